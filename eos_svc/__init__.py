@@ -1,0 +1,41 @@
+"""eos_svc — an Enhanced Opportunistic System (EOS) grasp planner.
+
+The package root is the paper's Figure 1, domain-free: the information
+:class:`Board`, the :class:`Agent` contract, the :class:`Weights` of the
+sub-ratings, and the :class:`Controller` with its cycle records. It imports
+neither Pinocchio, coal nor Zenoh, so another planner can embed it with its
+own agents. The grasping domain lives in :mod:`eos_svc.kinematics` and
+:mod:`eos_svc.agents`; the network service in :mod:`eos_svc.service`.
+"""
+
+from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
+from eos_svc.board import Board, BoardChange
+from eos_svc.controller import CancelToken, Controller, CycleCallback, RepeatPolicy
+from eos_svc.errors import EosError, ValidationError
+from eos_svc.ratings import Weights, check_probability
+from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus, to_jsonable
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "ActionResult",
+    "Agent",
+    "AgentRating",
+    "Board",
+    "BoardChange",
+    "CancelToken",
+    "Controller",
+    "CycleCallback",
+    "CycleContext",
+    "CycleRecord",
+    "EosError",
+    "Outcome",
+    "RepeatPolicy",
+    "RunResult",
+    "RunStatus",
+    "ValidationError",
+    "Weights",
+    "__version__",
+    "check_probability",
+    "to_jsonable",
+]

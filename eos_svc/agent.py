@@ -1,0 +1,151 @@
+"""The agent contract (paper §2.1, §3).
+
+An agent has a name, the stages in which it may act, a *default* sub-rating
+fixed at creation, an *opportunistic* sub-rating set every cycle from the state
+(by its own precondition test, :meth:`Agent.opportunistic`, or by the agent
+that acted in the previous cycle, :attr:`ActionResult.ratings`), a *learned*
+sub-rating slot, and an action (:meth:`Agent.act`) that reports its outcome.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import TYPE_CHECKING, Any
+
+from eos_svc.ratings import check_probability
+
+if TYPE_CHECKING:
+    from eos_svc.board import Board, BoardChange
+
+
+class Outcome(str, Enum):
+    """What an action achieved.
+
+    - ``PROGRESS``: it did something; the stage goes on.
+    - ``STAGE_COMPLETE``: the current stage's goal is reached; the controller
+      moves to the next stage (or completes the run after the last one).
+    - ``FINISHED``: the agent ends the run (successfully or not, see
+      :attr:`ActionResult.succeeded`).
+    - ``CANNOT_ACT``: the agent does not know what to do in this situation;
+      the run stalls (paper §5).
+    """
+
+    PROGRESS = "progress"
+    STAGE_COMPLETE = "stage_complete"
+    FINISHED = "finished"
+    CANNOT_ACT = "cannot_act"
+
+
+@dataclass(frozen=True, slots=True)
+class ActionResult:
+    """The report of one action.
+
+    Attributes:
+        outcome: see :class:`Outcome`.
+        detail: what the agent did, in words (goes into the cycle record).
+        ratings: opportunistic sub-ratings this agent sets for other agents
+            (name -> value in [0, 1]); they apply in the next cycle of the same stage.
+        succeeded: with ``FINISHED``, whether the run's goal was met.
+    """
+
+    outcome: Outcome
+    detail: str = ""
+    ratings: Mapping[str, float] = field(default_factory=dict)
+    succeeded: bool | None = None
+
+
+@dataclass(frozen=True, slots=True)
+class CycleContext:
+    """What an agent may know about the controller's state in this cycle.
+
+    Attributes:
+        seq: cycle number in the run (1-based).
+        stage: current stage name.
+        stage_cycle: cycles already run in this stage (0 at the stage's start).
+        events: board changes made by the previous cycle of this stage (empty
+            at a stage's start) — what precondition tests react to.
+        last_agent: name of the agent that acted in the previous cycle of this
+            stage, or ``None``.
+        acted: how many times each agent has acted in this stage.
+    """
+
+    seq: int
+    stage: str
+    stage_cycle: int
+    events: tuple[BoardChange, ...]
+    last_agent: str | None
+    acted: Mapping[str, int]
+
+    def changed(self, key: str) -> bool:
+        """Whether the previous cycle wrote board entry ``key``."""
+        return any(change.key == key for change in self.events)
+
+
+class Agent(ABC):
+    """Base class of every agent.
+
+    Subclasses implement :meth:`act`, and usually :meth:`opportunistic`.
+
+    Args:
+        name: unique name of the agent in a controller.
+        stages: stages in which the agent may be rated and chosen.
+        default: default sub-rating P(A|B_d) in [0, 1], fixed for the agent's life.
+        learned: initial learned sub-rating P(A|B_l) in [0, 1].
+
+    Raises:
+        ValidationError: on a rating outside [0, 1] or NaN.
+        ValueError: on an empty name or no stages.
+    """
+
+    __slots__ = ("_default", "_learned", "name", "stages")
+
+    def __init__(self, name: str, stages: Iterable[str], default: float, learned: float = 0.0) -> None:
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"agent name must be a non-empty str, got {name!r}")
+        self.name = name
+        self.stages = frozenset(stages)
+        if not self.stages:
+            raise ValueError(f"agent {name!r}: stages must name at least one stage")
+        self._default = check_probability(default, f"agents.{name}.default")
+        self._learned = check_probability(learned, f"agents.{name}.learned")
+
+    @property
+    def default(self) -> float:
+        """Default sub-rating P(A|B_d): fixed at creation."""
+        return self._default
+
+    @property
+    def learned(self) -> float:
+        """Learned sub-rating P(A|B_l) (paper §7); updated between runs by a learner."""
+        return self._learned
+
+    @learned.setter
+    def learned(self, value: float) -> None:
+        self._learned = check_probability(value, f"agents.{self.name}.learned")
+
+    def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
+        """Precondition test: the opportunistic sub-rating in [0, 1] from the state.
+
+        Return ``None`` for "no opinion" (keeps what the previous action set,
+        else 0). Called only from a stage's second cycle on: at a stage's start
+        there are no events and every opportunistic sub-rating is 0 (paper §5).
+        """
+        return None
+
+    def learned_rating(self, board: Board, ctx: CycleContext) -> float:
+        """Learned sub-rating for this cycle; defaults to :attr:`learned`."""
+        return self._learned
+
+    @abstractmethod
+    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        """Run the agent's action against the board and report the outcome."""
+
+    def describe(self) -> dict[str, Any]:
+        """JSON-friendly description of the agent."""
+        return {"name": self.name, "stages": sorted(self.stages), "default": self._default}
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(name={self.name!r}, default={self._default})"

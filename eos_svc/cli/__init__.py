@@ -1,0 +1,55 @@
+"""The ``eos`` command line.
+
+Each sub-command lives in its own module under :mod:`eos_svc.cli` and exposes
+``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only
+when their command runs, so ``eos --help`` stays fast and a broken optional
+dependency of one command cannot break the others.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import sys
+from collections.abc import Sequence
+
+#: command name -> (module, one-line help)
+COMMANDS: dict[str, tuple[str, str]] = {
+    "plan": ("eos_svc.cli.plan", "plan one grasp on a scene and print the cycle trace"),
+    "ep1": ("eos_svc.cli.ep1", "run EP1 alone: roll a fingertip and estimate curvature"),
+    "experiment": ("eos_svc.cli.experiment", "run one of the paper's experiments"),
+    "serve": ("eos_svc.cli.serve", "run the planner as a Zenoh service"),
+    "client": ("eos_svc.cli.client", "request a plan from a running service"),
+    "demo": ("eos_svc.cli.demo", "the domain-free controller on a small example"),
+}
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Top-level parser with one sub-parser per command (arguments added lazily)."""
+    parser = argparse.ArgumentParser(prog="eos", description="Enhanced Opportunistic System grasp planner")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    for name, (_module, help_text) in COMMANDS.items():
+        sub.add_parser(name, help=help_text, add_help=False)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``eos`` console script; returns the process exit code."""
+    args = list(sys.argv[1:] if argv is None else argv)
+    if not args or args[0] in {"-h", "--help"} or args[0] not in COMMANDS:
+        parser = build_parser()
+        if args and args[0] not in {"-h", "--help"}:
+            parser.error(f"unknown command {args[0]!r}; choose from {', '.join(COMMANDS)}")
+        parser.print_help()
+        return 0 if args else 2
+    name = args[0]
+    module_name, help_text = COMMANDS[name]
+    module = importlib.import_module(module_name)
+    parser = argparse.ArgumentParser(prog=f"eos {name}", description=help_text)
+    module.add_arguments(parser)
+    parsed = parser.parse_args(args[1:])
+    return int(module.run(parsed))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,56 @@
+"""Argument helpers shared by the ``eos`` sub-commands."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+
+from eos_svc.errors import ValidationError
+from eos_svc.ratings import Weights
+
+
+def finite_float(text: str) -> float:
+    """argparse type: a finite float (NaN and inf are rejected)."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return value
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a finite float > 0."""
+    value = finite_float(text)
+    if value <= 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
+    return value
+
+
+def add_weight_arguments(parser: argparse.ArgumentParser) -> None:
+    """--w-default / --w-opportunistic / --w-learned (must sum to 1)."""
+    group = parser.add_argument_group("weights P(B_i) (each in [0, 1], summing to 1)")
+    group.add_argument(
+        "--w-default", type=finite_float, default=0.5, metavar="P", help="default weight (0.5)"
+    )
+    group.add_argument(
+        "--w-opportunistic", type=finite_float, default=0.5, metavar="P", help="opportunistic weight (0.5)"
+    )
+    group.add_argument("--w-learned", type=finite_float, default=0.0, metavar="P", help="learned weight (0)")
+
+
+def weights_from_args(args: argparse.Namespace) -> Weights:
+    """Build the weights; a bad combination exits with status 2 and names the field."""
+    try:
+        return Weights(args.w_default, args.w_opportunistic, args.w_learned)
+    except ValidationError as exc:
+        fail(f"--w-*: {exc}")
+        raise  # unreachable
+
+
+def fail(message: str, code: int = 2) -> None:
+    """Print ``eos: error: message`` to stderr and exit with ``code``."""
+    print(f"eos: error: {message}", file=sys.stderr)
+    raise SystemExit(code)

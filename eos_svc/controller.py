@@ -1,0 +1,356 @@
+"""The EOS controller (paper §2.1, §3, §5).
+
+Each cycle the controller rates every agent allowed in the current stage,
+chooses the highest total P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties go to the agent
+listed first), runs its action against the board, and records the cycle.
+
+Rules the paper leaves open, fixed here (and visible in every cycle record):
+
+1. **Opportunistic sub-ratings are event driven.** They are reset to 0 every
+   cycle; then the ratings set by the agent that acted in the previous cycle
+   (:attr:`ActionResult.ratings`) apply, and every agent's precondition test
+   (:meth:`Agent.opportunistic`) may raise its own — the larger value counts.
+   At a stage's first cycle nothing has happened in the stage yet, so every
+   opportunistic sub-rating is 0 (paper §5: "At the beginning of a new stage
+   all opportunistic sub-ratings are zero").
+2. **Repeat rule** (:class:`RepeatPolicy`, default ``ONCE_UNLESS_ASKED``): the
+   default sub-rating encodes a pre-defined order in which every agent acts
+   once per stage; an agent that has already acted in the stage is eligible
+   again only while its variable part, P(A|B_o)·P(B_o) + P(A|B_l)·P(B_l), is
+   positive — i.e. while the state asks for it. With the opportunistic weight
+   at 0 this yields the paper's fixed sequence (§4.1: each agent once, then
+   the run stops). ``ALWAYS`` makes every allowed agent eligible every cycle.
+3. **Ends.** ``CANNOT_ACT`` from the chosen agent stalls the run, as does a
+   cycle in which no agent is eligible. ``STAGE_COMPLETE`` moves to the next
+   stage (after the last one the run completes). ``FINISHED`` ends the run as
+   the agent says. Cancellation, the cycle limit and the deadline are checked
+   before every cycle. An exception raised by an agent ends the run with status
+   ``error`` and the exception in the reason; nothing escapes :meth:`run`.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+from collections.abc import Callable, Iterable, Sequence
+from enum import Enum
+
+from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
+from eos_svc.board import Board, BoardChange
+from eos_svc.errors import ValidationError
+from eos_svc.ratings import Weights, check_probability
+from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus
+
+CycleCallback = Callable[[CycleRecord], None]
+
+
+class RepeatPolicy(str, Enum):
+    """Which agents may be chosen again within a stage (see module docstring, rule 2)."""
+
+    ONCE_UNLESS_ASKED = "once_unless_asked"
+    ALWAYS = "always"
+
+
+class CancelToken:
+    """A thread-safe flag to cancel a running plan from another thread."""
+
+    __slots__ = ("_event", "reason")
+
+    def __init__(self) -> None:
+        self._event = threading.Event()
+        self.reason = "cancelled"
+
+    def cancel(self, reason: str = "cancelled") -> None:
+        """Ask the run to stop before its next cycle."""
+        self.reason = reason
+        self._event.set()
+
+    @property
+    def cancelled(self) -> bool:
+        """Whether :meth:`cancel` was called."""
+        return self._event.is_set()
+
+
+class Controller:
+    """Runs agents over stages until the run ends.
+
+    Args:
+        agents: the agent list; its order breaks ties.
+        stages: stage names, in the order they are run.
+        weights: weights of the sub-ratings.
+        max_cycles: cycle limit (≥ 1).
+        deadline_s: wall-clock budget of a run in seconds, or ``None``.
+        repeat_policy: see :class:`RepeatPolicy`.
+        keep_trace: keep every cycle record in :attr:`RunResult.trace`.
+        callbacks: called with every :class:`CycleRecord` as it is made.
+
+    Raises:
+        ValidationError: on duplicate agent names, an agent allowed in an
+            unknown stage, no stages, or a bad limit.
+    """
+
+    def __init__(
+        self,
+        agents: Sequence[Agent],
+        stages: Sequence[str],
+        weights: Weights | None = None,
+        *,
+        max_cycles: int = 1000,
+        deadline_s: float | None = None,
+        repeat_policy: RepeatPolicy = RepeatPolicy.ONCE_UNLESS_ASKED,
+        keep_trace: bool = True,
+        callbacks: Iterable[CycleCallback] = (),
+    ) -> None:
+        self.stages: tuple[str, ...] = tuple(stages)
+        if not self.stages:
+            raise ValidationError("stages", "must name at least one stage")
+        if len(set(self.stages)) != len(self.stages):
+            raise ValidationError("stages", f"must be unique, got {list(self.stages)}")
+        self.agents: tuple[Agent, ...] = tuple(agents)
+        names = [a.name for a in self.agents]
+        for name in names:
+            if names.count(name) > 1:
+                raise ValidationError("agents", f"agent name {name!r} is used twice")
+        for agent in self.agents:
+            unknown = agent.stages - set(self.stages)
+            if unknown:
+                raise ValidationError(f"agents.{agent.name}.stages", f"unknown stage(s) {sorted(unknown)}")
+        self.weights = weights if weights is not None else Weights()
+        if not isinstance(self.weights, Weights):
+            raise ValidationError("weights", f"must be a Weights, got {type(self.weights).__name__}")
+        if isinstance(max_cycles, bool) or not isinstance(max_cycles, int) or max_cycles < 1:
+            raise ValidationError("max_cycles", f"must be an integer ≥ 1, got {max_cycles!r}")
+        self.max_cycles = max_cycles
+        if deadline_s is not None and (
+            not isinstance(deadline_s, (int, float)) or not math.isfinite(deadline_s) or deadline_s <= 0
+        ):
+            raise ValidationError("deadline_s", f"must be a positive number of seconds, got {deadline_s!r}")
+        self.deadline_s = deadline_s
+        self.repeat_policy = RepeatPolicy(repeat_policy)
+        self.keep_trace = keep_trace
+        self.callbacks: list[CycleCallback] = list(callbacks)
+        # Per stage: the allowed agents in list order, with flags telling whether
+        # they override the precondition / learned hooks (skip the call if not).
+        self._by_stage: dict[str, tuple[tuple[Agent, bool, bool], ...]] = {
+            stage: tuple(
+                (
+                    a,
+                    type(a).opportunistic is not Agent.opportunistic,
+                    type(a).learned_rating is not Agent.learned_rating,
+                )
+                for a in self.agents
+                if stage in a.stages
+            )
+            for stage in self.stages
+        }
+
+    def add_callback(self, callback: CycleCallback) -> None:
+        """Register a per-cycle callback (like py_trees' post-tick handlers)."""
+        self.callbacks.append(callback)
+
+    def run(self, board: Board | None = None, *, cancel: CancelToken | None = None) -> RunResult:
+        """Run cycles until the run ends; never raises for a planning outcome.
+
+        Args:
+            board: the information board (a new empty one when omitted).
+            cancel: a token another thread may set to stop the run.
+        """
+        board = board if board is not None else Board()
+        weights = self.weights
+        wd, wo, wl = weights.default, weights.opportunistic, weights.learned
+        always = self.repeat_policy is RepeatPolicy.ALWAYS
+        stages = self.stages
+        callbacks = self.callbacks
+        keep = self.keep_trace
+        clock = time.monotonic
+        t0 = clock()
+        deadline_at = None if self.deadline_s is None else t0 + self.deadline_s
+
+        trace: list[CycleRecord] = []
+        stage_index = 0
+        stage = stages[0]
+        stage_cycle = 0
+        per_stage: dict[str, int] = {stage: 0}
+        completed: list[str] = []
+        acted: dict[str, int] = {}
+        events: tuple[BoardChange, ...] = ()
+        hints: dict[str, float] = {}
+        last_agent: str | None = None
+        seq = 0
+
+        def finish(status: RunStatus, reason: str) -> RunResult:
+            return RunResult(
+                status=status,
+                reason=reason,
+                cycles=seq,
+                cycles_per_stage=per_stage,
+                stages_completed=tuple(completed),
+                final_stage=stage,
+                trace=tuple(trace),
+                wall_time_s=clock() - t0,
+            )
+
+        def emit(record: CycleRecord) -> str | None:
+            if keep:
+                trace.append(record)
+            for callback in callbacks:
+                try:
+                    callback(record)
+                except Exception as exc:  # a broken observer must not kill the plan silently
+                    return f"cycle callback {callback!r} raised {type(exc).__name__}: {exc}"
+            return None
+
+        while True:
+            if cancel is not None and cancel.cancelled:
+                return finish(RunStatus.CANCELLED, cancel.reason)
+            if seq >= self.max_cycles:
+                return finish(
+                    RunStatus.CYCLE_LIMIT, f"cycle limit of {self.max_cycles} reached in stage {stage!r}"
+                )
+            if deadline_at is not None and clock() >= deadline_at:
+                return finish(
+                    RunStatus.DEADLINE, f"deadline of {self.deadline_s} s passed in stage {stage!r}"
+                )
+            seq += 1
+            ctx = CycleContext(seq, stage, stage_cycle, events, last_agent, acted)
+
+            # --- rate ---------------------------------------------------------
+            rows: list[AgentRating] = []
+            best: Agent | None = None
+            best_total = -1.0
+            for agent, has_precondition, has_learned in self._by_stage[stage]:
+                name = agent.name
+                try:
+                    if stage_cycle == 0:
+                        opp = 0.0
+                    else:
+                        opp = hints.get(name, 0.0)
+                        if has_precondition:
+                            own = agent.opportunistic(board, ctx)
+                            if own is not None:
+                                own = check_probability(own, f"agents.{name}.opportunistic")
+                                if own > opp:
+                                    opp = own
+                    learned = (
+                        check_probability(agent.learned_rating(board, ctx), f"agents.{name}.learned")
+                        if has_learned
+                        else agent._learned
+                    )
+                except Exception as exc:
+                    per_stage[stage] += 1
+                    seq_reason = f"agent {name!r} failed its rating: {type(exc).__name__}: {exc}"
+                    emit(
+                        CycleRecord(
+                            seq,
+                            stage,
+                            stage_cycle,
+                            tuple(rows),
+                            weights,
+                            None,
+                            None,
+                            seq_reason,
+                            (),
+                            clock() - t0,
+                        )
+                    )
+                    return finish(RunStatus.ERROR, seq_reason)
+                variable = opp * wo + learned * wl
+                total = agent._default * wd + variable
+                eligible = always or variable > 0.0 or name not in acted
+                rows.append(AgentRating(name, agent._default, opp, learned, total, eligible))
+                if eligible and total > best_total:
+                    best, best_total = agent, total
+
+            if best is None:
+                per_stage[stage] += 1
+                reason = (
+                    f"no agent may act in stage {stage!r}: every allowed agent has acted and "
+                    "none is asked for again by its opportunistic or learned sub-rating"
+                    if rows
+                    else f"no agent is allowed in stage {stage!r}"
+                )
+                broken = emit(
+                    CycleRecord(
+                        seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, (), clock() - t0
+                    )
+                )
+                return finish(RunStatus.ERROR, broken) if broken else finish(RunStatus.STALLED, reason)
+
+            # --- act ----------------------------------------------------------
+            name = best.name
+            board.begin_cycle()
+            try:
+                result = best.act(board, ctx)
+                if not isinstance(result, ActionResult):
+                    raise TypeError(f"act() must return an ActionResult, got {type(result).__name__}")
+                new_hints = {
+                    target: check_probability(value, f"agents.{name}.ratings.{target}")
+                    for target, value in result.ratings.items()
+                }
+            except Exception as exc:
+                changes = board.end_cycle()
+                per_stage[stage] += 1
+                reason = f"agent {name!r} raised {type(exc).__name__}: {exc}"
+                emit(
+                    CycleRecord(
+                        seq,
+                        stage,
+                        stage_cycle,
+                        tuple(rows),
+                        weights,
+                        name,
+                        None,
+                        reason,
+                        changes,
+                        clock() - t0,
+                    )
+                )
+                return finish(RunStatus.ERROR, reason)
+            changes = board.end_cycle()
+            per_stage[stage] += 1
+            acted[name] = acted.get(name, 0) + 1
+            outcome = result.outcome
+            broken = emit(
+                CycleRecord(
+                    seq,
+                    stage,
+                    stage_cycle,
+                    tuple(rows),
+                    weights,
+                    name,
+                    outcome,
+                    result.detail,
+                    changes,
+                    clock() - t0,
+                )
+            )
+            if broken:
+                return finish(RunStatus.ERROR, broken)
+
+            # --- transition ---------------------------------------------------
+            if outcome is Outcome.PROGRESS:
+                stage_cycle += 1
+                events = changes
+                hints = new_hints
+                last_agent = name
+            elif outcome is Outcome.CANNOT_ACT:
+                detail = f": {result.detail}" if result.detail else ""
+                return finish(RunStatus.STALLED, f"agent {name!r} cannot act in stage {stage!r}{detail}")
+            elif outcome is Outcome.STAGE_COMPLETE:
+                completed.append(stage)
+                if stage_index + 1 == len(stages):
+                    return finish(RunStatus.COMPLETED, f"all stages completed ({', '.join(completed)})")
+                stage_index += 1
+                stage = stages[stage_index]
+                per_stage[stage] = 0
+                stage_cycle = 0
+                acted = {}
+                events = ()
+                hints = {}
+                last_agent = None
+            elif outcome is Outcome.FINISHED:
+                status = RunStatus.COMPLETED if result.succeeded else RunStatus.FAILED
+                return finish(status, result.detail or f"finished by agent {name!r}")
+            else:  # pragma: no cover - Outcome is closed
+                return finish(RunStatus.ERROR, f"agent {name!r} returned unknown outcome {outcome!r}")

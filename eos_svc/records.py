@@ -1,0 +1,183 @@
+"""Cycle records and run results (DESIGN §6).
+
+A cycle is the choice and the execution of one action (paper §2.1). Every cycle
+leaves a :class:`CycleRecord`; a run ends with a :class:`RunResult` whose status
+says how it ended. Both convert to JSON-friendly dicts with :func:`to_jsonable`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, fields, is_dataclass
+from enum import Enum
+from typing import Any, NamedTuple
+
+from eos_svc.agent import Outcome
+from eos_svc.board import BoardChange
+from eos_svc.ratings import Weights
+
+
+class RunStatus(str, Enum):
+    """How a run ended."""
+
+    COMPLETED = "completed"  #: all stages done, or an agent finished the run successfully
+    ERROR = "error"  #: an agent raised an exception or broke the contract (a bug, reported)
+    FAILED = "failed"  #: an agent finished the run and reported the goal was not met
+    STALLED = "stalled"  #: the chosen agent could not act, or no agent was eligible
+    CYCLE_LIMIT = "cycle_limit"  #: the cycle limit was reached
+    DEADLINE = "deadline"  #: the wall-clock deadline passed
+    CANCELLED = "cancelled"  #: cancelled from outside
+
+
+class AgentRating(NamedTuple):
+    """One agent's ratings in one cycle (a named tuple: cheap to build every cycle).
+
+    ``eligible`` is false for an agent the repeat rule excludes (see
+    :class:`~eos_svc.controller.RepeatPolicy`).
+    """
+
+    name: str
+    default: float
+    opportunistic: float
+    learned: float
+    total: float
+    eligible: bool = True
+
+
+@dataclass(frozen=True, slots=True)
+class CycleRecord:
+    """What happened in one cycle.
+
+    Attributes:
+        seq: cycle number in the run, 1-based and contiguous.
+        stage: the stage the cycle ran in.
+        stage_cycle: 0-based cycle number within the stage.
+        ratings: every agent rated in this cycle, in list order.
+        weights: the weights used.
+        chosen: the agent whose action ran (``None`` when none was eligible).
+        outcome: what the action reported (``None`` when nothing ran).
+        detail: the action's own words, or why nothing ran.
+        changes: the board entries the action wrote.
+        elapsed_s: seconds since the run started, at the end of the cycle.
+    """
+
+    seq: int
+    stage: str
+    stage_cycle: int
+    ratings: tuple[AgentRating, ...]
+    weights: Weights
+    chosen: str | None
+    outcome: Outcome | None
+    detail: str
+    changes: tuple[BoardChange, ...]
+    elapsed_s: float
+
+    def rating_of(self, name: str) -> AgentRating:
+        """The rating row of agent ``name`` (KeyError when it was not rated)."""
+        for row in self.ratings:
+            if row.name == name:
+                return row
+        raise KeyError(f"agent {name!r} was not rated in cycle {self.seq}")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-friendly form."""
+        return {
+            "seq": self.seq,
+            "stage": self.stage,
+            "stage_cycle": self.stage_cycle,
+            "weights": self.weights.to_dict(),
+            "ratings": [
+                {
+                    "agent": r.name,
+                    "default": r.default,
+                    "opportunistic": r.opportunistic,
+                    "learned": r.learned,
+                    "total": r.total,
+                    "eligible": r.eligible,
+                }
+                for r in self.ratings
+            ],
+            "chosen": self.chosen,
+            "outcome": None if self.outcome is None else self.outcome.value,
+            "detail": self.detail,
+            "changes": [
+                {"key": c.key, "old": to_jsonable(c.old), "new": to_jsonable(c.new)} for c in self.changes
+            ],
+            "elapsed_s": self.elapsed_s,
+        }
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """How a controller run ended.
+
+    Attributes:
+        status: see :class:`RunStatus`.
+        reason: why, in words.
+        cycles: number of cycles run.
+        cycles_per_stage: cycles run in each stage entered.
+        stages_completed: stages whose goal was reached, in order.
+        final_stage: the stage the run ended in.
+        trace: every cycle record (empty when ``keep_trace`` was off).
+        wall_time_s: seconds from start to end.
+    """
+
+    status: RunStatus
+    reason: str
+    cycles: int
+    cycles_per_stage: dict[str, int]
+    stages_completed: tuple[str, ...]
+    final_stage: str
+    trace: tuple[CycleRecord, ...] = field(default=(), repr=False)
+    wall_time_s: float = 0.0
+
+    @property
+    def ok(self) -> bool:
+        """True when the run completed (all stages, or finished successfully)."""
+        return self.status is RunStatus.COMPLETED
+
+    def agents_run(self) -> list[str]:
+        """Names of the chosen agents, cycle by cycle."""
+        return [r.chosen for r in self.trace if r.chosen is not None]
+
+    def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
+        """JSON-friendly form (the trace only when asked)."""
+        out: dict[str, Any] = {
+            "status": self.status.value,
+            "reason": self.reason,
+            "cycles": self.cycles,
+            "cycles_per_stage": dict(self.cycles_per_stage),
+            "stages_completed": list(self.stages_completed),
+            "final_stage": self.final_stage,
+            "wall_time_s": self.wall_time_s,
+        }
+        if include_trace:
+            out["trace"] = [r.to_dict() for r in self.trace]
+        return out
+
+
+def to_jsonable(value: Any) -> Any:
+    """Convert a board value to something ``json.dumps`` accepts.
+
+    Handles dataclasses, enums, mappings, sequences and array-likes (anything
+    with ``tolist()``, e.g. NumPy arrays) without importing NumPy. Non-finite
+    floats become ``None`` so the output stays strict JSON.
+    """
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Enum):
+        return to_jsonable(value.value)
+    if hasattr(value, "to_dict"):
+        return to_jsonable(value.to_dict())
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: to_jsonable(getattr(value, f.name)) for f in fields(value)}
+    if isinstance(value, Mapping):
+        return {str(k): to_jsonable(v) for k, v in value.items()}
+    if hasattr(value, "tolist"):
+        return to_jsonable(value.tolist())
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [to_jsonable(v) for v in value]
+    return repr(value)

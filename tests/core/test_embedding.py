@@ -1,0 +1,43 @@
+"""Another planner reuses the core: a root-finding problem solved by custom agents."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from eos_svc import RunStatus, Weights
+from eos_svc.demo import RootProblem, default_problem, solve_root
+
+
+def test_root_finding_with_both_subratings():
+    result, board = solve_root(default_problem())
+    assert result.status is RunStatus.COMPLETED
+    assert board["root"] == pytest.approx(0.7390851332151607, abs=1e-9)
+    assert result.stages_completed == ("bracket",)
+    assert set(result.agents_run()) >= {"scan", "widen", "secant", "done"}
+
+
+def test_same_problem_same_cycles():
+    first, _ = solve_root(default_problem())
+    second, _ = solve_root(default_problem())
+    assert [r.chosen for r in first.trace] == [r.chosen for r in second.trace]
+
+
+@pytest.mark.parametrize(
+    "f,start,root",
+    [
+        (lambda x: x**3 - 2.0, (5.0, 6.0), 2 ** (1 / 3)),
+        (lambda x: math.exp(x) - 3.0, (-4.0, -3.0), math.log(3.0)),
+    ],
+)
+def test_other_functions(f, start, root):
+    result, board = solve_root(RootProblem(f, start, 1e-10))
+    assert result.status is RunStatus.COMPLETED
+    assert board["root"] == pytest.approx(root, abs=1e-8)
+
+
+def test_default_only_runs_a_fixed_sequence_and_stops():
+    result, _ = solve_root(default_problem(), Weights(1.0, 0.0))
+    assert result.agents_run() == ["scan", "widen"]
+    assert result.status is RunStatus.STALLED
