@@ -1,0 +1,275 @@
+"""Curvature estimation from rolling contact (EP1), Montana's first equation with v = 0.
+
+Sign convention (the one used everywhere in eos_svc, proved by ``tests/ep1``)
+-----------------------------------------------------------------------------
+Contact frame ``C``: origin at the contact point, ``z`` = the *fingertip's* outward
+unit normal (it points from the fingertip into the object; it is minus
+:attr:`Contact.normal`), ``x, y`` tangent with ``x × y = z``.
+
+* ``ω = (ω_x, ω_y)`` -- angular velocity of the fingertip relative to the object,
+  tangential components in ``C`` [rad/s] (rolling has no spin, ``ω_z = 0``).
+* ``u = M_f α̇_f`` -- velocity of the contact point *over the fingertip surface*
+  (the time derivative of the tactile reading in the fingertip frame, rotated into
+  ``C``) [m/s]. The tactile sensor measures it.
+* ``K_f``, ``K_o`` -- curvature forms (symmetric 2×2, in ``C``) of fingertip and
+  object [1/m], **positive for convex** surfaces (a sphere of radius R has I/R).
+
+Rolling without sliding (``v = 0``) and keeping contact then gives::
+
+    (K_o + K_f) u = [-ω_y, ω_x]ᵀ   ( = z × ω )
+    K_o u = [-ω_y, ω_x]ᵀ - K_f u                  (the estimator's equation)
+
+Closed-form check: a sphere tip (r_f) rolling at rate |ω| on a sphere (R) moves its
+contact point over the tip at |ω| r_f R / (r_f + R); on a plane at |ω| r_f.
+
+Because the equation is linear and homogeneous in (ω, u), a sample may be given as
+rates (rad/s, m/s) or as finite increments over the same interval (rad, m).
+
+Each sample gives two equations in the three unknowns ``(k_xx, k_xy, k_yy)`` of the
+symmetric ``K_o``; rolls along two independent tangent directions make them
+determined, and :meth:`CurvatureEstimator.estimate` solves the least-squares
+problem over all samples, with the covariance ``s² (AᵀA)⁻¹`` from the residuals.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "DEFAULT_FLAT_CURVATURE",
+    "CurvatureEstimate",
+    "CurvatureEstimator",
+    "CurvatureSample",
+    "UnderdeterminedError",
+]
+
+#: Curvatures below this magnitude [1/m] (radius above 1 m) are "flat" at hand scale;
+#: it is also the floor of ``|H|`` in the relative radius error so a plane can be rated.
+DEFAULT_FLAT_CURVATURE = 1.0
+
+Array = NDArray[np.float64]
+
+
+class UnderdeterminedError(ValueError):
+    """The samples do not determine the curvature form (roll along two directions)."""
+
+
+def _vec2(name: str, value: ArrayLike) -> Array:
+    a = np.asarray(value, dtype=float).reshape(-1)
+    if a.shape != (2,) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: expected 2 finite numbers, got {value!r}")
+    return a
+
+
+def _mat2(name: str, value: ArrayLike) -> Array:
+    a = np.asarray(value, dtype=float)
+    if a.shape != (2, 2) or not np.all(np.isfinite(a)):
+        raise ValueError(f"{name}: expected a finite 2x2 matrix, got {value!r}")
+    if abs(a[0, 1] - a[1, 0]) > 1e-9 * (1.0 + abs(a).max()):
+        raise ValueError(f"{name}: curvature form must be symmetric, got {a.tolist()}")
+    return a
+
+
+@dataclass(frozen=True)
+class CurvatureSample:
+    """One rolling observation in the contact frame (see the module's sign convention).
+
+    Attributes:
+        omega_xy: tangential angular velocity of the fingertip w.r.t. the object
+            [rad/s] (or rotation increment [rad]).
+        contact_velocity: velocity of the contact point over the fingertip [m/s]
+            (or displacement over the same interval [m]).
+        K_f: fingertip curvature form [1/m] (``I / r_f`` for a sphere tip).
+    """
+
+    omega_xy: Array
+    contact_velocity: Array
+    K_f: Array
+
+    def rows(self) -> tuple[Array, Array]:
+        """The two least-squares rows ``A (2×3)`` and right-hand side ``b (2,)``."""
+        u1, u2 = self.contact_velocity
+        A = np.array([[u1, u2, 0.0], [0.0, u1, u2]])
+        w = np.array([-self.omega_xy[1], self.omega_xy[0]])
+        return A, w - self.K_f @ self.contact_velocity
+
+
+@dataclass(frozen=True)
+class CurvatureEstimate:
+    """Least-squares estimate of the object's curvature form at the contact.
+
+    Attributes:
+        form: symmetric 2×2 curvature form ``K_o`` in the contact frame [1/m].
+        covariance: 3×3 covariance of ``(k_xx, k_xy, k_yy)`` [1/m²].
+        principal_curvatures: ``(k1, k2)``, eigenvalues of ``form``, ``k1 >= k2`` [1/m].
+        principal_directions: 2×2, columns are the unit principal directions in ``C``.
+        radii: ``(1/k1, 1/k2)`` [m]; ``inf`` where the curvature is flat (see ``flat``).
+        sigma_curvatures: standard deviations of ``(k1, k2)`` [1/m].
+        mean_curvature: ``H = (k1 + k2) / 2`` [1/m]; ``sigma_mean_curvature`` its σ.
+        mean_radius: ``1 / H`` [m] (``inf`` when flat).
+        relative_error: σ_R / R of the mean radius, ``σ_H / max(|H|, flat_curvature)``.
+        rating: ``max(0, 1 - relative_error)``, EP1's opportunistic sub-rating.
+        flat: per principal direction, ``|k| <= max(flat_curvature, 2 σ_k)``.
+        n_samples: number of samples (2 equations each); ``residual_rms`` [1/m·m/s
+            units of the equation, i.e. rad/s or rad] of the least-squares residuals.
+    """
+
+    form: Array
+    covariance: Array
+    principal_curvatures: tuple[float, float]
+    principal_directions: Array
+    radii: tuple[float, float]
+    sigma_curvatures: tuple[float, float]
+    mean_curvature: float
+    sigma_mean_curvature: float
+    mean_radius: float
+    relative_error: float
+    rating: float
+    flat: tuple[bool, bool]
+    n_samples: int
+    residual_rms: float
+
+    @property
+    def is_flat(self) -> bool:
+        """True when both principal curvatures are flat."""
+        return self.flat[0] and self.flat[1]
+
+    @property
+    def sigma_radii(self) -> tuple[float, float]:
+        """σ of the principal radii by first-order propagation, σ_k / k² [m]."""
+        return tuple(  # type: ignore[return-value]
+            math.inf if r == math.inf else s * r * r
+            for r, s in zip(self.radii, self.sigma_curvatures, strict=True)
+        )
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-friendly form (``inf`` becomes ``None``)."""
+
+        def f(x: float) -> float | None:
+            return None if not math.isfinite(x) else float(x)
+
+        return {
+            "form": self.form.tolist(),
+            "principal_curvatures": [float(k) for k in self.principal_curvatures],
+            "sigma_curvatures": [f(s) for s in self.sigma_curvatures],
+            "radii": [f(r) for r in self.radii],
+            "mean_curvature": float(self.mean_curvature),
+            "sigma_mean_curvature": f(self.sigma_mean_curvature),
+            "mean_radius": f(self.mean_radius),
+            "relative_error": f(self.relative_error),
+            "rating": float(self.rating),
+            "flat": list(self.flat),
+            "n_samples": self.n_samples,
+            "residual_rms": float(self.residual_rms),
+        }
+
+
+@dataclass
+class CurvatureEstimator:
+    """Accumulates rolling samples and solves for the object's curvature form.
+
+    Samples from several EP1 runs at the same contact (expressed in the same
+    contact frame) may be accumulated into one estimator.
+    """
+
+    flat_curvature: float = DEFAULT_FLAT_CURVATURE
+    _samples: list[CurvatureSample] = field(default_factory=list, repr=False)
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.flat_curvature) and self.flat_curvature > 0):
+            raise ValueError(f"flat_curvature: must be a positive number, got {self.flat_curvature}")
+
+    @property
+    def samples(self) -> tuple[CurvatureSample, ...]:
+        """All samples added so far."""
+        return tuple(self._samples)
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples."""
+        return len(self._samples)
+
+    def reset(self) -> None:
+        """Forget every sample."""
+        self._samples.clear()
+
+    def add_sample(
+        self, omega_xy: ArrayLike, contact_velocity_tip: ArrayLike, K_f: ArrayLike
+    ) -> CurvatureSample:
+        """Add one observation (contact frame; rates or increments, see module doc)."""
+        s = CurvatureSample(
+            _vec2("omega_xy", omega_xy),
+            _vec2("contact_velocity_tip", contact_velocity_tip),
+            _mat2("K_f", K_f),
+        )
+        self._samples.append(s)
+        return s
+
+    def add_samples(self, samples: Iterable[CurvatureSample]) -> None:
+        """Add samples produced elsewhere (e.g. :attr:`EP1Result.samples`)."""
+        for s in samples:
+            self.add_sample(s.omega_xy, s.contact_velocity, s.K_f)
+
+    def estimate(self) -> CurvatureEstimate:
+        """Least squares over all samples; raises :class:`UnderdeterminedError`."""
+        m = len(self._samples)
+        if m < 2:
+            raise UnderdeterminedError(
+                f"need samples from two independent roll directions, have {m} sample(s)"
+            )
+        A = np.empty((2 * m, 3))
+        b = np.empty(2 * m)
+        for i, s in enumerate(self._samples):
+            A[2 * i : 2 * i + 2], b[2 * i : 2 * i + 2] = s.rows()
+        AtA = A.T @ A
+        scale = float(np.trace(AtA))
+        if scale == 0.0 or np.linalg.cond(AtA) > 1e12:
+            raise UnderdeterminedError(
+                "samples do not determine the curvature form: roll along two independent "
+                "tangent directions (contact velocities are parallel or zero)"
+            )
+        theta = np.linalg.solve(AtA, A.T @ b)
+        r = b - A @ theta
+        dof = 2 * m - 3
+        rss = float(r @ r)
+        s2 = rss / dof if dof > 0 else math.inf
+        cov = s2 * np.linalg.inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
+        form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
+        evals, evecs = np.linalg.eigh(form)
+        order = [1, 0]  # k1 >= k2
+        ks = (float(evals[order[0]]), float(evals[order[1]]))
+        dirs = evecs[:, order]
+        sig = []
+        for j in range(2):
+            vx, vy = dirs[:, j]
+            g = np.array([vx * vx, 2 * vx * vy, vy * vy])
+            sig.append(math.sqrt(max(float(g @ cov @ g), 0.0)) if dof > 0 else math.inf)
+        gH = np.array([0.5, 0.0, 0.5])
+        H = 0.5 * (theta[0] + theta[2])
+        sH = math.sqrt(max(float(gH @ cov @ gH), 0.0)) if dof > 0 else math.inf
+        kf = self.flat_curvature
+        flat = tuple(abs(k) <= max(kf, 2.0 * s) for k, s in zip(ks, sig, strict=True))
+        radii = tuple(math.inf if fl else 1.0 / k for k, fl in zip(ks, flat, strict=True))
+        mean_flat = abs(H) <= max(kf, 2.0 * sH)
+        rel = sH / max(abs(H), kf)
+        return CurvatureEstimate(
+            form=form,
+            covariance=cov,
+            principal_curvatures=ks,
+            principal_directions=dirs,
+            radii=(radii[0], radii[1]),
+            sigma_curvatures=(sig[0], sig[1]),
+            mean_curvature=float(H),
+            sigma_mean_curvature=sH,
+            mean_radius=math.inf if mean_flat else 1.0 / float(H),
+            relative_error=rel,
+            rating=max(0.0, 1.0 - rel) if math.isfinite(rel) else 0.0,
+            flat=(bool(flat[0]), bool(flat[1])),
+            n_samples=m,
+            residual_rms=math.sqrt(rss / (2 * m)),
+        )
