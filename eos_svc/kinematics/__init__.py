@@ -1,0 +1,58 @@
+"""Hand kinematics (Pinocchio), objects and contacts (coal), tactile sensing.
+
+SI units; world z up; the hand approaches along +x. See ``docs/kinematics.md``.
+"""
+
+from .hand import (
+    HAND3X3_URDF,
+    ConfigurationError,
+    FingerDescription,
+    HandDescription,
+    HandDescriptionError,
+    HandModel,
+    HandState,
+    KinematicsError,
+    UnknownNameError,
+    UrdfLoadError,
+    WorkspaceError,
+    load_hand,
+)
+from .objects import (
+    Box,
+    Capsule,
+    CurvatureUndefinedError,
+    Cylinder,
+    Ellipsoid,
+    ObjectSizeError,
+    Sphere,
+    SurfaceObject,
+)
+from .scene import Contact, Scene
+from .tactile import TactileReading, TactileSensor
+
+__all__ = [
+    "HAND3X3_URDF",
+    "Box",
+    "Capsule",
+    "ConfigurationError",
+    "Contact",
+    "CurvatureUndefinedError",
+    "Cylinder",
+    "Ellipsoid",
+    "FingerDescription",
+    "HandDescription",
+    "HandDescriptionError",
+    "HandModel",
+    "HandState",
+    "KinematicsError",
+    "ObjectSizeError",
+    "Scene",
+    "Sphere",
+    "SurfaceObject",
+    "TactileReading",
+    "TactileSensor",
+    "UnknownNameError",
+    "UrdfLoadError",
+    "WorkspaceError",
+    "load_hand",
+]

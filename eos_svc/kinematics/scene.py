@@ -1,0 +1,146 @@
+"""Contact queries between the hand's collision geometry and one object (coal).
+
+Signed distances (negative = penetration), witness points and the normal, in world
+coordinates (m). For a sphere fingertip the tip witness and the normal follow from the
+sphere centre, so they are exact even when coal's GJK/EPA witnesses are approximate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from .hand import HandModel, HandState, KinematicsError
+from .objects import SurfaceObject
+
+__all__ = ["Contact", "Scene"]
+
+
+@dataclass(frozen=True, slots=True)
+class Contact:
+    """Closest-point result between one hand geometry and the object.
+
+    Attributes:
+        finger: finger name (or the geometry name for :meth:`Scene.distance`).
+        distance: signed distance, m (negative = penetration depth).
+        point_tip: world witness point on the hand geometry (fingertip surface), m.
+        point_object: world witness point on the object surface, m.
+        normal: world unit normal, from the object toward the fingertip.
+    """
+
+    finger: str
+    distance: float
+    point_tip: np.ndarray
+    point_object: np.ndarray
+    normal: np.ndarray
+
+
+class Scene:
+    """A hand and one object. Reuses coal requests/results/transforms across calls."""
+
+    def __init__(self, hand: HandModel, obj: SurfaceObject) -> None:
+        if not isinstance(hand, HandModel):
+            raise KinematicsError("hand", f"must be a HandModel, got {type(hand).__name__}")
+        if not isinstance(obj, SurfaceObject):
+            raise KinematicsError("obj", f"must be a SurfaceObject, got {type(obj).__name__}")
+        self.hand = hand
+        self.object = obj
+        self._req = coal.DistanceRequest()
+        self._req.enable_nearest_points = True
+        self._req.enable_signed_distance = True
+        self._res = coal.DistanceResult()
+        self._tf_obj = coal.Transform3s()
+        self._tf_tip = coal.Transform3s()
+        self.set_object_placement(obj.placement)
+        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere).
+        self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
+        for name in hand.finger_names:
+            gid = hand.tip_geometry_id(name)
+            r = hand.tip_radius(name)
+            geom = hand.collision_model.geometryObjects[gid].geometry if gid is not None else None
+            is_sphere = geom is None or isinstance(geom, coal.Sphere)
+            shape = geom if geom is not None else coal.Sphere(r)
+            self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
+
+    def set_object_placement(self, placement: pin.SE3) -> None:
+        """Move the object (world ← object)."""
+        self.object.placement = pin.SE3(placement)
+        self._tf_obj.setTransform(
+            np.asarray(placement.rotation, dtype=float),
+            np.asarray(placement.translation, dtype=float),
+        )
+
+    def contact(self, state: HandState, finger: str) -> Contact:
+        """Closest points between finger ``finger``'s tip and the object."""
+        try:
+            fid, r, shape, is_sphere = self._tips[finger]
+        except KeyError:
+            from .hand import UnknownNameError
+
+            raise UnknownNameError(
+                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
+            ) from None
+        M = state.data.oMf[fid]
+        res = self._res
+        res.clear()
+        if is_sphere:
+            c = M.translation
+            self._tf_tip.setTranslation(c)
+            coal.distance(self.object.geometry, self._tf_obj, shape, self._tf_tip, self._req, res)
+            p_obj = res.getNearestPoint1()
+            n = res.normal
+            d = res.min_distance
+            # Exact sphere witness: n from the object toward the centre.
+            dx, dy, dz = c[0] - p_obj[0], c[1] - p_obj[1], c[2] - p_obj[2]
+            nn = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if nn > 1e-12 and d >= 0.0:
+                n = np.array([dx / nn, dy / nn, dz / nn])
+            return Contact(finger, d, c - r * n, p_obj, n)
+        gid = self.hand.tip_geometry_id(finger)
+        assert gid is not None
+        coal.distance(
+            self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res
+        )
+        return Contact(
+            finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
+        )
+
+    def contacts(self, state: HandState) -> dict[str, Contact]:
+        """:meth:`contact` for every finger."""
+        return {f: self.contact(state, f) for f in self.hand.finger_names}
+
+    def distance(self, state: HandState, geometry_name: str) -> Contact:
+        """Closest points between any hand collision geometry (by name) and the object;
+        ``Contact.finger`` holds the geometry name."""
+        gid = self.hand.geometry_id(geometry_name)
+        return self._geometry_distance(state, gid)
+
+    def _geometry_distance(self, state: HandState, gid: int) -> Contact:
+        go = self.hand.collision_model.geometryObjects[gid]
+        res = self._res
+        res.clear()
+        coal.distance(
+            self.object.geometry,
+            self._tf_obj,
+            go.geometry,
+            state.geometry_data.oMg[gid],
+            self._req,
+            res,
+        )
+        return Contact(
+            go.name, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
+        )
+
+    def min_distance(self, state: HandState) -> Contact:
+        """The closest of all hand collision geometries to the object."""
+        best: Contact | None = None
+        for gid in range(self.hand.collision_model.ngeoms):
+            c = self._geometry_distance(state, gid)
+            if best is None or c.distance < best.distance:
+                best = c
+        assert best is not None
+        return best

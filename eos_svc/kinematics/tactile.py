@@ -1,0 +1,104 @@
+"""A tactile sensor on a spherical fingertip: where on the fingertip the contact is.
+
+The reading is expressed in the fingertip frame (origin at the sphere centre, m). Gaussian
+noise of ``noise_std`` m per axis is added in the tangent plane of the fingertip surface and
+the point is re-projected onto the sphere; an optional taxel ``pitch`` (m) then rounds each
+coordinate to the nearest multiple of the pitch and re-projects onto the sphere. The rng is
+seeded, so readings are reproducible.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .hand import HandState, KinematicsError, UnknownNameError
+from .scene import Contact
+
+__all__ = ["TactileReading", "TactileSensor"]
+
+
+@dataclass(frozen=True, slots=True)
+class TactileReading:
+    """One reading of a fingertip sensor.
+
+    Attributes:
+        finger: finger name.
+        point_tip: contact location in the fingertip frame, on the fingertip sphere, m.
+        normal_tip: outward unit normal of the fingertip surface there (fingertip frame).
+        in_contact: True when the signed distance is within the sensor's contact tolerance.
+            When False the point is the noise-free nearest point (no measurement).
+        distance: signed tip–object distance, m (from the contact query).
+    """
+
+    finger: str
+    point_tip: np.ndarray
+    normal_tip: np.ndarray
+    in_contact: bool
+    distance: float
+
+
+class TactileSensor:
+    """Tactile reading for a spherical fingertip from a :class:`~.scene.Contact`.
+
+    Args:
+        noise_std: standard deviation of the tangential position noise, m (≥ 0).
+        pitch: taxel pitch, m (> 0), or None for a continuous sensor.
+        contact_tolerance: distances ≤ this (m) count as contact.
+        rng: a numpy Generator, or a seed, or None (fresh entropy).
+    """
+
+    def __init__(
+        self,
+        noise_std: float = 2e-4,
+        pitch: float | None = None,
+        contact_tolerance: float = 1e-4,
+        rng: np.random.Generator | int | None = None,
+    ) -> None:
+        if not (math.isfinite(noise_std) and noise_std >= 0.0):
+            raise KinematicsError("noise_std", f"must be finite and ≥ 0 m, got {noise_std!r}")
+        if pitch is not None and not (math.isfinite(pitch) and pitch > 0.0):
+            raise KinematicsError("pitch", f"must be finite and > 0 m or None, got {pitch!r}")
+        if not (math.isfinite(contact_tolerance) and contact_tolerance >= 0.0):
+            raise KinematicsError(
+                "contact_tolerance", f"must be finite and ≥ 0 m, got {contact_tolerance!r}"
+            )
+        self.noise_std = float(noise_std)
+        self.pitch = None if pitch is None else float(pitch)
+        self.contact_tolerance = float(contact_tolerance)
+        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+
+    def read(self, state: HandState, contact: Contact) -> TactileReading:
+        """The reading of ``contact.finger``'s sensor for this contact (state at the same q)."""
+        hand = state.hand
+        if contact.finger not in hand.finger_names:
+            raise UnknownNameError(
+                "contact.finger", f"unknown finger {contact.finger!r}; known: {hand.finger_names}"
+            )
+        r = hand.tip_radius(contact.finger)
+        M = state.data.oMf[hand.tip_frame_id(contact.finger)]
+        p = M.rotation.T @ (np.asarray(contact.point_tip, dtype=float) - M.translation)
+        norm = float(np.linalg.norm(p))
+        if norm < 1e-12:  # degenerate: fall back on the contact normal
+            p = M.rotation.T @ np.asarray(contact.normal, dtype=float)
+            norm = -1.0
+        p = p * (r / norm)
+        in_contact = bool(contact.distance <= self.contact_tolerance)
+        if in_contact:
+            if self.noise_std > 0.0:
+                n = p / r
+                a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+                t1 = a - (a @ n) * n
+                t1 /= np.linalg.norm(t1)
+                t2 = np.cross(n, t1)
+                g = self.rng.normal(0.0, self.noise_std, size=2)
+                p = p + g[0] * t1 + g[1] * t2
+                p *= r / np.linalg.norm(p)
+            if self.pitch is not None:
+                p = np.round(p / self.pitch) * self.pitch
+                pn = float(np.linalg.norm(p))
+                if pn > 1e-12:
+                    p *= r / pn
+        return TactileReading(contact.finger, p, p / r, in_contact, float(contact.distance))
