@@ -13,7 +13,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, NamedTuple
 
 from eos_svc.ratings import check_probability
 
@@ -57,9 +57,10 @@ class ActionResult:
     succeeded: bool | None = None
 
 
-@dataclass(frozen=True, slots=True)
-class CycleContext:
+class CycleContext(NamedTuple):
     """What an agent may know about the controller's state in this cycle.
+
+    A named tuple (immutable, cheap to build once per cycle).
 
     Attributes:
         seq: cycle number in the run (1-based).

@@ -95,8 +95,7 @@ class Board(Mapping[str, Any]):
     # --- cycle bookkeeping (called by the controller) --------------------------
     def begin_cycle(self) -> None:
         """Start recording changes."""
-        self._changes = {}
-        self._first_old = {}
+        self._changes = _EMPTY  # dicts are made on the first write only
 
     def end_cycle(self) -> tuple[BoardChange, ...]:
         """Stop recording; return what changed since :meth:`begin_cycle`."""
@@ -107,20 +106,27 @@ class Board(Mapping[str, Any]):
         return tuple(changes.values())
 
     def _record(self, key: str, old: Any, new: Any) -> None:
-        assert self._changes is not None
+        if self._changes is _EMPTY:
+            self._changes = {}
+            self._first_old = {}
+        changes = self._changes
+        assert changes is not None
         first_old = self._first_old.setdefault(key, old)
         created = first_old is _MISSING
         removed = new is _MISSING
         if not created and not removed and _same(first_old, new):
-            self._changes.pop(key, None)  # written back to what it was
+            changes.pop(key, None)  # written back to what it was
             return
-        self._changes[key] = BoardChange(
+        changes[key] = BoardChange(
             key=key,
             old=None if created else first_old,
             new=None if removed else new,
             created=created,
             removed=removed,
         )
+
+
+_EMPTY: dict[str, BoardChange] = {}  # shared sentinel: "recording, nothing written yet"
 
 
 def _same(a: Any, b: Any) -> bool:

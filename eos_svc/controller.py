@@ -158,18 +158,29 @@ class Controller:
         """
         board = board if board is not None else Board()
         weights = self.weights
-        wd, wo, wl = weights.default, weights.opportunistic, weights.learned
+        wo, wl = weights.opportunistic, weights.learned
         always = self.repeat_policy is RepeatPolicy.ALWAYS
         stages = self.stages
         callbacks = self.callbacks
         keep = self.keep_trace
+        max_cycles = self.max_cycles
         clock = time.monotonic
+        new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__
+        # Per stage, per agent: what does not change during a run.
+        tables = {
+            stage: tuple(
+                (a, a.name, a._default, a._default * weights.default, pre, lea, a._learned)
+                for a, pre, lea in rows
+            )
+            for stage, rows in self._by_stage.items()
+        }
         t0 = clock()
         deadline_at = None if self.deadline_s is None else t0 + self.deadline_s
 
         trace: list[CycleRecord] = []
         stage_index = 0
         stage = stages[0]
+        table = tables[stage]
         stage_cycle = 0
         per_stage: dict[str, int] = {stage: 0}
         completed: list[str] = []
@@ -191,7 +202,9 @@ class Controller:
                 wall_time_s=clock() - t0,
             )
 
-        def emit(record: CycleRecord) -> str | None:
+        def emit(fields: tuple) -> str | None:
+            """Record a cycle; returns an error text if a callback raised."""
+            record = new_tuple(CycleRecord, (*fields, clock() - t0))
             if keep:
                 trace.append(record)
             for callback in callbacks:
@@ -204,77 +217,60 @@ class Controller:
         while True:
             if cancel is not None and cancel.cancelled:
                 return finish(RunStatus.CANCELLED, cancel.reason)
-            if seq >= self.max_cycles:
+            if seq >= max_cycles:
                 return finish(
-                    RunStatus.CYCLE_LIMIT, f"cycle limit of {self.max_cycles} reached in stage {stage!r}"
+                    RunStatus.CYCLE_LIMIT, f"cycle limit of {max_cycles} reached in stage {stage!r}"
                 )
             if deadline_at is not None and clock() >= deadline_at:
                 return finish(
                     RunStatus.DEADLINE, f"deadline of {self.deadline_s} s passed in stage {stage!r}"
                 )
             seq += 1
-            ctx = CycleContext(seq, stage, stage_cycle, events, last_agent, acted)
+            per_stage[stage] += 1
+            ctx = new_tuple(CycleContext, (seq, stage, stage_cycle, events, last_agent, acted))
 
             # --- rate ---------------------------------------------------------
             rows: list[AgentRating] = []
             best: Agent | None = None
             best_total = -1.0
-            for agent, has_precondition, has_learned in self._by_stage[stage]:
-                name = agent.name
-                try:
-                    if stage_cycle == 0:
-                        opp = 0.0
-                    else:
-                        opp = hints.get(name, 0.0)
-                        if has_precondition:
+            name = ""
+            try:
+                for agent, name, default, weighted_default, has_pre, has_learned, learned in table:
+                    opp = 0.0
+                    if stage_cycle:  # rule 1: nothing to react to at a stage's first cycle
+                        if hints:
+                            opp = hints.get(name, 0.0)
+                        if has_pre:
                             own = agent.opportunistic(board, ctx)
                             if own is not None:
-                                own = check_probability(own, f"agents.{name}.opportunistic")
+                                if own.__class__ is not float or not 0.0 <= own <= 1.0:
+                                    own = check_probability(own, f"agents.{name}.opportunistic")
                                 if own > opp:
                                     opp = own
-                    learned = (
-                        check_probability(agent.learned_rating(board, ctx), f"agents.{name}.learned")
-                        if has_learned
-                        else agent._learned
-                    )
-                except Exception as exc:
-                    per_stage[stage] += 1
-                    seq_reason = f"agent {name!r} failed its rating: {type(exc).__name__}: {exc}"
-                    emit(
-                        CycleRecord(
-                            seq,
-                            stage,
-                            stage_cycle,
-                            tuple(rows),
-                            weights,
-                            None,
-                            None,
-                            seq_reason,
-                            (),
-                            clock() - t0,
+                    if has_learned:
+                        learned = check_probability(
+                            agent.learned_rating(board, ctx), f"agents.{name}.learned"
                         )
-                    )
-                    return finish(RunStatus.ERROR, seq_reason)
-                variable = opp * wo + learned * wl
-                total = agent._default * wd + variable
-                eligible = always or variable > 0.0 or name not in acted
-                rows.append(AgentRating(name, agent._default, opp, learned, total, eligible))
-                if eligible and total > best_total:
-                    best, best_total = agent, total
+                    variable = opp * wo + learned * wl
+                    total = weighted_default + variable
+                    eligible = always or variable > 0.0 or name not in acted
+                    rows.append(new_tuple(AgentRating, (name, default, opp, learned, total, eligible)))
+                    if eligible and total > best_total:
+                        best = agent
+                        best_total = total
+            except Exception as exc:
+                reason = f"agent {name!r} failed its rating: {type(exc).__name__}: {exc}"
+                emit((seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, ()))
+                return finish(RunStatus.ERROR, reason)
 
             if best is None:
-                per_stage[stage] += 1
                 reason = (
                     f"no agent may act in stage {stage!r}: every allowed agent has acted and "
                     "none is asked for again by its opportunistic or learned sub-rating"
                     if rows
                     else f"no agent is allowed in stage {stage!r}"
                 )
-                broken = emit(
-                    CycleRecord(
-                        seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, (), clock() - t0
-                    )
-                )
+                broken = emit((seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, ()))
                 return finish(RunStatus.ERROR, broken) if broken else finish(RunStatus.STALLED, reason)
 
             # --- act ----------------------------------------------------------
@@ -282,48 +278,26 @@ class Controller:
             board.begin_cycle()
             try:
                 result = best.act(board, ctx)
-                if not isinstance(result, ActionResult):
+                if result.__class__ is not ActionResult and not isinstance(result, ActionResult):
                     raise TypeError(f"act() must return an ActionResult, got {type(result).__name__}")
-                new_hints = {
-                    target: check_probability(value, f"agents.{name}.ratings.{target}")
-                    for target, value in result.ratings.items()
-                }
+                new_hints = (
+                    {
+                        target: check_probability(value, f"agents.{name}.ratings.{target}")
+                        for target, value in result.ratings.items()
+                    }
+                    if result.ratings
+                    else {}
+                )
             except Exception as exc:
                 changes = board.end_cycle()
-                per_stage[stage] += 1
                 reason = f"agent {name!r} raised {type(exc).__name__}: {exc}"
-                emit(
-                    CycleRecord(
-                        seq,
-                        stage,
-                        stage_cycle,
-                        tuple(rows),
-                        weights,
-                        name,
-                        None,
-                        reason,
-                        changes,
-                        clock() - t0,
-                    )
-                )
+                emit((seq, stage, stage_cycle, tuple(rows), weights, name, None, reason, changes))
                 return finish(RunStatus.ERROR, reason)
             changes = board.end_cycle()
-            per_stage[stage] += 1
             acted[name] = acted.get(name, 0) + 1
             outcome = result.outcome
             broken = emit(
-                CycleRecord(
-                    seq,
-                    stage,
-                    stage_cycle,
-                    tuple(rows),
-                    weights,
-                    name,
-                    outcome,
-                    result.detail,
-                    changes,
-                    clock() - t0,
-                )
+                (seq, stage, stage_cycle, tuple(rows), weights, name, outcome, result.detail, changes)
             )
             if broken:
                 return finish(RunStatus.ERROR, broken)
@@ -343,6 +317,7 @@ class Controller:
                     return finish(RunStatus.COMPLETED, f"all stages completed ({', '.join(completed)})")
                 stage_index += 1
                 stage = stages[stage_index]
+                table = tables[stage]
                 per_stage[stage] = 0
                 stage_cycle = 0
                 acted = {}

@@ -45,9 +45,8 @@ class AgentRating(NamedTuple):
     eligible: bool = True
 
 
-@dataclass(frozen=True, slots=True)
-class CycleRecord:
-    """What happened in one cycle.
+class CycleRecord(NamedTuple):
+    """What happened in one cycle (an immutable named tuple).
 
     Attributes:
         seq: cycle number in the run, 1-based and contiguous.
