@@ -18,9 +18,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from _harness import median_of, table  # noqa: E402
+from _harness import median_of, table
 
-from eos_svc import ActionResult, Agent, Board, Controller, CycleContext, Outcome, Weights  # noqa: E402
+from eos_svc import ActionResult, Agent, Board, Controller, CycleContext, Outcome, Weights
 
 N_AGENTS = 8
 CYCLES = 2000
