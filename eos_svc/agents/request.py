@@ -190,7 +190,7 @@ class PlanRequest:
     """A grasp-plan request.
 
     Attributes:
-        object: the object to grasp.
+        obj: the object to grasp (``"object"`` in the JSON form).
         weights: weights of the sub-ratings.
         seed: seed of the run's random generator (search moves, tactile noise).
         tactile_noise: standard deviation of the tactile contact location (m).
@@ -198,7 +198,7 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
     """
 
-    object: ObjectSpec = field(default_factory=ObjectSpec)
+    obj: ObjectSpec = field(default_factory=ObjectSpec)
     weights: Weights = field(default_factory=Weights)
     seed: int = 1
     tactile_noise: float = 2e-4
@@ -206,8 +206,8 @@ class PlanRequest:
     deadline_s: float | None = 10.0
 
     def __post_init__(self) -> None:
-        if not isinstance(self.object, ObjectSpec):
-            raise ValidationError("object", f"must be an ObjectSpec, got {type(self.object).__name__}")
+        if not isinstance(self.obj, ObjectSpec):
+            raise ValidationError("object", f"must be an ObjectSpec, got {type(self.obj).__name__}")
         if not isinstance(self.weights, Weights):
             raise ValidationError("weights", f"must be a Weights, got {type(self.weights).__name__}")
         object.__setattr__(self, "seed", _integer(self.seed, "seed", 0, 2**63 - 1))
@@ -231,7 +231,7 @@ class PlanRequest:
         _check_keys(data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s"}, "")
         kwargs: dict[str, Any] = {}
         if "object" in data:
-            kwargs["object"] = ObjectSpec.from_dict(data["object"])
+            kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
         for key in ("seed", "tactile_noise", "max_cycles", "deadline_s"):
@@ -242,7 +242,7 @@ class PlanRequest:
     def to_dict(self) -> dict[str, Any]:
         """JSON form (round-trips through :meth:`from_dict`)."""
         return {
-            "object": self.object.to_dict(),
+            "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
             "tactile_noise": self.tactile_noise,
