@@ -21,6 +21,7 @@ from abc import ABC, abstractmethod
 import coal
 import numpy as np
 import pinocchio as pin
+from numpy.typing import ArrayLike
 
 from .hand import KinematicsError
 
@@ -231,7 +232,7 @@ class Ellipsoid(SurfaceObject):
 
     kind = "ellipsoid"
 
-    def __init__(self, radii: np.ndarray | tuple[float, float, float],
+    def __init__(self, radii: ArrayLike,
                  placement: pin.SE3 | None = None) -> None:
         super().__init__(placement)
         self.radii = _positive3("radii", radii)
@@ -417,7 +418,7 @@ class Box(SurfaceObject):
 
     kind = "box"
 
-    def __init__(self, size: np.ndarray | tuple[float, float, float],
+    def __init__(self, size: ArrayLike,
                  placement: pin.SE3 | None = None) -> None:
         super().__init__(placement)
         self.size = _positive3("size", size)

@@ -201,8 +201,8 @@ def _desc(**changes: object) -> HandDescription:
     d = HandDescription.hand3x3()
     fingers = list(d.fingers)
     f0 = changes.pop("finger0", None)
-    if f0 is not None:
-        fingers[0] = f0  # type: ignore[assignment]
+    if isinstance(f0, FingerDescription):
+        fingers[0] = f0
     return HandDescription(
         fingers=tuple(fingers),
         wrist_joints=changes.pop("wrist_joints", d.wrist_joints),  # type: ignore[arg-type]
