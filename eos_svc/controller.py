@@ -23,7 +23,8 @@ Rules the paper leaves open, fixed here (and visible in every cycle record):
 3. **Ends.** ``CANNOT_ACT`` from the chosen agent stalls the run, as does a
    cycle in which no agent is eligible. ``STAGE_COMPLETE`` moves to the next
    stage (after the last one the run completes). ``FINISHED`` ends the run as
-   the agent says. Cancellation, the cycle limit and the deadline are checked
+   the agent says, and the stage it ended in counts as completed (the run
+   exited it gracefully). Cancellation, the cycle limit and the deadline are checked
    before every cycle. An exception raised by an agent ends the run with status
    ``error`` and the exception in the reason; nothing escapes :meth:`run`.
 """
@@ -325,6 +326,7 @@ class Controller:
                 hints = {}
                 last_agent = None
             elif outcome is Outcome.FINISHED:
+                completed.append(stage)  # the run exits gracefully from this stage
                 status = RunStatus.COMPLETED if result.succeeded else RunStatus.FAILED
                 return finish(status, result.detail or f"finished by agent {name!r}")
             else:  # pragma: no cover - Outcome is closed

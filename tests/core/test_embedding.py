@@ -14,7 +14,7 @@ def test_root_finding_with_both_subratings():
     result, board = solve_root(default_problem())
     assert result.status is RunStatus.COMPLETED
     assert board["root"] == pytest.approx(0.7390851332151607, abs=1e-9)
-    assert result.stages_completed == ("bracket",)
+    assert result.stages_completed == ("bracket", "refine")
     assert set(result.agents_run()) >= {"scan", "widen", "secant", "done"}
 
 
