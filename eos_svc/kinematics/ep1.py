@@ -1,0 +1,334 @@
+"""EP1, the exploratory procedure: roll one fingertip on the object and estimate its curvature.
+
+Procedure (:func:`run_ep1`), from a configuration where the fingertip touches the object
+(:func:`place_hand_for_ep1` makes one):
+
+1. Contact frame ``F`` at the start contact: ``z`` = the fingertip's outward normal (into
+   the object), ``x`` = world z (or world y when the normal is nearly vertical) projected on
+   the tangent plane, ``y = z × x``. The estimate's form is expressed in ``(x, y)``.
+2. For each tangent direction ``a = cos φ x + sin φ y`` (φ = 0°, 90°, 45°, 135°; at least
+   the first two): roll about the fixed world axis ``a`` by ``+θ/2``, then ``−θ``, then
+   ``+θ/2`` — back at the start, so EP1 can be repeated in place. Every leg is one
+   :class:`~.rolling.RollingQP` (set up once, warm-started each step) and every step gives a
+   tactile reading.
+3. The readings (fingertip frame) are mapped to geodesic coordinates on the fingertip sphere
+   around the start contact (exact arc lengths, not chords), in the basis ``(x, y)``; the net
+   roll angle ``ϑ`` of each reading is known. Readings of the outward half-legs and of the
+   sweep back are two independent sets; each gives, by a least-squares fit
+   ``c(ϑ) = c₀ + s ϑ + s₂ ϑ²``, the contact's displacement over the fingertip per radian at
+   the start point, ``s`` [m/rad]. Each fit is one :class:`~.curvature.CurvatureSample`
+   ``(ω_xy = (cos φ, sin φ), u = s, K_f = I/r_f)`` — Montana's equation in increments.
+4. :class:`~.curvature.CurvatureEstimator` solves for ``K_o`` over all samples (including
+   those of earlier EP1 runs when an estimator is passed in).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+import pinocchio as pin
+
+from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
+from .hand import HandModel, HandState, KinematicsError
+from .objects import Box, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from .rolling import RollingQP
+from .scene import Scene
+from .tactile import TactileSensor
+
+__all__ = [
+    "DEFAULT_DIRECTIONS",
+    "EP1Error",
+    "EP1Result",
+    "contact_frame",
+    "ep1_scene",
+    "ground_truth_form",
+    "place_hand_for_ep1",
+    "run_ep1",
+]
+
+#: Roll directions in the tangent plane, degrees from the frame's x axis.
+DEFAULT_DIRECTIONS: tuple[float, ...] = (0.0, 90.0, 45.0, 135.0)
+
+#: |gap| above which the fingertip does not count as touching at the start, m.
+CONTACT_TOLERANCE = 1e-4
+
+
+class EP1Error(KinematicsError):
+    """EP1 cannot run (no contact at the start, bad parameters)."""
+
+
+@dataclass(frozen=True)
+class EP1Result:
+    """Outcome of one EP1 run.
+
+    Attributes:
+        estimate: the estimator's estimate after this run's samples (and earlier ones when an
+            estimator was passed in).
+        q_final: configuration at the end (= the start, up to integration drift).
+        steps: rolling steps taken.
+        samples: this run's samples (add them to another estimator to accumulate).
+        max_slip_speed: largest no-slip residual over the run, m/s.
+        max_gap: largest |gap| measured at the contact over the run, m.
+        frame: 3×3 world contact frame (columns x, y, z) the form is expressed in.
+        contact_point: world contact point (object side) at the start, m.
+        normal: world object normal at the start (object → fingertip).
+    """
+
+    estimate: CurvatureEstimate
+    q_final: np.ndarray
+    steps: int
+    samples: tuple[CurvatureSample, ...]
+    max_slip_speed: float
+    max_gap: float
+    frame: np.ndarray
+    contact_point: np.ndarray
+    normal: np.ndarray
+
+
+def contact_frame(normal: np.ndarray) -> np.ndarray:
+    """The EP1 contact frame (columns x, y, z) for the object normal ``normal`` (world).
+
+    ``z = −normal`` (the fingertip's outward normal); ``x`` = world z projected on the
+    tangent plane (world y if the normal is within ~25° of vertical); ``y = z × x``.
+    """
+    z = -np.asarray(normal, dtype=float)
+    z = z / np.linalg.norm(z)
+    ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = ref - (ref @ z) * z
+    x /= np.linalg.norm(x)
+    y = np.array([z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]])
+    return np.column_stack([x, y, z])
+
+
+def ground_truth_form(obj: SurfaceObject, point: np.ndarray, frame: np.ndarray) -> np.ndarray:
+    """The object's analytic curvature form at ``point`` in the frame's ``(x, y)``, 1/m."""
+    return obj.curvature_form(point, frame[:, 0], frame[:, 1])
+
+
+def place_hand_for_ep1(
+    scene: Scene,
+    finger: str = "finger1",
+    q: np.ndarray | None = None,
+    point: np.ndarray | None = None,
+) -> np.ndarray:
+    """A configuration where ``finger``'s tip touches the object with zero gap.
+
+    Translates the wrist (x, y, z) of ``q`` (default: neutral) so the fingertip sphere
+    centre sits at ``s + r_f n``, with ``s`` the object's surface point closest to ``point``
+    (default: closest to the fingertip centre) and ``n`` its outward normal.
+
+    Raises:
+        WorkspaceError: the wrist would leave its workspace.
+    """
+    hand = scene.hand
+    st = hand.state(hand.neutral() if q is None else q)
+    c = st.tip_position(finger).copy()
+    obj = scene.object
+    target = c if point is None else np.asarray(point, dtype=float)
+    s = obj.closest_surface_point(target)
+    n = obj.surface_normal(target)
+    if point is None and obj.signed_distance(c) < 0:
+        n = -n if (c - s) @ n < 0 else n  # tip centre inside: still put the tip outside
+    dp = s + hand.tip_radius(finger) * n - c
+    q_new = st.move_wrist(dp)
+    # polish: the closest point of the moved tip may differ slightly on curved surfaces
+    for _ in range(3):
+        st.update(q_new)
+        ct = scene.contact(st, finger)
+        if abs(ct.distance) < 1e-12:
+            break
+        q_new = st.move_wrist(-ct.distance * ct.normal)
+    return q_new
+
+
+def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float) -> np.ndarray:
+    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m."""
+    d = points / np.linalg.norm(points, axis=1, keepdims=True)
+    cosang = d @ b
+    v = d - np.outer(cosang, b)
+    sin_ang = np.linalg.norm(v, axis=1)
+    ang = np.arctan2(sin_ang, cosang)
+    scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
+    v = v * scale[:, None]
+    return np.column_stack([v @ ex, v @ ey])
+
+
+def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
+    """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
+    X = np.column_stack([np.ones_like(theta), theta, theta * theta])
+    coef, *_ = np.linalg.lstsq(X, c, rcond=None)
+    out: np.ndarray = coef[1]
+    return out
+
+
+def run_ep1(
+    scene: Scene,
+    state: HandState,
+    finger: str,
+    tactile_sensor: TactileSensor,
+    *,
+    omega: float = 0.5,
+    steps_per_direction: int = 100,
+    dt: float = 0.01,
+    directions: Sequence[float] = DEFAULT_DIRECTIONS,
+    solver: str = "osqp",
+    estimator: CurvatureEstimator | None = None,
+) -> EP1Result:
+    """Run EP1 from ``state`` (the fingertip must touch the object), estimate the curvature.
+
+    Args:
+        scene: hand and object; state: start configuration (updated to the final q).
+        finger: the rolling finger; tactile_sensor: its sensor (noise, seed).
+        omega: rolling rate, rad/s (> 0). steps_per_direction: steps of the full sweep of one
+            direction (the sweep covers ``omega · dt · steps_per_direction`` rad, centred on the
+            start); each direction takes twice this many steps.
+        dt: time step, s. directions: roll directions, degrees in the tangent plane (≥ 2
+            independent ones). solver: QP backend (see :class:`~.rolling.RollingQP`).
+        estimator: accumulate into this estimator (repeated EP1); default: a new one.
+
+    Raises:
+        EP1Error: no contact at the start or bad parameters; RollingQPError: the QP failed.
+    """
+    if not (math.isfinite(omega) and omega > 0):
+        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
+    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
+        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
+    dirs = [float(d) for d in directions]
+    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
+        raise EP1Error("directions", "need at least two finite directions (degrees)")
+    hand: HandModel = scene.hand
+    ct0 = scene.contact(state, finger)
+    if abs(ct0.distance) > CONTACT_TOLERANCE:
+        raise EP1Error(
+            "state",
+            f"{finger}'s tip is {ct0.distance:.3g} m from the object (tolerance "
+            f"{CONTACT_TOLERANCE} m); bring it into contact first (place_hand_for_ep1)",
+        )
+    F = contact_frame(ct0.normal)
+    r = hand.tip_radius(finger)
+    R0 = state.tip_placement(finger).rotation
+    ex_t = R0.T @ F[:, 0]
+    K_f = np.eye(2) / r
+    half = steps_per_direction // 2
+    full = 2 * half
+    est = estimator if estimator is not None else CurvatureEstimator()
+    samples: list[CurvatureSample] = []
+    max_slip = 0.0
+    max_gap = abs(ct0.distance)
+    steps = 0
+    for phi_deg in dirs:
+        phi = math.radians(phi_deg)
+        a_xy = np.array([math.cos(phi), math.sin(phi)])
+        axis = F[:, :2] @ a_xy
+        a_tip = R0.T @ axis
+        pts: list[list[np.ndarray]] = [[], []]  # set 0: outward half-legs, set 1: the sweep
+        ths: list[list[float]] = [[], []]
+        for leg, (sign, n_steps) in enumerate(((1.0, half), (-1.0, full), (1.0, half))):
+            # the axis stays the one tangent at the start (fixed for the whole direction)
+            rq = RollingQP(
+                state,
+                finger,
+                axis,
+                sign * omega,
+                dt,
+                solver,
+                scene=scene,
+                tactile=tactile_sensor,
+                project_axis=False,
+            )
+            k = 0 if leg != 1 else 1
+            for _ in range(n_steps):
+                st = rq.step()
+                rd = st.reading
+                assert rd is not None
+                if rd.in_contact:
+                    pts[k].append(rd.point_tip)
+                    # realized net roll angle of the tip about a (not the commanded ω·t):
+                    # the data of rq still hold the kinematics of this reading
+                    Rk = rq._data.oMf[rq._fid].rotation
+                    ths[k].append(float(pin.log3(R0.T @ Rk) @ a_tip))
+                max_slip = max(max_slip, st.slip_speed)
+                max_gap = max(max_gap, abs(st.contact.distance))
+            steps += n_steps
+            state.update(rq.q)
+        for k in (0, 1):
+            P = np.array(pts[k])
+            if len(P) < 5:
+                raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
+            b = P.mean(axis=0)
+            b /= np.linalg.norm(b)
+            # basis at b: the frame's x, y (tip frame) projected on the tangent plane at b
+            ex = ex_t - (ex_t @ b) * b
+            ex /= np.linalg.norm(ex)
+            ey = np.array(
+                [b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]]
+            )
+            c = _log_chart(P, b, ex, ey, r)
+            s = _fit_slope(np.array(ths[k]), c)
+            samples.append(est.add_sample(a_xy, s, K_f))
+    return EP1Result(
+        estimate=est.estimate(),
+        q_final=state.q,
+        steps=steps,
+        samples=tuple(samples),
+        max_slip_speed=max_slip,
+        max_gap=max_gap,
+        frame=F,
+        contact_point=np.array(ct0.point_object, dtype=float),
+        normal=np.array(ct0.normal, dtype=float),
+    )
+
+
+# --------------------------------------------------------------------------- scenes
+
+#: Shapes :func:`ep1_scene` builds.
+SHAPES = ("sphere", "plane", "cylinder", "ellipsoid")
+
+
+def ep1_scene(
+    shape: str = "sphere",
+    size: float = 0.04,
+    *,
+    hand: HandModel | None = None,
+    finger: str = "finger1",
+) -> Scene:
+    """An object in front of ``finger``'s tip (hand at neutral) for EP1.
+
+    ``sphere``: radius ``size``; ``plane``: the −x face of a box (``size`` is ignored);
+    ``cylinder``: radius ``size``, axis along world z, touched on its side; ``ellipsoid``:
+    semi-axes ``size · (1, 0.75, 0.6)``, turned so the touched point is off its axes.
+    """
+    from .hand import load_hand
+
+    if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):
+        raise EP1Error("size", f"must be a finite number > 0 m, got {size!r}")
+    h = hand if hand is not None else load_hand()
+    c = h.state().tip_position(finger).copy()
+    r = h.tip_radius(finger)
+    gap = 0.005
+    obj: SurfaceObject
+    if shape == "sphere":
+        obj = Sphere(size, pin.SE3(np.eye(3), c + np.array([r + gap + size, 0.0, 0.0])))
+    elif shape == "plane":
+        half = 0.025
+        obj = Box((2 * half, 0.2, 0.2), pin.SE3(np.eye(3), c + np.array([r + gap + half, 0.0, 0.0])))
+    elif shape == "cylinder":
+        obj = Cylinder(size, 0.2, pin.SE3(np.eye(3), c + np.array([r + gap + size, 0.0, 0.0])))
+    elif shape == "ellipsoid":
+        radii = size * np.array([1.0, 0.75, 0.6])
+        Rot = pin.rpy.rpyToMatrix(0.5, 0.4, 0.3)
+        e = Ellipsoid(radii, pin.SE3(Rot, np.zeros(3)))
+        # the surface point whose outward normal faces the fingertip (−x world)
+        nl = Rot.T @ np.array([-1.0, 0.0, 0.0])
+        s_local = radii**2 * nl / np.linalg.norm(radii * nl)
+        s_world = Rot @ s_local
+        e.placement = pin.SE3(Rot, c + np.array([r + gap, 0.0, 0.0]) - s_world)
+        obj = e
+    else:
+        raise EP1Error("shape", f"unknown shape {shape!r}; choose from {', '.join(SHAPES)}")
+    return Scene(h, obj)

@@ -1,0 +1,511 @@
+"""The rolling-without-sliding step of EP1: a small differential-IK QP over joint velocities.
+
+Each :meth:`RollingQP.step` measures the contact (coal), solves
+
+    minimise    ½ q̇ᵀ W q̇
+    subject to  t₁ᵀ J_p q̇ = 0,  t₂ᵀ J_p q̇ = 0          no slip (material point at the contact)
+                nᵀ J_p q̇ = −β · gap / dt               keep contact, drift correction
+                J_ω q̇ = ω · a                          roll about the fixed tangent axis a, no spin
+                max(−q̇_max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇_max, (q_max − q)/dt)
+
+and integrates ``q ← q + q̇ dt``. ``J_p`` is the Jacobian of the fingertip body's material
+point at the contact, ``J_ω`` of its angular velocity (world axes), ``n`` the contact normal
+(object → fingertip), ``t₁, t₂`` tangents. The variables are the joint velocities of the
+wrist and of the rolling finger; the other fingers keep still (their q̇ is 0).
+
+The problem is a :class:`qpsolvers.Problem` (``RollingQP.problem``, live arrays updated in
+place, pink's ``build_ik`` style). With ``solver="osqp"`` (default) one ``osqp.OSQP`` object
+is set up once per roll and then updated and warm-started every step at tight tolerances
+(``eps_abs = eps_rel = 1e-9`` by default, not OSQP's 1e-3); any other installed qpsolvers
+backend is selectable by name and solves the same Problem through
+:func:`qpsolvers.solve_problem`. A failed or infeasible QP raises :class:`RollingQPError`
+carrying a copy of the problem.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import coal
+import numpy as np
+import osqp
+import pinocchio as pin
+import qpsolvers
+import scipy.sparse as sp
+
+from .hand import HandState, KinematicsError
+from .scene import Contact, Scene
+from .tactile import TactileReading, TactileSensor
+
+__all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
+
+_LWA = pin.LOCAL_WORLD_ALIGNED
+
+
+def available_solvers() -> list[str]:
+    """Installed qpsolvers backends usable by :class:`RollingQP`."""
+    return list(qpsolvers.available_solvers)
+
+
+class RollingQPError(RuntimeError):
+    """The rolling QP failed (infeasible, not solved, bad output).
+
+    Attributes:
+        problem: a copy of the :class:`qpsolvers.Problem` that failed.
+        solver: backend name; ``status``: the backend's status text.
+    """
+
+    def __init__(self, message: str, problem: qpsolvers.Problem, solver: str, status: str) -> None:
+        super().__init__(f"rolling QP ({solver}): {message} [status: {status}]")
+        self.problem = problem
+        self.solver = solver
+        self.status = status
+
+
+@dataclass(frozen=True, slots=True)
+class RollingStep:
+    """Outcome of one rolling step.
+
+    Attributes:
+        contact: the contact measured at the start of the step (configuration before it).
+        reading: the tactile reading of that contact (None without a sensor).
+        qdot: full joint velocity applied during the step (nv,), SI.
+        slip_speed: |tangential velocity| of the fingertip material point at the contact
+            implied by ``qdot`` (the no-slip residual), m/s.
+        normal_residual: |nᵀ J_p q̇ − target| (contact-keeping equality residual), m/s.
+        omega_residual: |J_ω q̇ − ω a| (angular velocity equality residual), rad/s.
+        iterations: solver iterations (0 when the backend does not report them).
+    """
+
+    contact: Contact
+    reading: TactileReading | None
+    qdot: np.ndarray
+    slip_speed: float
+    normal_residual: float
+    omega_residual: float
+    iterations: int
+
+
+def _unit(name: str, v: object) -> np.ndarray:
+    a = np.asarray(v, dtype=float).reshape(-1)
+    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) < 1e-12:
+        raise KinematicsError(name, f"must be a finite non-zero 3-vector, got {v!r}")
+    out: np.ndarray = a / np.linalg.norm(a)
+    return out
+
+
+class RollingQP:
+    """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
+
+    Args:
+        state: the hand state at the start of the roll; it is not modified during the roll
+            (the QP drives its own Pinocchio data) and is brought up to date by :meth:`sync`.
+        finger: the rolling finger (its tip must be a sphere).
+        axis: world rolling axis (unit after normalisation; tangent to the object at the
+            contact — its normal component is removed at construction).
+        omega: rolling rate about ``axis``, rad/s (sign gives the direction).
+        dt: time step, s (> 0).
+        solver: ``"osqp"`` (default, set up once and warm-started) or any installed qpsolvers
+            backend name (``available_solvers()``).
+        scene: the hand and the object (required; keyword).
+        tactile: optional sensor; each step then carries a reading of its contact.
+        weights: diagonal of W over the active joints (wrist then finger), default 1.
+        gap_gain: β of the drift correction, in (0, 1].
+        eps: OSQP absolute and relative tolerance.
+        check_termination: OSQP checks convergence every this many iterations.
+        project_axis: remove the axis' component along the current contact normal (default);
+            False keeps the given axis as is (EP1 keeps one axis over several legs).
+        second_order: correct the targets by ½ dt J̇q̇ so that q ← q + q̇ dt meets them on
+            average over the step (slip per step O(dt³) instead of O(dt²)).
+    """
+
+    def __init__(
+        self,
+        state: HandState,
+        finger: str,
+        axis: object,
+        omega: float,
+        dt: float,
+        solver: str = "osqp",
+        *,
+        scene: Scene,
+        tactile: TactileSensor | None = None,
+        weights: object = None,
+        gap_gain: float = 0.5,
+        eps: float = 1e-9,
+        check_termination: int = 5,
+        project_axis: bool = True,
+        second_order: bool = True,
+    ) -> None:
+        hand = state.hand
+        self.hand = hand
+        self.scene = scene
+        self.finger = finger
+        self.tactile = tactile
+        if not (math.isfinite(dt) and dt > 0):
+            raise KinematicsError("dt", f"must be a finite number > 0 s, got {dt!r}")
+        if not math.isfinite(omega):
+            raise KinematicsError("omega", f"must be finite rad/s, got {omega!r}")
+        if not (0.0 < gap_gain <= 1.0):
+            raise KinematicsError("gap_gain", f"must be in (0, 1], got {gap_gain!r}")
+        if solver != "osqp" and solver not in qpsolvers.available_solvers:
+            raise KinematicsError(
+                "solver",
+                f"unknown or uninstalled QP solver {solver!r}; available: {qpsolvers.available_solvers}",
+            )
+        self.solver = solver
+        self.dt = float(dt)
+        self.omega = float(omega)
+        self.gap_gain = float(gap_gain)
+        self.eps = float(eps)
+        model = hand.model
+        self._model = model
+        self._fid = hand.tip_frame_id(finger)
+        self._r = hand.tip_radius(finger)
+        gid = hand.tip_geometry_id(finger)
+        if gid is not None and not isinstance(
+            hand.collision_model.geometryObjects[gid].geometry, coal.Sphere
+        ):
+            raise KinematicsError("finger", f"{finger}'s tip is not a sphere; cannot roll it")
+        self._cols = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
+        nx = len(self._cols)
+        self.nx = nx
+        # q + v dt is exact when every joint is 1-DoF with nq == nv (hand3x3).
+        if not (model.nq == model.nv and all(j.nq == 1 for j in model.joints[1:])):
+            raise KinematicsError("hand", "RollingQP needs 1-DoF joints with nq == nv")
+        self._data = model.createData()
+        self._state = state
+        self._q = state.q
+        self._stale = False
+
+        # Fast contact: coal distance functor with reused transforms/result.
+        # keep the shapes referenced: the functor holds raw pointers to them
+        self._tip_shape = coal.Sphere(self._r)
+        obj = scene.object
+        self._obj_shape = obj.geometry
+        self._dist = coal.ComputeDistance(self._obj_shape, self._tip_shape)
+        self._tf_obj = coal.Transform3s()
+        M = obj.placement
+        self._tf_obj.setTransform(np.asarray(M.rotation), np.asarray(M.translation))
+        self._tf_tip = coal.Transform3s()
+        self._req = coal.DistanceRequest()
+        self._req.enable_signed_distance = True
+        self._req.gjk_tolerance = 1e-12
+        self._res = coal.DistanceResult()
+
+        # Axis: tangent at the current contact.
+        self.kinematics_only()
+        c0 = self.contact()
+        a = _unit("axis", axis)
+        n = c0.normal
+        if project_axis:
+            a = a - (a @ n) * n
+        if np.linalg.norm(a) < 1e-6 or abs(a @ n) > 0.5 * np.linalg.norm(a):
+            raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
+        self.axis = a / np.linalg.norm(a)
+        self._wa = self.omega * self.axis
+        self.check_termination = check_termination
+        #: Second-order integration: the QP targets the step's average velocities (see _build).
+        self.second_order = bool(second_order)
+        self._zero_nv = np.zeros(model.nv)
+        #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
+        self.fast_tactile = True
+
+        # Preallocated QP data.
+        w = np.ones(nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
+        if w.shape != (nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+            raise KinematicsError("weights", f"must be {nx} finite numbers > 0")
+        self._P = np.diag(w)
+        self._qlin = np.zeros(nx)
+        # OSQP constraint matrix [C; I] (CSC, column-major): column j = C[:, j] then 1.
+        # C, b, lb, ub are views into the OSQP arrays, so one update feeds both the
+        # qpsolvers Problem and OSQP.
+        self._Ax = np.zeros(7 * nx)
+        self._Ax2 = self._Ax.reshape(nx, 7)
+        self._Ax2[:, 6] = 1.0
+        self._C = self._Ax2[:, :6].T
+        self._l = np.zeros(6 + nx)
+        self._u = np.zeros(6 + nx)
+        self._b = self._l[:6]
+        self._lb = self._l[6:]
+        self._ub = self._u[6:]
+        self._lo = hand.lower[self._cols]  # q index == v index for hand3x3-like hands
+        self._hi = hand.upper[self._cols]
+        self._nvmax = -hand.velocity_limit[self._cols]
+        self._vmax = hand.velocity_limit[self._cols]
+        self._qa = self._q[self._cols].copy()  # active joints' q, kept in step with _q
+        self._Jb = np.zeros((6, nx))
+        self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
+        self._M[3:, 3:] = np.eye(3)
+        self._tmp = np.zeros(nx)
+        self._res6 = np.zeros(6)
+        self._qdot = np.zeros(model.nv)
+        #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
+        self.problem = qpsolvers.Problem(
+            self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
+        )
+        self._b[3:] = self._wa
+        self._osqp: Any = None
+        self._osqp_solver: Any = None
+        self.steps = 0
+
+    # ------------------------------------------------------------------ state
+    @property
+    def q(self) -> np.ndarray:
+        """Current configuration (a copy)."""
+        return self._q.copy()
+
+    @property
+    def state(self) -> HandState:
+        """The hand state, synchronised to the current configuration."""
+        self.sync()
+        return self._state
+
+    def sync(self) -> None:
+        """Bring the caller's :class:`HandState` up to the current q."""
+        if self._stale:
+            self._state.update(self._q)
+            self._stale = False
+
+    # ------------------------------------------------------------------ contact
+    def contact(self) -> Contact:
+        """Contact of the rolling tip at the current q (coal), kinematics already computed."""
+        c = self._data.oMf[self._fid].translation
+        self._tf_tip.setTranslation(c)
+        res = self._res
+        res.clear()
+        self._dist(self._tf_obj, self._tf_tip, self._req, res)
+        p_obj = res.getNearestPoint1()
+        d = res.min_distance
+        dx, dy, dz = c[0] - p_obj[0], c[1] - p_obj[1], c[2] - p_obj[2]
+        nn = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if nn > 1e-12 and d > -0.5 * self._r:  # tip centre outside the object
+            s = 1.0 / nn
+            n = np.array((dx * s, dy * s, dz * s))
+        else:
+            n = np.asarray(res.normal, dtype=float)
+        r = self._r
+        p_tip = np.array((c[0] - r * n[0], c[1] - r * n[1], c[2] - r * n[2]))
+        return Contact(self.finger, float(d), p_tip, p_obj, n)
+
+    # ------------------------------------------------------------------ the step
+    def _build(self, contact: Contact) -> None:
+        """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact."""
+        J = pin.getFrameJacobian(self._model, self._data, self._fid, _LWA)
+        J.take(self._cols, axis=1, out=self._Jb)
+        n = contact.normal
+        nx_, ny_, nz_ = float(n[0]), float(n[1]), float(n[2])
+        # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
+        if abs(nx_) < 0.9:
+            t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
+        else:
+            t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
+        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
+        t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
+        # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
+        # t1 × n = −t2, t2 × n = t1.
+        r = self._r
+        M = self._M
+        M[0, 0], M[0, 1], M[0, 2] = t1x, t1y, t1z
+        M[0, 3], M[0, 4], M[0, 5] = -r * t2x, -r * t2y, -r * t2z
+        M[1, 0], M[1, 1], M[1, 2] = t2x, t2y, t2z
+        M[1, 3], M[1, 4], M[1, 5] = r * t1x, r * t1y, r * t1z
+        M[2, 0], M[2, 1], M[2, 2] = nx_, ny_, nz_
+        np.matmul(M, self._Jb, out=self._C)
+        b = self._b
+        b[2] = -self.gap_gain * contact.distance / self.dt
+        if self.second_order and self.steps > 0:
+            # q̇ is constant over a step, so the tip moves with the acceleration J̇q̇ of the
+            # last q̇: ask for the step's *average* velocities, v + ½ dt a, to meet the
+            # targets (no slip, contact, ω a) — second-order accurate integration.
+            acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._fid, _LWA)
+            ax, ay, az = acc.linear.tolist()
+            wx, wy, wz = acc.angular.tolist()
+            # material point at r = −r_f n: a_p = a_c + α × r + ω × (ω × r); the last term is
+            # normal when ω ⟂ n, and α × r = −r_f α × n
+            px = ax - r * (wy * nz_ - wz * ny_)
+            py = ay - r * (wz * nx_ - wx * nz_)
+            pz = az - r * (wx * ny_ - wy * nx_)
+            h = 0.5 * self.dt
+            b[0] = -h * (t1x * px + t1y * py + t1z * pz)
+            b[1] = -h * (t2x * px + t2y * py + t2z * pz)
+            b[2] -= h * (nx_ * ax + ny_ * ay + nz_ * az)
+            wa = self._wa
+            b[3] = wa[0] - h * wx
+            b[4] = wa[1] - h * wy
+            b[5] = wa[2] - h * wz
+        idt = 1.0 / self.dt
+        lb, ub, tmp = self._lb, self._ub, self._tmp
+        np.subtract(self._lo, self._qa, out=tmp)
+        tmp *= idt
+        np.maximum(self._nvmax, tmp, out=lb)
+        np.subtract(self._hi, self._qa, out=tmp)
+        tmp *= idt
+        np.minimum(self._vmax, tmp, out=ub)
+
+    def _solve_osqp(self) -> tuple[np.ndarray, int]:
+        nx = self.nx
+        self._u[:6] = self._b
+        if self._osqp is None:
+            # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
+            indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
+            A = sp.csc_matrix((self._Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
+            s = osqp.OSQP()
+            s.setup(
+                sp.csc_matrix(np.triu(self._P)),
+                self._qlin,
+                A,
+                self._l,
+                self._u,
+                eps_abs=self.eps,
+                eps_rel=self.eps,
+                eps_prim_inf=1e-12,
+                eps_dual_inf=1e-12,
+                warm_starting=True,
+                polishing=False,
+                verbose=False,
+                max_iter=20000,
+                check_termination=self.check_termination,
+            )
+            self._osqp = s
+            # The extension object behind osqp.OSQP: update/solve without the wrapper's
+            # per-call Python glue (np.maximum on l/u, derivative cache, info namespace).
+            self._osqp_solver = s._solver
+        else:
+            slv = self._osqp_solver
+            slv.update_data_vec(q=None, l=self._l, u=self._u)
+            slv.update_data_mat(P_x=None, P_i=None, A_x=self._Ax, A_i=None)
+        slv = self._osqp_solver
+        slv.solve()
+        info = slv.info
+        if info.status_val != 1:  # OSQP_SOLVED
+            raise RollingQPError(
+                "OSQP did not solve the rolling QP", self.problem_copy(), "osqp", str(info.status)
+            )
+        return slv.solution.x, int(info.iter)
+
+    def _solve_generic(self) -> tuple[np.ndarray, int]:
+        sol = qpsolvers.solve_problem(self.problem, solver=self.solver)
+        if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
+            raise RollingQPError(
+                "no solution found", self.problem_copy(), self.solver, str(sol.extras or "not found")
+            )
+        return sol.x, 0
+
+    def problem_copy(self) -> qpsolvers.Problem:
+        """An independent copy of the current QP (for errors and inspection)."""
+        return qpsolvers.Problem(
+            self._P.copy(),
+            self._qlin.copy(),
+            None,
+            None,
+            self._C.copy(),
+            self._b.copy(),
+            self._lb.copy(),
+            self._ub.copy(),
+        )
+
+    def kinematics_only(self) -> None:
+        """Tip placement at the current q (no Jacobians)."""
+        pin.framesForwardKinematics(self._model, self._data, self._q)
+
+    def kinematics(self) -> None:
+        """Forward kinematics (with the last q̇, for the second-order terms), joint Jacobians
+        and the tip placement at the current q."""
+        model, data = self._model, self._data
+        if self.second_order:
+            pin.forwardKinematics(model, data, self._q, self._qdot, self._zero_nv)
+            pin.computeJointJacobians(model, data)
+        else:
+            pin.computeJointJacobians(model, data, self._q)
+        pin.updateFramePlacement(model, data, self._fid)
+
+    def read_tactile(self, contact: Contact) -> TactileReading | None:
+        """The sensor's reading of ``contact`` (None without a sensor).
+
+        For a plain :class:`TactileSensor` this is the same reading (same noise model, same
+        random draws, tested equal to ``TactileSensor.read``) written with scalar arithmetic:
+        ``TactileSensor.read`` spends ~100 µs in ``np.cross`` and friends on 3-vectors.
+        """
+        sensor = self.tactile
+        if sensor is None:
+            return None
+        if type(sensor) is not TactileSensor or not self.fast_tactile:
+            self.sync()
+            return sensor.read(self._state, contact)
+        r = self._r
+        Mf = self._data.oMf[self._fid]
+        R = Mf.rotation
+        n = contact.normal
+        # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
+        px, py, pz = (R.T @ n).tolist()
+        px, py, pz = -r * px, -r * py, -r * pz
+        d = contact.distance
+        in_contact = d <= sensor.contact_tolerance
+        if in_contact:
+            if sensor.noise_std > 0.0:
+                nx_, ny_, nz_ = px / r, py / r, pz / r
+                if abs(nx_) < 0.9:
+                    t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
+                else:
+                    t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
+                s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+                t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
+                t2x = ny_ * t1z - nz_ * t1y
+                t2y = nz_ * t1x - nx_ * t1z
+                t2z = nx_ * t1y - ny_ * t1x
+                g0, g1 = sensor.rng.normal(0.0, sensor.noise_std, size=2).tolist()
+                px, py, pz = px + g0 * t1x + g1 * t2x, py + g0 * t1y + g1 * t2y, pz + g0 * t1z + g1 * t2z
+                s = r / math.sqrt(px * px + py * py + pz * pz)
+                px, py, pz = px * s, py * s, pz * s
+            if sensor.pitch is not None:
+                h = sensor.pitch
+                px, py, pz = round(px / h) * h, round(py / h) * h, round(pz / h) * h
+                pn = math.sqrt(px * px + py * py + pz * pz)
+                if pn > 1e-12:
+                    px, py, pz = px * r / pn, py * r / pn, pz * r / pn
+        p = np.array((px, py, pz))
+        return TactileReading(contact.finger, p, p / r, bool(in_contact), float(d))
+
+    def step(self) -> RollingStep:
+        """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
+        self.kinematics()
+        contact = self.contact()
+        reading = self.read_tactile(contact) if self.tactile is not None else None
+        self._build(contact)
+        if (self._lb > self._ub).any():
+            raise RollingQPError(
+                "joint limits leave no feasible velocity",
+                self.problem_copy(),
+                self.solver,
+                "infeasible bounds",
+            )
+        x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
+        # residuals of the equalities at the returned solution
+        res = self._res6
+        np.matmul(self._C, x, out=res)
+        res -= self._b
+        r0, r1, r2, r3, r4, r5 = res.tolist()
+        qdot = self._qdot
+        qdot[self._cols] = x
+        qa = self._qa
+        qa += x * self.dt
+        self._q[self._cols] = qa
+        self._stale = True
+        self.steps += 1
+        return RollingStep(
+            contact,
+            reading,
+            qdot.copy(),
+            math.sqrt(r0 * r0 + r1 * r1),
+            abs(r2),
+            math.sqrt(r3 * r3 + r4 * r4 + r5 * r5),
+            it,
+        )
+
+    def run(self, n: int) -> list[RollingStep]:
+        """``n`` steps; returns their records."""
+        return [self.step() for _ in range(n)]
