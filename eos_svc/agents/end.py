@@ -1,0 +1,85 @@
+"""end: finishes the run when the grasp is complete or can no longer progress.
+
+Success when all fingertips touch (a precision grip). The grasp is *good*
+(paper Fig. 2) when the contacts lie about the object's diameter: the opposing
+finger's contact and the middle of the other contacts are on opposite sides of
+the object's centre — the angle between them, seen from the centre, at least
+150°. Opportunistic sub-rating: 1 when every finger is done (touching, missed,
+or stopped by a link contact), else 0. When chosen with a finger still open
+(nothing else can act), it ends the run as failed, saying which fingers never
+reached the object.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from eos_svc.agent import ActionResult, CycleContext, Outcome
+from eos_svc.agents import keys
+from eos_svc.agents.base import GRASP, GraspAgent
+from eos_svc.agents.finger import DONE_STATES
+from eos_svc.agents.world import GraspWorld
+from eos_svc.board import Board
+
+#: smallest angle (deg) between the opposing contact and the others' midpoint for a good grasp
+GOOD_GRASP_ANGLE_DEG = 150.0
+
+
+def grasp_geometry(world: GraspWorld) -> dict:
+    """Contacts per finger and the good-grasp test, from the world as it is (ground truth)."""
+    hand = world.hand
+    contacts = {}
+    for finger in hand.finger_names:
+        c = world.scene.contact(world.state, finger)
+        contacts[finger] = {
+            "touching": bool(c.distance <= world.params.contact_tolerance),
+            "distance": float(c.distance),
+            "point": np.round(c.point_object, 6).tolist(),
+            "normal": np.round(c.normal, 6).tolist(),
+        }
+    all_touch = all(c["touching"] for c in contacts.values())
+    angle = None
+    good = False
+    if all_touch:
+        centre = world.obj.placement.translation
+        opposing = hand.description.opposing_finger
+        u = np.asarray(contacts[opposing]["point"]) - centre
+        others = [np.asarray(c["point"]) for f, c in contacts.items() if f != opposing]
+        v = np.mean(others, axis=0) - centre
+        cos = float(u @ v / max(np.linalg.norm(u) * np.linalg.norm(v), 1e-12))
+        angle = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+        good = angle >= GOOD_GRASP_ANGLE_DEG
+    return {"contacts": contacts, "all_touching": all_touch, "good": good, "diameter_angle_deg": angle}
+
+
+class EndAgent(GraspAgent):
+    """Judges the grasp and ends the run."""
+
+    def __init__(self, default: float, world: GraspWorld) -> None:
+        super().__init__("end", (GRASP,), default, world)
+
+    def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
+        states = board.get(keys.FINGER_STATE, {})
+        if states and all(s in DONE_STATES for s in states.values()):
+            return 1.0
+        return 0.0
+
+    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        verdict = grasp_geometry(self.world)
+        board.set(keys.OUTCOME, verdict)
+        states = board.get(keys.FINGER_STATE, {})
+        if verdict["all_touching"]:
+            quality = "good" if verdict["good"] else "not about the diameter"
+            angle = verdict["diameter_angle_deg"]
+            return ActionResult(
+                Outcome.FINISHED,
+                f"precision grip: all fingertips touch; grasp {quality} ({angle:.0f}° across the centre)",
+                succeeded=True,
+            )
+        missing = [f for f, c in verdict["contacts"].items() if not c["touching"]]
+        why = ", ".join(f"{f} {states.get(f, 'open')}" for f in missing)
+        return ActionResult(
+            Outcome.FINISHED, f"grasp failed: no fingertip contact for {why}", succeeded=False
+        )

@@ -1,0 +1,22 @@
+"""Names of the information-board entries the grasp agents share.
+
+Keeping them in one place documents what the agents know and lets tests and
+clients read the board without guessing strings.
+"""
+
+from __future__ import annotations
+
+LOCATED = "located"  #: bool: the object is within the hand's envelope
+GAP = "gap_to_object"  #: float m: object surface to the grasp centre
+SEARCH_MOVES = "search_moves"  #: int: random search moves made
+CURVATURE = "curvature"  #: dict: EP1's latest curvature estimate (principal curvatures, σ, rating)
+EP1_RUNS = "ep1_runs"  #: int: EP1 runs so far
+EP1_CONTACT = "ep1_contact"  #: dict: world contact point and object normal of the last EP1 run
+SHAPE = "shape"  #: dict: post_shape's postulate (class, radius, diameter, centre, confidence)
+TARGET = "grasp_target"  #: dict: grasp_points' target (wrist goal, pre-grasp, predicted contacts)
+D_OVER_H = "d_over_h"  #: float: estimated object diameter over hand height
+AT_TARGET = "wrist_at_target"  #: bool: the wrist reached its grasp position
+WRIST_LEFT = "wrist_distance_left"  #: float m: distance left to the wrist's grasp position
+FINGER_STATE = "finger_state"  #: dict finger -> "open" | "closing" | "touching" | "missed" | "link"
+FINGER_ANGLE = "finger_angle"  #: dict finger -> joint angle (rad)
+OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict

@@ -1,0 +1,239 @@
+"""The grasp planner: the paper's eight agents under the EOS controller, from one call.
+
+    from eos_svc.agents import PlanRequest, plan
+    result = plan(PlanRequest(seed=3), on_cycle=print)
+
+Agent list (its order breaks ties, paper §5) and default sub-ratings:
+
+=============  ========================  =======
+agent          stages                    default
+=============  ========================  =======
+finger1        search, grasping          0.8
+finger2        search, grasping          0.7
+finger3        search, grasping          0.6
+wrist          search, grasping          0.9
+ep1            information               0.9
+post_shape     information               0.7
+grasp_points   information               0.6
+end            grasping                  0.2
+=============  ========================  =======
+
+The same request with the same seed gives the same cycles and result.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from eos_svc.agent import Agent
+from eos_svc.agents import keys
+from eos_svc.agents.base import STAGES
+from eos_svc.agents.end import EndAgent, grasp_geometry
+from eos_svc.agents.ep1 import EP1Agent
+from eos_svc.agents.finger import FingerAgent
+from eos_svc.agents.grasp_points import GraspPointsAgent
+from eos_svc.agents.post_shape import PostShapeAgent
+from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.agents.result import PlanResult
+from eos_svc.agents.world import FingerSweep, GraspWorld, WorldParameters, build_sweeps
+from eos_svc.agents.wrist import WristAgent
+from eos_svc.board import Board
+from eos_svc.controller import CancelToken, Controller
+from eos_svc.errors import ValidationError
+from eos_svc.kinematics import (
+    HAND3X3_URDF,
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    HandModel,
+    Scene,
+    Sphere,
+    SurfaceObject,
+    TactileSensor,
+    load_hand,
+)
+from eos_svc.kinematics.curvature import CurvatureEstimator
+from eos_svc.records import CycleRecord
+
+CycleCallback = Callable[[CycleRecord], None]
+
+#: default sub-ratings P(A|B_d), fixed at creation (see the module docstring)
+DEFAULT_RATINGS: dict[str, float] = {
+    "finger1": 0.8,
+    "finger2": 0.7,
+    "finger3": 0.6,
+    "wrist": 0.9,
+    "ep1": 0.9,
+    "post_shape": 0.7,
+    "grasp_points": 0.6,
+    "end": 0.2,
+}
+
+
+@functools.lru_cache(maxsize=4)
+def default_hand(urdf: str = str(HAND3X3_URDF)) -> HandModel:
+    """The hand3x3 model, loaded once per process."""
+    return load_hand(Path(urdf))
+
+
+_SWEEPS: dict[int, dict[str, FingerSweep]] = {}
+
+
+def _sweeps(hand: HandModel) -> dict[str, FingerSweep]:
+    key = id(hand)
+    if key not in _SWEEPS:
+        _SWEEPS[key] = build_sweeps(hand)
+    return _SWEEPS[key]
+
+
+def make_object(spec: ObjectSpec) -> SurfaceObject:
+    """The kinematics object for a validated :class:`ObjectSpec`."""
+    placement = pin.SE3(pin.rpy.rpyToMatrix(*spec.rpy), np.asarray(spec.position, dtype=float))
+    s = spec.size
+    if spec.shape == "sphere":
+        return Sphere(s["radius"], placement)
+    if spec.shape == "ellipsoid":
+        return Ellipsoid(s["radii"], placement)
+    if spec.shape == "cylinder":
+        return Cylinder(s["radius"], s["length"], placement)
+    if spec.shape == "capsule":
+        return Capsule(s["radius"], s["length"], placement)
+    return Box(s["size"], placement)
+
+
+def build_world(
+    request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
+) -> GraspWorld:
+    """The world of one plan: hand at its start pose, the object, seeded randomness.
+
+    Raises:
+        ValidationError: the object is outside the search workspace or overlaps the hand.
+    """
+    hand = hand or default_hand()
+    params = params or WorldParameters()
+    obj = make_object(request.obj)
+    search_seed, sensor_seed = np.random.SeedSequence(request.seed).spawn(2)
+    state = hand.state(hand.neutral())
+    world = GraspWorld(
+        hand=hand,
+        scene=Scene(hand, obj),
+        state=state,
+        sensor=TactileSensor(noise_std=request.tactile_noise, rng=np.random.default_rng(sensor_seed)),
+        rng=np.random.default_rng(search_seed),
+        params=params,
+        estimator=CurvatureEstimator(),
+        sweeps=_sweeps(hand),
+    )
+    # The object must be findable: its centre within envelope reach of the region the
+    # grasp centre can sweep, and not overlapping the hand at the start.
+    lo = np.asarray(params.search_box_lo) + np.asarray(params.grasp_centre) - params.envelope_radius
+    hi = np.asarray(params.search_box_hi) + np.asarray(params.grasp_centre) + params.envelope_radius
+    centre = np.asarray(request.obj.position)
+    for i, axis in enumerate("xyz"):
+        if not lo[i] <= centre[i] <= hi[i]:
+            raise ValidationError(
+                f"object.position[{i}]",
+                f"{axis} = {centre[i]:.3f} m is outside the hand's search workspace "
+                f"[{lo[i]:.3f}, {hi[i]:.3f}] m",
+            )
+    if world.hand_clearance() < params.clearance:
+        raise ValidationError("object.position", "the object overlaps the hand at its start pose")
+    return world
+
+
+def build_agents(
+    world: GraspWorld, ratings: dict[str, float] | None = None, solver: str = "osqp"
+) -> list[Agent]:
+    """The eight agents in list order (ties go to the first)."""
+    r = {**DEFAULT_RATINGS, **(ratings or {})}
+    return [
+        FingerAgent("finger1", r["finger1"], world),
+        FingerAgent("finger2", r["finger2"], world),
+        FingerAgent("finger3", r["finger3"], world),
+        WristAgent(r["wrist"], world),
+        EP1Agent(r["ep1"], world, solver=solver),
+        PostShapeAgent(r["post_shape"], world),
+        GraspPointsAgent(r["grasp_points"], world),
+        EndAgent(r["end"], world),
+    ]
+
+
+def plan(
+    request: PlanRequest | None = None,
+    *,
+    on_cycle: CycleCallback | None = None,
+    cancel: CancelToken | None = None,
+    hand: HandModel | None = None,
+    params: WorldParameters | None = None,
+    keep_trace: bool = True,
+) -> PlanResult:
+    """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
+
+    Args:
+        request: what to grasp and how (default: :class:`PlanRequest` defaults).
+        on_cycle: called with every cycle record as it happens.
+        cancel: a token another thread may set to stop the plan within one cycle.
+        hand: the hand model (default: ``urdf/hand3x3.urdf``, cached).
+        params: world constants (default: :class:`WorldParameters`).
+        keep_trace: keep every cycle record in the result.
+
+    Raises:
+        ValidationError: a request the planner cannot start (object outside the workspace,
+            overlapping the hand). Every planning outcome is a status in the result.
+    """
+    t0 = time.perf_counter()
+    request = request if request is not None else PlanRequest()
+    world = build_world(request, hand, params)
+    agents = build_agents(world)
+    controller = Controller(
+        agents,
+        STAGES,
+        request.weights,
+        max_cycles=request.max_cycles,
+        deadline_s=request.deadline_s,
+        keep_trace=keep_trace,
+        callbacks=[on_cycle] if on_cycle is not None else [],
+    )
+    board = Board()
+    run = controller.run(board, cancel=cancel)
+    verdict = board.get(keys.OUTCOME) or grasp_geometry(world)
+    obj = world.obj
+    truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
+    truth["d_over_h"] = obj.diameter / world.hand.hand_height
+    if request.obj.shape == "sphere":
+        truth["radius"] = request.obj.size["radius"]
+    shape = board.get(keys.SHAPE)
+    return PlanResult.from_run(
+        run,
+        request=request,
+        shape=shape,
+        curvature=board.get(keys.CURVATURE),
+        ground_truth=truth,
+        contacts=verdict["contacts"],
+        good_grasp=bool(verdict["good"]) if verdict["all_touching"] else False,
+        diameter_angle_deg=verdict["diameter_angle_deg"],
+        d_over_h=board.get(keys.D_OVER_H),
+        ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
+        hand_height=world.hand.hand_height,
+        wall_time_s=time.perf_counter() - t0,
+    )
+
+
+def ratio_sphere_request(
+    d_over_h: float, seed: int, hand: HandModel | None = None, **kwargs: object
+) -> PlanRequest:
+    """A sphere request with diameter ``d_over_h`` × hand height at the default position."""
+    hand = hand or default_hand()
+    if not (d_over_h > 0.0 and math.isfinite(d_over_h)):
+        raise ValidationError("d_over_h", f"must be a positive finite ratio, got {d_over_h!r}")
+    radius = 0.5 * d_over_h * hand.hand_height
+    spec = ObjectSpec("sphere", {"radius": radius}, ObjectSpec().position)
+    return PlanRequest(obj=spec, seed=seed, **kwargs)  # type: ignore[arg-type]

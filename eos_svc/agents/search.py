@@ -1,0 +1,39 @@
+"""The search stage's behaviour (paper §4): a random search of a bounded workspace.
+
+Each move picks a direction among ±x, ±y, ±z and a step length, both from the
+run's seeded generator. The object is *located* when its surface comes within
+the hand's envelope (``WorldParameters.envelope_radius`` of the grasp centre,
+between the fingers) — a proximity sense of the palm, documented in
+``docs/planner.md``. Any of the motion agents (finger1–3, wrist) can make a
+search move: the finger agents lead the hand with their fingertip, the wrist
+moves it; the paper allows all four in the search stage.
+"""
+
+from __future__ import annotations
+
+from eos_svc.agent import ActionResult, Outcome
+from eos_svc.agents import keys
+from eos_svc.agents.world import GraspWorld
+from eos_svc.board import Board
+
+
+def search_rating(board: Board) -> float:
+    """Opportunistic sub-rating of a search move: 1 until the object is located."""
+    return 0.0 if board.get(keys.LOCATED) else 1.0
+
+
+def search_move(world: GraspWorld, board: Board, who: str) -> ActionResult:
+    """Make one random search move and report whether the object is now located."""
+    if world.located():
+        board.set(keys.LOCATED, True)
+        board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
+        return ActionResult(Outcome.STAGE_COMPLETE, "object already within the hand's envelope")
+    label, moved, blocked = world.random_search_step()
+    board.set(keys.SEARCH_MOVES, int(board.get(keys.SEARCH_MOVES, 0)) + 1)
+    gap = world.object_gap_to_grasp_centre()
+    board.set(keys.GAP, round(gap, 6))
+    what = f"{who} moved the hand {label} by {moved * 1000:.1f} mm" + (" (blocked)" if blocked else "")
+    if world.located():
+        board.set(keys.LOCATED, True)
+        return ActionResult(Outcome.STAGE_COMPLETE, f"{what}: object located, {gap * 1000:.1f} mm away")
+    return ActionResult(Outcome.PROGRESS, f"{what}; object surface {gap * 1000:.1f} mm from the grasp centre")

@@ -1,0 +1,278 @@
+"""The simulated hand and its world, as the grasp agents see and move it.
+
+:class:`GraspWorld` holds the hand (Pinocchio), the scene (coal), the tactile
+sensor and the run's random generator, and offers the few guarded motions the
+agents make: a random search step of the hand, a wrist step toward a target, a
+finger closing step that stops at first touch. Agents keep what they *know* on
+the board; the world is what they act on.
+
+Conventions (hand3x3): world z up, the hand approaches along +x, the wrist keeps
+its rotation at zero outside EP1, so the palm frame is the world frame shifted
+by the wrist's translation. SI units.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
+from eos_svc.kinematics.curvature import CurvatureEstimator
+
+
+@dataclass(frozen=True)
+class WorldParameters:
+    """Tunable constants of the grasp world (SI units).
+
+    Attributes:
+        search_box_lo, search_box_hi: bounds of the wrist's search workspace (m).
+        search_step_min, search_step_max: random search step length range (m).
+        envelope_radius: the object is *located* when its surface comes within this
+            distance of the hand's grasp centre (m).
+        grasp_centre: the grasp centre in the palm frame (m): between the fingers.
+        clearance: smallest hand–object distance a search or approach move may leave (m).
+        wrist_step: length of one wrist approach step in the grasp stage (m).
+        approach_distance: pre-grasp stand-off: how far before its grasp position the
+            hand is placed by grasp_points (m).
+        finger_step: joint increment of one finger closing step (rad, every joint).
+        contact_tolerance: a fingertip within this distance touches (m).
+        ep1_steps: rolling steps per direction in one EP1 run.
+        ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
+        confidence_threshold: post_shape confidence needed to leave the information stage.
+    """
+
+    search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
+    search_box_hi: tuple[float, float, float] = (0.30, 0.15, 0.15)
+    search_step_min: float = 0.01
+    search_step_max: float = 0.04
+    envelope_radius: float = 0.05
+    grasp_centre: tuple[float, float, float] = (0.11, 0.0, 0.0)
+    clearance: float = 0.002
+    wrist_step: float = 0.005
+    approach_distance: float = 0.04
+    finger_step: float = 0.03
+    contact_tolerance: float = 1e-4
+    ep1_steps: int = 16
+    ep1_directions: tuple[float, ...] = (0.0, 90.0)
+    confidence_threshold: float = 0.6
+
+
+@dataclass
+class FingerSweep:
+    """Fingertip-centre positions in the palm frame as the finger closes (all joints equal).
+
+    Attributes:
+        angles: joint angle of every sample (rad), increasing (closing).
+        points: (N, 3) tip-centre positions in the palm frame (m).
+    """
+
+    angles: np.ndarray
+    points: np.ndarray
+
+    def index_at(self, angle: float) -> int:
+        """Index of the first sample at or beyond ``angle``."""
+        return int(np.searchsorted(self.angles, angle - 1e-12))
+
+    def reaches(self, angle: float, centre_palm: np.ndarray, radius: float) -> bool:
+        """Whether closing from ``angle`` brings the tip centre within ``radius`` of ``centre_palm``."""
+        rest = self.points[self.index_at(angle) :]
+        if len(rest) == 0:
+            return False
+        d = rest - centre_palm
+        return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
+
+
+@dataclass
+class GraspWorld:
+    """The hand, the object and the run's randomness; guarded motions for the agents."""
+
+    hand: HandModel
+    scene: Scene
+    state: HandState
+    sensor: TactileSensor
+    rng: np.random.Generator
+    params: WorldParameters = field(default_factory=WorldParameters)
+    estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+    sweeps: dict[str, FingerSweep] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if not self.sweeps:
+            self.sweeps = build_sweeps(self.hand, resolution=0.01)
+        self._wrist_q = self.hand.wrist_q_index
+        self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
+        geometries = self.hand.collision_model.geometryObjects
+        self._links: dict[str, list[str]] = {
+            finger: [
+                g.name
+                for i, g in enumerate(geometries)
+                if g.name.startswith(f"{finger}_") and i != self.hand.tip_geometry_id(finger)
+            ]
+            for finger in self.hand.finger_names
+        }
+
+    # --- reading the world -------------------------------------------------------
+    @property
+    def obj(self) -> SurfaceObject:
+        """The object."""
+        return self.scene.object
+
+    def wrist_position(self) -> np.ndarray:
+        """World position of the wrist (= palm origin), m."""
+        return self.state.q[self._wrist_q[:3]]
+
+    def grasp_centre_world(self) -> np.ndarray:
+        """World position of the grasp centre between the fingers, m."""
+        return self.wrist_position() + self._grasp_centre
+
+    def object_gap_to_grasp_centre(self) -> float:
+        """Distance from the grasp centre to the object surface, m (negative inside)."""
+        return float(self.obj.signed_distance(self.grasp_centre_world()))
+
+    def located(self) -> bool:
+        """The object is in the hand's envelope (see :class:`WorldParameters`)."""
+        return self.object_gap_to_grasp_centre() <= self.params.envelope_radius
+
+    def tip_distance(self, finger: str) -> float:
+        """Signed fingertip–object distance, m."""
+        return float(self.scene.contact(self.state, finger).distance)
+
+    def touching(self, finger: str) -> bool:
+        """Whether ``finger``'s tip touches the object."""
+        return self.tip_distance(finger) <= self.params.contact_tolerance
+
+    def hand_clearance(self) -> float:
+        """Smallest distance between any hand geometry and the object, m."""
+        return float(self.scene.min_distance(self.state).distance)
+
+    def finger_angle(self, finger: str) -> float:
+        """The finger's (common) joint angle, rad (its first joint)."""
+        return float(self.state.q[self.hand.finger_q_index(finger)[0]])
+
+    # --- moving it -----------------------------------------------------------------
+    def set_q(self, q: np.ndarray) -> None:
+        """Move the hand to ``q`` (validated by the hand model)."""
+        self.state.update(q)
+
+    def random_search_step(self) -> tuple[str, float, bool]:
+        """One random search move: direction among ±x, ±y, ±z and length from the run's rng.
+
+        The move is clipped to the search box and shortened (halved up to 4 times) if it
+        would bring the hand closer than the clearance to the object.
+
+        Returns:
+            (direction label, length actually moved in m, blocked flag).
+        """
+        p = self.params
+        axis = int(self.rng.integers(3))
+        sign = 1.0 if self.rng.integers(2) else -1.0
+        length = float(self.rng.uniform(p.search_step_min, p.search_step_max))
+        label = ("+" if sign > 0 else "-") + "xyz"[axis]
+        start = self.wrist_position()
+        lo, hi = np.asarray(p.search_box_lo), np.asarray(p.search_box_hi)
+        q0 = self.state.q
+        for _ in range(5):
+            target = start.copy()
+            target[axis] = min(max(start[axis] + sign * length, lo[axis]), hi[axis])
+            q = q0.copy()
+            q[self._wrist_q[:3]] = target
+            self.state.update(q)
+            if self.hand_clearance() >= p.clearance:
+                return label, float(abs(target[axis] - start[axis])), False
+            length *= 0.5
+        self.state.update(q0)
+        return label, 0.0, True
+
+    def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
+        """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
+
+        Stops short (by bisection) where any hand geometry would come closer than the
+        contact tolerance to the object, so the hand never pushes the object.
+
+        Returns:
+            (distance left to the target in m, stopped-by-contact flag).
+        """
+        start = self.wrist_position()
+        delta = np.asarray(target, dtype=float) - start
+        dist = float(np.linalg.norm(delta))
+        if dist < 1e-9:
+            return 0.0, False
+        move = min(step, dist)
+        q0 = self.state.q
+        q = q0.copy()
+        q[self._wrist_q[:3]] = start + delta * (move / dist)
+        self.state.update(q)
+        if self.hand_clearance() >= -self.params.contact_tolerance:
+            return dist - move, False
+        lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
+            self.state.update(q)
+            if self.hand_clearance() >= 0.0:
+                lo = mid
+            else:
+                hi = mid
+        q[self._wrist_q[:3]] = start + delta * (lo * move / dist)
+        self.state.update(q)
+        return dist - lo * move, True
+
+    def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
+        """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
+
+        Returns:
+            (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
+            object; the step was cut by bisection to the contact), ``"link"`` (another part
+            of the finger touched first: not a precision grip) or ``"limit"`` (the joint
+            limit was reached without touching).
+        """
+        q0 = self.state.q
+        q1, at_limit = self.state.close_finger(finger, dtheta)
+        self.state.update(q1)
+        tol = self.params.contact_tolerance
+        if self.tip_distance(finger) > tol and self._finger_links_clear(finger):
+            return ("limit" if at_limit else "moved"), self.finger_angle(finger)
+        idx = self.hand.finger_q_index(finger)
+        lo, hi = 0.0, 1.0
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            q = q0.copy()
+            q[idx] = q0[idx] + mid * (q1[idx] - q0[idx])
+            self.state.update(q)
+            if self.tip_distance(finger) > tol * 0.5 and self._finger_links_clear(finger):
+                lo = mid
+            else:
+                hi = mid
+        q = q0.copy()
+        q[idx] = q0[idx] + hi * (q1[idx] - q0[idx])
+        self.state.update(q)
+        event = "touched" if self.tip_distance(finger) <= tol else "link"
+        return event, self.finger_angle(finger)
+
+    def _finger_links_clear(self, finger: str) -> bool:
+        """No link of ``finger`` (other than its tip) touches the object."""
+        return all(self.scene.distance(self.state, name).distance > 0.0 for name in self._links[finger])
+
+
+def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
+    """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
+
+    Computed once per hand at the neutral wrist (palm = world).
+    """
+    state = hand.state(hand.neutral())
+    palm = state.palm_placement()
+    sweeps: dict[str, FingerSweep] = {}
+    for finger in hand.finger_names:
+        idx = hand.finger_q_index(finger)
+        lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
+        n = max(2, math.ceil((hi - lo) / resolution) + 1)
+        angles = np.linspace(lo, hi, n)
+        points = np.empty((n, 3))
+        q = hand.neutral()
+        for k, a in enumerate(angles):
+            q[idx] = a
+            state.update(q)
+            points[k] = palm.actInv(state.tip_position(finger))
+        sweeps[finger] = FingerSweep(angles, points)
+    return sweeps
