@@ -1,0 +1,143 @@
+"""``eos plan``: one grasp plan on a scene, with a live trace of the cycles.
+
+    eos plan                                  # default scene: a 3 cm sphere, seed 1
+    eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
+    eos plan --json                           # the result as JSON (no trace)
+    eos plan --record cycles.jsonl            # every cycle record as JSON lines
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import IO, Any
+
+from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.errors import ValidationError
+from eos_svc.records import CycleRecord
+
+#: request field -> command-line option, for error messages
+FIELD_OPTIONS = {
+    "object.shape": "--shape",
+    "object.radius": "--radius",
+    "object.radii": "--radii",
+    "object.length": "--length",
+    "object.size": "--size",
+    "object.position": "--position",
+    "object.rpy": "--rpy",
+    "weights": "--w-default/--w-opportunistic/--w-learned",
+    "seed": "--seed",
+    "tactile_noise": "--noise",
+    "max_cycles": "--max-cycles",
+    "deadline_s": "--deadline",
+}
+
+
+def add_object_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options choosing the object (shared with other commands)."""
+    g = parser.add_argument_group("object (SI units: m, rad)")
+    g.add_argument("--shape", default="sphere", help="sphere, ellipsoid, cylinder, box or capsule (sphere)")
+    g.add_argument("--radius", type=positive_float, help="sphere/cylinder/capsule radius (0.03 for a sphere)")
+    g.add_argument("--radii", type=positive_float, nargs=3, metavar=("A", "B", "C"), help="ellipsoid semi-axes")
+    g.add_argument("--length", type=positive_float, help="cylinder/capsule length")
+    g.add_argument("--size", type=positive_float, nargs=3, metavar=("X", "Y", "Z"), help="box edge lengths")
+    g.add_argument("--position", type=finite_float, nargs=3, metavar=("X", "Y", "Z"), help="object centre")
+    g.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"), help="object orientation")
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    add_object_arguments(parser)
+    add_weight_arguments(parser)
+    g = parser.add_argument_group("run")
+    g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
+    g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
+    g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
+    g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    out = parser.add_argument_group("output")
+    out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
+    out.add_argument("--record", metavar="FILE", help="write every cycle record to FILE as JSON lines")
+    out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
+
+
+def request_dict(args: argparse.Namespace) -> dict[str, Any]:
+    """The JSON request the options describe."""
+    obj: dict[str, Any] = {"shape": args.shape}
+    if args.shape == "sphere" and args.radius is None:
+        obj["radius"] = 0.03
+    for name in ("radius", "radii", "length", "size", "position", "rpy"):
+        value = getattr(args, name)
+        if value is not None:
+            obj[name] = value
+    return {
+        "object": obj,
+        "weights": {"default": args.w_default, "opportunistic": args.w_opportunistic, "learned": args.w_learned},
+        "seed": args.seed,
+        "tactile_noise": args.noise,
+        "max_cycles": args.max_cycles,
+        "deadline_s": args.deadline,
+    }
+
+
+def format_cycle(record: CycleRecord) -> str:
+    """One readable line per cycle: stage, every total, the choice and what it did."""
+    ratings = " ".join(f"{r.name}={r.total:.2f}{'' if r.eligible else '·'}" for r in record.ratings)
+    chosen = record.chosen or "-"
+    return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}: {record.detail}"
+
+
+def format_result(result: Any) -> str:
+    """A short human summary of a :class:`~eos_svc.agents.PlanResult`."""
+    lines = [
+        f"status: {result.status} — {result.reason}",
+        f"cycles: {result.cycles} {result.cycles_per_stage}; stages completed: "
+        f"{', '.join(result.stages_completed) or 'none'}",
+    ]
+    if result.shape:
+        s = result.shape
+        size = "size unknown" if s["grasp_radius"] is None else f"radius {s['grasp_radius'] * 1000:.2f} mm"
+        lines.append(f"shape: {s['class']}, {size}, confidence {s['confidence']:.0%} (EP1 runs: {result.ep1_runs})")
+    truth = result.ground_truth
+    lines.append(f"truth: {truth['shape']}, diameter {truth['diameter'] * 1000:.1f} mm, d/h {truth['d_over_h']:.2f}")
+    touching = [f for f, c in result.contacts.items() if c["touching"]]
+    lines.append(f"contacts: {', '.join(touching) or 'none'}; good grasp: {'yes' if result.good_grasp else 'no'}")
+    lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
+
+    try:
+        request = PlanRequest.from_dict(request_dict(args))
+    except ValidationError as exc:
+        fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
+    record_file: IO[str] | None = None
+    if args.record:
+        try:
+            record_file = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed below
+        except OSError as exc:
+            fail(f"--record: cannot write {args.record!r}: {exc.strerror}")
+
+    def on_cycle(record: CycleRecord) -> None:
+        if record_file is not None:
+            record_file.write(json.dumps(record.to_dict(), allow_nan=False) + "\n")
+        if not args.json and not args.quiet:
+            print(format_cycle(record), flush=True)
+
+    try:
+        result = plan(request, on_cycle=on_cycle)
+    except ValidationError as exc:
+        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+    finally:
+        if record_file is not None:
+            record_file.close()
+    if args.json:
+        print(result.to_json())
+    else:
+        print(format_result(result))
+    return 0 if result.status in ("success", "failed") else 1
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(run(argparse.Namespace()))
