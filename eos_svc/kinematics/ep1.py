@@ -27,6 +27,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pinocchio as pin
@@ -46,6 +47,7 @@ __all__ = [
     "ep1_scene",
     "ground_truth_form",
     "place_hand_for_ep1",
+    "repeat_ep1",
     "run_ep1",
 ]
 
@@ -282,6 +284,37 @@ def run_ep1(
         contact_point=np.array(ct0.point_object, dtype=float),
         normal=np.array(ct0.normal, dtype=float),
     )
+
+
+def repeat_ep1(
+    scene: Scene,
+    state: HandState,
+    finger: str,
+    tactile_sensor: TactileSensor,
+    *,
+    target_rating: float = 0.95,
+    max_runs: int = 30,
+    estimator: CurvatureEstimator | None = None,
+    **kwargs: Any,
+) -> tuple[EP1Result, int, int]:
+    """Repeat EP1 in place, accumulating samples, until ``estimate.rating >= target_rating``
+    (the relative radius error is at most ``1 − target_rating``) or ``max_runs`` runs.
+
+    Returns ``(last result, runs, total steps)``; the last result's estimate covers all runs.
+    """
+    if not (0.0 <= target_rating <= 1.0):
+        raise EP1Error("target_rating", f"must be in [0, 1], got {target_rating!r}")
+    if not (isinstance(max_runs, int) and max_runs >= 1):
+        raise EP1Error("max_runs", f"must be an integer >= 1, got {max_runs!r}")
+    est = estimator if estimator is not None else CurvatureEstimator()
+    total = 0
+    runs = 0
+    while True:
+        res = run_ep1(scene, state, finger, tactile_sensor, estimator=est, **kwargs)
+        runs += 1
+        total += res.steps
+        if res.estimate.rating >= target_rating or runs >= max_runs:
+            return res, runs, total
 
 
 # --------------------------------------------------------------------------- scenes
