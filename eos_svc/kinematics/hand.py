@@ -288,6 +288,7 @@ class HandModel:
         self.load_warnings = load_warnings
         self.nq: int = int(model.nq)
         self.nv: int = int(model.nv)
+        self._q_shape = (self.nq,)
         self.finger_names: tuple[str, ...] = description.finger_names
         self.opposing_finger: str = description.opposing_finger
 
@@ -449,6 +450,13 @@ class HandModel:
 
     def validate_q(self, q: object, field: str = "q") -> np.ndarray:
         """Return ``q`` as a fresh float array after checking length and finiteness."""
+        if (
+            type(q) is np.ndarray
+            and q.dtype == np.float64
+            and q.shape == self._q_shape
+            and math.isfinite(sum(q.tolist()))  # fast path; overflow falls through to the check
+        ):
+            return q.copy()
         try:
             arr = np.array(q, dtype=float)
         except (TypeError, ValueError) as exc:
@@ -485,14 +493,28 @@ class HandState:
     placements once; every query afterwards reads those results.
     """
 
-    __slots__ = ("_S", "_q", "data", "geometry_data", "hand", "model")
+    __slots__ = ("_gmodel", "_q", "_tips", "data", "geometry_data", "hand", "model")
 
     def __init__(self, hand: HandModel, q: object = None) -> None:
         self.hand = hand
         self.model = hand.model
         self.data = hand.model.createData()
+        self._gmodel = hand.collision_model
         self.geometry_data = pin.GeometryData(hand.collision_model)
-        self._S = np.zeros((3, 3))
+        # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
+        # joint id, the joint placement (a live reference into data.oMi), the tip translation
+        # (a live view into data.oMf; never handed out), and a reusable point placement.
+        self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
+        for name in hand.finger_names:
+            fid = hand.tip_frame_id(name)
+            jid = int(hand.model.frames[fid].parentJoint)
+            self._tips[name] = (
+                fid,
+                jid,
+                self.data.oMi[jid],
+                self.data.oMf[fid].translation,
+                pin.SE3.Identity(),
+            )
         self._q = hand.neutral()
         self.update(self._q if q is None else q)
 
@@ -503,11 +525,20 @@ class HandState:
 
     def update(self, q: object) -> None:
         """Set ``q`` (validated: length, finite) and recompute kinematics and geometry placements."""
-        qa = self.hand.validate_q(q)
+        hand = self.hand
+        if (  # inlined fast path of HandModel.validate_q (this is the hot path)
+            type(q) is np.ndarray
+            and q.dtype == np.float64
+            and q.shape == hand._q_shape
+            and math.isfinite(sum(q.tolist()))
+        ):
+            qa = q.copy()
+        else:
+            qa = hand.validate_q(q)
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, qa)  # also computes data.oMi (forward kinematics)
         pin.updateFramePlacements(model, data)
-        pin.updateGeometryPlacements(model, data, self.hand.collision_model, self.geometry_data)
+        pin.updateGeometryPlacements(model, data, self._gmodel, self.geometry_data)
         self._q = qa
 
     def copy(self) -> HandState:
@@ -543,23 +574,21 @@ class HandState:
             self.model, self.data, self.hand.tip_frame_id(finger), pin.LOCAL_WORLD_ALIGNED
         )
 
+    def _tip(self, finger: str) -> tuple[int, int, pin.SE3, np.ndarray, pin.SE3]:
+        try:
+            return self._tips[finger]
+        except KeyError:
+            raise UnknownNameError(
+                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
+            ) from None
+
     def tip_point_jacobian(self, finger: str, point_world: np.ndarray) -> np.ndarray:
         """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
         is currently at ``point_world`` (m), per unit joint velocity."""
-        fid = self.hand.tip_frame_id(finger)
-        J = pin.getFrameJacobian(self.model, self.data, fid, pin.LOCAL_WORLD_ALIGNED)
-        o = self.data.oMf[fid].translation
-        rx = point_world[0] - o[0]
-        ry = point_world[1] - o[1]
-        rz = point_world[2] - o[2]
-        S = self._S  # v_p = v_o + ω × r = v_o - [r]× ω
-        S[0, 1] = -rz
-        S[0, 2] = ry
-        S[1, 0] = rz
-        S[1, 2] = -rx
-        S[2, 0] = -ry
-        S[2, 1] = rx
-        out: np.ndarray = J[:3] - S @ J[3:]
+        _, jid, oMi, _, M = self._tip(finger)
+        M.translation = oMi.actInv(point_world)  # the point in the tip body's joint frame
+        J = pin.getFrameJacobian(self.model, self.data, jid, M, pin.LOCAL_WORLD_ALIGNED)
+        out: np.ndarray = J[:3]
         return out
 
     def tip_angular_jacobian(self, finger: str) -> np.ndarray:
