@@ -1,0 +1,31 @@
+"""``eos experiment NAME [options]``: the paper's experiments and ours, on the real planner.
+
+Each experiment module has its own options (``eos experiment NAME --help``), writes
+JSON/CSV and PNG plots to ``--out`` and prints a summary.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+
+#: experiment name -> (module, help)
+EXPERIMENTS = {
+    "ablation": ("eos_svc.experiments.ablation", "paper §4.1: weights (1,0), (0,1), (0.5,0.5) and a sweep"),
+    "ratio": ("eos_svc.experiments.ratio", "paper Fig. 3: grasp-stage cycles against d/h"),
+    "accuracy": (
+        "eos_svc.experiments.accuracy",
+        "EP1 curvature accuracy: spheres, plane, cylinder, ellipsoid",
+    ),
+}
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    names = ", ".join(f"{k} ({v[1]})" for k, v in EXPERIMENTS.items())
+    parser.add_argument("experiment", choices=list(EXPERIMENTS), metavar="NAME", help=names)
+    parser.add_argument("options", nargs=argparse.REMAINDER, help="the experiment's own options")
+
+
+def run(args: argparse.Namespace) -> int:
+    module = importlib.import_module(EXPERIMENTS[args.experiment][0])
+    return int(module.main(args.options))

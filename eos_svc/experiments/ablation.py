@@ -1,0 +1,152 @@
+"""Paper §4.1: default vs opportunistic sub-ratings, by running the planner with those weights.
+
+- weights (default, opportunistic) = (1, 0), (0, 1), (0.5, 0.5) on one seed: which agents
+  ran, which stages completed, the final status;
+- the same three over many seeds: counts of statuses and of completed stages;
+- a sweep of the default weight from 0 to 1: completion rate (all three stages) and mean
+  cycles.
+
+    eos experiment ablation --seeds 20 --out results/ablation
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from eos_svc.agents import PlanRequest
+from eos_svc.experiments.common import pyplot, run_plans, write_csv, write_json
+from eos_svc.ratings import Weights
+
+PAPER_WEIGHTS = ((1.0, 0.0), (0.0, 1.0), (0.5, 0.5))
+ALL_STAGES = ("search", "information", "grasping")
+
+
+def summarize(result: Any) -> dict[str, Any]:
+    """The facts of one run the paper talks about."""
+    return {
+        "status": result.status,
+        "reason": result.reason,
+        "stages_completed": list(result.stages_completed),
+        "all_stages": tuple(result.stages_completed) == ALL_STAGES,
+        "cycles": result.cycles,
+        "agents_run": result.agents_run(),
+    }
+
+
+def run(
+    seeds: int = 20, sweep_points: int = 11, out: Path = Path("results/ablation"), quiet: bool = False
+) -> dict:
+    """Run the experiment; write ablation.json, ablation_sweep.csv and ablation.png into ``out``."""
+    one_seed = {}
+    for wd, wo in PAPER_WEIGHTS:
+        (result,) = run_plans(
+            [PlanRequest(weights=Weights(wd, wo), seed=1)], f"weights ({wd}, {wo}) seed 1", True
+        )
+        one_seed[f"{wd},{wo}"] = summarize(result)
+    counts = {}
+    for wd, wo in PAPER_WEIGHTS:
+        results = run_plans(
+            [PlanRequest(weights=Weights(wd, wo), seed=s) for s in range(1, seeds + 1)],
+            f"weights ({wd}, {wo})",
+            quiet,
+        )
+        counts[f"{wd},{wo}"] = {
+            "status": dict(Counter(r.status for r in results)),
+            "stages_completed": dict(Counter(",".join(r.stages_completed) or "none" for r in results)),
+            "all_stages_rate": float(np.mean([tuple(r.stages_completed) == ALL_STAGES for r in results])),
+        }
+    sweep = []
+    for wd in np.linspace(0.0, 1.0, sweep_points):
+        wd = round(float(wd), 6)
+        results = run_plans(
+            [PlanRequest(weights=Weights(wd, round(1.0 - wd, 6)), seed=s) for s in range(1, seeds + 1)],
+            f"sweep default weight {wd:.2f}",
+            quiet,
+        )
+        sweep.append(
+            {
+                "default_weight": wd,
+                "completion_rate": float(np.mean([tuple(r.stages_completed) == ALL_STAGES for r in results])),
+                "success_rate": float(np.mean([r.status == "success" for r in results])),
+                "mean_cycles": float(np.mean([r.cycles for r in results])),
+            }
+        )
+    data = {"seeds": seeds, "one_seed": one_seed, "counts": counts, "sweep": sweep}
+    write_json(out / "ablation.json", data)
+    write_csv(out / "ablation_sweep.csv", sweep)
+    plot(sweep, out / "ablation.png")
+    return data
+
+
+def plot(sweep: list[dict], path: Path) -> Path:
+    """Completion rate and mean cycles against the default weight."""
+    plt = pyplot()
+    w = [row["default_weight"] for row in sweep]
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    ax.plot(w, [row["completion_rate"] for row in sweep], "o-", label="all three stages completed")
+    ax.plot(w, [row["success_rate"] for row in sweep], "s--", label="grasp achieved")
+    ax.set_xlabel("default weight P(B_d)  (opportunistic weight = 1 − P(B_d))")
+    ax.set_ylabel("rate over seeds")
+    ax.set_ylim(-0.05, 1.05)
+    ax2 = ax.twinx()
+    ax2.plot(w, [row["mean_cycles"] for row in sweep], "^:", color="gray", label="mean cycles")
+    ax2.set_ylabel("mean cycles per run")
+    lines = ax.get_lines() + ax2.get_lines()
+    ax.legend(lines, [str(line.get_label()) for line in lines], loc="center right", fontsize=8)
+    ax.set_title("EOS ablation: default vs opportunistic sub-ratings")
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def report(data: dict) -> str:
+    """Human-readable summary."""
+    lines = ["one seed (1):"]
+    for key, row in data["one_seed"].items():
+        agents = " ".join(row["agents_run"][:8]) + (" ..." if len(row["agents_run"]) > 8 else "")
+        lines.append(
+            f"  weights ({key}): {row['status']:<9} stages {','.join(row['stages_completed']) or 'none'}; "
+            f"{row['cycles']} cycles: {agents}"
+        )
+    lines.append(f"over {data['seeds']} seeds:")
+    for key, row in data["counts"].items():
+        lines.append(f"  weights ({key}): status {row['status']}, all stages {row['all_stages_rate']:.0%}")
+    lines.append("sweep of the default weight:")
+    for row in data["sweep"]:
+        lines.append(
+            f"  P(B_d)={row['default_weight']:.1f}: completion {row['completion_rate']:.0%}, "
+            f"grasp {row['success_rate']:.0%}, mean cycles {row['mean_cycles']:.1f}"
+        )
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Command-line options of this experiment."""
+    parser = argparse.ArgumentParser(
+        prog="eos experiment ablation", description=(__doc__ or "").split("\n")[0]
+    )
+    parser.add_argument("--seeds", type=int, default=20, help="seeds per condition (20)")
+    parser.add_argument("--sweep-points", type=int, default=11, help="default weights in the sweep (11)")
+    parser.add_argument("--out", type=Path, default=Path("results/ablation"), help="output folder")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment ablation [options]``."""
+    args = build_parser().parse_args(argv)
+    data = run(args.seeds, args.sweep_points, args.out)
+    print(report(data))
+    print(f"wrote {args.out}/ablation.json, ablation_sweep.csv, ablation.png")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

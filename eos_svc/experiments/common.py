@@ -1,0 +1,58 @@
+"""Shared plumbing of the experiments: running many plans with progress, writing files."""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+import time
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from eos_svc.agents import PlanRequest, PlanResult, plan
+
+
+def run_plans(requests: Sequence[PlanRequest], label: str, quiet: bool = False) -> list[PlanResult]:
+    """Plan every request in order, printing progress to stderr (one line, updated)."""
+    results = []
+    t0 = time.perf_counter()
+    n = len(requests)
+    for i, request in enumerate(requests, 1):
+        results.append(plan(request, keep_trace=True))
+        if not quiet:
+            elapsed = time.perf_counter() - t0
+            eta = elapsed / i * (n - i)
+            print(f"\r{label}: {i}/{n} plans, {elapsed:.1f} s, ~{eta:.0f} s left   ", end="", file=sys.stderr)
+    if not quiet:
+        print(file=sys.stderr)
+    return results
+
+
+def write_json(path: Path, data: Any) -> Path:
+    """Write ``data`` as indented strict JSON."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(data, indent=2, allow_nan=False) + "\n", encoding="utf-8")
+    return path
+
+
+def write_csv(path: Path, rows: Iterable[dict[str, Any]]) -> Path:
+    """Write dict rows as CSV (header from the first row)."""
+    rows = list(rows)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    with path.open("w", newline="", encoding="utf-8") as f:
+        if rows:
+            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    return path
+
+
+def pyplot():
+    """matplotlib.pyplot on the non-interactive Agg backend."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt

@@ -1,0 +1,136 @@
+"""Paper §4.2 / Figure 3: grasp-stage cycles against the object-diameter to hand-height ratio.
+
+Spheres of diameter d = ratio × h at the default position, many seeds per ratio, weights
+(0.5, 0.5). As in the paper, a run counts when all three fingertips touched; the
+good-grasp rate (contacts about the diameter) is reported beside it.
+
+    eos experiment ratio --seeds 10 --out results/ratio
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from eos_svc.agents.planner import ratio_sphere_request
+from eos_svc.experiments.common import pyplot, run_plans, write_csv, write_json
+
+DEFAULT_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
+
+
+def run(
+    ratios: tuple[float, ...] = DEFAULT_RATIOS,
+    seeds: int = 10,
+    out: Path = Path("results/ratio"),
+    quiet: bool = False,
+) -> dict:
+    """Run the sweep; write ratio.json, ratio.csv, ratio_runs.csv and ratio.png into ``out``."""
+    rows, runs = [], []
+    for ratio in ratios:
+        results = run_plans(
+            [ratio_sphere_request(ratio, seed) for seed in range(1, seeds + 1)], f"d/h = {ratio:.2f}", quiet
+        )
+        grasped = [r for r in results if r.status == "success"]
+        cycles = [r.cycles_per_stage.get("grasping", 0) for r in grasped]
+        for seed, r in enumerate(results, 1):
+            runs.append(
+                {
+                    "ratio": ratio,
+                    "seed": seed,
+                    "status": r.status,
+                    "grasp_cycles": r.cycles_per_stage.get("grasping", 0),
+                    "good_grasp": r.good_grasp,
+                    "estimated_d_over_h": r.d_over_h,
+                }
+            )
+        rows.append(
+            {
+                "ratio": ratio,
+                "runs": len(results),
+                "grasped": len(grasped),
+                "mean_grasp_cycles": float(np.mean(cycles)) if cycles else None,
+                "std_grasp_cycles": float(np.std(cycles)) if cycles else None,
+                "min_grasp_cycles": int(min(cycles)) if cycles else None,
+                "max_grasp_cycles": int(max(cycles)) if cycles else None,
+                "good_grasp_rate": float(np.mean([r.good_grasp for r in results])),
+            }
+        )
+    valid = [(row["ratio"], row["mean_grasp_cycles"]) for row in rows if row["mean_grasp_cycles"] is not None]
+    slope = float(np.polyfit(*zip(*valid, strict=True), 1)[0]) if len(valid) >= 2 else None
+    means = [m for _, m in valid]
+    falling = all(b <= a for a, b in zip(means, means[1:], strict=False)) if means else False
+    data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
+    write_json(out / "ratio.json", data)
+    write_csv(out / "ratio.csv", rows)
+    write_csv(out / "ratio_runs.csv", runs)
+    plot(rows, runs, out / "ratio.png")
+    return data
+
+
+def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
+    """Grasp cycles against d/h (paper Fig. 3): every run, means with ±1 σ."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    ok = [r for r in runs if r["status"] == "success"]
+    ax.scatter(
+        [r["ratio"] for r in ok], [r["grasp_cycles"] for r in ok], s=10, alpha=0.35, label="runs (grasped)"
+    )
+    good = [row for row in rows if row["mean_grasp_cycles"] is not None]
+    ax.errorbar(
+        [row["ratio"] for row in good],
+        [row["mean_grasp_cycles"] for row in good],
+        yerr=[row["std_grasp_cycles"] for row in good],
+        fmt="o-",
+        capsize=3,
+        label="mean ± σ",
+    )
+    ax.set_xlabel("object diameter / hand height  d/h")
+    ax.set_ylabel("grasp-stage cycles")
+    ax.set_title("Grasp cycles fall as d/h rises (paper Fig. 3)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    plt.close(fig)
+    return path
+
+
+def report(data: dict) -> str:
+    """Human-readable table."""
+    lines = ["  d/h  grasped  grasp cycles (mean ± σ)  good-grasp rate"]
+    for row in data["rows"]:
+        m = row["mean_grasp_cycles"]
+        cyc = "      -" if m is None else f"{m:7.1f} ± {row['std_grasp_cycles']:.1f}"
+        lines.append(
+            f"  {row['ratio']:.2f}  {row['grasped']:>3}/{row['runs']:<3}  {cyc:>22}  {row['good_grasp_rate']:.0%}"
+        )
+    lines.append(
+        f"slope {data['slope_cycles_per_ratio']:.1f} cycles per unit d/h; "
+        f"falling monotonically: {data['monotonically_falling']}"
+    )
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Command-line options of this experiment."""
+    parser = argparse.ArgumentParser(prog="eos experiment ratio", description=(__doc__ or "").split("\n")[0])
+    parser.add_argument("--seeds", type=int, default=10, help="seeds per ratio (10)")
+    parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
+    parser.add_argument("--out", type=Path, default=Path("results/ratio"), help="output folder")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment ratio [options]``."""
+    args = build_parser().parse_args(argv)
+    data = run(tuple(args.ratios), args.seeds, args.out)
+    print(report(data))
+    print(f"wrote {args.out}/ratio.json, ratio.csv, ratio_runs.csv, ratio.png")
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())
