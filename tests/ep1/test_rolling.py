@@ -142,7 +142,12 @@ def test_fast_tactile_reading_equals_the_sensor(sphere_setup):
     sc, st, F = sphere_setup
     for noise, pitch in [(0.0, None), (2e-4, None), (2e-4, 5e-4)]:
         rq = RollingQP(
-            st.copy(), "finger1", F[:, 0], 0.5, 0.01, scene=sc,
+            st.copy(),
+            "finger1",
+            F[:, 0],
+            0.5,
+            0.01,
+            scene=sc,
             tactile=TactileSensor(noise, pitch, rng=7),
         )
         ref = TactileSensor(noise, pitch, rng=7)
