@@ -1,15 +1,16 @@
 """Contact queries between the hand's collision geometry and one object (coal).
 
 Signed distances (negative = penetration), witness points and the normal, in world
-coordinates (m). For a sphere fingertip the tip witness and the normal follow from the
-sphere centre. When a sphere fingertip penetrates the object the contact comes from the
-object's analytic closest point instead of coal: coal's penetration depth is approximate for
-curved shapes (its sphere–cylinder depth ignores the caps; EPA converges to a tolerance).
+coordinates (m). For a separated sphere fingertip, coal's sphere–primitive algorithms give
+exact witnesses and normal (sphere, box, capsule, cylinder; GJK-accurate, a few µm, for the
+ellipsoid — ``Scene(..., exact_tips=True)`` makes those exact too). When a sphere fingertip
+penetrates the object, the contact comes from the object's analytic closest point instead:
+coal's penetration depth is approximate for curved shapes (its sphere–cylinder depth ignores
+the caps; EPA converges to a tolerance).
 """
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import coal
@@ -132,24 +133,10 @@ class Scene:
             d = res.min_distance
             if d < 0.0:  # penetration: coal's EPA / sphere-cylinder depth is approximate
                 return self._analytic_sphere_contact(finger, c.copy(), r)
-            p_obj = res.getNearestPoint1()
-            # Exact sphere witness and normal from the centre (plain floats: numpy on 3-vectors
-            # costs ~1–2 µs per operation).
-            cx, cy, cz = c.tolist()
-            ox, oy, oz = p_obj.tolist()
-            dx, dy, dz = cx - ox, cy - oy, cz - oz
-            nn = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if nn <= 1e-12:
-                n = res.normal
-                return Contact(finger, d, c - r * n, p_obj, n)
-            s = 1.0 / nn
-            nx, ny, nz = dx * s, dy * s, dz * s
+            # coal's sphere–primitive witnesses and normal (object → tip) are exact for the
+            # sphere, box, capsule and cylinder; GJK-accurate (~µm) for the ellipsoid.
             return _fast_contact(
-                finger,
-                d,
-                np.array((cx - r * nx, cy - r * ny, cz - r * nz)),
-                p_obj,
-                np.array((nx, ny, nz)),
+                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
             )
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None

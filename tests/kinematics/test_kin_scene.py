@@ -169,3 +169,13 @@ def test_bad_names(hand: HandModel) -> None:
         scene.distance(st, "nope")
     with pytest.raises(KinematicsError, match="obj"):
         Scene(hand, "sphere")  # type: ignore[arg-type]
+
+
+def test_allegro_contacts(allegro: HandModel, random_q: RandQ) -> None:
+    rng = np.random.default_rng(8)
+    st = allegro.state(random_q(allegro, rng))
+    c = st.tip_position("thumb")
+    obj = Sphere(0.03, pin.SE3(np.eye(3), c + np.array([0.0, 0.05, 0.0])))
+    con = Scene(allegro, obj).contact(st, "thumb")
+    assert con.distance == pytest.approx(0.05 - 0.03 - 0.012, abs=1e-9)
+    assert np.allclose(con.normal, [0, -1, 0])
