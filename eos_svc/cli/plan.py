@@ -1,9 +1,9 @@
 """``eos plan``: one grasp plan on a scene, with a live trace of the cycles.
 
-    eos plan                                  # default scene: a 3 cm sphere, seed 1
-    eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
-    eos plan --json                           # the result as JSON (no trace)
-    eos plan --record cycles.jsonl            # every cycle record as JSON lines
+eos plan                                  # default scene: a 3 cm sphere, seed 1
+eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
+eos plan --json                           # the result as JSON (no trace)
+eos plan --record cycles.jsonl            # every cycle record as JSON lines
 """
 
 from __future__ import annotations
@@ -39,7 +39,9 @@ def add_object_arguments(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("object (SI units: m, rad)")
     g.add_argument("--shape", default="sphere", help="sphere, ellipsoid, cylinder, box or capsule (sphere)")
     g.add_argument("--radius", type=positive_float, help="sphere/cylinder/capsule radius (0.03 for a sphere)")
-    g.add_argument("--radii", type=positive_float, nargs=3, metavar=("A", "B", "C"), help="ellipsoid semi-axes")
+    g.add_argument(
+        "--radii", type=positive_float, nargs=3, metavar=("A", "B", "C"), help="ellipsoid semi-axes"
+    )
     g.add_argument("--length", type=positive_float, help="cylinder/capsule length")
     g.add_argument("--size", type=positive_float, nargs=3, metavar=("X", "Y", "Z"), help="box edge lengths")
     g.add_argument("--position", type=finite_float, nargs=3, metavar=("X", "Y", "Z"), help="object centre")
@@ -71,7 +73,11 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
             obj[name] = value
     return {
         "object": obj,
-        "weights": {"default": args.w_default, "opportunistic": args.w_opportunistic, "learned": args.w_learned},
+        "weights": {
+            "default": args.w_default,
+            "opportunistic": args.w_opportunistic,
+            "learned": args.w_learned,
+        },
         "seed": args.seed,
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
@@ -96,11 +102,15 @@ def format_result(result: Any) -> str:
     if result.shape:
         s = result.shape
         size = "size unknown" if s["grasp_radius"] is None else f"radius {s['grasp_radius'] * 1000:.2f} mm"
-        lines.append(f"shape: {s['class']}, {size}, confidence {s['confidence']:.0%} (EP1 runs: {result.ep1_runs})")
+        confidence = s["confidence"]
+        lines.append(
+            f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs})"
+        )
     truth = result.ground_truth
-    lines.append(f"truth: {truth['shape']}, diameter {truth['diameter'] * 1000:.1f} mm, d/h {truth['d_over_h']:.2f}")
-    touching = [f for f, c in result.contacts.items() if c["touching"]]
-    lines.append(f"contacts: {', '.join(touching) or 'none'}; good grasp: {'yes' if result.good_grasp else 'no'}")
+    diameter_mm = truth["diameter"] * 1000
+    lines.append(f"truth: {truth['shape']}, diameter {diameter_mm:.1f} mm, d/h {truth['d_over_h']:.2f}")
+    touching = ", ".join(f for f, c in result.contacts.items() if c["touching"]) or "none"
+    lines.append(f"contacts: {touching}; good grasp: {'yes' if result.good_grasp else 'no'}")
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
     return "\n".join(lines)
 

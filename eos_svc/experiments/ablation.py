@@ -91,7 +91,7 @@ def plot(sweep: list[dict], path: Path) -> Path:
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
     ax.plot(w, [row["completion_rate"] for row in sweep], "o-", label="all three stages completed")
     ax.plot(w, [row["success_rate"] for row in sweep], "s--", label="grasp achieved")
-    ax.set_xlabel("default weight P(B_d)  (opportunistic weight = 1 − P(B_d))")
+    ax.set_xlabel("default weight P(B_d)  (opportunistic weight = 1 - P(B_d))")
     ax.set_ylabel("rate over seeds")
     ax.set_ylim(-0.05, 1.05)
     ax2 = ax.twinx()

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Sequence
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -59,9 +60,11 @@ def run(
             }
         )
     valid = [(row["ratio"], row["mean_grasp_cycles"]) for row in rows if row["mean_grasp_cycles"] is not None]
-    slope = float(np.polyfit(*zip(*valid, strict=True), 1)[0]) if len(valid) >= 2 else None
+    xs = np.array([x for x, _ in valid], dtype=float)
+    ys = np.array([y for _, y in valid], dtype=float)
+    slope = float(np.polyfit(xs, ys, 1)[0]) if len(valid) >= 2 else None
     means = [m for _, m in valid]
-    falling = all(b <= a for a, b in zip(means, means[1:], strict=False)) if means else False
+    falling = all(b <= a for a, b in pairwise(means)) if means else False
     data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
     write_json(out / "ratio.json", data)
     write_csv(out / "ratio.csv", rows)
@@ -85,7 +88,7 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
         yerr=[row["std_grasp_cycles"] for row in good],
         fmt="o-",
         capsize=3,
-        label="mean ± σ",
+        label="mean ± std",
     )
     ax.set_xlabel("object diameter / hand height  d/h")
     ax.set_ylabel("grasp-stage cycles")
@@ -100,13 +103,12 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
 
 def report(data: dict) -> str:
     """Human-readable table."""
-    lines = ["  d/h  grasped  grasp cycles (mean ± σ)  good-grasp rate"]
+    lines = ["  d/h  grasped  grasp cycles (mean ± std)  good-grasp rate"]
     for row in data["rows"]:
         m = row["mean_grasp_cycles"]
         cyc = "      -" if m is None else f"{m:7.1f} ± {row['std_grasp_cycles']:.1f}"
-        lines.append(
-            f"  {row['ratio']:.2f}  {row['grasped']:>3}/{row['runs']:<3}  {cyc:>22}  {row['good_grasp_rate']:.0%}"
-        )
+        grasped = f"{row['grasped']:>3}/{row['runs']:<3}"
+        lines.append(f"  {row['ratio']:.2f}  {grasped}  {cyc:>24}  {row['good_grasp_rate']:.0%}")
     lines.append(
         f"slope {data['slope_cycles_per_ratio']:.1f} cycles per unit d/h; "
         f"falling monotonically: {data['monotonically_falling']}"
