@@ -247,41 +247,58 @@ class Ellipsoid(SurfaceObject):
         return float(2.0 * self.radii.max())
 
     def _project_local(self, p: np.ndarray) -> np.ndarray:
-        # Closest point x = a²p/(t + a²) with t the root of Σ (a_i p_i/(t + a_i²))² = 1,
-        # t > -min a_i² (monotone decreasing there): safeguarded Newton.
-        a2 = self.radii**2
-        if np.linalg.norm(p / self.radii) < 1e-12:  # the centre: nearest is the shortest axis
-            i = int(np.argmin(self.radii))
+        # Closest point x_i = a_i² p_i / (t + a_i²) with t the root of
+        # F(t) = Σ (a_i p_i / (t + a_i²))² − 1 on t > −min a_i², where F decreases
+        # monotonically: safeguarded Newton in plain floats (numpy on 3-vectors is slow).
+        a = self.radii.tolist()
+        x = p.tolist()
+        a2 = [ai * ai for ai in a]
+        if sum((xi / ai) ** 2 for xi, ai in zip(x, a, strict=True)) < 1e-24:
+            i = int(np.argmin(self.radii))  # the centre: nearest is the end of the shortest axis
             out = np.zeros(3)
-            out[i] = self.radii[i]
+            out[i] = a[i]
             return out
-        lo = -a2.min() + 1e-300
-        hi = float(np.linalg.norm(p) * self.radii.max())
-        t = 0.0 if hi <= 0 else 0.5 * (lo + hi)
 
         def f(t: float) -> tuple[float, float]:
-            u = self.radii * p / (t + a2)
-            return float(u @ u - 1.0), float(-2.0 * (u @ (u / (t + a2))))
+            val, der = -1.0, 0.0
+            for ai, a2i, xi in zip(a, a2, x, strict=True):
+                den = t + a2i
+                u = ai * xi / den
+                val += u * u
+                der -= 2.0 * u * u / den
+            return val, der
 
-        while f(hi)[0] > 0:
-            hi *= 2.0
-        for _ in range(200):
+        k_min = int(np.argmin(self.radii))
+        lo = -a2[k_min]
+        # Start left of the root (F > 0): Newton on a convex decreasing F then rises
+        # monotonically to the root. Outside points: t = 0. Inside points: walk toward lo.
+        t = 0.0
+        if f(t)[0] <= 0.0:
+            gap = -lo
+            for _ in range(40):
+                gap *= 0.25
+                if gap < 1e-9 * -lo:  # root too close to the pole: treat as degenerate
+                    gap = 0.0
+                    break
+                if f(lo + gap)[0] > 0.0:
+                    break
+            if gap == 0.0:  # no root in (lo, 0]: p on the shortest axis' plane (degenerate)
+                xs = [
+                    a2i * xi / (a2i - a2[k_min]) if a2i != a2[k_min] else 0.0
+                    for a2i, xi in zip(a2, x, strict=True)
+                ]
+                rad = 1.0 - sum((xi / ai) ** 2 for xi, ai in zip(xs, a, strict=True))
+                xs[k_min] = math.copysign(a[k_min] * math.sqrt(max(rad, 0.0)), x[k_min] or 1.0)
+                return np.array(xs)
+            t = lo + gap
+        for _ in range(100):
             val, der = f(t)
-            if val > 0:
-                lo = t
-            else:
-                hi = t
-            tn = t - val / der if der != 0 else 0.5 * (lo + hi)
-            if not (lo < tn < hi):
-                tn = 0.5 * (lo + hi)
-            if abs(tn - t) <= 1e-15 * max(1.0, abs(t)):
-                t = tn
+            if val <= 1e-15 or der >= 0.0:
                 break
-            t = tn
-        x = a2 * p / (t + a2)
-        x = x / np.sqrt(np.sum((x / self.radii) ** 2))  # exactly on the surface
-        out2: np.ndarray = x
-        return out2
+            t -= val / der
+        s = [a2i * xi / (t + a2i) for a2i, xi in zip(a2, x, strict=True)]
+        k = math.sqrt(sum((si / ai) ** 2 for si, ai in zip(s, a, strict=True)))
+        return np.array([si / k for si in s])  # exactly on the surface
 
     def _normal_local(self, s: np.ndarray) -> np.ndarray:
         g = s / self.radii**2

@@ -244,3 +244,21 @@ def test_kinds_geometry_diameter() -> None:
     ]:
         assert obj.kind == kind
         assert obj.geometry is not None and obj.diameter > 0
+
+
+@pytest.mark.parametrize(
+    "p",
+    [[0.02, 0.0, 0.0], [0.0, 0.01, 0.0], [0.0, 0.0, 0.001], [0.0, 0.0, 0.0], [0.01, 0.005, 0.002]],
+)
+def test_ellipsoid_closest_point_inside_and_degenerate(p: list[float]) -> None:
+    """Interior points, including those on the axes (where the Lagrange root degenerates)."""
+    a = np.array([0.05, 0.03, 0.02])
+    e = Ellipsoid(a)
+    s = e.closest_surface_point(np.array(p))
+    assert np.sum((s / a) ** 2) == pytest.approx(1.0, abs=1e-12)
+    rng = np.random.default_rng(2)
+    u = rng.normal(size=(100_000, 3))
+    samples = a * (u / np.linalg.norm(u, axis=1)[:, None])
+    brute = np.min(np.linalg.norm(samples - np.array(p), axis=1))
+    assert np.linalg.norm(s - p) <= brute + 1e-9
+    assert e.signed_distance(np.array(p)) == pytest.approx(-np.linalg.norm(s - p))
