@@ -74,7 +74,9 @@ class EP1Agent(GraspAgent):
                 estimator=world.estimator,
             )
         except (RollingQPError, KinematicsError) as exc:
+            world.sync()
             return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}")
+        world.sync()  # run_ep1 moved the state directly
         est = result.estimate
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
         reading = world.sensor.read(world.state, world.scene.contact(world.state, finger))

@@ -41,6 +41,8 @@ class WorldParameters:
         ep1_steps: rolling steps per direction in one EP1 run.
         ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
         confidence_threshold: post_shape confidence needed to leave the information stage.
+        hand_bound: radius of a ball about the grasp centre that contains the whole hand at
+            any finger angle (m); objects farther away need no collision query.
     """
 
     search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
@@ -57,6 +59,7 @@ class WorldParameters:
     ep1_steps: int = 16
     ep1_directions: tuple[float, ...] = (0.0, 90.0)
     confidence_threshold: float = 0.6
+    hand_bound: float = 0.2
 
 
 @dataclass
@@ -102,6 +105,8 @@ class GraspWorld:
             self.sweeps = build_sweeps(self.hand, resolution=0.01)
         self._wrist_q = self.hand.wrist_q_index
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
+        self.version = 0  # bumped on every move; derived quantities are memoised per version
+        self._memo: dict[object, float] = {}
         geometries = self.hand.collision_model.geometryObjects
         self._links: dict[str, list[str]] = {
             finger: [
@@ -127,24 +132,46 @@ class GraspWorld:
         return self.wrist_position() + self._grasp_centre
 
     def object_gap_to_grasp_centre(self) -> float:
-        """Distance from the grasp centre to the object surface, m (negative inside)."""
-        return float(self.obj.signed_distance(self.grasp_centre_world()))
+        """Distance from the grasp centre to the object surface, m (negative inside; memoised)."""
+        memo = self._memo
+        value = memo.get("gap")
+        if value is None:
+            value = memo["gap"] = float(self.obj.signed_distance(self.grasp_centre_world()))
+        return value
 
     def located(self) -> bool:
         """The object is in the hand's envelope (see :class:`WorldParameters`)."""
         return self.object_gap_to_grasp_centre() <= self.params.envelope_radius
 
     def tip_distance(self, finger: str) -> float:
-        """Signed fingertip–object distance, m."""
-        return float(self.scene.contact(self.state, finger).distance)
+        """Signed fingertip–object distance, m (memoised per hand pose)."""
+        memo = self._memo
+        value = memo.get(finger)
+        if value is None:
+            value = memo[finger] = float(self.scene.contact(self.state, finger).distance)
+        return value
 
     def touching(self, finger: str) -> bool:
         """Whether ``finger``'s tip touches the object."""
         return self.tip_distance(finger) <= self.params.contact_tolerance
 
     def hand_clearance(self) -> float:
-        """Smallest distance between any hand geometry and the object, m."""
-        return float(self.scene.min_distance(self.state).distance)
+        """Smallest distance between any hand geometry and the object, m (memoised).
+
+        When the object is farther from the grasp centre than ``hand_bound`` no hand
+        geometry can be near it; the lower bound (gap − hand_bound) is returned without
+        a collision query.
+        """
+        memo = self._memo
+        value = memo.get("clearance")
+        if value is None:
+            gap = self.object_gap_to_grasp_centre()
+            if gap > self.params.hand_bound + self.params.clearance:
+                value = gap - self.params.hand_bound
+            else:
+                value = float(self.scene.min_distance(self.state).distance)
+            memo["clearance"] = value
+        return value
 
     def finger_angle(self, finger: str) -> float:
         """The finger's (common) joint angle, rad (its first joint)."""
@@ -154,6 +181,13 @@ class GraspWorld:
     def set_q(self, q: np.ndarray) -> None:
         """Move the hand to ``q`` (validated by the hand model)."""
         self.state.update(q)
+        self.version += 1
+        self._memo.clear()
+
+    def sync(self) -> None:
+        """Call after moving ``state`` directly (e.g. EP1's rolling): forget memoised values."""
+        self.version += 1
+        self._memo.clear()
 
     def random_search_step(self) -> tuple[str, float, bool]:
         """One random search move: direction among ±x, ±y, ±z and length from the run's rng.
@@ -177,11 +211,11 @@ class GraspWorld:
             target[axis] = min(max(start[axis] + sign * length, lo[axis]), hi[axis])
             q = q0.copy()
             q[self._wrist_q[:3]] = target
-            self.state.update(q)
+            self.set_q(q)
             if self.hand_clearance() >= p.clearance:
                 return label, float(abs(target[axis] - start[axis])), False
             length *= 0.5
-        self.state.update(q0)
+        self.set_q(q0)
         return label, 0.0, True
 
     def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
@@ -202,20 +236,20 @@ class GraspWorld:
         q0 = self.state.q
         q = q0.copy()
         q[self._wrist_q[:3]] = start + delta * (move / dist)
-        self.state.update(q)
+        self.set_q(q)
         if self.hand_clearance() >= -self.params.contact_tolerance:
             return dist - move, False
         lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
         for _ in range(30):
             mid = 0.5 * (lo + hi)
             q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
-            self.state.update(q)
+            self.set_q(q)
             if self.hand_clearance() >= 0.0:
                 lo = mid
             else:
                 hi = mid
         q[self._wrist_q[:3]] = start + delta * (lo * move / dist)
-        self.state.update(q)
+        self.set_q(q)
         return dist - lo * move, True
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
@@ -229,7 +263,7 @@ class GraspWorld:
         """
         q0 = self.state.q
         q1, at_limit = self.state.close_finger(finger, dtheta)
-        self.state.update(q1)
+        self.set_q(q1)
         tol = self.params.contact_tolerance
         if self.tip_distance(finger) > tol and self._finger_links_clear(finger):
             return ("limit" if at_limit else "moved"), self.finger_angle(finger)
@@ -239,14 +273,14 @@ class GraspWorld:
             mid = 0.5 * (lo + hi)
             q = q0.copy()
             q[idx] = q0[idx] + mid * (q1[idx] - q0[idx])
-            self.state.update(q)
+            self.set_q(q)
             if self.tip_distance(finger) > tol * 0.5 and self._finger_links_clear(finger):
                 lo = mid
             else:
                 hi = mid
         q = q0.copy()
         q[idx] = q0[idx] + hi * (q1[idx] - q0[idx])
-        self.state.update(q)
+        self.set_q(q)
         event = "touched" if self.tip_distance(finger) <= tol else "link"
         return event, self.finger_angle(finger)
 

@@ -1,0 +1,79 @@
+"""Whole plans: median plan time, cycles and time per cycle.
+
+    .venv/bin/python benchmarks/bench_plan.py
+
+Default scene (3 cm sphere, seed 1) repeated, then the ratio sweep (spheres over d/h,
+a few seeds each). Baseline measured in the same run: the same plans with the
+controller's per-cycle recording only (the trace) vs with a live per-cycle callback
+that formats the trace line as `eos plan` does, to show what observation costs.
+Goals: ≤ 60 µs per cycle and ≤ 20 ms per plan (median, default scene).
+"""
+
+from __future__ import annotations
+
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from _harness import table
+
+from eos_svc.agents import PlanRequest, plan
+from eos_svc.agents.planner import ratio_sphere_request
+from eos_svc.cli.plan import format_cycle
+
+REPEATS = 15
+
+
+def time_plans(request: PlanRequest, repeats: int, on_cycle=None) -> tuple[float, int]:
+    """(median seconds per plan, cycles of the plan)."""
+    samples = []
+    cycles = 0
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        result = plan(request, on_cycle=on_cycle)
+        samples.append(time.perf_counter() - t0)
+        cycles = result.cycles
+    return statistics.median(samples), cycles
+
+
+def main() -> int:
+    plan(PlanRequest())  # load the hand, warm caches
+    default = PlanRequest()
+    t_plan, cycles = time_plans(default, REPEATS)
+    sink: list[str] = []
+    t_cb, _ = time_plans(default, REPEATS, on_cycle=lambda r: sink.append(format_cycle(r)))
+    per_cycle = t_plan / cycles
+    print(f"default scene (seed 1, {cycles} cycles), median of {REPEATS} plans")
+    print(
+        table(
+            [
+                ("plan, trace kept", t_plan, 1.0),
+                ("plan + live trace formatting", t_cb, t_cb / t_plan),
+                ("per cycle", per_cycle, None),
+            ],
+            "plan",
+        )
+    )
+    print(f"goals: per cycle <= 60 µs -> {'met' if per_cycle <= 60e-6 else 'NOT met'}; "
+          f"per plan <= 20 ms -> {'met' if t_plan <= 20e-3 else 'NOT met'}")
+    print("\nratio sweep (3 seeds each, 1 run per seed)")
+    print("  d/h   status(es)            cycles  plan ms  µs/cycle")
+    for ratio in (0.2, 0.35, 0.5, 0.65, 0.8, 0.95):
+        times, cyc, statuses = [], [], []
+        for seed in (1, 2, 3):
+            t0 = time.perf_counter()
+            r = plan(ratio_sphere_request(ratio, seed))
+            times.append(time.perf_counter() - t0)
+            cyc.append(r.cycles)
+            statuses.append(r.status)
+        t = statistics.median(times)
+        c = statistics.median(cyc)
+        print(f"  {ratio:.2f}  {','.join(statuses):<20}  {c:6.0f}  {t * 1e3:7.1f}  {t / c * 1e6:8.1f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
