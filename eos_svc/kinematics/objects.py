@@ -148,6 +148,16 @@ class SurfaceObject(ABC):
         """Signed distance from ``p_world`` to the surface, m (negative inside)."""
         return self._signed_distance_local(self.to_local(_point("p_world", p_world)))
 
+    def closest_point_and_distance(self, p_world: np.ndarray) -> tuple[np.ndarray, float]:
+        """(closest surface point (world, m), signed distance (m, negative inside)) at once."""
+        p = self.to_local(_point("p_world", p_world))
+        s = self._project_local(p)
+        return self.to_world(s), self._signed_distance_from(p, s)
+
+    def _signed_distance_from(self, p: np.ndarray, s: np.ndarray) -> float:
+        """Signed distance of local p given its closest surface point s."""
+        return self._signed_distance_local(p)
+
     def surface_normal(self, p_world: np.ndarray) -> np.ndarray:
         """Unit outward normal (world) at the surface point closest to ``p_world``."""
         s = self._project_local(self.to_local(_point("p_world", p_world)))
@@ -312,7 +322,9 @@ class Ellipsoid(SurfaceObject):
         return out
 
     def _signed_distance_local(self, p: np.ndarray) -> float:
-        s = self._project_local(p)
+        return self._signed_distance_from(p, self._project_local(p))
+
+    def _signed_distance_from(self, p: np.ndarray, s: np.ndarray) -> float:
         d = float(np.linalg.norm(p - s))
         return -d if np.sum((p / self.radii) ** 2) < 1.0 else d
 

@@ -151,8 +151,7 @@ class Scene:
         """Exact contact of a sphere (centre c, radius r) from the object's analytic closest
         point; used when the sphere penetrates the object."""
         obj = self.object
-        p_obj = obj.closest_surface_point(c)
-        sd = obj.signed_distance(c)
+        p_obj, sd = obj.closest_point_and_distance(c)
         diff = c - p_obj
         nd = float(np.linalg.norm(diff))
         # outward from the object through the centre; centre on the surface: surface normal
