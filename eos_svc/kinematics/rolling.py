@@ -16,8 +16,8 @@ wrist and of the rolling finger; the other fingers keep still (their q̇ is 0).
 The problem is a :class:`qpsolvers.Problem` (``RollingQP.problem``, live arrays updated in
 place, pink's ``build_ik`` style). With ``solver="osqp"`` (default) one ``osqp.OSQP`` object
 is set up once per roll and then updated and warm-started every step at tight tolerances
-(``eps_abs = eps_rel = 1e-9`` by default, not OSQP's 1e-3); any other installed qpsolvers
-backend is selectable by name and solves the same Problem through
+(``eps_abs = eps_rel = 1e-7`` by default, not OSQP's 1e-3: no-slip residual ≲ 1e-8 m/s);
+any other installed qpsolvers backend is selectable by name and solves the same Problem through
 :func:`qpsolvers.solve_problem`. A failed or infeasible QP raises :class:`RollingQPError`
 carrying a copy of the problem.
 """
@@ -134,7 +134,7 @@ class RollingQP:
         tactile: TactileSensor | None = None,
         weights: object = None,
         gap_gain: float = 0.5,
-        eps: float = 1e-9,
+        eps: float = 1e-7,
         check_termination: int = 5,
         project_axis: bool = True,
         second_order: bool = True,
@@ -239,6 +239,9 @@ class RollingQP:
         self._Jb = np.zeros((6, nx))
         self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
         self._M[3:, 3:] = np.eye(3)
+        self._M3 = self._M[:3].reshape(-1)  # view of the three changing rows
+        self._lo_dt = self._lo / self.dt
+        self._hi_dt = self._hi / self.dt
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
         self._qdot = np.zeros(model.nv)
@@ -247,6 +250,7 @@ class RollingQP:
             self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
         )
         self._b[3:] = self._wa
+        self._wa_t = tuple(self._wa.tolist())
         self._osqp: Any = None
         self._osqp_solver: Any = None
         self.steps = 0
@@ -272,31 +276,39 @@ class RollingQP:
     # ------------------------------------------------------------------ contact
     def contact(self) -> Contact:
         """Contact of the rolling tip at the current q (coal), kinematics already computed."""
-        c = self._data.oMf[self._fid].translation
+        M = self._data.oMf[self._fid]
+        self._Mtip = M  # reused by the tactile reading of this step
+        c = M.translation
         self._tf_tip.setTranslation(c)
         res = self._res
         res.clear()
         self._dist(self._tf_obj, self._tf_tip, self._req, res)
         p_obj = res.getNearestPoint1()
         d = res.min_distance
-        dx, dy, dz = c[0] - p_obj[0], c[1] - p_obj[1], c[2] - p_obj[2]
+        cx, cy, cz = c.tolist()
+        ox, oy, oz = p_obj.tolist()
+        dx, dy, dz = cx - ox, cy - oy, cz - oz
         nn = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if nn > 1e-12 and d > -0.5 * self._r:  # tip centre outside the object
-            s = 1.0 / nn
-            n = np.array((dx * s, dy * s, dz * s))
-        else:
-            n = np.asarray(res.normal, dtype=float)
         r = self._r
-        p_tip = np.array((c[0] - r * n[0], c[1] - r * n[1], c[2] - r * n[2]))
-        return Contact(self.finger, float(d), p_tip, p_obj, n)
+        if nn > 1e-12 and d > -0.5 * r:  # tip centre outside the object
+            s = 1.0 / nn
+            nx_, ny_, nz_ = dx * s, dy * s, dz * s
+        else:
+            nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
+        return Contact(
+            self.finger,
+            d,
+            np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)),
+            p_obj,
+            np.array((nx_, ny_, nz_)),
+        )
 
     # ------------------------------------------------------------------ the step
     def _build(self, contact: Contact) -> None:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact."""
         J = pin.getFrameJacobian(self._model, self._data, self._fid, _LWA)
         J.take(self._cols, axis=1, out=self._Jb)
-        n = contact.normal
-        nx_, ny_, nz_ = float(n[0]), float(n[1]), float(n[2])
+        nx_, ny_, nz_ = contact.normal.tolist()
         # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
         if abs(nx_) < 0.9:
             t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
@@ -306,17 +318,15 @@ class RollingQP:
         t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
         t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
         # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
-        # t1 × n = −t2, t2 × n = t1.
+        # t1 × n = −t2, t2 × n = t1. One slice assignment (item writes cost ~0.3 µs each).
         r = self._r
-        M = self._M
-        M[0, 0], M[0, 1], M[0, 2] = t1x, t1y, t1z
-        M[0, 3], M[0, 4], M[0, 5] = -r * t2x, -r * t2y, -r * t2z
-        M[1, 0], M[1, 1], M[1, 2] = t2x, t2y, t2z
-        M[1, 3], M[1, 4], M[1, 5] = r * t1x, r * t1y, r * t1z
-        M[2, 0], M[2, 1], M[2, 2] = nx_, ny_, nz_
-        np.matmul(M, self._Jb, out=self._C)
-        b = self._b
-        b[2] = -self.gap_gain * contact.distance / self.dt
+        self._M3[:] = (
+            t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z,
+            t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
+            nx_, ny_, nz_, 0.0, 0.0, 0.0,
+        )  # fmt: skip
+        np.matmul(self._M, self._Jb, out=self._C)
+        bn = -self.gap_gain * contact.distance / self.dt
         if self.second_order and self.steps > 0:
             # q̇ is constant over a step, so the tip moves with the acceleration J̇q̇ of the
             # last q̇: ask for the step's *average* velocities, v + ½ dt a, to meet the
@@ -330,21 +340,25 @@ class RollingQP:
             py = ay - r * (wz * nx_ - wx * nz_)
             pz = az - r * (wx * ny_ - wy * nx_)
             h = 0.5 * self.dt
-            b[0] = -h * (t1x * px + t1y * py + t1z * pz)
-            b[1] = -h * (t2x * px + t2y * py + t2z * pz)
-            b[2] -= h * (nx_ * ax + ny_ * ay + nz_ * az)
-            wa = self._wa
-            b[3] = wa[0] - h * wx
-            b[4] = wa[1] - h * wy
-            b[5] = wa[2] - h * wz
-        idt = 1.0 / self.dt
-        lb, ub, tmp = self._lb, self._ub, self._tmp
-        np.subtract(self._lo, self._qa, out=tmp)
-        tmp *= idt
-        np.maximum(self._nvmax, tmp, out=lb)
-        np.subtract(self._hi, self._qa, out=tmp)
-        tmp *= idt
-        np.minimum(self._vmax, tmp, out=ub)
+            wa0, wa1, wa2 = self._wa_t
+            self._b[:] = (
+                -h * (t1x * px + t1y * py + t1z * pz),
+                -h * (t2x * px + t2y * py + t2z * pz),
+                bn - h * (nx_ * ax + ny_ * ay + nz_ * az),
+                wa0 - h * wx,
+                wa1 - h * wy,
+                wa2 - h * wz,
+            )
+        else:
+            self._b[2] = bn
+        # bounds: max(−q̇max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇max, (q_max − q)/dt)
+        qs = self._tmp
+        np.multiply(self._qa, 1.0 / self.dt, out=qs)
+        lb, ub = self._lb, self._ub
+        np.subtract(self._lo_dt, qs, out=lb)
+        np.maximum(self._nvmax, lb, out=lb)
+        np.subtract(self._hi_dt, qs, out=ub)
+        np.minimum(self._vmax, ub, out=ub)
 
     def _solve_osqp(self) -> tuple[np.ndarray, int]:
         nx = self.nx
@@ -369,6 +383,9 @@ class RollingQP:
                 verbose=False,
                 max_iter=20000,
                 check_termination=self.check_termination,
+                scaling=0,  # small, well-scaled problem: no re-scaling on every update
+                adaptive_rho=False,
+                rho=0.05,
             )
             self._osqp = s
             # The extension object behind osqp.OSQP: update/solve without the wrapper's
@@ -437,11 +454,8 @@ class RollingQP:
             self.sync()
             return sensor.read(self._state, contact)
         r = self._r
-        Mf = self._data.oMf[self._fid]
-        R = Mf.rotation
-        n = contact.normal
         # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
-        px, py, pz = (R.T @ n).tolist()
+        px, py, pz = (contact.normal @ self._Mtip.rotation).tolist()
         px, py, pz = -r * px, -r * py, -r * pz
         d = contact.distance
         in_contact = d <= sensor.contact_tolerance
