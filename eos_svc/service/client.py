@@ -1,0 +1,428 @@
+"""Python client of the EOS planning service.
+
+::
+
+    with EosClient.open(make_config(connect=["tcp/127.0.0.1:7447"])) as client:
+        client.wait_for_instances(1)
+        outcome = client.plan(PlanRequest(), on_cycle=lambda msg: print(msg["seq"]))
+        print(outcome.result["status"])
+
+The client keeps the live set of service instances from their liveliness
+tokens, sends each plan to one instance by its own key (spreading plans over
+instances: the one with the fewest plans in flight from this client, ties in
+turn), watches the goal's cycle stream, and retries on another instance when
+the one it asked disappears (its token goes, or the query ends without a
+reply) or is busy. Zenoh callbacks only enqueue; the user's ``on_cycle`` runs
+in the thread that called :meth:`EosClient.plan`.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import itertools
+import queue
+import secrets
+import threading
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import EosError
+from eos_svc.service import protocol as proto
+
+#: called with every cycle message ``{"schema", "goal_id", "instance", "seq", "record"}``
+CycleHandler = Callable[[dict[str, Any]], None]
+
+
+class ServiceUnavailableError(EosError):
+    """No service instance answered the plan (none found, or every attempt lost its instance)."""
+
+
+@dataclass
+class PlanOutcome:
+    """What a plan request returned.
+
+    Attributes:
+        goal_id: the request's goal id.
+        instance: the instance that answered.
+        result: the plan result (``status``, ``reason``, ``cycles``, ``seed``, ...).
+        cycles: the cycle messages of the answering attempt, in order (empty when not watched).
+        final_status: the goal's final ``done`` status message (``None`` when not watched or lost).
+        attempts: instances asked (1 when the first answered).
+        gaps: sequence numbers found missing or out of order in the cycle stream (should be empty).
+        round_trip_s: seconds from the first request to the answer.
+    """
+
+    goal_id: str
+    instance: str
+    result: dict[str, Any]
+    cycles: list[dict[str, Any]] = field(default_factory=list)
+    final_status: dict[str, Any] | None = None
+    attempts: int = 1
+    gaps: list[int] = field(default_factory=list)
+    round_trip_s: float = 0.0
+
+    @property
+    def status(self) -> str:
+        """The plan's status (``success``, ``cancelled``, ...)."""
+        return str(self.result.get("status"))
+
+    @property
+    def complete(self) -> bool:
+        """Whether the cycle stream was received whole: seq 1..n, no gap, n = cycles published."""
+        n = self.result.get("cycles_published", self.result.get("cycles"))
+        return (
+            not self.gaps
+            and self.final_status is not None
+            and [c["seq"] for c in self.cycles] == list(range(1, (n or 0) + 1))
+        )
+
+
+class _LostError(Exception):
+    pass
+
+
+def _direct(callback: Callable[[Any], None], drop: Callable[[], None] | None = None) -> Any:
+    """A Zenoh callback run in Zenoh's own thread (no Python thread per entity).
+
+    Only for callbacks that just put into a ``SimpleQueue`` (never block, never
+    call Zenoh): an indirect callback starts a Python thread per query or
+    subscriber, ≈ 1 ms each. ``indirect`` is unstable in zenoh-python 1.x; if
+    it goes away the default (indirect) callback is used.
+    """
+    try:
+        return zenoh.handlers.Callback(callback, drop, indirect=False)
+    except TypeError:  # pragma: no cover - future zenoh without the option
+        return zenoh.handlers.Callback(callback, drop)
+
+
+class EosClient:
+    """Client of the EOS planning service on an open Zenoh session.
+
+    Args:
+        session: an open Zenoh session (closed by :meth:`close` only if
+            the client opened it, see :meth:`open`).
+        namespace: the service's namespace, if any.
+        timeout_margin_s: added to the request's deadline to time out a plan query (s).
+        status_grace_s: how long to wait for the final status message after the reply (s).
+    """
+
+    def __init__(
+        self,
+        session: zenoh.Session,
+        *,
+        namespace: str | None = None,
+        timeout_margin_s: float = 10.0,
+        status_grace_s: float = 2.0,
+    ) -> None:
+        self.session = session
+        self.prefix = proto.prefix(namespace)
+        self.timeout_margin_s = timeout_margin_s
+        self.status_grace_s = status_grace_s
+        self._lock = threading.Lock()
+        self._live: set[str] = set()
+        self._inflight: dict[str, int] = {}
+        self._waiters: dict[int, tuple[str, queue.SimpleQueue[tuple[str, Any]]]] = {}
+        self._waiter_ids = itertools.count()
+        self._turn = itertools.count()
+        self._owns_session = False
+        self._live_changed = threading.Condition(self._lock)
+        self._token_sub = session.liveliness().declare_subscriber(
+            proto.instance_key(self.prefix), self._on_token, history=True
+        )
+
+    @classmethod
+    def open(cls, config: zenoh.Config, **kwargs: Any) -> EosClient:
+        """Open a session from ``config`` and a client that owns it."""
+        client = cls(zenoh.open(config), **kwargs)
+        client._owns_session = True
+        return client
+
+    def close(self) -> None:
+        """Undeclare the liveliness subscriber (and close the session if owned)."""
+        with contextlib.suppress(Exception):  # already gone with a closed session
+            self._token_sub.undeclare()
+        if self._owns_session:
+            self.session.close()
+
+    def __enter__(self) -> EosClient:
+        return self
+
+    def __exit__(self, *_exc: object) -> None:
+        self.close()
+
+    # ------------------------------------------------------------------ discovery
+    def _on_token(self, sample: zenoh.Sample) -> None:
+        iid = str(sample.key_expr).rsplit("/", 1)[-1]
+        with self._lock:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._live.add(iid)
+            else:
+                self._live.discard(iid)
+                for inst, q in self._waiters.values():
+                    if inst == iid:
+                        q.put(("lost", iid))
+            self._live_changed.notify_all()
+
+    def instances(self) -> list[str]:
+        """Instances whose liveliness token is alive now (sorted)."""
+        with self._lock:
+            return sorted(self._live)
+
+    def discover(self, timeout: float = 1.0) -> list[str]:
+        """Ask the network for the instances' liveliness tokens (a liveliness query)."""
+        found = set()
+        for reply in self.session.liveliness().get(proto.instance_key(self.prefix), timeout=timeout):
+            if reply.ok is not None:
+                found.add(str(reply.ok.key_expr).rsplit("/", 1)[-1])
+        with self._lock:
+            self._live |= found
+        return sorted(found)
+
+    def wait_for_instances(self, n: int = 1, timeout: float = 5.0) -> list[str]:
+        """Block until at least ``n`` instances are alive; returns them (raises ServiceUnavailableError)."""
+        end = time.monotonic() + timeout
+        with self._live_changed:
+            while len(self._live) < n:
+                left = end - time.monotonic()
+                if left <= 0:
+                    raise ServiceUnavailableError(
+                        f"{len(self._live)} instance(s) alive after {timeout} s, wanted {n}"
+                    )
+                self._live_changed.wait(left)
+            return sorted(self._live)
+
+    def _choose(self, exclude: set[str]) -> str | None:
+        with self._lock:
+            candidates = sorted(self._live - exclude)
+            if not candidates:
+                return None
+            turn = next(self._turn)
+            rotated = candidates[turn % len(candidates) :] + candidates[: turn % len(candidates)]
+            return min(rotated, key=lambda i: self._inflight.get(i, 0))
+
+    # ------------------------------------------------------------------ plan
+    def plan(
+        self,
+        request: PlanRequest | Mapping[str, Any] | None = None,
+        *,
+        goal_id: str | None = None,
+        on_cycle: CycleHandler | None = None,
+        instance: str | None = None,
+        watch: bool = True,
+        timeout: float | None = None,
+        max_attempts: int = 3,
+    ) -> PlanOutcome:
+        """Request one plan and wait for its result.
+
+        Args:
+            request: the plan request (default: ``PlanRequest()``); a mapping is sent as is.
+            goal_id: the goal id (default: a random ``g-<hex>``).
+            on_cycle: called with every cycle message, in order, in this thread.
+            instance: ask this instance only (no spreading, no retry elsewhere).
+            watch: subscribe to the goal's cycles and status (needed for ``on_cycle``).
+            timeout: seconds to wait for one instance's answer (default: the
+                request's deadline + ``timeout_margin_s``).
+            max_attempts: instances to try before giving up.
+
+        Raises:
+            RequestError: the service refused the request (code, field, reason).
+            ServiceUnavailableError: no instance answered.
+        """
+        req = PlanRequest() if request is None else request
+        goal_id = proto.check_id(goal_id, "goal_id") if goal_id is not None else f"g-{secrets.token_hex(8)}"
+        payload = proto.encode_request(goal_id, req)
+        if timeout is None:
+            deadline = req.deadline_s if isinstance(req, PlanRequest) else req.get("deadline_s", 10.0)
+            timeout = (deadline if isinstance(deadline, (int, float)) else 60.0) + self.timeout_margin_s
+        t0 = time.monotonic()
+        exclude: set[str] = set()
+        last_error: str = "no service instance found"
+        for attempt in range(1, max_attempts + 1):
+            iid = instance or self._choose(exclude)
+            if iid is None:
+                self.discover(timeout=0.5)
+                iid = self._choose(exclude)
+                if iid is None and exclude:  # every instance tried: start over after a pause
+                    time.sleep(0.05 * attempt)
+                    exclude.clear()
+                    iid = self._choose(exclude)
+            if iid is None:
+                raise ServiceUnavailableError(last_error)
+            try:
+                outcome = self._attempt(iid, goal_id, payload, on_cycle, watch, timeout)
+            except _LostError as lost:
+                last_error = f"instance {iid}: {lost}"
+                exclude.add(iid)
+                if instance is not None:
+                    break
+                continue
+            except proto.RequestError as err:
+                if (
+                    err.code in (proto.E_BUSY, proto.E_UNAVAILABLE)
+                    and instance is None
+                    and attempt < max_attempts
+                ):
+                    last_error = str(err)
+                    exclude.add(iid)
+                    continue
+                raise
+            outcome.attempts = attempt
+            outcome.round_trip_s = time.monotonic() - t0
+            return outcome
+        raise ServiceUnavailableError(
+            f"goal {goal_id}: no answer after {max_attempts} attempt(s); last: {last_error}"
+        )
+
+    def _attempt(
+        self,
+        iid: str,
+        goal_id: str,
+        payload: bytes,
+        on_cycle: CycleHandler | None,
+        watch: bool,
+        timeout: float,
+    ) -> PlanOutcome:
+        events: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
+        wid = next(self._waiter_ids)
+        with self._lock:
+            self._waiters[wid] = (iid, events)
+            self._inflight[iid] = self._inflight.get(iid, 0) + 1
+        sub = None
+        token = zenoh.CancellationToken()
+        try:
+            if watch:
+                sub = self.session.declare_subscriber(
+                    proto.goal_keys(self.prefix, goal_id), _direct(lambda s: events.put(("sample", s)))
+                )
+            self.session.get(
+                proto.plan_key(self.prefix, iid),
+                _direct(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
+                payload=payload,
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                timeout=timeout,
+                cancellation_token=token,
+            )
+            return self._collect(iid, goal_id, events, on_cycle, watch, timeout)
+        except _LostError:
+            token.cancel()
+            raise
+        finally:
+            if sub is not None:
+                sub.undeclare()
+            with self._lock:
+                self._waiters.pop(wid, None)
+                self._inflight[iid] -= 1
+
+    def _collect(
+        self,
+        iid: str,
+        goal_id: str,
+        events: queue.SimpleQueue[tuple[str, Any]],
+        on_cycle: CycleHandler | None,
+        watch: bool,
+        timeout: float,
+    ) -> PlanOutcome:
+        cycles: list[dict[str, Any]] = []
+        gaps: list[int] = []
+        final: dict[str, Any] | None = None
+        reply: dict[str, Any] | None = None
+        error: proto.RequestError | None = None
+        ended = False
+        end_at = time.monotonic() + timeout + 1.0
+        grace_at: float | None = None
+        while True:
+            if (reply is not None or error is not None) and (
+                not watch or final is not None or error is not None
+            ):
+                break
+            now = time.monotonic()
+            limit = grace_at if grace_at is not None else end_at
+            if now >= limit:
+                break
+            try:
+                kind, item = events.get(timeout=limit - now)
+            except queue.Empty:
+                break
+            if kind == "sample":
+                try:
+                    msg = proto.loads_strict(item.payload.to_bytes())
+                except (ValueError, RecursionError):
+                    continue
+                if not isinstance(msg, dict) or msg.get("instance") != iid:
+                    continue  # an earlier attempt's instance: ignore
+                if "seq" in msg:
+                    expected = len(cycles) + 1
+                    if msg["seq"] != expected:
+                        gaps.append(expected)
+                    cycles.append(msg)
+                    if on_cycle is not None:
+                        on_cycle(msg)
+                elif msg.get("state") == proto.STATE_DONE:
+                    final = msg
+            elif kind == "reply":
+                if item.ok is not None:
+                    reply = proto.loads_strict(item.ok.payload.to_bytes())
+                else:
+                    error = proto.error_from_payload(item.err.payload.to_bytes())
+                grace_at = time.monotonic() + self.status_grace_s
+            elif kind == "end":
+                ended = True
+                if reply is None and error is None:
+                    raise _LostError("query ended without a reply (instance gone or timed out)")
+            elif kind == "lost" and reply is None and error is None:
+                raise _LostError("liveliness token withdrawn")
+        if error is not None:
+            raise error
+        if reply is None:
+            raise _LostError("no reply before the timeout" if not ended else "no reply")
+        result = reply.get("result", {})
+        return PlanOutcome(
+            goal_id=goal_id,
+            instance=str(reply.get("instance", iid)),
+            result=result,
+            cycles=cycles,
+            final_status=final,
+            gaps=gaps,
+        )
+
+    # ------------------------------------------------------------------ cancel / watch
+    def cancel(self, goal_id: str, timeout: float = 2.0) -> bool:
+        """Cancel a queued or running goal on whichever instance has it; True when one had it."""
+        proto.check_id(goal_id, "goal_id")
+        found = False
+        for reply in self.session.get(
+            proto.cancel_key(self.prefix, goal_id),
+            target=zenoh.QueryTarget.ALL,
+            consolidation=zenoh.ConsolidationMode.NONE,
+            timeout=timeout,
+        ):
+            if reply.ok is not None:
+                try:
+                    found = found or bool(proto.loads_strict(reply.ok.payload.to_bytes()).get("found"))
+                except (ValueError, AttributeError):
+                    continue
+        return found
+
+    def watch(self, callback: Callable[[str, dict[str, Any]], None], goal_id: str = "*") -> Any:
+        """Subscribe to cycle and status messages (of every goal by default).
+
+        ``callback(kind, message)`` runs in a Zenoh callback thread with ``kind``
+        ``"cycle"`` or ``"status"``; keep it short. Returns the subscriber
+        (``undeclare()`` it to stop).
+        """
+
+        def on_sample(sample: zenoh.Sample) -> None:
+            try:
+                msg = proto.loads_strict(sample.payload.to_bytes())
+            except (ValueError, RecursionError):
+                return
+            kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"
+            callback(kind, msg)
+
+        return self.session.declare_subscriber(proto.goal_keys(self.prefix, goal_id), on_sample)

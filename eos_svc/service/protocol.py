@@ -1,0 +1,237 @@
+"""Wire protocol of the EOS planning service: key expressions and message schemas.
+
+Everything on the wire is UTF-8 JSON (strict: no NaN/Infinity) carrying
+``"schema": 1``. Key expressions live under a versioned prefix
+``eos/@v1`` (``@v1`` is a verbatim chunk: wildcards never cross it), with an
+optional namespace: ``eos/@v1/<namespace>``. With ``P`` the prefix:
+
+=================================  =========================  ==========================================
+key expression                     Zenoh entity               message
+=================================  =========================  ==========================================
+``P/instance/<iid>``               liveliness token           (none) — one per service instance
+``P/plan/<iid>``                   queryable (one/instance)   request: :func:`encode_request`; reply: the
+                                                              plan result, or an error reply
+                                                              (:class:`RequestError`)
+``P/cancel/<goal_id>``             queryable ``P/cancel/*``   reply: ``{"goal_id", "instance", "found"}``
+``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
+                                                              "record"}`` — one per cycle, seq 1, 2, ...
+``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
+                                                              ...}`` — ``running``, then ``done`` with
+                                                              ``status``, ``cycles`` and ``result``
+=================================  =========================  ==========================================
+
+This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from collections.abc import Mapping
+from typing import Any
+
+from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import ValidationError
+
+#: version of the message schemas (the ``"schema"`` field of every message)
+SCHEMA_VERSION = 1
+#: root of every key expression; ``@v1`` versions the key space
+ROOT = "eos/@v1"
+#: largest plan request accepted (bytes of JSON)
+MAX_REQUEST_BYTES = 64 * 1024
+#: goal ids and namespaces: one plain key-expression chunk (no wildcards, no ``@``, no ``/``)
+ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
+
+# Error codes carried by error replies.
+E_TOO_LARGE = "payload_too_large"
+E_NOT_JSON = "not_json"
+E_SCHEMA = "unsupported_schema"
+E_INVALID = "invalid_request"
+E_BUSY = "busy"
+E_DUPLICATE = "duplicate_goal"
+E_UNAVAILABLE = "unavailable"
+E_INTERNAL = "internal_error"
+ERROR_CODES = frozenset(
+    {E_TOO_LARGE, E_NOT_JSON, E_SCHEMA, E_INVALID, E_BUSY, E_DUPLICATE, E_UNAVAILABLE, E_INTERNAL}
+)
+
+#: plan states published on ``P/goal/<goal_id>/status``
+STATE_RUNNING = "running"
+STATE_DONE = "done"
+
+
+class RequestError(ValidationError):
+    """A request the service refuses; sent back as an error reply.
+
+    Attributes:
+        code: machine-readable cause (one of :data:`ERROR_CODES`).
+        field: dotted name of the offending field (``"request"`` for the whole message).
+        reason: why, in words.
+        goal_id: the request's goal id when it could be read, else ``None``.
+    """
+
+    def __init__(self, code: str, field: str, reason: str, goal_id: str | None = None) -> None:
+        super().__init__(field, reason)
+        self.code = code
+        self.goal_id = goal_id
+
+    def to_dict(self) -> dict[str, Any]:  # type: ignore[override,unused-ignore]
+        """The error reply's JSON form."""
+        return {
+            "schema": SCHEMA_VERSION,
+            "code": self.code,
+            "field": self.field,
+            "reason": self.reason,
+            "goal_id": self.goal_id,
+        }
+
+    def __str__(self) -> str:
+        return f"{self.code}: {self.field}: {self.reason}"
+
+
+def check_id(value: object, field: str) -> str:
+    """Validate a goal id or namespace (one key-expression chunk, 1–64 chars of ``[A-Za-z0-9_.-]``)."""
+    if not isinstance(value, str):
+        raise RequestError(E_INVALID, field, f"must be a string, got {type(value).__name__}")
+    if not ID_PATTERN.fullmatch(value):
+        raise RequestError(
+            E_INVALID,
+            field,
+            "must be 1-64 characters of A-Z a-z 0-9 _ . - starting with a letter or digit",
+        )
+    return value
+
+
+def prefix(namespace: str | None = None) -> str:
+    """The service's key prefix: ``eos/@v1`` or ``eos/@v1/<namespace>``."""
+    if namespace is None or namespace == "":
+        return ROOT
+    return f"{ROOT}/{check_id(namespace, 'namespace')}"
+
+
+def instance_key(pfx: str, instance: str = "*") -> str:
+    """Liveliness token key of an instance (``*``: all)."""
+    return f"{pfx}/instance/{instance}"
+
+
+def plan_key(pfx: str, instance: str = "*") -> str:
+    """Plan queryable of an instance (``*``: any)."""
+    return f"{pfx}/plan/{instance}"
+
+
+def cancel_key(pfx: str, goal_id: str = "*") -> str:
+    """Cancel query key of a goal (every instance serves ``P/cancel/*``)."""
+    return f"{pfx}/cancel/{goal_id}"
+
+
+def cycle_key(pfx: str, goal_id: str = "*") -> str:
+    """Where a goal's cycle records are published (``*``: every goal)."""
+    return f"{pfx}/goal/{goal_id}/cycle"
+
+
+def status_key(pfx: str, goal_id: str = "*") -> str:
+    """Where a goal's status messages are published (``*``: every goal)."""
+    return f"{pfx}/goal/{goal_id}/status"
+
+
+def goal_keys(pfx: str, goal_id: str = "*") -> str:
+    """Everything published about a goal (cycles and status)."""
+    return f"{pfx}/goal/{goal_id}/*"
+
+
+def _reject_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not valid JSON")
+
+
+def loads_strict(data: bytes | str) -> Any:
+    """Parse strict JSON (NaN/Infinity rejected); raises ValueError or RecursionError."""
+    return json.loads(data, parse_constant=_reject_constant)
+
+
+def dumps(obj: Any) -> bytes:
+    """Compact strict JSON bytes."""
+    return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
+
+
+def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> bytes:
+    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., <PlanRequest fields>}``."""
+    body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
+    return dumps({"schema": SCHEMA_VERSION, "goal_id": goal_id, **body})
+
+
+#: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)
+MAX_WIRE_INT = 2**64
+
+
+def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
+    """Reject integers too large for any field, naming where they are."""
+    stack: list[tuple[Any, str]] = [(value, path)]
+    while stack:
+        v, where = stack.pop()
+        if isinstance(v, dict):
+            stack.extend((item, f"{where}.{k}" if where else str(k)) for k, item in v.items())
+        elif isinstance(v, list):
+            stack.extend((item, f"{where}[{i}]") for i, item in enumerate(v))
+        elif isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT:
+            raise RequestError(E_INVALID, where or "request", "integer too large (|x| > 2**64)", goal_id)
+
+
+def decode_request(
+    payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES
+) -> tuple[str, PlanRequest]:
+    """Decode and validate a plan request.
+
+    Returns:
+        ``(goal_id, request)``.
+
+    Raises:
+        RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
+    """
+    if len(payload) > max_bytes:
+        raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
+    try:
+        data = loads_strict(bytes(payload))
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        raise RequestError(E_NOT_JSON, "request", f"not JSON: {str(exc)[:200]}") from None
+    if not isinstance(data, dict):
+        raise RequestError(E_INVALID, "request", f"must be a JSON object, got {type(data).__name__}")
+    goal_raw = data.get("goal_id")
+    goal_id = goal_raw if isinstance(goal_raw, str) and ID_PATTERN.fullmatch(goal_raw) else None
+    if "schema" not in data:
+        raise RequestError(E_SCHEMA, "schema", "is required", goal_id)
+    schema = data["schema"]
+    if isinstance(schema, bool) or not isinstance(schema, int):
+        raise RequestError(E_SCHEMA, "schema", f"must be an integer, got {type(schema).__name__}", goal_id)
+    if schema != SCHEMA_VERSION:
+        raise RequestError(
+            E_SCHEMA, "schema", f"version {schema} not supported (this is {SCHEMA_VERSION})", goal_id
+        )
+    if "goal_id" not in data:
+        raise RequestError(E_INVALID, "goal_id", "is required")
+    check_id(goal_raw, "goal_id")
+    assert goal_id is not None
+    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id")}
+    _check_integers(body, "", goal_id)
+    try:
+        request = PlanRequest.from_dict(body)
+    except ValidationError as exc:
+        raise RequestError(E_INVALID, exc.field, exc.reason, goal_id) from None
+    except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
+        raise RequestError(E_INVALID, "request", f"unacceptable value: {exc}", goal_id) from None
+    return goal_id, request
+
+
+def error_from_payload(payload: bytes) -> RequestError:
+    """Rebuild the :class:`RequestError` of an error reply (robust to foreign payloads)."""
+    try:
+        data = loads_strict(payload)
+        if isinstance(data, dict) and isinstance(data.get("code"), str):
+            return RequestError(
+                str(data["code"]),
+                str(data.get("field", "request")),
+                str(data.get("reason", "")),
+                data.get("goal_id") if isinstance(data.get("goal_id"), str) else None,
+            )
+    except (ValueError, RecursionError):
+        pass
+    return RequestError(E_INTERNAL, "reply", f"unreadable error reply: {bytes(payload[:200])!r}")

@@ -1,0 +1,60 @@
+"""Zenoh session configuration helpers (loopback peers by default, any config file otherwise)."""
+
+from __future__ import annotations
+
+import json
+import socket
+from collections.abc import Sequence
+from pathlib import Path
+
+import zenoh
+
+#: default listening endpoint of ``eos serve``
+DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
+
+
+def free_port() -> int:
+    """A TCP port on 127.0.0.1 that was free a moment ago (bind-port-0 trick)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def make_config(
+    *,
+    mode: str = "peer",
+    listen: Sequence[str] = (),
+    connect: Sequence[str] = (),
+    lease_ms: int | None = None,
+    base: str | Path | None = None,
+) -> zenoh.Config:
+    """A Zenoh configuration: a ``peer`` with multicast scouting off unless a file says otherwise.
+
+    Args:
+        mode: ``"peer"``, ``"client"`` or ``"router"`` (ignored when ``base`` is given).
+        listen: endpoints to listen on, e.g. ``"tcp/127.0.0.1:7447"``.
+        connect: endpoints to connect to.
+        lease_ms: transport lease (ms): a silent (frozen) peer is dropped after it;
+            Zenoh's default is 10 000.
+        base: a Zenoh JSON5 configuration file; ``listen``/``connect``/``lease_ms``
+            override its values when given.
+    """
+    if base is not None:
+        conf = zenoh.Config.from_file(str(base))
+    else:
+        conf = zenoh.Config()
+        conf.insert_json5("mode", json.dumps(mode))
+        conf.insert_json5("scouting/multicast/enabled", "false")
+    if listen:
+        conf.insert_json5("listen/endpoints", json.dumps(list(listen)))
+    if connect:
+        conf.insert_json5("connect/endpoints", json.dumps(list(connect)))
+    if lease_ms is not None:
+        conf.insert_json5("transport/link/tx/lease", str(int(lease_ms)))
+        conf.insert_json5("transport/link/tx/keep_alive", "4")
+    return conf
+
+
+def loopback(port: int) -> str:
+    """The TCP endpoint ``tcp/127.0.0.1:<port>``."""
+    return f"tcp/127.0.0.1:{port}"
