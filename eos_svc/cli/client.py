@@ -1,0 +1,169 @@
+"""``eos client`` — talk to running ``eos serve`` instances.
+
+eos client list                             # instances alive (liveliness tokens)
+eos client plan --seed 7                    # one plan, cycles printed live, then the result
+eos client plan --json --quiet              # the result only, as JSON
+eos client cancel GOAL_ID                   # cancel a queued or running goal
+eos client watch                            # every cycle and status on the network
+
+By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import threading
+from typing import Any
+
+from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.cli.serve import add_connection_arguments, session_config
+from eos_svc.errors import ValidationError
+
+
+def format_cycle(msg: dict[str, Any]) -> str:
+    """One line per cycle message: seq, stage, chosen agent, outcome, detail."""
+    rec = msg.get("record", {})
+    return (
+        f"{msg.get('goal_id', '?')} #{msg.get('seq', '?'):>4} {rec.get('stage', '?'):<11} "
+        f"-> {rec.get('chosen') or '-'} [{rec.get('outcome')}] {rec.get('detail', '')}"
+    )
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Options and actions of ``eos client``."""
+    sub = parser.add_subparsers(dest="action", metavar="ACTION")
+    lst = sub.add_parser("list", help="list the service instances alive")
+    p = sub.add_parser("plan", help="request one plan; print its cycles live, then the result")
+    c = sub.add_parser("cancel", help="cancel a goal by id")
+    c.add_argument("goal_id", metavar="GOAL_ID")
+    w = sub.add_parser("watch", help="print every cycle and status message on the network (Ctrl-C to stop)")
+    for sp in (lst, p, c, w):
+        add_connection_arguments(sp, default_listen=False)
+        sp.add_argument(
+            "--timeout",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help="seconds to wait for an answer (plan: the request's deadline + 10)",
+        )
+    from eos_svc.cli.plan import add_object_arguments
+
+    add_object_arguments(p)
+    add_weight_arguments(p)
+    g = p.add_argument_group("run")
+    g.add_argument("--seed", type=int, default=1, help="seed (1)")
+    g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
+    g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
+    g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
+    g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
+    g.add_argument(
+        "--request",
+        default=None,
+        metavar="FILE",
+        help="send this JSON request file (schema/goal_id added) instead of the options",
+    )
+    g.add_argument("--json", action="store_true", help="print the result as JSON")
+    g.add_argument("--quiet", action="store_true", help="do not print the cycles")
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the chosen action; exit 0 on success, 1 on a refused/failed request or no service."""
+    if args.action is None:
+        fail("ACTION: choose one of list, plan, cancel, watch")
+    conf = session_config(args, serving=False)
+    from eos_svc.service import protocol as proto
+    from eos_svc.service.client import EosClient, ServiceUnavailableError
+
+    request: Any = None
+    if args.action == "plan":
+        from eos_svc.agents.request import PlanRequest
+        from eos_svc.cli.plan import FIELD_OPTIONS, request_dict
+
+        try:
+            if args.goal_id is not None:
+                proto.check_id(args.goal_id, "goal_id")
+        except ValidationError as exc:
+            fail(f"--goal-id: {exc.reason}")
+        if args.request is not None:
+            try:
+                with open(args.request, encoding="utf-8") as fh:
+                    request = proto.loads_strict(fh.read())
+            except OSError as exc:
+                fail(f"--request: cannot read {args.request!r}: {exc.strerror}")
+            except ValueError as exc:
+                fail(f"--request: not JSON: {exc}")
+        else:
+            try:
+                request = PlanRequest.from_dict(request_dict(args))
+            except ValidationError as exc:
+                fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+    if args.action == "cancel":
+        try:
+            proto.check_id(args.goal_id, "goal_id")
+        except ValidationError as exc:
+            fail(f"GOAL_ID: {exc.reason}")
+    try:
+        client = EosClient.open(conf, namespace=args.namespace)
+    except ValidationError as exc:
+        fail(f"--namespace: {exc.reason}")
+    except Exception as exc:
+        fail(f"cannot open the Zenoh session: {exc}", code=1)
+    with client:
+        if args.action == "list":
+            found = client.discover(timeout=args.timeout or 1.0)
+            for iid in found:
+                print(iid)
+            if not found:
+                print("no instance found")
+            return 0 if found else 1
+        if args.action == "cancel":
+            had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0)
+            print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
+            return 0 if had_it else 1
+        if args.action == "watch":
+            stop = threading.Event()
+            sub = client.watch(
+                lambda kind, msg: print(
+                    format_cycle(msg)
+                    if kind == "cycle"
+                    else f"{msg.get('goal_id')} status {json.dumps(msg)}",
+                    flush=True,
+                )
+            )
+            try:
+                while not stop.wait(0.5):
+                    pass
+            except KeyboardInterrupt:
+                pass
+            finally:
+                sub.undeclare()
+            return 0
+        client.discover(timeout=1.0)
+        show = None if args.quiet or args.json else (lambda msg: print(format_cycle(msg), flush=True))
+        try:
+            outcome = client.plan(
+                request, goal_id=args.goal_id, on_cycle=show, instance=args.instance, timeout=args.timeout
+            )
+        except proto.RequestError as err:
+            print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
+            return 1
+        except ServiceUnavailableError as exc:
+            print(f"eos client: no service: {exc}")
+            return 1
+        if args.json:
+            print(
+                json.dumps(
+                    {"goal_id": outcome.goal_id, "instance": outcome.instance, "result": outcome.result},
+                    allow_nan=False,
+                )
+            )
+        else:
+            r = outcome.result
+            print(
+                f"goal {outcome.goal_id} on {outcome.instance}: {r.get('status')} — {r.get('reason')} "
+                f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
+                f"{outcome.round_trip_s * 1000:.1f} ms)"
+            )
+        return 0 if outcome.status not in ("error", "cancelled") else 1
