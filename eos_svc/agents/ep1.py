@@ -68,6 +68,8 @@ class EP1Agent(GraspAgent):
                 world.state,
                 finger,
                 world.sensor,
+                omega=p.ep1_omega,
+                dt=p.ep1_dt,
                 steps_per_direction=p.ep1_steps,
                 directions=p.ep1_directions,
                 solver=self.solver,

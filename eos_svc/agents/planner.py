@@ -228,12 +228,16 @@ def plan(
 
 
 def ratio_sphere_request(
-    d_over_h: float, seed: int, hand: HandModel | None = None, **kwargs: object
+    d_over_h: float,
+    seed: int,
+    hand: HandModel | None = None,
+    position: tuple[float, float, float] | None = None,
+    **kwargs: object,
 ) -> PlanRequest:
-    """A sphere request with diameter ``d_over_h`` × hand height at the default position."""
+    """A sphere of diameter ``d_over_h`` × hand height (at the default position unless given)."""
     hand = hand or default_hand()
     if not (d_over_h > 0.0 and math.isfinite(d_over_h)):
         raise ValidationError("d_over_h", f"must be a positive finite ratio, got {d_over_h!r}")
     radius = 0.5 * d_over_h * hand.hand_height
-    spec = ObjectSpec("sphere", {"radius": radius}, ObjectSpec().position)
+    spec = ObjectSpec("sphere", {"radius": radius}, position or ObjectSpec().position)
     return PlanRequest(obj=spec, seed=seed, **kwargs)  # type: ignore[arg-type]

@@ -9,9 +9,12 @@ Classes, from the principal curvatures k1 ≥ k2 and their σ (1/m):
 
 Size: the grasp radius is 1/H (mean curvature) for a sphere or ellipsoid and
 1/k1 for a cylinder; the centre lies that far behind the sensed contact along
-the object normal. Confidence is the complement of the estimate's relative
-radius error, ``1 − σ_R/R`` (0 for a plane). Opportunistic sub-rating: 1 right
-after EP1 wrote a new estimate, else 0.
+the object normal. Confidence is the probability, under the estimate's Gaussian
+uncertainty, that the true grasp radius lies within ±10 % of the postulated one:
+``erf(0.1 / (√2 · σ_R/R))`` (0 for a plane) — 60 % needs σ_R/R ≤ 0.12. (The
+plain complement ``1 − σ_R/R`` would accept a 40 % error at 60 %, too loose to
+tell d/h ≥ 1.) Opportunistic sub-rating: 1 right after EP1 wrote a new
+estimate, else 0.
 """
 
 from __future__ import annotations
@@ -28,6 +31,15 @@ from eos_svc.board import Board
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
+#: the size tolerance the confidence refers to (relative)
+SIZE_TOLERANCE = 0.10
+
+
+def size_confidence(relative_error: float | None) -> float:
+    """Probability that the true size is within ±SIZE_TOLERANCE of the estimate (Gaussian σ)."""
+    if relative_error is None or not math.isfinite(relative_error) or relative_error <= 0.0:
+        return 0.0 if relative_error is None or not math.isfinite(relative_error) else 1.0
+    return math.erf(SIZE_TOLERANCE / (math.sqrt(2.0) * relative_error))
 
 
 def classify(curvature: dict) -> tuple[str, float]:
@@ -61,7 +73,7 @@ class PostShapeAgent(GraspAgent):
             return ActionResult(Outcome.CANNOT_ACT, "no curvature estimate to ponder yet")
         kind, radius = classify(curvature)
         rel = curvature.get("relative_error")
-        confidence = 0.0 if kind == "plane" or rel is None else max(0.0, min(1.0, 1.0 - float(rel)))
+        confidence = 0.0 if kind == "plane" or rel is None else size_confidence(float(rel))
         if kind == "plane" or not math.isfinite(radius) or radius <= 0.0:
             centre = None
             diameter = math.inf

@@ -39,6 +39,10 @@ class WorldParameters:
         finger_step: joint increment of one finger closing step (rad, every joint).
         contact_tolerance: a fingertip within this distance touches (m).
         ep1_steps: rolling steps per direction in one EP1 run.
+        ep1_omega: rolling rate (rad/s); with ``ep1_dt`` the sweep of one direction is
+            ``ep1_omega · ep1_dt · ep1_steps`` rad (0.32 rad by default: large enough that the
+            contact's travel over the fingertip dominates the tactile noise).
+        ep1_dt: time step of the rolling motion (s).
         ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
         confidence_threshold: post_shape confidence needed to leave the information stage.
         hand_bound: radius of a ball about the grasp centre that contains the whole hand at
@@ -57,6 +61,8 @@ class WorldParameters:
     finger_step: float = 0.03
     contact_tolerance: float = 1e-4
     ep1_steps: int = 16
+    ep1_omega: float = 2.0
+    ep1_dt: float = 0.01
     ep1_directions: tuple[float, ...] = (0.0, 90.0)
     confidence_threshold: float = 0.6
     hand_bound: float = 0.2

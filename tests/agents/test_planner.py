@@ -97,7 +97,7 @@ def test_every_cycle_reaches_the_callback():
 
 
 def test_too_large_object_fails_cleanly():
-    r = plan(ratio_sphere_request(1.05, seed=1))
+    r = plan(ratio_sphere_request(1.3, seed=1, position=(0.3, 0.02, -0.015)))
     assert r.status == "failed"
     assert "too large" in r.reason
 
