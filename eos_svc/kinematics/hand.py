@@ -586,6 +586,10 @@ class HandState:
         """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
         is currently at ``point_world`` (m), per unit joint velocity."""
         _, jid, oMi, _, M = self._tip(finger)
+        if type(point_world) is not np.ndarray or point_world.shape != (3,):
+            point_world = np.asarray(point_world, dtype=float)
+            if point_world.shape != (3,):
+                raise ConfigurationError("point_world", f"must be a 3-vector, got {point_world!r}")
         M.translation = oMi.actInv(point_world)  # the point in the tip body's joint frame
         J = pin.getFrameJacobian(self.model, self.data, jid, M, pin.LOCAL_WORLD_ALIGNED)
         out: np.ndarray = J[:3]

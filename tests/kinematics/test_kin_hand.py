@@ -10,6 +10,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 import yourdfpy
+from hypothesis import given, settings
+from hypothesis import strategies as hyp_st
 
 from eos_svc.kinematics import (
     HAND3X3_URDF,
@@ -264,3 +266,30 @@ def test_allegro_second_hand(allegro: HandModel) -> None:
     assert not at_limit
     with pytest.raises(WorkspaceError):
         st.move_wrist(np.zeros(3))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st_q=hyp_st.lists(
+        hyp_st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=0, max_size=17
+    )
+)
+def test_validate_q_fuzz(hand: HandModel, st_q: list[float]) -> None:
+    """Any list either validates (15 finite numbers) or raises ConfigurationError."""
+    ok = len(st_q) == 15 and all(np.isfinite(st_q))
+    if ok:
+        assert np.array_equal(hand.validate_q(st_q), np.array(st_q))
+        assert np.array_equal(hand.validate_q(np.array(st_q)), np.array(st_q))
+    else:
+        with pytest.raises(ConfigurationError):
+            hand.validate_q(st_q)
+        with pytest.raises(ConfigurationError):
+            hand.validate_q(np.array(st_q))
+
+
+def test_point_jacobian_accepts_lists(hand: HandModel) -> None:
+    st = hand.state()
+    p = st.tip_position("finger1")
+    assert np.allclose(st.tip_point_jacobian("finger1", p.tolist()), st.tip_point_jacobian("finger1", p))
+    with pytest.raises(ConfigurationError, match="point_world"):
+        st.tip_point_jacobian("finger1", [1.0, 2.0])
