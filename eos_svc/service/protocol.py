@@ -215,7 +215,7 @@ def decode_request(
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:
-        raise RequestError(E_INVALID, exc.field, exc.reason, goal_id) from None
+        raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
         raise RequestError(E_INVALID, "request", f"unacceptable value: {exc}", goal_id) from None
     return goal_id, request

@@ -21,6 +21,7 @@ gets a ``busy`` error reply. Every query ends in exactly one ``reply`` or
 
 from __future__ import annotations
 
+import inspect
 import logging
 import os
 import queue
@@ -126,6 +127,7 @@ class PlanService:
         self._stopping = False
         self._owns_session = False
         self._started = False
+        self._planner_kwargs: dict[str, Any] = {}
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -142,6 +144,11 @@ class PlanService:
             return self
         if self._planner is None:
             self._planner = default_planner()
+        try:  # the grasp planner can skip keeping its trace: the service streams every cycle instead
+            params = inspect.signature(self._planner).parameters
+            self._planner_kwargs = {"keep_trace": False} if "keep_trace" in params else {}
+        except (TypeError, ValueError):
+            self._planner_kwargs = {}
         self._started = True
         self._threads.append(
             threading.Thread(target=self._dispatch, name=f"eos-dispatch-{self.instance}", daemon=True)
@@ -407,7 +414,7 @@ class PlanService:
         try:
             self._status(goal_id, proto.STATE_RUNNING)
             assert self._planner is not None
-            outcome = self._planner(job.request, on_cycle=on_cycle, cancel=job.cancel)
+            outcome = self._planner(job.request, on_cycle=on_cycle, cancel=job.cancel, **self._planner_kwargs)
             result = outcome.to_dict() if hasattr(outcome, "to_dict") else dict(outcome)
             result = to_jsonable(result)
         finally:
