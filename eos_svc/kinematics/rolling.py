@@ -412,6 +412,13 @@ class RollingQP:
             )
         return sol.x, 0
 
+    def build(self) -> qpsolvers.Problem:
+        """The QP of the next step at the current q, without solving it (pink's ``build_ik``):
+        kinematics, contact, constraint rows and bounds; returns an independent copy."""
+        self.kinematics()
+        self._build(self.contact())
+        return self.problem_copy()
+
     def problem_copy(self) -> qpsolvers.Problem:
         """An independent copy of the current QP (for errors and inspection)."""
         return qpsolvers.Problem(

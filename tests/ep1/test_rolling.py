@@ -41,6 +41,10 @@ def test_problem_is_an_inspectable_qpsolvers_problem(sphere_setup):
     assert np.allclose(p.b[3:], 0.5 * rq.axis, atol=1e-3)  # ω a (+ ½ dt J̇q̇ correction)
     copy = rq.problem_copy()
     assert copy.A is not p.A and np.array_equal(copy.A, p.A)
+    built = rq.build()  # the next step's QP, unsolved
+    sol = qpsolvers.solve_problem(built, solver="daqp")
+    assert sol.found
+    np.testing.assert_allclose(built.A[:2] @ sol.x, built.b[:2], atol=1e-12)
 
 
 def test_constraint_rows_match_finite_differences(sphere_setup):
