@@ -332,8 +332,7 @@ class RollingQP:
             # last q̇: ask for the step's *average* velocities, v + ½ dt a, to meet the
             # targets (no slip, contact, ω a) — second-order accurate integration.
             acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._fid, _LWA)
-            ax, ay, az = acc.linear.tolist()
-            wx, wy, wz = acc.angular.tolist()
+            ax, ay, az, wx, wy, wz = acc.vector.tolist()
             # material point at r = −r_f n: a_p = a_c + α × r + ω × (ω × r); the last term is
             # normal when ω ⟂ n, and α × r = −r_f α × n
             px = ax - r * (wy * nz_ - wz * ny_)
