@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from eos_svc.kinematics.curvature import CurvatureEstimator, UnderdeterminedError
 
@@ -157,3 +159,23 @@ def test_accumulates_across_estimators():
     np.testing.assert_allclose(a.estimate().form, b.estimate().form)
     d = a.estimate().to_dict()
     assert d["n_samples"] == 6 and len(d["radii"]) == 2
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    k=st.tuples(st.floats(-50, 200), st.floats(-60, 60), st.floats(-50, 200)),
+    phis=st.lists(st.floats(0, math.pi), min_size=2, max_size=6, unique=True),
+)
+def test_property_recovers_any_form_from_two_directions(k, phis):
+    """Any symmetric K_o with K_o + K_f positive definite is recovered exactly from rolls
+    along at least two independent directions."""
+    K = np.array([[k[0], k[1]], [k[1], k[2]]])
+    if np.min(np.linalg.eigvalsh(K + KF)) < 5.0:
+        return
+    dirs = np.array([[math.cos(p), math.sin(p)] for p in phis])
+    if abs(np.linalg.det(dirs[:2] @ dirs[:2].T)) < 1e-3:
+        return
+    est = CurvatureEstimator()
+    for w in dirs:
+        est.add_sample(w, np.linalg.solve(K + KF, np.array([-w[1], w[0]])), KF)
+    np.testing.assert_allclose(est.estimate().form, K, atol=1e-6 * (1 + np.abs(K).max()))
