@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import coal
 import numpy as np
 
 from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
@@ -114,14 +115,23 @@ class GraspWorld:
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, float] = {}
         geometries = self.hand.collision_model.geometryObjects
-        self._links: dict[str, list[str]] = {
+        self._links: dict[str, list[int]] = {
             finger: [
-                g.name
+                i
                 for i, g in enumerate(geometries)
                 if g.name.startswith(f"{finger}_") and i != self.hand.tip_geometry_id(finger)
             ]
             for finger in self.hand.finger_names
         }
+        # Fast distance queries (coal directly, reused request/result): the agents' hot path
+        # needs only the signed distance, not witness points.
+        self._geometries = [g.geometry for g in geometries]
+        self._req = self.scene._req
+        self._res = coal.DistanceResult()
+        self._obj_geometry = self.scene.object.geometry
+        self._obj_tf = self.scene._tf_obj
+        self._probe = coal.Sphere(1e-9)
+        self._probe_tf = coal.Transform3s()
 
     # --- reading the world -------------------------------------------------------
     @property
@@ -142,7 +152,7 @@ class GraspWorld:
         memo = self._memo
         value = memo.get("gap")
         if value is None:
-            value = memo["gap"] = float(self.obj.signed_distance(self.grasp_centre_world()))
+            value = memo["gap"] = self._point_gap(self.grasp_centre_world())
         return value
 
     def located(self) -> bool:
@@ -175,7 +185,7 @@ class GraspWorld:
             if gap > self.params.hand_bound + self.params.clearance:
                 value = gap - self.params.hand_bound
             else:
-                value = float(self.scene.min_distance(self.state).distance)
+                value = min(self._geometry_gap(gid) for gid in range(len(self._geometries)))
             memo["clearance"] = value
         return value
 
@@ -227,8 +237,8 @@ class GraspWorld:
     def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
         """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
 
-        Stops short (by bisection) where any hand geometry would come closer than the
-        contact tolerance to the object, so the hand never pushes the object.
+        Stops short (by bisection) where any hand geometry would come within half the
+        contact tolerance of the object, so the hand never pushes the object.
 
         Returns:
             (distance left to the target in m, stopped-by-contact flag).
@@ -250,7 +260,7 @@ class GraspWorld:
             mid = 0.5 * (lo + hi)
             q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
             self.set_q(q)
-            if self.hand_clearance() >= 0.0:
+            if self.hand_clearance() >= 0.5 * self.params.contact_tolerance:
                 lo = mid
             else:
                 hi = mid
@@ -263,36 +273,83 @@ class GraspWorld:
 
         Returns:
             (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
-            object; the step was cut by bisection to the contact), ``"link"`` (another part
+            object; the step was cut at the contact by regula falsi), ``"link"`` (another part
             of the finger touched first: not a precision grip) or ``"limit"`` (the joint
             limit was reached without touching).
         """
+        tol = self.params.contact_tolerance
+        idx = self.hand.finger_q_index(finger)
         q0 = self.state.q
+        f0 = self._closing_gap(finger)
         q1, at_limit = self.state.close_finger(finger, dtheta)
         self.set_q(q1)
-        tol = self.params.contact_tolerance
-        if self.tip_distance(finger) > tol and self._finger_links_clear(finger):
+        f1 = self._closing_gap(finger)
+        if f1 > 0.0:
             return ("limit" if at_limit else "moved"), self.finger_angle(finger)
-        idx = self.hand.finger_q_index(finger)
-        lo, hi = 0.0, 1.0
-        for _ in range(30):
-            mid = 0.5 * (lo + hi)
+        # First touch inside the step: regula falsi (Illinois) on the step fraction for the
+        # closing gap, converging to a tip within [tol/2, tol] of the object (or a link just
+        # touching), a handful of distance queries instead of a long bisection.
+        a, fa, b, fb = 0.0, f0, 1.0, f1
+        side = 0
+        s_ok = 0.0
+        for _ in range(40):
+            frac = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
             q = q0.copy()
-            q[idx] = q0[idx] + mid * (q1[idx] - q0[idx])
+            q[idx] = q0[idx] + frac * (q1[idx] - q0[idx])
             self.set_q(q)
-            if self.tip_distance(finger) > tol * 0.5 and self._finger_links_clear(finger):
-                lo = mid
+            fs = self._closing_gap(finger)
+            if fs >= 0.0:
+                s_ok = frac
+                if fs <= 0.5 * tol:
+                    break
+                a, fa = frac, fs
+                if side == 1:
+                    fb *= 0.5
+                side = 1
             else:
-                hi = mid
+                b, fb = frac, fs
+                if side == -1:
+                    fa *= 0.5
+                side = -1
+            if b - a < 1e-9:
+                break
         q = q0.copy()
-        q[idx] = q0[idx] + hi * (q1[idx] - q0[idx])
+        q[idx] = q0[idx] + s_ok * (q1[idx] - q0[idx])
         self.set_q(q)
         event = "touched" if self.tip_distance(finger) <= tol else "link"
         return event, self.finger_angle(finger)
 
+    def _closing_gap(self, finger: str) -> float:
+        """How far ``finger`` may still close before something touches (m): the tip's
+        distance beyond half the contact tolerance, or a link's distance, whichever is less."""
+        tip = self.tip_distance(finger) - 0.5 * self.params.contact_tolerance
+        return min([tip, *(self._geometry_gap(gid) for gid in self._links[finger])])
+
     def _finger_links_clear(self, finger: str) -> bool:
         """No link of ``finger`` (other than its tip) touches the object."""
-        return all(self.scene.distance(self.state, name).distance > 0.0 for name in self._links[finger])
+        return all(self._geometry_gap(gid) > 0.0 for gid in self._links[finger])
+
+    def _geometry_gap(self, gid: int) -> float:
+        """Signed distance between hand geometry ``gid`` and the object (m)."""
+        res = self._res
+        res.clear()
+        coal.distance(
+            self._obj_geometry,
+            self._obj_tf,
+            self._geometries[gid],
+            self.state.geometry_data.oMg[gid],
+            self._req,
+            res,
+        )
+        return float(res.min_distance)
+
+    def _point_gap(self, point: np.ndarray) -> float:
+        """Signed distance from a world point to the object surface (m)."""
+        self._probe_tf.setTranslation(point)
+        res = self._res
+        res.clear()
+        coal.distance(self._obj_geometry, self._obj_tf, self._probe, self._probe_tf, self._req, res)
+        return float(res.min_distance)
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:

@@ -1,0 +1,93 @@
+"""The grasp world's guarded motions: they never push into the object."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eos_svc.agents import ObjectSpec, PlanRequest
+from eos_svc.agents.planner import build_world
+
+
+def world_with_sphere(position=(0.12, 0.0, 0.0), radius=0.03, seed=1):
+    return build_world(PlanRequest(obj=ObjectSpec("sphere", {"radius": radius}, position), seed=seed))
+
+
+@pytest.mark.parametrize("finger", ["finger1", "finger2", "finger3"])
+def test_closing_stops_at_first_touch(finger):
+    world = world_with_sphere()
+    tol = world.params.contact_tolerance
+    events = []
+    for _ in range(100):
+        event, _angle = world.close_finger_step(finger, 0.05)
+        events.append(event)
+        assert world.tip_distance(finger) >= 0.0  # never penetrates
+        if event != "moved":
+            break
+    assert events[-1] == "touched"
+    assert 0.0 <= world.tip_distance(finger) <= tol
+
+
+def test_closing_on_nothing_reaches_the_limit():
+    world = world_with_sphere(position=(0.35, 0.1, 0.1), radius=0.01)
+    event = "moved"
+    for _ in range(200):
+        event, angle = world.close_finger_step("finger1", 0.1)
+        if event != "moved":
+            break
+    assert event == "limit"
+    assert angle == pytest.approx(world.hand.upper[world.hand.finger_q_index("finger1")[0]])
+
+
+def test_wrist_step_stops_short_of_contact():
+    world = world_with_sphere(position=(0.30, 0.0, 0.0))
+    target = world.wrist_position() + np.array([0.3, 0.0, 0.0])  # straight through the object
+    blocked = False
+    for _ in range(200):
+        left, blocked = world.step_wrist_toward(target, 0.01)
+        assert world.hand_clearance() >= 0.0
+        if blocked or left == 0.0:
+            break
+    assert blocked
+    assert world.hand_clearance() <= 1e-4
+
+
+def test_search_steps_stay_in_the_box_and_follow_the_seed():
+    paths = []
+    for _ in range(2):
+        world = world_with_sphere(position=(0.35, 0.1, 0.1), radius=0.02, seed=7)
+        path = []
+        for _ in range(50):
+            world.random_search_step()
+            p = world.wrist_position()
+            assert np.all(p >= np.array(world.params.search_box_lo) - 1e-12)
+            assert np.all(p <= np.array(world.params.search_box_hi) + 1e-12)
+            assert world.hand_clearance() >= world.params.clearance
+            path.append(p)
+        paths.append(np.array(path))
+    np.testing.assert_array_equal(paths[0], paths[1])
+
+
+def test_sweep_reach_matches_brute_force():
+    world = world_with_sphere()
+    sweep = world.sweeps["finger3"]
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        centre = rng.uniform([0.0, -0.05, -0.1], [0.2, 0.05, 0.1])
+        radius = rng.uniform(0.01, 0.06)
+        angle = rng.uniform(-0.3, 1.8)
+        expected = any(
+            np.linalg.norm(p - centre) <= radius
+            for a, p in zip(sweep.angles, sweep.points, strict=True)
+            if a >= angle - 1e-12
+        )
+        assert sweep.reaches(angle, centre, radius) == expected
+
+
+def test_hand_bound_contains_the_hand():
+    # The collision-query shortcut assumes every hand part lies within hand_bound of the grasp centre.
+    world = world_with_sphere()
+    centre = np.array(world.params.grasp_centre)
+    for finger, sweep in world.sweeps.items():
+        reach = np.linalg.norm(sweep.points - centre, axis=1).max() + world.hand.tip_radius(finger)
+        assert reach < world.params.hand_bound
