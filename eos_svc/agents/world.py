@@ -253,7 +253,7 @@ class GraspWorld:
         q = q0.copy()
         q[self._wrist_q[:3]] = start + delta * (move / dist)
         self.set_q(q)
-        if self.hand_clearance() >= -self.params.contact_tolerance:
+        if self.hand_clearance() >= 0.5 * self.params.contact_tolerance:
             return dist - move, False
         lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
         for _ in range(30):

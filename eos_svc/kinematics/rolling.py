@@ -366,7 +366,7 @@ class RollingQP:
             # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
             indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
             A = sp.csc_matrix((self._Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
-            s = osqp.OSQP()
+            s = osqp.OSQP(algebra="builtin")  # naming it skips a per-object import probe (~1 ms)
             s.setup(
                 sp.csc_matrix(np.triu(self._P)),
                 self._qlin,
