@@ -25,6 +25,7 @@ carrying a copy of the problem.
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 from typing import Any
 
@@ -94,6 +95,51 @@ def _unit(name: str, v: object) -> np.ndarray:
         raise KinematicsError(name, f"must be a finite non-zero 3-vector, got {v!r}")
     out: np.ndarray = a / np.linalg.norm(a)
     return out
+
+
+_OSQP_CACHE = threading.local()
+
+
+def _cached_osqp(rq: RollingQP) -> tuple[Any, Any]:
+    """An OSQP solver for ``rq``'s problem structure, set up once per thread and reused.
+
+    Every rolling QP with ``nx`` variables has the same sparsity ([C; I], C dense 6×nx;
+    P diagonal), so one set-up serves every roll of every EP1 run; the caller then
+    overwrites all the data (q, l, u, P, A). Thread-local: OSQP objects are not shared
+    between threads (the service plans concurrently).
+    """
+    key = (rq.nx, rq.eps, rq.check_termination)
+    cache: dict = getattr(_OSQP_CACHE, "solvers", None) or {}
+    _OSQP_CACHE.solvers = cache
+    if key not in cache:
+        nx = rq.nx
+        # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
+        indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
+        A = sp.csc_matrix((rq._Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
+        s = osqp.OSQP(algebra="builtin")  # naming it skips a per-object import probe (~1 ms)
+        s.setup(
+            sp.csc_matrix(np.triu(rq._P)),
+            rq._qlin,
+            A,
+            rq._l,
+            rq._u,
+            eps_abs=rq.eps,
+            eps_rel=rq.eps,
+            eps_prim_inf=1e-12,
+            eps_dual_inf=1e-12,
+            warm_starting=True,
+            polishing=False,
+            verbose=False,
+            max_iter=20000,
+            check_termination=rq.check_termination,
+            scaling=0,  # small, well-scaled problem: no re-scaling on every update
+            adaptive_rho=False,
+            rho=0.05,
+        )
+        # The extension object behind osqp.OSQP: update/solve without the wrapper's
+        # per-call Python glue (np.maximum on l/u, derivative cache, info namespace).
+        cache[key] = (s, s._solver)
+    return cache[key]
 
 
 class RollingQP:
@@ -360,36 +406,12 @@ class RollingQP:
         np.minimum(self._vmax, ub, out=ub)
 
     def _solve_osqp(self) -> tuple[np.ndarray, int]:
-        nx = self.nx
         self._u[:6] = self._b
         if self._osqp is None:
-            # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
-            indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
-            A = sp.csc_matrix((self._Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
-            s = osqp.OSQP(algebra="builtin")  # naming it skips a per-object import probe (~1 ms)
-            s.setup(
-                sp.csc_matrix(np.triu(self._P)),
-                self._qlin,
-                A,
-                self._l,
-                self._u,
-                eps_abs=self.eps,
-                eps_rel=self.eps,
-                eps_prim_inf=1e-12,
-                eps_dual_inf=1e-12,
-                warm_starting=True,
-                polishing=False,
-                verbose=False,
-                max_iter=20000,
-                check_termination=self.check_termination,
-                scaling=0,  # small, well-scaled problem: no re-scaling on every update
-                adaptive_rho=False,
-                rho=0.05,
-            )
-            self._osqp = s
-            # The extension object behind osqp.OSQP: update/solve without the wrapper's
-            # per-call Python glue (np.maximum on l/u, derivative cache, info namespace).
-            self._osqp_solver = s._solver
+            self._osqp, self._osqp_solver = _cached_osqp(self)
+            slv = self._osqp_solver
+            slv.update_data_vec(q=self._qlin, l=self._l, u=self._u)
+            slv.update_data_mat(P_x=np.ascontiguousarray(np.diag(self._P)), P_i=None, A_x=self._Ax, A_i=None)
         else:
             slv = self._osqp_solver
             slv.update_data_vec(q=None, l=self._l, u=self._u)
