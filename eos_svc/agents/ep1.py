@@ -2,8 +2,15 @@
 
 Each action rolls one fingertip on the object without sliding, along two
 tangent directions (``eos_svc.kinematics.ep1.run_ep1``), and adds the samples to
-the run's curvature estimator, so repeated EP1 runs sharpen one estimate. The
-first run brings the fingertip closest to the object into contact.
+that side's curvature estimator, so repeated EP1 runs sharpen one estimate.
+
+Where it touches: the object is explored from **above** by the upper finger
+(finger1) — the hand lowers it onto the object's top, at the point found by
+moving 1 cm inside the surface point nearest the hand (proximity) and straight
+up — and, when post_shape asks for it (to size the object), from **below** by
+the opposing finger. The other fingers are opened while exploring so
+they stay clear of the object. The sensed contact point and normal of each side
+go on the board (``keys.EP1_CONTACT``).
 
 Opportunistic sub-rating: after post_shape has pondered a new estimate and is
 not yet confident (< 60 %), the complement of the estimate's relative radius
@@ -21,21 +28,28 @@ from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
-from eos_svc.kinematics.ep1 import place_hand_for_ep1, run_ep1
+from eos_svc.kinematics.curvature import CurvatureEstimator
+from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
 from eos_svc.kinematics.hand import KinematicsError
 from eos_svc.kinematics.rolling import RollingQPError
 
+#: QP backend EP1 falls back on when OSQP does not converge on a roll
+FALLBACK_SOLVER = "daqp"
 #: lowest opportunistic sub-rating of EP1 while the shape is not known
 RATING_FLOOR = 0.05
+#: how far above/below the hand's grasp centre the exploration aims (m): far enough that the
+#: closest surface point is the object's top (bottom)
+PROBE_REACH = 0.5
 
 
 class EP1Agent(GraspAgent):
-    """Rolls a fingertip on the object and estimates its curvature."""
+    """Rolls a fingertip on the object (top, then bottom if asked) and estimates its curvature."""
 
     def __init__(self, default: float, world: GraspWorld, solver: str = "osqp") -> None:
         super().__init__("ep1", (INFO,), default, world)
         self.solver = solver
-        self.finger: str | None = None
+        self.side: str | None = None
+        self.estimators: dict[str, CurvatureEstimator] = {}
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -46,38 +60,90 @@ class EP1Agent(GraspAgent):
         rating = float(board.get(keys.CURVATURE, {}).get("rating", 0.0))
         return max(RATING_FLOOR, min(1.0, rating))
 
-    def _choose_finger(self) -> str:
+    def _finger_for(self, side: str) -> str:
+        hand = self.world.hand
+        if side == "bottom":
+            return hand.description.opposing_finger
+        return next(f for f in hand.finger_names if f != hand.description.opposing_finger)
+
+    def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
+        """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
+
+        Returns the proximity point (the object's surface point nearest the hand) and the
+        unit direction from the hand toward it, both world.
+        """
         world = self.world
-        return min(world.hand.finger_names, key=world.tip_distance)
+        hand = world.hand
+        q = world.state.q
+        q[hand.wrist_q_index[3:6]] = 0.0
+        for other in hand.finger_names:
+            idx = hand.finger_q_index(other)
+            q[idx] = 0.0 if other == finger else hand.lower[idx]
+        sign = 1.0 if side == "top" else -1.0
+        # Proximity: the object's surface point nearest the grasp centre, 1 cm inside it,
+        # then straight up (down) — the closest surface point from there is on the top (bottom).
+        centre = world.grasp_centre_world()
+        near = world.obj.closest_surface_point(centre)
+        inward = near - centre
+        norm = float(np.linalg.norm(inward))
+        direction = inward / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
+        inside = near + 0.01 * direction
+        aim = inside + np.array([0.0, 0.0, sign * PROBE_REACH])
+        world.set_q(place_hand_for_ep1(world.scene, finger, q=q, point=aim))
+        return near, direction
+
+    def _roll(self, finger: str, estimator: CurvatureEstimator, solver: str) -> EP1Result:
+        p = self.world.params
+        return run_ep1(
+            self.world.scene,
+            self.world.state,
+            finger,
+            self.world.sensor,
+            omega=p.ep1_omega,
+            dt=p.ep1_dt,
+            steps_per_direction=p.ep1_steps,
+            directions=p.ep1_directions,
+            solver=solver,
+            estimator=estimator,
+        )
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         world = self.world
-        p = world.params
+        shape = board.get(keys.SHAPE)
+        side = "bottom" if shape is not None and shape.get("needs") == "bottom" else "top"
+        finger = self._finger_for(side)
         moved = ""
-        if self.finger is None or not world.touching(self.finger):
-            self.finger = self._choose_finger()
+        if self.side != side or not world.touching(finger):
             try:
-                world.set_q(place_hand_for_ep1(world.scene, self.finger, q=world.state.q))
+                near, direction = self._place(side, finger)
             except KinematicsError as exc:
-                return ActionResult(Outcome.CANNOT_ACT, f"cannot bring {self.finger} into contact: {exc}")
-            moved = f"brought {self.finger} into contact; "
-        finger = self.finger
+                return ActionResult(
+                    Outcome.CANNOT_ACT, f"cannot bring {finger} onto the object's {side}: {exc}"
+                )
+            self.side = side
+            moved = f"brought {finger} onto the object's {side}; "
+            if keys.APPROACH not in board:
+                board.set(
+                    keys.APPROACH,
+                    {"point": np.round(near, 6).tolist(), "direction": np.round(direction, 6).tolist()},
+                )
+        estimator = self.estimators.setdefault(side, CurvatureEstimator())
+        fallback = ""
         try:
-            result = run_ep1(
-                world.scene,
-                world.state,
-                finger,
-                world.sensor,
-                omega=p.ep1_omega,
-                dt=p.ep1_dt,
-                steps_per_direction=p.ep1_steps,
-                directions=p.ep1_directions,
-                solver=self.solver,
-                estimator=world.estimator,
-            )
+            result = self._roll(finger, estimator, self.solver)
         except (RollingQPError, KinematicsError) as exc:
             world.sync()
-            return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}")
+            if not isinstance(exc, RollingQPError) or self.solver == FALLBACK_SOLVER:
+                return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}")
+            # OSQP can stall on a feasible but badly conditioned roll (max iterations); the
+            # dense active-set solver is slower but exact: redo this run with it.
+            try:
+                self._place(side, finger)
+                result = self._roll(finger, estimator, FALLBACK_SOLVER)
+            except (RollingQPError, KinematicsError) as exc2:
+                world.sync()
+                return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}; then {exc2}")
+            fallback = f" ({self.solver} stalled: {exc.status}; rolled with {FALLBACK_SOLVER})"
         world.sync()  # run_ep1 moved the state directly
         est = result.estimate
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
@@ -87,16 +153,25 @@ class EP1Agent(GraspAgent):
         normal = -(tip.rotation @ reading.normal_tip)
         summary = est.to_dict()
         summary["finger"] = finger
+        summary["side"] = side
         summary["max_slip_speed"] = float(result.max_slip_speed)
-        board.set(keys.CURVATURE, summary)
+        if side == "top":
+            board.set(keys.CURVATURE, summary)
+        else:
+            board.set(keys.CURVATURE_BOTTOM, summary)
         board.set(keys.EP1_RUNS, int(board.get(keys.EP1_RUNS, 0)) + 1)
-        board.set(
-            keys.EP1_CONTACT,
-            {"finger": finger, "point": np.round(point, 6).tolist(), "normal": np.round(normal, 6).tolist()},
-        )
+        contacts = dict(board.get(keys.EP1_CONTACT, {}))
+        contacts[side] = {
+            "finger": finger,
+            "point": np.round(point, 6).tolist(),
+            "normal": np.round(normal, 6).tolist(),
+        }
+        board.set(keys.EP1_CONTACT, contacts)
         k1, k2 = est.principal_curvatures
         return ActionResult(
             Outcome.PROGRESS,
-            f"{moved}rolled {finger} ({result.steps} steps, slip ≤ {result.max_slip_speed:.1e} m/s): "
+            f"{moved}{fallback.strip() + '; ' if fallback else ''}rolled {finger} on the {side} "
+            f"({result.steps} steps, "
+            f"slip ≤ {result.max_slip_speed:.1e} m/s): "
             f"k = ({k1:.1f}, {k2:.1f}) 1/m, relative radius error {est.relative_error:.3f}",
         )

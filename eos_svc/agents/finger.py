@@ -33,7 +33,7 @@ class FingerAgent(GraspAgent):
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger
         self._reach_radius_extra = world.hand.tip_radius(finger)
-        self._reach_memo: tuple[int, int, bool] = (-1, -1, False)  # (world version, board shape id, value)
+        self._reach_memo: tuple[object, bool] = (None, False)  # (wrist, angle, shape id) -> value
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
@@ -44,11 +44,13 @@ class FingerAgent(GraspAgent):
         shape = board.get(keys.SHAPE)
         if not shape or keys.TARGET not in board:
             return False
-        version, shape_id, value = self._reach_memo
-        if version == self.world.version and shape_id == id(shape):
+        world = self.world
+        key = (world.wrist_position().tobytes(), world.finger_angle(self.finger), id(shape))
+        memo_key, value = self._reach_memo
+        if memo_key == key:
             return value
         value = self._in_reach(shape)
-        self._reach_memo = (self.world.version, id(shape), value)
+        self._reach_memo = (key, value)
         return value
 
     def _in_reach(self, shape: dict) -> bool:

@@ -9,9 +9,13 @@ from __future__ import annotations
 LOCATED = "located"  #: bool: the object is within the hand's envelope
 GAP = "gap_to_object"  #: float m: object surface to the grasp centre
 SEARCH_MOVES = "search_moves"  #: int: random search moves made
-CURVATURE = "curvature"  #: dict: EP1's latest curvature estimate (principal curvatures, σ, rating)
+CURVATURE = (
+    "curvature"  #: dict: EP1's curvature estimate on the object's top (principal curvatures, σ, rating)
+)
+CURVATURE_BOTTOM = "curvature_bottom"  #: dict: the same on the object's bottom, when explored
 EP1_RUNS = "ep1_runs"  #: int: EP1 runs so far
-EP1_CONTACT = "ep1_contact"  #: dict: world contact point and object normal of the last EP1 run
+EP1_CONTACT = "ep1_contact"  #: dict side -> {finger, point, normal}: sensed EP1 contact (world)
+APPROACH = "approach"  #: dict: proximity point of the object nearest the hand and the direction to it
 SHAPE = "shape"  #: dict: post_shape's postulate (class, radius, diameter, centre, confidence)
 TARGET = "grasp_target"  #: dict: grasp_points' target (wrist goal, pre-grasp, predicted contacts)
 D_OVER_H = "d_over_h"  #: float: estimated object diameter over hand height

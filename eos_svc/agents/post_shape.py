@@ -1,20 +1,30 @@
-"""post_shape: postulates the object's shape and size from EP1's curvature estimate.
+"""post_shape: postulates the object's shape and size from what EP1 felt.
 
-Classes, from the principal curvatures k1 ≥ k2 and their σ (1/m):
+Classes, from the principal curvatures k1 ≥ k2 on the object's top and their σ (1/m):
 
-- ``plane``: both flat (EP1 alone cannot size it);
+- ``plane``: both flat;
 - ``cylinder``: k2 flat, k1 not;
 - ``sphere``: |k1 − k2| within max(2σ, 15 % of the mean curvature);
 - ``ellipsoid``: otherwise.
 
-Size: the grasp radius is 1/H (mean curvature) for a sphere or ellipsoid and
-1/k1 for a cylinder; the centre lies that far behind the sensed contact along
-the object normal. Confidence is the probability, under the estimate's Gaussian
-uncertainty, that the true grasp radius lies within ±10 % of the postulated one:
-``erf(0.1 / (√2 · σ_R/R))`` (0 for a plane) — 60 % needs σ_R/R ≤ 0.12. (The
-plain complement ``1 − σ_R/R`` would accept a 40 % error at 60 %, too loose to
-tell d/h ≥ 1.) Opportunistic sub-rating: 1 right after EP1 wrote a new
-estimate, else 0.
+Size along the closing direction (the vertical half-extent, what the grasp
+needs): the top's curvature cannot size a plane, a cylinder or an ellipsoid (and
+mistakes an ellipsoid's top for a bigger sphere), so post_shape asks EP1 to feel
+the bottom too (``needs: "bottom"``); the half-extent is half the height between
+the two sensed contacts, the centre's height their midpoint, and its horizontal
+position one half-extent behind the surface point nearest the hand along the
+approach (the object taken as about as deep as it is high: exact for spheres
+and for cylinders lying across the approach). The curvature radius of the top
+(1/H) is reported beside it.
+
+Confidence: the probability, under the estimate's Gaussian uncertainty, that the
+true size lies within ±10 % of the postulated one: ``erf(0.1 / (√2 · σ/size))``.
+For a sphere σ/size is EP1's relative radius error (the paper's criterion: EP1
+repeats until its curvature radius is trusted); for the other classes it is the
+tactile noise over the half-extent. 0 while the bottom is not felt. 60 % needs
+σ/size ≤ 0.12. (The plain complement ``1 − σ_R/R`` would
+accept a 40 % error at 60 %, too loose to tell d/h ≥ 1.) Opportunistic
+sub-rating: 1 right after EP1 wrote a new estimate, else 0.
 """
 
 from __future__ import annotations
@@ -64,32 +74,62 @@ class PostShapeAgent(GraspAgent):
         super().__init__("post_shape", (INFO,), default, world)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
-        return 1.0 if ctx.changed(keys.CURVATURE) else 0.0
+        return 1.0 if ctx.changed(keys.CURVATURE) or ctx.changed(keys.CURVATURE_BOTTOM) else 0.0
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         curvature = board.get(keys.CURVATURE)
-        contact = board.get(keys.EP1_CONTACT)
-        if curvature is None or contact is None:
-            return ActionResult(Outcome.CANNOT_ACT, "no curvature estimate to ponder yet")
+        contacts = board.get(keys.EP1_CONTACT, {})
+        if curvature is None or "top" not in contacts:
+            return ActionResult(Outcome.CANNOT_ACT, "no curvature estimate of the object's top to ponder yet")
         kind, radius = classify(curvature)
-        rel = curvature.get("relative_error")
-        confidence = 0.0 if kind == "plane" or rel is None else size_confidence(float(rel))
-        if kind == "plane" or not math.isfinite(radius) or radius <= 0.0:
-            centre = None
-            diameter = math.inf
+        top = contacts["top"]
+        needs = None
+        centre: list[float] | None = None
+        half: float | None = None
+        if "bottom" not in contacts:
+            confidence = 0.0
+            needs = "bottom"
+            how = "size unknown until the bottom is felt"
         else:
-            centre = (np.asarray(contact["point"]) - radius * np.asarray(contact["normal"])).round(6).tolist()
-            diameter = 2.0 * radius
+            p_top, p_bottom = np.asarray(top["point"]), np.asarray(contacts["bottom"]["point"])
+            half = 0.5 * float(p_top[2] - p_bottom[2])
+            if half <= 0.0:
+                return ActionResult(Outcome.CANNOT_ACT, "the top and bottom contacts are inverted")
+            mid = 0.5 * (p_top + p_bottom)
+            approach = board.get(keys.APPROACH)
+            if approach is not None:
+                # depth: assume the object is about as deep as it is high, measured from the
+                # surface point nearest the hand along the approach (exact for spheres and
+                # for cylinders lying across the approach)
+                d = np.asarray(approach["direction"], dtype=float)
+                d_xy = np.array([d[0], d[1], 0.0])
+                n_xy = float(np.linalg.norm(d_xy))
+                if n_xy > 1e-6:
+                    mid[:2] = np.asarray(approach["point"])[:2] + half * d_xy[:2] / n_xy
+            centre = mid.round(6).tolist()
+            if kind == "sphere":
+                # the paper's EP1 criterion: how sure is the top's curvature radius
+                rel = curvature.get("relative_error")
+                confidence = size_confidence(None if rel is None else float(rel))
+                how = f"curvature radius {radius * 1000:.2f} mm on top, centre between top and bottom"
+            else:
+                noise = max(self.world.sensor.noise_std, 1e-6)
+                confidence = size_confidence(noise / half)
+                how = "from the top and bottom contacts"
         shape = {
             "class": kind,
-            "grasp_radius": None if centre is None else round(radius, 6),
-            "diameter": None if centre is None else round(diameter, 6),
+            "grasp_radius": None if half is None else round(half, 6),
+            "diameter": None if half is None else round(2.0 * half, 6),
             "centre": centre,
             "confidence": round(confidence, 6),
             "principal_curvatures": curvature["principal_curvatures"],
+            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
+            "needs": needs,
         }
         board.set(keys.SHAPE, shape)
-        if centre is not None:
-            board.set(keys.D_OVER_H, round(diameter / self.world.hand.hand_height, 6))
-        size = "size unknown" if centre is None else f"radius {radius * 1000:.2f} mm"
-        return ActionResult(Outcome.PROGRESS, f"postulated a {kind}, {size}, confidence {confidence:.0%}")
+        if half is not None:
+            board.set(keys.D_OVER_H, round(2.0 * half / self.world.hand.hand_height, 6))
+        size = "" if half is None else f", half-height {half * 1000:.2f} mm"
+        return ActionResult(
+            Outcome.PROGRESS, f"postulated a {kind}{size} ({how}), confidence {confidence:.0%}"
+        )
