@@ -14,6 +14,7 @@ from eos_svc.service.server import PlanService
 from eos_svc.service.session import free_port, loopback, make_config
 
 
+@pytest.fixture(scope="session")
 def grasp_planner() -> Callable[..., Any]:
     """The real grasp planner (issue 5); EOS_TEST_PLANNER=root swaps in the core demo (transport only)."""
     if os.environ.get("EOS_TEST_PLANNER") == "root":

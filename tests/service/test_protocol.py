@@ -83,7 +83,7 @@ json_values = st.recursive(
 FIELDS = ["object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "schema", "goal_id"]
 
 
-@settings(max_examples=250, deadline=None)
+@settings(max_examples=120, deadline=None)
 @given(st.dictionaries(st.sampled_from(FIELDS) | st.text(max_size=6), json_values, max_size=6))
 def test_fuzz_envelopes(fields):
     body = {"schema": 1, "goal_id": "g1", **fields}

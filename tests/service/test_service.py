@@ -13,7 +13,6 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import PlanOutcome, ServiceUnavailableError
 from eos_svc.service.demo_planner import root_plan, slowed
-from tests.service.conftest import grasp_planner
 
 STATUSES = {"success", "failed", "stalled", "cycle_limit", "deadline", "cancelled", "error", "completed"}
 
@@ -28,8 +27,8 @@ def assert_stream_complete(outcome: PlanOutcome) -> None:
     assert outcome.complete
 
 
-def test_plan_end_to_end_with_the_grasp_planner(port, services, clients):
-    svc = services(port, planner=grasp_planner())
+def test_plan_end_to_end_with_the_grasp_planner(port, services, clients, grasp_planner):
+    svc = services(port, planner=grasp_planner)
     client = clients(port)
     assert client.wait_for_instances(1) == [svc.instance]
     seen: list[dict[str, Any]] = []
@@ -46,8 +45,8 @@ def test_plan_end_to_end_with_the_grasp_planner(port, services, clients):
     assert svc.stats.replied_ok == 1
 
 
-def test_same_request_same_cycles(port, services, clients):
-    services(port, planner=grasp_planner())
+def test_same_request_same_cycles(port, services, clients, grasp_planner):
+    services(port, planner=grasp_planner)
     client = clients(port)
     client.wait_for_instances(1)
     a = client.plan(PlanRequest(seed=5))
@@ -153,8 +152,8 @@ def test_client_raises_the_error_reply(port, services, clients):
     )
 
 
-def test_cancel_a_running_plan_ends_within_a_cycle(port, services, clients):
-    svc = services(port, planner=slowed(grasp_planner(), 0.02))
+def test_cancel_a_running_plan_ends_within_a_cycle(port, services, clients, grasp_planner):
+    svc = services(port, planner=slowed(grasp_planner, 0.02))
     client = clients(port)
     client.wait_for_instances(1)
     seen: list[int] = []
@@ -210,7 +209,7 @@ def test_cancel_a_queued_plan_and_an_unknown_goal(port, services, clients):
 
 
 def test_busy_past_the_queue_bound(port, services, clients):
-    svc = services(port, planner=slowed(root_plan, 0.05), workers=1, queue_size=1)
+    svc = services(port, planner=slowed(root_plan, 0.02), workers=1, queue_size=1)
     client = clients(port)
     client.wait_for_instances(1)
     outs: list[Any] = []
@@ -224,7 +223,7 @@ def test_busy_past_the_queue_bound(port, services, clients):
     threads = [threading.Thread(target=ask, args=(f"b{i}",)) for i in range(4)]
     for t in threads:
         t.start()
-        time.sleep(0.05)
+        time.sleep(0.03)
     for t in threads:
         t.join(15)
     busy = [o for o in outs if isinstance(o, proto.RequestError)]
@@ -235,7 +234,7 @@ def test_busy_past_the_queue_bound(port, services, clients):
 
 
 def test_duplicate_goal_id_is_refused(port, services, clients):
-    services(port, planner=slowed(root_plan, 0.05))
+    services(port, planner=slowed(root_plan, 0.02))
     client = clients(port)
     client.wait_for_instances(1)
     t = threading.Thread(target=lambda: client.plan(PlanRequest(), goal_id="dup"))

@@ -1,0 +1,323 @@
+"""Reliability runs of the service on loopback, bounded in count and time.
+
+    python -m eos_svc.service.reliability load   [--instances 2 --clients 4 --plans 25]
+    python -m eos_svc.service.reliability fault  # two instances, one SIGKILLed mid-load
+    python -m eos_svc.service.reliability freeze # two instances, one SIGSTOPped mid-load
+
+Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
+scouting off), N client threads (each its own Zenoh session) sending M plans
+each, and an observer session subscribed to every cycle and status. It checks
+that every request is answered exactly once, that every answered plan's cycle
+stream is complete and contiguous (seq 1..n as seen by the client, and by the
+observer), and prints the counts. Exit code 0 when every check holds.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import signal
+import subprocess
+import sys
+import threading
+import time
+from collections import defaultdict
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from eos_svc.agents.request import PlanRequest
+from eos_svc.service import protocol as proto
+from eos_svc.service.client import EosClient, PlanOutcome
+from eos_svc.service.session import free_port, loopback, make_config
+
+
+@dataclass
+class Server:
+    """One ``eos serve`` subprocess."""
+
+    port: int
+    proc: subprocess.Popen[str]
+    instance: str
+    stats: dict[str, int] | None = None
+
+
+def start_servers(
+    n: int,
+    *,
+    planner: str = "grasp",
+    workers: int = 2,
+    queue: int = 16,
+    lease_ms: int | None = None,
+    cycle_delay: float | None = None,
+) -> list[Server]:
+    """Start ``n`` service processes on loopback; the first listens, the others also connect to it."""
+    servers: list[Server] = []
+    for i in range(n):
+        port = free_port()
+        cmd = [
+            sys.executable,
+            "-m",
+            "eos_svc.cli",
+            "serve",
+            "--listen",
+            loopback(port),
+            "--instance",
+            f"inst-{i}",
+            "--planner",
+            planner,
+            "--workers",
+            str(workers),
+            "--queue",
+            str(queue),
+            "--log-level",
+            "warning",
+        ]
+        if servers:
+            cmd += ["--connect", loopback(servers[0].port)]
+        if lease_ms is not None:
+            cmd += ["--lease-ms", str(lease_ms)]
+        if cycle_delay is not None:
+            cmd += ["--cycle-delay", str(cycle_delay)]
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        if "serving" not in line:
+            proc.kill()
+            raise RuntimeError(f"eos serve did not start: {line}{proc.stderr.read() if proc.stderr else ''}")
+        servers.append(Server(port, proc, f"inst-{i}"))
+    return servers
+
+
+def stop_servers(servers: list[Server]) -> None:
+    """SIGTERM the live servers (SIGCONT first, in case one is frozen) and read their final stats."""
+    for s in servers:
+        if s.proc.poll() is None:
+            s.proc.send_signal(signal.SIGCONT)
+            s.proc.send_signal(signal.SIGTERM)
+    for s in servers:
+        try:
+            out, _ = s.proc.communicate(timeout=15)
+        except subprocess.TimeoutExpired:
+            s.proc.kill()
+            out, _ = s.proc.communicate()
+        for line in (out or "").splitlines():
+            if "stopped;" in line:
+                s.stats = json.loads(line.split("stopped;", 1)[1].strip().replace("'", '"'))
+
+
+@dataclass
+class Report:
+    """Counts of one run."""
+
+    mode: str
+    requested: int = 0
+    answered: int = 0
+    failed: list[str] = field(default_factory=list)
+    incomplete: list[str] = field(default_factory=list)
+    retried: int = 0
+    statuses: dict[str, int] = field(default_factory=lambda: defaultdict(int))
+    cycles_received: int = 0
+    observer_cycles: int = 0
+    observer_gaps: list[str] = field(default_factory=list)
+    server_stats: dict[str, Any] = field(default_factory=dict)
+    wall_s: float = 0.0
+    event: str = ""
+
+    @property
+    def ok(self) -> bool:
+        """Every request answered exactly once, every stream complete and contiguous."""
+        return (
+            self.answered == self.requested
+            and not self.failed
+            and not self.incomplete
+            and not self.observer_gaps
+        )
+
+    def print(self) -> None:
+        """Human-readable counts."""
+        print(f"== reliability {self.mode}: {'OK' if self.ok else 'FAILED'} in {self.wall_s:.1f} s")
+        if self.event:
+            print(f"   event: {self.event}")
+        print(
+            f"   requests {self.requested}, answered {self.answered} (exactly once each: "
+            f"{self.answered == self.requested and not self.failed}), retried on another instance "
+            f"{self.retried}"
+        )
+        print(f"   statuses {dict(self.statuses)}")
+        print(
+            f"   cycles received by clients {self.cycles_received}, "
+            f"incomplete streams {len(self.incomplete)}; "
+            f"observer saw {self.observer_cycles} cycles, gaps {len(self.observer_gaps)}"
+        )
+        for name, st in self.server_stats.items():
+            print(f"   {name}: {st if st is not None else 'killed (no stats)'}")
+        for what, items in (
+            ("failed", self.failed),
+            ("incomplete", self.incomplete),
+            ("gaps", self.observer_gaps),
+        ):
+            if items:
+                print(f"   {what}: {items[:10]}{' ...' if len(items) > 10 else ''}")
+
+
+class Observer:
+    """Counts every cycle message per (goal, instance) and checks contiguity."""
+
+    def __init__(self, session: zenoh.Session, prefix: str) -> None:
+        self._lock = threading.Lock()
+        self.seqs: dict[tuple[str, str], list[int]] = defaultdict(list)
+        self.done: dict[tuple[str, str], int] = {}
+        self._sub = session.declare_subscriber(proto.goal_keys(prefix), self._on)
+
+    def _on(self, sample: zenoh.Sample) -> None:
+        msg = json.loads(sample.payload.to_bytes())
+        key = (msg["goal_id"], msg["instance"])
+        with self._lock:
+            if "seq" in msg:
+                self.seqs[key].append(msg["seq"])
+            elif msg.get("state") == proto.STATE_DONE:
+                self.done[key] = msg.get("result", {}).get("cycles_published", -1)
+
+    def check(self, report: Report) -> None:
+        """Every finished (goal, instance) stream is 1..n; streams cut by a dead instance are a prefix."""
+        with self._lock:
+            report.observer_cycles = sum(len(v) for v in self.seqs.values())
+            for key, seqs in self.seqs.items():
+                if seqs != list(range(1, len(seqs) + 1)):
+                    report.observer_gaps.append(f"{key}: not contiguous")
+                elif key in self.done and self.done[key] != len(seqs):
+                    report.observer_gaps.append(f"{key}: {len(seqs)} seen, {self.done[key]} published")
+
+    def close(self) -> None:
+        self._sub.undeclare()
+
+
+def run(
+    mode: str,
+    *,
+    instances: int = 2,
+    clients: int = 4,
+    plans: int = 25,
+    planner: str = "grasp",
+    time_limit_s: float = 120.0,
+    lease_ms: int = 1000,
+    event_after: float = 0.3,
+    cycle_delay: float | None = None,
+) -> Report:
+    """One bounded run; ``mode`` is ``load``, ``fault`` (SIGKILL) or ``freeze`` (SIGSTOP)."""
+    if mode not in ("load", "fault", "freeze"):
+        raise ValueError(f"mode must be load, fault or freeze, got {mode!r}")
+    if mode != "load":
+        instances = max(instances, 2)
+    report = Report(mode, requested=clients * plans)
+    t0 = time.monotonic()
+    lease = lease_ms if mode == "freeze" else None
+    servers = start_servers(instances, planner=planner, lease_ms=lease, cycle_delay=cycle_delay)
+    endpoints = [loopback(s.port) for s in servers]
+    sessions: list[EosClient] = []
+    observer_session = zenoh.open(make_config(connect=endpoints))
+    observer = Observer(observer_session, proto.prefix())
+    lock = threading.Lock()
+    done_count = [0]
+    try:
+        for _ in range(clients):
+            c = EosClient.open(make_config(connect=endpoints, lease_ms=lease), timeout_margin_s=10.0)
+            c.wait_for_instances(instances, timeout=15)
+            sessions.append(c)
+        deadline = t0 + time_limit_s
+
+        def work(ci: int, client: EosClient) -> None:
+            for j in range(plans):
+                goal = f"r{ci}-{j}"
+                if time.monotonic() > deadline:
+                    with lock:
+                        report.failed.append(f"{goal}: not sent (time limit)")
+                    continue
+                try:
+                    out: PlanOutcome = client.plan(
+                        PlanRequest(seed=1 + (ci * plans + j) % 7), goal_id=goal, max_attempts=4
+                    )
+                except Exception as exc:
+                    with lock:
+                        report.failed.append(f"{goal}: {type(exc).__name__}: {exc}")
+                    continue
+                with lock:
+                    report.answered += 1
+                    done_count[0] += 1
+                    report.statuses[out.status] += 1
+                    report.cycles_received += len(out.cycles)
+                    report.retried += out.attempts > 1
+                    if not out.complete:
+                        report.incomplete.append(goal)
+
+        threads = [threading.Thread(target=work, args=(i, c), daemon=True) for i, c in enumerate(sessions)]
+        for t in threads:
+            t.start()
+        if mode in ("fault", "freeze"):
+            # strike once a share of the plans is done, so the victim has plans in flight
+            while done_count[0] < event_after * report.requested and time.monotonic() < deadline:
+                time.sleep(0.01)
+            victim = servers[-1]
+            if mode == "fault":
+                victim.proc.send_signal(signal.SIGKILL)
+                report.event = f"SIGKILL {victim.instance} after {done_count[0]} plans answered"
+            else:
+                victim.proc.send_signal(signal.SIGSTOP)
+                t_stop = time.monotonic()
+                watcher = sessions[0]
+                while victim.instance in watcher.instances() and time.monotonic() < t_stop + 30:
+                    time.sleep(0.01)
+                report.event = (
+                    f"SIGSTOP {victim.instance} after {done_count[0]} plans answered; token gone "
+                    f"after {time.monotonic() - t_stop:.2f} s (lease {lease_ms} ms)"
+                )
+        for t in threads:
+            t.join(max(0.0, deadline - time.monotonic()) + 30)
+    finally:
+        time.sleep(0.3)
+        observer.check(report)
+        observer.close()
+        for c in sessions:
+            c.close()
+        observer_session.close()
+        stop_servers(servers)
+        report.server_stats = {s.instance: s.stats for s in servers}
+        report.wall_s = time.monotonic() - t0
+    return report
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Command line: run one mode and print its counts."""
+    parser = argparse.ArgumentParser(
+        prog="python -m eos_svc.service.reliability", description=__doc__.splitlines()[0]
+    )
+    parser.add_argument("mode", choices=("load", "fault", "freeze"))
+    parser.add_argument("--instances", type=int, default=2, help="service processes (fault/freeze: ≥ 2)")
+    parser.add_argument("--clients", type=int, default=4, help="concurrent clients, each its own session")
+    parser.add_argument("--plans", type=int, default=25, help="plans per client")
+    parser.add_argument("--planner", choices=("grasp", "root"), default="grasp")
+    parser.add_argument("--time-limit", type=float, default=120.0, help="s")
+    parser.add_argument("--lease-ms", type=int, default=1000, help="freeze: transport lease (ms)")
+    parser.add_argument("--cycle-delay", type=float, default=None, help="sleep per cycle in the servers (s)")
+    args = parser.parse_args(argv)
+    for name in ("instances", "clients", "plans"):
+        if getattr(args, name) < 1 or getattr(args, name) > 1000:
+            parser.error(f"--{name}: must be in [1, 1000]")
+    report = run(
+        args.mode,
+        instances=args.instances,
+        clients=args.clients,
+        plans=args.plans,
+        planner=args.planner,
+        time_limit_s=args.time_limit,
+        lease_ms=args.lease_ms,
+        cycle_delay=args.cycle_delay,
+    )
+    report.print()
+    return 0 if report.ok else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
