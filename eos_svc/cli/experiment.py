@@ -17,6 +17,7 @@ EXPERIMENTS = {
         "eos_svc.experiments.accuracy",
         "EP1 curvature accuracy: spheres, plane, cylinder, ellipsoid",
     ),
+    "shapes": ("eos_svc.experiments.shapes", "every shape end to end: success and good-grasp rates"),
 }
 
 
