@@ -4,10 +4,12 @@ Success when all fingertips touch (a precision grip). The grasp is *good*
 (paper Fig. 2) when the contacts lie about the object's diameter: the opposing
 finger's contact and the middle of the other contacts are on opposite sides of
 the object's centre — the angle between them, seen from the centre, at least
-150°. Opportunistic sub-rating: 1 when every finger is done (touching, missed,
-or stopped by a link contact), else 0. When chosen with a finger still open
-(nothing else can act), it ends the run as failed, saying which fingers never
-reached the object.
+150° — *and* the contacts are in force closure under Coulomb friction (μ from the board's
+``friction`` entry, the request's; see :mod:`eos_svc.agents.quality` for the linearised
+cones and the Ferrari–Canny ε, reported with the verdict). Opportunistic sub-rating: 1
+when every finger is done (touching, missed, or stopped by a link contact), else 0. When
+chosen with a finger still open (nothing else can act), it ends the run as failed, saying
+which fingers never reached the object.
 """
 
 from __future__ import annotations
@@ -20,6 +22,7 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, GraspAgent
 from eos_svc.agents.finger import DONE_STATES
+from eos_svc.agents.quality import DEFAULT_EDGES, DEFAULT_FRICTION, contacts_quality
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 
@@ -27,8 +30,16 @@ from eos_svc.board import Board
 GOOD_GRASP_ANGLE_DEG = 150.0
 
 
-def grasp_geometry(world: GraspWorld) -> dict:
-    """Contacts per finger and the good-grasp test, from the world as it is (ground truth)."""
+def grasp_geometry(world: GraspWorld, friction: float = DEFAULT_FRICTION) -> dict:
+    """Contacts per finger and the good-grasp test, from the world as it is (ground truth).
+
+    Returns a dict: ``contacts`` (per finger: touching, distance, point, outward normal),
+    ``all_touching``, ``diameter_angle_deg``, ``about_diameter`` (the paper's Fig. 2 test),
+    ``quality`` (:class:`~eos_svc.agents.quality.GraspQuality` as a dict: force closure, ε,
+    μ, …, over the touching contacts, torques about the object's centre scaled by its half
+    diameter), ``good`` (all touching, about the diameter and in force closure) and
+    ``q_final`` (the hand configuration judged).
+    """
     hand = world.hand
     contacts = {}
     for finger in hand.finger_names:
@@ -41,7 +52,7 @@ def grasp_geometry(world: GraspWorld) -> dict:
         }
     all_touch = all(c["touching"] for c in contacts.values())
     angle = None
-    good = False
+    about = False
     if all_touch:
         centre = world.obj.placement.translation
         opposing = hand.description.opposing_finger
@@ -50,8 +61,19 @@ def grasp_geometry(world: GraspWorld) -> dict:
         v = np.mean(others, axis=0) - centre
         cos = float(u @ v / max(np.linalg.norm(u) * np.linalg.norm(v), 1e-12))
         angle = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
-        good = angle >= GOOD_GRASP_ANGLE_DEG
-    return {"contacts": contacts, "all_touching": all_touch, "good": good, "diameter_angle_deg": angle}
+        about = angle >= GOOD_GRASP_ANGLE_DEG
+    quality = contacts_quality(
+        contacts, world.obj.placement.translation, 0.5 * world.obj.diameter, friction, DEFAULT_EDGES
+    )
+    return {
+        "contacts": contacts,
+        "all_touching": all_touch,
+        "good": bool(about and quality.force_closure),
+        "about_diameter": about,
+        "diameter_angle_deg": angle,
+        "quality": quality.to_dict(),
+        "q_final": world.state.q.tolist(),
+    }
 
 
 class EndAgent(GraspAgent):
@@ -67,15 +89,23 @@ class EndAgent(GraspAgent):
         return 0.0
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
-        verdict = grasp_geometry(self.world)
+        verdict = grasp_geometry(self.world, float(board.get(keys.FRICTION, DEFAULT_FRICTION)))
         board.set(keys.OUTCOME, verdict)
         states = board.get(keys.FINGER_STATE, {})
         if verdict["all_touching"]:
-            quality = "good" if verdict["good"] else "not about the diameter"
+            q = verdict["quality"]
+            if verdict["good"]:
+                judgement = "good"
+            elif verdict["about_diameter"]:
+                judgement = "not good (no force closure)"
+            else:
+                judgement = "not good (not about the diameter)"
             angle = verdict["diameter_angle_deg"]
+            closure = "force closure" if q["force_closure"] else "no force closure"
             return ActionResult(
                 Outcome.FINISHED,
-                f"precision grip: all fingertips touch; grasp {quality} ({angle:.0f}° across the centre)",
+                f"precision grip: all fingertips touch; grasp {judgement} ({angle:.0f}° across the "
+                f"centre, {closure} at μ={q['friction']:g}, ε={q['epsilon']:.3f})",
                 succeeded=True,
             )
         missing = [f for f, c in verdict["contacts"].items() if not c["touching"]]

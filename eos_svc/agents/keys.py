@@ -24,3 +24,5 @@ WRIST_LEFT = "wrist_distance_left"  #: float m: distance left to the wrist's gra
 FINGER_STATE = "finger_state"  #: dict finger -> "open" | "closing" | "touching" | "missed" | "link"
 FINGER_ANGLE = "finger_angle"  #: dict finger -> joint angle (rad)
 OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict
+FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the request; read by end)
+Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)

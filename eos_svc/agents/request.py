@@ -9,7 +9,8 @@ JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 
     {"object": {"shape": "sphere", "radius": 0.03, "position": [0.22, 0.0, 0.0]},
      "weights": {"default": 0.5, "opportunistic": 0.5},
-     "seed": 1, "tactile_noise": 0.0002, "max_cycles": 2000, "deadline_s": 10.0}
+     "seed": 1, "tactile_noise": 0.0002, "max_cycles": 2000, "deadline_s": 10.0,
+     "friction": 0.5}
 """
 
 from __future__ import annotations
@@ -39,6 +40,9 @@ MAX_POSITION = 10.0
 MAX_CYCLES_LIMIT = 100_000
 MAX_DEADLINE_S = 3600.0
 MAX_TACTILE_NOISE = 0.01
+#: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
+DEFAULT_FRICTION = 0.5
+MAX_FRICTION = 10.0
 
 DEFAULT_OBJECT: dict[str, Any] = {"shape": "sphere", "radius": 0.03, "position": [0.21, 0.02, -0.015]}
 
@@ -196,6 +200,8 @@ class PlanRequest:
         tactile_noise: standard deviation of the tactile contact location (m).
         max_cycles: cycle limit of the run.
         deadline_s: wall-clock budget of the run (s), or ``None``.
+        friction: Coulomb friction coefficient μ of the fingertip contacts, in
+            [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -204,6 +210,7 @@ class PlanRequest:
     tactile_noise: float = 2e-4
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
+    friction: float = DEFAULT_FRICTION
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, ObjectSpec):
@@ -218,6 +225,10 @@ class PlanRequest:
         object.__setattr__(self, "max_cycles", _integer(self.max_cycles, "max_cycles", 1, MAX_CYCLES_LIMIT))
         if self.deadline_s is not None:
             object.__setattr__(self, "deadline_s", _positive(self.deadline_s, "deadline_s", MAX_DEADLINE_S))
+        mu = _number(self.friction, "friction")
+        if not 0.0 <= mu <= MAX_FRICTION:
+            raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
+        object.__setattr__(self, "friction", mu)
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
@@ -228,13 +239,15 @@ class PlanRequest:
         """
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
-        _check_keys(data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s"}, "")
+        _check_keys(
+            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+        )
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s"):
+        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
@@ -248,4 +261,5 @@ class PlanRequest:
             "tactile_noise": self.tactile_noise,
             "max_cycles": self.max_cycles,
             "deadline_s": self.deadline_s,
+            "friction": self.friction,
         }
