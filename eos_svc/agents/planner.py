@@ -202,7 +202,7 @@ def plan(
         keep_trace=keep_trace,
         callbacks=[on_cycle] if on_cycle is not None else [],
     )
-    board = Board()
+    board = Board({keys.FRICTION: request.friction})
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME) or grasp_geometry(world)
     obj = world.obj
