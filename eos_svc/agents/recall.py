@@ -1,0 +1,80 @@
+"""recall: tries the grasp remembered for objects like this one (the learned sub-rating, paper §7).
+
+In the grasping stage, when the grasp memory holds a grasp that worked for the
+postulated shape class and size band, recall's *learned* sub-rating is that
+grasp's smoothed success rate; its default and opportunistic sub-ratings are 0, so
+it is chosen only through the learned weight P(B_l). Its action pre-shapes the
+hand in one move: the wrist where it stood relative to the estimated centre, each
+finger two closing steps short of its remembered contact angle — the finger agents
+then close the last steps. It acts at most once per plan.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from eos_svc.agent import ActionResult, CycleContext, Outcome
+from eos_svc.agents import keys
+from eos_svc.agents.base import GRASP, GraspAgent
+from eos_svc.agents.memory import GraspMemory, RememberedGrasp
+from eos_svc.agents.world import GraspWorld
+from eos_svc.board import Board
+
+RECALLED = "recalled"  #: board entry: the memory key recall applied
+
+
+class RecallAgent(GraspAgent):
+    """Pre-shapes the hand to a remembered grasp."""
+
+    def __init__(self, world: GraspWorld, memory: GraspMemory) -> None:
+        super().__init__("recall", (GRASP,), 0.0, world)
+        self.memory = memory
+        self._cache: tuple[object, RememberedGrasp | None] = (None, None)
+
+    def remembered(self, board: Board) -> RememberedGrasp | None:
+        """The memory's grasp for the postulated class and d/h band (looked up once per postulate)."""
+        shape = board.get(keys.SHAPE)
+        dh = board.get(keys.D_OVER_H)
+        if shape is None or dh is None:
+            return None
+        key = (shape["class"], dh)
+        if self._cache[0] != key:
+            self._cache = (key, self.memory.recall(shape["class"], float(dh)))
+        return self._cache[1]
+
+    def learned_rating(self, board: Board, ctx: CycleContext) -> float:
+        if RECALLED in board:
+            return 0.0
+        entry = self.remembered(board)
+        return 0.0 if entry is None else entry.reliability
+
+    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        entry = self.remembered(board)
+        if entry is None:
+            return ActionResult(Outcome.CANNOT_ACT, "nothing remembered for objects like this one")
+        world = self.world
+        hand = world.hand
+        shape = board[keys.SHAPE]
+        q = world.state.q
+        q[hand.wrist_q_index[:3]] = np.asarray(shape["centre"]) + np.asarray(entry.offset)
+        q[hand.wrist_q_index[3:6]] = 0.0
+        margin = 2.0 * world.params.finger_step
+        for attempt in range(4):
+            for finger in hand.finger_names:
+                idx = hand.finger_q_index(finger)
+                q[idx] = np.maximum(hand.lower[idx], entry.angles.get(finger, 0.0) - margin * (attempt + 1))
+            q = np.clip(q, hand.lower, hand.upper)
+            world.set_q(q)
+            if world.hand_clearance() >= 0.5 * world.params.contact_tolerance:
+                break
+        else:
+            return ActionResult(Outcome.CANNOT_ACT, f"the grasp remembered for {entry.key} collides here")
+        board.set(RECALLED, entry.key)
+        board.set(keys.AT_TARGET, True)
+        board.set(keys.FINGER_STATE, dict.fromkeys(hand.finger_names, "closing"))
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"pre-shaped the hand to the grasp remembered for {entry.key} "
+            f"({entry.successes} of {entry.tries} worked)",
+            ratings=dict.fromkeys(hand.finger_names, 1.0),
+        )
