@@ -115,7 +115,7 @@ class GraspMemory:
             key=row[0],
             tries=int(row[1]),
             successes=int(row[2]),
-            offset=tuple(json.loads(row[3])),  # type: ignore[arg-type]
+            offset=tuple(json.loads(row[3])),
             angles={k: float(v) for k, v in json.loads(row[4]).items()},
             grasp_cycles=None if row[5] is None else int(row[5]),
         )

@@ -39,7 +39,9 @@ from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
+from eos_svc.agents.memory import GraspMemory
 from eos_svc.agents.post_shape import PostShapeAgent
+from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.agents.result import PlanResult
 from eos_svc.agents.world import FingerSweep, GraspWorld, WorldParameters, build_sweeps
@@ -150,10 +152,15 @@ def build_world(
 
 
 def build_agents(
-    world: GraspWorld, ratings: dict[str, float] | None = None, solver: str = "osqp"
+    world: GraspWorld,
+    ratings: dict[str, float] | None = None,
+    solver: str = "osqp",
+    memory: GraspMemory | None = None,
 ) -> list[Agent]:
-    """The eight agents in list order (ties go to the first)."""
+    """The eight agents in list order (ties go to the first); with a grasp memory, ``recall``
+    joins them just before ``end`` (learned sub-rating, paper §7)."""
     r = {**DEFAULT_RATINGS, **(ratings or {})}
+    recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
     return [
         FingerAgent("finger1", r["finger1"], world),
         FingerAgent("finger2", r["finger2"], world),
@@ -162,6 +169,7 @@ def build_agents(
         EP1Agent(r["ep1"], world, solver=solver),
         PostShapeAgent(r["post_shape"], world),
         GraspPointsAgent(r["grasp_points"], world),
+        *recall,
         EndAgent(r["end"], world),
     ]
 
@@ -174,6 +182,7 @@ def plan(
     hand: HandModel | None = None,
     params: WorldParameters | None = None,
     keep_trace: bool = True,
+    memory: GraspMemory | None = None,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -184,6 +193,9 @@ def plan(
         hand: the hand model (default: ``urdf/hand3x3.urdf``, cached).
         params: world constants (default: :class:`WorldParameters`).
         keep_trace: keep every cycle record in the result.
+        memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
+            plan reaches grasping, records how it went (give the request a learned weight
+            P(B_l) > 0 for recall to be chosen).
 
     Raises:
         ValidationError: a request the planner cannot start (object outside the workspace,
@@ -192,7 +204,7 @@ def plan(
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
     world = build_world(request, hand, params)
-    agents = build_agents(world)
+    agents = build_agents(world, memory=memory)
     controller = Controller(
         agents,
         STAGES,
@@ -205,6 +217,8 @@ def plan(
     board = Board({keys.FRICTION: request.friction})
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME) or grasp_geometry(world)
+    if memory is not None:
+        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), verdict["all_touching"])
     obj = world.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / world.hand.hand_height
@@ -225,6 +239,16 @@ def plan(
         hand_height=world.hand.hand_height,
         wall_time_s=time.perf_counter() - t0,
     )
+
+
+def remember(memory: GraspMemory, world: GraspWorld, board: Board, grasp_cycles: int, success: bool) -> None:
+    """Record a plan that reached grasping: one try for its key, and the grasp if it worked."""
+    shape, dh = board.get(keys.SHAPE), board.get(keys.D_OVER_H)
+    if shape is None or dh is None or shape.get("centre") is None or keys.TARGET not in board:
+        return
+    offset = tuple((world.wrist_position() - np.asarray(shape["centre"])).tolist())
+    angles = {f: world.finger_angle(f) for f in world.hand.finger_names}
+    memory.record(shape["class"], float(dh), success, offset, angles, grasp_cycles)
 
 
 def ratio_sphere_request(

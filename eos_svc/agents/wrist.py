@@ -43,7 +43,8 @@ class WristAgent(GraspAgent):
         if target is None:
             return ActionResult(Outcome.CANNOT_ACT, "no grasp target on the board: nowhere to go")
         if board.get(keys.AT_TARGET):
-            return ActionResult(Outcome.CANNOT_ACT, "the hand is already at its grasp position")
+            # chosen on its default alone (it has not acted in this stage yet): nothing to move
+            return ActionResult(Outcome.PROGRESS, "the hand is already at its grasp position: it holds")
         if self.any_touching(board):
             return ActionResult(Outcome.CANNOT_ACT, "a fingertip touches the object: the hand must stay")
         left, blocked = self.world.step_wrist_toward(

@@ -18,6 +18,7 @@ EXPERIMENTS = {
         "EP1 curvature accuracy: spheres, plane, cylinder, ellipsoid",
     ),
     "shapes": ("eos_svc.experiments.shapes", "every shape end to end: success and good-grasp rates"),
+    "learning": ("eos_svc.experiments.learning", "paper §7: learned sub-rating on a stream with repeats"),
 }
 
 
