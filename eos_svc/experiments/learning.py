@@ -16,6 +16,7 @@ import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -52,7 +53,7 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
         Path(str(db) + suffix).unlink(missing_ok=True)
     memory = GraspMemory(db)
     seen: set[str] = set()
-    rows = []
+    rows: list[dict[str, Any]] = []
     names = stream(repeats, seed)
     for i, name in enumerate(names):
         request_seed = seed * 1000 + i
@@ -81,14 +82,14 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
         values = [r[key] for r in rows if r["repeat"] == repeat]
         return float(np.mean(values)) if values else float("nan")
 
-    summary = {
+    summary: dict[str, Any] = {
         "new": {"without": mean("grasp_cycles_without", False), "with": mean("grasp_cycles_with", False)},
         "repeated": {"without": mean("grasp_cycles_without", True), "with": mean("grasp_cycles_with", True)},
     }
     rep = summary["repeated"]
     summary["repeated_reduction"] = 1.0 - rep["with"] / rep["without"] if rep["without"] else None
-    summary["new_worse"] = sum(
-        1 for r in rows if not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"]
+    summary["new_worse"] = len(
+        [r for r in rows if not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"]]
     )
     data = {"repeats": repeats, "seed": seed, "rows": rows, "summary": summary, "memory": str(db)}
     write_json(out / "learning.json", data)

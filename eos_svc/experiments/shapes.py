@@ -88,8 +88,8 @@ def report(data: dict) -> str:
     lines = ["  object               postulated  success  good   cycles  statuses"]
     for r in data["rows"]:
         lines.append(
-            f"  {r['object']:<20} {r['postulated']:<10}  {r['success_rate']:6.0%}  {r['good_grasp_rate']:5.0%}"
-            f"  {r['mean_cycles']:6.1f}  {r['statuses']}"
+            f"  {r['object']:<20} {r['postulated']:<10}  {r['success_rate']:6.0%}"
+            f"  {r['good_grasp_rate']:5.0%}  {r['mean_cycles']:6.1f}  {r['statuses']}"
         )
     return "\n".join(lines)
 
