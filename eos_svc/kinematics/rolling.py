@@ -35,10 +35,11 @@ import osqp
 import pinocchio as pin
 import qpsolvers
 import scipy.sparse as sp
+from scipy.linalg import lapack
 
 from .hand import HandState, KinematicsError
-from .scene import Contact, Scene
-from .tactile import TactileReading, TactileSensor
+from .scene import Contact, Scene, _fast_contact
+from .tactile import TactileReading, TactileSensor, _fast_reading
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
 
@@ -87,6 +88,35 @@ class RollingStep:
     normal_residual: float
     omega_residual: float
     iterations: int
+
+
+_new = object.__new__
+_STEP_SETTERS = tuple(
+    RollingStep.__dict__[f].__set__
+    for f in ("contact", "reading", "qdot", "slip_speed", "normal_residual", "omega_residual", "iterations")
+)
+_S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = _STEP_SETTERS
+_DGELS = lapack.dgels
+#: The direct solution may exceed a bound by this much (rad/s, m/s) and still be taken: rolling
+#: at the wrist's velocity limit puts it on the bound up to round-off (OSQP itself meets its
+#: constraints only to eps = 1e-7).
+_BOUND_TOL = 1e-8
+
+
+def _fast_step(
+    contact: Contact, reading: TactileReading | None, qdot: np.ndarray, slip: float,
+    normal: float, omega: float, iterations: int,
+) -> RollingStep:
+    """RollingStep(...) without the frozen dataclass __init__ (~2 µs): fills the slots."""
+    st: RollingStep = _new(RollingStep)
+    _S_CONTACT(st, contact)
+    _S_READING(st, reading)
+    _S_QDOT(st, qdot)
+    _S_SLIP(st, slip)
+    _S_NORMAL(st, normal)
+    _S_OMEGA(st, omega)
+    _S_ITER(st, iterations)
+    return st
 
 
 def _unit(name: str, v: object) -> np.ndarray:
@@ -165,6 +195,15 @@ class RollingQP:
             False keeps the given axis as is (EP1 keeps one axis over several legs).
         second_order: correct the targets by ½ dt J̇q̇ so that q ← q + q̇ dt meets them on
             average over the step (slip per step O(dt³) instead of O(dt²)).
+        direct: first solve the equality-constrained problem in closed form (the minimum-W-norm
+            solution of the six equalities, one LAPACK ``dgels``); when it lies within the
+            bounds it *is* the QP's optimum (the bounds are inactive) and the backend is not
+            called (``RollingStep.iterations`` is then 0). Otherwise — a bound active, a
+            rank-deficient system — the backend solves the QP. False: always the backend.
+
+    A roller can be re-used for another roll of the same finger in the same scene with
+    :meth:`retarget` (new axis and rate; EP1 rolls six legs with one roller), which skips the
+    set-up (Pinocchio data, coal functor, arrays).
     """
 
     def __init__(
@@ -184,6 +223,7 @@ class RollingQP:
         check_termination: int = 5,
         project_axis: bool = True,
         second_order: bool = True,
+        direct: bool = True,
     ) -> None:
         hand = state.hand
         self.hand = hand
@@ -203,7 +243,6 @@ class RollingQP:
             )
         self.solver = solver
         self.dt = float(dt)
-        self.omega = float(omega)
         self.gap_gain = float(gap_gain)
         self.eps = float(eps)
         model = hand.model
@@ -222,9 +261,11 @@ class RollingQP:
         if not (model.nq == model.nv and all(j.nq == 1 for j in model.joints[1:])):
             raise KinematicsError("hand", "RollingQP needs 1-DoF joints with nq == nv")
         self._data = model.createData()
-        self._state = state
-        self._q = state.q
-        self._stale = False
+        # live views of the tip placement in self._data (indexing data.oMf from Python
+        # costs ~2 µs per access; the views follow every kinematics update)
+        tip = self._data.oMf[self._fid]
+        self._c_view = tip.translation
+        self._R_view = tip.rotation
 
         # Fast contact: coal distance functor with reused transforms/result.
         # keep the shapes referenced: the functor holds raw pointers to them
@@ -233,37 +274,30 @@ class RollingQP:
         self._obj_shape = obj.geometry
         self._dist = coal.ComputeDistance(self._obj_shape, self._tip_shape)
         self._tf_obj = coal.Transform3s()
-        M = obj.placement
-        self._tf_obj.setTransform(np.asarray(M.rotation), np.asarray(M.translation))
         self._tf_tip = coal.Transform3s()
         self._req = coal.DistanceRequest()
         self._req.enable_signed_distance = True
         self._req.gjk_tolerance = 1e-12
         self._res = coal.DistanceResult()
+        self._n: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
-        # Axis: tangent at the current contact.
-        self.kinematics_only()
-        c0 = self.contact()
-        a = _unit("axis", axis)
-        n = c0.normal
-        if project_axis:
-            a = a - (a @ n) * n
-        if np.linalg.norm(a) < 1e-6 or abs(a @ n) > 0.5 * np.linalg.norm(a):
-            raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
-        self.axis = a / np.linalg.norm(a)
-        self._wa = self.omega * self.axis
         self.check_termination = check_termination
         #: Second-order integration: the QP targets the step's average velocities (see _build).
         self.second_order = bool(second_order)
         self._zero_nv = np.zeros(model.nv)
         #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
         self.fast_tactile = True
+        #: Closed-form solve when the bounds are inactive (see the class doc).
+        self.direct = bool(direct)
 
         # Preallocated QP data.
         w = np.ones(nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
         if w.shape != (nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise KinematicsError("weights", f"must be {nx} finite numbers > 0")
         self._P = np.diag(w)
+        # direct solve: x = W^-1/2 z with z the minimum-norm solution of (C W^-1/2) z = b
+        self._wscale = None if np.all(w == 1.0) else 1.0 / np.sqrt(w)
+        self._Cw = np.zeros((6, nx))
         self._qlin = np.zeros(nx)
         # OSQP constraint matrix [C; I] (CSC, column-major): column j = C[:, j] then 1.
         # C, b, lb, ub are views into the OSQP arrays, so one update feeds both the
@@ -277,17 +311,23 @@ class RollingQP:
         self._b = self._l[:6]
         self._lb = self._l[6:]
         self._ub = self._u[6:]
+        # dgels' right-hand side must have max(6, nx) rows: b followed by (ignored) lb entries
+        self._b_ext = self._l[: max(6, nx)]
         self._lo = hand.lower[self._cols]  # q index == v index for hand3x3-like hands
         self._hi = hand.upper[self._cols]
         self._nvmax = -hand.velocity_limit[self._cols]
         self._vmax = hand.velocity_limit[self._cols]
-        self._qa = self._q[self._cols].copy()  # active joints' q, kept in step with _q
         self._Jb = np.zeros((6, nx))
         self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
         self._M[3:, 3:] = np.eye(3)
         self._M3 = self._M[:3].reshape(-1)  # view of the three changing rows
         self._lo_dt = self._lo / self.dt
         self._hi_dt = self._hi / self.dt
+        # bounds before clipping to the velocity limits: row 0 (q_min − q)/dt, row 1 (q_max − q)/dt
+        self._lohi_dt = np.stack([self._lo_dt, self._hi_dt])
+        self._T2 = np.zeros((2, nx))
+        self._T2_lo = self._T2[0]
+        self._T2_hi = self._T2[1]
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
         self._qdot = np.zeros(model.nv)
@@ -295,11 +335,55 @@ class RollingQP:
         self.problem = qpsolvers.Problem(
             self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
         )
-        self._b[3:] = self._wa
-        self._wa_t = tuple(self._wa.tolist())
         self._osqp: Any = None
         self._osqp_solver: Any = None
+        self._retarget(state, axis, omega, project_axis)
+
+    def retarget(
+        self,
+        axis: object,
+        omega: float,
+        *,
+        state: HandState | None = None,
+        project_axis: bool = True,
+    ) -> None:
+        """Start a new roll with this roller: axis ``axis``, rate ``omega``, from ``state``
+        (default: where the last roll ended). Same as a new ``RollingQP`` with the same
+        finger, scene, dt, solver and options (and the same results), without its set-up.
+        The object's placement is re-read from the scene."""
+        if not math.isfinite(omega):
+            raise KinematicsError("omega", f"must be finite rad/s, got {omega!r}")
+        if state is None:
+            self.sync()
+            state = self._state
+        elif state.hand is not self.hand:
+            raise KinematicsError("state", "belongs to another hand model")
+        self._retarget(state, axis, omega, project_axis)
+
+    def _retarget(self, state: HandState, axis: object, omega: float, project_axis: bool) -> None:
+        self.omega = float(omega)
+        self._state = state
+        self._q = state.q
+        self._qa = self._q[self._cols].copy()  # active joints' q, kept in step with _q
+        self._stale = False
+        self._qdot[:] = 0.0
         self.steps = 0
+        self._osqp = None  # re-upload the whole problem on the first solve
+        M = self.scene.object.placement
+        self._tf_obj.setTransform(np.asarray(M.rotation), np.asarray(M.translation))
+        # Axis: tangent at the current contact.
+        self.kinematics_only()
+        c0 = self.contact()
+        a = _unit("axis", axis)
+        n = c0.normal
+        if project_axis:
+            a = a - (a @ n) * n
+        if np.linalg.norm(a) < 1e-6 or abs(a @ n) > 0.5 * np.linalg.norm(a):
+            raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
+        self.axis = a / np.linalg.norm(a)
+        self._wa = self.omega * self.axis
+        self._b[3:] = self._wa
+        self._wa_t = tuple(self._wa.tolist())
 
     # ------------------------------------------------------------------ state
     @property
@@ -322,9 +406,7 @@ class RollingQP:
     # ------------------------------------------------------------------ contact
     def contact(self) -> Contact:
         """Contact of the rolling tip at the current q (coal), kinematics already computed."""
-        M = self._data.oMf[self._fid]
-        self._Mtip = M  # reused by the tactile reading of this step
-        c = M.translation
+        c = self._c_view
         self._tf_tip.setTranslation(c)
         res = self._res
         res.clear()
@@ -341,7 +423,8 @@ class RollingQP:
             nx_, ny_, nz_ = dx * s, dy * s, dz * s
         else:
             nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
-        return Contact(
+        self._n = (nx_, ny_, nz_)
+        return _fast_contact(
             self.finger,
             d,
             np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)),
@@ -350,11 +433,12 @@ class RollingQP:
         )
 
     # ------------------------------------------------------------------ the step
-    def _build(self, contact: Contact) -> None:
-        """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact."""
+    def _build(self, contact: Contact, n: tuple[float, float, float] | None = None) -> None:
+        """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
+        (``n``: the contact normal as floats, when the caller has them)."""
         J = pin.getFrameJacobian(self._model, self._data, self._fid, _LWA)
         J.take(self._cols, axis=1, out=self._Jb)
-        nx_, ny_, nz_ = contact.normal.tolist()
+        nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
         # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
         if abs(nx_) < 0.9:
             t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
@@ -399,11 +483,32 @@ class RollingQP:
         # bounds: max(−q̇max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇max, (q_max − q)/dt)
         qs = self._tmp
         np.multiply(self._qa, 1.0 / self.dt, out=qs)
-        lb, ub = self._lb, self._ub
-        np.subtract(self._lo_dt, qs, out=lb)
-        np.maximum(self._nvmax, lb, out=lb)
-        np.subtract(self._hi_dt, qs, out=ub)
-        np.minimum(self._vmax, ub, out=ub)
+        np.subtract(self._lohi_dt, qs, out=self._T2)
+        np.maximum(self._nvmax, self._T2_lo, out=self._lb)
+        np.minimum(self._vmax, self._T2_hi, out=self._ub)
+
+    def _solve_direct(self) -> np.ndarray | None:
+        """The minimum-W-norm solution of C q̇ = b when it satisfies the bounds (it is then
+        the QP's optimum), else None."""
+        if self.nx < 6:
+            return None  # over-determined equalities: the backend decides
+        ws = self._wscale
+        if ws is None:
+            A = self._C
+        else:
+            A = self._Cw
+            np.multiply(self._C, ws, out=A)
+        _, z, info = _DGELS(A, self._b_ext)
+        if info != 0:
+            return None  # rank-deficient
+        x: np.ndarray = z[: self.nx]
+        if ws is not None:
+            x = x * ws
+        tol = _BOUND_TOL
+        for xi, lo, hi in zip(x.tolist(), self._lb.tolist(), self._ub.tolist(), strict=True):
+            if not lo - tol <= xi <= hi + tol:  # also catches NaN
+                return None
+        return x
 
     def _solve_osqp(self) -> tuple[np.ndarray, int]:
         self._u[:6] = self._b
@@ -412,8 +517,6 @@ class RollingQP:
             slv = self._osqp_solver
             slv.update_data_vec(q=self._qlin, l=self._l, u=self._u)
             slv.update_data_mat(P_x=np.ascontiguousarray(np.diag(self._P)), P_i=None, A_x=self._Ax, A_i=None)
-            # a new roll: start cold, not from another problem's primal/dual solution
-            slv.warm_start(x=np.zeros(self.nx), y=np.zeros(6 + self.nx))
         else:
             slv = self._osqp_solver
             slv.update_data_vec(q=None, l=self._l, u=self._u)
@@ -476,17 +579,25 @@ class RollingQP:
         For a plain :class:`TactileSensor` this is the same reading (same noise model, same
         random draws, tested equal to ``TactileSensor.read``) written with scalar arithmetic:
         ``TactileSensor.read`` spends ~100 µs in ``np.cross`` and friends on 3-vectors.
+        The kinematics must be those of ``contact`` (as after :meth:`contact`).
         """
-        sensor = self.tactile
-        if sensor is None:
+        if self.tactile is None:
             return None
+        return self._read(contact, tuple(contact.normal.tolist()))
+
+    def _read(self, contact: Contact, n: tuple[float, ...]) -> TactileReading:
+        sensor = self.tactile
+        assert sensor is not None
         if type(sensor) is not TactileSensor or not self.fast_tactile:
             self.sync()
             return sensor.read(self._state, contact)
         r = self._r
         # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
-        px, py, pz = (contact.normal @ self._Mtip.rotation).tolist()
-        px, py, pz = -r * px, -r * py, -r * pz
+        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self._R_view.tolist()
+        n0, n1, n2 = n
+        px = -r * (n0 * r00 + n1 * r10 + n2 * r20)
+        py = -r * (n0 * r01 + n1 * r11 + n2 * r21)
+        pz = -r * (n0 * r02 + n1 * r12 + n2 * r22)
         d = contact.distance
         in_contact = d <= sensor.contact_tolerance
         if in_contact:
@@ -511,36 +622,49 @@ class RollingQP:
                 pn = math.sqrt(px * px + py * py + pz * pz)
                 if pn > 1e-12:
                     px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-        p = np.array((px, py, pz))
-        return TactileReading(contact.finger, p, p / r, bool(in_contact), float(d))
+        return _fast_reading(
+            contact.finger,
+            np.array((px, py, pz)),
+            np.array((px / r, py / r, pz / r)),
+            bool(in_contact),
+            float(d),
+        )
+
+    def _bounds_infeasible(self) -> bool:
+        return bool((self._lb > self._ub).any())
 
     def step(self) -> RollingStep:
         """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
         self.kinematics()
         contact = self.contact()
-        reading = self.read_tactile(contact) if self.tactile is not None else None
-        self._build(contact)
-        if (self._lb > self._ub).any():
-            raise RollingQPError(
-                "joint limits leave no feasible velocity",
-                self.problem_copy(),
-                self.solver,
-                "infeasible bounds",
-            )
-        x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
+        n = self._n
+        reading = self._read(contact, n) if self.tactile is not None else None
+        self._build(contact, n)
+        x = self._solve_direct() if self.direct else None
+        it = 0
+        if x is None:
+            if self._bounds_infeasible():
+                raise RollingQPError(
+                    "joint limits leave no feasible velocity",
+                    self.problem_copy(),
+                    self.solver,
+                    "infeasible bounds",
+                )
+            x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
         # residuals of the equalities at the returned solution
         res = self._res6
         np.matmul(self._C, x, out=res)
-        res -= self._b
+        np.subtract(res, self._b, out=res)
         r0, r1, r2, r3, r4, r5 = res.tolist()
         qdot = self._qdot
         qdot[self._cols] = x
         qa = self._qa
-        qa += x * self.dt
+        np.multiply(x, self.dt, out=self._tmp)
+        qa += self._tmp
         self._q[self._cols] = qa
         self._stale = True
         self.steps += 1
-        return RollingStep(
+        return _fast_step(
             contact,
             reading,
             qdot.copy(),
