@@ -25,6 +25,7 @@ Procedure (:func:`run_ep1`), from a configuration where the fingertip touches th
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -146,6 +147,58 @@ def place_hand_for_ep1(
     return q_new
 
 
+def _log3(R: np.ndarray) -> np.ndarray:
+    """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
+    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
+    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
+    c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
+    theta = np.arctan2(0.5 * s2, c)
+    # θ / (2 sin θ) → ½ as θ → 0
+    scale = np.where(s2 > 1e-12, theta / np.maximum(s2, 1e-300), 0.5 + theta * theta / 12.0)
+    out: np.ndarray = v * scale[:, None]
+    return out
+
+
+_ROLLERS = threading.local()
+_ROLLERS_KEEP = 8  # rollers kept per thread (one per scene and finger in use)
+
+
+def _roller(
+    scene: Scene,
+    state: HandState,
+    finger: str,
+    sensor: TactileSensor,
+    axis: np.ndarray,
+    omega: float,
+    dt: float,
+    solver: str,
+) -> RollingQP:
+    """A :class:`RollingQP` for this scene, finger, dt and solver, re-targeted to ``state``,
+    ``axis`` and ``omega``: the same roller as a new one, without its set-up (Pinocchio data,
+    coal functor, arrays; ~0.5 ms). Cached per thread (a roller is not shared between
+    threads), a few per thread, most recently used last."""
+    cache: dict[tuple[int, str, float, str], RollingQP] | None = getattr(_ROLLERS, "cache", None)
+    if cache is None:
+        cache = _ROLLERS.cache = {}
+    key = (id(scene), finger, float(dt), solver)
+    rq = cache.pop(key, None)
+    if rq is not None and (
+        rq.scene is not scene or rq.hand is not state.hand or rq._obj_shape is not scene.object.geometry
+    ):
+        rq = None  # the object was replaced: build a new roller
+    if rq is None:
+        rq = RollingQP(
+            state, finger, axis, omega, dt, solver, scene=scene, tactile=sensor, project_axis=False
+        )
+    else:
+        rq.tactile = sensor
+        rq.retarget(axis, omega, state=state, project_axis=False)
+    cache[key] = rq
+    while len(cache) > _ROLLERS_KEEP:
+        del cache[next(iter(cache))]
+    return rq
+
+
 def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m."""
     d = points / np.linalg.norm(points, axis=1, keepdims=True)
@@ -218,48 +271,53 @@ def run_ep1(
     K_f = np.eye(2) / r
     half = steps_per_direction // 2
     full = 2 * half
+    legs = ((1.0, half, 0), (-1.0, full, 1), (1.0, half, 0))  # (sign, steps, reading set)
+    n_dir = 2 * full
     est = estimator if estimator is not None else CurvatureEstimator()
     samples: list[CurvatureSample] = []
-    max_slip = 0.0
-    max_gap = abs(ct0.distance)
+    # per direction, one row per step: tactile point, tip rotation, in contact; slip and gap
+    P_all = np.empty((n_dir, 3))
+    R_all = np.empty((n_dir, 3, 3))
+    inc = np.zeros(n_dir, dtype=bool)
+    slips: list[float] = []
+    gaps: list[float] = [abs(ct0.distance)]
+    sets = np.concatenate([np.full(n, k) for _, n, k in legs])  # 0: outward half-legs, 1: sweep
     steps = 0
+    rq: RollingQP | None = None
     for phi_deg in dirs:
         phi = math.radians(phi_deg)
         a_xy = np.array([math.cos(phi), math.sin(phi)])
         axis = F[:, :2] @ a_xy
         a_tip = R0.T @ axis
-        pts: list[list[np.ndarray]] = [[], []]  # set 0: outward half-legs, set 1: the sweep
-        ths: list[list[float]] = [[], []]
-        for leg, (sign, n_steps) in enumerate(((1.0, half), (-1.0, full), (1.0, half))):
-            # the axis stays the one tangent at the start (fixed for the whole direction)
-            rq = RollingQP(
-                state,
-                finger,
-                axis,
-                sign * omega,
-                dt,
-                solver,
-                scene=scene,
-                tactile=tactile_sensor,
-                project_axis=False,
-            )
-            k = 0 if leg != 1 else 1
+        i = 0
+        for sign, n_steps, _ in legs:
+            # the axis stays the one tangent at the start (fixed for the whole direction);
+            # one roller for the whole run, re-targeted for every leg
+            if rq is None:
+                rq = _roller(scene, state, finger, tactile_sensor, axis, sign * omega, dt, solver)
+            else:
+                rq.retarget(axis, sign * omega, project_axis=False)
+            R_view = rq._R_view  # live: the kinematics of the step's reading
+            step = rq.step
             for _ in range(n_steps):
-                st = rq.step()
+                st = step()
                 rd = st.reading
                 assert rd is not None
                 if rd.in_contact:
-                    pts[k].append(rd.point_tip)
-                    # realized net roll angle of the tip about a (not the commanded ω·t):
-                    # the data of rq still hold the kinematics of this reading
-                    Rk = rq._data.oMf[rq._fid].rotation
-                    ths[k].append(float(pin.log3(R0.T @ Rk) @ a_tip))
-                max_slip = max(max_slip, st.slip_speed)
-                max_gap = max(max_gap, abs(st.contact.distance))
+                    inc[i] = True
+                    P_all[i] = rd.point_tip
+                    R_all[i] = R_view
+                else:
+                    inc[i] = False
+                slips.append(st.slip_speed)
+                gaps.append(abs(st.contact.distance))
+                i += 1
             steps += n_steps
-            state.update(rq.q)
+        # realized net roll angle of the tip about a (not the commanded ω·t)
+        th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
         for k in (0, 1):
-            P = np.array(pts[k])
+            sel = inc & (sets == k)
+            P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
             b = P.mean(axis=0)
@@ -271,8 +329,12 @@ def run_ep1(
                 [b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]]
             )
             c = _log_chart(P, b, ex, ey, r)
-            s = _fit_slope(np.array(ths[k]), c)
+            s = _fit_slope(th_all[sel], c)
             samples.append(est.add_sample(a_xy, s, K_f))
+    assert rq is not None
+    state.update(rq.q)
+    max_slip = max(slips)
+    max_gap = max(gaps)
     return EP1Result(
         estimate=est.estimate(),
         q_final=state.q,

@@ -382,6 +382,7 @@ class RollingQP:
             raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
         self.axis = a / np.linalg.norm(a)
         self._wa = self.omega * self.axis
+        self._b[:3] = 0.0  # the no-slip targets of a first step (no second-order term yet)
         self._b[3:] = self._wa
         self._wa_t = tuple(self._wa.tolist())
 
