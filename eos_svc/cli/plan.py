@@ -3,13 +3,14 @@
 eos plan                                  # default scene: a 3 cm sphere, seed 1
 eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
 eos plan --json                           # the result as JSON (no trace)
-eos plan --record cycles.jsonl            # every cycle record as JSON lines
+eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
+eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
+eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from typing import IO, Any
 
@@ -31,6 +32,7 @@ FIELD_OPTIONS = {
     "tactile_noise": "--noise",
     "max_cycles": "--max-cycles",
     "deadline_s": "--deadline",
+    "friction": "--friction",
 }
 
 
@@ -56,9 +58,21 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
     g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    g.add_argument(
+        "--friction",
+        type=finite_float,
+        default=0.5,
+        metavar="MU",
+        help="Coulomb friction μ at the fingertips, for the grasp quality (0.5)",
+    )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
-    out.add_argument("--record", metavar="FILE", help="write every cycle record to FILE as JSON lines")
+    out.add_argument(
+        "--record",
+        metavar="FILE",
+        help="write the request, every cycle record and the result to FILE as JSON lines (see eos replay)",
+    )
+    out.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
 
 
@@ -82,6 +96,7 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
         "deadline_s": args.deadline,
+        "friction": args.friction,
     }
 
 
@@ -111,12 +126,17 @@ def format_result(result: Any) -> str:
     lines.append(f"truth: {truth['shape']}, diameter {diameter_mm:.1f} mm, d/h {truth['d_over_h']:.2f}")
     touching = ", ".join(f for f, c in result.contacts.items() if c["touching"]) or "none"
     lines.append(f"contacts: {touching}; good grasp: {'yes' if result.good_grasp else 'no'}")
+    if getattr(result, "friction", None) is not None:
+        closure = "force closure" if getattr(result, "force_closure", False) else "no force closure"
+        eps = result.epsilon
+        lines.append(f"quality: {closure} at μ = {result.friction:g}, ε = {eps:.3f} (Ferrari-Canny)")
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
     return "\n".join(lines)
 
 
 def run(args: argparse.Namespace) -> int:
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
+    from eos_svc.cli.replay import cycle_line, header_line, result_line
 
     try:
         request = PlanRequest.from_dict(request_dict(args))
@@ -128,20 +148,33 @@ def run(args: argparse.Namespace) -> int:
             record_file = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed below
         except OSError as exc:
             fail(f"--record: cannot write {args.record!r}: {exc.strerror}")
+            raise  # unreachable: fail() exits
+        record_file.write(header_line(request) + "\n")
 
     def on_cycle(record: CycleRecord) -> None:
         if record_file is not None:
-            record_file.write(json.dumps(record.to_dict(), allow_nan=False) + "\n")
+            record_file.write(cycle_line(record) + "\n")
         if not args.json and not args.quiet:
             print(format_cycle(record), flush=True)
 
     try:
         result = plan(request, on_cycle=on_cycle)
+        if record_file is not None:
+            record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
         fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
     finally:
         if record_file is not None:
             record_file.close()
+    if args.picture:
+        from eos_svc.agents.picture import draw_result
+
+        if result.q_final is None:
+            fail("--picture: no final hand configuration (the end agent never judged the grasp)", code=1)
+        try:
+            draw_result(result, args.picture)
+        except OSError as exc:
+            fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
     if args.json:
         print(result.to_json())
     else:
