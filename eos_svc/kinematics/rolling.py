@@ -97,10 +97,6 @@ _STEP_SETTERS = tuple(
 )
 _S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = _STEP_SETTERS
 _DGELS = lapack.dgels
-#: The direct solution may exceed a bound by this much (rad/s, m/s) and still be taken: rolling
-#: at the wrist's velocity limit puts it on the bound up to round-off (OSQP itself meets its
-#: constraints only to eps = 1e-7).
-_BOUND_TOL = 1e-8
 
 
 def _fast_step(
@@ -197,9 +193,10 @@ class RollingQP:
             average over the step (slip per step O(dt³) instead of O(dt²)).
         direct: first solve the equality-constrained problem in closed form (the minimum-W-norm
             solution of the six equalities, one LAPACK ``dgels``); when it lies within the
-            bounds it *is* the QP's optimum (the bounds are inactive) and the backend is not
-            called (``RollingStep.iterations`` is then 0). Otherwise — a bound active, a
-            rank-deficient system — the backend solves the QP. False: always the backend.
+            bounds (to ``eps``, OSQP's own tolerance) it is the QP's optimum (the bounds are
+            inactive) and the backend is not called (``RollingStep.iterations`` is then 0).
+            Otherwise — a bound active, a rank-deficient system — the backend solves the QP.
+            False: always the backend.
 
     A roller can be re-used for another roll of the same finger in the same scene with
     :meth:`retarget` (new axis and rate; EP1 rolls six legs with one roller), which skips the
@@ -505,7 +502,12 @@ class RollingQP:
         x: np.ndarray = z[: self.nx]
         if ws is not None:
             x = x * ws
-        tol = _BOUND_TOL
+        # Taken when within the bounds to OSQP's own tolerance eps: OSQP's solutions meet the
+        # bounds only to ≈ eps·(1 + |q̇|) too (rolling at the wrist's velocity limit puts the
+        # unconstrained optimum a few 1e-8 rad/s beyond it; OSQP returns a point within ~1e-6
+        # of the unconstrained optimum there, while clamping exactly would move the finger by
+        # ~1e-3 rad/s — the problem is nearly degenerate in that direction).
+        tol = self.eps
         for xi, lo, hi in zip(x.tolist(), self._lb.tolist(), self._ub.tolist(), strict=True):
             if not lo - tol <= xi <= hi + tol:  # also catches NaN
                 return None
