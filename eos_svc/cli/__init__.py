@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 from collections.abc import Sequence
 
@@ -49,7 +50,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog=f"eos {name}", description=help_text)
     module.add_arguments(parser)
     parsed = parser.parse_args(args[1:])
-    return int(module.run(parsed))
+    try:
+        return int(module.run(parsed))
+    except BrokenPipeError:  # output piped into e.g. `head`: stop quietly
+        sys.stdout = open(os.devnull, "w")  # noqa: SIM115 - swallow the flush at exit
+        return 0
+    except KeyboardInterrupt:
+        print("eos: interrupted", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":  # pragma: no cover
