@@ -93,7 +93,19 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
     ax.set_xlabel("object diameter / hand height  d/h")
     ax.set_ylabel("grasp-stage cycles")
     ax.set_title("Grasp cycles fall as d/h rises (paper Fig. 3)")
-    ax.legend(fontsize=8)
+    ax2 = ax.twinx()
+    ax2.plot(
+        [row["ratio"] for row in rows],
+        [row["good_grasp_rate"] for row in rows],
+        "s:",
+        color="tab:green",
+        label="good-grasp rate",
+    )
+    ax2.set_ylim(-0.05, 1.05)
+    ax2.set_ylabel("good-grasp rate (about the diameter, force closure)")
+    handles = ax.get_legend_handles_labels()
+    handles2 = ax2.get_legend_handles_labels()
+    ax.legend(handles[0] + handles2[0], handles[1] + handles2[1], fontsize=8, loc="center left")
     fig.tight_layout()
     path.parent.mkdir(parents=True, exist_ok=True)
     fig.savefig(path)
