@@ -33,6 +33,7 @@ import zenoh
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import EosError
 from eos_svc.service import protocol as proto
+from eos_svc.service.session import direct_callback
 
 #: called with every cycle message ``{"schema", "goal_id", "instance", "seq", "record"}``
 CycleHandler = Callable[[dict[str, Any]], None]
@@ -86,20 +87,6 @@ class _LostError(Exception):
     pass
 
 
-def _direct(callback: Callable[[Any], None], drop: Callable[[], None] | None = None) -> Any:
-    """A Zenoh callback run in Zenoh's own thread (no Python thread per entity).
-
-    Only for callbacks that just put into a ``SimpleQueue`` (never block, never
-    call Zenoh): an indirect callback starts a Python thread per query or
-    subscriber, ≈ 1 ms each. ``indirect`` is unstable in zenoh-python 1.x; if
-    it goes away the default (indirect) callback is used.
-    """
-    try:
-        return zenoh.handlers.Callback(callback, drop, indirect=False)
-    except TypeError:  # pragma: no cover - future zenoh without the option
-        return zenoh.handlers.Callback(callback, drop)
-
-
 class EosClient:
     """Client of the EOS planning service on an open Zenoh session.
 
@@ -132,7 +119,7 @@ class EosClient:
         self._owns_session = False
         self._live_changed = threading.Condition(self._lock)
         self._token_sub = session.liveliness().declare_subscriber(
-            proto.instance_key(self.prefix), self._on_token, history=True
+            proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
         )
 
     @classmethod
@@ -297,11 +284,12 @@ class EosClient:
         try:
             if watch:
                 sub = self.session.declare_subscriber(
-                    proto.goal_keys(self.prefix, goal_id), _direct(lambda s: events.put(("sample", s)))
+                    proto.goal_keys(self.prefix, goal_id),
+                    direct_callback(lambda s: events.put(("sample", s))),
                 )
             self.session.get(
                 proto.plan_key(self.prefix, iid),
-                _direct(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
+                direct_callback(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
                 payload=payload,
                 encoding=zenoh.Encoding.APPLICATION_JSON,
                 consolidation=zenoh.ConsolidationMode.NONE,
@@ -425,4 +413,6 @@ class EosClient:
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"
             callback(kind, msg)
 
-        return self.session.declare_subscriber(proto.goal_keys(self.prefix, goal_id), on_sample)
+        return self.session.declare_subscriber(
+            proto.goal_keys(self.prefix, goal_id), direct_callback(on_sample)
+        )

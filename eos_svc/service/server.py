@@ -11,8 +11,9 @@ prefix ``P`` (see :mod:`eos_svc.service.protocol`):
 and publishes every cycle of a plan on ``P/goal/<goal_id>/cycle`` and its
 status on ``P/goal/<goal_id>/status``, reliably (``CongestionControl.BLOCK``).
 
-Threads: Zenoh's callback threads only append the query to an in-process
-queue (never block, never call Zenoh). A dispatcher thread validates requests
+Threads: the queryables' callbacks run in Zenoh's own thread and only append
+the query to an in-process queue (never block, never call Zenoh; see
+:func:`~eos_svc.service.session.direct_callback`). A dispatcher thread validates requests
 and answers bad ones at once; valid ones go to a bounded job queue drained by
 ``workers`` worker threads that run the planner; past the bound the request
 gets a ``busy`` error reply. Every query ends in exactly one ``reply`` or
@@ -38,6 +39,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.controller import CancelToken
 from eos_svc.records import CycleRecord, to_jsonable
 from eos_svc.service import protocol as proto
+from eos_svc.service.session import direct_callback
 
 log = logging.getLogger(__name__)
 
@@ -161,9 +163,13 @@ class PlanService:
             t.start()
         s = self.session
         self._entities.append(
-            s.declare_queryable(proto.plan_key(self.prefix, self.instance), self._on_plan, complete=True)
+            s.declare_queryable(
+                proto.plan_key(self.prefix, self.instance), direct_callback(self._on_plan), complete=True
+            )
         )
-        self._entities.append(s.declare_queryable(proto.cancel_key(self.prefix), self._on_cancel))
+        self._entities.append(
+            s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel))
+        )
         # the token last: a client that sees it can use the queryables
         self._entities.append(s.liveliness().declare_token(proto.instance_key(self.prefix, self.instance)))
         log.info("eos service %s serving under %s", self.instance, self.prefix)

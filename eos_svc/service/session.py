@@ -4,8 +4,9 @@ from __future__ import annotations
 
 import json
 import socket
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 import zenoh
 
@@ -58,3 +59,21 @@ def make_config(
 def loopback(port: int) -> str:
     """The TCP endpoint ``tcp/127.0.0.1:<port>``."""
     return f"tcp/127.0.0.1:{port}"
+
+
+def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | None = None) -> Any:
+    """A Zenoh callback handler run directly in Zenoh's own thread.
+
+    Only for callbacks that never block and never call Zenoh — here they only
+    put into a ``queue.SimpleQueue`` drained by our own threads (zenoh-python
+    releases the GIL in its blocking calls, so a Zenoh thread waiting for the
+    GIL cannot deadlock with them). Why not the default (``indirect``)
+    callback: it runs in a Python thread of zenoh-python's — one is started
+    per query (≈ 1 ms each), and a process that exits with such an entity
+    still declared hangs at interpreter shutdown. ``indirect`` is marked
+    unstable in zenoh-python 1.x; without it the default handler is used.
+    """
+    try:
+        return zenoh.handlers.Callback(callback, drop, indirect=False)
+    except TypeError:  # pragma: no cover - a zenoh-python without the option
+        return zenoh.handlers.Callback(callback, drop)
