@@ -489,18 +489,19 @@ class HandModel:
 class HandState:
     """q, Pinocchio data and geometry data of one hand, kept consistent.
 
-    :meth:`update` runs forward kinematics, frame placements, joint Jacobians and geometry
-    placements once; every query afterwards reads those results.
+    :meth:`update` runs forward kinematics, frame placements and joint Jacobians once (geometry
+    placements once, when first needed); every query afterwards reads those results.
     """
 
-    __slots__ = ("_gmodel", "_q", "_tips", "data", "geometry_data", "hand", "model")
+    __slots__ = ("_gdata", "_geom_stale", "_gmodel", "_q", "_tips", "data", "hand", "model")
 
     def __init__(self, hand: HandModel, q: object = None) -> None:
         self.hand = hand
         self.model = hand.model
         self.data = hand.model.createData()
         self._gmodel = hand.collision_model
-        self.geometry_data = pin.GeometryData(hand.collision_model)
+        self._gdata = pin.GeometryData(hand.collision_model)
+        self._geom_stale = True
         # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
         # joint id, the joint placement (a live reference into data.oMi), the tip translation
         # (a live view into data.oMf; never handed out), and a reusable point placement.
@@ -524,7 +525,8 @@ class HandState:
         return self._q.copy()
 
     def update(self, q: object) -> None:
-        """Set ``q`` (validated: length, finite) and recompute kinematics and geometry placements."""
+        """Set ``q`` (validated: length, finite) and recompute kinematics (joint Jacobians,
+        frame placements); the geometry placements follow on first use of :attr:`geometry_data`."""
         hand = self.hand
         if (  # inlined fast path of HandModel.validate_q (this is the hot path)
             type(q) is np.ndarray
@@ -538,8 +540,17 @@ class HandState:
         model, data = self.model, self.data
         pin.computeJointJacobians(model, data, qa)  # also computes data.oMi (forward kinematics)
         pin.updateFramePlacements(model, data)
-        pin.updateGeometryPlacements(model, data, self._gmodel, self.geometry_data)
+        # geometry placements are computed on first use (most updates only need the tips)
+        self._geom_stale = True
         self._q = qa
+
+    @property
+    def geometry_data(self) -> pin.GeometryData:
+        """Pinocchio geometry data (collision placements ``oMg``) at the current q."""
+        if self._geom_stale:
+            pin.updateGeometryPlacements(self.model, self.data, self._gmodel, self._gdata)
+            self._geom_stale = False
+        return self._gdata
 
     def copy(self) -> HandState:
         """An independent state at the same q."""
@@ -585,7 +596,10 @@ class HandState:
     def tip_point_jacobian(self, finger: str, point_world: np.ndarray) -> np.ndarray:
         """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
         is currently at ``point_world`` (m), per unit joint velocity."""
-        _, jid, oMi, _, M = self._tip(finger)
+        tip = self._tips.get(finger)
+        if tip is None:
+            tip = self._tip(finger)  # raises UnknownNameError
+        _, jid, oMi, _, M = tip
         if type(point_world) is not np.ndarray or point_world.shape != (3,):
             point_world = np.asarray(point_world, dtype=float)
             if point_world.shape != (3,):

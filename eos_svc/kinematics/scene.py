@@ -93,8 +93,11 @@ class Scene:
         self._tf_obj = coal.Transform3s()
         self._tf_tip = coal.Transform3s()
         self.set_object_placement(obj.placement)
-        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere).
+        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere), and
+        # a coal distance functor object–tip (cheaper per call than coal.distance; it holds
+        # raw pointers to both shapes, which self._tips and self.object keep alive).
         self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
+        self._functors: dict[str, coal.ComputeDistance] = {}
         for name in hand.finger_names:
             gid = hand.tip_geometry_id(name)
             r = hand.tip_radius(name)
@@ -102,6 +105,7 @@ class Scene:
             is_sphere = geom is None or isinstance(geom, coal.Sphere)
             shape = geom if geom is not None else coal.Sphere(r)
             self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
+            self._functors[name] = coal.ComputeDistance(self._obj_geom, shape)
 
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
@@ -129,7 +133,7 @@ class Scene:
             if self.exact_tips:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             self._tf_tip.setTranslation(c)
-            coal.distance(self._obj_geom, self._tf_obj, shape, self._tf_tip, self._req, res)
+            self._functors[finger](self._tf_obj, self._tf_tip, self._req, res)
             d = res.min_distance
             if d < 0.0:  # penetration: coal's EPA / sphere-cylinder depth is approximate
                 return self._analytic_sphere_contact(finger, c.copy(), r)
