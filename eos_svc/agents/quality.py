@@ -41,6 +41,7 @@ in 3-D never are (the torque about the line through them is unresisted), three c
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass
@@ -252,8 +253,28 @@ def contacts_quality(
     edges: int = DEFAULT_EDGES,
 ) -> GraspQuality:
     """:func:`grasp_quality` of the *touching* fingertips of a plan's ``contacts`` dict
-    (per finger: ``touching``, ``point`` and outward ``normal`` in the world frame)."""
-    touching = [c for c in contacts.values() if c.get("touching")]
-    points = np.array([c["point"] for c in touching], dtype=float).reshape(-1, 3)
-    normals = np.array([c["normal"] for c in touching], dtype=float).reshape(-1, 3)
+    (per finger: ``touching``, ``point`` and outward ``normal`` in the world frame).
+
+    Memoised on its (hashable) inputs: the end agent and the plan result judge the same
+    contacts, and a 6-D hull costs milliseconds.
+    """
+    touching = tuple(
+        (tuple(float(v) for v in c["point"]), tuple(float(v) for v in c["normal"]))
+        for c in contacts.values()
+        if c.get("touching")
+    )
+    centre_key = tuple(float(v) for v in np.asarray(centre, dtype=float).ravel())
+    return _contacts_quality(touching, centre_key, float(torque_scale), float(mu), int(edges))
+
+
+@functools.lru_cache(maxsize=64)
+def _contacts_quality(
+    touching: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...],
+    centre: tuple[float, ...],
+    torque_scale: float,
+    mu: float,
+    edges: int,
+) -> GraspQuality:
+    points = np.array([p for p, _ in touching], dtype=float).reshape(-1, 3)
+    normals = np.array([n for _, n in touching], dtype=float).reshape(-1, 3)
     return grasp_quality(points, normals, centre, mu, edges, torque_scale)
