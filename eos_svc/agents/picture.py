@@ -38,7 +38,7 @@ SEGMENTS = 16
 OBJECT_COLOUR = "#4c9be8"
 HAND_COLOUR = "#9a9a9a"
 PALM_COLOUR = "#6d6d6d"
-TIP_COLOURS = {"finger1": "#e8a33c", "finger2": "#58b85c", "finger3": "#b565c9"}
+TIP_PALETTE = ("#e8a33c", "#58b85c", "#b565c9", "#e377c2", "#17becf")
 CONTACT_COLOUR = "#d62728"
 #: orthographic views: (title, horizontal axis, vertical axis, depth axis, depth sign toward viewer)
 VIEWS = (
@@ -119,23 +119,39 @@ def _placed(polys: list[np.ndarray], rotation: np.ndarray, translation: np.ndarr
 def scene_solids(
     q: Any, request: PlanRequest, hand: HandModel | None = None
 ) -> list[tuple[str, list[np.ndarray], str, float]]:
-    """Every solid to draw: (name, world polygons in m, colour, alpha), object first."""
+    """Every solid to draw: (name, world polygons in m, colour, alpha), object first.
+
+    Fingertips are coloured per finger (in the hand's finger order), palms darker; a
+    geometry that is not a primitive is drawn as its local bounding box.
+    """
     hand = hand or default_hand()
     obj = make_object(request.obj)
     pl = obj.placement
     solids = [("object", _placed(shape_mesh(obj.geometry), pl.rotation, pl.translation), OBJECT_COLOUR, 0.35)]
     state = hand.state(np.asarray(q, dtype=float))
+    tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
     for gid, g in enumerate(hand.collision_model.geometryObjects):
         m = state.geometry_data.oMg[gid]
-        finger = g.name.split("_")[0]
-        if "_tip" in g.name:
-            colour = TIP_COLOURS.get(finger, HAND_COLOUR)
+        if gid in tips:
+            colour = TIP_PALETTE[tips[gid] % len(TIP_PALETTE)]
         elif g.name.startswith("palm"):
             colour = PALM_COLOUR
         else:
             colour = HAND_COLOUR
-        solids.append((g.name, _placed(shape_mesh(g.geometry), m.rotation, m.translation), colour, 0.9))
+        try:
+            polys = shape_mesh(g.geometry)
+        except TypeError:
+            polys = _aabb_mesh(g.geometry)
+        solids.append((g.name, _placed(polys, m.rotation, m.translation), colour, 0.9))
     return solids
+
+
+def _aabb_mesh(shape: coal.CollisionGeometry) -> list[np.ndarray]:
+    """The local axis-aligned bounding box of any coal geometry, as a box mesh."""
+    shape.computeLocalAABB()
+    box = shape.aabb_local
+    lo, hi = np.asarray(box.min_, dtype=float), np.asarray(box.max_, dtype=float)
+    return [p + 0.5 * (lo + hi) for p in _box_mesh(0.5 * (hi - lo))]
 
 
 def _contacts(contacts: Mapping[str, Mapping[str, Any]]) -> list[tuple[str, np.ndarray, np.ndarray]]:
