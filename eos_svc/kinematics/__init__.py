@@ -17,6 +17,7 @@ from .hand import (
     WorkspaceError,
     load_hand,
 )
+from .hands import PreShapedHandModel, allegro_description, allegro_hand, load_composite_hand
 from .objects import (
     Box,
     Capsule,
@@ -46,6 +47,7 @@ __all__ = [
     "HandState",
     "KinematicsError",
     "ObjectSizeError",
+    "PreShapedHandModel",
     "Scene",
     "Sphere",
     "SurfaceObject",
@@ -54,5 +56,8 @@ __all__ = [
     "UnknownNameError",
     "UrdfLoadError",
     "WorkspaceError",
+    "allegro_description",
+    "allegro_hand",
+    "load_composite_hand",
     "load_hand",
 ]
