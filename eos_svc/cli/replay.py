@@ -7,8 +7,9 @@ eos replay run.jsonl --picture grasp.png  # and draw the final grasp
 
 Record file (JSON lines, written by ``eos plan --record``):
 
-- line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}}`` — the
-  plan request in its JSON form (:meth:`PlanRequest.to_dict`);
+- line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
+  — the plan request in its JSON form (:meth:`PlanRequest.to_dict`) and the hand's name
+  (``hand3x3``, the default, or a ``<name>_hand()`` factory of :mod:`eos_svc.kinematics`);
 - one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
 - last line, the result: ``{"eos_record": "result", "result": {...}}`` —
   :meth:`PlanResult.to_dict` without the trace (absent when the run was interrupted).
@@ -41,13 +42,16 @@ RECORD_SCHEMA = 1
 MARK = "eos_record"
 #: fields that measure wall-clock time: never compared
 TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
+#: the planner's default hand
+DEFAULT_HAND = "hand3x3"
 
 
 # --- writing (used by ``eos plan --record``) ---------------------------------------------
-def header_line(request: Any) -> str:
-    """The header line of a record file for ``request`` (a PlanRequest)."""
+def header_line(request: Any, hand: str = DEFAULT_HAND) -> str:
+    """The header line of a record file for ``request`` (a PlanRequest) planned with ``hand``."""
     return json.dumps(
-        {MARK: "header", "schema": RECORD_SCHEMA, "request": request.to_dict()}, allow_nan=False
+        {MARK: "header", "schema": RECORD_SCHEMA, "request": request.to_dict(), "hand": hand},
+        allow_nan=False,
     )
 
 
@@ -67,12 +71,19 @@ class RecordFileError(ValueError):
 
 
 class Recording:
-    """A parsed record file: the request, the cycle dicts, the result dict (or None)."""
+    """A parsed record file: the request, the cycle dicts, the result dict (or None), the hand."""
 
-    def __init__(self, request: dict[str, Any], cycles: list[dict[str, Any]], result: dict[str, Any] | None):
+    def __init__(
+        self,
+        request: dict[str, Any],
+        cycles: list[dict[str, Any]],
+        result: dict[str, Any] | None,
+        hand: str = DEFAULT_HAND,
+    ):
         self.request = request
         self.cycles = cycles
         self.result = result
+        self.hand = hand
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -122,7 +133,27 @@ def read_recording(path: str | Path) -> Recording:
                 f"line {number}: cycle {value['seq']!r} out of order (expected {len(cycles) + 1})"
             )
         cycles.append(value)
-    return Recording(header["request"], cycles, result)
+    hand = header.get("hand", DEFAULT_HAND)
+    if not isinstance(hand, str):
+        raise RecordFileError(f"line {parsed[0][0]}: hand must be a name, got {hand!r}")
+    return Recording(header["request"], cycles, result, hand)
+
+
+def resolve_hand(name: str) -> Any:
+    """The hand model called ``name``: ``None`` (the planner's default) for ``hand3x3``, else
+    the result of :mod:`eos_svc.kinematics`' ``<name>_hand()``.
+
+    Raises:
+        RecordFileError: no such hand.
+    """
+    if name == DEFAULT_HAND:
+        return None
+    import eos_svc.kinematics as kinematics
+
+    factory = getattr(kinematics, f"{name}_hand", None) if name.isidentifier() else None
+    if not callable(factory):
+        raise RecordFileError(f"unknown hand {name!r}")
+    return factory()
 
 
 def record_from_dict(data: dict[str, Any]) -> CycleRecord:
@@ -198,12 +229,19 @@ class Verification:
 
 
 def verify(recording: Recording) -> Verification:
-    """Re-run the recorded request and compare it cycle by cycle, then the result."""
+    """Re-run the recorded request (with the recorded hand) and compare it cycle by cycle,
+    then the result.
+
+    Raises:
+        RecordFileError: the recorded hand is unknown.
+        ValidationError: the recorded request is not valid (any more).
+    """
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
 
     request = PlanRequest.from_dict(recording.request)
+    hand = resolve_hand(recording.hand)
     replayed: list[dict[str, Any]] = []
-    result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())))
+    result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())), hand=hand)
     out = Verification()
     out.replayed_result = normalise(result.to_dict())
     for recorded, again in zip(recording.cycles, replayed, strict=False):
@@ -276,6 +314,8 @@ def run(args: argparse.Namespace) -> int:
             verification = verify(recording)
         except ValidationError as exc:
             fail(f"FILE: the recorded request is not valid here: {exc}")
+        except RecordFileError as exc:
+            fail(f"FILE: {args.file}: {exc}")
         for line in describe(verification, recording):
             print(line)
         code = 0 if verification.identical else 1
@@ -285,7 +325,11 @@ def run(args: argparse.Namespace) -> int:
 
         if final is None or final.get("q_final") is None:
             fail("--picture: no final hand configuration in the recording (the end agent never acted)")
-        draw_result(final, args.picture)
+        try:
+            hand = resolve_hand(recording.hand)
+        except RecordFileError as exc:
+            fail(f"FILE: {args.file}: {exc}")
+        draw_result(final, args.picture, hand=hand)
         print(f"picture: {args.picture}")
     return code
 

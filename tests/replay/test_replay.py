@@ -25,7 +25,7 @@ def recorded(tmp_path_factory):
 
 def test_record_file_layout(recorded):
     header, *cycles, footer = [json.loads(line) for line in recorded.read_text().splitlines()]
-    assert header == {"eos_record": "header", "schema": 1, "request": header["request"]}
+    assert header == {"eos_record": "header", "schema": 1, "request": header["request"], "hand": "hand3x3"}
     assert header["request"]["seed"] == 3 and header["request"]["friction"] == 0.5
     assert [c["seq"] for c in cycles] == list(range(1, len(cycles) + 1))
     assert all("eos_record" not in c for c in cycles)
@@ -126,3 +126,16 @@ def test_plan_picture(tmp_path, capsys):
     assert main(["plan", "--quiet", "--picture", str(png)]) == 0
     data = png.read_bytes()
     assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 20_000
+
+
+def test_unknown_hand_in_a_recording(recorded, tmp_path, capsys):
+    lines = recorded.read_text().splitlines()
+    header = json.loads(lines[0])
+    header["hand"] = "octopus"
+    lines[0] = json.dumps(header)
+    bad = tmp_path / "hand.jsonl"
+    bad.write_text("\n".join(lines) + "\n")
+    assert read_recording(bad).hand == "octopus"
+    with pytest.raises(SystemExit) as exc:
+        main(["replay", "--quiet", str(bad)])
+    assert exc.value.code == 2 and "unknown hand 'octopus'" in capsys.readouterr().err
