@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack
 
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
 from .hand import HandModel, HandState, KinematicsError
@@ -214,7 +215,10 @@ def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
     X = np.column_stack([np.ones_like(theta), theta, theta * theta])
-    coef, *_ = np.linalg.lstsq(X, c, rcond=None)
+    # LAPACK's QR least squares directly (np.linalg.lstsq's SVD and wrapper cost ~3x more)
+    _, coef, info = lapack.dgels(X, c)
+    if info != 0:
+        coef, *_ = np.linalg.lstsq(X, c, rcond=None)
     out: np.ndarray = coef[1]
     return out
 
@@ -272,13 +276,8 @@ def run_ep1(
     half = steps_per_direction // 2
     full = 2 * half
     legs = ((1.0, half, 0), (-1.0, full, 1), (1.0, half, 0))  # (sign, steps, reading set)
-    n_dir = 2 * full
     est = estimator if estimator is not None else CurvatureEstimator()
     samples: list[CurvatureSample] = []
-    # per direction, one row per step: tactile point, tip rotation, in contact; slip and gap
-    P_all = np.empty((n_dir, 3))
-    R_all = np.empty((n_dir, 3, 3))
-    inc = np.zeros(n_dir, dtype=bool)
     slips: list[float] = []
     gaps: list[float] = [abs(ct0.distance)]
     sets = np.concatenate([np.full(n, k) for _, n, k in legs])  # 0: outward half-legs, 1: sweep
@@ -289,7 +288,9 @@ def run_ep1(
         a_xy = np.array([math.cos(phi), math.sin(phi)])
         axis = F[:, :2] @ a_xy
         a_tip = R0.T @ axis
-        i = 0
+        # per step of this direction: tactile point and tip rotation (None out of contact)
+        pts: list[np.ndarray | None] = []
+        rots: list[np.ndarray | None] = []
         for sign, n_steps, _ in legs:
             # the axis stays the one tangent at the start (fixed for the whole direction);
             # one roller for the whole run, re-targeted for every leg
@@ -304,19 +305,22 @@ def run_ep1(
                 rd = st.reading
                 assert rd is not None
                 if rd.in_contact:
-                    inc[i] = True
-                    P_all[i] = rd.point_tip
-                    R_all[i] = R_view
+                    pts.append(rd.point_tip)
+                    rots.append(R_view.copy())
                 else:
-                    inc[i] = False
+                    pts.append(None)
+                    rots.append(None)
                 slips.append(st.slip_speed)
                 gaps.append(abs(st.contact.distance))
-                i += 1
             steps += n_steps
+        inc = np.array([p is not None for p in pts])
+        P_all = np.array([p for p in pts if p is not None]).reshape(-1, 3)
+        R_all = np.array([R for R in rots if R is not None]).reshape(-1, 3, 3)
+        set_in = sets[inc]
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
         for k in (0, 1):
-            sel = inc & (sets == k)
+            sel = set_in == k
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")

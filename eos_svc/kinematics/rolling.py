@@ -117,10 +117,15 @@ def _fast_step(
 
 def _unit(name: str, v: object) -> np.ndarray:
     a = np.asarray(v, dtype=float).reshape(-1)
-    if a.shape != (3,) or not np.all(np.isfinite(a)) or np.linalg.norm(a) < 1e-12:
-        raise KinematicsError(name, f"must be a finite non-zero 3-vector, got {v!r}")
-    out: np.ndarray = a / np.linalg.norm(a)
-    return out
+    if a.shape == (3,):
+        x, y, z = a.tolist()
+        na = math.sqrt(x * x + y * y + z * z)
+        if math.isfinite(na) and na >= 1e-12:
+            return np.array((x / na, y / na, z / na))
+        if np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:  # huge entries: x * x overflowed
+            out: np.ndarray = a / np.linalg.norm(a)
+            return out
+    raise KinematicsError(name, f"must be a finite non-zero 3-vector, got {v!r}")
 
 
 _OSQP_CACHE = threading.local()
@@ -370,14 +375,17 @@ class RollingQP:
         self._tf_obj.setTransform(np.asarray(M.rotation), np.asarray(M.translation))
         # Axis: tangent at the current contact.
         self.kinematics_only()
-        c0 = self.contact()
-        a = _unit("axis", axis)
-        n = c0.normal
+        self.contact()
+        n0, n1, n2 = self._n
+        # _unit, then the projection, in scalars (numpy on 3-vectors costs µs per call)
+        a0, a1, a2 = _unit("axis", axis).tolist()
         if project_axis:
-            a = a - (a @ n) * n
-        if np.linalg.norm(a) < 1e-6 or abs(a @ n) > 0.5 * np.linalg.norm(a):
+            d = a0 * n0 + a1 * n1 + a2 * n2
+            a0, a1, a2 = a0 - d * n0, a1 - d * n1, a2 - d * n2
+        na = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        if na < 1e-6 or abs(a0 * n0 + a1 * n1 + a2 * n2) > 0.5 * na:
             raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
-        self.axis = a / np.linalg.norm(a)
+        self.axis = np.array((a0 / na, a1 / na, a2 / na))
         self._wa = self.omega * self.axis
         self._b[:3] = 0.0  # the no-slip targets of a first step (no second-order term yet)
         self._b[3:] = self._wa
