@@ -1,96 +1,133 @@
-"""Per-step time of EP1's rolling step: OSQP as used, every other backend, naive solve_qp.
+"""Per-step time of EP1's rolling step and the time of one EP1 run, with every backend side by
+side and, with ``--baseline REV``, the code of an earlier git revision measured in the same run.
 
 One step = kinematics (Pinocchio), contact (coal), tactile reading, QP, integration.
-Run: ``.venv/bin/python benchmarks/bench_rolling.py`` (``--steps N`` for more samples).
+Run: ``.venv/bin/python benchmarks/bench_rolling.py [--baseline 9a82297] [--steps N]``.
 
-Rows: ``osqp (as used)`` — one OSQP object per roll, updated and warm-started, eps 1e-9;
-each other installed qpsolvers backend through ``qpsolvers.solve_problem`` on the same live
-Problem; ``solve_qp osqp (naive)`` — ``qpsolvers.solve_qp(..., solver="osqp")`` every step
-(OSQP set up from scratch, default tolerances). Also the breakdown of the OSQP step.
+Rows: ``as used`` — the default: the closed-form solve when the bounds are inactive, OSQP (set
+up once per thread, updated and warm-started) otherwise; ``osqp only`` — ``direct=False``,
+every step through OSQP; each other installed qpsolvers backend through
+``qpsolvers.solve_problem`` on the same live Problem (``direct=False``); ``solve_qp osqp
+(naive)`` — ``qpsolvers.solve_qp(..., solver="osqp")`` every step (OSQP set up from scratch,
+default tolerances); ``baseline REV`` — the default of that revision. Rows are timed in
+interleaved rounds (the machine is shared; drift hits every row alike). Then one EP1 run as the
+planner calls it (omega 2 rad/s, dt 10 ms, 16 steps per direction, directions 0° and 90°: 64
+steps), and the breakdown of the default step.
 """
 
 from __future__ import annotations
 
 import argparse
+import inspect
 import statistics
 import sys
 import time
+import timeit
 from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
+from typing import Any
 
 import numpy as np
 import qpsolvers
 
-from eos_svc.kinematics import TactileSensor
-from eos_svc.kinematics.ep1 import contact_frame, ep1_scene, place_hand_for_ep1
-from eos_svc.kinematics.rolling import RollingQP, RollingQPError
+import eos_svc.kinematics as kin_now
+import eos_svc.kinematics.ep1
+import eos_svc.kinematics.rolling  # noqa: F401  (kin_now.rolling)
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _baseline import load_kinematics
+
+EP1_KW: dict[str, Any] = {"omega": 2.0, "dt": 0.01, "steps_per_direction": 16, "directions": (0.0, 90.0)}
 
 
-def _naive_solve(rq: RollingQP) -> Callable[[], tuple[np.ndarray, int]]:
+def _naive_solve(rq: Any, kin: ModuleType) -> Callable[[], tuple[np.ndarray, int]]:
     def solve() -> tuple[np.ndarray, int]:
         p = rq.problem
         x = qpsolvers.solve_qp(p.P, p.q, None, None, p.A, p.b, p.lb, p.ub, solver="osqp")
         if x is None:
-            raise RollingQPError("no solution", rq.problem_copy(), "osqp (naive)", "None")
+            raise kin.rolling.RollingQPError("no solution", rq.problem_copy(), "osqp (naive)", "None")
         return x, 0
 
     return solve
 
 
-def time_steps(solver: str, n_steps: int, leg: int = 50, naive: bool = False) -> tuple[list[float], float]:
-    """Per-step wall times (s) over back-and-forth rolls, and the largest no-slip residual."""
-    sc = ep1_scene("sphere", 0.04)
-    st = sc.hand.state(place_hand_for_ep1(sc, "finger1"))
-    F = contact_frame(sc.contact(st, "finger1").normal)
-    sensor = TactileSensor(2e-4, rng=0)
-    times: list[float] = []
-    worst = 0.0
-    sign = 1.0
-    pc = time.perf_counter
-    while len(times) < n_steps:
-        rq = RollingQP(
-            st,
-            "finger1",
-            F[:, 0],
-            sign * 0.5,
-            0.01,
-            "osqp" if naive else solver,
-            scene=sc,
-            tactile=sensor,
-            project_axis=False,
-        )
-        if naive:
-            rq._solve_osqp = _naive_solve(rq)  # type: ignore[method-assign]
-        for _ in range(leg):
+class Stepper:
+    """Back-and-forth rolls of finger1 on a 4 cm sphere; ``run(n)`` times ``n`` more steps."""
+
+    def __init__(self, kin: ModuleType, solver: str = "osqp", naive: bool = False, direct: bool | None = None,
+                 leg: int = 50) -> None:
+        self.kin, self.solver, self.naive, self.leg = kin, solver, naive, leg
+        params = inspect.signature(kin.rolling.RollingQP).parameters
+        self.kw: dict[str, Any] = {} if direct is None or "direct" not in params else {"direct": direct}
+        self.sc = kin.ep1.ep1_scene("sphere", 0.04)
+        self.st = self.sc.hand.state(kin.ep1.place_hand_for_ep1(self.sc, "finger1"))
+        self.F = kin.ep1.contact_frame(self.sc.contact(self.st, "finger1").normal)
+        self.sensor = kin.TactileSensor(2e-4, rng=0)
+        self.sign = 1.0
+        self.k = leg
+        self.rq: Any = None
+        self.worst = 0.0
+
+    def _new_leg(self) -> None:
+        if self.rq is not None:
+            self.st.update(self.rq.q)
+        self.rq = self.kin.rolling.RollingQP(
+            self.st, "finger1", self.F[:, 0], self.sign * 0.5, 0.01, "osqp" if self.naive else self.solver,
+            scene=self.sc, tactile=self.sensor, project_axis=False, **self.kw,
+        )  # fmt: skip
+        if self.naive:
+            self.rq._solve_osqp = _naive_solve(self.rq, self.kin)
+        self.sign = -self.sign
+        self.k = 0
+        for _ in range(self.leg // 5):  # not timed: the first steps of a roll (set-up)
+            self.worst = max(self.worst, self.rq.step().slip_speed)
+            self.k += 1
+
+    def run(self, n: int) -> list[float]:
+        times = []
+        pc = time.perf_counter
+        for _ in range(n):
+            if self.k >= self.leg:
+                self._new_leg()
+            step = self.rq.step
             t0 = pc()
-            s = rq.step()
+            s = step()
             times.append(pc() - t0)
-            worst = max(worst, s.slip_speed)
-        st.update(rq.q)
-        sign = -sign
-    return times[leg // 5 :], worst  # drop the first steps (setup of the first roll)
+            self.k += 1
+            self.worst = max(self.worst, s.slip_speed)
+        return times
+
+
+def ep1_runner(kin: ModuleType) -> Callable[[], Any]:
+    sc = kin.ep1.ep1_scene("sphere", 0.04)
+    q0 = kin.ep1.place_hand_for_ep1(sc, "finger1")
+    st = sc.hand.state(q0)
+    sensor = kin.TactileSensor(2e-4, rng=0)
+
+    def run() -> Any:
+        st.update(q0)
+        return kin.ep1.run_ep1(sc, st, "finger1", sensor, **EP1_KW)
+
+    return run
 
 
 def breakdown(n: int = 2000) -> dict[str, float]:
-    """Median µs of each part of the OSQP step."""
-    sc = ep1_scene("sphere", 0.04)
-    st = sc.hand.state(place_hand_for_ep1(sc, "finger1"))
-    F = contact_frame(sc.contact(st, "finger1").normal)
-    parts: dict[str, list[float]] = {k: [] for k in ("kinematics", "contact", "tactile", "build", "osqp")}
+    """Median µs of each part of the default step (current code)."""
+    RollingQP = kin_now.rolling.RollingQP
+    sc = kin_now.ep1.ep1_scene("sphere", 0.04)
+    st = sc.hand.state(kin_now.ep1.place_hand_for_ep1(sc, "finger1"))
+    F = kin_now.ep1.contact_frame(sc.contact(st, "finger1").normal)
+    names = ("kinematics", "contact", "tactile", "build", "solve (direct)", "whole step")
+    parts: dict[str, list[float]] = {k: [] for k in names}
     pc = time.perf_counter
+    rq = RollingQP(st, "finger1", F[:, 0], 0.5, 0.01, scene=sc, tactile=kin_now.TactileSensor(2e-4, rng=0),
+                   project_axis=False)  # fmt: skip
     sign = 1.0
-    done = 0
-    while done < n:
-        rq = RollingQP(
-            st,
-            "finger1",
-            F[:, 0],
-            sign * 0.5,
-            0.01,
-            scene=sc,
-            tactile=TactileSensor(2e-4, rng=0),
-            project_axis=False,
-        )
-        for _ in range(50):
+    while len(parts["whole step"]) < n:
+        rq.retarget(F[:, 0], sign * 0.5, project_axis=False)
+        rq.step()
+        for _ in range(49):
             t0 = pc()
             rq.kinematics()
             t1 = pc()
@@ -100,19 +137,12 @@ def breakdown(n: int = 2000) -> dict[str, float]:
             t3 = pc()
             rq._build(c)
             t4 = pc()
-            rq._solve_osqp()
+            rq._solve_direct()
             t5 = pc()
-            rq.step()  # advance (not timed here)
-            for k, a, b in (
-                ("kinematics", t0, t1),
-                ("contact", t1, t2),
-                ("tactile", t2, t3),
-                ("build", t3, t4),
-                ("osqp", t4, t5),
-            ):
+            rq.step()  # advances (its own draw of the sensor noise)
+            t6 = pc()
+            for k, a, b in zip(names, (t0, t1, t2, t3, t4, t5), (t1, t2, t3, t4, t5, t6), strict=True):
                 parts[k].append(b - a)
-        done += 50
-        st.update(rq.q)
         sign = -sign
     return {k: 1e6 * statistics.median(v) for k, v in parts.items()}
 
@@ -120,31 +150,61 @@ def breakdown(n: int = 2000) -> dict[str, float]:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--steps", type=int, default=2000, help="timed steps per row")
+    p.add_argument("--runs", type=int, default=31, help="timed EP1 runs per row")
+    p.add_argument("--baseline", default=None, help="git revision to time beside the current code")
     a = p.parse_args(argv)
-    rows: list[tuple[str, float, float, float]] = []
-    for name, solver, naive, n in [
-        ("osqp (as used)", "osqp", False, a.steps),
-        *[(f"{s} (solve_problem)", s, False, a.steps) for s in qpsolvers.available_solvers if s != "osqp"],
-        ("solve_qp osqp (naive)", "osqp", True, max(200, a.steps // 10)),
-    ]:
-        ts, worst = time_steps(solver, n, naive=naive)
-        rows.append((name, 1e6 * statistics.median(ts), 1e6 * float(np.percentile(ts, 90)), worst))
-    base = rows[0][1]
+    base = load_kinematics(a.baseline) if a.baseline else None
+    rows: list[tuple[str, Stepper, int]] = [
+        ("as used (direct, else osqp)", Stepper(kin_now), a.steps),
+        ("osqp only (direct=False)", Stepper(kin_now, direct=False), a.steps),
+        *[
+            (f"{s} (solve_problem)", Stepper(kin_now, s, direct=False), a.steps)
+            for s in qpsolvers.available_solvers
+            if s != "osqp"
+        ],
+        ("solve_qp osqp (naive)", Stepper(kin_now, naive=True, direct=False), max(200, a.steps // 10)),
+    ]
+    if base is not None:
+        rows.insert(1, (f"baseline {a.baseline} (as used then)", Stepper(base), a.steps))
+    times: dict[str, list[float]] = {name: [] for name, _, _ in rows}
+    rounds = 20
+    for _ in range(rounds):  # interleaved
+        for name, stepper, n in rows:
+            times[name] += stepper.run(max(1, n // rounds))
+    med0 = 1e6 * statistics.median(times[rows[0][0]])
     print("EP1 rolling step (kinematics + contact + tactile + QP + integration), sphere R = 4 cm")
-    print(f"{'backend':<26}{'median µs':>11}{'p90 µs':>10}{'ratio':>8}{'max no-slip residual m/s':>27}")
-    for name, med, p90, worst in rows:
-        print(f"{name:<26}{med:>11.1f}{p90:>10.1f}{med / base:>8.2f}{worst:>27.1e}")
-    print("\nbreakdown of the osqp step (median µs):")
-    for k, v in breakdown(min(a.steps, 2000)).items():
-        print(f"  {k:<12}{v:8.1f}")
-    # machine calibration against DESIGN §7 (np.cross on 3-vectors ≈ 16 µs there)
-    import timeit
+    print(f"{'row':<36}{'median µs':>11}{'p90 µs':>10}{'ratio':>8}{'max no-slip residual m/s':>27}")
+    for name, stepper, _ in rows:
+        ts = times[name]
+        med = 1e6 * statistics.median(ts)
+        p90 = 1e6 * float(np.percentile(ts, 90))
+        print(f"{name:<36}{med:>11.1f}{p90:>10.1f}{med / med0:>8.2f}{stepper.worst:>27.1e}")
 
+    runners = [("current", ep1_runner(kin_now))]
+    if base is not None:
+        runners.append((f"baseline {a.baseline}", ep1_runner(base)))
+    ep1_ms: dict[str, list[float]] = {name: [] for name, _ in runners}
+    for _, f in runners:
+        f()  # warm up (thread caches, imports)
+    for _ in range(a.runs):
+        for name, f in runners:
+            t0 = time.perf_counter()
+            f()
+            ep1_ms[name].append(1e3 * (time.perf_counter() - t0))
+    print(f"\nEP1 run as the planner calls it ({EP1_KW}), median of {a.runs} runs:")
+    cur = statistics.median(ep1_ms["current"])
+    for name, _ in runners:
+        med = statistics.median(ep1_ms[name])
+        print(f"  {name:<28}{med:8.2f} ms   ratio {med / cur:5.2f}")
+
+    print("\nbreakdown of the default step (median µs):")
+    for k, v in breakdown(min(a.steps, 2000)).items():
+        print(f"  {k:<16}{v:8.1f}")
+    # machine calibration against DESIGN §7 (np.cross on 3-vectors ≈ 16 µs there)
     x, y = np.ones(3), np.ones(3)
     cross = min(timeit.repeat(lambda: np.cross(x, y), number=2000, repeat=5)) / 2000 * 1e6
-    scale = 16.0 / cross
     print(f"\ncalibration: np.cross on 3-vectors {cross:.1f} µs here vs ≈16 µs on the DESIGN §7 machine")
-    print(f"osqp step scaled to that machine ≈ {rows[0][1] * scale:.0f} µs (goal: <= 60 µs median)")
+    print(f"default step scaled to that machine ≈ {med0 * 16.0 / cross:.0f} µs (goal: <= 60 µs median)")
     return 0
 
 
