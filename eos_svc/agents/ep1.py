@@ -4,12 +4,14 @@ Each action rolls one fingertip on the object without sliding, along two
 tangent directions (``eos_svc.kinematics.ep1.run_ep1``), and adds the samples to
 that side's curvature estimator, so repeated EP1 runs sharpen one estimate.
 
-Where it touches: the object is explored from **above** by the upper finger
-(finger1) — the hand lowers it onto the object's top, at the point found by
+Where it touches: the object is explored from **above** by an upper finger
+(finger1 for hand3x3; :class:`~eos_svc.agents.world.ProbeChoice` picks it for
+any hand) — the hand lowers it onto the object's top, at the point found by
 moving 1 cm inside the surface point nearest the hand (proximity) and straight
 up — and, when post_shape asks for it (to size the object), from **below** by
-the opposing finger. The other fingers are opened while exploring so
-they stay clear of the object. The sensed contact point and normal of each side
+the opposing finger. The probing finger is set to its probe angle (straight,
+0, for hand3x3); the other fingers are opened while exploring so they stay
+clear of the object. The sensed contact point and normal of each side
 go on the board (``keys.EP1_CONTACT``).
 
 Opportunistic sub-rating: after post_shape has pondered a new estimate and is
@@ -61,10 +63,7 @@ class EP1Agent(GraspAgent):
         return max(RATING_FLOOR, min(1.0, rating))
 
     def _finger_for(self, side: str) -> str:
-        hand = self.world.hand
-        if side == "bottom":
-            return hand.description.opposing_finger
-        return next(f for f in hand.finger_names if f != hand.description.opposing_finger)
+        return self.world.probe.finger(side)
 
     def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
         """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
@@ -78,7 +77,7 @@ class EP1Agent(GraspAgent):
         q[hand.wrist_q_index[3:6]] = 0.0
         for other in hand.finger_names:
             idx = hand.finger_q_index(other)
-            q[idx] = 0.0 if other == finger else hand.lower[idx]
+            q[idx] = world.probe.angles[finger] if other == finger else hand.lower[idx]
         sign = 1.0 if side == "top" else -1.0
         # Proximity: the object's surface point nearest the grasp centre, 1 cm inside it,
         # then straight up (down) — the closest surface point from there is on the top (bottom).

@@ -1,5 +1,8 @@
 """finger1, finger2, finger3: search moves, then close their finger in the grasping stage.
 
+One agent per finger of the hand, named after it (hand3x3: finger1, finger2, finger3; the
+Allegro: index, middle, ring, thumb).
+
 Grasping (paper §2.1, §5): a finger agent closes its finger by a small amount
 (every joint by ``WorldParameters.finger_step``), stopping at first touch. Its
 opportunistic sub-rating is d/h (estimated object diameter over hand height)

@@ -18,6 +18,11 @@ grasp_points   information               0.6
 end            grasping                  0.2
 =============  ========================  =======
 
+Another hand (``plan(request, hand=allegro_hand())``) brings its own finger agents, one per
+finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
+extra finger (:func:`finger_ratings`); its world parameters are derived from it
+(:meth:`WorldParameters.for_hand`).
+
 The same request with the same seed gives the same cycles and result.
 """
 
@@ -67,7 +72,8 @@ from eos_svc.records import CycleRecord
 
 CycleCallback = Callable[[CycleRecord], None]
 
-#: default sub-ratings P(A|B_d), fixed at creation (see the module docstring)
+#: default sub-ratings P(A|B_d), fixed at creation (see the module docstring); a hand with
+#: other finger names rates its fingers by position (:func:`finger_ratings`)
 DEFAULT_RATINGS: dict[str, float] = {
     "finger1": 0.8,
     "finger2": 0.7,
@@ -80,20 +86,47 @@ DEFAULT_RATINGS: dict[str, float] = {
 }
 
 
+#: default sub-ratings of the finger agents by their position in the hand's finger list;
+#: fingers beyond these get 0.1 less each, never below FINGER_RATING_FLOOR
+FINGER_RATINGS: tuple[float, ...] = (0.8, 0.7, 0.6)
+#: lowest default sub-rating of a finger agent (above end's 0.2: end comes last)
+FINGER_RATING_FLOOR = 0.3
+
+
+def finger_ratings(finger_names: tuple[str, ...] | list[str]) -> dict[str, float]:
+    """Default sub-ratings of the finger agents: 0.8, 0.7, 0.6 in the hand's finger order
+    (finger1, finger2, finger3 for hand3x3), then 0.1 less per extra finger (floor 0.3)."""
+    out = {}
+    for i, name in enumerate(finger_names):
+        rating = FINGER_RATINGS[i] if i < len(FINGER_RATINGS) else FINGER_RATINGS[-1] - 0.1 * (i - 2)
+        out[name] = round(max(FINGER_RATING_FLOOR, rating), 6)
+    return out
+
+
 @functools.lru_cache(maxsize=4)
 def default_hand(urdf: str = str(HAND3X3_URDF)) -> HandModel:
     """The hand3x3 model, loaded once per process."""
     return load_hand(Path(urdf))
 
 
-_SWEEPS: dict[int, dict[str, FingerSweep]] = {}
+#: per hand (by id, with the hand kept so the id cannot be reused): its sweeps and parameters
+_PER_HAND: dict[int, tuple[HandModel, dict[str, FingerSweep], WorldParameters]] = {}
+
+
+def _derived(hand: HandModel) -> tuple[HandModel, dict[str, FingerSweep], WorldParameters]:
+    entry = _PER_HAND.get(id(hand))
+    if entry is None or entry[0] is not hand:
+        entry = _PER_HAND[id(hand)] = (hand, build_sweeps(hand), WorldParameters.for_hand(hand))
+    return entry
 
 
 def _sweeps(hand: HandModel) -> dict[str, FingerSweep]:
-    key = id(hand)
-    if key not in _SWEEPS:
-        _SWEEPS[key] = build_sweeps(hand)
-    return _SWEEPS[key]
+    return _derived(hand)[1]
+
+
+def parameters_for(hand: HandModel) -> WorldParameters:
+    """``WorldParameters.for_hand(hand)``, derived once per hand."""
+    return _derived(hand)[2]
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:
@@ -120,7 +153,7 @@ def build_world(
         ValidationError: the object is outside the search workspace or overlaps the hand.
     """
     hand = hand or default_hand()
-    params = params or WorldParameters()
+    params = params or parameters_for(hand)
     obj = make_object(request.obj)
     search_seed, sensor_seed = np.random.SeedSequence(request.seed).spawn(2)
     state = hand.state(hand.neutral())
@@ -158,13 +191,15 @@ def build_agents(
     memory: GraspMemory | None = None,
 ) -> list[Agent]:
     """The eight agents in list order (ties go to the first); with a grasp memory, ``recall``
-    joins them just before ``end`` (learned sub-rating, paper §7)."""
-    r = {**DEFAULT_RATINGS, **(ratings or {})}
+    joins them just before ``end`` (learned sub-rating, paper §7).
+
+    One finger agent per finger of the world's hand, in the hand's order, named after the
+    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents)."""
+    fingers = world.hand.finger_names
+    r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
     return [
-        FingerAgent("finger1", r["finger1"], world),
-        FingerAgent("finger2", r["finger2"], world),
-        FingerAgent("finger3", r["finger3"], world),
+        *(FingerAgent(finger, r[finger], world) for finger in fingers),
         WristAgent(r["wrist"], world),
         EP1Agent(r["ep1"], world, solver=solver),
         PostShapeAgent(r["post_shape"], world),
@@ -190,8 +225,10 @@ def plan(
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: ``urdf/hand3x3.urdf``, cached).
-        params: world constants (default: :class:`WorldParameters`).
+        hand: the hand model (default: ``urdf/hand3x3.urdf``, cached), e.g.
+            :func:`eos_svc.kinematics.allegro_hand`.
+        params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
+            for hand3x3, hand-dependent fields derived for another hand).
         keep_trace: keep every cycle record in the result.
         memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
             plan reaches grasping, records how it went (give the request a learned weight

@@ -6,9 +6,14 @@ agents make: a random search step of the hand, a wrist step toward a target, a
 finger closing step that stops at first touch. Agents keep what they *know* on
 the board; the world is what they act on.
 
-Conventions (hand3x3): world z up, the hand approaches along +x, the wrist keeps
-its rotation at zero outside EP1, so the palm frame is the world frame shifted
-by the wrist's translation. SI units.
+Conventions (hand3x3 and every hand the planner takes): world z up, the hand
+approaches along +x, the wrist keeps its rotation at zero outside EP1, so the
+palm frame is the world frame shifted by the wrist's translation; the palm
+frame's z axis is the closing direction (the opposing finger below, the others
+above). SI units. What depends on the hand is derived from it:
+:meth:`WorldParameters.for_hand` (grasp centre, search box, hand bound),
+:func:`build_sweeps` (closing paths), :attr:`GraspWorld.probe` (which finger
+explores the object's top and bottom, and at which angle).
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from dataclasses import dataclass, field
 import coal
 import numpy as np
 
-from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
+from eos_svc.kinematics import HandDescription, HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 
 
@@ -68,6 +73,71 @@ class WorldParameters:
     confidence_threshold: float = 0.6
     hand_bound: float = 0.2
 
+    @classmethod
+    def for_hand(cls, hand: HandModel, **overrides: object) -> WorldParameters:
+        """Parameters for ``hand``: the defaults (tuned for hand3x3) for hand3x3 itself; for
+        another hand the hand-dependent fields are derived from its model (see
+        :func:`derive_hand_fields`). ``overrides`` replace any field afterwards."""
+        if is_hand3x3(hand):
+            return cls(**overrides)  # type: ignore[arg-type]
+        return cls(**{**derive_hand_fields(hand), **overrides})  # type: ignore[arg-type]
+
+
+def is_hand3x3(hand: HandModel) -> bool:
+    """Whether ``hand`` is described as hand3x3 (the hand the defaults are tuned for)."""
+    radius = hand.tip_radius(hand.finger_names[0])
+    return hand.description == HandDescription.hand3x3(radius)
+
+
+def derive_hand_fields(hand: HandModel, sweeps: dict[str, FingerSweep] | None = None) -> dict[str, object]:
+    """The hand-dependent :class:`WorldParameters` fields, from the hand's model.
+
+    - ``grasp_centre``: on the hand axis (the palm frame's x axis), at the mean x of the
+      points where each finger's closing path comes nearest that axis;
+    - ``search_box_lo``/``hi``: hand3x3's wrist box shifted so the grasp centre sweeps the
+      same region of the world (an object findable by hand3x3 is findable by this hand);
+    - ``hand_bound``: the largest distance from the grasp centre to any point of any
+      collision geometry over every finger's closing path, plus 1 cm.
+    """
+    sweeps = sweeps if sweeps is not None else build_sweeps(hand)
+    xs = []
+    for sweep in sweeps.values():
+        off_axis = np.hypot(sweep.points[:, 1], sweep.points[:, 2])
+        xs.append(float(sweep.points[int(np.argmin(off_axis)), 0]))
+    centre = np.array([round(float(np.mean(xs)), 4), 0.0, 0.0])
+    base = WorldParameters()
+    shift = centre - np.asarray(base.grasp_centre)
+    lo = np.round(np.asarray(base.search_box_lo) - shift, 4)
+    hi = np.round(np.asarray(base.search_box_hi) - shift, 4)
+    return {
+        "grasp_centre": tuple(centre.tolist()),
+        "search_box_lo": tuple(lo.tolist()),
+        "search_box_hi": tuple(hi.tolist()),
+        "hand_bound": round(_hand_reach(hand, sweeps, centre) + 0.01, 3),
+    }
+
+
+def _hand_reach(hand: HandModel, sweeps: dict[str, FingerSweep], centre_palm: np.ndarray) -> float:
+    """Largest distance from ``centre_palm`` to any collision geometry's bounding sphere over
+    the fingers' closing paths (every finger at the same fraction of its range), wrist at 0."""
+    state = hand.state(hand.neutral())
+    palm = state.palm_placement()
+    geometries = hand.collision_model.geometryObjects
+    radii = []
+    for g in geometries:
+        g.geometry.computeLocalAABB()
+        radii.append(float(g.geometry.aabb_radius) + float(np.linalg.norm(g.geometry.aabb_center)))
+    reach = 0.0
+    for fraction in np.linspace(0.0, 1.0, 21):
+        q = hand.neutral()
+        for finger, sweep in sweeps.items():
+            q[hand.finger_q_index(finger)] = sweep.angles[0] + fraction * (sweep.angles[-1] - sweep.angles[0])
+        state.update(q)
+        for gid, radius in enumerate(radii):
+            p = palm.actInv(state.geometry_data.oMg[gid].translation)
+            reach = max(reach, float(np.linalg.norm(p - centre_palm)) + radius)
+    return reach
+
 
 @dataclass
 class FingerSweep:
@@ -94,6 +164,57 @@ class FingerSweep:
         return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
 
 
+@dataclass(frozen=True)
+class ProbeChoice:
+    """Which finger EP1 rolls on the object's top and on its bottom, and at which angle.
+
+    Attributes:
+        top: the non-opposing finger whose closing path runs nearest the palm's x–z plane
+            (the first listed on a tie: finger1 for hand3x3, the middle finger for the Allegro).
+        bottom: the opposing finger.
+        angles: per probing finger, the joint angle it is set to while exploring: the angle of
+            its closing path's most forward point (the fingertip moves along ±z there; 0 for
+            hand3x3's straight fingers).
+    """
+
+    top: str
+    bottom: str
+    angles: dict[str, float]
+
+    @classmethod
+    def for_hand(cls, hand: HandModel, sweeps: dict[str, FingerSweep]) -> ProbeChoice:
+        """The choice for ``hand`` from its closing paths."""
+        opposing = hand.description.opposing_finger
+        upper = [f for f in hand.finger_names if f != opposing]
+        side = {f: float(np.min(np.abs(sweeps[f].points[:, 1]))) for f in upper}
+        nearest = min(side.values())
+        top = next(f for f in upper if side[f] <= nearest + 1e-9)
+        angles = {}
+        for finger in (top, opposing):
+            sweep = sweeps[finger]
+            k = int(np.argmax(sweep.points[:, 0]))
+            angles[finger] = round(float(sweep.angles[k]), 6) + 0.0  # + 0.0: never -0.0
+        return cls(top=top, bottom=opposing, angles=angles)
+
+    def finger(self, side: str) -> str:
+        """The finger that explores ``side`` ("top" or "bottom")."""
+        return self.bottom if side == "bottom" else self.top
+
+
+def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
+    """Per finger, the collision geometries that move when it closes, except its tip:
+    those on the bodies its first listed joint carries."""
+    model = hand.model
+    geometries = hand.collision_model.geometryObjects
+    out: dict[str, list[int]] = {}
+    for finger in hand.finger_names:
+        first = model.getJointId(hand.description.finger(finger).joints[0])
+        moving = set(model.subtrees[first])
+        tip = hand.tip_geometry_id(finger)
+        out[finger] = [i for i, g in enumerate(geometries) if g.parentJoint in moving and i != tip]
+    return out
+
+
 @dataclass
 class GraspWorld:
     """The hand, the object and the run's randomness; guarded motions for the agents."""
@@ -114,24 +235,17 @@ class GraspWorld:
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, float] = {}
-        geometries = self.hand.collision_model.geometryObjects
-        self._links: dict[str, list[int]] = {
-            finger: [
-                i
-                for i, g in enumerate(geometries)
-                if g.name.startswith(f"{finger}_") and i != self.hand.tip_geometry_id(finger)
-            ]
-            for finger in self.hand.finger_names
-        }
+        self._links = finger_link_geometries(self.hand)
+        self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
         # Fast distance queries (coal directly, reused request/result): the agents' hot path
         # needs only the signed distance, not witness points.
-        self._geometries = [g.geometry for g in geometries]
+        self._geometries = [g.geometry for g in self.hand.collision_model.geometryObjects]
         self._req = self.scene._req
         self._res = coal.DistanceResult()
         self._obj_geometry = self.scene.object.geometry
         self._obj_tf = self.scene._tf_obj
-        self._probe = coal.Sphere(1e-9)
-        self._probe_tf = coal.Transform3s()
+        self._point = coal.Sphere(1e-9)
+        self._point_tf = coal.Transform3s()
 
     # --- reading the world -------------------------------------------------------
     @property
@@ -345,10 +459,10 @@ class GraspWorld:
 
     def _point_gap(self, point: np.ndarray) -> float:
         """Signed distance from a world point to the object surface (m)."""
-        self._probe_tf.setTranslation(point)
+        self._point_tf.setTranslation(point)
         res = self._res
         res.clear()
-        coal.distance(self._obj_geometry, self._obj_tf, self._probe, self._probe_tf, self._req, res)
+        coal.distance(self._obj_geometry, self._obj_tf, self._point, self._point_tf, self._req, res)
         return float(res.min_distance)
 
 
