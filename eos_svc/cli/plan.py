@@ -6,6 +6,7 @@ eos plan --json                           # the result as JSON (no trace)
 eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
 eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
 eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
+eos plan --hand allegro                   # the Allegro hand of example-robot-data
 """
 
 from __future__ import annotations
@@ -17,6 +18,9 @@ from typing import IO, Any
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
 from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord
+
+#: hands ``--hand`` accepts
+HANDS = ("hand3x3", "allegro")
 
 #: request field -> command-line option, for error messages
 FIELD_OPTIONS = {
@@ -64,6 +68,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.5,
         metavar="MU",
         help="Coulomb friction μ at the fingertips, for the grasp quality (0.5)",
+    )
+    g.add_argument(
+        "--hand",
+        choices=HANDS,
+        default="hand3x3",
+        help="the hand: hand3x3 (urdf/hand3x3.urdf) or allegro (example-robot-data's) (hand3x3)",
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
@@ -157,8 +167,13 @@ def run(args: argparse.Namespace) -> int:
         if not args.json and not args.quiet:
             print(format_cycle(record), flush=True)
 
+    hand = None  # hand3x3, the planner's default
+    if getattr(args, "hand", "hand3x3") == "allegro":
+        from eos_svc.kinematics import allegro_hand
+
+        hand = allegro_hand()
     try:
-        result = plan(request, on_cycle=on_cycle)
+        result = plan(request, on_cycle=on_cycle, hand=hand)
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
@@ -172,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
         if result.q_final is None:
             fail("--picture: no final hand configuration (the end agent never judged the grasp)", code=1)
         try:
-            draw_result(result, args.picture)
+            draw_result(result, args.picture, hand=hand)
         except OSError as exc:
             fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
     if args.json:
