@@ -5,7 +5,10 @@ three fingers: the fingertip–object distance with witness points and the Jacob
 fingertip material point at the contact. Printed beside the bare Pinocchio and coal calls
 measured in the same run (the floor) and the ratio. Medians over repeated runs.
 
-    .venv/bin/python benchmarks/bench_kinematics.py [--repeat 31] [--number 2000]
+    .venv/bin/python benchmarks/bench_kinematics.py [--repeat 31] [--number 2000] [--baseline REV]
+
+``--baseline REV`` also times the same update with ``eos_svc.kinematics`` as it was at git
+revision ``REV``, in the same run, interleaved with the current code (the machine is shared).
 """
 
 from __future__ import annotations
@@ -14,14 +17,20 @@ import argparse
 import gc
 import platform
 import statistics
+import sys
 import time
 from collections.abc import Callable
+from pathlib import Path
+from types import ModuleType
 
 import coal
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.kinematics import Scene, Sphere, load_hand
+import eos_svc.kinematics as kin_now
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from _baseline import load_kinematics
 
 
 def median_us(fn: Callable[[], object], number: int, repeat: int) -> tuple[float, float]:
@@ -43,8 +52,9 @@ def median_us(fn: Callable[[], object], number: int, repeat: int) -> tuple[float
     return statistics.median(runs), min(runs)
 
 
-def main(number: int = 2000, repeat: int = 31) -> dict[str, float]:
-    hand = load_hand()
+def setup(kin: ModuleType) -> tuple[Callable[[], None], dict[str, object]]:
+    """The update of ``kin`` (a version of eos_svc.kinematics) and its objects."""
+    hand = kin.load_hand()
     fingers = hand.finger_names
     q = hand.neutral()
     q[hand.wrist_q_index[:3]] = [0.01, 0.0, 0.0]
@@ -58,8 +68,8 @@ def main(number: int = 2000, repeat: int = 31) -> dict[str, float]:
         c[0] + np.sqrt((R + r + 1e-3) ** 2 - c[1] ** 2 - c[2] ** 2)
         for c in (state.tip_position(f) for f in fingers)
     )
-    obj = Sphere(R, pin.SE3(np.eye(3), np.array([x0, 0.0, 0.0])))
-    scene = Scene(hand, obj)
+    obj = kin.Sphere(R, pin.SE3(np.eye(3), np.array([x0, 0.0, 0.0])))
+    scene = kin.Scene(hand, obj)
     gaps = [scene.contact(state, f).distance for f in fingers]
     assert all(0.0 < g < 5e-3 for g in gaps), gaps
 
@@ -68,6 +78,38 @@ def main(number: int = 2000, repeat: int = 31) -> dict[str, float]:
         for f in fingers:
             c = scene.contact(state, f)
             state.tip_point_jacobian(f, c.point_tip)
+
+    return ours, {"hand": hand, "q": q, "state": state, "scene": scene, "obj": obj}
+
+
+def interleaved_us(fns: dict[str, Callable[[], None]], number: int, repeat: int) -> dict[str, float]:
+    """Median µs per call of each function, timed in interleaved runs (drift hits all alike)."""
+    runs: dict[str, list[float]] = {k: [] for k in fns}
+    for fn in fns.values():
+        for _ in range(number // 10):
+            fn()
+    gc_was_enabled = gc.isenabled()
+    gc.disable()
+    try:
+        for _ in range(repeat):
+            for k, fn in fns.items():
+                t0 = time.perf_counter()
+                for _ in range(number):
+                    fn()
+                runs[k].append((time.perf_counter() - t0) / number * 1e6)
+    finally:
+        if gc_was_enabled:
+            gc.enable()
+    return {k: statistics.median(v) for k, v in runs.items()}
+
+
+def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> dict[str, float]:
+    ours, objs = setup(kin_now)
+    hand, q, state, scene, obj = (objs[k] for k in ("hand", "q", "state", "scene", "obj"))
+    assert isinstance(hand, kin_now.HandModel) and isinstance(q, np.ndarray)
+    assert isinstance(state, kin_now.HandState) and isinstance(scene, kin_now.Scene)
+    assert isinstance(obj, kin_now.Sphere)
+    fingers = hand.finger_names
 
     # The floor: the same library calls, no validation, no Python objects built.
     model, data = hand.model, hand.model.createData()
@@ -140,12 +182,21 @@ def main(number: int = 2000, repeat: int = 31) -> dict[str, float]:
     goal = 20.0
     med = rows[next(iter(rows))][0]
     print(f"ratio update / floor: {ratio:.2f}; goal ≤ {goal:.0f} µs: {'met' if med <= goal else 'NOT met'}")
-    return {"update_us": med, "ratio": ratio}
+    out = {"update_us": med, "ratio": ratio}
+    if baseline is not None:
+        old, _ = setup(load_kinematics(baseline))
+        both = interleaved_us({"current": ours, "baseline": old, "floor": floor}, number, repeat)
+        print(f"\nsame run, interleaved: update now {both['current']:.2f} µs, at {baseline} "
+              f"{both['baseline']:.2f} µs (ratio {both['baseline'] / both['current']:.2f}); "
+              f"floor {both['floor']:.2f} µs")
+        out["baseline_us"] = both["baseline"]
+    return out
 
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--number", type=int, default=2000, help="calls per run")
     ap.add_argument("--repeat", type=int, default=31, help="runs (the median is reported)")
+    ap.add_argument("--baseline", default=None, help="git revision to time beside the current code")
     a = ap.parse_args()
-    main(a.number, a.repeat)
+    main(a.number, a.repeat, a.baseline)
