@@ -30,6 +30,32 @@ def format_cycle(msg: dict[str, Any]) -> str:
     )
 
 
+def request_dict(args: argparse.Namespace) -> dict[str, Any]:
+    """The JSON plan request the ``eos client plan`` options describe."""
+    obj: dict[str, Any] = {"shape": args.shape}
+    if args.shape == "sphere" and args.radius is None:
+        obj["radius"] = 0.03
+    for name in ("radius", "radii", "length", "size", "position", "rpy"):
+        value = getattr(args, name)
+        if value is not None:
+            obj[name] = value
+    out: dict[str, Any] = {
+        "object": obj,
+        "weights": {
+            "default": args.w_default,
+            "opportunistic": args.w_opportunistic,
+            "learned": args.w_learned,
+        },
+        "seed": args.seed,
+        "tactile_noise": args.noise,
+        "max_cycles": args.max_cycles,
+        "deadline_s": args.deadline,
+    }
+    if args.friction is not None:
+        out["friction"] = args.friction
+    return out
+
+
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options and actions of ``eos client``."""
     sub = parser.add_subparsers(dest="action", metavar="ACTION")
@@ -56,6 +82,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
     g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    g.add_argument(
+        "--friction",
+        type=finite_float,
+        default=None,
+        metavar="MU",
+        help="Coulomb friction at the fingertips (the request's default when omitted)",
+    )
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
     g.add_argument(
@@ -79,7 +112,7 @@ def run(args: argparse.Namespace) -> int:
     request: Any = None
     if args.action == "plan":
         from eos_svc.agents.request import PlanRequest
-        from eos_svc.cli.plan import FIELD_OPTIONS, request_dict
+        from eos_svc.cli.plan import FIELD_OPTIONS
 
         try:
             if args.goal_id is not None:

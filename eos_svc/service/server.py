@@ -54,6 +54,14 @@ def default_planner() -> Planner:
     return plan
 
 
+def _encode(obj: Any) -> bytes:
+    """Strict JSON bytes; values JSON does not take (arrays, NaN, ...) go through ``to_jsonable``."""
+    try:
+        return proto.dumps(obj)
+    except (TypeError, ValueError):
+        return proto.dumps(to_jsonable(obj))
+
+
 @dataclass
 class _Job:
     query: zenoh.Query
@@ -357,21 +365,27 @@ class PlanService:
             with self._lock:
                 if result.get("status") == "cancelled":
                     self.stats.cancelled += 1
-            self._status(
-                goal_id,
-                proto.STATE_DONE,
-                status=result.get("status"),
-                cycles=result.get("cycles"),
-                result=result,
+            encoded = _encode(result)  # once, spliced into the status message and the reply
+            head = b'{"schema":%d,"goal_id":"%s","instance":"%s",' % (
+                proto.SCHEMA_VERSION,
+                goal_id.encode(),
+                self.instance.encode(),
             )
-            body = proto.dumps(
-                {
-                    "schema": proto.SCHEMA_VERSION,
-                    "goal_id": goal_id,
-                    "instance": self.instance,
-                    "result": result,
-                }
+            status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
+            self.session.put(
+                proto.status_key(self.prefix, goal_id),
+                head
+                + b'"state":"'
+                + proto.STATE_DONE.encode()
+                + b'",'
+                + status
+                + b',"result":'
+                + encoded
+                + b"}",
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=zenoh.CongestionControl.BLOCK,
             )
+            body = head + b'"result":' + encoded + b"}"
             answered = True
             with self._lock:  # counted first: the client may read the stats as soon as it has the reply
                 self.stats.replied_ok += 1
@@ -410,11 +424,7 @@ class PlanService:
         def on_cycle(record: CycleRecord) -> None:
             nonlocal seq
             seq += 1
-            rec = record.to_dict() if hasattr(record, "to_dict") else record
-            try:
-                body = proto.dumps(rec)
-            except (TypeError, ValueError):
-                body = proto.dumps(to_jsonable(rec))
+            body = _encode(record.to_dict() if hasattr(record, "to_dict") else record)
             publisher.put(head.encode() + str(seq).encode() + b',"record":' + body + b"}")
 
         try:
@@ -422,7 +432,6 @@ class PlanService:
             assert self._planner is not None
             outcome = self._planner(job.request, on_cycle=on_cycle, cancel=job.cancel, **self._planner_kwargs)
             result = outcome.to_dict() if hasattr(outcome, "to_dict") else dict(outcome)
-            result = to_jsonable(result)
         finally:
             publisher.undeclare()
             with self._lock:
