@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack
 
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
 from .hand import HandModel, HandState, KinematicsError
@@ -215,10 +214,9 @@ def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
     X = np.column_stack([np.ones_like(theta), theta, theta * theta])
-    # LAPACK's QR least squares directly (np.linalg.lstsq's SVD and wrapper cost ~3x more)
-    _, coef, info = lapack.dgels(X, c)
-    if info != 0:
-        coef, *_ = np.linalg.lstsq(X, c, rcond=None)
+    # np.linalg.lstsq, not scipy's lapack.dgels: with two right-hand sides scipy's OpenBLAS
+    # goes multi-threaded and, on a loaded 2-core machine, takes milliseconds instead of µs
+    coef, *_ = np.linalg.lstsq(X, c, rcond=None)
     out: np.ndarray = coef[1]
     return out
 
