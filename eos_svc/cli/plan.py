@@ -159,7 +159,7 @@ def run(args: argparse.Namespace) -> int:
         except OSError as exc:
             fail(f"--record: cannot write {args.record!r}: {exc.strerror}")
             raise  # unreachable: fail() exits
-        record_file.write(header_line(request) + "\n")
+        record_file.write(header_line(request, getattr(args, "hand", "hand3x3")) + "\n")
 
     def on_cycle(record: CycleRecord) -> None:
         if record_file is not None:

@@ -139,3 +139,15 @@ def test_unknown_hand_in_a_recording(recorded, tmp_path, capsys):
     with pytest.raises(SystemExit) as exc:
         main(["replay", "--quiet", str(bad)])
     assert exc.value.code == 2 and "unknown hand 'octopus'" in capsys.readouterr().err
+
+
+def test_recorded_hand_is_replayed(tmp_path, capsys):
+    path = tmp_path / "allegro.jsonl"
+    assert main(["plan", "--quiet", "--hand", "allegro", "--max-cycles", "30", "--record", str(path)]) in (
+        0,
+        1,
+    )
+    assert json.loads(path.read_text().splitlines()[0])["hand"] == "allegro"
+    capsys.readouterr()
+    assert main(["replay", "--quiet", str(path)]) == 0
+    assert "replay: deterministic" in capsys.readouterr().out
