@@ -258,6 +258,11 @@ class RollingQP:
             raise KinematicsError("finger", f"{finger}'s tip is not a sphere; cannot roll it")
         self._cols = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         nx = len(self._cols)
+        # the active joints as a slice when they are contiguous (finger1 of hand3x3): q[slice]
+        # is a view, and slice indexing is cheaper than an index array
+        c0 = int(self._cols[0])
+        contiguous = bool(np.array_equal(self._cols, np.arange(c0, c0 + nx)))
+        self._sel: slice | np.ndarray = slice(c0, c0 + nx) if contiguous else self._cols
         self.nx = nx
         # q + v dt is exact when every joint is 1-DoF with nq == nv (hand3x3).
         if not (model.nq == model.nv and all(j.nq == 1 for j in model.joints[1:])):
@@ -366,7 +371,8 @@ class RollingQP:
         self.omega = float(omega)
         self._state = state
         self._q = state.q
-        self._qa = self._q[self._cols].copy()  # active joints' q, kept in step with _q
+        # active joints' q, kept in step with _q (a view of it when the joints are contiguous)
+        self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
         self._stale = False
         self._qdot[:] = 0.0
         self.steps = 0
@@ -668,11 +674,13 @@ class RollingQP:
         np.subtract(res, self._b, out=res)
         r0, r1, r2, r3, r4, r5 = res.tolist()
         qdot = self._qdot
-        qdot[self._cols] = x
+        sel = self._sel
+        qdot[sel] = x
         qa = self._qa
         np.multiply(x, self.dt, out=self._tmp)
         qa += self._tmp
-        self._q[self._cols] = qa
+        if type(sel) is not slice:
+            self._q[sel] = qa
         self._stale = True
         self.steps += 1
         return _fast_step(
