@@ -11,13 +11,13 @@ prefix ``P`` (see :mod:`eos_svc.service.protocol`):
 and publishes every cycle of a plan on ``P/goal/<goal_id>/cycle`` and its
 status on ``P/goal/<goal_id>/status``, reliably (``CongestionControl.BLOCK``).
 
-Threads: the queryables' callbacks run in Zenoh's own thread and only append
-the query to an in-process queue (never block, never call Zenoh; see
-:func:`~eos_svc.service.session.direct_callback`). A dispatcher thread validates requests
-and answers bad ones at once; valid ones go to a bounded job queue drained by
-``workers`` worker threads that run the planner; past the bound the request
-gets a ``busy`` error reply. Every query ends in exactly one ``reply`` or
-``reply_err`` and is dropped.
+Threads: the queryables' callbacks run in Zenoh's own thread and never block
+nor call Zenoh (see :func:`~eos_svc.service.session.direct_callback`): the plan
+callback decodes and validates the request and either queues it for the
+``workers`` worker threads that run the planner (at most ``workers +
+queue_size`` goals admitted; past that a ``busy`` error) or hands the refusal
+to a dispatcher thread, which sends the error reply (it also serves cancel).
+Every query ends in exactly one ``reply`` or ``reply_err`` and is dropped.
 """
 
 from __future__ import annotations
@@ -127,7 +127,9 @@ class PlanService:
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
         self.stats = ServiceStats()
-        self._inbox: queue.SimpleQueue[tuple[str, zenoh.Query] | None] = queue.SimpleQueue()
+        self._inbox: queue.SimpleQueue[tuple[str, zenoh.Query, proto.RequestError | None] | None] = (
+            queue.SimpleQueue()
+        )
         # bounded by admission: at most workers + queue_size goals active (running or waiting)
         self._jobs: queue.SimpleQueue[_Job | None] = queue.SimpleQueue()
         self._active: dict[str, _Job] = {}
@@ -214,10 +216,20 @@ class PlanService:
 
     # ------------------------------------------------------------------ Zenoh callbacks
     def _on_plan(self, query: zenoh.Query) -> None:
-        self._inbox.put(("plan", query))  # never blocks, never calls Zenoh
+        """In Zenoh's thread: decode and admit at once (pure Python: never blocks, never calls Zenoh).
+
+        An admitted plan goes straight to the workers' queue (one thread hop less);
+        a refusal goes to the dispatcher thread, which sends the error reply.
+        """
+        try:
+            refusal = self._admit(query)
+        except Exception as exc:  # a bug must not leave the query unanswered
+            refusal = proto.RequestError(proto.E_INTERNAL, "request", repr(exc)[:300])
+        if refusal is not None:
+            self._inbox.put(("error", query, refusal))
 
     def _on_cancel(self, query: zenoh.Query) -> None:
-        self._inbox.put(("cancel", query))
+        self._inbox.put(("cancel", query, None))  # never blocks, never calls Zenoh
 
     # ------------------------------------------------------------------ threads
     def _reply_err(self, query: zenoh.Query, err: proto.RequestError) -> None:
@@ -237,10 +249,10 @@ class PlanService:
             item = self._inbox.get()
             if item is None:
                 break
-            kind, query = item
+            _kind, query, refusal = item
             try:
-                if kind == "plan":
-                    self._admit(query)
+                if refusal is not None:
+                    self._reply_err(query, refusal)
                 else:
                     self._cancel(query)
             except Exception as exc:  # a bug must not kill the dispatcher, nor leave a query unanswered
@@ -254,10 +266,11 @@ class PlanService:
                 break
             if item is not None:
                 self._reply_err(
-                    item[1], proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
+                    item[1], item[2] or proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
                 )
 
-    def _admit(self, query: zenoh.Query) -> None:
+    def _admit(self, query: zenoh.Query) -> proto.RequestError | None:
+        """Queue the plan for a worker, or return why not."""
         with self._lock:
             self.stats.received += 1
         payload = query.payload
@@ -268,8 +281,7 @@ class PlanService:
                 b"" if payload is None else payload.to_bytes(), self.max_request_bytes
             )
         except proto.RequestError as err:
-            self._reply_err(query, err)
-            return
+            return err
         job = _Job(query, goal_id, request)
         refusal: proto.RequestError
         with self._lock:
@@ -280,7 +292,7 @@ class PlanService:
             elif len(self._active) < self.workers + self.queue_size:
                 self._active[goal_id] = job
                 self._jobs.put(job)
-                return
+                return None
             else:
                 refusal = proto.RequestError(
                     proto.E_BUSY,
@@ -289,7 +301,7 @@ class PlanService:
                     "retry later or on another instance",
                     goal_id,
                 )
-        self._reply_err(query, refusal)
+        return refusal
 
     def _cancel(self, query: zenoh.Query) -> None:
         goal_id = str(query.key_expr).rsplit("/", 1)[-1]
