@@ -332,6 +332,8 @@ class RollingQP:
         self._hi_dt = self._hi / self.dt
         # bounds before clipping to the velocity limits: row 0 (q_min − q)/dt, row 1 (q_max − q)/dt
         self._lohi_dt = np.stack([self._lo_dt, self._hi_dt])
+        self._vmax_l: list[float] = self._vmax.tolist()
+        self._free_steps = 0  # bound evaluations that may be skipped (see _bounds)
         self._T2 = np.zeros((2, nx))
         self._T2_lo = self._T2[0]
         self._T2_hi = self._T2[1]
@@ -375,6 +377,7 @@ class RollingQP:
         self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
         self._stale = False
         self._qdot[:] = 0.0
+        self._free_steps = 0
         self.steps = 0
         self._osqp = None  # re-upload the whole problem on the first solve
         M = self.scene.object.placement
@@ -449,7 +452,12 @@ class RollingQP:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
         (``n``: the contact normal as floats, when the caller has them)."""
         J = pin.getFrameJacobian(self._model, self._data, self._fid, _LWA)
-        J.take(self._cols, axis=1, out=self._Jb)
+        sel = self._sel
+        if type(sel) is slice:
+            Jb = J[:, sel]
+        else:
+            Jb = self._Jb
+            J.take(sel, axis=1, out=Jb)
         nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
         # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
         if abs(nx_) < 0.9:
@@ -467,7 +475,7 @@ class RollingQP:
             t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
             nx_, ny_, nz_, 0.0, 0.0, 0.0,
         )  # fmt: skip
-        np.matmul(self._M, self._Jb, out=self._C)
+        np.matmul(self._M, Jb, out=self._C)
         bn = -self.gap_gain * contact.distance / self.dt
         if self.second_order and self.steps > 0:
             # q̇ is constant over a step, so the tip moves with the acceleration J̇q̇ of the
@@ -492,12 +500,31 @@ class RollingQP:
             )
         else:
             self._b[2] = bn
-        # bounds: max(−q̇max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇max, (q_max − q)/dt)
+        self._bounds()
+
+    def _bounds(self) -> None:
+        """lb, ub: max(−q̇max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇max, (q_max − q)/dt).
+
+        Far from the position limits they are exactly ∓q̇max, and q moves by at most
+        q̇max·dt per step: after an exact evaluation that finds every position limit at least
+        k steps away, the next k − 1 evaluations are skipped (the arrays already hold ∓q̇max).
+        """
+        if self._free_steps > 0:
+            self._free_steps -= 1
+            return
         qs = self._tmp
         np.multiply(self._qa, 1.0 / self.dt, out=qs)
         np.subtract(self._lohi_dt, qs, out=self._T2)
         np.maximum(self._nvmax, self._T2_lo, out=self._lb)
         np.minimum(self._vmax, self._T2_hi, out=self._ub)
+        # steps until a position limit could bind: (q_min − q)/dt < −q̇max and
+        # (q_max − q)/dt > q̇max hold while each changes by at most q̇max (+ solver tolerance)
+        # per step
+        k = math.inf
+        for tl, th, v in zip(self._T2_lo.tolist(), self._T2_hi.tolist(), self._vmax_l, strict=True):
+            shift = v * (1.0 + 1e-6) + 1e-6
+            k = min(k, (-v - tl) / shift, (th - v) / shift)
+        self._free_steps = int(k) - 1 if k >= 2.0 else 0
 
     def _solve_direct(self) -> np.ndarray | None:
         """The minimum-W-norm solution of C q̇ = b when it satisfies the bounds (it is then
@@ -558,6 +585,7 @@ class RollingQP:
     def build(self) -> qpsolvers.Problem:
         """The QP of the next step at the current q, without solving it (pink's ``build_ik``):
         kinematics, contact, constraint rows and bounds; returns an independent copy."""
+        self._free_steps = 0
         self.kinematics()
         self._build(self.contact())
         return self.problem_copy()
