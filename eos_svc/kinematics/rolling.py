@@ -334,6 +334,8 @@ class RollingQP:
         self._lohi_dt = np.stack([self._lo_dt, self._hi_dt])
         self._vmax_l: list[float] = self._vmax.tolist()
         self._free_steps = 0  # bound evaluations that may be skipped (see _bounds)
+        self._lb_tol: list[float] = []
+        self._ub_tol: list[float] = []
         self._T2 = np.zeros((2, nx))
         self._T2_lo = self._T2[0]
         self._T2_hi = self._T2[1]
@@ -517,6 +519,9 @@ class RollingQP:
         np.subtract(self._lohi_dt, qs, out=self._T2)
         np.maximum(self._nvmax, self._T2_lo, out=self._lb)
         np.minimum(self._vmax, self._T2_hi, out=self._ub)
+        tol = self.eps
+        self._lb_tol = [lo - tol for lo in self._lb.tolist()]
+        self._ub_tol = [hi + tol for hi in self._ub.tolist()]
         # steps until a position limit could bind: (q_min − q)/dt < −q̇max and
         # (q_max − q)/dt > q̇max hold while each changes by at most q̇max (+ solver tolerance)
         # per step
@@ -543,14 +548,14 @@ class RollingQP:
         x: np.ndarray = z[: self.nx]
         if ws is not None:
             x = x * ws
-        # Taken when within the bounds to OSQP's own tolerance eps: OSQP's solutions meet the
-        # bounds only to ≈ eps·(1 + |q̇|) too (rolling at the wrist's velocity limit puts the
+        # Taken when within the bounds to OSQP's own tolerance eps (_lb_tol = lb − eps, _ub_tol =
+        # ub + eps, set by _bounds): OSQP's solutions meet the bounds only to ≈ eps·(1 + |q̇|)
+        # too (rolling at the wrist's velocity limit puts the
         # unconstrained optimum a few 1e-8 rad/s beyond it; OSQP returns a point within ~1e-6
         # of the unconstrained optimum there, while clamping exactly would move the finger by
         # ~1e-3 rad/s — the problem is nearly degenerate in that direction).
-        tol = self.eps
-        for xi, lo, hi in zip(x.tolist(), self._lb.tolist(), self._ub.tolist(), strict=True):
-            if not lo - tol <= xi <= hi + tol:  # also catches NaN
+        for xi, lo, hi in zip(x.tolist(), self._lb_tol, self._ub_tol, strict=True):
+            if not lo <= xi <= hi:  # also catches NaN
                 return None
         return x
 
