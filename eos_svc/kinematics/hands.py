@@ -71,7 +71,7 @@ ALLEGRO_PRESHAPE: Mapping[str, float] = {
     "joint_4.0": 0.0,
     "joint_8.0": 0.35,  # ring abducted toward the middle finger
     "joint_12.0": 1.396,  # thumb rotated into opposition (its upper limit)
-    "joint_13.0": 0.3,  # thumb twisted toward the middle finger
+    "joint_13.0": 0.45,  # thumb twisted toward the middle finger
 }
 
 #: the six wrist joints: name, type, axis, lower, upper, effort, velocity (as hand3x3)
