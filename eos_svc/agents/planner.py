@@ -253,7 +253,7 @@ def plan(
     )
     board = Board({keys.FRICTION: request.friction})
     run = controller.run(board, cancel=cancel)
-    verdict = board.get(keys.OUTCOME) or grasp_geometry(world)
+    verdict = board.get(keys.OUTCOME) or grasp_geometry(world, request.friction)
     if memory is not None:
         remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), verdict["all_touching"])
     obj = world.obj
@@ -274,6 +274,7 @@ def plan(
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
         hand_height=world.hand.hand_height,
+        q_final=tuple(float(x) for x in world.state.q),
         wall_time_s=time.perf_counter() - t0,
     )
 
