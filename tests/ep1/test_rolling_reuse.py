@@ -33,7 +33,7 @@ def test_retarget_equals_a_new_roller(finger):
     # one roller, re-targeted
     st_b = st.copy()
     sb = TactileSensor(2e-4, rng=5)
-    rq = None
+    rq: RollingQP | None = None
     reused = []
     for axis, omega, n in legs:
         if rq is None:
@@ -41,9 +41,11 @@ def test_retarget_equals_a_new_roller(finger):
         else:
             rq.retarget(axis, omega, project_axis=False)
         reused += rq.run(n)
+    assert rq is not None
     rq.sync()
     for a, b in zip(fresh, reused, strict=True):
         np.testing.assert_array_equal(a.qdot, b.qdot)
+        assert a.reading is not None and b.reading is not None
         np.testing.assert_array_equal(a.reading.point_tip, b.reading.point_tip)
     np.testing.assert_array_equal(st_a.q, st_b.q)
 
@@ -57,6 +59,7 @@ def test_direct_solution_is_the_qp_optimum_and_bounds_are_exact():
     for _ in range(40):
         s = rq.step()
         p = rq.problem_copy()
+        assert p.lb is not None and p.ub is not None
         # the bounds of this step, evaluated in full
         qa = (rq._q[rq._cols] - s.qdot[rq._cols] * rq.dt) / rq.dt
         lb = np.maximum(-sc.hand.velocity_limit[rq._cols], sc.hand.lower[rq._cols] / rq.dt - qa)
@@ -64,7 +67,7 @@ def test_direct_solution_is_the_qp_optimum_and_bounds_are_exact():
         np.testing.assert_allclose(p.lb, lb, atol=1e-9)
         np.testing.assert_allclose(p.ub, ub, atol=1e-9)
         ref = qpsolvers.solve_problem(p, solver="daqp")
-        assert ref.found
+        assert ref.found and ref.x is not None
         np.testing.assert_allclose(s.qdot[rq._cols], ref.x, atol=1e-6)
         direct += s.iterations == 0
         assert s.slip_speed < 1e-12
