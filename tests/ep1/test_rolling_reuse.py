@@ -27,9 +27,9 @@ def test_retarget_equals_a_new_roller(finger):
     sa = TactileSensor(2e-4, rng=5)
     fresh = []
     for axis, omega, n in legs:
-        rq = RollingQP(st_a, finger, axis, omega, 0.01, scene=sc, tactile=sa, project_axis=False)
-        fresh += rq.run(n)
-        st_a.update(rq.q)
+        new = RollingQP(st_a, finger, axis, omega, 0.01, scene=sc, tactile=sa, project_axis=False)
+        fresh += new.run(n)
+        st_a.update(new.q)
     # one roller, re-targeted
     st_b = st.copy()
     sb = TactileSensor(2e-4, rng=5)
