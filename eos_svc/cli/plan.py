@@ -12,6 +12,7 @@ eos plan --hand allegro                   # the Allegro hand of example-robot-da
 from __future__ import annotations
 
 import argparse
+import sqlite3
 import sys
 from typing import IO, Any
 
@@ -74,6 +75,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=HANDS,
         default="hand3x3",
         help="the hand: hand3x3 (urdf/hand3x3.urdf) or allegro (example-robot-data's) (hand3x3)",
+    )
+    g.add_argument(
+        "--memory",
+        metavar="DB",
+        help="grasp memory (SQLite file, created if missing): adds the recall agent and records this plan; "
+        "give a learned weight, e.g. --w-default 0.25 --w-opportunistic 0.25 --w-learned 0.5",
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
@@ -172,8 +179,16 @@ def run(args: argparse.Namespace) -> int:
         from eos_svc.kinematics import allegro_hand
 
         hand = allegro_hand()
+    memory = None
+    if getattr(args, "memory", None):
+        from eos_svc.agents.memory import GraspMemory
+
+        try:
+            memory = GraspMemory(args.memory)
+        except (OSError, sqlite3.Error) as exc:
+            fail(f"--memory: cannot open {args.memory!r}: {exc}")
     try:
-        result = plan(request, on_cycle=on_cycle, hand=hand)
+        result = plan(request, on_cycle=on_cycle, hand=hand, memory=memory)
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
