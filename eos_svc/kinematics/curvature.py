@@ -61,16 +61,19 @@ class UnderdeterminedError(ValueError):
 
 def _vec2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float).reshape(-1)
-    if a.shape != (2,) or not np.all(np.isfinite(a)):
+    if a.shape != (2,) or not all(map(math.isfinite, a.tolist())):
         raise ValueError(f"{name}: expected 2 finite numbers, got {value!r}")
     return a
 
 
 def _mat2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float)
-    if a.shape != (2, 2) or not np.all(np.isfinite(a)):
+    if a.shape != (2, 2):
         raise ValueError(f"{name}: expected a finite 2x2 matrix, got {value!r}")
-    if abs(a[0, 1] - a[1, 0]) > 1e-9 * (1.0 + abs(a).max()):
+    (a00, a01), (a10, a11) = a.tolist()
+    if not all(map(math.isfinite, (a00, a01, a10, a11))):
+        raise ValueError(f"{name}: expected a finite 2x2 matrix, got {value!r}")
+    if abs(a01 - a10) > 1e-9 * (1.0 + max(abs(a00), abs(a01), abs(a10), abs(a11))):
         raise ValueError(f"{name}: curvature form must be symmetric, got {a.tolist()}")
     return a
 
@@ -222,13 +225,24 @@ class CurvatureEstimator:
             raise UnderdeterminedError(
                 f"need samples from two independent roll directions, have {m} sample(s)"
             )
-        A = np.empty((2 * m, 3))
-        b = np.empty(2 * m)
-        for i, s in enumerate(self._samples):
-            A[2 * i : 2 * i + 2], b[2 * i : 2 * i + 2] = s.rows()
+        # CurvatureSample.rows() of every sample, stacked (vectorised: one array op per term)
+        samples = self._samples
+        U = np.array([s.contact_velocity for s in samples])  # (m, 2)
+        W = np.array([s.omega_xy for s in samples])
+        K = np.array([s.K_f for s in samples])  # (m, 2, 2)
+        A3 = np.zeros((m, 2, 3))
+        A3[:, 0, :2] = U
+        A3[:, 1, 1:] = U
+        A = A3.reshape(2 * m, 3)
+        Ku = K[:, :, 0] * U[:, :1] + K[:, :, 1] * U[:, 1:]  # K_f u, as in rows()
+        b = (np.stack([-W[:, 1], W[:, 0]], axis=1) - Ku).reshape(2 * m)
         AtA = A.T @ A
         scale = float(np.trace(AtA))
-        if scale == 0.0 or np.linalg.cond(AtA) > 1e12:
+        # 2-norm condition number of the symmetric AtA from its eigenvalues (np.linalg.cond would
+        # take an SVD through a heavier wrapper)
+        ev = np.abs(np.linalg.eigvalsh(AtA))
+        ev_min = float(ev.min())
+        if scale == 0.0 or ev_min == 0.0 or float(ev.max()) / ev_min > 1e12:
             raise UnderdeterminedError(
                 "samples do not determine the curvature form: roll along two independent "
                 "tangent directions (contact velocities are parallel or zero)"
