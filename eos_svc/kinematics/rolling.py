@@ -566,6 +566,8 @@ class RollingQP:
             slv = self._osqp_solver
             slv.update_data_vec(q=self._qlin, l=self._l, u=self._u)
             slv.update_data_mat(P_x=np.ascontiguousarray(np.diag(self._P)), P_i=None, A_x=self._Ax, A_i=None)
+            # a new roll: start cold, not from another problem's primal/dual solution
+            slv.warm_start(x=np.zeros(self.nx), y=np.zeros(6 + self.nx))
         else:
             slv = self._osqp_solver
             slv.update_data_vec(q=None, l=self._l, u=self._u)
