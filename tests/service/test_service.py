@@ -234,7 +234,7 @@ def test_busy_past_the_queue_bound(port, services, clients):
 
 
 def test_duplicate_goal_id_is_refused(port, services, clients):
-    services(port, planner=slowed(root_plan, 0.02))
+    services(port, planner=slowed(root_plan, 0.05))
     client = clients(port)
     client.wait_for_instances(1)
     t = threading.Thread(target=lambda: client.plan(PlanRequest(), goal_id="dup"))
