@@ -36,7 +36,8 @@ def start_server(port: int, *extra: str) -> subprocess.Popen[str]:
 
 @pytest.fixture
 def server(port: int) -> Iterator[subprocess.Popen[str]]:
-    proc = start_server(port, "--instance", "sub-1")
+    # the shipped loopback-peer config file, its endpoint overridden by --listen
+    proc = start_server(port, "--instance", "sub-1", "--config", str(ROOT / "config" / "peer-loopback.json5"))
     yield proc
     if proc.poll() is None:
         proc.kill()
