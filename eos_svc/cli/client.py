@@ -30,6 +30,15 @@ def format_cycle(msg: dict[str, Any]) -> str:
     )
 
 
+def format_status(msg: dict[str, Any]) -> str:
+    """One line per status message: goal, instance, state (and how the plan ended)."""
+    line = f"{msg.get('goal_id', '?')} [{msg.get('instance', '?')}] {msg.get('state', '?')}"
+    if msg.get("state") == "done":
+        reason = (msg.get("result") or {}).get("reason", "")
+        line += f": {msg.get('status')} after {msg.get('cycles')} cycles — {reason}"
+    return line
+
+
 def request_dict(args: argparse.Namespace) -> dict[str, Any]:
     """The JSON plan request the ``eos client plan`` options describe."""
     obj: dict[str, Any] = {"shape": args.shape}
@@ -159,9 +168,7 @@ def run(args: argparse.Namespace) -> int:
             stop = threading.Event()
             sub = client.watch(
                 lambda kind, msg: print(
-                    format_cycle(msg)
-                    if kind == "cycle"
-                    else f"{msg.get('goal_id')} status {json.dumps(msg)}",
+                    format_cycle(msg) if kind == "cycle" else format_status(msg),
                     flush=True,
                 )
             )
