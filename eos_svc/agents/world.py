@@ -19,6 +19,7 @@ explores the object's top and bottom, and at which angle).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from dataclasses import dataclass, field
 
 import coal
@@ -246,6 +247,16 @@ class GraspWorld:
         self._obj_tf = self.scene._tf_obj
         self._point = coal.Sphere(1e-9)
         self._point_tf = coal.Transform3s()
+        # Bounding spheres (local centre, radius) of the hand geometries and the object: a
+        # cheap lower bound on a distance lets a min over geometries skip exact queries that
+        # cannot be the minimum (the result is the same).
+        self._bounds: list[tuple[tuple[float, float, float], float]] = []
+        for g in self._geometries:
+            g.computeLocalAABB()
+            c = np.asarray(g.aabb_center, dtype=float)
+            self._bounds.append(((float(c[0]), float(c[1]), float(c[2])), float(g.aabb_radius)))
+        self._obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
+        self._obj_radius = 0.5 * float(self.scene.object.diameter)
 
     # --- reading the world -------------------------------------------------------
     @property
@@ -299,7 +310,7 @@ class GraspWorld:
             if gap > self.params.hand_bound + self.params.clearance:
                 value = gap - self.params.hand_bound
             else:
-                value = min(self._geometry_gap(gid) for gid in range(len(self._geometries)))
+                value = self._min_gap(range(len(self._geometries)), math.inf)
             memo["clearance"] = value
         return value
 
@@ -437,7 +448,31 @@ class GraspWorld:
         """How far ``finger`` may still close before something touches (m): the tip's
         distance beyond half the contact tolerance, or a link's distance, whichever is less."""
         tip = self.tip_distance(finger) - 0.5 * self.params.contact_tolerance
-        return min([tip, *(self._geometry_gap(gid) for gid in self._links[finger])])
+        return self._min_gap(self._links[finger], tip)
+
+    def _min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
+        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
+        query of a geometry whose bounding-sphere lower bound already exceeds the minimum."""
+        oMg = self.state.geometry_data.oMg
+        ox, oy, oz = self._obj_centre
+        bounds = []
+        for gid in geometry_ids:
+            (cx, cy, cz), radius = self._bounds[gid]
+            M = oMg[gid]
+            R = M.rotation
+            t = M.translation
+            px = t[0] + R[0, 0] * cx + R[0, 1] * cy + R[0, 2] * cz - ox
+            py = t[1] + R[1, 0] * cx + R[1, 1] * cy + R[1, 2] * cz - oy
+            pz = t[2] + R[2, 0] * cx + R[2, 1] * cy + R[2, 2] * cz - oz
+            bounds.append((math.sqrt(px * px + py * py + pz * pz) - radius - self._obj_radius, gid))
+        bounds.sort()
+        for lower, gid in bounds:
+            if lower >= best:
+                break
+            gap = self._geometry_gap(gid)
+            if gap < best:
+                best = gap
+        return best
 
     def _finger_links_clear(self, finger: str) -> bool:
         """No link of ``finger`` (other than its tip) touches the object."""
