@@ -24,6 +24,14 @@ def grasp_planner() -> Callable[..., Any]:
     return plan
 
 
+def _default_planner() -> Callable[..., Any]:
+    if os.environ.get("EOS_TEST_PLANNER") == "root":
+        return root_plan
+    from eos_svc.agents.planner import plan
+
+    return plan
+
+
 @pytest.fixture
 def port() -> int:
     return free_port()
@@ -40,7 +48,7 @@ def services() -> Iterator[Callable[..., PlanService]]:
     def start(
         listen: int | None = None, connect: tuple[int, ...] = (), lease_ms: int | None = None, **kwargs: Any
     ) -> PlanService:
-        kwargs.setdefault("planner", root_plan)
+        kwargs.setdefault("planner", _default_planner())
         conf = make_config(
             listen=[loopback(listen)] if listen else [],
             connect=[loopback(p) for p in connect],

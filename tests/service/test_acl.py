@@ -17,10 +17,10 @@ from pathlib import Path
 import pytest
 import zenoh
 
+from eos_svc.agents.planner import plan
 from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient
-from eos_svc.service.demo_planner import root_plan
 from eos_svc.service.server import PlanService
 from eos_svc.service.session import loopback
 
@@ -44,7 +44,7 @@ def router(port: int) -> Iterator[zenoh.Session]:
 
 @pytest.fixture
 def planner(router: zenoh.Session, port: int) -> Iterator[PlanService]:
-    svc = PlanService.open(load("planner-client.json5", port), planner=root_plan, instance="real")
+    svc = PlanService.open(load("planner-client.json5", port), planner=plan, instance="real")
     yield svc
     svc.stop()
 
@@ -53,7 +53,7 @@ def test_client_may_plan_and_read_cycles(planner, port):
     with EosClient.open(load("user-client.json5", port)) as client:
         assert client.wait_for_instances(1) == ["real"]
         out = client.plan(PlanRequest(), goal_id="acl-ok")
-        assert out.result["status"] == "completed" and out.complete
+        assert out.result["status"] == "success" and out.complete
         assert client.cancel("not-running") is False  # the cancel query goes through (nothing to cancel)
 
 
