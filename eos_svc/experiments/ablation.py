@@ -20,7 +20,14 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import PlanRequest
-from eos_svc.experiments.common import pyplot, run_plans, write_csv, write_json
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
 from eos_svc.ratings import Weights
 
 PAPER_WEIGHTS = ((1.0, 0.0), (0.0, 1.0), (0.5, 0.5))
@@ -100,11 +107,7 @@ def plot(sweep: list[dict], path: Path) -> Path:
     lines = ax.get_lines() + ax2.get_lines()
     ax.legend(lines, [str(line.get_label()) for line in lines], loc="center right", fontsize=8)
     ax.set_title("EOS ablation: default vs opportunistic sub-ratings")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -130,12 +133,9 @@ def report(data: dict) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of this experiment."""
-    parser = argparse.ArgumentParser(
-        prog="eos experiment ablation", description=(__doc__ or "").split("\n")[0]
-    )
+    parser = experiment_parser("ablation", __doc__, "results/ablation")
     parser.add_argument("--seeds", type=int, default=20, help="seeds per condition (20)")
     parser.add_argument("--sweep-points", type=int, default=11, help="default weights in the sweep (11)")
-    parser.add_argument("--out", type=Path, default=Path("results/ablation"), help="output folder")
     return parser
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import csv
 import json
 import sys
@@ -45,6 +46,22 @@ def write_csv(path: Path, rows: Iterable[dict[str, Any]]) -> Path:
             writer = csv.DictWriter(f, fieldnames=list(rows[0]))
             writer.writeheader()
             writer.writerows(rows)
+    return path
+
+
+def experiment_parser(name: str, doc: str | None, out: str) -> argparse.ArgumentParser:
+    """The parser every experiment starts from: its program name, summary and ``--out``."""
+    parser = argparse.ArgumentParser(prog=f"eos experiment {name}", description=(doc or "").split("\n")[0])
+    parser.add_argument("--out", type=Path, default=Path(out), help=f"output folder ({out})")
+    return parser
+
+
+def save_figure(fig: Any, path: Path) -> Path:
+    """Lay out, write (creating the folder) and close a matplotlib figure."""
+    fig.tight_layout()
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fig.savefig(path)
+    pyplot().close(fig)
     return path
 
 

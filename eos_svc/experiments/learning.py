@@ -22,7 +22,7 @@ import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.experiments.common import pyplot, write_csv, write_json
+from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.ratings import Weights
 
 ACROSS = (math.pi / 2, 0.0, 0.0)
@@ -112,11 +112,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     ax.set_ylabel("grasp-stage cycles")
     ax.set_title("Learned sub-rating: grasp cycles on new and repeated objects")
     ax.legend(fontsize=8)
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -138,12 +134,9 @@ def report(data: dict) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of this experiment."""
-    parser = argparse.ArgumentParser(
-        prog="eos experiment learning", description=(__doc__ or "").split("\n")[0]
-    )
+    parser = experiment_parser("learning", __doc__, "results/learning")
     parser.add_argument("--repeats", type=int, default=3, help="times each object appears (3)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
-    parser.add_argument("--out", type=Path, default=Path("results/learning"), help="output folder")
     return parser
 
 

@@ -17,7 +17,14 @@ from pathlib import Path
 import numpy as np
 
 from eos_svc.agents.planner import ratio_sphere_request
-from eos_svc.experiments.common import pyplot, run_plans, write_csv, write_json
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
 
 DEFAULT_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 
@@ -106,11 +113,7 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
     handles = ax.get_legend_handles_labels()
     handles2 = ax2.get_legend_handles_labels()
     ax.legend(handles[0] + handles2[0], handles[1] + handles2[1], fontsize=8, loc="center left")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -130,10 +133,9 @@ def report(data: dict) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of this experiment."""
-    parser = argparse.ArgumentParser(prog="eos experiment ratio", description=(__doc__ or "").split("\n")[0])
+    parser = experiment_parser("ratio", __doc__, "results/ratio")
     parser.add_argument("--seeds", type=int, default=10, help="seeds per ratio (10)")
     parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
-    parser.add_argument("--out", type=Path, default=Path("results/ratio"), help="output folder")
     return parser
 
 

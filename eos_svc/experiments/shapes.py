@@ -17,7 +17,14 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
-from eos_svc.experiments.common import pyplot, run_plans, write_csv, write_json
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
 
 ACROSS = (math.pi / 2, 0.0, 0.0)  # cylinder/capsule axis along y: across the approach (x)
 
@@ -76,11 +83,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     ax.set_xlabel("rate over seeds")
     ax.set_title("Every shape end to end")
     ax.legend(fontsize=8, loc="lower right")
-    fig.tight_layout()
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(path)
-    plt.close(fig)
-    return path
+    return save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -96,9 +99,8 @@ def report(data: dict) -> str:
 
 def build_parser() -> argparse.ArgumentParser:
     """Command-line options of this experiment."""
-    parser = argparse.ArgumentParser(prog="eos experiment shapes", description=(__doc__ or "").split("\n")[0])
+    parser = experiment_parser("shapes", __doc__, "results/shapes")
     parser.add_argument("--seeds", type=int, default=5, help="seeds per object (5)")
-    parser.add_argument("--out", type=Path, default=Path("results/shapes"), help="output folder")
     return parser
 
 
