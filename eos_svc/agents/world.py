@@ -237,6 +237,14 @@ class GraspWorld:
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, float] = {}
         self._links = finger_link_geometries(self.hand)
+        # per finger: (q index, lower, upper) of each of its joints
+        self._finger_limits: dict[str, list[tuple[int, float, float]]] = {
+            f: [
+                (int(i), float(self.hand.lower[i]), float(self.hand.upper[i]))
+                for i in self.hand.finger_q_index(f)
+            ]
+            for f in self.hand.finger_names
+        }
         self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
         # Fast distance queries (coal directly, reused request/result): the agents' hot path
         # needs only the signed distance, not witness points.
@@ -316,7 +324,7 @@ class GraspWorld:
 
     def finger_angle(self, finger: str) -> float:
         """The finger's (common) joint angle, rad (its first joint)."""
-        return float(self.state.q[self.hand.finger_q_index(finger)[0]])
+        return float(self.state.q[self._finger_limits[finger][0][0]])
 
     # --- moving it -----------------------------------------------------------------
     def set_q(self, q: np.ndarray) -> None:
@@ -406,7 +414,7 @@ class GraspWorld:
         idx = self.hand.finger_q_index(finger)
         q0 = self.state.q
         f0 = self._closing_gap(finger)
-        q1, at_limit = self.state.close_finger(finger, dtheta)
+        q1, at_limit = self._closed(q0, finger, dtheta)
         self.set_q(q1)
         f1 = self._closing_gap(finger)
         if f1 > 0.0:
@@ -444,27 +452,49 @@ class GraspWorld:
         event = "touched" if self.tip_distance(finger) <= tol else "link"
         return event, self.finger_angle(finger)
 
+    def _closed(self, q0: np.ndarray, finger: str, dtheta: float) -> tuple[np.ndarray, bool]:
+        """``q0`` with every joint of ``finger`` moved by ``dtheta`` rad, clipped to its limits
+        (as ``HandState.close_finger``, in scalar arithmetic: the arrays are three long)."""
+        q = q0.copy()
+        at_limit = False
+        for i, lo, hi in self._finger_limits[finger]:
+            target = q[i] + dtheta
+            if target <= lo:
+                q[i], at_limit = lo, True
+            elif target >= hi:
+                q[i], at_limit = hi, True
+            else:
+                q[i] = target
+        return q, at_limit
+
     def _closing_gap(self, finger: str) -> float:
         """How far ``finger`` may still close before something touches (m): the tip's
-        distance beyond half the contact tolerance, or a link's distance, whichever is less."""
-        tip = self.tip_distance(finger) - 0.5 * self.params.contact_tolerance
-        return self._min_gap(self._links[finger], tip)
+        distance beyond half the contact tolerance, or a link's distance, whichever is less
+        (memoised per hand pose)."""
+        memo = self._memo
+        key = ("closing", finger)
+        value = memo.get(key)
+        if value is None:
+            tip = self.tip_distance(finger) - 0.5 * self.params.contact_tolerance
+            value = memo[key] = self._min_gap(self._links[finger], tip)
+        return value
 
     def _min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
         query of a geometry whose bounding-sphere lower bound already exceeds the minimum."""
         oMg = self.state.geometry_data.oMg
         ox, oy, oz = self._obj_centre
+        obj_radius = self._obj_radius
         bounds = []
         for gid in geometry_ids:
-            (cx, cy, cz), radius = self._bounds[gid]
+            centre, radius = self._bounds[gid]
             M = oMg[gid]
-            R = M.rotation
-            t = M.translation
-            px = t[0] + R[0, 0] * cx + R[0, 1] * cy + R[0, 2] * cz - ox
-            py = t[1] + R[1, 0] * cx + R[1, 1] * cy + R[1, 2] * cz - oy
-            pz = t[2] + R[2, 0] * cx + R[2, 1] * cy + R[2, 2] * cz - oz
-            bounds.append((math.sqrt(px * px + py * py + pz * pz) - radius - self._obj_radius, gid))
+            if centre == (0.0, 0.0, 0.0):  # primitives centred on their frame: the usual case
+                px, py, pz = M.translation.tolist()
+            else:
+                px, py, pz = M.act(np.asarray(centre)).tolist()
+            px, py, pz = px - ox, py - oy, pz - oz
+            bounds.append((math.sqrt(px * px + py * py + pz * pz) - radius - obj_radius, gid))
         bounds.sort()
         for lower, gid in bounds:
             if lower >= best:
