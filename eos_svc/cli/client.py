@@ -17,6 +17,7 @@ import threading
 from typing import Any
 
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.cli.plan import request_dict as plan_request_dict
 from eos_svc.cli.serve import add_connection_arguments, session_config
 from eos_svc.errors import ValidationError
 
@@ -40,28 +41,11 @@ def format_status(msg: dict[str, Any]) -> str:
 
 
 def request_dict(args: argparse.Namespace) -> dict[str, Any]:
-    """The JSON plan request the ``eos client plan`` options describe."""
-    obj: dict[str, Any] = {"shape": args.shape}
-    if args.shape == "sphere" and args.radius is None:
-        obj["radius"] = 0.03
-    for name in ("radius", "radii", "length", "size", "position", "rpy"):
-        value = getattr(args, name)
-        if value is not None:
-            obj[name] = value
-    out: dict[str, Any] = {
-        "object": obj,
-        "weights": {
-            "default": args.w_default,
-            "opportunistic": args.w_opportunistic,
-            "learned": args.w_learned,
-        },
-        "seed": args.seed,
-        "tactile_noise": args.noise,
-        "max_cycles": args.max_cycles,
-        "deadline_s": args.deadline,
-    }
-    if args.friction is not None:
-        out["friction"] = args.friction
+    """The JSON plan request the ``eos client plan`` options describe (as ``eos plan``'s;
+    an unset ``--friction`` is left to the service's default)."""
+    out = plan_request_dict(args)
+    if out.get("friction") is None:
+        out.pop("friction", None)
     return out
 
 
