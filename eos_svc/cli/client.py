@@ -16,7 +16,8 @@ import json
 import threading
 from typing import Any
 
-from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.cli.common import fail, positive_float
+from eos_svc.cli.plan import add_request_arguments
 from eos_svc.cli.plan import request_dict as plan_request_dict
 from eos_svc.cli.serve import add_connection_arguments, session_config
 from eos_svc.errors import ValidationError
@@ -66,22 +67,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             metavar="S",
             help="seconds to wait for an answer (plan: the request's deadline + 10)",
         )
-    from eos_svc.cli.plan import add_object_arguments
-
-    add_object_arguments(p)
-    add_weight_arguments(p)
-    g = p.add_argument_group("run")
-    g.add_argument("--seed", type=int, default=1, help="seed (1)")
-    g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
-    g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
-    g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
-    g.add_argument(
-        "--friction",
-        type=finite_float,
-        default=None,
-        metavar="MU",
-        help="Coulomb friction at the fingertips (the request's default when omitted)",
-    )
+    g = add_request_arguments(p, friction_default=None)
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
     g.add_argument(

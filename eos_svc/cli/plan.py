@@ -55,7 +55,11 @@ def add_object_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--rpy", type=finite_float, nargs=3, metavar=("R", "P", "Y"), help="object orientation")
 
 
-def add_arguments(parser: argparse.ArgumentParser) -> None:
+def add_request_arguments(
+    parser: argparse.ArgumentParser, friction_default: float | None = 0.5
+) -> argparse._ArgumentGroup:
+    """The options that make a plan request (shared by ``eos plan`` and ``eos client plan``):
+    the groups object, weights and run; returns the run group for more options."""
     add_object_arguments(parser)
     add_weight_arguments(parser)
     g = parser.add_argument_group("run")
@@ -66,10 +70,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument(
         "--friction",
         type=finite_float,
-        default=0.5,
+        default=friction_default,
         metavar="MU",
-        help="Coulomb friction μ at the fingertips, for the grasp quality (0.5)",
+        help="Coulomb friction μ at the fingertips, for the grasp quality "
+        + ("(the request's default when omitted)" if friction_default is None else f"({friction_default})"),
     )
+    return g
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    g = add_request_arguments(parser)
     g.add_argument(
         "--hand",
         choices=HANDS,
