@@ -128,10 +128,12 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def format_cycle(record: CycleRecord) -> str:
-    """One readable line per cycle: stage, every total, the choice and what it did."""
+    """Two readable lines per cycle: stage and every total (``·`` = not eligible), then the
+    chosen agent, its outcome and what it did."""
     ratings = " ".join(f"{r.name}={r.total:.2f}{'' if r.eligible else '·'}" for r in record.ratings)
     chosen = record.chosen or "-"
-    return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}: {record.detail}"
+    outcome = f" [{record.outcome.value}]" if record.outcome is not None else ""
+    return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}{outcome}: {record.detail}"
 
 
 def format_result(result: Any) -> str:

@@ -30,7 +30,7 @@ def test_plan_trace_and_record(tmp_path, capsys):
     record = tmp_path / "cycles.jsonl"
     assert main(["plan", "--record", str(record)]) == 0
     out = capsys.readouterr().out
-    assert "status: success" in out and "-> wrist:" in out
+    assert "status: success" in out and "-> wrist [progress]:" in out
     header, *lines, footer = [json.loads(line) for line in record.read_text().splitlines()]
     assert header["eos_record"] == "header" and footer["eos_record"] == "result"
     assert [r["seq"] for r in lines] == list(range(1, len(lines) + 1))
