@@ -22,7 +22,6 @@ import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 
-import coal
 import numpy as np
 
 from eos_svc.kinematics import HandDescription, HandModel, HandState, Scene, SurfaceObject, TactileSensor
@@ -237,29 +236,13 @@ class GraspWorld:
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, float] = {}
         self._links = finger_link_geometries(self.hand)
-        # per finger: (q index, lower, upper) of each of its joints
-        self._finger_limits: dict[str, list[tuple[int, float, float]]] = {
-            f: [
-                (int(i), float(self.hand.lower[i]), float(self.hand.upper[i]))
-                for i in self.hand.finger_q_index(f)
-            ]
-            for f in self.hand.finger_names
-        }
         self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
-        # Fast distance queries (coal directly, reused request/result): the agents' hot path
-        # needs only the signed distance, not witness points.
-        self._geometries = [g.geometry for g in self.hand.collision_model.geometryObjects]
-        self._req = self.scene._req
-        self._res = coal.DistanceResult()
-        self._obj_geometry = self.scene.object.geometry
-        self._obj_tf = self.scene._tf_obj
-        self._point = coal.Sphere(1e-9)
-        self._point_tf = coal.Transform3s()
         # Bounding spheres (local centre, radius) of the hand geometries and the object: a
         # cheap lower bound on a distance lets a min over geometries skip exact queries that
         # cannot be the minimum (the result is the same).
         self._bounds: list[tuple[tuple[float, float, float], float]] = []
-        for g in self._geometries:
+        for go in self.hand.collision_model.geometryObjects:
+            g = go.geometry
             g.computeLocalAABB()
             c = np.asarray(g.aabb_center, dtype=float)
             self._bounds.append(((float(c[0]), float(c[1]), float(c[2])), float(g.aabb_radius)))
@@ -285,7 +268,7 @@ class GraspWorld:
         memo = self._memo
         value = memo.get("gap")
         if value is None:
-            value = memo["gap"] = self._point_gap(self.grasp_centre_world())
+            value = memo["gap"] = self.scene.point_gap(self.grasp_centre_world())
         return value
 
     def located(self) -> bool:
@@ -318,13 +301,13 @@ class GraspWorld:
             if gap > self.params.hand_bound + self.params.clearance:
                 value = gap - self.params.hand_bound
             else:
-                value = self._min_gap(range(len(self._geometries)), math.inf)
+                value = self._min_gap(range(len(self._bounds)), math.inf)
             memo["clearance"] = value
         return value
 
     def finger_angle(self, finger: str) -> float:
         """The finger's (common) joint angle, rad (its first joint)."""
-        return float(self.state.q[self._finger_limits[finger][0][0]])
+        return float(self.state.q[self.hand.finger_joint_limits(finger)[0][0]])
 
     # --- moving it -----------------------------------------------------------------
     def set_q(self, q: np.ndarray) -> None:
@@ -414,7 +397,7 @@ class GraspWorld:
         idx = self.hand.finger_q_index(finger)
         q0 = self.state.q
         f0 = self._closing_gap(finger)
-        q1, at_limit = self._closed(q0, finger, dtheta)
+        q1, at_limit = self.state.close_finger(finger, dtheta)
         self.set_q(q1)
         f1 = self._closing_gap(finger)
         if f1 > 0.0:
@@ -452,21 +435,6 @@ class GraspWorld:
         event = "touched" if self.tip_distance(finger) <= tol else "link"
         return event, self.finger_angle(finger)
 
-    def _closed(self, q0: np.ndarray, finger: str, dtheta: float) -> tuple[np.ndarray, bool]:
-        """``q0`` with every joint of ``finger`` moved by ``dtheta`` rad, clipped to its limits
-        (as ``HandState.close_finger``, in scalar arithmetic: the arrays are three long)."""
-        q = q0.copy()
-        at_limit = False
-        for i, lo, hi in self._finger_limits[finger]:
-            target = q[i] + dtheta
-            if target <= lo:
-                q[i], at_limit = lo, True
-            elif target >= hi:
-                q[i], at_limit = hi, True
-            else:
-                q[i] = target
-        return q, at_limit
-
     def _closing_gap(self, finger: str) -> float:
         """How far ``finger`` may still close before something touches (m): the tip's
         distance beyond half the contact tolerance, or a link's distance, whichever is less
@@ -499,36 +467,10 @@ class GraspWorld:
         for lower, gid in bounds:
             if lower >= best:
                 break
-            gap = self._geometry_gap(gid)
+            gap = self.scene.gap(self.state, gid)
             if gap < best:
                 best = gap
         return best
-
-    def _finger_links_clear(self, finger: str) -> bool:
-        """No link of ``finger`` (other than its tip) touches the object."""
-        return all(self._geometry_gap(gid) > 0.0 for gid in self._links[finger])
-
-    def _geometry_gap(self, gid: int) -> float:
-        """Signed distance between hand geometry ``gid`` and the object (m)."""
-        res = self._res
-        res.clear()
-        coal.distance(
-            self._obj_geometry,
-            self._obj_tf,
-            self._geometries[gid],
-            self.state.geometry_data.oMg[gid],
-            self._req,
-            res,
-        )
-        return float(res.min_distance)
-
-    def _point_gap(self, point: np.ndarray) -> float:
-        """Signed distance from a world point to the object surface (m)."""
-        self._point_tf.setTranslation(point)
-        res = self._res
-        res.clear()
-        coal.distance(self._obj_geometry, self._obj_tf, self._point, self._point_tf, self._req, res)
-        return float(res.min_distance)
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:

@@ -293,6 +293,7 @@ class HandModel:
         self.opposing_finger: str = description.opposing_finger
 
         self._q_index: dict[str, np.ndarray] = {}
+        self._joint_limits: dict[str, tuple[tuple[int, float, float], ...]] = {}
         self._v_index: dict[str, np.ndarray] = {}
         for f in description.fingers:
             qi, vi = self._joint_indices(f.joints, f"{f.name}.joints")
@@ -394,6 +395,17 @@ class HandModel:
         """Indices in q of the finger's joints (palm outward)."""
         self._check_finger(name)
         return self._q_index[name].copy()
+
+    def finger_joint_limits(self, name: str) -> tuple[tuple[int, float, float], ...]:
+        """(q index, lower, upper) of each of the finger's joints, palm outward (cached)."""
+        limits = self._joint_limits.get(name)
+        if limits is None:
+            self._check_finger(name)
+            limits = tuple(
+                (int(i), float(self.lower[i]), float(self.upper[i])) for i in self._q_index[name]
+            )
+            self._joint_limits[name] = limits
+        return limits
 
     def finger_v_index(self, name: str) -> np.ndarray:
         """Indices in v of the finger's joints (palm outward)."""
@@ -620,16 +632,22 @@ class HandState:
     # -- motions (return a new q; the state is not changed)
     def close_finger(self, finger: str, dtheta: float) -> tuple[np.ndarray, bool]:
         """New q with every joint of ``finger`` changed by ``dtheta`` rad (positive closes),
-        clipped to the joint limits; the flag is True when a limit was hit."""
+        clipped to the joint limits; the flag is True when a limit was hit.
+
+        Scalar arithmetic over the finger's few joints: it is on the planner's hot path.
+        """
         if not math.isfinite(dtheta):
             raise ConfigurationError("dtheta", f"must be finite, got {dtheta!r}")
-        idx = self.hand.finger_q_index(finger)
         q = self._q.copy()
-        target = q[idx] + dtheta
-        lo, hi = self.hand.lower[idx], self.hand.upper[idx]
-        clipped = np.clip(target, lo, hi)
-        q[idx] = clipped
-        at_limit = bool(np.any(target <= lo) or np.any(target >= hi))
+        at_limit = False
+        for i, lo, hi in self.hand.finger_joint_limits(finger):
+            target = q[i] + dtheta
+            if target <= lo:
+                q[i], at_limit = lo, True
+            elif target >= hi:
+                q[i], at_limit = hi, True
+            else:
+                q[i] = target
         return q, at_limit
 
     def move_wrist(

@@ -92,6 +92,8 @@ class Scene:
         self._res = coal.DistanceResult()
         self._tf_obj = coal.Transform3s()
         self._tf_tip = coal.Transform3s()
+        self._point = coal.Sphere(1e-9)  # a point probe for point_gap
+        self._tf_point = coal.Transform3s()
         self.set_object_placement(obj.placement)
         # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere), and
         # a coal distance functor object–tip (cheaper per call than coal.distance; it holds
@@ -171,6 +173,29 @@ class Scene:
         ``Contact.finger`` holds the geometry name."""
         gid = self.hand.geometry_id(geometry_name)
         return self._geometry_distance(state, gid)
+
+    def gap(self, state: HandState, gid: int) -> float:
+        """Signed distance (m) between hand collision geometry ``gid`` and the object, without
+        witness points (the cheap query for guarded motions)."""
+        res = self._res
+        res.clear()
+        coal.distance(
+            self.object.geometry,
+            self._tf_obj,
+            self.hand.collision_model.geometryObjects[gid].geometry,
+            state.geometry_data.oMg[gid],
+            self._req,
+            res,
+        )
+        return float(res.min_distance)
+
+    def point_gap(self, point: np.ndarray) -> float:
+        """Signed distance (m) from a world point to the object's surface (negative inside)."""
+        self._tf_point.setTranslation(np.asarray(point, dtype=float))
+        res = self._res
+        res.clear()
+        coal.distance(self.object.geometry, self._tf_obj, self._point, self._tf_point, self._req, res)
+        return float(res.min_distance)
 
     def _geometry_distance(self, state: HandState, gid: int) -> Contact:
         go = self.hand.collision_model.geometryObjects[gid]
