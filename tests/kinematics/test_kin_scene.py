@@ -20,6 +20,7 @@ from eos_svc.kinematics import (
     Sphere,
     SurfaceObject,
     UnknownNameError,
+    load_hand,
 )
 
 RandQ = Callable[..., np.ndarray]
@@ -179,3 +180,50 @@ def test_allegro_contacts(allegro: HandModel, random_q: RandQ) -> None:
     con = Scene(allegro, obj).contact(st, "thumb")
     assert con.distance == pytest.approx(0.05 - 0.03 - 0.012, abs=1e-9)
     assert np.allclose(con.normal, [0, -1, 0])
+
+
+@pytest.mark.parametrize("shape", list(SHAPES))
+def test_tip_contacts_batched_closed_form(shape: str, hand: HandModel, random_q: RandQ) -> None:
+    """Scene.tip_contacts (one computeDistances for every tip) against the closed forms, and
+    equal to the one-finger-at-a-time contact()."""
+    make, sd = SHAPES[shape]
+    obj = make()
+    scene = Scene(hand, obj)
+    rng = np.random.default_rng(33)
+    st = hand.state()
+    for _ in range(20):
+        st.update(random_q(hand, rng))
+        centres = [st.tip_position(f) for f in hand.finger_names]
+        scene.set_object_placement(_random_placement(rng, np.mean(centres, axis=0)))
+        batch = scene.tip_contacts(st)
+        assert [c.finger for c in batch] == list(hand.finger_names)
+        for con, c in zip(batch, centres, strict=True):
+            expected = sd(obj.to_local(c)) - hand.tip_radius(con.finger)
+            assert con.distance == pytest.approx(expected, abs=1e-7 if expected > 0 else 1e-5)
+            one = scene.contact(st, con.finger)
+            assert con.distance == pytest.approx(one.distance, abs=1e-12)
+            assert np.allclose(con.point_tip, one.point_tip, atol=1e-12)
+            assert np.allclose(con.point_object, one.point_object, atol=1e-12)
+            assert np.allclose(con.normal, one.normal, atol=1e-12)
+
+
+def test_tip_contacts_follow_the_object_and_the_state(hand: HandModel) -> None:
+    st = hand.state()
+    c = st.tip_position("finger1")
+    scene = Scene(hand, Sphere(0.02))
+    for gap in (0.05, 0.001, -0.004, 0.03):  # not stale; penetration takes the exact path
+        scene.set_object_placement(pin.SE3(np.eye(3), c + np.array([0.03 + gap, 0.0, 0.0])))
+        assert scene.tip_contacts(st)[0].distance == pytest.approx(gap, abs=1e-9)
+    with pytest.raises(KinematicsError, match="state"):
+        scene.tip_contacts(load_hand().state())  # another HandModel's state
+
+
+def test_tip_contacts_allegro(allegro: HandModel, random_q: RandQ) -> None:
+    rng = np.random.default_rng(9)
+    st = allegro.state(random_q(allegro, rng))
+    centre = st.tip_position("thumb") + np.array([0.0, 0.05, 0.0])
+    scene = Scene(allegro, Sphere(0.03, pin.SE3(np.eye(3), centre)))
+    for con in scene.tip_contacts(st):
+        one = scene.contact(st, con.finger)
+        assert con.distance == pytest.approx(one.distance, abs=1e-12)
+        assert np.allclose(con.point_tip, one.point_tip, atol=1e-12)
