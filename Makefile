@@ -3,7 +3,7 @@
 #   make test   -> the test suite
 # Both create (or reuse) the project's virtual environment in .venv.
 # The venv's interpreter: the distribution's CPython when it has venv (Debian builds it with PGO
-# and LTO; it runs our Python glue ~1.2-1.4x faster than a default source build such as pyenv's,
+# and LTO; the benchmarks run 1.1-1.3x faster on it than on a default source build such as pyenv's,
 # see docs/benchmarks.md), else the first python3 on PATH. Override: make PYTHON=python3.12 test
 PYTHON ?= $(shell /usr/bin/python3 -c 'import sys, venv, ensurepip; sys.exit(sys.version_info < (3, 10))' \
             >/dev/null 2>&1 && echo /usr/bin/python3 || echo python3)
