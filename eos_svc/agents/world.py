@@ -21,7 +21,9 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
+import coal
 import numpy as np
 
 from eos_svc.kinematics import HandDescription, HandModel, HandState, Scene, SurfaceObject, TactileSensor
@@ -237,15 +239,12 @@ class GraspWorld:
         self._memo: dict[object, float] = {}
         self._links = finger_link_geometries(self.hand)
         self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
-        # Bounding spheres (local centre, radius) of the hand geometries and the object: a
-        # cheap lower bound on a distance lets a min over geometries skip exact queries that
-        # cannot be the minimum (the result is the same).
-        self._bounds: list[tuple[tuple[float, float, float], float]] = []
-        for go in self.hand.collision_model.geometryObjects:
-            g = go.geometry
-            g.computeLocalAABB()
-            c = np.asarray(g.aabb_center, dtype=float)
-            self._bounds.append(((float(c[0]), float(c[1]), float(c[2])), float(g.aabb_radius)))
+        # Per hand geometry, a cheap lower bound on its distance to the object (the object
+        # taken as its bounding ball): a min over geometries skips the exact queries that
+        # cannot be the minimum (the result is the same). See _shape_bound.
+        self._bounds = [_shape_bound(go.geometry) for go in self.hand.collision_model.geometryObjects]
+        self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
+        self._views_of: HandState | None = None
         self._obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
         self._obj_radius = 0.5 * float(self.scene.object.diameter)
 
@@ -449,28 +448,86 @@ class GraspWorld:
 
     def _min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
-        query of a geometry whose bounding-sphere lower bound already exceeds the minimum."""
-        oMg = self.state.geometry_data.oMg
+        query of a geometry whose lower bound already reaches the minimum (the bound is the
+        distance from the object's bounding ball to the geometry's primitive, see
+        :func:`_shape_bound`; a skipped geometry's gap is ≥ its bound ≥ the minimum, so the
+        result is the min over every geometry)."""
+        state = self.state
+        state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
+        views = self._bound_views
+        if self._views_of is not state:
+            # live views of every geometry's placement (reading oMg[i] from Python costs µs)
+            oMg = state.geometry_data.oMg
+            views = self._bound_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
+            self._views_of = state
         ox, oy, oz = self._obj_centre
-        obj_radius = self._obj_radius
+        obj_radius = self._obj_radius + _BOUND_MARGIN
         bounds = []
         for gid in geometry_ids:
-            centre, radius = self._bounds[gid]
-            M = oMg[gid]
-            if centre == (0.0, 0.0, 0.0):  # primitives centred on their frame: the usual case
-                px, py, pz = M.translation.tolist()
+            kind, a, b = self._bounds[gid]
+            t, R = views[gid]
+            tx, ty, tz = t.tolist()
+            px, py, pz = ox - tx, oy - ty, oz - tz  # object centre relative to the geometry
+            if kind == _SPHERE:  # a ball of radius a about the local point b (usually 0)
+                if b is not None:
+                    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+                    bx, by, bz = b
+                    px -= r00 * bx + r01 * by + r02 * bz
+                    py -= r10 * bx + r11 * by + r12 * bz
+                    pz -= r20 * bx + r21 * by + r22 * bz
+                lower = math.sqrt(px * px + py * py + pz * pz) - a
             else:
-                px, py, pz = M.act(np.asarray(centre)).tolist()
-            px, py, pz = px - ox, py - oy, pz - oz
-            bounds.append((math.sqrt(px * px + py * py + pz * pz) - radius - obj_radius, gid))
+                (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
+                # the object centre in the geometry's frame
+                lx = r00 * px + r10 * py + r20 * pz
+                ly = r01 * px + r11 * py + r21 * pz
+                lz = r02 * px + r12 * py + r22 * pz
+                if kind == _BOX:  # half sides a
+                    hx, hy, hz = a
+                    dx = abs(lx) - hx
+                    dy = abs(ly) - hy
+                    dz = abs(lz) - hz
+                    dx = dx if dx > 0.0 else 0.0
+                    dy = dy if dy > 0.0 else 0.0
+                    dz = dz if dz > 0.0 else 0.0
+                    lower = math.sqrt(dx * dx + dy * dy + dz * dz)
+                else:  # _SEGMENT: radius a about the local z segment of half length b
+                    dz = abs(lz) - b
+                    dz = dz if dz > 0.0 else 0.0
+                    lower = math.sqrt(lx * lx + ly * ly + dz * dz) - a
+            bounds.append((lower - obj_radius, gid))
         bounds.sort()
         for lower, gid in bounds:
             if lower >= best:
                 break
-            gap = self.scene.gap(self.state, gid)
+            gap = self.scene.gap(state, gid)
             if gap < best:
                 best = gap
         return best
+
+
+#: kinds of lower bound of a hand geometry (see _shape_bound)
+_SPHERE, _BOX, _SEGMENT = 0, 1, 2
+#: subtracted from every lower bound (m): covers the round-off of the bound and of coal's
+#: distance, so a bound never exceeds the exact gap coal would return
+_BOUND_MARGIN = 1e-7
+
+
+def _shape_bound(geometry: object) -> tuple[int, Any, Any]:
+    """How to bound the distance from a point to a hand geometry (local frame) from below:
+    ``(_BOX, half sides, None)`` for a box, ``(_SEGMENT, radius, half length)`` for
+    a cylinder or capsule along local z (the cylinder lies inside that capsule), and for a
+    sphere or any other shape ``(_SPHERE, radius, centre or None)``: the ball of its
+    local AABB (the sphere itself for a sphere)."""
+    if isinstance(geometry, coal.Box):
+        return _BOX, tuple(float(x) for x in geometry.halfSide), None
+    if isinstance(geometry, (coal.Cylinder, coal.Capsule)):
+        return _SEGMENT, float(geometry.radius), float(geometry.halfLength)
+    if isinstance(geometry, coal.Sphere):
+        return _SPHERE, float(geometry.radius), None
+    geometry.computeLocalAABB()  # type: ignore[attr-defined]
+    c = tuple(float(x) for x in geometry.aabb_center)  # type: ignore[attr-defined]
+    return _SPHERE, float(geometry.aabb_radius), (None if c == (0.0, 0.0, 0.0) else c)  # type: ignore[attr-defined]
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
