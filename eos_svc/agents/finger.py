@@ -16,6 +16,8 @@ opportunistic weight alone, finger1 is chosen and does not know where to begin).
 
 from __future__ import annotations
 
+from bisect import bisect_left
+
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
@@ -36,7 +38,11 @@ class FingerAgent(GraspAgent):
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger
         self._reach_radius_extra = world.hand.tip_radius(finger)
-        self._reach_memo: tuple[object, bool] = (None, False)  # (wrist, angle, shape id) -> value
+        sweep = world.sweeps[finger]
+        self._sweep = sweep
+        self._sweep_angles = sweep.angles.tolist()
+        # (wrist position, shape entry) -> last sweep sample within reach (see FingerSweep.last_within)
+        self._reach_memo: tuple[object, object, int] = (None, None, -1)
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
@@ -48,20 +54,17 @@ class FingerAgent(GraspAgent):
         if not shape or keys.TARGET not in board:
             return False
         world = self.world
-        key = (world.wrist_position().tobytes(), world.finger_angle(self.finger), id(shape))
-        memo_key, value = self._reach_memo
-        if memo_key == key:
-            return value
-        value = self._in_reach(shape)
-        self._reach_memo = (key, value)
-        return value
-
-    def _in_reach(self, shape: dict) -> bool:
-        centre_palm = np.asarray(shape["centre"]) - self.world.wrist_position()
-        radius = float(shape["grasp_radius"]) + self._reach_radius_extra
-        return self.world.sweeps[self.finger].reaches(
-            self.world.finger_angle(self.finger), centre_palm, radius
-        )
+        wrist = world.wrist_xyz()
+        memo_wrist, memo_shape, last = self._reach_memo
+        if memo_shape is not shape or memo_wrist != wrist:
+            centre_palm = np.asarray(shape["centre"]) - world.wrist_position()
+            radius = float(shape["grasp_radius"]) + self._reach_radius_extra
+            last = self._sweep.last_within(centre_palm, radius)
+            self._reach_memo = (wrist, shape, last)
+        if last < 0:
+            return False
+        # FingerSweep.index_at (np.searchsorted, side left) on the angles as a list
+        return bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12) <= last
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         if ctx.stage == SEARCH:

@@ -165,6 +165,14 @@ class FingerSweep:
         d = rest - centre_palm
         return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
 
+    def last_within(self, centre_palm: np.ndarray, radius: float) -> int:
+        """Index of the last sample within ``radius`` of ``centre_palm`` (−1 if none): closing
+        from ``angle`` reaches it (:meth:`reaches`) iff ``index_at(angle) <= last_within(...)``,
+        so one evaluation per centre serves every angle."""
+        d = self.points - centre_palm
+        within = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= radius * radius)
+        return int(within[-1]) if len(within) else -1
+
 
 @dataclass(frozen=True)
 class ProbeChoice:
@@ -236,7 +244,9 @@ class GraspWorld:
         self._wrist_q = self.hand.wrist_q_index
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
-        self._memo: dict[object, float] = {}
+        self._memo: dict[object, Any] = {}
+        # per finger: the q index of its first joint (its angle, see finger_angle)
+        self._angle_q = {f: self.hand.finger_joint_limits(f)[0][0] for f in self.hand.finger_names}
         self._links = finger_link_geometries(self.hand)
         self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
         # Per hand geometry, a cheap lower bound on its distance to the object (the object
@@ -306,7 +316,24 @@ class GraspWorld:
 
     def finger_angle(self, finger: str) -> float:
         """The finger's (common) joint angle, rad (its first joint)."""
-        return float(self.state.q[self.hand.finger_joint_limits(finger)[0][0]])
+        return self.q_list()[self._angle_q[finger]]
+
+    def q_list(self) -> list[float]:
+        """The hand's configuration as a list of floats (memoised per hand pose; do not modify)."""
+        memo = self._memo
+        value = memo.get("q")
+        if value is None:
+            value = memo["q"] = self.state.q.tolist()
+        return value
+
+    def wrist_xyz(self) -> tuple[float, float, float]:
+        """:meth:`wrist_position` as a tuple of floats (memoised per hand pose)."""
+        memo = self._memo
+        value = memo.get("wrist")
+        if value is None:
+            x, y, z = self.wrist_position().tolist()
+            value = memo["wrist"] = (x, y, z)
+        return value
 
     # --- moving it -----------------------------------------------------------------
     def set_q(self, q: np.ndarray) -> None:
