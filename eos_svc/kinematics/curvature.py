@@ -36,6 +36,7 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -53,6 +54,80 @@ __all__ = [
 DEFAULT_FLAT_CURVATURE = 1.0
 
 Array = NDArray[np.float64]
+
+
+try:  # the gufuncs behind np.linalg's small-matrix functions (same LAPACK calls)
+    from numpy.linalg import _umath_linalg
+
+    _ulinalg: Any = (
+        _umath_linalg
+        if all(hasattr(_umath_linalg, f) for f in ("eigvalsh_lo", "eigh_lo", "solve1", "inv", "lstsq"))
+        else None
+    )
+except ImportError:  # pragma: no cover - other NumPy layouts: the public functions only
+    _ulinalg = None
+
+
+def _finite(a: np.ndarray) -> bool:
+    return math.isfinite(sum(a.reshape(-1).tolist()))
+
+
+def _eigvalsh(a: np.ndarray) -> np.ndarray:
+    """``np.linalg.eigvalsh(a)`` for a real symmetric matrix, without its wrapper (~10 µs):
+    the same gufunc; anything but a finite result is redone by the public function (which
+    raises as before)."""
+    if _ulinalg is not None:
+        with np.errstate(all="ignore"):
+            w = _ulinalg.eigvalsh_lo(a, signature="d->d")
+        if _finite(w):
+            return w
+    return np.linalg.eigvalsh(a)
+
+
+def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.linalg.eigh(a)`` (eigenvalues, eigenvectors), as :func:`_eigvalsh`."""
+    if _ulinalg is not None:
+        with np.errstate(all="ignore"):
+            w, v = _ulinalg.eigh_lo(a, signature="d->dd")
+        if _finite(w) and _finite(v):
+            return w, v
+    w, v = np.linalg.eigh(a)
+    return w, v
+
+
+def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.solve(a, b)`` for a vector ``b``, as :func:`_eigvalsh`."""
+    if _ulinalg is not None:
+        with np.errstate(all="ignore"):
+            x = _ulinalg.solve1(a, b, signature="dd->d")
+        if _finite(x):
+            return x
+    return np.linalg.solve(a, b)
+
+
+def _inv(a: np.ndarray) -> np.ndarray:
+    """``np.linalg.inv(a)``, as :func:`_eigvalsh`."""
+    if _ulinalg is not None:
+        with np.errstate(all="ignore"):
+            x = _ulinalg.inv(a, signature="d->d")
+        if _finite(x):
+            return x
+    return np.linalg.inv(a)
+
+
+def lstsq_solution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.linalg.lstsq(a, b, rcond=None)[0]`` for real 2-D ``a`` (m×n, m ≥ n) and ``b`` (m×k),
+    as :func:`_eigvalsh`."""
+    if _ulinalg is not None:
+        m, n = a.shape
+        with np.errstate(all="ignore"):
+            x, _, _, _ = _ulinalg.lstsq(a, b, _EPS * max(m, n), signature="ddd->ddid")
+        if _finite(x):
+            return x
+    return np.linalg.lstsq(a, b, rcond=None)[0]
+
+
+_EPS = float(np.finfo(float).eps)
 
 
 class UnderdeterminedError(ValueError):
@@ -240,21 +315,21 @@ class CurvatureEstimator:
         scale = float(np.trace(AtA))
         # 2-norm condition number of the symmetric AtA from its eigenvalues (np.linalg.cond would
         # take an SVD through a heavier wrapper)
-        ev = np.abs(np.linalg.eigvalsh(AtA))
+        ev = np.abs(_eigvalsh(AtA))
         ev_min = float(ev.min())
         if scale == 0.0 or ev_min == 0.0 or float(ev.max()) / ev_min > 1e12:
             raise UnderdeterminedError(
                 "samples do not determine the curvature form: roll along two independent "
                 "tangent directions (contact velocities are parallel or zero)"
             )
-        theta = np.linalg.solve(AtA, A.T @ b)
+        theta = _solve(AtA, A.T @ b)
         r = b - A @ theta
         dof = 2 * m - 3
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
-        cov = s2 * np.linalg.inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
+        cov = s2 * _inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
         form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
-        evals, evecs = np.linalg.eigh(form)
+        evals, evecs = _eigh(form)
         order = [1, 0]  # k1 >= k2
         ks = (float(evals[order[0]]), float(evals[order[1]]))
         dirs = evecs[:, order]

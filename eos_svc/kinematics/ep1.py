@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
+from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
 from .hand import HandModel, HandState, KinematicsError
 from .objects import Box, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
@@ -97,13 +97,22 @@ def contact_frame(normal: np.ndarray) -> np.ndarray:
     ``z = −normal`` (the fingertip's outward normal); ``x`` = world z projected on the
     tangent plane (world y if the normal is within ~25° of vertical); ``y = z × x``.
     """
-    z = -np.asarray(normal, dtype=float)
-    z = z / np.linalg.norm(z)
-    ref = np.array([0.0, 0.0, 1.0]) if abs(z[2]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    x = ref - (ref @ z) * z
-    x /= np.linalg.norm(x)
-    y = np.array([z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]])
-    return np.column_stack([x, y, z])
+    # scalar arithmetic on the 3-vectors (numpy costs µs per call on them; same values)
+    z0, z1, z2 = (-np.asarray(normal, dtype=float)).tolist()
+    nz = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
+    z0, z1, z2 = z0 / nz, z1 / nz, z2 / nz
+    f0, f1, f2 = (0.0, 0.0, 1.0) if abs(z2) < 0.9 else (0.0, 1.0, 0.0)
+    d = f0 * z0 + f1 * z1 + f2 * z2
+    x0, x1, x2 = f0 - d * z0, f1 - d * z1, f2 - d * z2
+    nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+    x0, x1, x2 = x0 / nx, x1 / nx, x2 / nx
+    return np.array(
+        [
+            [x0, z1 * x2 - z2 * x1, z0],
+            [x1, z2 * x0 - z0 * x2, z1],
+            [x2, z0 * x1 - z1 * x0, z2],
+        ]
+    )
 
 
 def ground_truth_form(obj: SurfaceObject, point: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -213,11 +222,13 @@ def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
-    X = np.column_stack([np.ones_like(theta), theta, theta * theta])
-    # np.linalg.lstsq, not scipy's lapack.dgels: with two right-hand sides scipy's OpenBLAS
-    # goes multi-threaded and, on a loaded 2-core machine, takes milliseconds instead of µs
-    coef, *_ = np.linalg.lstsq(X, c, rcond=None)
-    out: np.ndarray = coef[1]
+    X = np.empty((len(theta), 3))
+    X[:, 0] = 1.0
+    X[:, 1] = theta
+    X[:, 2] = theta * theta
+    # np.linalg.lstsq's LAPACK call (not scipy's lapack.dgels: with two right-hand sides scipy's
+    # OpenBLAS goes multi-threaded and, on a loaded 2-core machine, takes milliseconds)
+    out: np.ndarray = lstsq_solution(X, c)[1]
     return out
 
 
@@ -269,7 +280,6 @@ def run_ep1(
     F = contact_frame(ct0.normal)
     r = hand.tip_radius(finger)
     R0 = state.tip_placement(finger).rotation
-    ex_t = R0.T @ F[:, 0]
     K_f = np.eye(2) / r
     half = steps_per_direction // 2
     full = 2 * half
@@ -278,7 +288,16 @@ def run_ep1(
     samples: list[CurvatureSample] = []
     slips: list[float] = []
     gaps: list[float] = [abs(ct0.distance)]
+    n_dir = sum(n for _, n, _ in legs)  # steps of one direction
     sets = np.concatenate([np.full(n, k) for _, n, k in legs])  # 0: outward half-legs, 1: sweep
+    # per step of a direction: tactile point and tip rotation, kept where in contact
+    P_buf = np.empty((n_dir, 3))
+    R_buf = np.empty((n_dir, 3, 3))
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R0.tolist()
+    fx0, fx1, fx2 = F[:, 0].tolist()
+    ex_t0 = r00 * fx0 + r10 * fx1 + r20 * fx2  # R0ᵀ x of the frame (tip frame)
+    ex_t1 = r01 * fx0 + r11 * fx1 + r21 * fx2
+    ex_t2 = r02 * fx0 + r12 * fx1 + r22 * fx2
     steps = 0
     rq: RollingQP | None = None
     for phi_deg in dirs:
@@ -286,9 +305,8 @@ def run_ep1(
         a_xy = np.array([math.cos(phi), math.sin(phi)])
         axis = F[:, :2] @ a_xy
         a_tip = R0.T @ axis
-        # per step of this direction: tactile point and tip rotation (None out of contact)
-        pts: list[np.ndarray | None] = []
-        rots: list[np.ndarray | None] = []
+        inc: list[bool] = []
+        i = 0
         for sign, n_steps, _ in legs:
             # the axis stays the one tangent at the start (fixed for the whole direction);
             # one roller for the whole run, re-targeted for every leg
@@ -303,18 +321,18 @@ def run_ep1(
                 rd = st.reading
                 assert rd is not None
                 if rd.in_contact:
-                    pts.append(rd.point_tip)
-                    rots.append(R_view.copy())
+                    P_buf[i] = rd.point_tip
+                    R_buf[i] = R_view
+                    inc.append(True)
+                    i += 1
                 else:
-                    pts.append(None)
-                    rots.append(None)
+                    inc.append(False)
                 slips.append(st.slip_speed)
                 gaps.append(abs(st.contact.distance))
             steps += n_steps
-        inc = np.array([p is not None for p in pts])
-        P_all = np.array([p for p in pts if p is not None]).reshape(-1, 3)
-        R_all = np.array([R for R in rots if R is not None]).reshape(-1, 3, 3)
-        set_in = sets[inc]
+        P_all = P_buf[:i]
+        R_all = R_buf[:i]
+        set_in = sets[np.array(inc)]
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
         for k in (0, 1):
@@ -322,15 +340,22 @@ def run_ep1(
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            b = P.mean(axis=0)
-            b /= np.linalg.norm(b)
-            # basis at b: the frame's x, y (tip frame) projected on the tangent plane at b
-            ex = ex_t - (ex_t @ b) * b
-            ex /= np.linalg.norm(ex)
-            ey = np.array(
-                [b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]]
+            # basis at b (the readings' mean direction): the frame's x, y (tip frame)
+            # projected on the tangent plane at b; scalar arithmetic on the 3-vectors
+            b0, b1, b2 = P.mean(axis=0).tolist()
+            nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+            b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
+            d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
+            e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
+            ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
+            c = _log_chart(
+                P,
+                np.array((b0, b1, b2)),
+                np.array((e0, e1, e2)),
+                np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
+                r,
             )
-            c = _log_chart(P, b, ex, ey, r)
             s = _fit_slope(th_all[sel], c)
             samples.append(est.add_sample(a_xy, s, K_f))
     assert rq is not None
