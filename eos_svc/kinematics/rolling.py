@@ -25,6 +25,7 @@ carrying a copy of the problem.
 from __future__ import annotations
 
 import math
+import struct
 import threading
 from dataclasses import dataclass
 from typing import Any
@@ -97,6 +98,22 @@ _STEP_SETTERS = tuple(
 )
 _S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = _STEP_SETTERS
 _DGELS = lapack.dgels
+# struct.pack_into on a memoryview of a float64 array writes the same doubles as a numpy slice
+# assignment from a tuple, ~1 µs cheaper (no sequence-to-array discovery)
+_PACK18 = struct.Struct("18d").pack_into
+_PACK6 = struct.Struct("6d").pack_into
+_SC_FINGER, _SC_DISTANCE, _SC_POINT_TIP, _SC_POINT_OBJECT, _SC_NORMAL = (
+    Contact.__dict__[f].__set__ for f in ("finger", "distance", "point_tip", "point_object", "normal")
+)
+_SR_FINGER, _SR_POINT, _SR_NORMAL, _SR_IN, _SR_DIST = (
+    TactileReading.__dict__[f].__set__
+    for f in ("finger", "point_tip", "normal_tip", "in_contact", "distance")
+)
+_FK = pin.forwardKinematics
+_JJ = pin.computeJointJacobians
+_GFJ = pin.getFrameJacobian
+_GFCA = pin.getFrameClassicalAcceleration
+_matmul = np.matmul
 
 
 def _fast_step(
@@ -292,6 +309,7 @@ class RollingQP:
         #: Second-order integration: the QP targets the step's average velocities (see _build).
         self.second_order = bool(second_order)
         self._zero_nv = np.zeros(model.nv)
+        self._J = np.zeros((6, model.nv))  # the tip's frame Jacobian, set by kinematics()
         #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
         self.fast_tactile = True
         #: Closed-form solve when the bounds are inactive (see the class doc).
@@ -320,6 +338,7 @@ class RollingQP:
         self._ub = self._u[6:]
         # dgels' right-hand side must have max(6, nx) rows: b followed by (ignored) lb entries
         self._b_ext = self._l[: max(6, nx)]
+        self._b_buf = self._b.data  # for struct.pack_into (see step)
         self._lo = hand.lower[self._cols]  # q index == v index for hand3x3-like hands
         self._hi = hand.upper[self._cols]
         self._nvmax = -hand.velocity_limit[self._cols]
@@ -328,6 +347,7 @@ class RollingQP:
         self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
         self._M[3:, 3:] = np.eye(3)
         self._M3 = self._M[:3].reshape(-1)  # view of the three changing rows
+        self._M3_buf = self._M3.data  # for struct.pack_into (see step)
         self._lo_dt = self._lo / self.dt
         self._hi_dt = self._hi / self.dt
         # bounds before clipping to the velocity limits: row 0 (q_min − q)/dt, row 1 (q_max − q)/dt
@@ -453,7 +473,7 @@ class RollingQP:
     def _build(self, contact: Contact, n: tuple[float, float, float] | None = None) -> None:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
         (``n``: the contact normal as floats, when the caller has them)."""
-        J = pin.getFrameJacobian(self._model, self._data, self._fid, _LWA)
+        J = self._J  # from kinematics()
         sel = self._sel
         if type(sel) is slice:
             Jb = J[:, sel]
@@ -623,7 +643,8 @@ class RollingQP:
             pin.computeJointJacobians(model, data)
         else:
             pin.computeJointJacobians(model, data, self._q)
-        pin.updateFramePlacement(model, data, self._fid)
+        # getFrameJacobian also places the tip frame (data.oMf[fid]): no updateFramePlacement
+        self._J = pin.getFrameJacobian(model, data, self._fid, _LWA)
 
     def read_tactile(self, contact: Contact) -> TactileReading | None:
         """The sensor's reading of ``contact`` (None without a sensor).
@@ -686,13 +707,158 @@ class RollingQP:
         return bool((self._lb > self._ub).any())
 
     def step(self) -> RollingStep:
-        """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
-        self.kinematics()
-        contact = self.contact()
-        n = self._n
-        reading = self._read(contact, n) if self.tactile is not None else None
-        self._build(contact, n)
-        x = self._solve_direct() if self.direct else None
+        """Measure the contact, read the sensor, solve the QP, integrate one ``dt``.
+
+        The same computation as :meth:`kinematics`, :meth:`contact`, :meth:`read_tactile`,
+        ``_build``, ``_solve_direct`` and the integration in turn, written out in one body
+        (each helper call, attribute look-up and temporary array costs a fraction of a µs).
+        Keep the two in step: tests/kinematics/test_rolling_step.py compares them bit for bit.
+        """
+        model, data, fid = self._model, self._data, self._fid
+        # ---- kinematics: FK (with the last q̇), joint Jacobians; getFrameJacobian also
+        # places the tip frame (data.oMf[fid], seen through _c_view/_R_view)
+        if self.second_order:
+            _FK(model, data, self._q, self._qdot, self._zero_nv)
+            _JJ(model, data)
+        else:
+            _JJ(model, data, self._q)
+        J = _GFJ(model, data, fid, _LWA)
+        # ---- contact (as contact())
+        c = self._c_view
+        self._tf_tip.setTranslation(c)
+        res = self._res
+        res.clear()  # needed: a result at distance <= 0 would satisfy the next request as is
+        d = self._dist(self._tf_obj, self._tf_tip, self._req, res)  # = res.min_distance
+        p_obj = res.getNearestPoint1()
+        cx, cy, cz = c.tolist()
+        ox, oy, oz = p_obj.tolist()
+        dx, dy, dz = cx - ox, cy - oy, cz - oz
+        nn = math.sqrt(dx * dx + dy * dy + dz * dz)
+        r = self._r
+        if nn > 1e-12 and d > -0.5 * r:  # tip centre outside the object
+            s = 1.0 / nn
+            nx_, ny_, nz_ = dx * s, dy * s, dz * s
+        else:
+            nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
+        n = self._n = (nx_, ny_, nz_)
+        finger = self.finger
+        contact: Contact = _new(Contact)  # as _fast_contact(...), without the call
+        _SC_FINGER(contact, finger)
+        _SC_DISTANCE(contact, d)
+        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
+        _SC_POINT_OBJECT(contact, p_obj)
+        _SC_NORMAL(contact, np.array(n))
+        # ---- tactile reading (as _read())
+        sensor = self.tactile
+        reading: TactileReading | None = None
+        if sensor is not None:
+            if type(sensor) is not TactileSensor or not self.fast_tactile:
+                self.sync()
+                reading = sensor.read(self._state, contact)
+            else:
+                (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self._R_view.tolist()
+                px = -r * (nx_ * r00 + ny_ * r10 + nz_ * r20)
+                py = -r * (nx_ * r01 + ny_ * r11 + nz_ * r21)
+                pz = -r * (nx_ * r02 + ny_ * r12 + nz_ * r22)
+                in_contact = d <= sensor.contact_tolerance
+                if in_contact:
+                    if sensor.noise_std > 0.0:
+                        ux, uy, uz = px / r, py / r, pz / r
+                        if abs(ux) < 0.9:
+                            t1x, t1y, t1z = 1.0 - ux * ux, -ux * uy, -ux * uz
+                        else:
+                            t1x, t1y, t1z = -uy * ux, 1.0 - uy * uy, -uy * uz
+                        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+                        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
+                        t2x = uy * t1z - uz * t1y
+                        t2y = uz * t1x - ux * t1z
+                        t2z = ux * t1y - uy * t1x
+                        g0, g1 = sensor.rng.normal(0.0, sensor.noise_std, size=2).tolist()
+                        px, py, pz = (
+                            px + g0 * t1x + g1 * t2x,
+                            py + g0 * t1y + g1 * t2y,
+                            pz + g0 * t1z + g1 * t2z,
+                        )
+                        s = r / math.sqrt(px * px + py * py + pz * pz)
+                        px, py, pz = px * s, py * s, pz * s
+                    if sensor.pitch is not None:
+                        h = sensor.pitch
+                        px, py, pz = round(px / h) * h, round(py / h) * h, round(pz / h) * h
+                        pn = math.sqrt(px * px + py * py + pz * pz)
+                        if pn > 1e-12:
+                            px, py, pz = px * r / pn, py * r / pn, pz * r / pn
+                reading = _new(TactileReading)  # as _fast_reading(...), without the call
+                _SR_FINGER(reading, finger)
+                _SR_POINT(reading, np.array((px, py, pz)))
+                _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
+                _SR_IN(reading, in_contact)  # d and the tolerance are floats: a bool
+                _SR_DIST(reading, d)  # a float (coal's min_distance)
+        # ---- constraint rows and targets (as _build())
+        self._J = J
+        sel = self._sel
+        if type(sel) is slice:
+            Jb = J[:, sel]
+        else:
+            Jb = self._Jb
+            J.take(sel, axis=1, out=Jb)
+        if abs(nx_) < 0.9:
+            t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
+        else:
+            t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
+        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
+        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
+        t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
+        _PACK18(  # = self._M3[:] = (...), without numpy's sequence conversion
+            self._M3_buf, 0,
+            t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z,
+            t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
+            nx_, ny_, nz_, 0.0, 0.0, 0.0,
+        )  # fmt: skip
+        C = self._C
+        _matmul(self._M, Jb, out=C)
+        dt = self.dt
+        bn = -self.gap_gain * d / dt
+        b = self._b
+        if self.second_order and self.steps > 0:
+            ax, ay, az, wx, wy, wz = _GFCA(model, data, fid, _LWA).vector.tolist()
+            px = ax - r * (wy * nz_ - wz * ny_)
+            py = ay - r * (wz * nx_ - wx * nz_)
+            pz = az - r * (wx * ny_ - wy * nx_)
+            h = 0.5 * dt
+            wa0, wa1, wa2 = self._wa_t
+            b0, b1, b2, b3, b4, b5 = bt = (
+                -h * (t1x * px + t1y * py + t1z * pz),
+                -h * (t2x * px + t2y * py + t2z * pz),
+                bn - h * (nx_ * ax + ny_ * ay + nz_ * az),
+                wa0 - h * wx,
+                wa1 - h * wy,
+                wa2 - h * wz,
+            )
+            _PACK6(self._b_buf, 0, *bt)  # = b[:] = bt
+        else:
+            b[2] = bn
+            b0, b1, b2, b3, b4, b5 = b.tolist()
+        if self._free_steps > 0:
+            self._free_steps -= 1
+        else:
+            self._bounds()
+        # ---- solve: closed form when the bounds are inactive (as _solve_direct()), else the backend
+        x: np.ndarray | None = None
+        if self.direct and self.nx >= 6:
+            ws = self._wscale
+            if ws is None:
+                _, z, info = _DGELS(C, self._b_ext)
+            else:
+                np.multiply(C, ws, out=self._Cw)
+                _, z, info = _DGELS(self._Cw, self._b_ext)
+            if info == 0:
+                x = z  # dgels' solution has max(6, nx) = nx rows
+                if ws is not None:
+                    x = x * ws
+                for xi, lo, hi in zip(x.tolist(), self._lb_tol, self._ub_tol, strict=True):
+                    if not lo <= xi <= hi:  # also catches NaN
+                        x = None
+                        break
         it = 0
         if x is None:
             if self._bounds_infeasible():
@@ -703,30 +869,32 @@ class RollingQP:
                     "infeasible bounds",
                 )
             x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
-        # residuals of the equalities at the returned solution
-        res = self._res6
-        np.matmul(self._C, x, out=res)
-        np.subtract(res, self._b, out=res)
-        r0, r1, r2, r3, r4, r5 = res.tolist()
+        # ---- residuals of the equalities at the returned solution (C x in numpy: the same
+        # BLAS call as before, so the same round-off; − b in floats, as np.subtract would)
+        res6 = self._res6
+        _matmul(C, x, out=res6)
+        r0, r1, r2, r3, r4, r5 = res6.tolist()
+        r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
+        # ---- integration q ← q + q̇ dt
         qdot = self._qdot
-        sel = self._sel
         qdot[sel] = x
         qa = self._qa
-        np.multiply(x, self.dt, out=self._tmp)
-        qa += self._tmp
+        tmp = self._tmp
+        np.multiply(x, dt, out=tmp)
+        qa += tmp
         if type(sel) is not slice:
             self._q[sel] = qa
         self._stale = True
         self.steps += 1
-        return _fast_step(
-            contact,
-            reading,
-            qdot.copy(),
-            math.sqrt(r0 * r0 + r1 * r1),
-            abs(r2),
-            math.sqrt(r3 * r3 + r4 * r4 + r5 * r5),
-            it,
-        )
+        rs: RollingStep = _new(RollingStep)  # as _fast_step(...), without the call
+        _S_CONTACT(rs, contact)
+        _S_READING(rs, reading)
+        _S_QDOT(rs, qdot.copy())
+        _S_SLIP(rs, math.sqrt(r0 * r0 + r1 * r1))
+        _S_NORMAL(rs, abs(r2))
+        _S_OMEGA(rs, math.sqrt(r3 * r3 + r4 * r4 + r5 * r5))
+        _S_ITER(rs, it)
+        return rs
 
     def run(self, n: int) -> list[RollingStep]:
         """``n`` steps; returns their records."""
