@@ -83,8 +83,8 @@ class EndAgent(GraspAgent):
         super().__init__("end", (GRASP,), default, world)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
-        states = board.get(keys.FINGER_STATE, {})
-        if states and all(s in DONE_STATES for s in states.values()):
+        states = board.get(keys.FINGER_STATE)
+        if states and DONE_STATES.issuperset(states.values()):  # every finger is done
             return 1.0
         return 0.0
 

@@ -247,12 +247,10 @@ class GraspWorld:
         self._memo: dict[object, Any] = {}
         # per finger: the q index of its first joint (its angle, see finger_angle)
         self._angle_q = {f: self.hand.finger_joint_limits(f)[0][0] for f in self.hand.finger_names}
-        self._links = finger_link_geometries(self.hand)
-        self.probe = ProbeChoice.for_hand(self.hand, self.sweeps)
-        # Per hand geometry, a cheap lower bound on its distance to the object (the object
-        # taken as its bounding ball): a min over geometries skips the exact queries that
-        # cannot be the minimum (the result is the same). See _shape_bound.
-        self._bounds = [_shape_bound(go.geometry) for go in self.hand.collision_model.geometryObjects]
+        # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
+        # (the object taken as its bounding ball): a min over geometries skips the exact
+        # queries that cannot be the minimum (the result is the same). See _shape_bound.
+        self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
         self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
         self._views_of: HandState | None = None
         self._obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
@@ -531,6 +529,31 @@ class GraspWorld:
             if gap < best:
                 best = gap
         return best
+
+
+#: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
+#: derives from them alone (see _derived_for)
+_DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] = {}
+
+
+def _derived_for(
+    hand: HandModel, sweeps: dict[str, FingerSweep]
+) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any]]]:
+    """The finger link geometries, the probe choice and the geometries' distance bounds of
+    ``hand`` (with ``sweeps``), computed once per hand and sweeps (they never change; every
+    plan's world shares them read-only)."""
+    entry = _DERIVED.get(id(hand))
+    if entry is None or entry[0] is not hand or entry[1] is not sweeps:
+        derived = (
+            finger_link_geometries(hand),
+            ProbeChoice.for_hand(hand, sweeps),
+            [_shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
+        )
+        entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
+        while len(_DERIVED) > 8:
+            del _DERIVED[next(iter(_DERIVED))]
+    links, probe, bounds = entry[2]
+    return links, probe, bounds
 
 
 #: kinds of lower bound of a hand geometry (see _shape_bound)

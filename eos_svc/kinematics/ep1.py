@@ -136,7 +136,7 @@ def place_hand_for_ep1(
         WorkspaceError: the wrist would leave its workspace.
     """
     hand = scene.hand
-    st = hand.state(hand.neutral() if q is None else q)
+    st = _scratch_state(hand, hand.neutral() if q is None else q)
     c = st.tip_position(finger).copy()
     obj = scene.object
     target = c if point is None else np.asarray(point, dtype=float)
@@ -154,6 +154,27 @@ def place_hand_for_ep1(
             break
         q_new = st.move_wrist(-ct.distance * ct.normal)
     return q_new
+
+
+_SCRATCH = threading.local()
+
+
+def _scratch_state(hand: HandModel, q: object) -> HandState:
+    """A :class:`HandState` of ``hand`` at ``q`` (validated) for this thread's temporary use:
+    the same state as ``hand.state(q)`` without its set-up (Pinocchio and geometry data,
+    ~0.1 ms). One per hand per thread (a few hands kept); valid until the next call."""
+    cache: dict[int, HandState] | None = getattr(_SCRATCH, "states", None)
+    if cache is None:
+        cache = _SCRATCH.states = {}
+    st = cache.get(id(hand))
+    if st is not None and st.hand is hand:
+        st.update(q)
+        return st
+    st = hand.state(q)
+    cache[id(hand)] = st
+    while len(cache) > 4:
+        del cache[next(iter(cache))]
+    return st
 
 
 def _log3(R: np.ndarray) -> np.ndarray:
