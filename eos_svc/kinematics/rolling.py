@@ -25,6 +25,7 @@ carrying a copy of the problem.
 from __future__ import annotations
 
 import math
+import operator
 import struct
 import threading
 from dataclasses import dataclass
@@ -102,6 +103,7 @@ _DGELS = lapack.dgels
 # assignment from a tuple, ~1 µs cheaper (no sequence-to-array discovery)
 _PACK18 = struct.Struct("18d").pack_into
 _PACK6 = struct.Struct("6d").pack_into
+_LE = operator.le
 _SC_FINGER, _SC_DISTANCE, _SC_POINT_TIP, _SC_POINT_OBJECT, _SC_NORMAL = (
     Contact.__dict__[f].__set__ for f in ("finger", "distance", "point_tip", "point_object", "normal")
 )
@@ -341,7 +343,6 @@ class RollingQP:
         self._b_buf = self._b.data  # for struct.pack_into (see step)
         self._lo = hand.lower[self._cols]  # q index == v index for hand3x3-like hands
         self._hi = hand.upper[self._cols]
-        self._nvmax = -hand.velocity_limit[self._cols]
         self._vmax = hand.velocity_limit[self._cols]
         self._Jb = np.zeros((6, nx))
         self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
@@ -350,18 +351,21 @@ class RollingQP:
         self._M3_buf = self._M3.data  # for struct.pack_into (see step)
         self._lo_dt = self._lo / self.dt
         self._hi_dt = self._hi / self.dt
-        # bounds before clipping to the velocity limits: row 0 (q_min − q)/dt, row 1 (q_max − q)/dt
-        self._lohi_dt = np.stack([self._lo_dt, self._hi_dt])
+        self._lo_dt_l: list[float] = self._lo_dt.tolist()
+        self._hi_dt_l: list[float] = self._hi_dt.tolist()
         self._vmax_l: list[float] = self._vmax.tolist()
+        self._pack_nx = struct.Struct(f"{nx}d").pack_into
+        self._lb_buf = self._lb.data  # for struct.pack_into (_bounds)
+        self._ub_buf = self._ub.data
         self._free_steps = 0  # bound evaluations that may be skipped (see _bounds)
         self._lb_tol: list[float] = []
         self._ub_tol: list[float] = []
-        self._T2 = np.zeros((2, nx))
-        self._T2_lo = self._T2[0]
-        self._T2_hi = self._T2[1]
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
         self._qdot = np.zeros(model.nv)
+        # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step)
+        self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
+        self._qa_buf: Any = None
         #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
         self.problem = qpsolvers.Problem(
             self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
@@ -397,6 +401,7 @@ class RollingQP:
         self._q = state.q
         # active joints' q, kept in step with _q (a view of it when the joints are contiguous)
         self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
+        self._qa_buf = self._qa.data if type(self._sel) is slice else None
         self._stale = False
         self._qdot[:] = 0.0
         self._free_steps = 0
@@ -534,21 +539,30 @@ class RollingQP:
         if self._free_steps > 0:
             self._free_steps -= 1
             return
-        qs = self._tmp
-        np.multiply(self._qa, 1.0 / self.dt, out=qs)
-        np.subtract(self._lohi_dt, qs, out=self._T2)
-        np.maximum(self._nvmax, self._T2_lo, out=self._lb)
-        np.minimum(self._vmax, self._T2_hi, out=self._ub)
+        # in floats, the operations numpy's multiply, subtract, maximum and minimum did (same
+        # values, NaN propagated alike); the arrays written once each
+        inv = 1.0 / self.dt
         tol = self.eps
-        self._lb_tol = [lo - tol for lo in self._lb.tolist()]
-        self._ub_tol = [hi + tol for hi in self._ub.tolist()]
+        lb: list[float] = []
+        ub: list[float] = []
         # steps until a position limit could bind: (q_min − q)/dt < −q̇max and
         # (q_max − q)/dt > q̇max hold while each changes by at most q̇max (+ solver tolerance)
         # per step
         k = math.inf
-        for tl, th, v in zip(self._T2_lo.tolist(), self._T2_hi.tolist(), self._vmax_l, strict=True):
+        for q, lo, hi, v in zip(self._qa.tolist(), self._lo_dt_l, self._hi_dt_l, self._vmax_l, strict=True):
+            qs = q * inv
+            tl = lo - qs  # (q_min − q)/dt
+            th = hi - qs  # (q_max − q)/dt
+            nv = -v
+            lb.append(nv if nv >= tl else tl)  # np.maximum(−q̇max, tl)
+            ub.append(v if v <= th else th)  # np.minimum(q̇max, th)
             shift = v * (1.0 + 1e-6) + 1e-6
             k = min(k, (-v - tl) / shift, (th - v) / shift)
+        pack = self._pack_nx
+        pack(self._lb_buf, 0, *lb)
+        pack(self._ub_buf, 0, *ub)
+        self._lb_tol = [x - tol for x in lb]
+        self._ub_tol = [x + tol for x in ub]
         self._free_steps = int(k) - 1 if k >= 2.0 else 0
 
     def _solve_direct(self) -> np.ndarray | None:
@@ -844,6 +858,7 @@ class RollingQP:
             self._bounds()
         # ---- solve: closed form when the bounds are inactive (as _solve_direct()), else the backend
         x: np.ndarray | None = None
+        xs: list[float] | None = None
         if self.direct and self.nx >= 6:
             ws = self._wscale
             if ws is None:
@@ -855,10 +870,10 @@ class RollingQP:
                 x = z  # dgels' solution has max(6, nx) = nx rows
                 if ws is not None:
                     x = x * ws
-                for xi, lo, hi in zip(x.tolist(), self._lb_tol, self._ub_tol, strict=True):
-                    if not lo <= xi <= hi:  # also catches NaN
-                        x = None
-                        break
+                xs = x.tolist()
+                # lo <= x_i <= hi for every i (False on NaN), the loop in C
+                if not (all(map(_LE, self._lb_tol, xs)) and all(map(_LE, xs, self._ub_tol))):
+                    x = None
         it = 0
         if x is None:
             if self._bounds_infeasible():
@@ -869,6 +884,7 @@ class RollingQP:
                     "infeasible bounds",
                 )
             x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
+            xs = x.tolist()
         # ---- residuals of the equalities at the returned solution (C x in numpy: the same
         # BLAS call as before, so the same round-off; − b in floats, as np.subtract would)
         res6 = self._res6
@@ -877,12 +893,19 @@ class RollingQP:
         r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
         # ---- integration q ← q + q̇ dt
         qdot = self._qdot
-        qdot[sel] = x
         qa = self._qa
-        tmp = self._tmp
-        np.multiply(x, dt, out=tmp)
-        qa += tmp
-        if type(sel) is not slice:
+        if type(sel) is slice:
+            # qdot[sel] = x and qa += x * dt, float by float into the arrays' buffers (the same
+            # roundings as numpy's multiply then add)
+            pack = self._pack_nx
+            assert xs is not None  # the list of x, from the closed form or the backend
+            pack(self._qdot_a_buf, 0, *xs)
+            pack(self._qa_buf, 0, *[qi + xi * dt for qi, xi in zip(qa.tolist(), xs, strict=True)])
+        else:
+            qdot[sel] = x
+            tmp = self._tmp
+            np.multiply(x, dt, out=tmp)
+            qa += tmp
             self._q[sel] = qa
         self._stale = True
         self.steps += 1

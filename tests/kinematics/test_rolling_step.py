@@ -107,3 +107,26 @@ def test_step_calls_a_sensor_subclass_read() -> None:
     a = _roll("step", {}, {"noise_std": 2e-4, "rng": 7}, "finger1", "sphere", 0.04, _SensorSubclass)
     b = _roll("reference", {}, {"noise_std": 2e-4, "rng": 7}, "finger1", "sphere", 0.04, _SensorSubclass)
     assert a == b
+
+
+def test_bounds_equal_numpys_clipping_bit_for_bit() -> None:
+    """_bounds (in floats) against max(−q̇max, (q_min − q)/dt), min(q̇max, (q_max − q)/dt) in
+    numpy, at random configurations across and beyond the joint ranges."""
+    sc = ep1_scene("sphere", 0.04)
+    st = sc.hand.state(place_hand_for_ep1(sc, "finger1"))
+    F = contact_frame(sc.contact(st, "finger1").normal)
+    rq = RollingQP(st, "finger1", F[:, 0], 0.5, 0.01, scene=sc)
+    rng = np.random.default_rng(0)
+    lo, hi = sc.hand.lower[rq._cols], sc.hand.upper[rq._cols]
+    vmax = sc.hand.velocity_limit[rq._cols]
+    for _ in range(300):
+        q = lo + (hi - lo) * rng.uniform(-0.05, 1.05, size=rq.nx)
+        rq._qa[:] = q
+        rq._free_steps = 0
+        rq._bounds()
+        qs = q * (1.0 / rq.dt)
+        lb = np.maximum(-vmax, lo / rq.dt - qs)
+        ub = np.minimum(vmax, hi / rq.dt - qs)
+        assert rq._lb.tobytes() == lb.tobytes() and rq._ub.tobytes() == ub.tobytes()
+        assert rq._lb_tol == [x - rq.eps for x in lb.tolist()]
+        assert rq._ub_tol == [x + rq.eps for x in ub.tolist()]
