@@ -95,7 +95,7 @@ class GraspPointsAgent(GraspAgent):
             pre = wrist_goal - np.array([approach, 0.0, 0.0])
             q[hand.wrist_q_index[:3]] = np.clip(pre, lower, upper)
             world.set_q(q)
-            if world.hand_clearance() >= world.params.clearance:
+            if world.hand_clear(world.params.clearance):
                 break
             approach += 0.01
         else:

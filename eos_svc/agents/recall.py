@@ -65,7 +65,7 @@ class RecallAgent(GraspAgent):
                 q[idx] = np.maximum(hand.lower[idx], entry.angles.get(finger, 0.0) - margin * (attempt + 1))
             q = np.clip(q, hand.lower, hand.upper)
             world.set_q(q)
-            if world.hand_clearance() >= 0.5 * world.params.contact_tolerance:
+            if world.hand_clear(0.5 * world.params.contact_tolerance):
                 break
         else:
             return ActionResult(Outcome.CANNOT_ACT, f"the grasp remembered for {entry.key} collides here")

@@ -251,6 +251,17 @@ class GraspWorld:
         # (the object taken as its bounding ball): a min over geometries skips the exact
         # queries that cannot be the minimum (the result is the same). See _shape_bound.
         self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
+        self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
+        # per finger with a sphere tip (the scene measures it from the tip frame): its frame
+        # and radius, for a lower bound of the tip's distance (see _closing_clear)
+        self._tip_bound: dict[str, tuple[int, float]] = {}
+        geometries = self.hand.collision_model.geometryObjects
+        for f in self.hand.finger_names:
+            gid = self.hand.tip_geometry_id(f)
+            if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
+                self._tip_bound[f] = (self.hand.tip_frame_id(f), float(self.hand.tip_radius(f)))
+        self._frame_views: dict[int, np.ndarray] = {}
+        self._frame_views_of: HandState | None = None
         self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
         self._views_of: HandState | None = None
         self._obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
@@ -312,6 +323,21 @@ class GraspWorld:
             memo["clearance"] = value
         return value
 
+    def hand_clear(self, threshold: float) -> bool:
+        """``hand_clearance() >= threshold``, without the exact collision queries when the
+        geometries' lower bounds (see :meth:`_min_gap`) already reach ``threshold``."""
+        value = self._memo.get("clearance")
+        if value is None:
+            gap = self.object_gap_to_grasp_centre()
+            if gap <= self.params.hand_bound + self.params.clearance:  # the exact case
+                bounds = self._lower_bounds(range(len(self._bounds)))
+                if min(bounds)[0] >= threshold:  # every exact gap ≥ its bound ≥ threshold
+                    return True
+                value = self._memo["clearance"] = self._min_of(bounds, math.inf)
+            else:
+                value = self.hand_clearance()
+        return bool(value >= threshold)
+
     def finger_angle(self, finger: str) -> float:
         """The finger's (common) joint angle, rad (its first joint)."""
         return self.q_list()[self._angle_q[finger]]
@@ -368,7 +394,7 @@ class GraspWorld:
             q = q0.copy()
             q[self._wrist_q[:3]] = target
             self.set_q(q)
-            if self.hand_clearance() >= p.clearance:
+            if self.hand_clear(p.clearance):
                 return label, float(abs(target[axis] - start[axis])), False
             length *= 0.5
         self.set_q(q0)
@@ -393,14 +419,14 @@ class GraspWorld:
         q = q0.copy()
         q[self._wrist_q[:3]] = start + delta * (move / dist)
         self.set_q(q)
-        if self.hand_clearance() >= 0.5 * self.params.contact_tolerance:
+        if self.hand_clear(0.5 * self.params.contact_tolerance):
             return dist - move, False
         lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
         for _ in range(30):
             mid = 0.5 * (lo + hi)
             q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
             self.set_q(q)
-            if self.hand_clearance() >= 0.5 * self.params.contact_tolerance:
+            if self.hand_clear(0.5 * self.params.contact_tolerance):
                 lo = mid
             else:
                 hi = mid
@@ -418,14 +444,17 @@ class GraspWorld:
             limit was reached without touching).
         """
         tol = self.params.contact_tolerance
-        idx = self.hand.finger_q_index(finger)
+        idx = self._finger_q[finger]
         q0 = self.state.q
-        f0 = self._closing_gap(finger)
+        f0 = self._memo.get(("closing", finger))  # the closing gap at q0, when known
         q1, at_limit = self.state.close_finger(finger, dtheta)
         self.set_q(q1)
-        f1 = self._closing_gap(finger)
-        if f1 > 0.0:
+        if self._closing_clear(finger):
             return ("limit" if at_limit else "moved"), self.finger_angle(finger)
+        f1 = self._closing_gap(finger)
+        if f0 is None:  # the closing gap at the start of the step (the bracket's other end)
+            self.set_q(q0)
+            f0 = self._closing_gap(finger)
         # First touch inside the step: regula falsi (Illinois) on the step fraction for the
         # closing gap, converging to a tip within [tol/2, tol] of the object (or a link just
         # touching), a handful of distance queries instead of a long bisection.
@@ -471,12 +500,58 @@ class GraspWorld:
             value = memo[key] = self._min_gap(self._links[finger], tip)
         return value
 
+    def _closing_clear(self, finger: str) -> bool:
+        """``_closing_gap(finger) > 0``, proved without collision queries when the tip's and
+        the links' lower bounds allow (the tip's: its centre's distance to the object's
+        bounding ball, less its radius), else from the exact closing gap."""
+        value = self._memo.get(("closing", finger))
+        if value is None:
+            tip = self._tip_bound.get(finger)
+            if tip is not None:
+                tx, ty, tz = self._frame_translation(tip[0]).tolist()
+                ox, oy, oz = self._obj_centre
+                dx, dy, dz = tx - ox, ty - oy, tz - oz
+                lower = math.sqrt(dx * dx + dy * dy + dz * dz) - tip[1] - self._obj_radius - _BOUND_MARGIN
+                if lower > 0.5 * self.params.contact_tolerance and all(
+                    bound > 0.0 for bound, _ in self._lower_bounds(self._links[finger])
+                ):
+                    return True
+            value = self._closing_gap(finger)
+        return bool(value > 0.0)
+
+    def _frame_translation(self, frame_id: int) -> np.ndarray:
+        """Live view of a frame's world translation in the current state (do not modify)."""
+        views = self._frame_views
+        if self._frame_views_of is not self.state:
+            views = self._frame_views = {}
+            self._frame_views_of = self.state
+        view = views.get(frame_id)
+        if view is None:
+            view = views[frame_id] = self.state.data.oMf[frame_id].translation
+        return view
+
     def _min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
         query of a geometry whose lower bound already reaches the minimum (the bound is the
         distance from the object's bounding ball to the geometry's primitive, see
         :func:`_shape_bound`; a skipped geometry's gap is ≥ its bound ≥ the minimum, so the
         result is the min over every geometry)."""
+        return self._min_of(self._lower_bounds(geometry_ids), best)
+
+    def _min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
+        """:meth:`_min_gap` from the geometries' ``(lower bound, id)`` (sorted in place)."""
+        bounds.sort()
+        state = self.state
+        for lower, gid in bounds:
+            if lower >= best:
+                break
+            gap = self.scene.gap(state, gid)
+            if gap < best:
+                best = gap
+        return best
+
+    def _lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
+        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
         state = self.state
         state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
         views = self._bound_views
@@ -489,7 +564,7 @@ class GraspWorld:
         obj_radius = self._obj_radius + _BOUND_MARGIN
         bounds = []
         for gid in geometry_ids:
-            kind, a, b = self._bounds[gid]
+            kind, a, b, ball = self._bounds[gid]
             t, R = views[gid]
             tx, ty, tz = t.tolist()
             px, py, pz = ox - tx, oy - ty, oz - tz  # object centre relative to the geometry
@@ -520,15 +595,13 @@ class GraspWorld:
                     dz = abs(lz) - b
                     dz = dz if dz > 0.0 else 0.0
                     lower = math.sqrt(lx * lx + ly * ly + dz * dz) - a
+                if lower <= obj_radius:
+                    # they may overlap, and this bound does not hold for a penetration
+                    # depth (the object's centre may lie inside the primitive): the balls'
+                    # bound (the primitive's local AABB ball, radius ``ball``) does
+                    lower = math.sqrt(px * px + py * py + pz * pz) - ball
             bounds.append((lower - obj_radius, gid))
-        bounds.sort()
-        for lower, gid in bounds:
-            if lower >= best:
-                break
-            gap = self.scene.gap(state, gid)
-            if gap < best:
-                best = gap
-        return best
+        return bounds
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
@@ -538,7 +611,7 @@ _DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] =
 
 def _derived_for(
     hand: HandModel, sweeps: dict[str, FingerSweep]
-) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any]]]:
+) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]]]:
     """The finger link geometries, the probe choice and the geometries' distance bounds of
     ``hand`` (with ``sweeps``), computed once per hand and sweeps (they never change; every
     plan's world shares them read-only)."""
@@ -563,21 +636,26 @@ _SPHERE, _BOX, _SEGMENT = 0, 1, 2
 _BOUND_MARGIN = 1e-7
 
 
-def _shape_bound(geometry: object) -> tuple[int, Any, Any]:
-    """How to bound the distance from a point to a hand geometry (local frame) from below:
-    ``(_BOX, half sides, None)`` for a box, ``(_SEGMENT, radius, half length)`` for
-    a cylinder or capsule along local z (the cylinder lies inside that capsule), and for a
-    sphere or any other shape ``(_SPHERE, radius, centre or None)``: the ball of its
-    local AABB (the sphere itself for a sphere)."""
+def _shape_bound(geometry: Any) -> tuple[int, Any, Any, float]:
+    """How to bound the gap between a hand geometry and a ball (the object's bounding ball)
+    from below, from the ball centre's position in the geometry's frame: the distance to the
+    geometry's primitive less the ball's radius — ``(_BOX, half sides, None, r)`` for a box,
+    ``(_SEGMENT, radius, half length, r)`` for a cylinder or capsule along local z (the
+    cylinder lies inside that capsule), for a sphere ``(_SPHERE, radius, None, r)`` and for
+    any other shape ``(_SPHERE, r, AABB centre or None, r)``, with ``r`` the radius of the
+    primitive's local AABB ball (about its centre, the frame's origin for the primitives). The
+    box and segment bounds hold while the two are apart; where they may overlap the AABB
+    ball's bound holds (for the penetration depth too) and is used instead."""
+    geometry.computeLocalAABB()
+    ball = float(geometry.aabb_radius)
     if isinstance(geometry, coal.Box):
-        return _BOX, tuple(float(x) for x in geometry.halfSide), None
+        return _BOX, tuple(float(x) for x in geometry.halfSide), None, ball
     if isinstance(geometry, (coal.Cylinder, coal.Capsule)):
-        return _SEGMENT, float(geometry.radius), float(geometry.halfLength)
+        return _SEGMENT, float(geometry.radius), float(geometry.halfLength), ball
     if isinstance(geometry, coal.Sphere):
-        return _SPHERE, float(geometry.radius), None
-    geometry.computeLocalAABB()  # type: ignore[attr-defined]
-    c = tuple(float(x) for x in geometry.aabb_center)  # type: ignore[attr-defined]
-    return _SPHERE, float(geometry.aabb_radius), (None if c == (0.0, 0.0, 0.0) else c)  # type: ignore[attr-defined]
+        return _SPHERE, float(geometry.radius), None, ball
+    c = tuple(float(x) for x in geometry.aabb_center)
+    return _SPHERE, ball, (None if c == (0.0, 0.0, 0.0) else c), ball
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
