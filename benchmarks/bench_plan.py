@@ -27,8 +27,11 @@ from eos_svc.cli.plan import format_cycle
 REPEATS = 15
 
 
-def time_plans(request: PlanRequest, repeats: int, on_cycle=None) -> tuple[float, int]:
-    """(median seconds per plan, cycles of the plan)."""
+def time_plans(
+    request: PlanRequest, repeats: int, on_cycle=None, per_agent: dict | None = None
+) -> tuple[float, int]:
+    """(median seconds per plan, cycles of the plan). With ``per_agent``, also collects each
+    plan's mean cycle time per (stage, chosen agent), from the records' timestamps."""
     samples = []
     cycles = 0
     for _ in range(repeats):
@@ -36,13 +39,22 @@ def time_plans(request: PlanRequest, repeats: int, on_cycle=None) -> tuple[float
         result = plan(request, on_cycle=on_cycle)
         samples.append(time.perf_counter() - t0)
         cycles = result.cycles
+        if per_agent is not None:
+            spent: dict[tuple[str, str | None], list[float]] = {}
+            previous = 0.0
+            for record in result.trace:
+                spent.setdefault((record.stage, record.chosen), []).append(record.elapsed_s - previous)
+                previous = record.elapsed_s
+            for key, times in spent.items():
+                per_agent.setdefault(key, (len(times), []))[1].append(sum(times) / len(times))
     return statistics.median(samples), cycles
 
 
 def main() -> int:
     plan(PlanRequest())  # load the hand, warm caches
     default = PlanRequest()
-    t_plan, cycles = time_plans(default, REPEATS)
+    per_agent: dict = {}
+    t_plan, cycles = time_plans(default, REPEATS, per_agent=per_agent)
     sink: list[str] = []
     t_cb, _ = time_plans(default, REPEATS, on_cycle=lambda r: sink.append(format_cycle(r)))
     per_cycle = t_plan / cycles
@@ -59,6 +71,10 @@ def main() -> int:
     )
     print(f"goals: per cycle <= 60 µs -> {'met' if per_cycle <= 60e-6 else 'NOT met'}; "
           f"per plan <= 20 ms -> {'met' if t_plan <= 20e-3 else 'NOT met'}")
+    print("\nper chosen agent (default scene): cycles, median cycle time (rating + action + record)")
+    for (stage, agent), (n, times) in per_agent.items():
+        t = statistics.median(times)
+        print(f"  {stage:<12} {agent or '-':<13} {n:3d} x {t * 1e6:9.1f} µs = {n * t * 1e3:6.2f} ms")
     print("\nratio sweep (3 seeds each, 1 run per seed)")
     print("  d/h   status(es)            cycles  plan ms  µs/cycle")
     for ratio in (0.2, 0.35, 0.5, 0.65, 0.8, 0.95):
