@@ -59,7 +59,7 @@ def bare_step(rq: Any) -> None:
     records. The constraint rows and targets are the last real step's (M, b); q still moves by
     the solution, so the configuration (and coal's work) evolves as in a roll."""
     model, data, fid = rq._model, rq._data, rq._fid
-    pin.forwardKinematics(model, data, rq._q, rq._qdot, rq._zero_nv)
+    pin.forwardKinematics(model, data, rq._qk, rq._qdk, rq._zero_nv)
     pin.computeJointJacobians(model, data)
     J = pin.getFrameJacobian(model, data, fid, _LWA)
     c = rq._c_view
@@ -74,7 +74,7 @@ def bare_step(rq: Any) -> None:
     rq._R_view.tolist()
     rq.tactile.rng.normal(0.0, rq.tactile.noise_std, size=2).tolist()
     np.array(v), np.array(v)  # the reading's point and normal
-    np.matmul(rq._M, J[:, rq._sel], out=rq._C)
+    np.matmul(rq._M, J if rq._jsel is None else J[:, rq._jsel], out=rq._C)
     pin.getFrameClassicalAcceleration(model, data, fid, _LWA).vector.tolist()
     _, x, _ = lapack.dgels(rq._C, rq._b_ext)
     np.matmul(rq._C, x, out=rq._res6).tolist()

@@ -267,7 +267,6 @@ class RollingQP:
         self.gap_gain = float(gap_gain)
         self.eps = float(eps)
         model = hand.model
-        self._model = model
         self._fid = hand.tip_frame_id(finger)
         self._r = hand.tip_radius(finger)
         gid = hand.tip_geometry_id(finger)
@@ -286,6 +285,20 @@ class RollingQP:
         # q + v dt is exact when every joint is 1-DoF with nq == nv (hand3x3).
         if not (model.nq == model.nv and all(j.nq == 1 for j in model.joints[1:])):
             raise KinematicsError("hand", "RollingQP needs 1-DoF joints with nq == nv")
+        # When the tip's kinematic chain is exactly the active joints (wrist, then the finger;
+        # no inactive joint above the tip), the kinematics run on a model reduced to that chain:
+        # the same joint placements in the same order, and the other fingers keep still during a
+        # roll (q̇ = 0), so FK, the Jacobian and the acceleration are the same to the bit — over
+        # 9 joints instead of 15 (hand3x3), and the Jacobian comes with only the active columns.
+        chain = [int(model.idx_vs[j]) for j in list(model.supports[model.frames[self._fid].parentJoint])[1:]]
+        self._reduced = chain == self._cols.tolist()
+        if self._reduced:
+            kept = set(chain)
+            lock = [j for j in range(1, model.njoints) if int(model.idx_vs[j]) not in kept]
+            frame = model.frames[self._fid]
+            model = pin.buildReducedModel(model, lock, pin.neutral(model))
+            self._fid = model.getFrameId(frame.name, frame.type)
+        self._model = model
         self._data = model.createData()
         # live views of the tip placement in self._data (indexing data.oMf from Python
         # costs ~2 µs per access; the views follow every kinematics update)
@@ -362,7 +375,19 @@ class RollingQP:
         self._ub_tol: list[float] = []
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
-        self._qdot = np.zeros(model.nv)
+        self._qdot = np.zeros(hand.model.nv)
+        # what the kinematics take (see _retarget): the reduced model's q̇ (a view of the active
+        # joints' q̇, or its own copy when they are not contiguous), or the full q̇
+        self._qdot_r: np.ndarray | None = None
+        if not self._reduced:
+            self._qdk = self._qdot
+        elif type(self._sel) is slice:
+            self._qdk = self._qdot[self._sel]
+        else:
+            self._qdk = self._qdot_r = np.zeros(nx)
+        self._qk = self._qdot  # set by _retarget
+        # the Jacobian's active columns: all of them with the reduced model
+        self._jsel: slice | np.ndarray | None = None if self._reduced else self._sel
         # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step)
         self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
         self._qa_buf: Any = None
@@ -402,8 +427,11 @@ class RollingQP:
         # active joints' q, kept in step with _q (a view of it when the joints are contiguous)
         self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
         self._qa_buf = self._qa.data if type(self._sel) is slice else None
+        self._qk = self._qa if self._reduced else self._q  # the q the kinematics take
         self._stale = False
         self._qdot[:] = 0.0
+        if self._qdot_r is not None:
+            self._qdot_r[:] = 0.0
         self._free_steps = 0
         self.steps = 0
         self._osqp = None  # re-upload the whole problem on the first solve
@@ -479,12 +507,14 @@ class RollingQP:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
         (``n``: the contact normal as floats, when the caller has them)."""
         J = self._J  # from kinematics()
-        sel = self._sel
-        if type(sel) is slice:
-            Jb = J[:, sel]
+        jsel = self._jsel
+        if jsel is None:
+            Jb = J
+        elif type(jsel) is slice:
+            Jb = J[:, jsel]
         else:
             Jb = self._Jb
-            J.take(sel, axis=1, out=Jb)
+            J.take(jsel, axis=1, out=Jb)
         nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
         # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
         if abs(nx_) < 0.9:
@@ -646,17 +676,17 @@ class RollingQP:
 
     def kinematics_only(self) -> None:
         """Tip placement at the current q (no Jacobians)."""
-        pin.framesForwardKinematics(self._model, self._data, self._q)
+        pin.framesForwardKinematics(self._model, self._data, self._qk)
 
     def kinematics(self) -> None:
         """Forward kinematics (with the last q̇, for the second-order terms), joint Jacobians
         and the tip placement at the current q."""
         model, data = self._model, self._data
         if self.second_order:
-            pin.forwardKinematics(model, data, self._q, self._qdot, self._zero_nv)
+            pin.forwardKinematics(model, data, self._qk, self._qdk, self._zero_nv)
             pin.computeJointJacobians(model, data)
         else:
-            pin.computeJointJacobians(model, data, self._q)
+            pin.computeJointJacobians(model, data, self._qk)
         # getFrameJacobian also places the tip frame (data.oMf[fid]): no updateFramePlacement
         self._J = pin.getFrameJacobian(model, data, self._fid, _LWA)
 
@@ -732,10 +762,10 @@ class RollingQP:
         # ---- kinematics: FK (with the last q̇), joint Jacobians; getFrameJacobian also
         # places the tip frame (data.oMf[fid], seen through _c_view/_R_view)
         if self.second_order:
-            _FK(model, data, self._q, self._qdot, self._zero_nv)
+            _FK(model, data, self._qk, self._qdk, self._zero_nv)
             _JJ(model, data)
         else:
-            _JJ(model, data, self._q)
+            _JJ(model, data, self._qk)
         J = _GFJ(model, data, fid, _LWA)
         # ---- contact (as contact())
         c = self._c_view
@@ -809,12 +839,14 @@ class RollingQP:
                 _SR_DIST(reading, d)  # a float (coal's min_distance)
         # ---- constraint rows and targets (as _build())
         self._J = J
-        sel = self._sel
-        if type(sel) is slice:
-            Jb = J[:, sel]
+        jsel = self._jsel
+        if jsel is None:
+            Jb = J
+        elif type(jsel) is slice:
+            Jb = J[:, jsel]
         else:
             Jb = self._Jb
-            J.take(sel, axis=1, out=Jb)
+            J.take(jsel, axis=1, out=Jb)
         if abs(nx_) < 0.9:
             t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
         else:
@@ -892,6 +924,7 @@ class RollingQP:
         r0, r1, r2, r3, r4, r5 = res6.tolist()
         r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
         # ---- integration q ← q + q̇ dt
+        sel = self._sel
         qdot = self._qdot
         qa = self._qa
         if type(sel) is slice:
@@ -903,6 +936,8 @@ class RollingQP:
             pack(self._qa_buf, 0, *[qi + xi * dt for qi, xi in zip(qa.tolist(), xs, strict=True)])
         else:
             qdot[sel] = x
+            if self._qdot_r is not None:
+                self._qdot_r[:] = x
             tmp = self._tmp
             np.multiply(x, dt, out=tmp)
             qa += tmp

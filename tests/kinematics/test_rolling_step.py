@@ -34,6 +34,8 @@ def _reference_step(rq: RollingQP) -> RollingStep:
     np.subtract(res, rq._b, out=res)
     r0, r1, r2, r3, r4, r5 = res.tolist()
     rq._qdot[rq._sel] = x
+    if rq._qdot_r is not None:  # the reduced model's own q̇ (split active joints)
+        rq._qdot_r[:] = x
     rq._qa += x * rq.dt
     if type(rq._sel) is not slice:
         rq._q[rq._sel] = rq._qa
@@ -130,3 +132,41 @@ def test_bounds_equal_numpys_clipping_bit_for_bit() -> None:
         assert rq._lb.tobytes() == lb.tobytes() and rq._ub.tobytes() == ub.tobytes()
         assert rq._lb_tol == [x - rq.eps for x in lb.tolist()]
         assert rq._ub_tol == [x + rq.eps for x in ub.tolist()]
+
+
+@pytest.mark.parametrize("finger", ["finger1", "finger3"])  # contiguous / split active joints
+def test_reduced_chain_model_gives_the_full_models_kinematics_bit_for_bit(finger: str) -> None:
+    """The roller's kinematics run on a model reduced to the tip's chain (wrist + finger): tip
+    placement, Jacobian (active columns) and classical acceleration equal the full model's, with
+    the other fingers anywhere and still (q̇ = 0 there, as in a roll)."""
+    import pinocchio as pin
+
+    sc = ep1_scene("sphere", 0.04, finger=finger)
+    st = sc.hand.state(place_hand_for_ep1(sc, finger))
+    F = contact_frame(sc.contact(st, finger).normal)
+    rq = RollingQP(st, finger, F[:, 0], 0.5, 0.01, scene=sc)
+    assert rq._reduced and rq._model.nv == rq.nx
+    full = sc.hand.model
+    data = full.createData()
+    fid = sc.hand.tip_frame_id(finger)
+    lwa = pin.LOCAL_WORLD_ALIGNED
+    rng = np.random.default_rng(0)
+    for _ in range(100):
+        q = pin.randomConfiguration(full)
+        v = np.zeros(full.nv)
+        v[rq._cols] = rng.normal(size=rq.nx)
+        rq._q[:] = q
+        rq._qa[:] = q[rq._cols]
+        rq._qdot[:] = v
+        if rq._qdot_r is not None:
+            rq._qdot_r[:] = v[rq._cols]
+        rq.kinematics()
+        pin.forwardKinematics(full, data, q, v, np.zeros(full.nv))
+        pin.computeJointJacobians(full, data)
+        J = pin.getFrameJacobian(full, data, fid, lwa)
+        acc = pin.getFrameClassicalAcceleration(full, data, fid, lwa).vector
+        acc_r = pin.getFrameClassicalAcceleration(rq._model, rq._data, rq._fid, lwa).vector
+        assert rq._J.tobytes() == np.ascontiguousarray(J[:, rq._cols]).tobytes()
+        assert acc_r.tobytes() == acc.tobytes()
+        assert rq._c_view.tobytes() == data.oMf[fid].translation.tobytes()
+        assert rq._R_view.tobytes() == data.oMf[fid].rotation.tobytes()
