@@ -26,12 +26,15 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 from __future__ import annotations
 
 import json
+import math
 import re
 from collections.abc import Mapping
+from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ValidationError
+from eos_svc.records import CycleRecord, to_jsonable
 
 #: version of the message schemas (the ``"schema"`` field of every message)
 SCHEMA_VERSION = 1
@@ -143,14 +146,140 @@ def _reject_constant(name: str) -> Any:
     raise ValueError(f"{name} is not valid JSON")
 
 
+#: one strict decoder for every message (``json.loads`` with options builds a new one per call)
+_DECODER = json.JSONDecoder(parse_constant=_reject_constant)
+#: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
+_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+
+
+def _text(data: bytes | bytearray | str) -> str:
+    """JSON text from bytes exactly as ``json.loads`` reads them (UTF-8/16/32 detection, BOM)."""
+    if isinstance(data, str):
+        if data.startswith("\ufeff"):
+            raise json.JSONDecodeError("Unexpected UTF-8 BOM (decode using utf-8-sig)", data, 0)
+        return data
+    if not isinstance(data, (bytes, bytearray)):
+        raise TypeError(f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}")
+    return data.decode(json.detect_encoding(data), "surrogatepass")
+
+
 def loads_strict(data: bytes | str) -> Any:
     """Parse strict JSON (NaN/Infinity rejected); raises ValueError or RecursionError."""
-    return json.loads(data, parse_constant=_reject_constant)
+    return _DECODER.decode(_text(data))
 
 
 def dumps(obj: Any) -> bytes:
     """Compact strict JSON bytes."""
-    return json.dumps(obj, separators=(",", ":"), allow_nan=False).encode()
+    return _ENCODER.encode(obj).encode()
+
+
+# ---------------------------------------------------------------------- cycle records on the wire
+_float_repr = float.__repr__
+#: float -> its JSON text: rating values, weights and many board values repeat from cycle to cycle
+_FLOAT_TEXT: dict[float, str] = {}
+_FLOAT_TEXT_MAX = 4096
+
+
+def _float_json(x: float) -> str:
+    """JSON text of a float as ``dumps(to_jsonable(x))`` writes it (non-finite: ``null``)."""
+    if x == 0.0:  # 0.0 and -0.0 are equal keys: never cached
+        return _float_repr(x)
+    s = _FLOAT_TEXT.get(x)
+    if s is None:
+        if not math.isfinite(x):
+            return "null"
+        s = _float_repr(x)
+        if len(_FLOAT_TEXT) < _FLOAT_TEXT_MAX:
+            _FLOAT_TEXT[x] = s
+    return s
+
+
+def _value_json(v: Any) -> str:
+    """JSON text of any record value, as ``dumps(to_jsonable(v))`` writes it."""
+    t = type(v)
+    if t is float:
+        return _float_json(v)
+    if t is str:
+        return _json_str(v)
+    if v is None:
+        return "null"
+    if v is True:
+        return "true"
+    if v is False:
+        return "false"
+    if t is int:
+        return int.__repr__(v)
+    return _ENCODER.encode(to_jsonable(v))
+
+
+#: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)
+_RATING_HEAD: dict[str, str] = {}
+_ELIGIBLE = {True: ',"eligible":true}', False: ',"eligible":false}'}
+_last_weights: list[Any] = [None, ""]  # the last Weights seen and its JSON (weights rarely change)
+
+
+def cycle_record_json(record: CycleRecord) -> str:
+    """``CycleRecord.to_dict()`` as compact strict JSON, without building the dict.
+
+    The same text as ``dumps(to_jsonable(record.to_dict()))`` (checked by the tests), written
+    straight from the record with the fixed parts and repeated floats cached: a cycle is
+    encoded once per cycle in the service's planner thread.
+    """
+    weights = record.weights
+    if weights is _last_weights[0]:
+        weights_json = _last_weights[1]
+    else:
+        weights_json = _value_json(weights.to_dict())
+        _last_weights[:] = [weights, weights_json]
+    fj = _float_json
+    vj = _value_json
+    rows = []
+    for r in record.ratings:
+        name = r.name
+        head = _RATING_HEAD.get(name) if type(name) is str else None
+        if head is None:
+            head = '{"agent":' + vj(name) + ',"default":'
+            if type(name) is str and len(_RATING_HEAD) < 1024:
+                _RATING_HEAD[name] = head
+        d, o, le, tot, el = r.default, r.opportunistic, r.learned, r.total, r.eligible
+        rows.append(
+            head
+            + (fj(d) if type(d) is float else vj(d))
+            + ',"opportunistic":'
+            + (fj(o) if type(o) is float else vj(o))
+            + ',"learned":'
+            + (fj(le) if type(le) is float else vj(le))
+            + ',"total":'
+            + (fj(tot) if type(tot) is float else vj(tot))
+            + (_ELIGIBLE[el] if type(el) is bool else ',"eligible":' + vj(el) + "}")
+        )
+    outcome = record.outcome
+    changes = [
+        '{"key":' + vj(c.key) + ',"old":' + vj(c.old) + ',"new":' + vj(c.new) + "}" for c in record.changes
+    ]
+    return (
+        '{"seq":'
+        + vj(record.seq)
+        + ',"stage":'
+        + vj(record.stage)
+        + ',"stage_cycle":'
+        + vj(record.stage_cycle)
+        + ',"weights":'
+        + weights_json
+        + ',"ratings":['
+        + ",".join(rows)
+        + '],"chosen":'
+        + vj(record.chosen)
+        + ',"outcome":'
+        + ("null" if outcome is None else vj(outcome.value))
+        + ',"detail":'
+        + vj(record.detail)
+        + ',"changes":['
+        + ",".join(changes)
+        + '],"elapsed_s":'
+        + vj(record.elapsed_s)
+        + "}"
+    )
 
 
 def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> bytes:
@@ -161,6 +290,10 @@ def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> by
 
 #: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)
 MAX_WIRE_INT = 2**64
+
+
+#: 20 digits in a row: the only way to write an integer with |x| > 2**64 (= 18446744073709551616)
+_LONG_DIGITS = re.compile(r"[0-9]{20}")
 
 
 def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
@@ -190,7 +323,8 @@ def decode_request(
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
     try:
-        data = loads_strict(bytes(payload))
+        text = _text(payload if isinstance(payload, bytes) else bytes(payload))
+        data = _DECODER.decode(text)
     except (ValueError, RecursionError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
         raise RequestError(E_NOT_JSON, "request", f"not JSON: {str(exc)[:200]}") from None
     if not isinstance(data, dict):
@@ -211,7 +345,8 @@ def decode_request(
     check_id(goal_raw, "goal_id")
     assert goal_id is not None
     body = {k: v for k, v in data.items() if k not in ("schema", "goal_id")}
-    _check_integers(body, "", goal_id)
+    if _LONG_DIGITS.search(text):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
+        _check_integers(body, "", goal_id)
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:

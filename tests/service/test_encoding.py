@@ -1,0 +1,191 @@
+"""The service's fast encoders write exactly what the plain to_dict -> to_jsonable -> JSON chain writes."""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, fields, is_dataclass
+from enum import Enum
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from eos_svc.agent import Outcome
+from eos_svc.agents.request import PlanRequest
+from eos_svc.board import BoardChange
+from eos_svc.ratings import Weights
+from eos_svc.records import AgentRating, CycleRecord, to_jsonable
+from eos_svc.service import protocol as proto
+from eos_svc.service.demo_planner import root_plan
+
+
+def reference_to_jsonable(value: Any) -> Any:
+    """``to_jsonable`` as it was before its fast paths (the reference)."""
+    from collections.abc import Mapping
+
+    if value is None or isinstance(value, (bool, int, str)):
+        return value
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, Enum):
+        return reference_to_jsonable(value.value)
+    if hasattr(value, "to_dict"):
+        return reference_to_jsonable(value.to_dict())
+    if is_dataclass(value) and not isinstance(value, type):
+        return {f.name: reference_to_jsonable(getattr(value, f.name)) for f in fields(value)}
+    if isinstance(value, Mapping):
+        return {str(k): reference_to_jsonable(v) for k, v in value.items()}
+    if hasattr(value, "tolist"):
+        return reference_to_jsonable(value.tolist())
+    if isinstance(value, (list, tuple, set, frozenset)):
+        return [reference_to_jsonable(v) for v in value]
+    return repr(value)
+
+
+def reference_record_json(record: CycleRecord) -> bytes:
+    """What the service published before: ``to_dict`` then strict JSON, ``to_jsonable`` on failure."""
+    d = record.to_dict()
+    try:
+        return proto.dumps(d)
+    except (TypeError, ValueError):
+        return proto.dumps(reference_to_jsonable(d))
+
+
+class Colour(Enum):
+    RED = "red"
+
+
+@dataclass
+class Point:
+    x: float
+    y: float
+
+
+floats = st.floats(allow_nan=True, allow_infinity=True) | st.sampled_from([0.0, -0.0, 0.5, 1e-300, 1e300])
+scalars = st.none() | st.booleans() | st.integers(-(2**70), 2**70) | floats | st.text(max_size=8)
+keys = st.text(max_size=6) | st.integers(-5, 5) | st.booleans() | st.none() | st.sampled_from([0.5, -0.0])
+values = st.recursive(
+    scalars
+    | st.sampled_from([Colour.RED, Outcome.PROGRESS, Point(1.0, float("nan"))])
+    | st.builds(lambda xs: np.array(xs), st.lists(st.floats(-1, 1), max_size=3)),
+    lambda inner: (
+        st.lists(inner, max_size=4)
+        | st.lists(inner, max_size=4).map(tuple)
+        | st.dictionaries(keys, inner, max_size=4)
+    ),
+    max_leaves=20,
+)
+
+
+@settings(max_examples=400, deadline=None)
+@given(values)
+def test_to_jsonable_fast_paths_change_nothing(value):
+    assert to_jsonable(value) == reference_to_jsonable(value)
+    assert proto.dumps(to_jsonable(value)) == proto.dumps(reference_to_jsonable(value))
+
+
+def _record(ratings, changes, **kw: Any) -> CycleRecord:
+    base: dict[str, Any] = {
+        "seq": 3,
+        "stage": "search",
+        "stage_cycle": 2,
+        "ratings": tuple(ratings),
+        "weights": Weights(0.5, 0.5, 0.0),
+        "chosen": "a",
+        "outcome": Outcome.PROGRESS,
+        "detail": "moved 3 mm — ok",
+        "changes": tuple(changes),
+        "elapsed_s": 0.0123,
+    }
+    base.update(kw)
+    return CycleRecord(**base)
+
+
+rating_values = floats | st.integers(0, 2) | st.sampled_from([np.float64(0.25), np.float32(0.5), np.int64(1)])
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.lists(
+        st.tuples(
+            st.text(max_size=5),
+            rating_values,
+            rating_values,
+            rating_values,
+            rating_values,
+            st.booleans() | st.just(np.bool_(True)),
+        ),
+        max_size=5,
+    ),
+    st.lists(st.tuples(st.text(max_size=4), values, values), max_size=3),
+    st.none() | st.text(max_size=4),
+    st.none() | st.sampled_from(list(Outcome)),
+    floats,
+)
+def test_cycle_record_json_is_the_records_json(ratings, changes, chosen, outcome, elapsed):
+    record = _record(
+        [AgentRating(*r) for r in ratings],
+        [BoardChange(k, old, new) for k, old, new in changes],
+        chosen=chosen,
+        outcome=outcome,
+        elapsed_s=elapsed,
+    )
+    assert proto.cycle_record_json(record).encode() == reference_record_json(record)
+
+
+def test_cycle_record_json_caches_do_not_mix_signs_or_types():
+    for first, second in ((0.0, -0.0), (-0.0, 0.0), (1, 1.0), (1.0, True), (0.5, np.float64(0.5))):
+        for v in (first, second, first):
+            record = _record([AgentRating("a", v, v, v, v, True)], [])
+            assert proto.cycle_record_json(record).encode() == reference_record_json(record)
+    w1, w2 = Weights(0.5, 0.5, 0.0), Weights(0.25, 0.75, 0.0)
+    for w in (w1, w2, w1):
+        record = _record([], [], weights=w)
+        assert proto.cycle_record_json(record).encode() == reference_record_json(record)
+
+
+def test_cycle_record_json_on_real_runs(grasp_planner):
+    records: list[CycleRecord] = []
+    for seed in range(3):
+        root_plan(PlanRequest(seed=seed), on_cycle=records.append)
+    grasp_planner(PlanRequest(seed=3), on_cycle=records.append)
+    assert records
+    for record in records:
+        assert proto.cycle_record_json(record).encode() == reference_record_json(record)
+
+
+@pytest.mark.parametrize(
+    "payload",
+    [
+        b'{"a": 1}',
+        '{"a": "é"}'.encode("utf-16"),
+        '{"a": "é"}'.encode("utf-32-le"),
+        b'\xef\xbb\xbf{"a": 1}',
+        b'{"a": NaN}',
+        b'{"a": "\xed\xa0\x80"}',
+        b"\xff\xfe",
+        b"[1, 2",
+    ],
+)
+def test_loads_strict_reads_what_json_loads_reads(payload):
+    def reference(data: bytes) -> Any:
+        def reject(name: str) -> Any:
+            raise ValueError(name)
+
+        return json.loads(data, parse_constant=reject)
+
+    try:
+        expected: Any = reference(payload)
+    except (ValueError, RecursionError) as exc:
+        expected = type(exc)
+    try:
+        got: Any = proto.loads_strict(payload)
+    except (ValueError, RecursionError) as exc:
+        got = type(exc)
+    if isinstance(expected, type):
+        assert isinstance(got, type) and issubclass(got, ValueError) == issubclass(expected, ValueError)
+    else:
+        assert got == expected
