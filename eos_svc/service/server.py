@@ -43,6 +43,9 @@ from eos_svc.service.session import direct_callback
 
 log = logging.getLogger(__name__)
 
+_JSON = zenoh.Encoding.APPLICATION_JSON
+_BLOCK = zenoh.CongestionControl.BLOCK
+
 #: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
 Planner = Callable[..., Any]
 
@@ -162,6 +165,8 @@ class PlanService:
         except (TypeError, ValueError):
             self._planner_kwargs = {}
         self._started = True
+        # replies go out on the queryable's own key (the query's may be a wildcard), built once
+        self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
         self._threads.append(
             threading.Thread(target=self._dispatch, name=f"eos-dispatch-{self.instance}", daemon=True)
         )
@@ -173,9 +178,7 @@ class PlanService:
             t.start()
         s = self.session
         self._entities.append(
-            s.declare_queryable(
-                proto.plan_key(self.prefix, self.instance), direct_callback(self._on_plan), complete=True
-            )
+            s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
         )
         self._entities.append(
             s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel))
@@ -345,22 +348,29 @@ class PlanService:
             "state": state,
             **extra,
         }
-        self.session.put(
-            proto.status_key(self.prefix, goal_id),
-            proto.dumps(msg),
-            encoding=zenoh.Encoding.APPLICATION_JSON,
-            congestion_control=zenoh.CongestionControl.BLOCK,
-        )
+        key = proto.status_key(self.prefix, goal_id)
+        self.session.put(key, proto.dumps(msg), encoding=_JSON, congestion_control=_BLOCK)
+
+    def _head(self, goal_id: str) -> str:
+        """The fixed start of every message about a goal: ``{"schema":1,"goal_id":...,"instance":...,``."""
+        return f'{{"schema":{proto.SCHEMA_VERSION},"goal_id":"{goal_id}","instance":"{self.instance}",'
 
     def _run(self, job: _Job) -> None:
-        """Run one plan: publish its cycles and status, then answer its query exactly once."""
+        """Run one plan: publish its cycles and status, then answer its query exactly once.
+
+        The critical path after the plan is: result to JSON (once), the ``done`` status, the
+        reply; the cycle publisher is undeclared and the query dropped after the reply.
+        """
         goal_id, query = job.goal_id, job.query
         answered = False
+        publisher: Any = None
         try:
             if self._stopping:  # never ran, or cut short by stop(): let the client go elsewhere
                 raise proto.RequestError(
                     proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
                 )
+            head = self._head(goal_id)
+            status_key = proto.status_key(self.prefix, goal_id)
             if job.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
@@ -369,39 +379,35 @@ class PlanService:
                     "seed": job.request.seed,
                 }
             else:
-                result = self._plan(job)
+                publisher = self.session.declare_publisher(
+                    proto.cycle_key(self.prefix, goal_id), encoding=_JSON, congestion_control=_BLOCK
+                )
+                self.session.put(
+                    status_key,
+                    (head + '"state":"running"}').encode(),
+                    encoding=_JSON,
+                    congestion_control=_BLOCK,
+                )
+                result = self._plan(job, publisher, head)
                 if self._stopping:
                     raise proto.RequestError(
                         proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
                     )
-            with self._lock:
-                if result.get("status") == "cancelled":
-                    self.stats.cancelled += 1
             encoded = _encode(result)  # once, spliced into the status message and the reply
-            head = b'{"schema":%d,"goal_id":"%s","instance":"%s",' % (
-                proto.SCHEMA_VERSION,
-                goal_id.encode(),
-                self.instance.encode(),
-            )
             status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
+            head_b = head.encode()
             self.session.put(
-                proto.status_key(self.prefix, goal_id),
-                head
-                + b'"state":"'
-                + proto.STATE_DONE.encode()
-                + b'",'
-                + status
-                + b',"result":'
-                + encoded
-                + b"}",
-                encoding=zenoh.Encoding.APPLICATION_JSON,
-                congestion_control=zenoh.CongestionControl.BLOCK,
+                status_key,
+                head_b + b'"state":"done",' + status + b',"result":' + encoded + b"}",
+                encoding=_JSON,
+                congestion_control=_BLOCK,
             )
-            body = head + b'"result":' + encoded + b"}"
             answered = True
             with self._lock:  # counted first: the client may read the stats as soon as it has the reply
                 self.stats.replied_ok += 1
-            query.reply(query.key_expr, body, encoding=zenoh.Encoding.APPLICATION_JSON)
+                if result.get("status") == "cancelled":
+                    self.stats.cancelled += 1
+            query.reply(self._plan_key, head_b + b'"result":' + encoded + b"}", encoding=_JSON)
             query.drop()
         except proto.RequestError as err:
             if not answered:
@@ -422,37 +428,40 @@ class PlanService:
                 self._reply_err(
                     query, proto.RequestError(proto.E_INTERNAL, "request", repr(exc)[:300], goal_id)
                 )
+        finally:
+            if publisher is not None:  # after the reply: off the request's critical path
+                try:
+                    publisher.undeclare()
+                except Exception:
+                    log.debug("undeclare failed", exc_info=True)
 
-    def _plan(self, job: _Job) -> dict[str, Any]:
-        goal_id = job.goal_id
-        publisher = self.session.declare_publisher(
-            proto.cycle_key(self.prefix, goal_id),
-            encoding=zenoh.Encoding.APPLICATION_JSON,
-            congestion_control=zenoh.CongestionControl.BLOCK,
-        )
+    def _plan(self, job: _Job, publisher: Any, head: str) -> dict[str, Any]:
         seq = 0
-        head = f'{{"schema":{proto.SCHEMA_VERSION},"goal_id":"{goal_id}","instance":"{self.instance}","seq":'
+        head += '"seq":'
+        put = publisher.put
+        record_json = proto.cycle_record_json
 
         def on_cycle(record: CycleRecord) -> None:
             nonlocal seq
             seq += 1
-            body = _encode(record.to_dict() if hasattr(record, "to_dict") else record)
-            publisher.put(head.encode() + str(seq).encode() + b',"record":' + body + b"}")
+            if type(record) is CycleRecord:
+                body = record_json(record)
+            else:  # a planner of another kind: its records' own JSON form
+                body = _encode(record.to_dict() if hasattr(record, "to_dict") else record).decode()
+            put((head + str(seq) + ',"record":' + body + "}").encode())
 
         try:
-            self._status(goal_id, proto.STATE_RUNNING)
             assert self._planner is not None
             outcome = self._planner(job.request, on_cycle=on_cycle, cancel=job.cancel, **self._planner_kwargs)
             result = outcome.to_dict() if hasattr(outcome, "to_dict") else dict(outcome)
         finally:
-            publisher.undeclare()
             with self._lock:
                 self.stats.cycles_published += seq
         if not isinstance(result, dict):
             raise TypeError(f"planner result is a {type(result).__name__}, not a mapping")
         if result.get("cycles") is not None and result.get("cycles") != seq:
             log.warning(
-                "goal %s: planner reports %s cycles, %d published", goal_id, result.get("cycles"), seq
+                "goal %s: planner reports %s cycles, %d published", job.goal_id, result.get("cycles"), seq
             )
         result.setdefault("cycles_published", seq)
         return result
