@@ -115,6 +115,9 @@ class EosClient:
         self._inflight: dict[str, int] = {}
         self._waiters: dict[int, tuple[str, queue.SimpleQueue[tuple[str, Any]]]] = {}
         self._waiter_ids = itertools.count()
+        # default goal ids: a random prefix per client and a counter (no random bytes per plan)
+        self._goal_prefix = f"g-{secrets.token_hex(6)}-"
+        self._goal_numbers = itertools.count(1)
         self._turn = itertools.count()
         self._owns_session = False
         self._live_changed = threading.Condition(self._lock)
@@ -208,7 +211,7 @@ class EosClient:
 
         Args:
             request: the plan request (default: ``PlanRequest()``); a mapping is sent as is.
-            goal_id: the goal id (default: a random ``g-<hex>``).
+            goal_id: the goal id (default: ``g-<random hex of this client>-<n>``, n = 1, 2, ...).
             on_cycle: called with every cycle message, in order, in this thread.
             instance: ask this instance only (no spreading, no retry elsewhere).
             watch: subscribe to the goal's cycles and status (needed for ``on_cycle``).
@@ -221,7 +224,10 @@ class EosClient:
             ServiceUnavailableError: no instance answered.
         """
         req = PlanRequest() if request is None else request
-        goal_id = proto.check_id(goal_id, "goal_id") if goal_id is not None else f"g-{secrets.token_hex(8)}"
+        if goal_id is None:
+            goal_id = f"{self._goal_prefix}{next(self._goal_numbers)}"
+        else:
+            proto.check_id(goal_id, "goal_id")
         payload = proto.encode_request(goal_id, req)
         if timeout is None:
             deadline = req.deadline_s if isinstance(req, PlanRequest) else req.get("deadline_s", 10.0)
