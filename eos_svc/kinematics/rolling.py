@@ -28,6 +28,7 @@ import math
 import operator
 import struct
 import threading
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -148,6 +149,22 @@ def _unit(name: str, v: object) -> np.ndarray:
 
 
 _OSQP_CACHE = threading.local()
+# per hand: finger -> (Pinocchio model reduced to the tip's chain, the tip frame's id in it)
+_CHAIN_MODELS: weakref.WeakKeyDictionary[Any, dict[str, tuple[Any, int]]] = weakref.WeakKeyDictionary()
+
+
+def _chain_model(hand: Any, finger: str, fid: int, chain: list[int]) -> tuple[Any, int]:
+    """``hand``'s model with every joint off the tip's kinematic chain locked (built once per
+    hand and finger, ~0.25 ms; read-only, shared by the rollers, each with its own data)."""
+    per_hand = _CHAIN_MODELS.setdefault(hand, {})
+    if finger not in per_hand:
+        model = hand.model
+        kept = set(chain)
+        lock = [j for j in range(1, model.njoints) if int(model.idx_vs[j]) not in kept]
+        frame = model.frames[fid]
+        reduced = pin.buildReducedModel(model, lock, pin.neutral(model))
+        per_hand[finger] = (reduced, int(reduced.getFrameId(frame.name, frame.type)))
+    return per_hand[finger]
 
 
 def _cached_osqp(rq: RollingQP) -> tuple[Any, Any]:
@@ -293,11 +310,7 @@ class RollingQP:
         chain = [int(model.idx_vs[j]) for j in list(model.supports[model.frames[self._fid].parentJoint])[1:]]
         self._reduced = chain == self._cols.tolist()
         if self._reduced:
-            kept = set(chain)
-            lock = [j for j in range(1, model.njoints) if int(model.idx_vs[j]) not in kept]
-            frame = model.frames[self._fid]
-            model = pin.buildReducedModel(model, lock, pin.neutral(model))
-            self._fid = model.getFrameId(frame.name, frame.type)
+            model, self._fid = _chain_model(hand, finger, self._fid, chain)
         self._model = model
         self._data = model.createData()
         # live views of the tip placement in self._data (indexing data.oMf from Python
