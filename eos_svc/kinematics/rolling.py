@@ -941,19 +941,17 @@ class RollingQP:
         qdot = self._qdot
         qa = self._qa
         if type(sel) is slice:
-            # qdot[sel] = x and qa += x * dt, float by float into the arrays' buffers (the same
-            # roundings as numpy's multiply then add)
-            pack = self._pack_nx
+            # qdot[sel] = x from the floats, into the buffer (no numpy indexing)
             assert xs is not None  # the list of x, from the closed form or the backend
-            pack(self._qdot_a_buf, 0, *xs)
-            pack(self._qa_buf, 0, *[qi + xi * dt for qi, xi in zip(qa.tolist(), xs, strict=True)])
+            self._pack_nx(self._qdot_a_buf, 0, *xs)
         else:
             qdot[sel] = x
             if self._qdot_r is not None:
                 self._qdot_r[:] = x
-            tmp = self._tmp
-            np.multiply(x, dt, out=tmp)
-            qa += tmp
+        tmp = self._tmp
+        np.multiply(x, dt, out=tmp)
+        qa += tmp
+        if type(sel) is not slice:
             self._q[sel] = qa
         self._stale = True
         self.steps += 1
