@@ -157,6 +157,7 @@ def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> d
     # The batched floor: all three tip-object distances in one computeDistances (the geometry
     # model of the tips and the object that Scene.tip_contacts uses), then per finger the
     # witness points, normal and the Jacobian at the contact.
+    scene.tip_contacts(state)  # builds the scene's geometry model of the tips and the object
     tgm, tgd = scene._tip_gmodel, pin.GeometryData(scene._tip_gmodel)
     for r_ in tgd.distanceRequests:
         r_.enable_signed_distance = True
