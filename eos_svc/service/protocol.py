@@ -285,7 +285,10 @@ def cycle_record_json(record: CycleRecord) -> str:
 def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> bytes:
     """A plan request on the wire: ``{"schema": 1, "goal_id": ..., <PlanRequest fields>}``."""
     body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
-    return dumps({"schema": SCHEMA_VERSION, "goal_id": goal_id, **body})
+    if not body or "schema" in body or "goal_id" in body:  # the envelope's fields win, as in a merged dict
+        return dumps({"schema": SCHEMA_VERSION, "goal_id": goal_id, **body})
+    # the envelope spliced before the body's own JSON (no merged dict): the same bytes
+    return b'{"schema":%d,"goal_id":%s,%s' % (SCHEMA_VERSION, dumps(goal_id), dumps(body)[1:])
 
 
 #: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)

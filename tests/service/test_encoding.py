@@ -189,3 +189,12 @@ def test_loads_strict_reads_what_json_loads_reads(payload):
         assert isinstance(got, type) and issubclass(got, ValueError) == issubclass(expected, ValueError)
     else:
         assert got == expected
+
+
+@pytest.mark.parametrize(
+    "body",
+    [PlanRequest(seed=3, max_cycles=1), {}, {"schema": 2, "a": 1}, {"goal_id": "z"}, {"a": [1.5, "ü", None]}],
+)
+def test_encode_request_is_the_merged_envelope(body):
+    merged = body.to_dict() if isinstance(body, PlanRequest) else dict(body)
+    assert proto.encode_request("g-1", body) == proto.dumps({"schema": 1, "goal_id": "g-1", **merged})
