@@ -39,6 +39,9 @@ __all__ = [
     "load_hand",
 ]
 
+_LWA = pin.LOCAL_WORLD_ALIGNED
+_F64 = np.dtype(np.float64)
+
 #: The repository's three-finger hand (editable install: located relative to the package).
 HAND3X3_URDF: Path = Path(__file__).resolve().parents[2] / "urdf" / "hand3x3.urdf"
 
@@ -464,7 +467,7 @@ class HandModel:
         """Return ``q`` as a fresh float array after checking length and finiteness."""
         if (
             type(q) is np.ndarray
-            and q.dtype == np.float64
+            and q.dtype is _F64
             and q.shape == self._q_shape
             and math.isfinite(sum(q.tolist()))  # fast path; overflow falls through to the check
         ):
@@ -542,7 +545,7 @@ class HandState:
         hand = self.hand
         if (  # inlined fast path of HandModel.validate_q (this is the hot path)
             type(q) is np.ndarray
-            and q.dtype == np.float64
+            and q.dtype is _F64
             and q.shape == hand._q_shape
             and math.isfinite(sum(q.tolist()))
         ):
@@ -592,10 +595,13 @@ class HandState:
 
     # -- Jacobians
     def tip_jacobian(self, finger: str) -> np.ndarray:
-        """6×nv Jacobian of the tip frame origin, LOCAL_WORLD_ALIGNED ([v; ω] in world axes)."""
-        return pin.getFrameJacobian(
-            self.model, self.data, self.hand.tip_frame_id(finger), pin.LOCAL_WORLD_ALIGNED
-        )
+        """6×nv Jacobian of the tip frame origin (the fingertip sphere's centre, a material point
+        of the fingertip body) and of the fingertip's orientation, LOCAL_WORLD_ALIGNED
+        ([v; ω] in world axes)."""
+        tip = self._tips.get(finger)
+        if tip is None:
+            tip = self._tip(finger)  # raises UnknownNameError
+        return pin.getFrameJacobian(self.model, self.data, tip[0], _LWA)
 
     def _tip(self, finger: str) -> tuple[int, int, pin.SE3, np.ndarray, pin.SE3]:
         try:

@@ -211,23 +211,22 @@ class Scene:
         query per finger; the same coal algorithms, so the same contacts to round-off)."""
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
-        if self._tip_gmodel is None and not self._tip_model_tried:
-            self._build_tip_model()
-        if self._tip_gmodel is None or self.exact_tips:
+        gm = self._tip_gmodel
+        if gm is None or self.exact_tips:
+            if not self._tip_model_tried:
+                self._build_tip_model()
+                return self.tip_contacts(state)
             return tuple(self.contact(state, f) for f in self.hand.finger_names)
-        gm, gd = self._tip_gmodel, self._tip_gdata
+        gd = self._tip_gdata
         pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
         pin.computeDistances(gm, gd)
-        out = []
-        for finger, r, res in self._tip_batch:
-            d = res.min_distance
-            if d < 0.0:  # penetration: the exact contact, as in contact()
-                c = state._tips[finger][3].copy()
-                out.append(self._analytic_sphere_contact(finger, c, r))
-            else:
-                p_obj, p_tip, n = res.getNearestPoint1(), res.getNearestPoint2(), res.normal
-                out.append(_fast_contact(finger, d, p_tip, p_obj, n))
-        return tuple(out)
+        return tuple(
+            _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal)
+            if (d := res.min_distance) >= 0.0
+            # penetration: the exact contact, as in contact()
+            else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
+            for finger, r, res in self._tip_batch
+        )
 
     def contacts(self, state: HandState) -> dict[str, Contact]:
         """:meth:`contact` for every finger."""
