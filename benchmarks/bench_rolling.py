@@ -258,7 +258,7 @@ def main(argv: list[str] | None = None) -> int:
         med = statistics.median(ep1_ms[name])
         print(f"  {name:<28}{med:8.2f} ms   ratio {med / cur:5.2f}")
 
-    print("\nbreakdown of the default step (median µs; its helpers timed one by one, the step inlines them):")
+    print("\nbreakdown of the default step (median µs; its helpers timed one by one; the step calls them):")
     for k, v in breakdown(min(a.steps, 2000)).items():
         print(f"  {k:<16}{v:8.1f}")
 

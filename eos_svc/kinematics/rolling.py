@@ -41,8 +41,8 @@ import scipy.sparse as sp
 from scipy.linalg import lapack
 
 from .hand import HandState, KinematicsError
-from .scene import Contact, Scene, _fast_contact
-from .tactile import TactileReading, TactileSensor, _fast_reading
+from .scene import Contact, Scene
+from .tactile import TactileReading, TactileSensor
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
 
@@ -117,22 +117,6 @@ _JJ = pin.computeJointJacobians
 _GFJ = pin.getFrameJacobian
 _GFCA = pin.getFrameClassicalAcceleration
 _matmul = np.matmul
-
-
-def _fast_step(
-    contact: Contact, reading: TactileReading | None, qdot: np.ndarray, slip: float,
-    normal: float, omega: float, iterations: int,
-) -> RollingStep:
-    """RollingStep(...) without the frozen dataclass __init__ (~2 µs): fills the slots."""
-    st: RollingStep = _new(RollingStep)
-    _S_CONTACT(st, contact)
-    _S_READING(st, reading)
-    _S_QDOT(st, qdot)
-    _S_SLIP(st, slip)
-    _S_NORMAL(st, normal)
-    _S_OMEGA(st, omega)
-    _S_ITER(st, iterations)
-    return st
 
 
 def _unit(name: str, v: object) -> np.ndarray:
@@ -366,7 +350,7 @@ class RollingQP:
         self._ub = self._u[6:]
         # dgels' right-hand side must have max(6, nx) rows: b followed by (ignored) lb entries
         self._b_ext = self._l[: max(6, nx)]
-        self._b_buf = self._b.data  # for struct.pack_into (see step)
+        self._b_buf = self._b.data  # for struct.pack_into (see _build)
         self._lo = hand.lower[self._cols]  # q index == v index for hand3x3-like hands
         self._hi = hand.upper[self._cols]
         self._vmax = hand.velocity_limit[self._cols]
@@ -374,7 +358,7 @@ class RollingQP:
         self._M = np.zeros((6, 6))  # C = M J: rows t1, t2, n (linear) and the r_f terms
         self._M[3:, 3:] = np.eye(3)
         self._M3 = self._M[:3].reshape(-1)  # view of the three changing rows
-        self._M3_buf = self._M3.data  # for struct.pack_into (see step)
+        self._M3_buf = self._M3.data  # for struct.pack_into (see _build)
         self._lo_dt = self._lo / self.dt
         self._hi_dt = self._hi / self.dt
         self._lo_dt_l: list[float] = self._lo_dt.tolist()
@@ -401,7 +385,7 @@ class RollingQP:
         self._qk = self._qdot  # set by _retarget
         # the Jacobian's active columns: all of them with the reduced model
         self._jsel: slice | np.ndarray | None = None if self._reduced else self._sel
-        # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step)
+        # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step, the integration)
         self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
         self._qa_buf: Any = None
         #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
@@ -488,14 +472,15 @@ class RollingQP:
 
     # ------------------------------------------------------------------ contact
     def contact(self) -> Contact:
-        """Contact of the rolling tip at the current q (coal), kinematics already computed."""
+        """Contact of the rolling tip at the current q (coal), kinematics already computed.
+
+        Also leaves the normal as floats in ``self._n`` (for :meth:`_read` and :meth:`_build`)."""
         c = self._c_view
         self._tf_tip.setTranslation(c)
         res = self._res
-        res.clear()
-        self._dist(self._tf_obj, self._tf_tip, self._req, res)
+        res.clear()  # needed: a result at distance <= 0 would satisfy the next request as is
+        d = self._dist(self._tf_obj, self._tf_tip, self._req, res)  # = res.min_distance
         p_obj = res.getNearestPoint1()
-        d = res.min_distance
         cx, cy, cz = c.tolist()
         ox, oy, oz = p_obj.tolist()
         dx, dy, dz = cx - ox, cy - oy, cz - oz
@@ -506,19 +491,19 @@ class RollingQP:
             nx_, ny_, nz_ = dx * s, dy * s, dz * s
         else:
             nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
-        self._n = (nx_, ny_, nz_)
-        return _fast_contact(
-            self.finger,
-            d,
-            np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)),
-            p_obj,
-            np.array((nx_, ny_, nz_)),
-        )
+        n = self._n = (nx_, ny_, nz_)
+        contact: Contact = _new(Contact)  # as _fast_contact(...), without the call
+        _SC_FINGER(contact, self.finger)
+        _SC_DISTANCE(contact, d)
+        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
+        _SC_POINT_OBJECT(contact, p_obj)
+        _SC_NORMAL(contact, np.array(n))
+        return contact
 
     # ------------------------------------------------------------------ the step
-    def _build(self, contact: Contact, n: tuple[float, float, float] | None = None) -> None:
+    def _build(self, contact: Contact, n: tuple[float, ...] | None = None) -> tuple[float, ...]:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
-        (``n``: the contact normal as floats, when the caller has them)."""
+        (``n``: the contact normal as floats, when the caller has them); returns b as floats."""
         J = self._J  # from kinematics()
         jsel = self._jsel
         if jsel is None:
@@ -540,27 +525,28 @@ class RollingQP:
         # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
         # t1 × n = −t2, t2 × n = t1. One slice assignment (item writes cost ~0.3 µs each).
         r = self._r
-        self._M3[:] = (
+        _PACK18(  # = self._M3[:] = (...), without numpy's sequence conversion
+            self._M3_buf, 0,
             t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z,
             t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
             nx_, ny_, nz_, 0.0, 0.0, 0.0,
         )  # fmt: skip
-        np.matmul(self._M, Jb, out=self._C)
-        bn = -self.gap_gain * contact.distance / self.dt
+        _matmul(self._M, Jb, out=self._C)
+        dt = self.dt
+        bn = -self.gap_gain * contact.distance / dt
         if self.second_order and self.steps > 0:
             # q̇ is constant over a step, so the tip moves with the acceleration J̇q̇ of the
             # last q̇: ask for the step's *average* velocities, v + ½ dt a, to meet the
             # targets (no slip, contact, ω a) — second-order accurate integration.
-            acc = pin.getFrameClassicalAcceleration(self._model, self._data, self._fid, _LWA)
-            ax, ay, az, wx, wy, wz = acc.vector.tolist()
+            ax, ay, az, wx, wy, wz = _GFCA(self._model, self._data, self._fid, _LWA).vector.tolist()
             # material point at r = −r_f n: a_p = a_c + α × r + ω × (ω × r); the last term is
             # normal when ω ⟂ n, and α × r = −r_f α × n
             px = ax - r * (wy * nz_ - wz * ny_)
             py = ay - r * (wz * nx_ - wx * nz_)
             pz = az - r * (wx * ny_ - wy * nx_)
-            h = 0.5 * self.dt
+            h = 0.5 * dt
             wa0, wa1, wa2 = self._wa_t
-            self._b[:] = (
+            bt = (
                 -h * (t1x * px + t1y * py + t1z * pz),
                 -h * (t2x * px + t2y * py + t2z * pz),
                 bn - h * (nx_ * ax + ny_ * ay + nz_ * az),
@@ -568,20 +554,25 @@ class RollingQP:
                 wa1 - h * wy,
                 wa2 - h * wz,
             )
+            _PACK6(self._b_buf, 0, *bt)  # = self._b[:] = bt
         else:
-            self._b[2] = bn
-        self._bounds()
+            b = self._b
+            b[2] = bn
+            bt = tuple(b.tolist())
+        if self._free_steps > 0:  # see _bounds
+            self._free_steps -= 1
+        else:
+            self._bounds()
+        return bt
 
     def _bounds(self) -> None:
         """lb, ub: max(−q̇max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇max, (q_max − q)/dt).
 
         Far from the position limits they are exactly ∓q̇max, and q moves by at most
         q̇max·dt per step: after an exact evaluation that finds every position limit at least
-        k steps away, the next k − 1 evaluations are skipped (the arrays already hold ∓q̇max).
+        k steps away, the next k − 1 evaluations are skipped by ``_build`` (the arrays already
+        hold ∓q̇max): this evaluates them, and sets that count.
         """
-        if self._free_steps > 0:
-            self._free_steps -= 1
-            return
         # in floats, the operations numpy's multiply, subtract, maximum and minimum did (same
         # values, NaN propagated alike); the arrays written once each
         inv = 1.0 / self.dt
@@ -611,7 +602,13 @@ class RollingQP:
     def _solve_direct(self) -> np.ndarray | None:
         """The minimum-W-norm solution of C q̇ = b when it satisfies the bounds (it is then
         the QP's optimum), else None."""
-        if self.nx < 6:
+        sol = self._direct()
+        return None if sol is None else sol[0]
+
+    def _direct(self) -> tuple[np.ndarray, list[float]] | None:
+        """:meth:`_solve_direct`'s solution and the same as floats, or None."""
+        nx = self.nx
+        if nx < 6:
             return None  # over-determined equalities: the backend decides
         ws = self._wscale
         if ws is None:
@@ -619,22 +616,23 @@ class RollingQP:
         else:
             A = self._Cw
             np.multiply(self._C, ws, out=A)
-        _, z, info = _DGELS(A, self._b_ext)
+        _, x, info = _DGELS(A, self._b_ext)
         if info != 0:
             return None  # rank-deficient
-        x: np.ndarray = z[: self.nx]
+        # dgels' solution has max(6, nx) = nx rows
         if ws is not None:
             x = x * ws
+        xs: list[float] = x.tolist()
         # Taken when within the bounds to OSQP's own tolerance eps (_lb_tol = lb − eps, _ub_tol =
         # ub + eps, set by _bounds): OSQP's solutions meet the bounds only to ≈ eps·(1 + |q̇|)
         # too (rolling at the wrist's velocity limit puts the
         # unconstrained optimum a few 1e-8 rad/s beyond it; OSQP returns a point within ~1e-6
         # of the unconstrained optimum there, while clamping exactly would move the finger by
         # ~1e-3 rad/s — the problem is nearly degenerate in that direction).
-        for xi, lo, hi in zip(x.tolist(), self._lb_tol, self._ub_tol, strict=True):
-            if not lo <= xi <= hi:  # also catches NaN
-                return None
-        return x
+        # lo <= x_i <= hi for every i (False on NaN), the loop in C
+        if all(map(_LE, self._lb_tol, xs)) and all(map(_LE, xs, self._ub_tol)):
+            return x, xs
+        return None
 
     def _solve_osqp(self) -> tuple[np.ndarray, int]:
         self._u[:6] = self._b
@@ -696,12 +694,13 @@ class RollingQP:
         and the tip placement at the current q."""
         model, data = self._model, self._data
         if self.second_order:
-            pin.forwardKinematics(model, data, self._qk, self._qdk, self._zero_nv)
-            pin.computeJointJacobians(model, data)
+            _FK(model, data, self._qk, self._qdk, self._zero_nv)
+            _JJ(model, data)
         else:
-            pin.computeJointJacobians(model, data, self._qk)
-        # getFrameJacobian also places the tip frame (data.oMf[fid]): no updateFramePlacement
-        self._J = pin.getFrameJacobian(model, data, self._fid, _LWA)
+            _JJ(model, data, self._qk)
+        # getFrameJacobian also places the tip frame (data.oMf[fid], seen through _c_view and
+        # _R_view): no updateFramePlacement
+        self._J = _GFJ(model, data, self._fid, _LWA)
 
     def read_tactile(self, contact: Contact) -> TactileReading | None:
         """The sensor's reading of ``contact`` (None without a sensor).
@@ -729,7 +728,9 @@ class RollingQP:
         py = -r * (n0 * r01 + n1 * r11 + n2 * r21)
         pz = -r * (n0 * r02 + n1 * r12 + n2 * r22)
         d = contact.distance
-        in_contact = d <= sensor.contact_tolerance
+        if type(d) is not float:
+            d = float(d)
+        in_contact = d <= sensor.contact_tolerance  # a bool (floats)
         if in_contact:
             if sensor.noise_std > 0.0:
                 nx_, ny_, nz_ = px / r, py / r, pz / r
@@ -752,175 +753,29 @@ class RollingQP:
                 pn = math.sqrt(px * px + py * py + pz * pz)
                 if pn > 1e-12:
                     px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-        return _fast_reading(
-            contact.finger,
-            np.array((px, py, pz)),
-            np.array((px / r, py / r, pz / r)),
-            bool(in_contact),
-            float(d),
-        )
+        reading: TactileReading = _new(TactileReading)  # as _fast_reading(...), without the call
+        _SR_FINGER(reading, contact.finger)
+        _SR_POINT(reading, np.array((px, py, pz)))
+        _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
+        _SR_IN(reading, in_contact)
+        _SR_DIST(reading, d)
+        return reading
 
     def _bounds_infeasible(self) -> bool:
         return bool((self._lb > self._ub).any())
 
     def step(self) -> RollingStep:
-        """Measure the contact, read the sensor, solve the QP, integrate one ``dt``.
-
-        The same computation as :meth:`kinematics`, :meth:`contact`, :meth:`read_tactile`,
-        ``_build``, ``_solve_direct`` and the integration in turn, written out in one body
-        (each helper call, attribute look-up and temporary array costs a fraction of a µs).
-        Keep the two in step: tests/kinematics/test_rolling_step.py compares them bit for bit.
-        """
-        model, data, fid = self._model, self._data, self._fid
-        # ---- kinematics: FK (with the last q̇), joint Jacobians; getFrameJacobian also
-        # places the tip frame (data.oMf[fid], seen through _c_view/_R_view)
-        if self.second_order:
-            _FK(model, data, self._qk, self._qdk, self._zero_nv)
-            _JJ(model, data)
-        else:
-            _JJ(model, data, self._qk)
-        J = _GFJ(model, data, fid, _LWA)
-        # ---- contact (as contact())
-        c = self._c_view
-        self._tf_tip.setTranslation(c)
-        res = self._res
-        res.clear()  # needed: a result at distance <= 0 would satisfy the next request as is
-        d = self._dist(self._tf_obj, self._tf_tip, self._req, res)  # = res.min_distance
-        p_obj = res.getNearestPoint1()
-        cx, cy, cz = c.tolist()
-        ox, oy, oz = p_obj.tolist()
-        dx, dy, dz = cx - ox, cy - oy, cz - oz
-        nn = math.sqrt(dx * dx + dy * dy + dz * dz)
-        r = self._r
-        if nn > 1e-12 and d > -0.5 * r:  # tip centre outside the object
-            s = 1.0 / nn
-            nx_, ny_, nz_ = dx * s, dy * s, dz * s
-        else:
-            nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
-        n = self._n = (nx_, ny_, nz_)
-        finger = self.finger
-        contact: Contact = _new(Contact)  # as _fast_contact(...), without the call
-        _SC_FINGER(contact, finger)
-        _SC_DISTANCE(contact, d)
-        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
-        _SC_POINT_OBJECT(contact, p_obj)
-        _SC_NORMAL(contact, np.array(n))
-        # ---- tactile reading (as _read())
-        sensor = self.tactile
-        reading: TactileReading | None = None
-        if sensor is not None:
-            if type(sensor) is not TactileSensor or not self.fast_tactile:
-                self.sync()
-                reading = sensor.read(self._state, contact)
-            else:
-                (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self._R_view.tolist()
-                px = -r * (nx_ * r00 + ny_ * r10 + nz_ * r20)
-                py = -r * (nx_ * r01 + ny_ * r11 + nz_ * r21)
-                pz = -r * (nx_ * r02 + ny_ * r12 + nz_ * r22)
-                in_contact = d <= sensor.contact_tolerance
-                if in_contact:
-                    if sensor.noise_std > 0.0:
-                        ux, uy, uz = px / r, py / r, pz / r
-                        if abs(ux) < 0.9:
-                            t1x, t1y, t1z = 1.0 - ux * ux, -ux * uy, -ux * uz
-                        else:
-                            t1x, t1y, t1z = -uy * ux, 1.0 - uy * uy, -uy * uz
-                        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-                        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-                        t2x = uy * t1z - uz * t1y
-                        t2y = uz * t1x - ux * t1z
-                        t2z = ux * t1y - uy * t1x
-                        g0, g1 = sensor.rng.normal(0.0, sensor.noise_std, size=2).tolist()
-                        px, py, pz = (
-                            px + g0 * t1x + g1 * t2x,
-                            py + g0 * t1y + g1 * t2y,
-                            pz + g0 * t1z + g1 * t2z,
-                        )
-                        s = r / math.sqrt(px * px + py * py + pz * pz)
-                        px, py, pz = px * s, py * s, pz * s
-                    if sensor.pitch is not None:
-                        h = sensor.pitch
-                        px, py, pz = round(px / h) * h, round(py / h) * h, round(pz / h) * h
-                        pn = math.sqrt(px * px + py * py + pz * pz)
-                        if pn > 1e-12:
-                            px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-                reading = _new(TactileReading)  # as _fast_reading(...), without the call
-                _SR_FINGER(reading, finger)
-                _SR_POINT(reading, np.array((px, py, pz)))
-                _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
-                _SR_IN(reading, in_contact)  # d and the tolerance are floats: a bool
-                _SR_DIST(reading, d)  # a float (coal's min_distance)
-        # ---- constraint rows and targets (as _build())
-        self._J = J
-        jsel = self._jsel
-        if jsel is None:
-            Jb = J
-        elif type(jsel) is slice:
-            Jb = J[:, jsel]
-        else:
-            Jb = self._Jb
-            J.take(jsel, axis=1, out=Jb)
-        if abs(nx_) < 0.9:
-            t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
-        else:
-            t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
-        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-        t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
-        _PACK18(  # = self._M3[:] = (...), without numpy's sequence conversion
-            self._M3_buf, 0,
-            t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z,
-            t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
-            nx_, ny_, nz_, 0.0, 0.0, 0.0,
-        )  # fmt: skip
-        C = self._C
-        _matmul(self._M, Jb, out=C)
-        dt = self.dt
-        bn = -self.gap_gain * d / dt
-        b = self._b
-        if self.second_order and self.steps > 0:
-            ax, ay, az, wx, wy, wz = _GFCA(model, data, fid, _LWA).vector.tolist()
-            px = ax - r * (wy * nz_ - wz * ny_)
-            py = ay - r * (wz * nx_ - wx * nz_)
-            pz = az - r * (wx * ny_ - wy * nx_)
-            h = 0.5 * dt
-            wa0, wa1, wa2 = self._wa_t
-            b0, b1, b2, b3, b4, b5 = bt = (
-                -h * (t1x * px + t1y * py + t1z * pz),
-                -h * (t2x * px + t2y * py + t2z * pz),
-                bn - h * (nx_ * ax + ny_ * ay + nz_ * az),
-                wa0 - h * wx,
-                wa1 - h * wy,
-                wa2 - h * wz,
-            )
-            _PACK6(self._b_buf, 0, *bt)  # = b[:] = bt
-        else:
-            b[2] = bn
-            b0, b1, b2, b3, b4, b5 = b.tolist()
-        if self._free_steps > 0:
-            self._free_steps -= 1
-        else:
-            self._bounds()
-        # ---- solve: closed form when the bounds are inactive (as _solve_direct()), else the backend
-        x: np.ndarray | None = None
-        xs: list[float] | None = None
-        if self.direct and self.nx >= 6:
-            ws = self._wscale
-            if ws is None:
-                _, z, info = _DGELS(C, self._b_ext)
-            else:
-                np.multiply(C, ws, out=self._Cw)
-                _, z, info = _DGELS(self._Cw, self._b_ext)
-            if info == 0:
-                x = z  # dgels' solution has max(6, nx) = nx rows
-                if ws is not None:
-                    x = x * ws
-                xs = x.tolist()
-                # lo <= x_i <= hi for every i (False on NaN), the loop in C
-                if not (all(map(_LE, self._lb_tol, xs)) and all(map(_LE, xs, self._ub_tol))):
-                    x = None
+        """Measure the contact, read the sensor, solve the QP, integrate one ``dt``:
+        :meth:`kinematics`, :meth:`contact`, the tactile reading, ``_build`` (rows, targets,
+        bounds), the closed-form solve (``_direct``) or the backend, and the integration."""
+        self.kinematics()
+        contact = self.contact()
+        n = self._n
+        reading = None if self.tactile is None else self._read(contact, n)
+        b0, b1, b2, b3, b4, b5 = self._build(contact, n)
+        sol = self._direct() if self.direct else None
         it = 0
-        if x is None:
+        if sol is None:
             if self._bounds_infeasible():
                 raise RollingQPError(
                     "joint limits leave no feasible velocity",
@@ -930,32 +785,33 @@ class RollingQP:
                 )
             x, it = self._solve_osqp() if self.solver == "osqp" else self._solve_generic()
             xs = x.tolist()
-        # ---- residuals of the equalities at the returned solution (C x in numpy: the same
-        # BLAS call as before, so the same round-off; − b in floats, as np.subtract would)
+        else:
+            x, xs = sol
+        # ---- residuals of the equalities at the returned solution (C x in numpy, − b in
+        # floats, as np.subtract would)
         res6 = self._res6
-        _matmul(C, x, out=res6)
+        _matmul(self._C, x, out=res6)
         r0, r1, r2, r3, r4, r5 = res6.tolist()
         r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
         # ---- integration q ← q + q̇ dt
         sel = self._sel
         qdot = self._qdot
-        qa = self._qa
         if type(sel) is slice:
             # qdot[sel] = x from the floats, into the buffer (no numpy indexing)
-            assert xs is not None  # the list of x, from the closed form or the backend
             self._pack_nx(self._qdot_a_buf, 0, *xs)
         else:
             qdot[sel] = x
             if self._qdot_r is not None:
                 self._qdot_r[:] = x
         tmp = self._tmp
-        np.multiply(x, dt, out=tmp)
+        np.multiply(x, self.dt, out=tmp)
+        qa = self._qa
         qa += tmp
         if type(sel) is not slice:
             self._q[sel] = qa
         self._stale = True
         self.steps += 1
-        rs: RollingStep = _new(RollingStep)  # as _fast_step(...), without the call
+        rs: RollingStep = _new(RollingStep)  # the frozen dataclass's __init__ costs ~2 µs: fill the slots
         _S_CONTACT(rs, contact)
         _S_READING(rs, reading)
         _S_QDOT(rs, qdot.copy())
