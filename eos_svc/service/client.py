@@ -87,6 +87,43 @@ class _LostError(Exception):
     pass
 
 
+class _Stream:
+    """The cycle messages of one attempt, in arrival order, and the sequence numbers found missing."""
+
+    __slots__ = ("cycles", "events", "gaps", "iid", "lock")
+
+    def __init__(self, iid: str, events: queue.SimpleQueue[tuple[str, Any]]) -> None:
+        self.iid = iid
+        self.events = events
+        self.cycles: list[dict[str, Any]] = []
+        self.gaps: list[int] = []
+        self.lock = threading.Lock()
+
+    def accept(self, payload: bytes) -> dict[str, Any] | None:
+        """Parse a cycle or status message of this attempt's instance; record a cycle. None: not ours."""
+        try:
+            msg = proto.loads_strict(payload)
+        except (ValueError, RecursionError):
+            return None
+        if not isinstance(msg, dict) or msg.get("instance") != self.iid:
+            return None  # an earlier attempt's instance: ignore
+        if "seq" in msg:
+            with self.lock:
+                expected = len(self.cycles) + 1
+                if msg["seq"] != expected:
+                    self.gaps.append(expected)
+                self.cycles.append(msg)
+        return msg
+
+    def on_sample(self, sample: zenoh.Sample) -> None:
+        """Zenoh callback when there is no ``on_cycle``: cycles are parsed and kept right here, in
+        Zenoh's thread (pure Python, never blocks), so the waiting thread is woken only for the
+        final status, not once per cycle."""
+        msg = self.accept(sample.payload.to_bytes())
+        if msg is not None and "seq" not in msg and msg.get("state") == proto.STATE_DONE:
+            self.events.put(("final", msg))
+
+
 class EosClient:
     """Client of the EOS planning service on an open Zenoh session.
 
@@ -287,11 +324,14 @@ class EosClient:
             self._inflight[iid] = self._inflight.get(iid, 0) + 1
         sub = None
         token = zenoh.CancellationToken()
+        stream = _Stream(iid, events)
         try:
             if watch:
                 sub = self.session.declare_subscriber(
                     proto.goal_keys(self.prefix, goal_id),
-                    direct_callback(lambda s: events.put(("sample", s))),
+                    direct_callback(
+                        stream.on_sample if on_cycle is None else lambda s: events.put(("sample", s))
+                    ),
                 )
             self.session.get(
                 proto.plan_key(self.prefix, iid),
@@ -302,7 +342,7 @@ class EosClient:
                 timeout=timeout,
                 cancellation_token=token,
             )
-            return self._collect(iid, goal_id, events, on_cycle, watch, timeout)
+            return self._collect(iid, goal_id, events, stream, on_cycle, watch, timeout)
         except _LostError:
             token.cancel()
             raise
@@ -318,12 +358,11 @@ class EosClient:
         iid: str,
         goal_id: str,
         events: queue.SimpleQueue[tuple[str, Any]],
+        stream: _Stream,
         on_cycle: CycleHandler | None,
         watch: bool,
         timeout: float,
     ) -> PlanOutcome:
-        cycles: list[dict[str, Any]] = []
-        gaps: list[int] = []
         final: dict[str, Any] | None = None
         reply: dict[str, Any] | None = None
         error: proto.RequestError | None = None
@@ -343,22 +382,17 @@ class EosClient:
                 kind, item = events.get(timeout=limit - now)
             except queue.Empty:
                 break
-            if kind == "sample":
-                try:
-                    msg = proto.loads_strict(item.payload.to_bytes())
-                except (ValueError, RecursionError):
+            if kind == "sample":  # with on_cycle: parsed here, in the thread that called plan()
+                msg = stream.accept(item.payload.to_bytes())
+                if msg is None:
                     continue
-                if not isinstance(msg, dict) or msg.get("instance") != iid:
-                    continue  # an earlier attempt's instance: ignore
                 if "seq" in msg:
-                    expected = len(cycles) + 1
-                    if msg["seq"] != expected:
-                        gaps.append(expected)
-                    cycles.append(msg)
                     if on_cycle is not None:
                         on_cycle(msg)
                 elif msg.get("state") == proto.STATE_DONE:
                     final = msg
+            elif kind == "final":
+                final = item
             elif kind == "reply":
                 if item.ok is not None:
                     reply = proto.loads_strict(item.ok.payload.to_bytes())
@@ -376,6 +410,8 @@ class EosClient:
         if reply is None:
             raise _LostError("no reply before the timeout" if not ended else "no reply")
         result = reply.get("result", {})
+        with stream.lock:  # copies: Zenoh's thread may still append until the subscriber is undeclared
+            cycles, gaps = list(stream.cycles), list(stream.gaps)
         return PlanOutcome(
             goal_id=goal_id,
             instance=str(reply.get("instance", iid)),
