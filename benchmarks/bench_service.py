@@ -1,15 +1,29 @@
 """Speed of the EOS Zenoh service on loopback (one command).
 
-    .venv/bin/python benchmarks/bench_service.py [--quick]
+    .venv/bin/python benchmarks/bench_service.py [--quick] [--breakdown]
 
-1. Round-trip overhead of a plan request over the same plan called in-process:
-   medians of interleaved runs (service: ``eos serve`` in another process,
-   grasp planner, client in this process), for a 1-cycle plan (where the
-   overhead is not lost in the plan's own noise), without and with the live
-   cycle stream, and for a whole default plan with its stream. A bare Zenoh
-   queryable round trip is printed for reference. Goal: ≤ 1 ms median.
+1. Round-trip overhead of a plan request over the same plan called in-process,
+   medians of interleaved runs (service: ``eos serve`` in another process, one
+   worker, grasp planner; client in this process), for a 1-cycle plan (where the
+   per-request overhead is not lost in the plan's own noise), without and with
+   the live cycle stream, and for a whole default plan with its stream.
+
+   The baseline is ``plan(request, keep_trace=False)`` in this process with no
+   cycle callback: what a caller pays without the service. Everything the
+   service adds counts as overhead: encoding, sending, decoding and validating
+   the request, the hand-off to a worker, the ``running`` and ``done`` status
+   messages, JSON-encoding and publishing every cycle (the service always
+   publishes; "no stream" only means the client does not subscribe), the result
+   to JSON, the reply and its parsing. Goal: ≤ 1 ms median for the 1-cycle
+   plan without stream. Measured in the same loop, for reference: a bare
+   Zenoh get→reply to a queryable in another process answering from its own
+   thread with a reply of the same size (the transport floor in the same
+   conditions).
 2. Throughput (plans/s) with one and with two service processes on this
    machine, the same plans sent by concurrent client threads. Goal: ≥ 1.7×.
+
+``--breakdown`` times one request's path across both processes (timestamps on
+the monotonic clock, which both share) and prints the median of every step.
 
 Loopback only (tcp/127.0.0.1), multicast scouting off.
 """
@@ -21,10 +35,14 @@ import importlib.metadata
 import os
 import queue
 import resource
+import signal
 import statistics
+import subprocess
 import sys
 import threading
 import time
+from collections import defaultdict
+from typing import Any
 
 import zenoh
 
@@ -67,10 +85,71 @@ def bare_zenoh_round_trip(n: int) -> float:
     return median_ms(ts[n // 10 :])
 
 
-def overhead(client: EosClient, request: PlanRequest, n: int, watch: bool) -> tuple[float, float, int]:
-    """Interleaved medians (ms): in-process plan, service round trip; and the plan's cycles."""
-    local, remote = [], []
+#: size of a 1-cycle plan's reply (bytes): the echo server answers with as much
+ECHO_REPLY_BYTES = 2700
+
+
+def echo_server(port: int) -> None:
+    """``--echo-server``: a queryable answering every get at once from its own thread (loopback)."""
+    session = zenoh.open(make_config(listen=[loopback(port)]))
+    inbox: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
+    qable = session.declare_queryable(
+        "bench/echo", zenoh.handlers.Callback(inbox.put, indirect=False), complete=True
+    )
+    body = b"x" * ECHO_REPLY_BYTES
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+
+    def answer() -> None:
+        while True:
+            q = inbox.get()
+            q.reply("bench/echo", body)
+            q.drop()
+
+    threading.Thread(target=answer, daemon=True).start()
+    print("echo ready", flush=True)
+    stop.wait(600)  # bounded: the benchmark ends it long before
+    qable.undeclare()
+    session.close()
+
+
+def start_echo() -> tuple[subprocess.Popen[str], zenoh.Session]:
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, __file__, "--echo-server", str(port)], stdout=subprocess.PIPE, text=True
+    )
+    assert proc.stdout is not None and "echo ready" in proc.stdout.readline()
+    session = zenoh.open(make_config(connect=[loopback(port)]))
+    time.sleep(0.3)
+    return proc, session
+
+
+def echo_round_trip(session: zenoh.Session, payload: bytes) -> float:
+    """One get->reply to the echo server (s), through a callback and a queue as the client does."""
+    events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+    t0 = time.perf_counter()
+    session.get(
+        "bench/echo",
+        zenoh.handlers.Callback(events.put, lambda: events.put(None), indirect=False),
+        payload=payload,
+        consolidation=zenoh.ConsolidationMode.NONE,
+        timeout=5,
+    )
+    reply = events.get(timeout=5)
+    dt = time.perf_counter() - t0
+    assert reply is not None
+    while events.get(timeout=5) is not None:
+        pass
+    return dt
+
+
+def overhead(
+    client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int, watch: bool
+) -> tuple[float, float, float, int]:
+    """Interleaved medians (ms): in-process plan, service round trip, bare echo; and the plan's cycles."""
+    local, remote, bare = [], [], []
     cycles = 0
+    payload = b"x" * 300  # a plan request's size
     for i in range(n + 5):
         t0 = time.perf_counter()
         plan(request, keep_trace=False)
@@ -80,10 +159,13 @@ def overhead(client: EosClient, request: PlanRequest, n: int, watch: bool) -> tu
         if watch:
             assert out.complete
         cycles = out.result["cycles"]
+        plan(request, keep_trace=False)  # the echo, too, right after an in-process plan
+        rt = echo_round_trip(echo, payload)
         if i >= 5:  # warm-up
             local.append(t1 - t0)
             remote.append(t2 - t1)
-    return median_ms(local), median_ms(remote), cycles
+            bare.append(rt)
+    return median_ms(local), median_ms(remote), median_ms(bare), cycles
 
 
 def throughput(
@@ -128,10 +210,237 @@ def throughput(
     return len(requests) / wall, used
 
 
+# ---------------------------------------------------------------------------------------- --breakdown
+_STAMPS: list[tuple[str, int]] = []
+
+
+def _stamp(label: str) -> None:
+    _STAMPS.append((label, time.perf_counter_ns()))  # CLOCK_MONOTONIC: comparable across processes
+
+
+def _timed(owner: Any, name: str, before: str, after: str) -> None:
+    """Wrap ``owner.name`` with two stamps."""
+    f = getattr(owner, name)
+
+    def wrapper(*a: Any, **k: Any) -> Any:
+        _stamp(before)
+        try:
+            return f(*a, **k)
+        finally:
+            _stamp(after)
+
+    setattr(owner, name, wrapper)
+
+
+class _Proxy:
+    """Forwards to a Zenoh object, stamping the calls named in ``stamps``."""
+
+    def __init__(self, target: Any, stamps: dict[str, Any]) -> None:
+        self._t, self._s = target, stamps
+
+    def __getattr__(self, name: str) -> Any:
+        attr = getattr(self._t, name)
+        if name not in self._s:
+            return attr
+        label = self._s[name]
+
+        def call(*a: Any, **k: Any) -> Any:
+            tag = label(a) if callable(label) else label
+            _stamp(tag + "0")
+            out = attr(*a, **k)
+            _stamp(tag + "1")
+            return out
+
+        return call
+
+
+def probe_server(port: int, out: str) -> None:
+    """``--probe-server``: a one-worker grasp service with timestamps on every step."""
+    import json
+
+    from eos_svc.service import protocol as proto
+    from eos_svc.service import server as srv
+
+    sys.setswitchinterval(0.001)  # as eos serve
+    _timed(proto, "decode_request", "decode0", "decode1")
+    _timed(srv, "_encode", "json0", "json1")
+
+    class Result:
+        def __init__(self, r: Any) -> None:
+            self.r = r
+
+        def to_dict(self) -> Any:
+            _stamp("to_dict0")
+            d = self.r.to_dict()
+            _stamp("to_dict1")
+            return d
+
+    def planner(request: Any, *, on_cycle: Any, cancel: Any, keep_trace: bool) -> Any:
+        def cycle(rec: Any) -> None:
+            _stamp("cycle0")
+            on_cycle(rec)
+            _stamp("cycle1")
+
+        _stamp("plan0")
+        r = plan(request, on_cycle=cycle, cancel=cancel, keep_trace=keep_trace)
+        _stamp("plan1")
+        return Result(r)
+
+    class Probed(srv.PlanService):
+        def _on_plan(self, query: Any) -> None:
+            _stamp("callback")
+            super()._on_plan(_Proxy(query, {"reply": "reply", "drop": "drop"}))
+            _stamp("admitted")
+
+        def _run(self, job: Any) -> None:
+            _stamp("worker")
+            super()._run(job)
+            _stamp("worker_end")
+
+    session = zenoh.open(make_config(listen=[loopback(port)]))
+    service = Probed(session, instance="probe", planner=planner, workers=1)
+    service.session = _Proxy(  # type: ignore[assignment]
+        session,
+        {
+            "declare_publisher": "declare",
+            "put": lambda a: "running" if b'"state":"running"' in bytes(a[1]) else "done",
+        },
+    )
+    service.start()
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    print("probe ready", flush=True)
+    stop.wait(600)  # bounded: the benchmark ends it long before
+    service.stop()
+    session.close()
+    with open(out, "w") as f:
+        json.dump(_STAMPS, f)
+
+
+#: (from, to, what) — the steps of one request, in order
+_STEPS = [
+    ("start", "encode0", "client: before encoding (goal id, options)"),
+    ("encode0", "encode1", "client: request to JSON"),
+    ("encode1", "get0", "client: choose instance, waiter, callbacks"),
+    ("get0", "callback", "transport: get -> server callback (GIL taken)"),
+    ("callback", "decode0", "server: payload bytes, counters"),
+    ("decode0", "decode1", "server: decode + validate request"),
+    ("decode1", "admitted", "server: admit, job, queue"),
+    ("admitted", "worker", "server: wake the worker thread"),
+    ("worker", "declare0", "server: message heads"),
+    ("declare0", "declare1", "server: declare cycle publisher"),
+    ("running0", "running1", "server: put status running"),
+    ("plan0", "plan1", "plan in the server (incl. cycles)"),
+    ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),
+    ("to_dict0", "to_dict1", "server: PlanResult.to_dict"),
+    ("json0", "json1", "server: result to JSON"),
+    ("done0", "done1", "server: put status done"),
+    ("reply0", "reply1", "server: query.reply call"),
+    ("reply0", "reply_cb", "transport: reply -> client callback (GIL taken)"),
+    ("reply_cb", "loads0", "client: wake the waiting thread"),
+    ("loads0", "loads1", "client: parse the reply"),
+    ("loads1", "end", "client: outcome, clean-up"),
+    ("reply1", "drop1", "server: query.drop (after the reply)"),
+    ("drop1", "worker_end", "server: undeclare publisher, counters (after the reply)"),
+]
+
+
+def breakdown(n: int) -> None:
+    """Time the steps of ``n`` 1-cycle requests (no stream), interleaved with in-process plans."""
+    import json
+    import tempfile
+
+    from eos_svc.service import client as cli
+    from eos_svc.service import protocol as proto
+
+    fd, out = tempfile.mkstemp(prefix="eos-probe-", suffix=".json")
+    os.close(fd)
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, __file__, "--probe-server", str(port), out], stdout=subprocess.PIPE, text=True
+    )
+    assert proc.stdout is not None and "probe ready" in proc.stdout.readline()
+    _timed(proto, "encode_request", "encode0", "encode1")
+    _timed(proto, "loads_strict", "loads0", "loads1")
+    direct = cli.direct_callback
+
+    def stamped_callback(cb: Any, drop: Any = None) -> Any:
+        def f(x: Any) -> None:
+            _stamp("reply_cb")
+            cb(x)
+
+        return direct(f, drop)
+
+    cli.direct_callback = stamped_callback  # type: ignore[assignment]
+    client = EosClient.open(make_config(connect=[loopback(port)]))
+    client.session = _Proxy(client.session, {"get": "get"})  # type: ignore[assignment]
+    client.wait_for_instances(1, timeout=15)
+    request = PlanRequest(seed=3, max_cycles=1)
+    local, remote = [], []
+    starts = []
+    for i in range(n + 10):
+        t0 = time.perf_counter_ns()
+        plan(request, keep_trace=False)
+        t1 = time.perf_counter_ns()
+        starts.append(len(_STAMPS))
+        _stamp("start")
+        client.plan(request, watch=False)
+        _stamp("end")
+        if i >= 10:
+            local.append(t1 - t0)
+            remote.append(_STAMPS[-1][1] - t1)
+    client.close()
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(30)
+    with open(out) as f:
+        server_stamps = json.load(f)
+    os.unlink(out)
+    # one list of events per request: the client's from its "start", the server's from its "callback"
+    client_runs = [_STAMPS[a:b] for a, b in zip(starts, [*starts[1:], len(_STAMPS)], strict=True)]
+    server_runs: list[list[tuple[str, int]]] = []
+    for label, t in server_stamps:
+        if label == "callback":
+            server_runs.append([])
+        if server_runs:
+            server_runs[-1].append((label, t))
+    steps: dict[tuple[str, str], list[float]] = defaultdict(list)
+    for c_run, s_run in list(zip(client_runs, server_runs, strict=False))[10:]:
+        first: dict[str, int] = {}
+        for label, t in c_run + s_run:
+            first.setdefault(label, t)
+        for a, b, _ in _STEPS:
+            if a in first and b in first:
+                steps[(a, b)].append((first[b] - first[a]) / 1e3)
+    m = statistics.median
+    print(
+        f"breakdown of a 1-cycle plan request, no stream ({n} requests, medians; "
+        f"load average {os.getloadavg()[0]:.2f}):"
+    )
+    print(
+        f"   in-process plan {m(local) / 1e6:.2f} ms, service {m(remote) / 1e6:.2f} ms, "
+        f"overhead {(m(remote) - m(local)) / 1e6:.2f} ms"
+    )
+    for a, b, what in _STEPS:
+        if steps[(a, b)]:
+            print(f"   {what:<50} {m(steps[(a, b)]):8.0f} µs")
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repetitions")
+    parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
+    parser.add_argument("--echo-server", type=int, metavar="PORT", help=argparse.SUPPRESS)
+    parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.echo_server is not None:
+        echo_server(args.echo_server)
+        return 0
+    if args.probe_server is not None:
+        probe_server(int(args.probe_server[0]), args.probe_server[1])
+        return 0
+    if args.breakdown:
+        breakdown(40 if args.quick else 120)
+        return 0
     n_rt = 60 if args.quick else 150
     n_tp = 24 if args.quick else 60
     version = importlib.metadata.version("eclipse-zenoh")
@@ -140,30 +449,50 @@ def main() -> int:
         f"load average {os.getloadavg()[0]:.2f} (other processes share these CPUs)"
     )
     bare = bare_zenoh_round_trip(500)
-    print(f"bare Zenoh get->reply round trip (two sessions, one process): {bare:.3f} ms median")
+    print(f"bare Zenoh get->reply round trip, back to back (two sessions, one process): {bare:.3f} ms median")
 
     servers = start_servers(1, planner="grasp", workers=1)
+    echo_proc, echo = start_echo()
     try:
         client = EosClient.open(make_config(connect=[loopback(servers[0].port)]))
         client.wait_for_instances(1, timeout=15)
-        rows: list[tuple[str, float, float, int]] = []
+        rows: list[tuple[str, float, float, float, int]] = []
         one = PlanRequest(seed=3, max_cycles=1)
         for label, req, n, watch in (
             ("1-cycle plan, no stream", one, n_rt, False),
             ("1-cycle plan, live stream", one, n_rt, True),
             ("default plan (seed 3), live stream", PlanRequest(seed=3), max(10, n_rt // 10), True),
         ):
-            loc, rem, cyc = overhead(client, req, n, watch)
-            rows.append((label, loc, rem, cyc))
+            loc, rem, bare_rt, cyc = overhead(client, echo, req, n, watch)
+            rows.append((label, loc, rem, bare_rt, cyc))
         client.close()
     finally:
         stop_servers(servers)
+        echo.close()
+        echo_proc.terminate()
+        echo_proc.wait(10)
     print("\n1. round-trip overhead over the in-process plan (medians of interleaved runs)")
-    print(f"   {'case':<38} {'in-process':>11} {'service':>9} {'overhead':>9} {'cycles':>7}")
-    for label, loc, rem, cyc in rows:
-        print(f"   {label:<38} {loc:9.2f}ms {rem:7.2f}ms {rem - loc:7.2f}ms {cyc:7d}")
+    print(
+        "   in-process: plan(request, keep_trace=False), no cycle callback; overhead = service - in-process,"
+    )
+    print("   i.e. everything the service adds, including JSON-encoding and publishing every cycle")
+    print(
+        f"   {'case':<38} {'in-process':>11} {'service':>9} {'overhead':>9} {'cycles':>7} "
+        f"{'bare get->reply':>16}"
+    )
+    for label, loc, rem, bare_rt, cyc in rows:
+        print(f"   {label:<38} {loc:9.2f}ms {rem:7.2f}ms {rem - loc:7.2f}ms {cyc:7d} {bare_rt:14.2f}ms")
     goal = rows[0][2] - rows[0][1]
     print(f"   goal ≤ 1 ms median overhead (1-cycle plan, no stream): {'met' if goal <= 1.0 else 'NOT met'}")
+    per_cycle = (rows[2][2] - rows[2][1] - (rows[1][2] - rows[1][1])) / max(1, rows[2][4] - 1)
+    print(
+        f"   streaming: ≈ {per_cycle * 1e3:.0f} µs of overhead per further cycle "
+        "(default plan vs 1-cycle, both live)"
+    )
+    print(
+        "   bare get->reply: a queryable in another process, same reply size, measured in the same loop "
+        "(the transport floor here)"
+    )
 
     seeds = [1, 2, 3, 4, 6, 7]  # plans of 50-120 cycles
     requests = [PlanRequest(seed=seeds[i % len(seeds)]) for i in range(n_tp)]
