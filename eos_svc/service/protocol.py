@@ -215,7 +215,9 @@ def _value_json(v: Any) -> str:
 #: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)
 _RATING_HEAD: dict[str, str] = {}
 _ELIGIBLE = {True: ',"eligible":true}', False: ',"eligible":false}'}
-_last_weights: list[Any] = [None, ""]  # the last Weights seen and its JSON (weights rarely change)
+#: (the last Weights seen, its JSON) in one slot: read and replaced whole, so workers running
+#: plans with different weights never pair one's Weights with the other's JSON
+_last_weights: list[tuple[Any, str]] = [(None, "")]
 
 
 def cycle_record_json(record: CycleRecord) -> str:
@@ -226,11 +228,12 @@ def cycle_record_json(record: CycleRecord) -> str:
     encoded once per cycle in the service's planner thread.
     """
     weights = record.weights
-    if weights is _last_weights[0]:
-        weights_json = _last_weights[1]
+    last = _last_weights[0]
+    if weights is last[0]:
+        weights_json = last[1]
     else:
         weights_json = _value_json(weights.to_dict())
-        _last_weights[:] = [weights, weights_json]
+        _last_weights[0] = (weights, weights_json)
     fj = _float_json
     vj = _value_json
     rows = []

@@ -198,3 +198,24 @@ def test_loads_strict_reads_what_json_loads_reads(payload):
 def test_encode_request_is_the_merged_envelope(body):
     merged = body.to_dict() if isinstance(body, PlanRequest) else dict(body)
     assert proto.encode_request("g-1", body) == proto.dumps({"schema": 1, "goal_id": "g-1", **merged})
+
+
+def test_cycle_record_json_from_concurrent_workers_with_different_weights():
+    import threading
+
+    bad: list[bytes] = []
+
+    def work(weights: Weights) -> None:
+        record = _record([AgentRating("a", 0.5, 0.25, 0.0, 0.375, True)], [], weights=weights)
+        expected = reference_record_json(record)
+        for _ in range(3000):
+            got = proto.cycle_record_json(record).encode()
+            if got != expected:
+                bad.append(got)
+
+    threads = [threading.Thread(target=work, args=(w,)) for w in (Weights(0.5, 0.5, 0.0), Weights(0.2, 0.8))]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join(60)
+    assert not bad
