@@ -2,11 +2,11 @@
 #   make run    -> one grasp plan on the embedded default scene
 #   make test   -> the test suite
 # Both create (or reuse) the project's virtual environment in .venv.
-# The venv's interpreter: the distribution's CPython when it has venv (Debian builds it with PGO
-# and LTO; the benchmarks run 1.1-1.3x faster on it than on a default source build such as pyenv's,
-# see docs/benchmarks.md), else the first python3 on PATH. Override: make PYTHON=python3.12 test
-PYTHON ?= $(shell /usr/bin/python3 -c 'import sys, venv, ensurepip; sys.exit(sys.version_info < (3, 10))' \
-            >/dev/null 2>&1 && echo /usr/bin/python3 || echo python3)
+# The venv's interpreter. Debian's /usr/bin/python3 (built with PGO and LTO) runs the benchmarks
+# 1.1-1.3x faster than a default source build such as pyenv's, but speeds py_trees up more than the
+# EOS controller (bench_controller's ratio goes 0.14x -> 0.18x); see docs/benchmarks.md.
+# Choose it with: make clean && make PYTHON=/usr/bin/python3 test
+PYTHON ?= python3
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
