@@ -264,6 +264,13 @@ class GraspWorld:
         self._frame_views_of: HandState | None = None
         self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
         self._views_of: HandState | None = None
+        # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
+        # for a world's lifetime (a plan never moves it); moving it with
+        # scene.set_object_placement would need these refreshed (_refresh_object_bound).
+        self._refresh_object_bound()
+
+    def _refresh_object_bound(self) -> None:
+        """Re-read the object's bounding ball (centre, m; radius, m) from the scene."""
         self._obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
         self._obj_radius = 0.5 * float(self.scene.object.diameter)
 
@@ -623,8 +630,8 @@ def _derived_for(
             [_shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
         )
         entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
-        while len(_DERIVED) > 8:
-            del _DERIVED[next(iter(_DERIVED))]
+        while len(_DERIVED) > 8:  # pop with a default: another thread may evict it first
+            _DERIVED.pop(next(iter(_DERIVED), -1), None)
     links, probe, bounds = entry[2]
     return links, probe, bounds
 

@@ -59,12 +59,38 @@ Array = NDArray[np.float64]
 try:  # the gufuncs behind np.linalg's small-matrix functions (same LAPACK calls)
     from numpy.linalg import _umath_linalg
 
-    _ulinalg: Any = (
-        _umath_linalg
-        if all(hasattr(_umath_linalg, f) for f in ("eigvalsh_lo", "eigh_lo", "solve1", "inv", "lstsq"))
-        else None
-    )
+    _ulinalg: Any = _umath_linalg
 except ImportError:  # pragma: no cover - other NumPy layouts: the public functions only
+    _ulinalg = None
+
+
+def _private_linalg_agrees(u: Any) -> bool:
+    """True when NumPy's private gufuncs exist, take the signatures used below and agree with
+    the public functions on a small problem (checked once at import: a NumPy release that
+    renames or changes them makes every wrapper fall back to the public function)."""
+    if u is None:
+        return False
+    a = np.array([[2.0, 0.5], [0.5, 1.0]])
+    b = np.array([1.0, 2.0])
+    A = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
+    B = np.array([[1.0], [2.0], [3.0]])
+    try:
+        with np.errstate(all="ignore"):
+            return bool(
+                np.allclose(u.eigvalsh_lo(a, signature="d->d"), np.linalg.eigvalsh(a))
+                and np.allclose(u.eigh_lo(a, signature="d->dd")[0], np.linalg.eigh(a)[0])
+                and np.allclose(u.solve1(a, b, signature="dd->d"), np.linalg.solve(a, b))
+                and np.allclose(u.inv(a, signature="d->d"), np.linalg.inv(a))
+                and np.allclose(
+                    u.lstsq(A, B, 3 * float(np.finfo(float).eps), signature="ddd->ddid")[0],
+                    np.linalg.lstsq(A, B, rcond=None)[0],
+                )
+            )
+    except Exception:  # missing, renamed or re-signed in this NumPy
+        return False
+
+
+if not _private_linalg_agrees(_ulinalg):
     _ulinalg = None
 
 

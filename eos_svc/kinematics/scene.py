@@ -183,7 +183,7 @@ class Scene:
             # coal's sphere–primitive witnesses and normal (object → tip) are exact for the
             # sphere, box, capsule and cylinder; GJK-accurate (~µm) for the ellipsoid.
             return _fast_contact(
-                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
+                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
             )
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None
@@ -191,7 +191,7 @@ class Scene:
             self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res
         )
         return Contact(
-            finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
+            finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
         )
 
     def _analytic_sphere_contact(self, finger: str, c: np.ndarray, r: float) -> Contact:
@@ -206,14 +206,26 @@ class Scene:
         return Contact(finger, sd - r, c - r * n, p_obj, n)
 
     def tip_contacts(self, state: HandState) -> tuple[Contact, ...]:
-        """:meth:`contact` of every finger, in ``hand.finger_names`` order, from one
-        ``pin.computeDistances`` over the (object, tip) pairs (fewer Python calls than one
-        query per finger; the same coal algorithms, so the same contacts to round-off)."""
+        """:meth:`contact` of every finger, in ``hand.finger_names`` order (world frame, m):
+        signed distance, witness points on the tip and the object, normal object → tip.
+
+        One ``pin.updateGeometryPlacements`` + ``pin.computeDistances`` over (object, tip)
+        collision pairs instead of one coal query per finger: the same coal algorithms, so the
+        same contacts (exactly for sphere, box, cylinder and capsule objects; the ellipsoid's GJK
+        witness within µm), except that the tip sphere sits at its collision geometry's
+        placement, which :class:`HandModel` checks to be the tip frame within 1e-6 m.
+        Penetrating tips take the exact analytic path, as in :meth:`contact`. The first call
+        builds the tips' geometry model (≈ 0.2 ms). With ``exact_tips`` or a non-sphere
+        fingertip it is :meth:`contact` per finger. Every returned array is the contact's own.
+
+        Raises:
+            KinematicsError: ``state`` belongs to another hand model.
+        """
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
         gm = self._tip_gmodel
         if gm is None or self.exact_tips:
-            if not self._tip_model_tried:
+            if not (self._tip_model_tried or self.exact_tips):
                 self._build_tip_model()
                 return self.tip_contacts(state)
             return tuple(self.contact(state, f) for f in self.hand.finger_names)
@@ -221,7 +233,9 @@ class Scene:
         pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
         pin.computeDistances(gm, gd)
         return tuple(
-            _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal)
+            _fast_contact(
+                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
+            )
             if (d := res.min_distance) >= 0.0
             # penetration: the exact contact, as in contact()
             else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
@@ -274,7 +288,7 @@ class Scene:
             res,
         )
         return Contact(
-            go.name, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal
+            go.name, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
         )
 
     def min_distance(self, state: HandState) -> Contact:

@@ -227,3 +227,23 @@ def test_tip_contacts_allegro(allegro: HandModel, random_q: RandQ) -> None:
         one = scene.contact(st, con.finger)
         assert con.distance == pytest.approx(one.distance, abs=1e-12)
         assert np.allclose(con.point_tip, one.point_tip, atol=1e-12)
+
+
+def test_contacts_own_their_arrays(hand: HandModel, random_q: RandQ) -> None:
+    """A returned Contact does not change when the scene is queried again (coal's result
+    object is reused between queries)."""
+    rng = np.random.default_rng(5)
+    st = hand.state(random_q(hand, rng))
+    scene = Scene(hand, Box([0.04, 0.06, 0.05], pin.SE3(np.eye(3), st.tip_position("finger1") + 0.04)))
+    first = scene.contact(st, "finger1")
+    batch = scene.tip_contacts(st)
+    saved = [(c.normal.copy(), c.point_tip.copy(), c.point_object.copy()) for c in (first, *batch)]
+    moved = pin.SE3(pin.exp3(np.array([0.3, -0.2, 0.5])), st.tip_position("finger3") - 0.05)
+    scene.set_object_placement(moved)
+    scene.contact(st, "finger2")
+    scene.tip_contacts(st)
+    scene.distance(st, "palm_0")
+    for c, (n, pt, po) in zip((first, *batch), saved, strict=True):
+        assert np.array_equal(c.normal, n)
+        assert np.array_equal(c.point_tip, pt)
+        assert np.array_equal(c.point_object, po)
