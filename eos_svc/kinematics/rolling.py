@@ -40,6 +40,7 @@ import qpsolvers
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
+from ._slots import slot_setters
 from .hand import HandState, KinematicsError
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -94,23 +95,21 @@ class RollingStep:
 
 
 _new = object.__new__
-_STEP_SETTERS = tuple(
-    RollingStep.__dict__[f].__set__
-    for f in ("contact", "reading", "qdot", "slip_speed", "normal_residual", "omega_residual", "iterations")
-)
-_S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = _STEP_SETTERS
+_S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = slot_setters(
+    RollingStep, "contact", "reading", "qdot", "slip_speed", "normal_residual", "omega_residual",
+    "iterations",
+)  # fmt: skip
 _DGELS = lapack.dgels
 # struct.pack_into on a memoryview of a float64 array writes the same doubles as a numpy slice
 # assignment from a tuple, ~1 µs cheaper (no sequence-to-array discovery)
 _PACK18 = struct.Struct("18d").pack_into
 _PACK6 = struct.Struct("6d").pack_into
 _LE = operator.le
-_SC_FINGER, _SC_DISTANCE, _SC_POINT_TIP, _SC_POINT_OBJECT, _SC_NORMAL = (
-    Contact.__dict__[f].__set__ for f in ("finger", "distance", "point_tip", "point_object", "normal")
+_SC_FINGER, _SC_DISTANCE, _SC_POINT_TIP, _SC_POINT_OBJECT, _SC_NORMAL = slot_setters(
+    Contact, "finger", "distance", "point_tip", "point_object", "normal"
 )
-_SR_FINGER, _SR_POINT, _SR_NORMAL, _SR_IN, _SR_DIST = (
-    TactileReading.__dict__[f].__set__
-    for f in ("finger", "point_tip", "normal_tip", "in_contact", "distance")
+_SR_FINGER, _SR_POINT, _SR_NORMAL, _SR_IN, _SR_DIST = slot_setters(
+    TactileReading, "finger", "point_tip", "normal_tip", "in_contact", "distance"
 )
 _FK = pin.forwardKinematics
 _JJ = pin.computeJointJacobians
@@ -387,7 +386,6 @@ class RollingQP:
         self._jsel: slice | np.ndarray | None = None if self._reduced else self._sel
         # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step, the integration)
         self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
-        self._qa_buf: Any = None
         #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
         self.problem = qpsolvers.Problem(
             self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
@@ -423,7 +421,6 @@ class RollingQP:
         self._q = state.q
         # active joints' q, kept in step with _q (a view of it when the joints are contiguous)
         self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
-        self._qa_buf = self._qa.data if type(self._sel) is slice else None
         self._qk = self._qa if self._reduced else self._q  # the q the kinematics take
         self._stale = False
         self._qdot[:] = 0.0
@@ -753,7 +750,7 @@ class RollingQP:
                 pn = math.sqrt(px * px + py * py + pz * pz)
                 if pn > 1e-12:
                     px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-        reading: TactileReading = _new(TactileReading)  # as _fast_reading(...), without the call
+        reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
         _SR_FINGER(reading, contact.finger)
         _SR_POINT(reading, np.array((px, py, pz)))
         _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))

@@ -17,6 +17,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from ._slots import slot_setters
 from .hand import HandModel, HandState, KinematicsError
 from .objects import SurfaceObject
 
@@ -43,11 +44,9 @@ class Contact:
 
 
 _new = object.__new__
-_SET_FINGER = Contact.__dict__["finger"].__set__
-_SET_DISTANCE = Contact.__dict__["distance"].__set__
-_SET_POINT_TIP = Contact.__dict__["point_tip"].__set__
-_SET_POINT_OBJECT = Contact.__dict__["point_object"].__set__
-_SET_NORMAL = Contact.__dict__["normal"].__set__
+_SET_FINGER, _SET_DISTANCE, _SET_POINT_TIP, _SET_POINT_OBJECT, _SET_NORMAL = slot_setters(
+    Contact, "finger", "distance", "point_tip", "point_object", "normal"
+)
 
 
 def _fast_contact(

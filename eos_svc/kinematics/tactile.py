@@ -40,28 +40,6 @@ class TactileReading:
     distance: float
 
 
-_new = object.__new__
-_S_FINGER = TactileReading.__dict__["finger"].__set__
-_S_POINT = TactileReading.__dict__["point_tip"].__set__
-_S_NORMAL = TactileReading.__dict__["normal_tip"].__set__
-_S_IN = TactileReading.__dict__["in_contact"].__set__
-_S_DIST = TactileReading.__dict__["distance"].__set__
-
-
-def _fast_reading(
-    finger: str, point_tip: np.ndarray, normal_tip: np.ndarray, in_contact: bool, distance: float
-) -> TactileReading:
-    """TactileReading(...) without the frozen dataclass __init__ (~2 µs): fills the slots
-    directly. The instance is still frozen for its users."""
-    rd: TactileReading = _new(TactileReading)
-    _S_FINGER(rd, finger)
-    _S_POINT(rd, point_tip)
-    _S_NORMAL(rd, normal_tip)
-    _S_IN(rd, in_contact)
-    _S_DIST(rd, distance)
-    return rd
-
-
 class TactileSensor:
     """Tactile reading for a spherical fingertip from a :class:`~.scene.Contact`.
 
