@@ -341,15 +341,10 @@ class PlanService:
                     self._active.pop(job.goal_id, None)
 
     def _status(self, goal_id: str, state: str, **extra: Any) -> None:
-        msg = {
-            "schema": proto.SCHEMA_VERSION,
-            "goal_id": goal_id,
-            "instance": self.instance,
-            "state": state,
-            **extra,
-        }
+        """Publish a status message on the goal: :meth:`_head`, then ``state`` and ``extra``."""
+        body = self._head(goal_id).encode() + proto.dumps({"state": state, **extra})[1:]
         key = proto.status_key(self.prefix, goal_id)
-        self.session.put(key, proto.dumps(msg), encoding=_JSON, congestion_control=_BLOCK)
+        self.session.put(key, body, encoding=_JSON, congestion_control=_BLOCK)
 
     def _head(self, goal_id: str) -> str:
         """The fixed start of every message about a goal: ``{"schema":1,"goal_id":...,"instance":...,``."""
