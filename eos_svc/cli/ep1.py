@@ -15,6 +15,8 @@ import sys
 from collections.abc import Callable
 from typing import Any
 
+from eos_svc.cli.common import int_at_least
+
 __all__ = ["add_arguments", "run"]
 
 SHAPES = ("sphere", "plane", "cylinder", "ellipsoid")
@@ -29,19 +31,6 @@ def _number(name: str, lo: float, lo_ok: bool) -> Callable[[str], float]:
         if not math.isfinite(v) or v < lo or (v == lo and not lo_ok):
             rel = ">=" if lo_ok else ">"
             raise argparse.ArgumentTypeError(f"{name} must be a finite number {rel} {lo:g}, got {text!r}")
-        return v
-
-    return parse
-
-
-def _int(name: str, lo: int) -> Callable[[str], int]:
-    def parse(text: str) -> int:
-        try:
-            v = int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be an integer, got {text!r}") from None
-        if v < lo:
-            raise argparse.ArgumentTypeError(f"{name} must be >= {lo}, got {text!r}")
         return v
 
     return parse
@@ -70,14 +59,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="sphere/cylinder radius, ellipsoid's largest semi-axis, m (default 0.04; ignored for a plane)",
     )
     parser.add_argument("--noise", type=_number("--noise", 0.0, True), default=2e-4, help="tactile noise, m")
-    parser.add_argument("--seed", type=_int("--seed", 0), default=0, help="tactile noise seed")
+    parser.add_argument("--seed", type=int_at_least(0), default=0, help="tactile noise seed")
     parser.add_argument("--finger", default="finger1", help="rolling finger (default finger1)")
     parser.add_argument(
         "--omega", type=_number("--omega", 0.0, False), default=0.5, help="rolling rate, rad/s"
     )
     parser.add_argument("--dt", type=_number("--dt", 0.0, False), default=0.01, help="time step, s")
     parser.add_argument(
-        "--steps", type=_int("--steps", 8), default=100, help="steps per direction's sweep (default 100)"
+        "--steps", type=int_at_least(8), default=100, help="steps per direction's sweep (default 100)"
     )
     parser.add_argument("--solver", default="osqp", help="QP backend (osqp default, or daqp, ...)")
     parser.add_argument(
@@ -86,7 +75,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=0.95,
         help="repeat EP1 until its rating (1 - sigma_R/R) reaches this (default 0.95)",
     )
-    parser.add_argument("--max-runs", type=_int("--max-runs", 1), default=30, help="most EP1 repetitions")
+    parser.add_argument("--max-runs", type=int_at_least(1), default=30, help="most EP1 repetitions")
     parser.add_argument("--json", action="store_true", help="print the result as JSON")
 
 

@@ -15,28 +15,11 @@ import threading
 from pathlib import Path
 from typing import Any
 
-from eos_svc.cli.common import fail, positive_float
+from eos_svc.cli.common import fail, int_at_least, positive_float
 from eos_svc.errors import ValidationError
 
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be ≥ 1, got {value}")
-    return value
-
-
-def _natural(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {value}")
-    return value
+_positive_int = int_at_least(1)
+_natural = int_at_least(0)
 
 
 def add_connection_arguments(parser: argparse.ArgumentParser, *, default_listen: bool) -> None:
