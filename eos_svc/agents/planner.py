@@ -253,9 +253,13 @@ def plan(
     )
     board = Board({keys.FRICTION: request.friction})
     run = controller.run(board, cancel=cancel)
-    verdict = board.get(keys.OUTCOME) or grasp_geometry(world, request.friction)
+    verdict = board.get(keys.OUTCOME)
+    judged = verdict is not None  # the end agent's verdict is the one authority on "good"
+    if verdict is None:  # nobody judged: report the final contacts and their quality only
+        verdict = grasp_geometry(world, request.friction)
+    good = judged and bool(verdict["good"])
     if memory is not None:
-        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), verdict["all_touching"])
+        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), good)
     obj = world.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / world.hand.hand_height
@@ -269,7 +273,10 @@ def plan(
         curvature=board.get(keys.CURVATURE),
         ground_truth=truth,
         contacts=verdict["contacts"],
-        good_grasp=bool(verdict["good"]) if verdict["all_touching"] else False,
+        good_grasp=good,
+        force_closure=bool(verdict["quality"]["force_closure"]),
+        epsilon=float(verdict["quality"]["epsilon"]),
+        quality=verdict["quality"],
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),

@@ -1,4 +1,4 @@
-"""Every shape end to end: success and good-grasp rates per object class.
+"""Every shape end to end: precision-grip and success (good grasp) rates per object class.
 
 Spheres, ellipsoids, cylinders and capsules (lying across the approach) and boxes at
 the default position, several sizes and seeds each, weights (0.5, 0.5).
@@ -56,8 +56,9 @@ def run(seeds: int = 5, out: Path = Path("results/shapes"), quiet: bool = False)
                 "object": label,
                 "shape": shape,
                 "runs": len(results),
+                "grip_rate": float(np.mean([r.precision_grip for r in results])),
+                # success = the end agent judged the grasp good
                 "success_rate": float(np.mean([r.status == "success" for r in results])),
-                "good_grasp_rate": float(np.mean([r.good_grasp for r in results])),
                 "postulated": max(set(classes), key=classes.count),
                 "mean_cycles": float(np.mean([r.cycles for r in results])),
                 "statuses": ",".join(sorted({r.status for r in results})),
@@ -71,12 +72,12 @@ def run(seeds: int = 5, out: Path = Path("results/shapes"), quiet: bool = False)
 
 
 def plot(rows: list[dict], path: Path) -> Path:
-    """Success and good-grasp rates per object (horizontal bars)."""
+    """Precision-grip and success (good grasp) rates per object (horizontal bars)."""
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(7.0, 4.2), dpi=120)
     y = np.arange(len(rows))
-    ax.barh(y - 0.2, [r["success_rate"] for r in rows], height=0.4, label="grasp achieved")
-    ax.barh(y + 0.2, [r["good_grasp_rate"] for r in rows], height=0.4, label="good grasp")
+    ax.barh(y - 0.2, [r["grip_rate"] for r in rows], height=0.4, label="precision grip (all tips touch)")
+    ax.barh(y + 0.2, [r["success_rate"] for r in rows], height=0.4, label="success (good grasp)")
     ax.set_yticks(y, [r["object"] for r in rows], fontsize=8)
     ax.invert_yaxis()
     ax.set_xlim(0, 1.05)
@@ -88,11 +89,11 @@ def plot(rows: list[dict], path: Path) -> Path:
 
 def report(data: dict) -> str:
     """Human-readable table."""
-    lines = ["  object               postulated  success  good   cycles  statuses"]
+    lines = ["  object               postulated  grip   success  cycles  statuses"]
     for r in data["rows"]:
         lines.append(
-            f"  {r['object']:<20} {r['postulated']:<10}  {r['success_rate']:6.0%}"
-            f"  {r['good_grasp_rate']:5.0%}  {r['mean_cycles']:6.1f}  {r['statuses']}"
+            f"  {r['object']:<20} {r['postulated']:<10}  {r['grip_rate']:5.0%}"
+            f"  {r['success_rate']:6.0%}  {r['mean_cycles']:6.1f}  {r['statuses']}"
         )
     return "\n".join(lines)
 
