@@ -10,7 +10,9 @@ while its fingertip is free and closing from where it is will *land on its
 chosen contact*: the finger's closing sweep, from its current angle and the
 hand's current pose, first touches the postulated object (grasp_points' target)
 within ``WorldParameters.landing_tolerance`` of the contact grasp_points chose
-for it. Otherwise the agent does not know what to do: closing would land
+for it (a finger that closed past that contact's angle without touching — the
+object is not quite where it was postulated — keeps closing until it touches or
+reaches its limit). Otherwise the agent does not know what to do: closing would land
 elsewhere — in front of the object's centre while the hand is still on its way,
 or not on the object at all — so if it is chosen it reports ``CANNOT_ACT``
 (paper §5: at the start of grasping with the opportunistic weight alone,
@@ -87,9 +89,20 @@ class FingerAgent(GraspAgent):
         return miss
 
     def in_reach(self, board: Board) -> bool:
-        """Whether closing from the current angle would land on this finger's chosen contact."""
+        """Whether closing from the current angle would land on this finger's chosen contact —
+        or the finger has closed past it without touching (the object is not quite where it
+        was postulated): then it keeps closing until it touches or reaches its limit."""
         miss = self.landing_miss(board)
-        return miss is not None and miss <= self.world.params.landing_tolerance
+        if miss is not None and miss <= self.world.params.landing_tolerance:
+            return True
+        return self.passed_its_contact(board)
+
+    def passed_its_contact(self, board: Board) -> bool:
+        """The finger is closing, free, and already beyond its chosen contact's angle."""
+        if self.finger_state(board) != "closing":
+            return False
+        chosen = board.get(keys.TARGET, {}).get("contacts", {}).get(self.finger)
+        return chosen is not None and self.world.finger_angle(self.finger) >= float(chosen["angle"]) - 1e-9
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         if ctx.stage == SEARCH:
