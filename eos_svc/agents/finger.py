@@ -31,7 +31,7 @@ from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.synthesis import landing
+from eos_svc.agents.synthesis import landing_from, sweep_gaps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics import SurfaceObject
@@ -51,7 +51,9 @@ class FingerAgent(GraspAgent):
         self._sweep_angles = self._sweep.angles.tolist()
         # (target entry, its postulated object) and (hand pose, target) -> landing distance
         self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
-        self._landing_memo: tuple[object, object, float | None] = (None, None, None)
+        self._gaps_memo: tuple[object, object, tuple[np.ndarray, np.ndarray] | None] = (None, None, None)
+        self._miss_memo: dict[int, float | None] = {}
+        self._wrist_q = [int(i) for i in world.hand.wrist_q_index]
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
@@ -67,26 +69,36 @@ class FingerAgent(GraspAgent):
 
     def landing_miss(self, board: Board) -> float | None:
         """How far (m) from its chosen contact this finger's tip lands on the postulated object
-        if it closes from where it is now; None when it would not land on it at all."""
+        if it closes from where it is now; None when it would not land on it at all.
+
+        Memoised: per target and wrist pose, the gaps of the whole sweep to the object (they
+        change only when the wrist moves), then per start sample the landing."""
         target = board.get(keys.TARGET)
         if target is None or self.finger not in target.get("contacts", {}):
             return None
         world = self.world
-        key = tuple(world.q_list())
-        memo_key, memo_target, miss = self._landing_memo
-        if memo_key == key and memo_target is target:
-            return miss
-        obj = self._postulated(target)
-        miss = None
-        if obj is not None:
-            palm = world.state.data.oMf[world.hand.palm_frame_id]
-            start = bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12)
-            hit = landing(obj, self._sweep, self._tip_radius, palm.rotation, palm.translation, start)
-            if hit is not None:
-                chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-                miss = float(np.linalg.norm(hit.point - chosen))
-        self._landing_memo = (key, target, miss)
-        return miss
+        start = bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12)
+        q = world.q_list()
+        pose = tuple(q[i] for i in self._wrist_q)
+        memo_pose, memo_target, gaps = self._gaps_memo
+        if memo_pose != pose or memo_target is not target:
+            obj = self._postulated(target)
+            gaps = None
+            if obj is not None:
+                palm = world.state.data.oMf[world.hand.palm_frame_id]
+                gaps = sweep_gaps(obj, self._sweep, self._tip_radius, palm.rotation, palm.translation)
+            self._gaps_memo = (pose, target, gaps)
+            self._miss_memo = {}
+        if start not in self._miss_memo:
+            miss = None
+            obj = self._postulated(target)
+            if gaps is not None and obj is not None:
+                hit = landing_from(obj, self._sweep, gaps[0], gaps[1], start)
+                if hit is not None:
+                    chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
+                    miss = float(np.linalg.norm(hit.point - chosen))
+            self._miss_memo[start] = miss
+        return self._miss_memo[start]
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —

@@ -189,6 +189,37 @@ def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
     return float(t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a) if b != a else 0.0))
 
 
+def sweep_gaps(
+    obj: SurfaceObject, sweep: FingerSweep, tip_radius: float, rotation: np.ndarray, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The sweep's fingertip centres in the world (N, 3), the palm at (``rotation``,
+    ``origin``), and each one's gap to ``obj`` (signed distance less the tip radius, m)."""
+    pts = sweep.points @ rotation.T + origin
+    return pts, signed_distances(obj, pts) - tip_radius
+
+
+def landing_from(
+    obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray, start: int = 0
+) -> Landing | None:
+    """:func:`landing` from precomputed :func:`sweep_gaps` (``pts``, ``gaps``)."""
+    start = max(0, start - 1)
+    hits = np.flatnonzero(gaps[start:] <= 0.0)
+    if len(hits) == 0 or hits[0] == 0:
+        return None
+    k = start + int(hits[0])
+    a, b = gaps[k - 1], gaps[k]
+    s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
+    tip = pts[k - 1] + s * (pts[k] - pts[k - 1])
+    point = obj.closest_surface_point(tip)
+    # a sphere tip touching a convex object: the contact normal runs from the contact point to
+    # the tip's centre (defined on edges and rims too, where the surface normal is not)
+    out = tip - point
+    length = float(np.linalg.norm(out))
+    normal = out / length if length > 1e-9 else obj.surface_normal(tip)
+    angle = float(sweep.angles[k - 1] + s * (sweep.angles[k] - sweep.angles[k - 1]))
+    return Landing(k, angle, point, normal)
+
+
 def landing(
     obj: SurfaceObject,
     sweep: FingerSweep,
@@ -201,26 +232,8 @@ def landing(
     finger closes from sample ``start`` (a finger between samples ``start`` − 1 and ``start``,
     not touching, closes from the former), the palm at (``rotation``, ``origin``) in the
     world; None when it never does, or already touches there."""
-    start = max(0, start - 1)
-    pts = sweep.points[start:] @ rotation.T + origin
-    if len(pts) == 0:
-        return None
-    gap = signed_distances(obj, pts) - tip_radius
-    hits = np.flatnonzero(gap <= 0.0)
-    if len(hits) == 0 or hits[0] == 0:
-        return None
-    k = int(hits[0])
-    a, b = gap[k - 1], gap[k]
-    s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
-    tip = pts[k - 1] + s * (pts[k] - pts[k - 1])
-    point = obj.closest_surface_point(tip)
-    # a sphere tip touching a convex object: the contact normal runs from the contact point to
-    # the tip's centre (defined on edges and rims too, where the surface normal is not)
-    out = tip - point
-    length = float(np.linalg.norm(out))
-    normal = out / length if length > 1e-9 else obj.surface_normal(tip)
-    angle = float(sweep.angles[start + k - 1] + s * (sweep.angles[start + k] - sweep.angles[start + k - 1]))
-    return Landing(start + k, angle, point, normal)
+    pts, gaps = sweep_gaps(obj, sweep, tip_radius, rotation, origin)
+    return landing_from(obj, sweep, pts, gaps, start)
 
 
 def diameter_angle_deg(centre: np.ndarray, opposing: np.ndarray, others: list[np.ndarray]) -> float:
@@ -372,6 +385,15 @@ class GraspSynthesis:
         self._rpy_lo, self._rpy_hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
         self._xyz_lo, self._xyz_hi = hand.lower[widx[:3]], hand.upper[widx[:3]]
         self._tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+        # per collision geometry: the radius of a ball about its frame's origin that holds it
+        # (a cheap lower bound of its distance to the object, which skips the exact query)
+        self._balls = []
+        for go in hand.collision_model.geometryObjects:
+            geometry = go.geometry
+            geometry.computeLocalAABB()
+            self._balls.append(float(geometry.aabb_radius) + float(np.linalg.norm(geometry.aabb_center)))
+        self._obj_centre = np.asarray(obj.placement.translation, dtype=float)
+        self._obj_radius = 0.5 * float(obj.diameter)
         self.rejections: dict[str, int] = {}
 
     def _reject(self, why: str) -> None:
@@ -426,11 +448,14 @@ class GraspSynthesis:
             else:
                 simulated.append(best)
         simulated.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+        # a sphere's grasps about its diameters are all alike (ε too, by symmetry): the first,
+        # least-rotated one that is collision-free is the choice
+        wanted = 1 if isinstance(obj, Sphere) else SCORED
         kept: list[GraspCandidate] = []
         for cand in simulated:
             if self._collision_free(cand):
                 kept.append(self._score(cand))
-                if len(kept) == SCORED:
+                if len(kept) == wanted:
                     break
         if not kept:
             return []
@@ -503,16 +528,21 @@ class GraspSynthesis:
             q[idx] = self.sweeps[finger].angles[0] if angles is None else angles[finger]
         return np.clip(q, hand.lower, hand.upper)
 
-    def _clearance(self, q: np.ndarray, skip_tips: bool) -> float:
-        """Smallest distance (m) between the hand's collision geometries (the fingertips
-        skipped when asked) and the postulated object, the hand at ``q``."""
+    def _clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
+        """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
+        asked) is at least ``threshold`` m from the postulated object. A geometry whose
+        bounding ball is that far from the object's bounding ball needs no exact query."""
         self.state.update(q)
-        gaps = [
-            self.scene.gap(self.state, gid)
-            for gid in range(self.hand.collision_model.ngeoms)
-            if not (skip_tips and gid in self._tips)
-        ]
-        return min(gaps)
+        placements = self.state.geometry_data.oMg
+        for gid, ball in enumerate(self._balls):
+            if skip_tips and gid in self._tips:
+                continue
+            far = float(np.linalg.norm(placements[gid].translation - self._obj_centre))
+            if far - ball - self._obj_radius >= threshold:
+                continue
+            if self.scene.gap(self.state, gid) < threshold:
+                return False
+        return True
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
         """The collision-free pre-grasp wrist position (world, m) before ``c`` along its
@@ -522,7 +552,7 @@ class GraspSynthesis:
         for _ in range(4):
             pre = c.wrist - stand_off * c.approach
             inside = np.all(pre >= self._xyz_lo) and np.all(pre <= self._xyz_hi)
-            if inside and self._clearance(self._configuration(c, pre, None), False) >= self.params.clearance:
+            if inside and self._clear(self._configuration(c, pre, None), self.params.clearance, False):
                 return pre, stand_off
             stand_off += 0.01
         return None
@@ -536,7 +566,7 @@ class GraspSynthesis:
         # the approach with the fingers open: every sample from the pre-grasp to the grasp
         for s in np.linspace(0.0, 1.0, APPROACH_SAMPLES + 1)[1:]:
             q = self._configuration(c, start + s * (c.wrist - start), None)
-            if self._clearance(q, False) < 0.5 * self.params.contact_tolerance:
+            if not self._clear(q, 0.5 * self.params.contact_tolerance, False):
                 self._reject("the approach collides")
                 return False
         # the closing: only the fingertips may touch, part of the way and at the landing
@@ -546,7 +576,7 @@ class GraspSynthesis:
             for finger in hand.finger_names:
                 lo = float(self.sweeps[finger].angles[0])
                 angles[finger] = lo + fraction * (c.landings[finger].angle - lo)
-            if self._clearance(self._configuration(c, c.wrist, angles), True) < 0.0:
+            if not self._clear(self._configuration(c, c.wrist, angles), 0.0, True):
                 self._reject("a link or the palm touches before the fingertips")
                 return False
         return True
