@@ -125,6 +125,9 @@ class GraspPointsAgent(GraspAgent):
         board.set(keys.AT_TARGET, False)
         board.set(keys.WRIST_LEFT, round(stand_off, 6))
         roll, pitch, yaw = np.degrees(cand.wrist_rpy) + 0.0  # + 0.0: never "-0°"
+        if not cand.about_centre:
+            angle = f"{cand.angle_deg:.1f}°"
+            note += f" — no grasp about the centre is reachable, the closest lands {angle} across it"
         return ActionResult(
             Outcome.STAGE_COMPLETE,
             f"grasp {cand.label} of the postulated {spec.shape}{note}: best of {len(candidates)} "

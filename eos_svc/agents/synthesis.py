@@ -126,6 +126,11 @@ class GraspCandidate:
     turn: float = 0.0
 
     @property
+    def about_centre(self) -> bool:
+        """The predicted contacts lie about the centre (``MIN_PREDICTED_ANGLE_DEG``)."""
+        return self.angle_deg >= MIN_PREDICTED_ANGLE_DEG
+
+    @property
     def approach(self) -> np.ndarray:
         """Unit approach direction (world): the palm's x axis."""
         return self.rotation[:, 0]
@@ -421,10 +426,12 @@ class GraspSynthesis:
     def candidates(self) -> list[GraspCandidate]:
         """The best candidates, best first.
 
-        Every candidate orientation is simulated (landings, angle about the centre); the
-        ``SCORED`` least-rotated ones that are collision-free are scored by ε; the best ε
-        wins, and candidates within ``EPSILON_TIE`` (relative) of it count as equal, the
-        least wrist rotation first."""
+        Every candidate orientation is simulated (landings, angle about the centre); of
+        those about the centre, the ``SCORED`` least-rotated that are collision-free are
+        scored by ε; the best ε wins, and candidates within ``EPSILON_TIE`` (relative) of it
+        count as equal, the least wrist rotation first. When none about the centre is
+        collision-free, the collision-free one closest to it is returned alone (the best the
+        hand can do; its ``about_centre`` is False)."""
         obj = self.obj
         centre = np.asarray(obj.placement.translation, dtype=float)
         h = self.hand.hand_height
@@ -443,21 +450,28 @@ class GraspSynthesis:
                 self._reject("too small for the opposing finger's sweep")
                 continue
             best = self._best_depth(label, R, rpy, centre, base, extent)
-            if best is None:
-                self._reject("contacts not about the centre")
-            else:
+            if best is not None:
                 simulated.append(best)
-        simulated.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+        about = [c for c in simulated if c.about_centre]
+        about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
         # a sphere's grasps about its diameters are all alike (ε too, by symmetry): the first,
         # least-rotated one that is collision-free is the choice
         wanted = 1 if isinstance(obj, Sphere) else SCORED
         kept: list[GraspCandidate] = []
-        for cand in simulated:
+        for cand in about:
             if self._collision_free(cand):
                 kept.append(self._score(cand))
                 if len(kept) == wanted:
                     break
         if not kept:
+            # no grasp about the centre is reachable: the one closest to it, the best the hand
+            # can do (the end agent will judge it)
+            if len(about) < len(simulated):
+                self._reject("contacts not about the centre")
+            rest = sorted((c for c in simulated if not c.about_centre), key=lambda c: (-c.angle_deg, c.turn))
+            for cand in rest:
+                if self._collision_free(cand):
+                    return [self._score(cand)]
             return []
         top = max(c.epsilon for c in kept)
         kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
@@ -473,8 +487,7 @@ class GraspSynthesis:
         extent: float,
     ) -> GraspCandidate | None:
         """The depth, among ``base`` + ``DEPTH_OFFSETS`` (then refined), whose predicted
-        contacts lie best about the centre; None when no depth reaches
-        ``MIN_PREDICTED_ANGLE_DEG``."""
+        contacts lie best about the centre (None when no depth lands every fingertip)."""
         best: GraspCandidate | None = None
         for offset in DEPTH_OFFSETS:
             cand = self._simulate(label, R, rpy, centre, base + offset, extent)
@@ -487,7 +500,7 @@ class GraspSynthesis:
                 cand = self._simulate(label, R, rpy, centre, best.depth + step, extent)
                 if cand is not None and cand.angle_deg > best.angle_deg:
                     best = cand
-        return best if best is not None and best.angle_deg >= MIN_PREDICTED_ANGLE_DEG else None
+        return best
 
     def _simulate(
         self,
