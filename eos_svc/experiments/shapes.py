@@ -92,7 +92,7 @@ def run(
 def plot(rows: list[dict], path: Path) -> Path:
     """Precision-grip and success (good grasp) rates per object (horizontal bars)."""
     plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 5.2), dpi=120)
+    fig, ax = plt.subplots(figsize=(7.0, 6.0), dpi=120)
     y = np.arange(len(rows))
     bars = [("grip_rate", "precision grip (all tips touch)"), ("success_rate", "success (good grasp)")]
     if all("oracle_success_rate" in r for r in rows):
@@ -106,7 +106,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     ax.set_xlim(0, 1.05)
     ax.set_xlabel("rate over seeds")
     ax.set_title("Every shape end to end")
-    ax.legend(fontsize=8, loc="lower right")
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
     return save_figure(fig, path)
 
 
