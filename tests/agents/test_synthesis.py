@@ -265,3 +265,26 @@ def test_grasp_holds_on_a_postulate_a_little_off(monkeypatch, shape, size, rpy):
     monkeypatch.setattr(GraspPointsAgent, "postulate", noisy)
     r = plan(PlanRequest(obj=ObjectSpec(shape, size, HERE, rpy), seed=1), oracle_postulate=True)
     assert r.status == "success", r.reason
+
+
+def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
+    from eos_svc.agents.finger import FingerAgent
+    from eos_svc.agents.wrist import WristAgent
+
+    world = build_world(PlanRequest())
+    spec = ObjectSpec()  # the default sphere, as its own postulate
+    board = Board({keys.SHAPE: {"class": "sphere", "confidence": 0.9, "grasp_radius": 0.03, "centre": None}})
+    ctx = CycleContext(seq=1, stage="information", stage_cycle=0, events=(), last_agent=None, acted={})
+    assert GraspPointsAgent(0.6, world, oracle=spec).act(board, ctx).outcome is Outcome.STAGE_COMPLETE
+    target = board[keys.TARGET]
+    fingers = [FingerAgent(f, 0.5, world) for f in world.hand.finger_names]
+    # the hand stands 12 mm short of its grasp position (as if a contact had stopped it)
+    q = world.state.q
+    q[world.hand.wrist_q_index[:3]] = np.asarray(target["wrist"]) - 0.012 * np.asarray(target["approach"])
+    world.set_q(q)
+    assert not any(f.in_reach(board) for f in fingers)  # from here every tip lands elsewhere
+    words = WristAgent(0.9, world).repredict(board, target)
+    assert words == "contacts re-predicted from here"
+    new = board[keys.TARGET]
+    assert new["repredicted"] and new["contacts"] != target["contacts"]
+    assert all(f.in_reach(board) and f.landing_miss(board) < 1e-5 for f in fingers)  # µm rounding
