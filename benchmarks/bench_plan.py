@@ -7,12 +7,22 @@ a few seeds each). Baseline measured in the same run: the same plans with the
 controller's per-cycle recording only (the trace) vs with a live per-cycle callback
 that formats the trace line as `eos plan` does, to show what observation costs.
 Goals: ≤ 60 µs per cycle and ≤ 20 ms per plan (median, default scene).
+
+    .venv/bin/python benchmarks/bench_plan.py --baseline 256976e
+
+also times the default plan of another git revision (its tree exported to a temporary
+folder, planned in a child process) interleaved with this tree's, rounds of 10 plans each,
+and prints the ratio of the medians (the grasp-synthesis goal: within 2× of the revision
+before it).
 """
 
 from __future__ import annotations
 
+import os
 import statistics
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -50,7 +60,47 @@ def time_plans(
     return statistics.median(samples), cycles
 
 
+#: a child process that times ``n`` default plans and prints their times (s), one per line
+_CHILD = """
+import sys, time
+from eos_svc.agents import PlanRequest, plan
+plan(PlanRequest())
+for _ in range(int(sys.argv[1])):
+    t0 = time.perf_counter(); plan(PlanRequest()); print(time.perf_counter() - t0)
+"""
+
+
+def _child_times(tree: Path, n: int) -> list[float]:
+    """Times of ``n`` default plans by the package in ``tree`` (a child process)."""
+    env = {**os.environ, "PYTHONPATH": str(tree)}
+    out = subprocess.run(
+        [sys.executable, "-c", _CHILD, str(n)], env=env, capture_output=True, text=True, check=True
+    ).stdout
+    return [float(x) for x in out.split()]
+
+
+def baseline_ratio(rev: str, rounds: int = 4, per_round: int = 10) -> None:
+    """Median default-plan time of this tree and of git revision ``rev``, interleaved rounds."""
+    root = Path(__file__).resolve().parents[1]
+    with tempfile.TemporaryDirectory(prefix="eos_plan_baseline_") as tmp:
+        archive = subprocess.run(
+            ["git", "-C", str(root), "archive", rev, "eos_svc", "urdf"], capture_output=True, check=True
+        )
+        subprocess.run(["tar", "-x", "-C", tmp], input=archive.stdout, check=True)
+        ours: list[float] = []
+        theirs: list[float] = []
+        for _ in range(rounds):
+            ours += _child_times(root, per_round)
+            theirs += _child_times(Path(tmp), per_round)
+    a, b = statistics.median(ours), statistics.median(theirs)
+    print(f"\ndefault plan, {rounds} interleaved rounds of {per_round} plans each (child processes)")
+    print(f"  this tree {a * 1e3:.1f} ms, {rev} {b * 1e3:.1f} ms: ratio {a / b:.2f}")
+
+
 def main() -> int:
+    if "--baseline" in sys.argv:
+        baseline_ratio(sys.argv[sys.argv.index("--baseline") + 1])
+        return 0
     plan(PlanRequest())  # load the hand, warm caches
     default = PlanRequest()
     per_agent: dict = {}
@@ -69,8 +119,10 @@ def main() -> int:
             "plan",
         )
     )
-    print(f"goals: per cycle <= 60 µs -> {'met' if per_cycle <= 60e-6 else 'NOT met'}; "
-          f"per plan <= 20 ms -> {'met' if t_plan <= 20e-3 else 'NOT met'}")
+    print(
+        f"goals: per cycle <= 60 µs -> {'met' if per_cycle <= 60e-6 else 'NOT met'}; "
+        f"per plan <= 20 ms -> {'met' if t_plan <= 20e-3 else 'NOT met'}"
+    )
     print("\nper chosen agent (default scene): cycles, median cycle time (rating + action + record)")
     for (stage, agent), (n, times) in per_agent.items():
         t = statistics.median(times)

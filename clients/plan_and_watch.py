@@ -28,7 +28,8 @@ def main(
     goal_id: str | None = None,
     wait_s: float = 5.0,
 ) -> int:
-    """Plan once; print one line per cycle as it arrives, then the result as JSON. Returns an exit code."""
+    """Plan once; print one line per cycle as it arrives, then the result as JSON. Returns an exit
+    code: 0 only when the plan's status is ``success`` (a good grasp)."""
 
     def show(msg: dict[str, Any]) -> None:
         rec = msg["record"]
@@ -60,7 +61,7 @@ def main(
             indent=2,
         )
     )
-    return 0
+    return 0 if outcome.status == "success" else 1
 
 
 if __name__ == "__main__":

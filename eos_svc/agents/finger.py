@@ -6,12 +6,17 @@ Allegro: index, middle, ring, thumb).
 Grasping (paper §2.1, §5): a finger agent closes its finger by a small amount
 (every joint by ``WorldParameters.finger_step``), stopping at first touch. Its
 opportunistic sub-rating is d/h (estimated object diameter over hand height)
-while its fingertip is free and the object is *within reach* — the finger's
-closing sweep, from its current angle, passes within the estimated object
-radius plus the fingertip radius of the estimated centre. Out of reach, the
-agent does not know what to do: closing would miss the object, so if it is
-chosen it reports ``CANNOT_ACT`` (paper §5: at the start of grasping with the
-opportunistic weight alone, finger1 is chosen and does not know where to begin).
+while its fingertip is free and closing from where it is will *land on its
+chosen contact*: the finger's closing sweep, from its current angle and the
+hand's current pose, first touches the postulated object (grasp_points' target)
+within ``WorldParameters.landing_tolerance`` of the contact grasp_points chose
+for it (a finger that closed past that contact's angle without touching — the
+object is not quite where it was postulated — keeps closing until it touches or
+reaches its limit). Otherwise the agent does not know what to do: closing would land
+elsewhere — in front of the object's centre while the hand is still on its way,
+or not on the object at all — so if it is chosen it reports ``CANNOT_ACT``
+(paper §5: at the start of grasping with the opportunistic weight alone,
+finger1 is chosen and does not know where to begin).
 """
 
 from __future__ import annotations
@@ -23,9 +28,13 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
+from eos_svc.agents.postulate import make_object
+from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
+from eos_svc.agents.synthesis import landing_from, sweep_gaps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.kinematics import SurfaceObject
 
 #: finger states that end a finger's part in the grasp
 DONE_STATES = frozenset({"touching", "missed", "link"})
@@ -37,34 +46,75 @@ class FingerAgent(GraspAgent):
     def __init__(self, finger: str, default: float, world: GraspWorld) -> None:
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger
-        self._reach_radius_extra = world.hand.tip_radius(finger)
-        sweep = world.sweeps[finger]
-        self._sweep = sweep
-        self._sweep_angles = sweep.angles.tolist()
-        # (wrist position, shape entry) -> last sweep sample within reach (see FingerSweep.last_within)
-        self._reach_memo: tuple[object, object, int] = (None, None, -1)
+        self._tip_radius = world.hand.tip_radius(finger)
+        self._sweep = world.sweeps[finger]
+        self._sweep_angles = self._sweep.angles.tolist()
+        # (target entry, its postulated object) and (hand pose, target) -> landing distance
+        self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
+        self._gaps_memo: tuple[object, object, tuple[np.ndarray, np.ndarray] | None] = (None, None, None)
+        self._miss_memo: dict[int, float | None] = {}
+        self._wrist_q = [int(i) for i in world.hand.wrist_q_index]
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
         return str(board.get(keys.FINGER_STATE, {}).get(self.finger, "open"))
 
-    def in_reach(self, board: Board) -> bool:
-        """Whether closing from the current angle would reach the estimated object."""
-        shape = board.get(keys.SHAPE)
-        if not shape or keys.TARGET not in board:
-            return False
+    def _postulated(self, target: dict) -> SurfaceObject | None:
+        """The postulated object of ``target`` (built once per target)."""
+        if self._object_memo[0] is not target:
+            spec = target.get("object")
+            obj = None if spec is None else make_object(ObjectSpec.from_dict(spec))
+            self._object_memo = (target, obj)
+        return self._object_memo[1]
+
+    def landing_miss(self, board: Board) -> float | None:
+        """How far (m) from its chosen contact this finger's tip lands on the postulated object
+        if it closes from where it is now; None when it would not land on it at all.
+
+        Memoised: per target and wrist pose, the gaps of the whole sweep to the object (they
+        change only when the wrist moves), then per start sample the landing."""
+        target = board.get(keys.TARGET)
+        if target is None or self.finger not in target.get("contacts", {}):
+            return None
         world = self.world
-        wrist = world.wrist_xyz()
-        memo_wrist, memo_shape, last = self._reach_memo
-        if memo_shape is not shape or memo_wrist != wrist:
-            centre_palm = np.asarray(shape["centre"]) - world.wrist_position()
-            radius = float(shape["grasp_radius"]) + self._reach_radius_extra
-            last = self._sweep.last_within(centre_palm, radius)
-            self._reach_memo = (wrist, shape, last)
-        if last < 0:
+        start = bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12)
+        q = world.q_list()
+        pose = tuple(q[i] for i in self._wrist_q)
+        memo_pose, memo_target, gaps = self._gaps_memo
+        if memo_pose != pose or memo_target is not target:
+            obj = self._postulated(target)
+            gaps = None
+            if obj is not None:
+                palm = world.state.data.oMf[world.hand.palm_frame_id]
+                gaps = sweep_gaps(obj, self._sweep, self._tip_radius, palm.rotation, palm.translation)
+            self._gaps_memo = (pose, target, gaps)
+            self._miss_memo = {}
+        if start not in self._miss_memo:
+            miss = None
+            obj = self._postulated(target)
+            if gaps is not None and obj is not None:
+                hit = landing_from(obj, self._sweep, gaps[0], gaps[1], start)
+                if hit is not None:
+                    chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
+                    miss = float(np.linalg.norm(hit.point - chosen))
+            self._miss_memo[start] = miss
+        return self._miss_memo[start]
+
+    def in_reach(self, board: Board) -> bool:
+        """Whether closing from the current angle would land on this finger's chosen contact —
+        or the finger has closed past it without touching (the object is not quite where it
+        was postulated): then it keeps closing until it touches or reaches its limit."""
+        miss = self.landing_miss(board)
+        if miss is not None and miss <= self.world.params.landing_tolerance:
+            return True
+        return self.passed_its_contact(board)
+
+    def passed_its_contact(self, board: Board) -> bool:
+        """The finger is closing, free, and already beyond its chosen contact's angle."""
+        if self.finger_state(board) != "closing":
             return False
-        # FingerSweep.index_at (np.searchsorted, side left) on the angles as a list
-        return bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12) <= last
+        chosen = board.get(keys.TARGET, {}).get("contacts", {}).get(self.finger)
+        return chosen is not None and self.world.finger_angle(self.finger) >= float(chosen["angle"]) - 1e-9
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         if ctx.stage == SEARCH:
@@ -82,10 +132,15 @@ class FingerAgent(GraspAgent):
         if state in DONE_STATES:
             return ActionResult(Outcome.CANNOT_ACT, f"{self.finger} is already done ({state})")
         if not self.in_reach(board):
+            miss = self.landing_miss(board)
+            where = (
+                "would miss the object"
+                if miss is None
+                else f"would land {miss * 1000:.1f} mm from its chosen contact"
+            )
             return ActionResult(
                 Outcome.CANNOT_ACT,
-                f"the object is out of reach of {self.finger}'s sweep: closing would miss it "
-                "(the hand must come closer first)",
+                f"closing {self.finger} from here {where} (the hand must reach its grasp position first)",
             )
         event, angle = self.world.close_finger_step(self.finger, self.world.params.finger_step)
         new_state = {"moved": "closing", "touched": "touching", "limit": "missed", "link": "link"}[event]

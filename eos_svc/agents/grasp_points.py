@@ -1,19 +1,22 @@
-"""grasp_points: chooses a precision-grip target and pre-shapes the hand.
+"""grasp_points: chooses the grasp on the postulated object and places the hand before it.
 
-For a sphere-like postulate of radius R (paper Fig. 2, "a good grasp"): the
-contacts lie about a diameter — the opposing finger's tip touches the object
-straight below its centre and the upper pair straight above. From the opposing
-finger's closing sweep (palm frame) the agent finds the first angle θ* at which
-its tip centre is R + r_f from the hand's axis; the object centre must then sit
-on the hand axis at that tip's x. The wrist goal follows, and the pre-grasp is
-``WorldParameters.approach_distance`` before it (the wrist closes that gap in
-the grasping stage). The action moves the hand to the pre-grasp with the
-fingers open (a collision-free repositioning, counted as one information cycle)
-and completes the information stage.
+Grasp synthesis (:mod:`eos_svc.agents.synthesis`; Miller, Knoop, Christensen, Allen, ICRA
+2003): from post_shape's postulate — its class, size and pose (``object``), or, for an older
+postulate without it, an upright object of its class sized by the vertical half-extent
+(:mod:`eos_svc.agents.postulate`) — candidate grasps per primitive (approach direction and
+the hand's roll about it, using the whole wrist; contacts across the centre of mass) are
+simulated on the postulated object, kept when every fingertip lands from a collision-free
+pre-grasp, and scored by Ferrari–Canny ε; the best is chosen. The action turns the wrist to
+the grasp's orientation and moves the hand to the pre-grasp, ``approach_distance`` before
+the grasp along its approach, fingers open (a collision-free repositioning, counted as one
+information cycle), writes the target — wrist goal and rotation, the predicted contact of
+every finger, the postulated object — and completes the information stage. When the pose was
+assumed (no ``object``, or ``pose_known`` false) the cycle record says "pose assumed upright".
 
-Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no
-target exists yet; 0 otherwise. If the estimated d/h ≥ 1 the object is too big
-to grasp (paper §2.1) and the agent ends the run with status failed.
+Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no target exists
+yet; 0 otherwise. No candidate because the object is larger than the hand height across
+every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as failed, naming the postulated
+size; so does no collision-free candidate at all.
 """
 
 from __future__ import annotations
@@ -23,15 +26,42 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.postulate import Postulate, make_object, read_postulate
+from eos_svc.agents.request import ObjectSpec
+from eos_svc.agents.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.errors import ValidationError
+
+#: the reason synthesis gives for a grip wider than the hand height
+TOO_LARGE = "larger than the hand height across the grip"
+
+
+def size_words(spec: ObjectSpec) -> str:
+    """The postulated size in the request's field names, mm (e.g. ``size [70, 35, 45] mm``)."""
+    parts = []
+    for key, value in spec.size.items():
+        if isinstance(value, tuple):
+            parts.append(f"{key} [{', '.join(f'{v * 1000:.0f}' for v in value)}] mm")
+        else:
+            parts.append(f"{key} {value * 1000:.0f} mm")
+    return ", ".join(parts)
 
 
 class GraspPointsAgent(GraspAgent):
-    """Chooses the grasp and places the hand at the pre-grasp."""
+    """Chooses the grasp and places the hand at the pre-grasp.
 
-    def __init__(self, default: float, world: GraspWorld) -> None:
+    Args:
+        default: default sub-rating.
+        world: the world.
+        oracle: plan on this object instead of post_shape's postulate — the true object, for
+            measuring the grasp stage apart from recognition only (``plan(...,
+            oracle_postulate=True)``); never the planner's default.
+    """
+
+    def __init__(self, default: float, world: GraspWorld, oracle: ObjectSpec | None = None) -> None:
         super().__init__("grasp_points", (INFO,), default, world)
+        self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
         """post_shape's postulate if it is confident enough, else None."""
@@ -46,75 +76,120 @@ class GraspPointsAgent(GraspAgent):
             return 0.0
         return float(shape["confidence"])
 
+    def postulate(self, shape: dict) -> Postulate | None:
+        """The object to plan on (the oracle's when given)."""
+        if self.oracle is not None:
+            return Postulate(self.oracle, True, False, source="oracle")
+        return read_postulate(shape)
+
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         shape = self.confident_shape(board)
         if shape is None:
             return ActionResult(Outcome.CANNOT_ACT, "no shape postulated with enough confidence yet")
-        if shape["centre"] is None:
+        try:
+            postulate = self.postulate(shape)
+        except ValidationError as exc:
+            why = f"the postulated object is not valid: {exc.field}: {exc.reason}"
+            return ActionResult(Outcome.FINISHED, why, succeeded=False)
+        if postulate is None:
             return ActionResult(
                 Outcome.FINISHED,
                 f"cannot choose grasp points on a {shape['class']} of unknown size from EP1 alone",
                 succeeded=False,
             )
-        d_over_h = float(board.get(keys.D_OVER_H, 0.0))
-        if d_over_h >= 1.0:
-            return ActionResult(
-                Outcome.FINISHED,
-                f"object too large to grasp: estimated d/h = {d_over_h:.2f} ≥ 1",
-                succeeded=False,
-            )
         world = self.world
         hand = world.hand
-        radius = float(shape["grasp_radius"])
-        opposing = hand.description.opposing_finger
-        sweep = world.sweeps[opposing]
-        reach = radius + hand.tip_radius(opposing)
-        off_axis = np.hypot(sweep.points[:, 1], sweep.points[:, 2])
-        inside = np.nonzero(off_axis <= reach)[0]
-        if len(inside) == 0:
-            return ActionResult(
-                Outcome.FINISHED,
-                f"object too small for this hand: radius {radius * 1000:.1f} mm",
-                succeeded=False,
-            )
-        k = int(inside[0])
-        x_tip = float(sweep.points[k, 0])
-        centre = np.asarray(shape["centre"], dtype=float)
-        wrist_goal = centre - np.array([x_tip, 0.0, 0.0])
-        lower, upper = hand.lower[hand.wrist_q_index[:3]], hand.upper[hand.wrist_q_index[:3]]
-        if np.any(wrist_goal < lower) or np.any(wrist_goal > upper):
-            return ActionResult(
-                Outcome.FINISHED, "the grasp position is outside the wrist's workspace", succeeded=False
-            )
-        q = hand.neutral()
-        for finger in hand.finger_names:
-            idx = hand.finger_q_index(finger)
-            q[idx] = hand.lower[idx]  # open
-        approach = world.params.approach_distance
-        for _ in range(4):
-            pre = wrist_goal - np.array([approach, 0.0, 0.0])
-            q[hand.wrist_q_index[:3]] = np.clip(pre, lower, upper)
-            world.set_q(q)
-            if world.hand_clear(world.params.clearance):
-                break
-            approach += 0.01
-        else:
-            return ActionResult(Outcome.FINISHED, "no collision-free pre-grasp found", succeeded=False)
-        board.set(
-            keys.TARGET,
-            {
-                "wrist": np.round(wrist_goal, 6).tolist(),
-                "pregrasp": np.round(pre, 6).tolist(),
-                "centre": np.round(centre, 6).tolist(),
-                "opposing_angle": round(float(sweep.angles[k]), 6),
-            },
+        spec = postulate.spec
+        synthesis = GraspSynthesis(
+            hand,
+            world.sweeps,
+            world.params,
+            make_object(spec),
+            float(board.get(keys.FRICTION, 0.5)),
+            vertical_only=postulate.vertical_only,
         )
+        note = postulate.words()
+        note = f" ({note})" if note else ""
+        candidates = synthesis.candidates()
+        if not candidates:
+            return self._no_grasp(spec, synthesis, note)
+        for cand in candidates:
+            placed = self._place(cand, synthesis)
+            if placed is not None:
+                break
+        else:
+            return ActionResult(Outcome.FINISHED, f"no collision-free pre-grasp found{note}", succeeded=False)
+        pre, stand_off = placed
+        board.set(keys.TARGET, self._target(cand, pre, spec, postulate))
         board.set(keys.FINGER_STATE, dict.fromkeys(hand.finger_names, "open"))
         board.set(keys.AT_TARGET, False)
-        board.set(keys.WRIST_LEFT, round(approach, 6))
+        board.set(keys.WRIST_LEFT, round(stand_off, 6))
+        roll, pitch, yaw = np.degrees(cand.wrist_rpy) + 0.0  # + 0.0: never "-0°"
+        if not cand.about_centre:
+            angle = f"{cand.angle_deg:.1f}°"
+            note += f" — no grasp about the centre is reachable, the closest lands {angle} across it"
         return ActionResult(
             Outcome.STAGE_COMPLETE,
-            f"grasp about the diameter of the {shape['class']} (d/h = {d_over_h:.2f}): centre on the hand "
-            f"axis {x_tip * 1000:.1f} mm ahead of the palm; hand placed {approach * 1000:.0f} mm "
-            "before it, open",
+            f"grasp {cand.label} of the postulated {spec.shape}{note}: best of {len(candidates)} "
+            f"candidates, ε = {cand.epsilon:.3f}, contacts {cand.angle_deg:.0f}° across the centre; "
+            f"wrist turned to roll {roll:.0f}°, pitch {pitch:.0f}°, yaw {yaw:.0f}°, hand placed "
+            f"{stand_off * 1000:.0f} mm before the grasp, open",
         )
+
+    def _no_grasp(self, spec: ObjectSpec, synthesis: GraspSynthesis, note: str) -> ActionResult:
+        """End the run: why no candidate was kept."""
+        why = synthesis.rejections
+        if why and set(why) == {TOO_LARGE} | ({"wrist rotation out of its limits"} & set(why)):
+            h = self.world.hand.hand_height
+            return ActionResult(
+                Outcome.FINISHED,
+                f"object too large to grasp in every direction: postulated {spec.shape} "
+                f"{size_words(spec)} is at least the hand height {h * 1000:.0f} mm across every "
+                f"grip (d/h ≥ 1){note}",
+                succeeded=False,
+            )
+        reasons = ", ".join(f"{k} ({n})" for k, n in sorted(why.items()))
+        return ActionResult(
+            Outcome.FINISHED,
+            f"no grasp of the postulated {spec.shape} {size_words(spec)} is reachable{note}: {reasons}",
+            succeeded=False,
+        )
+
+    def _place(self, cand: GraspCandidate, synthesis: GraspSynthesis) -> tuple[np.ndarray, float] | None:
+        """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object
+        there (the hand senses it); returns (pre-grasp wrist position, stand-off)."""
+        world = self.world
+        hand = world.hand
+        pre = synthesis.pregrasp(cand)
+        if pre is None:
+            return None
+        q = world.state.q
+        widx = hand.wrist_q_index
+        q[widx[:3]] = pre[0]
+        q[widx[3:6]] = cand.wrist_rpy
+        for finger in hand.finger_names:
+            # open: every joint at the start of the finger's closing sweep (all joints equal,
+            # so that closing follows the sweep the grasp was planned on)
+            q[hand.finger_q_index(finger)] = world.sweeps[finger].angles[0]
+        world.set_q(q)
+        if not world.hand_clear(world.params.clearance):
+            return None
+        return pre
+
+    @staticmethod
+    def _target(cand: GraspCandidate, pre: np.ndarray, spec: ObjectSpec, postulate: Postulate) -> dict:
+        return {
+            "wrist": np.round(cand.wrist, 6).tolist(),
+            "wrist_rpy": [round(float(a), 6) for a in cand.wrist_rpy],
+            "pregrasp": np.round(pre, 6).tolist(),
+            "centre": np.round(np.asarray(spec.position), 6).tolist(),
+            "approach": np.round(cand.approach, 6).tolist(),
+            "closing": np.round(cand.closing, 6).tolist(),
+            "grasp": cand.label,
+            "epsilon": round(cand.epsilon, 6),
+            "angle_deg": round(cand.angle_deg, 3),
+            "contacts": {f: hit.to_dict() for f, hit in cand.landings.items()},
+            "object": spec.to_dict(),
+            "pose_assumed_upright": not postulate.pose_known,
+            "postulate": postulate.source,
+        }

@@ -35,7 +35,6 @@ from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
-import pinocchio as pin
 
 from eos_svc.agent import Agent
 from eos_svc.agents import keys
@@ -46,6 +45,7 @@ from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.agents.post_shape import PostShapeAgent
+from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.agents.result import PlanResult
@@ -56,14 +56,8 @@ from eos_svc.controller import CancelToken, Controller
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import (
     HAND3X3_URDF,
-    Box,
-    Capsule,
-    Cylinder,
-    Ellipsoid,
     HandModel,
     Scene,
-    Sphere,
-    SurfaceObject,
     TactileSensor,
     load_hand,
 )
@@ -129,21 +123,6 @@ def parameters_for(hand: HandModel) -> WorldParameters:
     return _derived(hand)[2]
 
 
-def make_object(spec: ObjectSpec) -> SurfaceObject:
-    """The kinematics object for a validated :class:`ObjectSpec`."""
-    placement = pin.SE3(pin.rpy.rpyToMatrix(*spec.rpy), np.asarray(spec.position, dtype=float))
-    s = spec.size
-    if spec.shape == "sphere":
-        return Sphere(s["radius"], placement)
-    if spec.shape == "ellipsoid":
-        return Ellipsoid(s["radii"], placement)
-    if spec.shape == "cylinder":
-        return Cylinder(s["radius"], s["length"], placement)
-    if spec.shape == "capsule":
-        return Capsule(s["radius"], s["length"], placement)
-    return Box(s["size"], placement)
-
-
 def build_world(
     request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
 ) -> GraspWorld:
@@ -189,9 +168,11 @@ def build_agents(
     ratings: dict[str, float] | None = None,
     solver: str = "osqp",
     memory: GraspMemory | None = None,
+    oracle: ObjectSpec | None = None,
 ) -> list[Agent]:
     """The eight agents in list order (ties go to the first); with a grasp memory, ``recall``
-    joins them just before ``end`` (learned sub-rating, paper §7).
+    joins them just before ``end`` (learned sub-rating, paper §7). ``oracle``: grasp_points
+    plans on this object instead of post_shape's postulate (measurement only).
 
     One finger agent per finger of the world's hand, in the hand's order, named after the
     finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents)."""
@@ -203,7 +184,7 @@ def build_agents(
         WristAgent(r["wrist"], world),
         EP1Agent(r["ep1"], world, solver=solver),
         PostShapeAgent(r["post_shape"], world),
-        GraspPointsAgent(r["grasp_points"], world),
+        GraspPointsAgent(r["grasp_points"], world, oracle=oracle),
         *recall,
         EndAgent(r["end"], world),
     ]
@@ -218,6 +199,7 @@ def plan(
     params: WorldParameters | None = None,
     keep_trace: bool = True,
     memory: GraspMemory | None = None,
+    oracle_postulate: bool = False,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -233,6 +215,9 @@ def plan(
         memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
             plan reaches grasping, records how it went (give the request a learned weight
             P(B_l) > 0 for recall to be chosen).
+        oracle_postulate: grasp_points plans on the request's true object instead of
+            post_shape's postulate — for measuring the grasp stage apart from recognition
+            only; off by default, never used by the command line or the service.
 
     Raises:
         ValidationError: a request the planner cannot start (object outside the workspace,
@@ -241,7 +226,7 @@ def plan(
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
     world = build_world(request, hand, params)
-    agents = build_agents(world, memory=memory)
+    agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
     controller = Controller(
         agents,
         STAGES,
@@ -253,9 +238,13 @@ def plan(
     )
     board = Board({keys.FRICTION: request.friction})
     run = controller.run(board, cancel=cancel)
-    verdict = board.get(keys.OUTCOME) or grasp_geometry(world, request.friction)
+    verdict = board.get(keys.OUTCOME)
+    judged = verdict is not None  # the end agent's verdict is the one authority on "good"
+    if verdict is None:  # nobody judged: report the final contacts and their quality only
+        verdict = grasp_geometry(world, request.friction)
+    good = judged and bool(verdict["good"])
     if memory is not None:
-        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), verdict["all_touching"])
+        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), good)
     obj = world.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / world.hand.hand_height
@@ -269,7 +258,10 @@ def plan(
         curvature=board.get(keys.CURVATURE),
         ground_truth=truth,
         contacts=verdict["contacts"],
-        good_grasp=bool(verdict["good"]) if verdict["all_touching"] else False,
+        good_grasp=good,
+        force_closure=bool(verdict["quality"]["force_closure"]),
+        epsilon=float(verdict["quality"]["epsilon"]),
+        quality=verdict["quality"],
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),

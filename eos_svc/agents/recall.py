@@ -57,7 +57,8 @@ class RecallAgent(GraspAgent):
         shape = board[keys.SHAPE]
         q = world.state.q
         q[hand.wrist_q_index[:3]] = np.asarray(shape["centre"]) + np.asarray(entry.offset)
-        q[hand.wrist_q_index[3:6]] = 0.0
+        # the wrist keeps the orientation grasp_points turned it to (the remembered offset is
+        # the wrist's position relative to the centre at that orientation)
         margin = 2.0 * world.params.finger_step
         for attempt in range(4):
             for finger in hand.finger_names:

@@ -1,4 +1,11 @@
-"""The plan result (DESIGN §6): how the plan ended and what it found."""
+"""The plan result: how the plan ended and what it found.
+
+Status (one authority: the end agent's verdict, carried in, never recomputed here):
+``success`` only when the end agent judged the grasp good; a run whose stages all completed
+with a grip that is not good ends ``completed`` (the paper's graceful exit, §6) with the end
+agent's reason; otherwise the run's own status (failed, stalled, cycle_limit, deadline,
+cancelled, error).
+"""
 
 from __future__ import annotations
 
@@ -7,15 +14,14 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
 from eos_svc.agents import keys
-from eos_svc.agents.quality import DEFAULT_EDGES, contacts_quality
 from eos_svc.records import CycleRecord, RunResult, RunStatus, to_jsonable
 
 if TYPE_CHECKING:
     from eos_svc.agents.request import PlanRequest
 
-#: core run status -> plan status
+#: core run status -> plan status (a completed run is ``success`` only with a good grasp)
 PLAN_STATUS: dict[RunStatus, str] = {
-    RunStatus.COMPLETED: "success",
+    RunStatus.COMPLETED: "completed",
     RunStatus.FAILED: "failed",
     RunStatus.STALLED: "stalled",
     RunStatus.CYCLE_LIMIT: "cycle_limit",
@@ -30,7 +36,8 @@ class PlanResult:
     """Everything a caller wants to know about one plan.
 
     Attributes:
-        status: success, failed, stalled, cycle_limit, deadline, cancelled or error.
+        status: success (the end agent judged the grasp good), completed (every stage done,
+            the grip not good), failed, stalled, cycle_limit, deadline, cancelled or error.
         reason: why, in words.
         cycles: cycles in total; ``cycles_per_stage`` per stage entered.
         stages_completed: stages exited gracefully, in order.
@@ -38,9 +45,11 @@ class PlanResult:
         curvature: EP1's last curvature estimate (principal curvatures, σ, radii).
         ground_truth: the real object (shape, size, pose, diameter, d/h).
         contacts: per finger: touching, distance (m), contact point and normal (world).
-        good_grasp: all fingertips touch, about the diameter (paper Fig. 2), and the
-            contacts are in force closure at the request's friction.
-        force_closure: the touching contacts are in force closure (Coulomb, μ = ``friction``).
+        good_grasp: the end agent's verdict: all fingertips touch, about the diameter (paper
+            Fig. 2), and the contacts are in force closure at the request's friction (False
+            when the end agent never judged the grasp).
+        force_closure: the touching contacts are in force closure (Coulomb, μ = ``friction``),
+            as the end agent found (or, when it never acted, measured on the final contacts).
         epsilon: Ferrari–Canny ε of the touching contacts (0 without force closure); see
             :mod:`eos_svc.agents.quality` (torques about the object's centre / its half diameter).
         friction: the Coulomb coefficient μ used.
@@ -80,8 +89,13 @@ class PlanResult:
 
     @property
     def success(self) -> bool:
-        """All fingertips touch the object."""
+        """The end agent judged the grasp good (status ``success``)."""
         return self.status == "success"
+
+    @property
+    def precision_grip(self) -> bool:
+        """Every fingertip touches the object (the paper's Fig. 3 criterion; good or not)."""
+        return bool(self.contacts) and all(c.get("touching") for c in self.contacts.values())
 
     def agents_run(self) -> list[str]:
         """The chosen agent of every cycle, in order."""
@@ -91,29 +105,19 @@ class PlanResult:
     def from_run(cls, run: RunResult, *, request: PlanRequest, **fields: Any) -> PlanResult:
         """Combine the controller's result with what the agents found.
 
-        ``force_closure``, ``epsilon`` and ``quality`` are computed here from the final
-        ``contacts`` (unless given) at the request's friction, with the object's centre and
-        half diameter from ``ground_truth``; ``good_grasp`` is kept only with force closure.
-        ``q_final`` (unless given) comes from the end agent's verdict in the trace.
+        ``good_grasp``, ``force_closure``, ``epsilon`` and ``quality`` are the end agent's
+        verdict as given (never recomputed here). A completed run is ``success`` only when
+        ``good_grasp``; otherwise ``completed``. ``q_final`` (unless given) comes from the end
+        agent's verdict in the trace.
         """
-        if "quality" not in fields and "contacts" in fields and "ground_truth" in fields:
-            truth = fields["ground_truth"]
-            q = contacts_quality(
-                fields["contacts"],
-                truth["position"],
-                0.5 * float(truth["diameter"]),
-                request.friction,
-                DEFAULT_EDGES,
-            )
-            fields["quality"] = q.to_dict()
-            fields["force_closure"] = q.force_closure
-            fields["epsilon"] = q.epsilon
-            fields["good_grasp"] = bool(fields.get("good_grasp")) and q.force_closure
         if "q_final" not in fields:
             fields["q_final"] = _q_final(run.trace)
         fields.setdefault("friction", request.friction)
+        status = PLAN_STATUS[run.status]
+        if run.status is RunStatus.COMPLETED and fields.get("good_grasp"):
+            status = "success"
         return cls(
-            status=PLAN_STATUS[run.status],
+            status=status,
             reason=run.reason,
             cycles=run.cycles,
             cycles_per_stage=dict(run.cycles_per_stage),

@@ -6,11 +6,13 @@ agents make: a random search step of the hand, a wrist step toward a target, a
 finger closing step that stops at first touch. Agents keep what they *know* on
 the board; the world is what they act on.
 
-Conventions (hand3x3 and every hand the planner takes): world z up, the hand
-approaches along +x, the wrist keeps its rotation at zero outside EP1, so the
-palm frame is the world frame shifted by the wrist's translation; the palm
-frame's z axis is the closing direction (the opposing finger below, the others
-above). SI units. What depends on the hand is derived from it:
+Conventions (hand3x3 and every hand the planner takes): world z up; the palm
+frame's x axis is the approach direction and its z axis the closing direction
+(the opposing finger below, the others above). The wrist keeps its rotation at
+zero in the search and while EP1 explores (the palm frame is then the world
+frame shifted by the wrist's translation, the hand approaching along +x);
+grasp_points turns it to the chosen grasp's orientation. SI units. What depends
+on the hand is derived from it:
 :meth:`WorldParameters.for_hand` (grasp centre, search box, hand bound),
 :func:`build_sweeps` (closing paths), :attr:`GraspWorld.probe` (which finger
 explores the object's top and bottom, and at which angle).
@@ -53,6 +55,8 @@ class WorldParameters:
         ep1_dt: time step of the rolling motion (s).
         ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
         confidence_threshold: post_shape confidence needed to leave the information stage.
+        landing_tolerance: a finger closes only when its tip will land within this distance
+            of the contact grasp_points chose for it, on the postulated object (m).
         hand_bound: radius of a ball about the grasp centre that contains the whole hand at
             any finger angle (m); objects farther away need no collision query.
     """
@@ -73,6 +77,7 @@ class WorldParameters:
     ep1_dt: float = 0.01
     ep1_directions: tuple[float, ...] = (0.0, 90.0)
     confidence_threshold: float = 0.6
+    landing_tolerance: float = 0.002
     hand_bound: float = 0.2
 
     @classmethod
@@ -286,7 +291,9 @@ class GraspWorld:
 
     def grasp_centre_world(self) -> np.ndarray:
         """World position of the grasp centre between the fingers, m."""
-        return self.wrist_position() + self._grasp_centre
+        palm = self.state.data.oMf[self.hand.palm_frame_id]  # the wrist may be turned
+        out: np.ndarray = palm.translation + palm.rotation @ self._grasp_centre
+        return out
 
     def object_gap_to_grasp_centre(self) -> float:
         """Distance from the grasp centre to the object surface, m (negative inside; memoised)."""

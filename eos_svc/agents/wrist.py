@@ -2,8 +2,13 @@
 
 Grasping (paper §2.1, §5): each action moves the hand a little closer
 (``WorldParameters.wrist_step``) from the pre-grasp stand-off toward the grasp
-position chosen by grasp_points, stopping short of any contact. Opportunistic
-sub-rating: 1 − d/h while the hand is not there yet and no fingertip touches.
+position chosen by grasp_points, along the grasp's approach (the wrist keeps the
+orientation grasp_points gave it), stopping short of any contact. When it must
+stop short, the hand is as close as it can get: the wrist re-predicts, on the
+postulated object, where each fingertip lands when it closes from here and
+makes those the fingers' chosen contacts (the cycle record says so).
+Opportunistic sub-rating: 1 − d/h while the hand is not there yet and no
+fingertip touches.
 """
 
 from __future__ import annotations
@@ -13,7 +18,10 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
+from eos_svc.agents.postulate import make_object
+from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
+from eos_svc.agents.synthesis import landing
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 
@@ -53,7 +61,29 @@ class WristAgent(GraspAgent):
         board.set(keys.WRIST_LEFT, round(left, 6))
         if left < 1e-6 or blocked:
             board.set(keys.AT_TARGET, True)
-        why = " (stopped short of a contact)" if blocked else ""
+        why = ""
+        if blocked:
+            why = " (stopped short of a contact; " + self.repredict(board, target) + ")"
         return ActionResult(
             Outcome.PROGRESS, f"hand moved closer; {left * 1000:.1f} mm to the grasp position{why}"
         )
+
+    def repredict(self, board: Board, target: dict) -> str:
+        """Make the fingers' chosen contacts those they land on from the hand's pose now (on
+        the postulated object); returns what was done, in words."""
+        world = self.world
+        hand = world.hand
+        spec = target.get("object")
+        if spec is None:
+            return "no postulated object to re-predict the contacts on"
+        obj = make_object(ObjectSpec.from_dict(spec))
+        palm = world.state.data.oMf[hand.palm_frame_id]
+        contacts = dict(target.get("contacts", {}))
+        for finger in hand.finger_names:
+            sweep = world.sweeps[finger]
+            start = sweep.index_at(world.finger_angle(finger))
+            hit = landing(obj, sweep, hand.tip_radius(finger), palm.rotation, palm.translation, start)
+            if hit is not None:
+                contacts[finger] = hit.to_dict()
+        board.set(keys.TARGET, {**target, "contacts": contacts, "repredicted": True})
+        return "contacts re-predicted from here"

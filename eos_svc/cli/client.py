@@ -81,7 +81,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the chosen action; exit 0 on success, 1 on a refused/failed request or no service."""
+    """Run the chosen action; exit 0 on success (a plan: only status ``success``, a good grasp),
+    1 on any other plan status, a refused request or no service."""
     if args.action is None:
         fail("ACTION: choose one of list, plan, cancel, watch")
     conf = session_config(args, serving=False)
@@ -176,4 +177,4 @@ def run(args: argparse.Namespace) -> int:
                 f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
                 f"{outcome.round_trip_s * 1000:.1f} ms)"
             )
-        return 0 if outcome.status not in ("error", "cancelled") else 1
+        return 0 if outcome.status == "success" else 1

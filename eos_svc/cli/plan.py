@@ -221,7 +221,14 @@ def run(args: argparse.Namespace) -> int:
         print(result.to_json())
     else:
         print(format_result(result))
-    return 0 if result.status in ("success", "failed") else 1
+    return plan_exit_code(result.status)
+
+
+def plan_exit_code(status: str) -> int:
+    """Exit code of a plan: 0 only for ``success`` (the end agent judged the grasp good); 1 for
+    every other status (completed with a grip that is not good, failed, stalled, …); bad
+    input exits 2 before planning."""
+    return 0 if status == "success" else 1
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -80,6 +80,7 @@ def run(
             {
                 "default_weight": wd,
                 "completion_rate": float(np.mean([tuple(r.stages_completed) == ALL_STAGES for r in results])),
+                # success = the end agent judged the grasp good (not merely all fingertips touching)
                 "success_rate": float(np.mean([r.status == "success" for r in results])),
                 "mean_cycles": float(np.mean([r.cycles for r in results])),
             }
@@ -97,7 +98,7 @@ def plot(sweep: list[dict], path: Path) -> Path:
     w = [row["default_weight"] for row in sweep]
     fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
     ax.plot(w, [row["completion_rate"] for row in sweep], "o-", label="all three stages completed")
-    ax.plot(w, [row["success_rate"] for row in sweep], "s--", label="grasp achieved")
+    ax.plot(w, [row["success_rate"] for row in sweep], "s--", label="success (good grasp)")
     ax.set_xlabel("default weight P(B_d)  (opportunistic weight = 1 - P(B_d))")
     ax.set_ylabel("rate over seeds")
     ax.set_ylim(-0.05, 1.05)
@@ -126,7 +127,7 @@ def report(data: dict) -> str:
     for row in data["sweep"]:
         lines.append(
             f"  P(B_d)={row['default_weight']:.1f}: completion {row['completion_rate']:.0%}, "
-            f"grasp {row['success_rate']:.0%}, mean cycles {row['mean_cycles']:.1f}"
+            f"success (good grasp) {row['success_rate']:.0%}, mean cycles {row['mean_cycles']:.1f}"
         )
     return "\n".join(lines)
 

@@ -14,13 +14,16 @@ from typing import Any
 from eos_svc.agents import PlanRequest, PlanResult, plan
 
 
-def run_plans(requests: Sequence[PlanRequest], label: str, quiet: bool = False) -> list[PlanResult]:
-    """Plan every request in order, printing progress to stderr (one line, updated)."""
+def run_plans(
+    requests: Sequence[PlanRequest], label: str, quiet: bool = False, **options: Any
+) -> list[PlanResult]:
+    """Plan every request in order (``options`` go to :func:`plan`), printing progress to
+    stderr (one line, updated)."""
     results = []
     t0 = time.perf_counter()
     n = len(requests)
     for i, request in enumerate(requests, 1):
-        results.append(plan(request, keep_trace=True))
+        results.append(plan(request, keep_trace=True, **options))
         if not quiet:
             elapsed = time.perf_counter() - t0
             eta = elapsed / i * (n - i)

@@ -26,6 +26,22 @@ def test_plan_json_result():
     assert set(data["contacts"]) == {"finger1", "finger2", "finger3"}
 
 
+def test_plan_poor_grip_is_completed_with_exit_1(capsys):
+    # μ = 0: every fingertip touches, but a frictionless grip of a sphere cannot hold it
+    assert main(["plan", "--json", "--friction", "0"]) == 1
+    data = json.loads(capsys.readouterr().out)
+    assert data["status"] == "completed" and data["good_grasp"] is False
+    assert "not good" in data["reason"] and data["stages_completed"][-1] == "grasping"
+
+
+def test_plan_exit_code_follows_the_status():
+    from eos_svc.cli.plan import plan_exit_code
+
+    assert plan_exit_code("success") == 0
+    for status in ("completed", "failed", "stalled", "cycle_limit", "deadline", "cancelled", "error"):
+        assert plan_exit_code(status) == 1
+
+
 def test_plan_trace_and_record(tmp_path, capsys):
     record = tmp_path / "cycles.jsonl"
     assert main(["plan", "--record", str(record)]) == 0

@@ -1,0 +1,91 @@
+"""The postulated object: what grasp synthesis plans on, from post_shape's postulate.
+
+post_shape's postulate (board entry ``shape``) carries ``object``, the postulated object in
+the request's own JSON form (``ObjectSpec.from_dict``), and ``pose_known``. An older
+postulate without ``object`` knows only the class, the vertical half-extent
+``grasp_radius`` and the ``centre``: it becomes an *upright* object (rpy = 0) whose every
+extent is the known one — a ball of radius ``grasp_radius`` for the curved classes (sphere,
+ellipsoid, cylinder, capsule: their top and bottom are curved, and a ball meets the fingers
+there as they do), a cube of edge 2·``grasp_radius`` for the flat ones (plane, box) — and,
+its size being known along the vertical only, it is grasped across the vertical.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pinocchio as pin
+
+from eos_svc.agents.request import ObjectSpec
+from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+
+
+def make_object(spec: ObjectSpec) -> SurfaceObject:
+    """The kinematics object for a validated :class:`ObjectSpec`."""
+    placement = pin.SE3(pin.rpy.rpyToMatrix(*spec.rpy), np.asarray(spec.position, dtype=float))
+    s = spec.size
+    if spec.shape == "sphere":
+        return Sphere(s["radius"], placement)
+    if spec.shape == "ellipsoid":
+        return Ellipsoid(s["radii"], placement)
+    if spec.shape == "cylinder":
+        return Cylinder(s["radius"], s["length"], placement)
+    if spec.shape == "capsule":
+        return Capsule(s["radius"], s["length"], placement)
+    return Box(s["size"], placement)
+
+
+@dataclass(frozen=True)
+class Postulate:
+    """The object grasp synthesis plans on.
+
+    Attributes:
+        spec: the postulated object (request form).
+        pose_known: its orientation was sensed (False: assumed upright, rpy = 0).
+        vertical_only: its size is known along the vertical only (an older postulate):
+            grasp across the vertical.
+        source: ``"post_shape"`` or ``"oracle"`` (the true object, for measurements only).
+    """
+
+    spec: ObjectSpec
+    pose_known: bool
+    vertical_only: bool
+    source: str = "post_shape"
+
+    def words(self) -> str:
+        """How the postulate was read, for the cycle record ("" when nothing was assumed)."""
+        if self.source == "oracle":
+            return "oracle postulate (the true object; measurement only)"
+        if self.vertical_only:
+            return "pose assumed upright, size known along the vertical only"
+        return "" if self.pose_known else "pose assumed upright"
+
+
+def upright_from_legacy(shape: Mapping[str, Any]) -> ObjectSpec | None:
+    """An upright ball or cube (see the module docstring) from the postulate's class, vertical
+    half-extent and centre (None when either is unknown)."""
+    g, centre = shape.get("grasp_radius"), shape.get("centre")
+    if g is None or centre is None:
+        return None
+    g = float(g)
+    if str(shape.get("class")) in ("plane", "box"):
+        return ObjectSpec("box", {"size": (2.0 * g, 2.0 * g, 2.0 * g)}, tuple(centre))
+    return ObjectSpec("sphere", {"radius": g}, tuple(centre))
+
+
+def read_postulate(shape: Mapping[str, Any]) -> Postulate | None:
+    """The postulate's object (``object`` when present, else the upright one), or None
+    when neither is known (a plane, or a size not yet measured).
+
+    Raises:
+        ValidationError: ``object`` is present but not a valid object (naming the field).
+    """
+    obj = shape.get("object")
+    if obj is not None:
+        spec = ObjectSpec.from_dict(obj, prefix="shape.object")
+        return Postulate(spec, bool(shape.get("pose_known", True)), False)
+    legacy = upright_from_legacy(shape)
+    return None if legacy is None else Postulate(legacy, False, True)

@@ -1,0 +1,619 @@
+"""Grasp synthesis on a postulated primitive (Miller, Knoop, Christensen, Allen, ICRA 2003).
+
+The planner's hand closes its fingers along the palm frame's z axis (the opposing finger
+below, the others above) and approaches along its x axis; its 6-DoF wrist can place and
+turn the palm anywhere in its workspace. A *candidate grasp* is a palm orientation (the
+approach direction and the hand's roll about it) and a depth (the object's centre on the
+palm's x axis, that far ahead of the palm). For each primitive the candidates put the
+closing axis through the centre of mass across the object, as GraspIt's primitive rules do:
+
+- sphere: about a diameter (vertical and horizontal closing, approach from the hand's side);
+- ellipsoid: across each of its two shorter axes;
+- cylinder and capsule: across the axis (closing along the axis' normals, approach along the
+  other normal, the axis, or from the hand's side), and along the axis when it is short;
+- box: across each pair of opposite faces, approach along the other face normals.
+
+Each candidate is simulated on the *postulated* object (never the true one): every finger's
+closing sweep (:class:`~eos_svc.agents.world.FingerSweep`, fingertip-centre path in the palm
+frame) is run against the object's signed distance until the fingertip touches — its
+*landing*: sweep index, contact point and outward normal. A candidate is kept when the
+wrist can take its pose (joint limits), every fingertip lands from the open hand, the
+contacts lie about the centre (the end agent's Fig. 2 test with a margin), the object is
+smaller than the hand height across the grip (paper §2.1: d/h < 1), and the hand is
+collision-free on the postulated object at the pre-grasp, along the straight approach with
+the fingers open and at the landing with only the fingertips touching (coal distances).
+The kept candidates are scored by the Ferrari–Canny ε of their predicted contacts on the
+postulated object (:mod:`eos_svc.agents.quality`; ``SCORE_EDGES`` cone edges for speed) and
+the best is chosen; ties (a sphere's symmetric grasps) go to the least wrist rotation.
+
+SI units throughout: metres, radians.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterator
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.agents.quality import grasp_quality
+from eos_svc.agents.world import FingerSweep, WorldParameters
+from eos_svc.kinematics import (
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    HandModel,
+    Scene,
+    Sphere,
+    SurfaceObject,
+)
+
+#: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
+SCORE_EDGES = 4
+#: smallest predicted angle (deg) across the centre a candidate must reach (the end agent's
+#: good-grasp test asks 150°; the margin absorbs the difference between postulate and object)
+MIN_PREDICTED_ANGLE_DEG = 160.0
+#: depth offsets tried, in order, about the depth that puts the opposing contact under the
+#: centre (m); the best is refined by ±``DEPTH_REFINE``
+DEPTH_OFFSETS = (0.0, -0.004, 0.004, -0.008, 0.008, -0.012, 0.012, -0.016, 0.016, -0.02, 0.02)
+DEPTH_REFINE = 0.002
+#: ε within this fraction of the best counts as equal (then the smaller wrist rotation wins)
+EPSILON_TIE = 0.05
+#: collision-free candidates scored by ε (the least-rotated first)
+SCORED = 4
+#: a depth whose predicted angle across the centre reaches this needs no other depth tried (deg)
+GOOD_ENOUGH_ANGLE_DEG = 172.0
+#: largest object across the grip, as a fraction of the hand height (paper §2.1: d/h < 1)
+MAX_D_OVER_H = 1.0
+#: approach-path samples checked for collisions between pre-grasp and grasp
+APPROACH_SAMPLES = 4
+
+
+@dataclass(frozen=True)
+class Landing:
+    """Where a closing fingertip first touches the object.
+
+    Attributes:
+        index: sweep sample at which the tip touches (the finger's angle is ``sweep.angles[index]``).
+        angle: that joint angle (rad).
+        point: contact point on the object (world, m).
+        normal: the object's outward unit normal there (world).
+    """
+
+    index: int
+    angle: float
+    point: np.ndarray
+    normal: np.ndarray
+
+    def to_dict(self) -> dict:
+        """JSON form (rounded to µm)."""
+        return {
+            "angle": round(self.angle, 6),
+            "point": np.round(self.point, 6).tolist(),
+            "normal": np.round(self.normal, 6).tolist(),
+        }
+
+
+@dataclass(frozen=True)
+class GraspCandidate:
+    """One candidate grasp on the postulated object.
+
+    Attributes:
+        label: how it grasps, in words (e.g. "across the axis, approach along the normal").
+        rotation: palm orientation in the world (3×3; columns: approach x, y, closing z).
+        wrist_rpy: the wrist's roll, pitch, yaw joint values giving ``rotation`` (rad).
+        wrist: palm origin at the grasp (world, m).
+        depth: the object's centre ahead of the palm along the approach (m).
+        extent: the object's half-extent along the closing axis through its centre (m).
+        landings: per finger, where its tip touches when it closes from open.
+        angle_deg: angle between the opposing contact and the others' midpoint seen from the
+            centre (deg; 180 = straight across).
+        epsilon: Ferrari–Canny ε of the predicted contacts (``SCORE_EDGES`` cone edges).
+        turn: rotation angle of the palm from the unrotated hand (rad), the tie-breaker.
+    """
+
+    label: str
+    rotation: np.ndarray
+    wrist_rpy: tuple[float, float, float]
+    wrist: np.ndarray
+    depth: float
+    extent: float
+    landings: dict[str, Landing]
+    angle_deg: float
+    epsilon: float = 0.0
+    turn: float = 0.0
+
+    @property
+    def about_centre(self) -> bool:
+        """The predicted contacts lie about the centre (``MIN_PREDICTED_ANGLE_DEG``)."""
+        return self.angle_deg >= MIN_PREDICTED_ANGLE_DEG
+
+    @property
+    def approach(self) -> np.ndarray:
+        """Unit approach direction (world): the palm's x axis."""
+        return self.rotation[:, 0]
+
+    @property
+    def closing(self) -> np.ndarray:
+        """Unit closing direction (world): the palm's z axis (opposing finger → the others)."""
+        return self.rotation[:, 2]
+
+
+# --- the postulated object's signed distance, vectorised -------------------------------
+def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
+    """Signed distance (m, negative inside) of each world point in ``points`` (N, 3) to
+    ``obj``'s surface. Exact for every primitive but the ellipsoid, whose distance is the
+    first-order estimate ``k0 (k0 − 1) / k1`` (exact on the surface, within a few % of it
+    one fingertip radius away; the contacts themselves are projected exactly)."""
+    M = obj.placement
+    p = (np.asarray(points, dtype=float) - M.translation) @ M.rotation  # local coordinates
+    if isinstance(obj, Sphere):
+        out: np.ndarray = np.linalg.norm(p, axis=1) - obj.radius
+        return out
+    if isinstance(obj, Ellipsoid):
+        r = np.asarray(obj.radii)
+        k0 = np.linalg.norm(p / r, axis=1)
+        k1 = np.maximum(np.linalg.norm(p / (r * r), axis=1), 1e-12)
+        out = k0 * (k0 - 1.0) / k1
+        return out
+    if isinstance(obj, Cylinder):
+        dr = np.hypot(p[:, 0], p[:, 1]) - obj.radius
+        dz = np.abs(p[:, 2]) - 0.5 * obj.length
+        outside = np.hypot(np.maximum(dr, 0.0), np.maximum(dz, 0.0))
+        out = np.where((dr <= 0.0) & (dz <= 0.0), np.maximum(dr, dz), outside)
+        return out
+    if isinstance(obj, Capsule):
+        z = np.clip(p[:, 2], -0.5 * obj.length, 0.5 * obj.length)
+        out = np.sqrt(p[:, 0] ** 2 + p[:, 1] ** 2 + (p[:, 2] - z) ** 2) - obj.radius
+        return out
+    if isinstance(obj, Box):
+        q = np.abs(p) - 0.5 * np.asarray(obj.size)
+        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+        out = outside + np.minimum(np.max(q, axis=1), 0.0)
+        return out
+    raise TypeError(f"obj: no signed distance for {type(obj).__name__}")
+
+
+def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
+    """Distance from the object's centre to its surface along the unit ``direction`` (m)."""
+    if isinstance(obj, Ellipsoid):  # exact: the ray meets x²/a² + y²/b² + z²/c² = 1
+        local = obj.placement.rotation.T @ direction
+        return float(1.0 / np.linalg.norm(local / np.asarray(obj.radii)))
+    c = obj.placement.translation
+    reach = 0.5 * obj.diameter + 1e-3
+    t = np.linspace(reach / 256, reach, 256)
+    sd = signed_distances(obj, c + t[:, None] * direction)
+    outside = sd > 0.0
+    k = int(np.argmax(outside)) if np.any(outside) else len(t) - 1
+    if k == 0:
+        return float(t[0])
+    # linear interpolation of the zero crossing between samples k-1 and k
+    a, b = sd[k - 1], sd[k]
+    return float(t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a) if b != a else 0.0))
+
+
+def sweep_gaps(
+    obj: SurfaceObject, sweep: FingerSweep, tip_radius: float, rotation: np.ndarray, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The sweep's fingertip centres in the world (N, 3), the palm at (``rotation``,
+    ``origin``), and each one's gap to ``obj`` (signed distance less the tip radius, m)."""
+    pts = sweep.points @ rotation.T + origin
+    return pts, signed_distances(obj, pts) - tip_radius
+
+
+def landing_from(
+    obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray, start: int = 0
+) -> Landing | None:
+    """:func:`landing` from precomputed :func:`sweep_gaps` (``pts``, ``gaps``)."""
+    start = max(0, start - 1)
+    hits = np.flatnonzero(gaps[start:] <= 0.0)
+    if len(hits) == 0 or hits[0] == 0:
+        return None
+    k = start + int(hits[0])
+    a, b = gaps[k - 1], gaps[k]
+    s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
+    tip = pts[k - 1] + s * (pts[k] - pts[k - 1])
+    point = obj.closest_surface_point(tip)
+    # a sphere tip touching a convex object: the contact normal runs from the contact point to
+    # the tip's centre (defined on edges and rims too, where the surface normal is not)
+    out = tip - point
+    length = float(np.linalg.norm(out))
+    normal = out / length if length > 1e-9 else obj.surface_normal(tip)
+    angle = float(sweep.angles[k - 1] + s * (sweep.angles[k] - sweep.angles[k - 1]))
+    return Landing(k, angle, point, normal)
+
+
+def landing(
+    obj: SurfaceObject,
+    sweep: FingerSweep,
+    tip_radius: float,
+    rotation: np.ndarray,
+    origin: np.ndarray,
+    start: int = 0,
+) -> Landing | None:
+    """Where ``sweep``'s fingertip (radius ``tip_radius``) first touches ``obj`` when the
+    finger closes from sample ``start`` (a finger between samples ``start`` − 1 and ``start``,
+    not touching, closes from the former), the palm at (``rotation``, ``origin``) in the
+    world; None when it never does, or already touches there."""
+    pts, gaps = sweep_gaps(obj, sweep, tip_radius, rotation, origin)
+    return landing_from(obj, sweep, pts, gaps, start)
+
+
+def diameter_angle_deg(centre: np.ndarray, opposing: np.ndarray, others: list[np.ndarray]) -> float:
+    """Angle (deg) between the opposing contact and the others' midpoint, seen from ``centre``
+    (the end agent's Fig. 2 test)."""
+    u = opposing - centre
+    v = np.mean(others, axis=0) - centre
+    cos = float(u @ v / max(float(np.linalg.norm(u) * np.linalg.norm(v)), 1e-12))
+    return math.degrees(math.acos(max(-1.0, min(1.0, cos))))
+
+
+# --- wrist orientation -------------------------------------------------------------------
+def rotation_from_rpy(roll: float, pitch: float, yaw: float) -> np.ndarray:
+    """Palm rotation of the wrist joints: R = Rx(roll) · Ry(pitch) · Rz(yaw) (the URDF chain)."""
+    cr, sr, cp, sp, cy, sy = (
+        math.cos(roll),
+        math.sin(roll),
+        math.cos(pitch),
+        math.sin(pitch),
+        math.cos(yaw),
+        math.sin(yaw),
+    )
+    rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
+    ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
+    rz = np.array([[cy, -sy, 0.0], [sy, cy, 0.0], [0.0, 0.0, 1.0]])
+    out: np.ndarray = rx @ ry @ rz
+    return out
+
+
+def rpy_from_rotation(R: np.ndarray) -> tuple[float, float, float]:
+    """The wrist's roll, pitch, yaw for palm rotation ``R`` (inverse of :func:`rotation_from_rpy`;
+    pitch in [−π/2, π/2])."""
+    pitch = math.asin(max(-1.0, min(1.0, float(R[0, 2]))))
+    yaw = math.atan2(-float(R[0, 1]), float(R[0, 0]))
+    roll = math.atan2(-float(R[1, 2]), float(R[2, 2]))
+    return roll, pitch, yaw
+
+
+def frame(approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
+    """Palm rotation with x = ``approach`` and z = ``closing`` (orthonormalised), y = z × x."""
+    x = approach / np.linalg.norm(approach)
+    z = closing - (closing @ x) * x
+    z /= np.linalg.norm(z)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+# --- candidate frames per primitive ------------------------------------------------------
+_EX, _EY, _EZ = np.eye(3)
+
+
+def _unit_perp(v: np.ndarray, axis: np.ndarray) -> np.ndarray | None:
+    """``v`` with its component along unit ``axis`` removed, normalised (None if ~parallel)."""
+    w = v - (v @ axis) * axis
+    n = float(np.linalg.norm(w))
+    return None if n < 1e-6 else w / n
+
+
+def _dedupe(vectors: list[np.ndarray | None], signed: bool) -> list[np.ndarray]:
+    out: list[np.ndarray] = []
+    for v in vectors:
+        if v is None:
+            continue
+        if all((abs(v @ u) if not signed else v @ u) < 0.999 for u in out):
+            out.append(v)
+    return out
+
+
+def closing_axes(obj: SurfaceObject, vertical_only: bool = False) -> list[tuple[str, np.ndarray]]:
+    """The closing axes (unsigned, world) through the centre of mass for ``obj``'s kind, with
+    a word on each. ``vertical_only``: the postulate's size is known along the vertical only."""
+    if vertical_only:
+        return [("across the vertical", _EZ)]
+    A = obj.placement.rotation
+    a1, a2, a3 = A[:, 0], A[:, 1], A[:, 2]
+    if isinstance(obj, Sphere):
+        return [("about a vertical diameter", _EZ), ("about a horizontal diameter", _EY)]
+    if isinstance(obj, Ellipsoid):
+        order = np.argsort(np.asarray(obj.radii))
+        words = ("shortest", "middle")
+        return [(f"across its {w} axis", A[:, int(i)]) for w, i in zip(words, order[:2], strict=True)]
+    if isinstance(obj, (Cylinder, Capsule)):
+        across = _dedupe([a1, a2, _unit_perp(_EZ, a3), _unit_perp(_EY, a3)], signed=False)
+        axes = [("across the axis", g) for g in across]
+        total = obj.length + (2.0 * obj.radius if isinstance(obj, Capsule) else 0.0)
+        if total <= 2.0 * obj.radius:  # short: also along the axis (on the end faces)
+            axes.append(("along the axis", a3))
+        return axes
+    if isinstance(obj, Box):
+        return [(f"across faces {name}", A[:, i]) for i, name in enumerate(("±x", "±y", "±z"))]
+    raise TypeError(f"obj: no grasp rule for {type(obj).__name__}")
+
+
+def approach_axes(obj: SurfaceObject, closing: np.ndarray) -> list[np.ndarray]:
+    """Approach directions (signed, world, ⟂ ``closing``): the object's own axes across the
+    grip and the direction nearest the hand's unrotated approach (+x)."""
+    A = obj.placement.rotation
+    options: list[np.ndarray | None] = [_unit_perp(_EX, closing)]
+    if not isinstance(obj, Sphere):
+        for i in range(3):
+            for sign in (1.0, -1.0):
+                options.append(_unit_perp(sign * A[:, i], closing))
+        if isinstance(obj, (Cylinder, Capsule)):
+            axis = A[:, 2]
+            options.append(_unit_perp(np.cross(closing, axis), closing))
+    return _dedupe(options, signed=True)
+
+
+def candidate_frames(obj: SurfaceObject, vertical_only: bool = False) -> Iterator[tuple[str, np.ndarray]]:
+    """(label, palm rotation) of every candidate orientation: each closing axis in both senses
+    (the opposing finger on either side), each approach across it."""
+    for words, g in closing_axes(obj, vertical_only):
+        for x in approach_axes(obj, g):
+            for sign in (1.0, -1.0):
+                yield words, frame(x, sign * g)
+
+
+# --- the synthesis -----------------------------------------------------------------------
+class GraspSynthesis:
+    """Candidate grasps of one hand on one postulated object, checked and scored.
+
+    Args:
+        hand: the hand model.
+        sweeps: its fingers' closing sweeps (palm frame).
+        params: world constants (approach stand-off, clearance).
+        obj: the postulated object.
+        friction: Coulomb μ for ε.
+        vertical_only: the postulate's size is known along the vertical only (grasp across it).
+    """
+
+    def __init__(
+        self,
+        hand: HandModel,
+        sweeps: dict[str, FingerSweep],
+        params: WorldParameters,
+        obj: SurfaceObject,
+        friction: float,
+        vertical_only: bool = False,
+    ) -> None:
+        self.hand = hand
+        self.sweeps = sweeps
+        self.params = params
+        self.obj = obj
+        self.friction = friction
+        self.vertical_only = vertical_only
+        self.scene = Scene(hand, obj)  # the imagined scene: the hand and the postulated object
+        self.state = hand.state(hand.neutral())
+        self.opposing = hand.description.opposing_finger
+        widx = hand.wrist_q_index
+        self._rpy_lo, self._rpy_hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
+        self._xyz_lo, self._xyz_hi = hand.lower[widx[:3]], hand.upper[widx[:3]]
+        self._tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+        # per collision geometry: the radius of a ball about its frame's origin that holds it
+        # (a cheap lower bound of its distance to the object, which skips the exact query)
+        self._balls = []
+        for go in hand.collision_model.geometryObjects:
+            geometry = go.geometry
+            geometry.computeLocalAABB()
+            self._balls.append(float(geometry.aabb_radius) + float(np.linalg.norm(geometry.aabb_center)))
+        self._obj_centre = np.asarray(obj.placement.translation, dtype=float)
+        self._obj_radius = 0.5 * float(obj.diameter)
+        self.rejections: dict[str, int] = {}
+
+    def _reject(self, why: str) -> None:
+        self.rejections[why] = self.rejections.get(why, 0) + 1
+
+    def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
+        """The wrist joint values for palm rotation R, or None outside their limits."""
+        rpy = rpy_from_rotation(R)
+        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+            return None
+        a = np.asarray(rpy)
+        if np.any(a < self._rpy_lo - 1e-9) or np.any(a > self._rpy_hi + 1e-9):
+            return None
+        return rpy
+
+    def depth_for(self, extent: float) -> float | None:
+        """Depth that puts the opposing fingertip straight under the centre when it touches:
+        the palm-frame x of the opposing sweep's first sample within ``extent`` + r_f of the
+        palm's x axis (None if its sweep never comes that close)."""
+        sweep = self.sweeps[self.opposing]
+        reach = extent + self.hand.tip_radius(self.opposing)
+        inside = np.flatnonzero(np.hypot(sweep.points[:, 1], sweep.points[:, 2]) <= reach)
+        return None if len(inside) == 0 else float(sweep.points[int(inside[0]), 0])
+
+    def candidates(self) -> list[GraspCandidate]:
+        """The best candidates, best first.
+
+        Every candidate orientation is simulated (landings, angle about the centre); of
+        those about the centre, the ``SCORED`` least-rotated that are collision-free are
+        scored by ε; the best ε wins, and candidates within ``EPSILON_TIE`` (relative) of it
+        count as equal, the least wrist rotation first. When none about the centre is
+        collision-free, the collision-free one closest to it is returned alone (the best the
+        hand can do; its ``about_centre`` is False)."""
+        obj = self.obj
+        centre = np.asarray(obj.placement.translation, dtype=float)
+        h = self.hand.hand_height
+        simulated: list[GraspCandidate] = []
+        for label, R in candidate_frames(obj, self.vertical_only):
+            rpy = self.wrist_rpy(R)
+            if rpy is None:
+                self._reject("wrist rotation out of its limits")
+                continue
+            extent = half_extent(obj, R[:, 2])
+            if 2.0 * extent / h >= MAX_D_OVER_H:
+                self._reject("larger than the hand height across the grip")
+                continue
+            base = self.depth_for(extent)
+            if base is None:
+                self._reject("too small for the opposing finger's sweep")
+                continue
+            best = self._best_depth(label, R, rpy, centre, base, extent)
+            if best is not None:
+                simulated.append(best)
+        about = [c for c in simulated if c.about_centre]
+        about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+        # a sphere's grasps about its diameters are all alike (ε too, by symmetry): the first,
+        # least-rotated one that is collision-free is the choice
+        wanted = 1 if isinstance(obj, Sphere) else SCORED
+        kept: list[GraspCandidate] = []
+        for cand in about:
+            if self._collision_free(cand):
+                kept.append(self._score(cand))
+                if len(kept) == wanted:
+                    break
+        if not kept:
+            # no grasp about the centre is reachable: the one closest to it, the best the hand
+            # can do (the end agent will judge it)
+            if len(about) < len(simulated):
+                self._reject("contacts not about the centre")
+            rest = sorted((c for c in simulated if not c.about_centre), key=lambda c: (-c.angle_deg, c.turn))
+            for cand in rest:
+                if self._collision_free(cand):
+                    return [self._score(cand)]
+            return []
+        top = max(c.epsilon for c in kept)
+        kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+        return kept
+
+    def _best_depth(
+        self,
+        label: str,
+        R: np.ndarray,
+        rpy: tuple[float, float, float],
+        centre: np.ndarray,
+        base: float,
+        extent: float,
+    ) -> GraspCandidate | None:
+        """The depth, among ``base`` + ``DEPTH_OFFSETS`` (then refined), whose predicted
+        contacts lie best about the centre (None when no depth lands every fingertip)."""
+        best: GraspCandidate | None = None
+        for offset in DEPTH_OFFSETS:
+            cand = self._simulate(label, R, rpy, centre, base + offset, extent)
+            if cand is not None and (best is None or cand.angle_deg > best.angle_deg):
+                best = cand
+            if best is not None and best.angle_deg >= GOOD_ENOUGH_ANGLE_DEG:
+                return best
+        if best is not None:
+            for step in (-DEPTH_REFINE, DEPTH_REFINE):
+                cand = self._simulate(label, R, rpy, centre, best.depth + step, extent)
+                if cand is not None and cand.angle_deg > best.angle_deg:
+                    best = cand
+        return best
+
+    def _simulate(
+        self,
+        label: str,
+        R: np.ndarray,
+        rpy: tuple[float, float, float],
+        centre: np.ndarray,
+        depth: float,
+        extent: float,
+    ) -> GraspCandidate | None:
+        wrist = centre - R[:, 0] * depth
+        if np.any(wrist < self._xyz_lo) or np.any(wrist > self._xyz_hi):
+            self._reject("wrist position out of its limits")
+            return None
+        landings: dict[str, Landing] = {}
+        for finger in self.hand.finger_names:
+            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
+            if hit is None:
+                self._reject("a fingertip misses the object")
+                return None
+            landings[finger] = hit
+        others = [landings[f].point for f in landings if f != self.opposing]
+        angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
+        turn = math.acos(max(-1.0, min(1.0, 0.5 * (float(np.trace(R)) - 1.0))))
+        return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=turn)
+
+    def _configuration(
+        self, c: GraspCandidate, wrist: np.ndarray, angles: dict[str, float] | None
+    ) -> np.ndarray:
+        """The hand at ``wrist`` turned as ``c``, each finger at ``angles`` (open when None)."""
+        hand = self.hand
+        q = hand.neutral()
+        widx = hand.wrist_q_index
+        q[widx[:3]] = wrist
+        q[widx[3:6]] = c.wrist_rpy
+        for finger in hand.finger_names:
+            idx = hand.finger_q_index(finger)
+            q[idx] = self.sweeps[finger].angles[0] if angles is None else angles[finger]
+        return np.clip(q, hand.lower, hand.upper)
+
+    def _clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
+        """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
+        asked) is at least ``threshold`` m from the postulated object. A geometry whose
+        bounding ball is that far from the object's bounding ball needs no exact query."""
+        self.state.update(q)
+        placements = self.state.geometry_data.oMg
+        for gid, ball in enumerate(self._balls):
+            if skip_tips and gid in self._tips:
+                continue
+            far = float(np.linalg.norm(placements[gid].translation - self._obj_centre))
+            if far - ball - self._obj_radius >= threshold:
+                continue
+            if self.scene.gap(self.state, gid) < threshold:
+                return False
+        return True
+
+    def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
+        """The collision-free pre-grasp wrist position (world, m) before ``c`` along its
+        approach, and its stand-off (m): ``approach_distance``, lengthened by 1 cm up to 4
+        times if needed; None when none is clear."""
+        stand_off = self.params.approach_distance
+        for _ in range(4):
+            pre = c.wrist - stand_off * c.approach
+            inside = np.all(pre >= self._xyz_lo) and np.all(pre <= self._xyz_hi)
+            if inside and self._clear(self._configuration(c, pre, None), self.params.clearance, False):
+                return pre, stand_off
+            stand_off += 0.01
+        return None
+
+    def _collision_free(self, c: GraspCandidate) -> bool:
+        pre = self.pregrasp(c)
+        if pre is None:
+            self._reject("no collision-free pre-grasp")
+            return False
+        start = pre[0]
+        # the approach with the fingers open: every sample from the pre-grasp to the grasp
+        for s in np.linspace(0.0, 1.0, APPROACH_SAMPLES + 1)[1:]:
+            q = self._configuration(c, start + s * (c.wrist - start), None)
+            if not self._clear(q, 0.5 * self.params.contact_tolerance, False):
+                self._reject("the approach collides")
+                return False
+        # the closing: only the fingertips may touch, part of the way and at the landing
+        hand = self.hand
+        for fraction in (0.5, 1.0):
+            angles = {}
+            for finger in hand.finger_names:
+                lo = float(self.sweeps[finger].angles[0])
+                angles[finger] = lo + fraction * (c.landings[finger].angle - lo)
+            if not self._clear(self._configuration(c, c.wrist, angles), 0.0, True):
+                self._reject("a link or the palm touches before the fingertips")
+                return False
+        return True
+
+    def _score(self, c: GraspCandidate) -> GraspCandidate:
+        points = np.array([c.landings[f].point for f in self.hand.finger_names])
+        normals = np.array([c.landings[f].normal for f in self.hand.finger_names])
+        q = grasp_quality(
+            points,
+            normals,
+            self.obj.placement.translation,
+            self.friction,
+            SCORE_EDGES,
+            0.5 * self.obj.diameter,
+        )
+        return GraspCandidate(
+            c.label,
+            c.rotation,
+            c.wrist_rpy,
+            c.wrist,
+            c.depth,
+            c.extent,
+            c.landings,
+            c.angle_deg,
+            epsilon=q.epsilon,
+            turn=c.turn,
+        )
