@@ -39,7 +39,7 @@ from enum import Enum
 
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
 from eos_svc.board import Board, BoardChange
-from eos_svc.errors import ValidationError
+from eos_svc.errors import ContractError, ValidationError
 from eos_svc.ratings import Weights, check_probability
 from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus
 
@@ -280,7 +280,9 @@ class Controller:
             try:
                 result = best.act(board, ctx)
                 if result.__class__ is not ActionResult and not isinstance(result, ActionResult):
-                    raise TypeError(f"act() must return an ActionResult, got {type(result).__name__}")
+                    raise ContractError(
+                        f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
+                    )
                 new_hints = (
                     {
                         target: check_probability(value, f"agents.{name}.ratings.{target}")

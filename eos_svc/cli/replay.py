@@ -33,6 +33,7 @@ from typing import Any
 from eos_svc.agent import Outcome
 from eos_svc.board import BoardChange
 from eos_svc.cli.common import fail
+from eos_svc.errors import EosError
 from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord
 
@@ -66,7 +67,7 @@ def result_line(result: Any) -> str:
 
 
 # --- reading -------------------------------------------------------------------------------
-class RecordFileError(ValueError):
+class RecordFileError(EosError, ValueError):
     """A record file that cannot be replayed (the message says where and why)."""
 
 

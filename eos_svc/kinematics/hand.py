@@ -24,6 +24,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from eos_svc.errors import NotFoundError, ValidationError
+
 __all__ = [
     "HAND3X3_URDF",
     "ConfigurationError",
@@ -46,28 +48,16 @@ _F64 = np.dtype(np.float64)
 HAND3X3_URDF: Path = Path(__file__).resolve().parents[2] / "urdf" / "hand3x3.urdf"
 
 
-class KinematicsError(ValueError):
+class KinematicsError(ValidationError):
     """Bad input to the kinematics layer. ``field`` names what is wrong, ``reason`` says why."""
-
-    def __init__(self, field: str, reason: str) -> None:
-        self.field = field
-        self.reason = reason
-        super().__init__(f"{field}: {reason}")
-
-    def to_dict(self) -> dict[str, str]:
-        """JSON-friendly form."""
-        return {"field": self.field, "reason": self.reason}
 
 
 class HandDescriptionError(KinematicsError):
     """A hand description is malformed or does not match its URDF."""
 
 
-class UnknownNameError(KinematicsError, KeyError):
+class UnknownNameError(KinematicsError, NotFoundError):
     """An unknown finger, frame, joint or geometry name."""
-
-    def __str__(self) -> str:  # KeyError would repr() the message
-        return f"{self.field}: {self.reason}"
 
 
 class ConfigurationError(KinematicsError):

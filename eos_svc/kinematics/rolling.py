@@ -40,6 +40,8 @@ import qpsolvers
 import scipy.sparse as sp
 from scipy.linalg import lapack
 
+from eos_svc.errors import ComputationError
+
 from ._slots import slot_setters
 from .hand import HandState, KinematicsError
 from .scene import Contact, Scene
@@ -55,7 +57,7 @@ def available_solvers() -> list[str]:
     return list(qpsolvers.available_solvers)
 
 
-class RollingQPError(RuntimeError):
+class RollingQPError(ComputationError):
     """The rolling QP failed (infeasible, not solved, bad output).
 
     Attributes:
