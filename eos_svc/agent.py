@@ -131,8 +131,8 @@ class Agent(ABC):
         """Precondition test: the opportunistic sub-rating in [0, 1] from the state.
 
         Return ``None`` for "no opinion" (keeps what the previous action set,
-        else 0). Called only from a stage's second cycle on: at a stage's start
-        there are no events and every opportunistic sub-rating is 0 (paper §5).
+        else 0). Called every cycle, a stage's first included (``ctx.stage_cycle``
+        is then 0 and ``ctx.events`` empty).
         """
         return None
 

@@ -6,13 +6,15 @@ listed first), runs its action against the board, and records the cycle.
 
 Rules the paper leaves open, fixed here (and visible in every cycle record):
 
-1. **Opportunistic sub-ratings are event driven.** They are reset to 0 every
-   cycle; then the ratings set by the agent that acted in the previous cycle
+1. **Opportunistic sub-ratings are reset every cycle.** They start at 0; then
+   the ratings set by the agent that acted in the previous cycle of the stage
    (:attr:`ActionResult.ratings`) apply, and every agent's precondition test
    (:meth:`Agent.opportunistic`) may raise its own — the larger value counts.
-   At a stage's first cycle nothing has happened in the stage yet, so every
-   opportunistic sub-rating is 0 (paper §5: "At the beginning of a new stage
-   all opportunistic sub-ratings are zero").
+   Every test runs every cycle, a stage's first included (the previous
+   cycle's ratings do not carry into a new stage). An agent family that wants
+   the paper's §5 rule — "at the beginning of a new stage all opportunistic
+   sub-ratings are zero" — says so in its own test (the grasp agents do: see
+   :class:`eos_svc.agents.base.GraspAgent`).
 2. **Repeat rule** (:class:`RepeatPolicy`, default ``ONCE_UNLESS_ASKED``): the
    default sub-rating encodes a pre-defined order in which every agent acts
    once per stage; an agent that has already acted in the stage is eligible
@@ -237,17 +239,14 @@ class Controller:
             name = ""
             try:
                 for agent, name, default, weighted_default, has_pre, has_learned, learned in table:
-                    opp = 0.0
-                    if stage_cycle:  # rule 1: nothing to react to at a stage's first cycle
-                        if hints:
-                            opp = hints.get(name, 0.0)
-                        if has_pre:
-                            own = agent.opportunistic(board, ctx)
-                            if own is not None:
-                                if own.__class__ is not float or not 0.0 <= own <= 1.0:
-                                    own = check_probability(own, f"agents.{name}.opportunistic")
-                                if own > opp:
-                                    opp = own
+                    opp = hints.get(name, 0.0) if hints else 0.0  # rule 1
+                    if has_pre:
+                        own = agent.opportunistic(board, ctx)
+                        if own is not None:
+                            if own.__class__ is not float or not 0.0 <= own <= 1.0:
+                                own = check_probability(own, f"agents.{name}.opportunistic")
+                            if own > opp:
+                                opp = own
                     if has_learned:
                         learned = check_probability(
                             agent.learned_rating(board, ctx), f"agents.{name}.learned"
