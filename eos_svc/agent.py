@@ -86,6 +86,11 @@ class CycleContext(NamedTuple):
         return any(change.key == key for change in self.events)
 
 
+# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
+# that documentation tools (pdoc) resolve its annotations here.
+CycleContext.__new__.__module__ = __name__
+
+
 class Agent(ABC):
     """Base class of every agent.
 

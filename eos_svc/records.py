@@ -109,6 +109,11 @@ class CycleRecord(NamedTuple):
         }
 
 
+# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
+# that documentation tools (pdoc) resolve its annotations here.
+CycleRecord.__new__.__module__ = __name__
+
+
 @dataclass(frozen=True)
 class RunResult:
     """How a controller run ended.

@@ -26,6 +26,8 @@ import pinocchio as pin
 
 from eos_svc.errors import NotFoundError, ValidationError
 
+from .assets import data_file
+
 __all__ = [
     "HAND3X3_URDF",
     "ConfigurationError",
@@ -44,8 +46,8 @@ __all__ = [
 _LWA = pin.LOCAL_WORLD_ALIGNED
 _F64 = np.dtype(np.float64)
 
-#: The repository's three-finger hand (editable install: located relative to the package).
-HAND3X3_URDF: Path = Path(__file__).resolve().parents[2] / "urdf" / "hand3x3.urdf"
+#: The three-finger hand's URDF (from the installed package's data, or the checkout's urdf/).
+HAND3X3_URDF: Path = data_file("hand3x3.urdf")
 
 
 class KinematicsError(ValidationError):
