@@ -1,4 +1,4 @@
-"""The plan result (DESIGN §6): how the plan ended and what it found."""
+"""The plan result: how the plan ended and what it found."""
 
 from __future__ import annotations
 
@@ -127,7 +127,7 @@ class PlanResult:
         )
 
     def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
-        """JSON-friendly form (DESIGN §6); the trace only when asked."""
+        """JSON-friendly form; the trace only when asked."""
         out = {
             "status": self.status,
             "reason": self.reason,
