@@ -53,6 +53,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from eos_svc.agents.request import DEFAULT_FRICTION, MAX_FRICTION
 from eos_svc.errors import ValidationError
+from eos_svc.kinematics.geometry import tangent_basis
 
 __all__ = [
     "DEFAULT_EDGES",
@@ -120,14 +121,6 @@ def check_friction(mu: object, name: str = "friction") -> float:
     return v
 
 
-def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A right-handed orthonormal tangent pair for unit normal ``n`` (3-D)."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    t1 = np.cross(n, helper)
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(n, t1)
-
-
 def primitive_wrenches(
     points: ArrayLike,
     normals: ArrayLike,
@@ -185,7 +178,7 @@ def primitive_wrenches(
             if m == 1:
                 forces[i, 0] = -ni
                 continue
-            t1, t2 = _tangents(ni)
+            t1, t2 = tangent_basis(ni)
             theta = 2.0 * np.pi * np.arange(m) / m
             forces[i] = -ni + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
         torques = np.cross(r[:, None, :], forces) / scale

@@ -34,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
+from .geometry import tangent_pair
 from .hand import HandModel, HandState, KinematicsError
 from .objects import Box, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
@@ -101,18 +102,8 @@ def contact_frame(normal: np.ndarray) -> np.ndarray:
     z0, z1, z2 = (-np.asarray(normal, dtype=float)).tolist()
     nz = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
     z0, z1, z2 = z0 / nz, z1 / nz, z2 / nz
-    f0, f1, f2 = (0.0, 0.0, 1.0) if abs(z2) < 0.9 else (0.0, 1.0, 0.0)
-    d = f0 * z0 + f1 * z1 + f2 * z2
-    x0, x1, x2 = f0 - d * z0, f1 - d * z1, f2 - d * z2
-    nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    x0, x1, x2 = x0 / nx, x1 / nx, x2 / nx
-    return np.array(
-        [
-            [x0, z1 * x2 - z2 * x1, z0],
-            [x1, z2 * x0 - z0 * x2, z1],
-            [x2, z0 * x1 - z1 * x0, z2],
-        ]
-    )
+    x0, x1, x2, y0, y1, y2 = tangent_pair(z0, z1, z2, prefer=2)
+    return np.array([[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]])
 
 
 def ground_truth_form(obj: SurfaceObject, point: np.ndarray, frame: np.ndarray) -> np.ndarray:

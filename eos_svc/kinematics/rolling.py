@@ -43,6 +43,7 @@ from scipy.linalg import lapack
 from eos_svc.errors import ComputationError
 
 from ._slots import slot_setters
+from .geometry import tangent_pair
 from .hand import HandState, KinematicsError
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -513,14 +514,7 @@ class RollingQP:
             Jb = self._Jb
             J.take(jsel, axis=1, out=Jb)
         nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
-        # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
-        if abs(nx_) < 0.9:
-            t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
-        else:
-            t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
-        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-        t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
+        t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(nx_, ny_, nz_)  # t1 ⟂ n, t2 = n × t1
         # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
         # t1 × n = −t2, t2 × n = t1. One slice assignment (item writes cost ~0.3 µs each).
         r = self._r
@@ -732,16 +726,7 @@ class RollingQP:
         in_contact = d <= sensor.contact_tolerance  # a bool (floats)
         if in_contact:
             if sensor.noise_std > 0.0:
-                nx_, ny_, nz_ = px / r, py / r, pz / r
-                if abs(nx_) < 0.9:
-                    t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
-                else:
-                    t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
-                s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-                t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-                t2x = ny_ * t1z - nz_ * t1y
-                t2y = nz_ * t1x - nx_ * t1z
-                t2z = nx_ * t1y - ny_ * t1x
+                t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(px / r, py / r, pz / r)
                 g0, g1 = sensor.rng.normal(0.0, sensor.noise_std, size=2).tolist()
                 px, py, pz = px + g0 * t1x + g1 * t2x, py + g0 * t1y + g1 * t2y, pz + g0 * t1z + g1 * t2z
                 s = r / math.sqrt(px * px + py * py + pz * pz)

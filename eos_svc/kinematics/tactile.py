@@ -14,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .geometry import tangent_basis
 from .hand import HandState, KinematicsError, UnknownNameError
 from .scene import Contact
 
@@ -89,10 +90,7 @@ class TactileSensor:
         if in_contact:
             if self.noise_std > 0.0:
                 n = p / r
-                a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-                t1 = a - (a @ n) * n
-                t1 /= np.linalg.norm(t1)
-                t2 = np.cross(n, t1)
+                t1, t2 = tangent_basis(n)
                 g = self.rng.normal(0.0, self.noise_std, size=2)
                 p = p + g[0] * t1 + g[1] * t2
                 p *= r / np.linalg.norm(p)
