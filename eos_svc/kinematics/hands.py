@@ -38,13 +38,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from .hand import (
-    FingerDescription,
-    HandDescription,
-    HandModel,
-    UrdfLoadError,
-    _capture_stderr,
-)
+from .hand import FingerDescription, HandDescription, HandModel, UrdfLoadError
+from .urdf_loading import _capture_stderr
 
 __all__ = [
     "ALLEGRO_MOUNT_XYZ",
