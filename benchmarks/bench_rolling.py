@@ -62,10 +62,11 @@ def bare_step(rq: Any) -> None:
     pin.computeJointJacobians(model, data)
     J = pin.getFrameJacobian(model, data, fid, _LWA)
     c = rq._c_view
-    rq._tf_tip.setTranslation(c)
-    res = rq._res
+    probe = rq._probe
+    probe.tf_tip.setTranslation(c)
+    res = probe.res
     res.clear()
-    rq._dist(rq._tf_obj, rq._tf_tip, rq._req, res)
+    probe.dist(probe.tf_obj, probe.tf_tip, probe.req, res)
     p = res.getNearestPoint1()
     v = c.tolist()
     p.tolist()

@@ -204,7 +204,7 @@ def _roller(
     key = (id(scene), finger, float(dt), solver)
     rq = cache.pop(key, None)
     if rq is not None and (
-        rq.scene is not scene or rq.hand is not state.hand or rq._obj_shape is not scene.object.geometry
+        rq.scene is not scene or rq.hand is not state.hand or rq.object_geometry is not scene.object.geometry
     ):
         rq = None  # the object was replaced: build a new roller
     if rq is None:
@@ -326,7 +326,7 @@ def run_ep1(
                 rq = _roller(scene, state, finger, tactile_sensor, axis, sign * omega, dt, solver)
             else:
                 rq.retarget(axis, sign * omega, project_axis=False)
-            R_view = rq._R_view  # live: the kinematics of the step's reading
+            R_view = rq.tip_rotation  # live: the kinematics of the step's reading
             step = rq.step
             for _ in range(n_steps):
                 st = step()

@@ -20,7 +20,7 @@ from numpy.typing import ArrayLike
 
 from eos_svc.errors import ValidationError
 
-__all__ = ["tangent_basis", "tangent_basis_reference", "tangent_pair"]
+__all__ = ["tangent_basis", "tangent_basis_reference", "tangent_pair", "unit_vector"]
 
 #: |n_k| at or above which the preferred axis e_k is too close to n and world y is used
 NEAR_AXIS = 0.9
@@ -64,3 +64,19 @@ def tangent_basis_reference(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, 
     t1 = a - (a @ nv) * nv
     t1 /= np.linalg.norm(t1)
     return t1, np.cross(nv, t1)
+
+
+def unit_vector(name: str, v: object) -> np.ndarray:
+    """``v`` normalised (a new array); :class:`~eos_svc.errors.ValidationError` naming ``name``
+    unless it is a finite non-zero 3-vector. Scalar arithmetic first (numpy's norm costs µs on
+    3-vectors), numpy when the squares overflow."""
+    a = np.asarray(v, dtype=float).reshape(-1)
+    if a.shape == (3,):
+        x, y, z = a.tolist()
+        na = math.sqrt(x * x + y * y + z * z)
+        if math.isfinite(na) and na >= 1e-12:
+            return np.array((x / na, y / na, z / na))
+        if np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:  # huge entries: x * x overflowed
+            out: np.ndarray = a / np.linalg.norm(a)
+            return out
+    raise ValidationError(name, f"must be a finite non-zero 3-vector, got {v!r}")
