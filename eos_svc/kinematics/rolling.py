@@ -575,11 +575,22 @@ class RollingQP:
         :meth:`kinematics`, :meth:`contact`, the tactile reading, ``_build`` (rows, targets,
         bounds), the closed-form solve (``_direct``) or the backend, and the integration."""
         self.kinematics()
-        contact = self.contact()
-        n = self._n
-        reading = None if self.tactile is None else self._read(contact, n)
+        # contact(), _read() and _direct() written out: one Python call each instead of two
+        contact, n = self._probe.measure(self._c_view)
+        self._n = n
+        sensor = self.tactile
+        if sensor is None:
+            reading = None
+        elif type(sensor) is TactileSensor and self.fast_tactile:
+            reading = read_sphere_tip(sensor, contact, self._R_view, n, self._r)
+        else:
+            reading = self._read(contact, n)
         b0, b1, b2, b3, b4, b5 = self._build(contact, n)
-        sol = self._direct() if self.direct else None
+        sol = (
+            _MIN_NORM(self._C, self._b_ext, self._wscale, self._Cw, self._lb_tol, self._ub_tol)
+            if self.direct
+            else None
+        )
         it = 0
         if sol is None:
             if self._bounds_infeasible():
