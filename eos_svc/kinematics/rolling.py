@@ -154,6 +154,29 @@ class RollingQP:
         self.scene = scene
         self.finger = finger
         self.tactile = tactile
+        self._check_arguments(solver, dt, omega, gap_gain, eps)
+        self._set_up_kinematics(finger)
+        # the contact: a coal distance functor with reused transforms and result
+        self._probe = SphereTipProbe(finger, self._r, scene.object.geometry)
+        self._n: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+        self.check_termination = check_termination
+        #: Second-order integration: the QP targets the step's average velocities (see _build).
+        self.second_order = bool(second_order)
+        self._zero_nv = np.zeros(self._model.nv)
+        self._J = np.zeros((6, self._model.nv))  # the tip's frame Jacobian, set by kinematics()
+        #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
+        self.fast_tactile = True
+        #: Closed-form solve when the bounds are inactive (see the class doc).
+        self.direct = bool(direct)
+
+        self._set_up_qp(weights)
+        self._set_up_step_buffers()
+        self._retarget(state, axis, omega, project_axis)
+
+    # ------------------------------------------------------------------ set-up (once per roller)
+    def _check_arguments(self, solver: str, dt: float, omega: float, gap_gain: float, eps: float) -> None:
+        """Check and keep the scalar arguments (:class:`KinematicsError` names the bad one)."""
         if not (math.isfinite(dt) and dt > 0):
             raise KinematicsError("dt", f"must be a finite number > 0 s, got {dt!r}")
         if not math.isfinite(omega):
@@ -169,6 +192,11 @@ class RollingQP:
         self.dt = float(dt)
         self.gap_gain = float(gap_gain)
         self.eps = float(eps)
+
+    def _set_up_kinematics(self, finger: str) -> None:
+        """The active joints (wrist, then the finger), the tip, the (reduced) Pinocchio model and
+        data, and live views of the tip placement."""
+        hand = self.hand
         model = hand.model
         self._fid = hand.tip_frame_id(finger)
         self._r = hand.tip_radius(finger)
@@ -205,21 +233,11 @@ class RollingQP:
         self._c_view = tip.translation
         self._R_view = tip.rotation
 
-        # the contact: a coal distance functor with reused transforms and result
-        self._probe = SphereTipProbe(finger, self._r, scene.object.geometry)
-        self._n: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
-        self.check_termination = check_termination
-        #: Second-order integration: the QP targets the step's average velocities (see _build).
-        self.second_order = bool(second_order)
-        self._zero_nv = np.zeros(model.nv)
-        self._J = np.zeros((6, model.nv))  # the tip's frame Jacobian, set by kinematics()
-        #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
-        self.fast_tactile = True
-        #: Closed-form solve when the bounds are inactive (see the class doc).
-        self.direct = bool(direct)
-
-        # Preallocated QP data.
+    def _set_up_qp(self, weights: object) -> None:
+        """The QP's arrays, preallocated: W, the OSQP constraint matrix [C; I] and the bounds,
+        with C, b, lb, ub as views into them, and the ``qpsolvers.Problem`` over them."""
+        hand, nx = self.hand, self.nx
         w = np.ones(nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
         if w.shape != (nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise KinematicsError("weights", f"must be {nx} finite numbers > 0")
@@ -262,9 +280,19 @@ class RollingQP:
         self._free_steps = 0  # bound evaluations that may be skipped (see _bounds)
         self._lb_tol: list[float] = []
         self._ub_tol: list[float] = []
+        #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
+        self.problem = qpsolvers.Problem(
+            self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
+        )
+        self._osqp: Any = None
+        self._osqp_solver: Any = None
+
+    def _set_up_step_buffers(self) -> None:
+        """The step's scratch arrays and the q̇ views the kinematics and the integration use."""
+        nx = self.nx
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
-        self._qdot = np.zeros(hand.model.nv)
+        self._qdot = np.zeros(self.hand.model.nv)
         # what the kinematics take (see _retarget): the reduced model's q̇ (a view of the active
         # joints' q̇, or its own copy when they are not contiguous), or the full q̇
         self._qdot_r: np.ndarray | None = None
@@ -279,13 +307,6 @@ class RollingQP:
         self._jsel: slice | np.ndarray | None = None if self._reduced else self._sel
         # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step, the integration)
         self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
-        #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
-        self.problem = qpsolvers.Problem(
-            self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
-        )
-        self._osqp: Any = None
-        self._osqp_solver: Any = None
-        self._retarget(state, axis, omega, project_axis)
 
     def retarget(
         self,
