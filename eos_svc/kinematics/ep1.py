@@ -244,6 +244,44 @@ def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     return out
 
 
+def _checked_ep1_arguments(
+    omega: float, steps_per_direction: int, dt: float, directions: Sequence[float]
+) -> list[float]:
+    """:func:`run_ep1`'s scalar arguments checked (:class:`EP1Error` names the bad one); the
+    directions as floats."""
+    if not (math.isfinite(omega) and omega > 0):
+        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
+    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
+        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
+    dirs = [float(d) for d in directions]
+    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
+        raise EP1Error("directions", "need at least two finite directions (degrees)")
+    return dirs
+
+
+def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) -> np.ndarray:
+    """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with
+    the frame's x (``ex_t``, tip frame) projected on the tangent plane at b as the chart's first
+    axis; scalar arithmetic on the 3-vectors."""
+    ex_t0, ex_t1, ex_t2 = ex_t
+    b0, b1, b2 = P.mean(axis=0).tolist()
+    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
+    d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
+    e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
+    ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
+    return _log_chart(
+        P,
+        np.array((b0, b1, b2)),
+        np.array((e0, e1, e2)),
+        np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
+        r,
+    )
+
+
 def run_ep1(
     scene: Scene,
     state: HandState,
@@ -272,15 +310,7 @@ def run_ep1(
     Raises:
         EP1Error: no contact at the start or bad parameters; RollingQPError: the QP failed.
     """
-    if not (math.isfinite(omega) and omega > 0):
-        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
-    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
-        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
-    dirs = [float(d) for d in directions]
-    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
-        raise EP1Error("directions", "need at least two finite directions (degrees)")
+    dirs = _checked_ep1_arguments(omega, steps_per_direction, dt, directions)
     hand: HandModel = scene.hand
     ct0 = scene.contact(state, finger)
     if abs(ct0.distance) > CONTACT_TOLERANCE:
@@ -352,23 +382,7 @@ def run_ep1(
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            # basis at b (the readings' mean direction): the frame's x, y (tip frame)
-            # projected on the tangent plane at b; scalar arithmetic on the 3-vectors
-            b0, b1, b2 = P.mean(axis=0).tolist()
-            nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-            b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
-            d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
-            e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
-            ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
-            c = _log_chart(
-                P,
-                np.array((b0, b1, b2)),
-                np.array((e0, e1, e2)),
-                np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
-                r,
-            )
-            s = _fit_slope(th_all[sel], c)
+            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r))
             samples.append(est.add_sample(a_xy, s, K_f))
     assert rq is not None
     state.update(rq.q)
