@@ -66,11 +66,16 @@ def wheel(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return built
 
 
-def test_the_wheel_carries_the_urdf_and_every_module(wheel: Path):
+def test_the_wheel_carries_the_urdf_every_module_and_data_file(wheel: Path):
     names = set(zipfile.ZipFile(wheel).namelist())
     assert zipfile.ZipFile(wheel).read("eos_svc/data/hand3x3.urdf") == URDF.read_bytes()
-    sources = {p.relative_to(ROOT).as_posix() for p in (ROOT / "eos_svc").rglob("*.py")}
-    assert sources <= names, sorted(sources - names)
+    files = {
+        p.relative_to(ROOT).as_posix()
+        for p in (ROOT / "eos_svc").rglob("*")
+        if p.is_file() and p.suffix != ".pyc" and "__pycache__" not in p.parts
+    }
+    assert any(f.endswith(".py") for f in files)
+    assert files <= names, sorted(files - names)  # every module and every data file
     assert not any(n.startswith(("urdf/", "tests/", "benchmarks/")) for n in names)
 
 
