@@ -20,14 +20,14 @@ from .description import HandDescription
 from .errors import UrdfLoadError
 from .hand_model import HandModel
 
-__all__ = ["HAND3X3_URDF", "load_hand"]
+__all__ = ["HAND3X3_URDF", "capture_stderr", "load_hand"]
 
 #: The three-finger hand's URDF (from the installed package's data, or the checkout's urdf/).
 HAND3X3_URDF: Path = data_file("hand3x3.urdf")
 
 
 @contextlib.contextmanager
-def _capture_stderr() -> Iterator[io.StringIO]:
+def capture_stderr() -> Iterator[io.StringIO]:
     """Capture C-level and Python stderr (Pinocchio prints URDF warnings there)."""
     buf = io.StringIO()
     try:
@@ -75,7 +75,7 @@ def load_hand(
     desc = description if description is not None else HandDescription.hand3x3()
     dirs = [str(Path(p)) for p in package_dirs]
     try:
-        with _capture_stderr() as err:
+        with capture_stderr() as err:
             model = pin.buildModelFromUrdf(str(path))
             gmodel = pin.buildGeomFromUrdf(model, str(path), pin.COLLISION, package_dirs=dirs)
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError with a parser message
