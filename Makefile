@@ -11,9 +11,9 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-all lint bench clean
+.PHONY: run test test-all lint docs bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[dev]'
@@ -32,8 +32,13 @@ lint: $(STAMP)
 	$(VENV)/bin/ruff check eos_svc tests benchmarks clients
 	$(VENV)/bin/mypy
 
+# The API reference, built from the docstrings into build/api/ (not kept in git) by pdoc;
+# any pdoc warning (e.g. an annotation it cannot resolve) fails the build.
+docs: $(STAMP)
+	$(PY) docs/api.py build/api
+
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(PY) $$b || exit 1; done
 
 clean:
-	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache
+	rm -rf $(VENV) .pytest_cache .mypy_cache .ruff_cache build

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import TYPE_CHECKING, Any, NamedTuple
 
+from eos_svc.errors import ValidationError
 from eos_svc.ratings import check_probability
 
 if TYPE_CHECKING:
@@ -85,6 +86,11 @@ class CycleContext(NamedTuple):
         return any(change.key == key for change in self.events)
 
 
+# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
+# that documentation tools (pdoc) resolve its annotations here.
+CycleContext.__new__.__module__ = __name__
+
+
 class Agent(ABC):
     """Base class of every agent.
 
@@ -97,19 +103,18 @@ class Agent(ABC):
         learned: initial learned sub-rating P(A|B_l) in [0, 1].
 
     Raises:
-        ValidationError: on a rating outside [0, 1] or NaN.
-        ValueError: on an empty name or no stages.
+        ValidationError: on a rating outside [0, 1] or NaN, an empty name or no stages.
     """
 
     __slots__ = ("_default", "_learned", "name", "stages")
 
     def __init__(self, name: str, stages: Iterable[str], default: float, learned: float = 0.0) -> None:
         if not isinstance(name, str) or not name:
-            raise ValueError(f"agent name must be a non-empty str, got {name!r}")
+            raise ValidationError("agents.name", f"must be a non-empty str, got {name!r}")
         self.name = name
         self.stages = frozenset(stages)
         if not self.stages:
-            raise ValueError(f"agent {name!r}: stages must name at least one stage")
+            raise ValidationError(f"agents.{name}.stages", "must name at least one stage")
         self._default = check_probability(default, f"agents.{name}.default")
         self._learned = check_probability(learned, f"agents.{name}.learned")
 
@@ -131,8 +136,8 @@ class Agent(ABC):
         """Precondition test: the opportunistic sub-rating in [0, 1] from the state.
 
         Return ``None`` for "no opinion" (keeps what the previous action set,
-        else 0). Called only from a stage's second cycle on: at a stage's start
-        there are no events and every opportunistic sub-rating is 0 (paper §5).
+        else 0). Called every cycle, a stage's first included (``ctx.stage_cycle``
+        is then 0 and ``ctx.events`` empty).
         """
         return None
 

@@ -12,6 +12,8 @@ from collections.abc import Iterator, Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from eos_svc.errors import ContractError
+
 _MISSING: Any = object()
 
 
@@ -70,7 +72,7 @@ class Board(Mapping[str, Any]):
     def set(self, key: str, value: Any) -> None:
         """Write entry ``key``; recorded as a change when inside a cycle."""
         if not isinstance(key, str) or not key:
-            raise TypeError(f"board key must be a non-empty str, got {key!r}")
+            raise ContractError("key", f"a board key must be a non-empty str, got {key!r}")
         entries = self._entries
         old = entries.get(key, _MISSING)
         entries[key] = value

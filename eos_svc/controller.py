@@ -6,13 +6,15 @@ listed first), runs its action against the board, and records the cycle.
 
 Rules the paper leaves open, fixed here (and visible in every cycle record):
 
-1. **Opportunistic sub-ratings are event driven.** They are reset to 0 every
-   cycle; then the ratings set by the agent that acted in the previous cycle
+1. **Opportunistic sub-ratings are reset every cycle.** They start at 0; then
+   the ratings set by the agent that acted in the previous cycle of the stage
    (:attr:`ActionResult.ratings`) apply, and every agent's precondition test
    (:meth:`Agent.opportunistic`) may raise its own — the larger value counts.
-   At a stage's first cycle nothing has happened in the stage yet, so every
-   opportunistic sub-rating is 0 (paper §5: "At the beginning of a new stage
-   all opportunistic sub-ratings are zero").
+   Every test runs every cycle, a stage's first included (the previous
+   cycle's ratings do not carry into a new stage). An agent family that wants
+   the paper's §5 rule — "at the beginning of a new stage all opportunistic
+   sub-ratings are zero" — says so in its own test (the grasp agents do: see
+   :class:`eos_svc.agents.base.GraspAgent`).
 2. **Repeat rule** (:class:`RepeatPolicy`, default ``ONCE_UNLESS_ASKED``): the
    default sub-rating encodes a pre-defined order in which every agent acts
    once per stage; an agent that has already acted in the stage is eligible
@@ -34,12 +36,12 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from enum import Enum
 
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
-from eos_svc.board import Board, BoardChange
-from eos_svc.errors import ValidationError
+from eos_svc.board import Board
+from eos_svc.errors import ContractError, ValidationError
 from eos_svc.ratings import Weights, check_probability
 from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus
 
@@ -156,76 +158,36 @@ class Controller:
         Args:
             board: the information board (a new empty one when omitted).
             cancel: a token another thread may set to stop the run.
+
+        The per-cycle path (limits, rating, action, progress) is written inline on local
+        variables — it is the arbitration's cost (``benchmarks/bench_controller.py``); what runs
+        once per stage or once per run is in the helpers below.
         """
         board = board if board is not None else Board()
         weights = self.weights
         wo, wl = weights.opportunistic, weights.learned
         always = self.repeat_policy is RepeatPolicy.ALWAYS
         stages = self.stages
-        callbacks = self.callbacks
-        keep = self.keep_trace
         max_cycles = self.max_cycles
         clock = time.monotonic
         new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__
-        # Per stage, per agent: what does not change during a run.
-        tables = {
-            stage: tuple(
-                (a, a.name, a._default, a._default * weights.default, pre, lea, a._learned)
-                for a, pre, lea in rows
-            )
-            for stage, rows in self._by_stage.items()
-        }
-        t0 = clock()
-        deadline_at = None if self.deadline_s is None else t0 + self.deadline_s
-
-        trace: list[CycleRecord] = []
-        stage_index = 0
-        stage = stages[0]
-        table = tables[stage]
-        stage_cycle = 0
+        tables = self._stage_tables()
+        log = _CycleLog(self.callbacks, self.keep_trace, clock)
+        emit = log.emit
+        deadline_at = None if self.deadline_s is None else log.t0 + self.deadline_s
+        # the run's state; rule 1: what a stage's cycles carry over (events, hints) starts empty
+        stage_index, stage, seq = 0, stages[0], 0
         per_stage: dict[str, int] = {stage: 0}
         completed: list[str] = []
-        acted: dict[str, int] = {}
-        events: tuple[BoardChange, ...] = ()
-        hints: dict[str, float] = {}
-        last_agent: str | None = None
-        seq = 0
-
-        def finish(status: RunStatus, reason: str) -> RunResult:
-            return RunResult(
-                status=status,
-                reason=reason,
-                cycles=seq,
-                cycles_per_stage=per_stage,
-                stages_completed=tuple(completed),
-                final_stage=stage,
-                trace=tuple(trace),
-                wall_time_s=clock() - t0,
-            )
-
-        def emit(fields: tuple) -> str | None:
-            """Record a cycle; returns an error text if a callback raised."""
-            record = new_tuple(CycleRecord, (*fields, clock() - t0))
-            if keep:
-                trace.append(record)
-            for callback in callbacks:
-                try:
-                    callback(record)
-                except Exception as exc:  # a broken observer must not kill the plan silently
-                    return f"cycle callback {callback!r} raised {type(exc).__name__}: {exc}"
-            return None
+        table, stage_cycle, acted, events, hints, last_agent = self._stage_start(tables, stage)
 
         while True:
-            if cancel is not None and cancel.cancelled:
-                return finish(RunStatus.CANCELLED, cancel.reason)
-            if seq >= max_cycles:
-                return finish(
-                    RunStatus.CYCLE_LIMIT, f"cycle limit of {max_cycles} reached in stage {stage!r}"
-                )
-            if deadline_at is not None and clock() >= deadline_at:
-                return finish(
-                    RunStatus.DEADLINE, f"deadline of {self.deadline_s} s passed in stage {stage!r}"
-                )
+            if (
+                (cancel is not None and cancel.cancelled)
+                or seq >= max_cycles
+                or (deadline_at is not None and clock() >= deadline_at)
+            ):
+                return log.result(*self._limit_end(cancel, seq, stage), seq, per_stage, completed, stage)
             seq += 1
             per_stage[stage] += 1
             ctx = new_tuple(CycleContext, (seq, stage, stage_cycle, events, last_agent, acted))
@@ -237,17 +199,14 @@ class Controller:
             name = ""
             try:
                 for agent, name, default, weighted_default, has_pre, has_learned, learned in table:
-                    opp = 0.0
-                    if stage_cycle:  # rule 1: nothing to react to at a stage's first cycle
-                        if hints:
-                            opp = hints.get(name, 0.0)
-                        if has_pre:
-                            own = agent.opportunistic(board, ctx)
-                            if own is not None:
-                                if own.__class__ is not float or not 0.0 <= own <= 1.0:
-                                    own = check_probability(own, f"agents.{name}.opportunistic")
-                                if own > opp:
-                                    opp = own
+                    opp = hints.get(name, 0.0) if hints else 0.0  # rule 1
+                    if has_pre:
+                        own = agent.opportunistic(board, ctx)
+                        if own is not None:
+                            if own.__class__ is not float or not 0.0 <= own <= 1.0:
+                                own = check_probability(own, f"agents.{name}.opportunistic")
+                            if own > opp:
+                                opp = own
                     if has_learned:
                         learned = check_probability(
                             agent.learned_rating(board, ctx), f"agents.{name}.learned"
@@ -262,17 +221,13 @@ class Controller:
             except Exception as exc:
                 reason = f"agent {name!r} failed its rating: {type(exc).__name__}: {exc}"
                 emit((seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, ()))
-                return finish(RunStatus.ERROR, reason)
-
+                return log.result(RunStatus.ERROR, reason, seq, per_stage, completed, stage)
             if best is None:
-                reason = (
-                    f"no agent may act in stage {stage!r}: every allowed agent has acted and "
-                    "none is asked for again by its opportunistic or learned sub-rating"
-                    if rows
-                    else f"no agent is allowed in stage {stage!r}"
-                )
+                status, reason = _nobody_end(stage, rows)
                 broken = emit((seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, ()))
-                return finish(RunStatus.ERROR, broken) if broken else finish(RunStatus.STALLED, reason)
+                if broken:
+                    status, reason = RunStatus.ERROR, broken
+                return log.result(status, reason, seq, per_stage, completed, stage)
 
             # --- act ----------------------------------------------------------
             name = best.name
@@ -280,20 +235,15 @@ class Controller:
             try:
                 result = best.act(board, ctx)
                 if result.__class__ is not ActionResult and not isinstance(result, ActionResult):
-                    raise TypeError(f"act() must return an ActionResult, got {type(result).__name__}")
-                new_hints = (
-                    {
-                        target: check_probability(value, f"agents.{name}.ratings.{target}")
-                        for target, value in result.ratings.items()
-                    }
-                    if result.ratings
-                    else {}
-                )
+                    raise ContractError(
+                        f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
+                    )
+                new_hints = _checked_hints(name, result.ratings) if result.ratings else {}
             except Exception as exc:
                 changes = board.end_cycle()
                 reason = f"agent {name!r} raised {type(exc).__name__}: {exc}"
                 emit((seq, stage, stage_cycle, tuple(rows), weights, name, None, reason, changes))
-                return finish(RunStatus.ERROR, reason)
+                return log.result(RunStatus.ERROR, reason, seq, per_stage, completed, stage)
             changes = board.end_cycle()
             acted[name] = acted.get(name, 0) + 1
             outcome = result.outcome
@@ -301,7 +251,7 @@ class Controller:
                 (seq, stage, stage_cycle, tuple(rows), weights, name, outcome, result.detail, changes)
             )
             if broken:
-                return finish(RunStatus.ERROR, broken)
+                return log.result(RunStatus.ERROR, broken, seq, per_stage, completed, stage)
 
             # --- transition ---------------------------------------------------
             if outcome is Outcome.PROGRESS:
@@ -309,25 +259,124 @@ class Controller:
                 events = changes
                 hints = new_hints
                 last_agent = name
-            elif outcome is Outcome.CANNOT_ACT:
-                detail = f": {result.detail}" if result.detail else ""
-                return finish(RunStatus.STALLED, f"agent {name!r} cannot act in stage {stage!r}{detail}")
-            elif outcome is Outcome.STAGE_COMPLETE:
+                continue
+            if outcome is Outcome.STAGE_COMPLETE and stage_index + 1 < len(stages):
                 completed.append(stage)
-                if stage_index + 1 == len(stages):
-                    return finish(RunStatus.COMPLETED, f"all stages completed ({', '.join(completed)})")
                 stage_index += 1
                 stage = stages[stage_index]
-                table = tables[stage]
                 per_stage[stage] = 0
-                stage_cycle = 0
-                acted = {}
-                events = ()
-                hints = {}
-                last_agent = None
-            elif outcome is Outcome.FINISHED:
-                completed.append(stage)  # the run exits gracefully from this stage
-                status = RunStatus.COMPLETED if result.succeeded else RunStatus.FAILED
-                return finish(status, result.detail or f"finished by agent {name!r}")
-            else:  # pragma: no cover - Outcome is closed
-                return finish(RunStatus.ERROR, f"agent {name!r} returned unknown outcome {outcome!r}")
+                table, stage_cycle, acted, events, hints, last_agent = self._stage_start(tables, stage)
+                continue
+            status, reason = _action_end(name, stage, result, completed)
+            return log.result(status, reason, seq, per_stage, completed, stage)
+
+    # --- once per run or per stage ----------------------------------------------------
+    def _stage_tables(self) -> dict[str, tuple[tuple, ...]]:
+        """Per stage, per allowed agent, what does not change during a run: (agent, name,
+        default, weighted default, has a precondition test, has a learned hook, learned)."""
+        wd = self.weights.default
+        return {
+            stage: tuple(
+                (a, a.name, a._default, a._default * wd, pre, lea, a._learned) for a, pre, lea in rows
+            )
+            for stage, rows in self._by_stage.items()
+        }
+
+    @staticmethod
+    def _stage_start(tables: dict[str, tuple[tuple, ...]], stage: str) -> tuple:
+        """A stage's first state: its agent table, stage_cycle 0, nobody acted, no events, no
+        ratings set by a previous action, no last agent."""
+        return tables[stage], 0, {}, (), {}, None
+
+    def _limit_end(self, cancel: CancelToken | None, seq: int, stage: str) -> tuple[RunStatus, str]:
+        """Why the run stops before a cycle: cancelled, the cycle limit, or the deadline."""
+        if cancel is not None and cancel.cancelled:
+            return RunStatus.CANCELLED, cancel.reason
+        if seq >= self.max_cycles:
+            return RunStatus.CYCLE_LIMIT, f"cycle limit of {self.max_cycles} reached in stage {stage!r}"
+        return RunStatus.DEADLINE, f"deadline of {self.deadline_s} s passed in stage {stage!r}"
+
+
+def _nobody_end(stage: str, rows: list[AgentRating]) -> tuple[RunStatus, str]:
+    """The run stalls: no agent is eligible in this cycle (rule 2), or none is allowed."""
+    if rows:
+        return RunStatus.STALLED, (
+            f"no agent may act in stage {stage!r}: every allowed agent has acted and "
+            "none is asked for again by its opportunistic or learned sub-rating"
+        )
+    return RunStatus.STALLED, f"no agent is allowed in stage {stage!r}"
+
+
+def _action_end(name: str, stage: str, result: ActionResult, completed: list[str]) -> tuple[RunStatus, str]:
+    """How the run ends after an action that is neither progress nor a stage change (rule 3);
+    appends the stage to ``completed`` when the run leaves it gracefully."""
+    outcome = result.outcome
+    if outcome is Outcome.CANNOT_ACT:
+        detail = f": {result.detail}" if result.detail else ""
+        return RunStatus.STALLED, f"agent {name!r} cannot act in stage {stage!r}{detail}"
+    if outcome is Outcome.STAGE_COMPLETE:  # the last stage
+        completed.append(stage)
+        return RunStatus.COMPLETED, f"all stages completed ({', '.join(completed)})"
+    if outcome is Outcome.FINISHED:
+        completed.append(stage)  # the run exits gracefully from this stage
+        status = RunStatus.COMPLETED if result.succeeded else RunStatus.FAILED
+        return status, result.detail or f"finished by agent {name!r}"
+    return RunStatus.ERROR, f"agent {name!r} returned unknown outcome {outcome!r}"  # pragma: no cover
+
+
+def _checked_hints(name: str, ratings: Mapping[str, float]) -> dict[str, float]:
+    """The opportunistic sub-ratings an action set for other agents, each checked."""
+    return {
+        target: check_probability(value, f"agents.{name}.ratings.{target}")
+        for target, value in ratings.items()
+    }
+
+
+class _CycleLog:
+    """A run's records: builds each cycle's record, keeps the trace, calls the callbacks, and
+    makes the final :class:`RunResult`."""
+
+    __slots__ = ("callbacks", "clock", "keep", "t0", "trace")
+
+    def __init__(self, callbacks: list[CycleCallback], keep: bool, clock: Callable[[], float]) -> None:
+        self.callbacks = callbacks
+        self.keep = keep
+        self.clock = clock
+        self.trace: list[CycleRecord] = []
+        self.t0 = clock()
+
+    def emit(self, fields: tuple) -> str | None:
+        """Record a cycle; returns an error text if a callback raised."""
+        record = _new_tuple(CycleRecord, (*fields, self.clock() - self.t0))
+        if self.keep:
+            self.trace.append(record)
+        for callback in self.callbacks:
+            try:
+                callback(record)
+            except Exception as exc:  # a broken observer must not kill the plan silently
+                return f"cycle callback {callback!r} raised {type(exc).__name__}: {exc}"
+        return None
+
+    def result(
+        self,
+        status: RunStatus,
+        reason: str,
+        cycles: int,
+        per_stage: dict[str, int],
+        completed: list[str],
+        stage: str,
+    ) -> RunResult:
+        """The run's result."""
+        return RunResult(
+            status=status,
+            reason=reason,
+            cycles=cycles,
+            cycles_per_stage=per_stage,
+            stages_completed=tuple(completed),
+            final_stage=stage,
+            trace=tuple(self.trace),
+            wall_time_s=self.clock() - self.t0,
+        )
+
+
+_new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__

@@ -4,7 +4,7 @@ It shows how another planner embeds the controller with its own agents:
 
 - stage ``bracket``: ``scan`` samples the search interval once (pre-defined
   order), ``widen`` doubles the interval while no sign change is known (its
-  opportunistic sub-rating is 1 until one is found);
+  opportunistic sub-rating is 1 once a scan found none, until one is found);
 - stage ``refine``: ``bisect`` halves the bracket (steady default),
   ``secant`` jumps to the secant root and is rated opportunistically by how
   much its last step shrank |f|, and ``done`` finishes when the bracket is
@@ -55,7 +55,8 @@ class Widen(Agent):
         self.f = f
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
-        return 0.0 if "bracket" in board else 1.0
+        # wanted once a scan of this stage has found no sign change, until one is found
+        return 1.0 if ctx.acted.get("scan") and "bracket" not in board else 0.0
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         lo, hi = board["interval"]

@@ -1,8 +1,13 @@
-"""Exceptions of the EOS core.
+"""Exceptions of eos_svc: one tree under :class:`EosError`.
 
 Planning outcomes (stalled, cycle limit, ...) are never exceptions: they are a
-:class:`~eos_svc.records.RunStatus`. Exceptions are for programming errors and
-bad input, and always name the offending field and the reason.
+:class:`~eos_svc.records.RunStatus`. Exceptions are for bad input, broken
+contracts and failed computations. Every exception class of the package derives
+from :class:`EosError` and keeps the standard base a caller would expect
+(``ValueError`` for a bad value, ``TypeError`` for a value of the wrong kind,
+``RuntimeError`` for a computation that failed), so both ``except EosError`` and
+the usual ``except ValueError`` work. Those about one input name it: ``field``
+(dotted name) and ``reason`` (words).
 """
 
 from __future__ import annotations
@@ -12,8 +17,8 @@ class EosError(Exception):
     """Base class of every error raised by eos_svc."""
 
 
-class ValidationError(EosError, ValueError):
-    """A value given to eos_svc is not acceptable.
+class FieldError(EosError):
+    """An error about one named input.
 
     Attributes:
         field: dotted name of the offending field (``"weights.default"``).
@@ -25,6 +30,26 @@ class ValidationError(EosError, ValueError):
         self.reason = reason
         super().__init__(f"{field}: {reason}")
 
+    def __str__(self) -> str:  # KeyError subclasses would repr() the message
+        return f"{self.field}: {self.reason}"
+
     def to_dict(self) -> dict[str, str]:
         """JSON-friendly form (used by the CLI and the service's error replies)."""
         return {"field": self.field, "reason": self.reason}
+
+
+class ValidationError(FieldError, ValueError):
+    """A value given to eos_svc is not acceptable (``field``: what, ``reason``: why)."""
+
+
+class ContractError(FieldError, TypeError):
+    """A value of the wrong kind: an argument, or an object that breaks an interface's contract
+    (e.g. an agent whose ``act`` does not return an ``ActionResult``)."""
+
+
+class NotFoundError(FieldError, KeyError):
+    """A name that is not there (an agent, a finger, a frame); ``field`` says which kind."""
+
+
+class ComputationError(EosError, RuntimeError):
+    """A computation that failed on acceptable input (a solver, a subprocess)."""

@@ -1,4 +1,4 @@
-"""Cycle records and run results (DESIGN §6).
+"""Cycle records and run results.
 
 A cycle is the choice and the execution of one action (paper §2.1). Every cycle
 leaves a :class:`CycleRecord`; a run ends with a :class:`RunResult` whose status
@@ -15,6 +15,7 @@ from typing import Any, NamedTuple
 
 from eos_svc.agent import Outcome
 from eos_svc.board import BoardChange
+from eos_svc.errors import NotFoundError
 from eos_svc.ratings import Weights
 
 
@@ -73,11 +74,12 @@ class CycleRecord(NamedTuple):
     elapsed_s: float
 
     def rating_of(self, name: str) -> AgentRating:
-        """The rating row of agent ``name`` (KeyError when it was not rated)."""
+        """The rating row of agent ``name`` (:class:`~eos_svc.errors.NotFoundError`, a KeyError,
+        when it was not rated)."""
         for row in self.ratings:
             if row.name == name:
                 return row
-        raise KeyError(f"agent {name!r} was not rated in cycle {self.seq}")
+        raise NotFoundError("agent", f"{name!r} was not rated in cycle {self.seq}")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-friendly form."""
@@ -105,6 +107,11 @@ class CycleRecord(NamedTuple):
             ],
             "elapsed_s": self.elapsed_s,
         }
+
+
+# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
+# that documentation tools (pdoc) resolve its annotations here.
+CycleRecord.__new__.__module__ = __name__
 
 
 @dataclass(frozen=True)

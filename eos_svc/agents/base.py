@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
-from collections.abc import Iterable
+import functools
+from collections.abc import Callable, Iterable
+from typing import Any
 
-from eos_svc.agent import Agent
+from eos_svc.agent import Agent, CycleContext
 from eos_svc.agents import keys
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
@@ -13,8 +15,38 @@ SEARCH, INFO, GRASP = "search", "information", "grasping"
 STAGES = (SEARCH, INFO, GRASP)
 
 
+#: an agent's precondition test, ``(self, board, ctx) -> sub-rating or None``
+PreconditionTest = Callable[[Any, Board, CycleContext], "float | None"]
+
+
+def zero_at_stage_start(test: PreconditionTest) -> PreconditionTest:
+    """Wrap a precondition test so that it gives 0 at a stage's first cycle (``stage_cycle`` 0)
+    and asks ``test`` from the second cycle on: paper §5, "at the beginning of a new stage all
+    opportunistic sub-ratings are zero" — nothing has happened in the stage yet."""
+
+    @functools.wraps(test)
+    def opportunistic(self: Any, board: Board, ctx: CycleContext) -> float | None:
+        if ctx.stage_cycle == 0:
+            return 0.0
+        return test(self, board, ctx)
+
+    return opportunistic
+
+
 class GraspAgent(Agent):
-    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` bound to a world."""
+    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` bound to a world.
+
+    The grasp agents keep the paper's rule that every opportunistic sub-rating is 0 at a
+    stage's first cycle (§5; the §4.1 ablation and Fig. 3 depend on it): the core asks every
+    precondition test every cycle, so each subclass's own :meth:`opportunistic` is wrapped
+    with :func:`zero_at_stage_start` when the class is defined.
+    """
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        own = cls.__dict__.get("opportunistic")
+        if own is not None:
+            cls.opportunistic = zero_at_stage_start(own)  # type: ignore[assignment,method-assign]
 
     def __init__(self, name: str, stages: Iterable[str], default: float, world: GraspWorld) -> None:
         super().__init__(name, stages, default)

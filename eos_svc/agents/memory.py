@@ -19,6 +19,8 @@ import threading
 from dataclasses import dataclass
 from pathlib import Path
 
+from eos_svc.errors import ValidationError
+
 #: width of a d/h size band
 BAND_WIDTH = 0.1
 
@@ -40,7 +42,7 @@ CREATE TABLE IF NOT EXISTS grasps (
 def memory_key(shape: str, d_over_h: float) -> tuple[str, str, int]:
     """(key, shape, band) for a postulated class and estimated d/h."""
     if not math.isfinite(d_over_h) or d_over_h < 0:
-        raise ValueError(f"d_over_h: must be a finite ratio ≥ 0, got {d_over_h!r}")
+        raise ValidationError("d_over_h", f"must be a finite ratio ≥ 0, got {d_over_h!r}")
     band = int(d_over_h / BAND_WIDTH)
     return f"{shape}/{band}", shape, band
 
@@ -132,7 +134,9 @@ class GraspMemory:
         """Count one try for this key; on success remember its grasp (atomic UPSERT)."""
         key, shape, band = memory_key(shape, d_over_h)
         if success and (offset is None or angles is None):
-            raise ValueError("offset, angles: a successful grasp must say where the wrist and fingers were")
+            raise ValidationError(
+                "offset, angles", "a successful grasp must say where the wrist and fingers were"
+            )
         off = json.dumps([float(x) for x in offset]) if success and offset is not None else None
         ang = json.dumps({k: float(v) for k, v in angles.items()}) if success and angles is not None else None
         self._connection().execute(

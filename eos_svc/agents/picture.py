@@ -30,6 +30,7 @@ from scipy.spatial import ConvexHull, QhullError
 
 from eos_svc.agents.planner import default_hand, make_object
 from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import ContractError, ValidationError
 from eos_svc.kinematics import HandModel
 
 #: mesh resolution (segments around a circle)
@@ -109,7 +110,7 @@ def shape_mesh(shape: coal.ShapeBase) -> list[np.ndarray]:
         return _cylinder_mesh(r, h, caps=False) + ends
     if isinstance(shape, coal.Cylinder):
         return _cylinder_mesh(shape.radius, shape.halfLength)
-    raise TypeError(f"cannot draw a {type(shape).__name__}")
+    raise ContractError("shape", f"cannot draw a {type(shape).__name__}")
 
 
 def _placed(polys: list[np.ndarray], rotation: np.ndarray, translation: np.ndarray) -> list[np.ndarray]:
@@ -289,7 +290,9 @@ def draw_result(result: Any, path: str | Path, hand: HandModel | None = None) ->
     data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
     q = data.get("q_final")
     if q is None:
-        raise ValueError("the result has no final hand configuration (q_final): the end agent never acted")
+        raise ValidationError(
+            "q_final", "the result has no final hand configuration: the end agent never acted"
+        )
     request = PlanRequest.from_dict(data["request"])
     title = result_title(data)
     return draw_grasp(path, q=q, request=request, contacts=data["contacts"], title=title, hand=hand)

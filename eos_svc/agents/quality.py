@@ -30,7 +30,7 @@ Conventions
 - Degenerate inputs (no contacts, coincident/collinear/coplanar contact sets, μ = 0 on a
   sphere…) give a wrench set of rank below the wrench-space dimension: no force closure,
   ε = 0, never an exception. Malformed inputs (wrong shapes, NaN, μ < 0, zero normals) raise
-  :class:`ValueError` naming the argument.
+  :class:`~eos_svc.errors.ValidationError` (a ``ValueError``) naming the argument.
 
 Closed forms checked by the tests: two antipodal contacts on a disc of radius ``r`` (2-D,
 ``L = r``) have ``ε = μ / √(2 + μ²)``; any frictionless grasp of a sphere, and any set of at
@@ -52,6 +52,8 @@ from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
 from eos_svc.agents.request import DEFAULT_FRICTION, MAX_FRICTION
+from eos_svc.errors import ValidationError
+from eos_svc.kinematics.geometry import tangent_basis
 
 __all__ = [
     "DEFAULT_EDGES",
@@ -103,28 +105,20 @@ def _array(value: ArrayLike, name: str) -> np.ndarray:
     try:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"{name}: must be an array of numbers") from None
+        raise ValidationError(name, "must be an array of numbers") from None
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name}: must be finite")
+        raise ValidationError(name, "must be finite")
     return a
 
 
 def check_friction(mu: object, name: str = "friction") -> float:
     """Validate a Coulomb friction coefficient: a finite number in [0, MAX_FRICTION]."""
     if isinstance(mu, bool) or not isinstance(mu, (int, float, np.floating, np.integer)):
-        raise ValueError(f"{name}: must be a number, got {type(mu).__name__}")
+        raise ValidationError(name, f"must be a number, got {type(mu).__name__}")
     v = float(mu)
     if not (math.isfinite(v) and 0.0 <= v <= MAX_FRICTION):
-        raise ValueError(f"{name}: must be in [0, {MAX_FRICTION}], got {v!r}")
+        raise ValidationError(name, f"must be in [0, {MAX_FRICTION}], got {v!r}")
     return v
-
-
-def _tangents(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A right-handed orthonormal tangent pair for unit normal ``n`` (3-D)."""
-    helper = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    t1 = np.cross(n, helper)
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(n, t1)
 
 
 def primitive_wrenches(
@@ -154,21 +148,21 @@ def primitive_wrenches(
     p = _array(points, "points")
     n = _array(normals, "normals")
     if p.ndim != 2 or p.shape[1] not in (2, 3):
-        raise ValueError(f"points: must have shape (k, 3) or (k, 2), got {p.shape}")
+        raise ValidationError("points", f"must have shape (k, 3) or (k, 2), got {p.shape}")
     if n.shape != p.shape:
-        raise ValueError(f"normals: must have the shape of points {p.shape}, got {n.shape}")
+        raise ValidationError("normals", f"must have the shape of points {p.shape}, got {n.shape}")
     dim = p.shape[1]
     mu = check_friction(mu, "mu")
     if isinstance(edges, bool) or not isinstance(edges, (int, np.integer)) or edges < 3:
-        raise ValueError(f"edges: must be an integer ≥ 3, got {edges!r}")
+        raise ValidationError("edges", f"must be an integer ≥ 3, got {edges!r}")
     lengths = np.linalg.norm(n, axis=1)
     if np.any(lengths < 1e-12):
-        raise ValueError("normals: every normal must be non-zero")
+        raise ValidationError("normals", "every normal must be non-zero")
     n = n / lengths[:, None]
     centroid = np.mean(p, axis=0) if len(p) else np.zeros(dim)
     c = centroid if centre is None else _array(centre, "centre")
     if c.shape != (dim,):
-        raise ValueError(f"centre: must have {dim} coordinates, got shape {c.shape}")
+        raise ValidationError("centre", f"must have {dim} coordinates, got shape {c.shape}")
     r = p - c
     if torque_scale is None:
         far = float(np.max(np.linalg.norm(r, axis=1))) if len(r) else 0.0
@@ -176,7 +170,7 @@ def primitive_wrenches(
     else:
         scale = float(_array(torque_scale, "torque_scale"))
         if scale <= 0.0:
-            raise ValueError(f"torque_scale: must be > 0, got {scale!r}")
+            raise ValidationError("torque_scale", f"must be > 0, got {scale!r}")
     m = 1 if mu == 0.0 else (2 if dim == 2 else int(edges))
     forces = np.empty((len(p), m, dim))
     if dim == 3:
@@ -184,7 +178,7 @@ def primitive_wrenches(
             if m == 1:
                 forces[i, 0] = -ni
                 continue
-            t1, t2 = _tangents(ni)
+            t1, t2 = tangent_basis(ni)
             theta = 2.0 * np.pi * np.arange(m) / m
             forces[i] = -ni + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
         torques = np.cross(r[:, None, :], forces) / scale

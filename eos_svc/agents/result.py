@@ -131,7 +131,7 @@ class PlanResult:
         )
 
     def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
-        """JSON-friendly form (DESIGN §6); the trace only when asked."""
+        """JSON-friendly form; the trace only when asked."""
         out = {
             "status": self.status,
             "reason": self.reason,

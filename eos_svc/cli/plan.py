@@ -165,7 +165,7 @@ def format_result(result: Any) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
-    from eos_svc.cli.replay import cycle_line, header_line, result_line
+    from eos_svc.recording import cycle_line, header_line, result_line
 
     try:
         request = PlanRequest.from_dict(request_dict(args))

@@ -5,19 +5,10 @@ eos replay run.jsonl                      # print its trace and result, re-run i
 eos replay run.jsonl --no-verify          # only print what was recorded
 eos replay run.jsonl --picture grasp.png  # and draw the final grasp
 
-Record file (JSON lines, written by ``eos plan --record``):
-
-- line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
-  — the plan request in its JSON form (:meth:`PlanRequest.to_dict`) and the hand's name
-  (``hand3x3``, the default, or a ``<name>_hand()`` factory of :mod:`eos_svc.kinematics`);
-- one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
-- last line, the result: ``{"eos_record": "result", "result": {...}}`` —
-  :meth:`PlanResult.to_dict` without the trace (absent when the run was interrupted).
-
-Verification re-runs the recorded request (same seed) and compares cycle by cycle and then
-the result, ignoring only wall-clock fields (``elapsed_s``, ``wall_time_s``). The first
-divergence is reported with the cycle, the field path and both values. Exit status: 0 when
-identical (or not verified), 1 on a divergence, 2 on a bad file.
+The record file's format is :mod:`eos_svc.recording`. Verification re-runs the recorded request
+(same seed, same hand) and compares cycle by cycle and then the result, ignoring only
+wall-clock fields. The first divergence is reported with the cycle, the field path and both
+values. Exit status: 0 when identical (or not verified), 1 on a divergence, 2 on a bad file.
 """
 
 from __future__ import annotations
@@ -26,117 +17,34 @@ import argparse
 import json
 import sys
 from collections.abc import Iterable
-from pathlib import Path
 from types import SimpleNamespace
 from typing import Any
 
-from eos_svc.agent import Outcome
-from eos_svc.board import BoardChange
 from eos_svc.cli.common import fail
-from eos_svc.ratings import Weights
-from eos_svc.records import AgentRating, CycleRecord
+from eos_svc.cli.plan import format_cycle, format_result
+from eos_svc.recording import (
+    DEFAULT_HAND,
+    RecordFileError,
+    Recording,
+    Verification,
+    compare_run,
+    first_difference,
+    normalise,
+    read_recording,
+    record_from_dict,
+)
 
-#: version of the record file layout (header / cycles / result)
-RECORD_SCHEMA = 1
-#: the key marking the header and result lines (cycle lines never have it)
-MARK = "eos_record"
-#: fields that measure wall-clock time: never compared
-TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
-#: the planner's default hand
-DEFAULT_HAND = "hand3x3"
-
-
-# --- writing (used by ``eos plan --record``) ---------------------------------------------
-def header_line(request: Any, hand: str = DEFAULT_HAND) -> str:
-    """The header line of a record file for ``request`` (a PlanRequest) planned with ``hand``."""
-    return json.dumps(
-        {MARK: "header", "schema": RECORD_SCHEMA, "request": request.to_dict(), "hand": hand},
-        allow_nan=False,
-    )
-
-
-def cycle_line(record: CycleRecord) -> str:
-    """One cycle line: :meth:`CycleRecord.to_dict` as JSON."""
-    return json.dumps(record.to_dict(), allow_nan=False)
-
-
-def result_line(result: Any) -> str:
-    """The final line: the plan result (a PlanResult) without its trace."""
-    return json.dumps({MARK: "result", "result": result.to_dict()}, allow_nan=False)
-
-
-# --- reading -------------------------------------------------------------------------------
-class RecordFileError(ValueError):
-    """A record file that cannot be replayed (the message says where and why)."""
-
-
-class Recording:
-    """A parsed record file: the request, the cycle dicts, the result dict (or None), the hand."""
-
-    def __init__(
-        self,
-        request: dict[str, Any],
-        cycles: list[dict[str, Any]],
-        result: dict[str, Any] | None,
-        hand: str = DEFAULT_HAND,
-    ):
-        self.request = request
-        self.cycles = cycles
-        self.result = result
-        self.hand = hand
-
-
-def read_recording(path: str | Path) -> Recording:
-    """Parse a record file.
-
-    Raises:
-        RecordFileError: unreadable, not JSON lines, no header, unknown schema, cycles out
-            of order.
-        OSError: the file cannot be opened.
-    """
-    text = Path(path).read_text(encoding="utf-8")
-    lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
-    if not lines:
-        raise RecordFileError("empty file: no header line")
-    parsed: list[tuple[int, dict[str, Any]]] = []
-    for number, line in lines:
-        try:
-            value = json.loads(line)
-        except json.JSONDecodeError as exc:
-            raise RecordFileError(f"line {number}: not JSON ({exc.msg})") from None
-        if not isinstance(value, dict):
-            raise RecordFileError(f"line {number}: not a JSON object")
-        parsed.append((number, value))
-    number, header = parsed[0]
-    if header.get(MARK) != "header" or not isinstance(header.get("request"), dict):
-        raise RecordFileError(
-            f"line {number}: no header with the request (record with `eos plan --record FILE`)"
-        )
-    if header.get("schema") != RECORD_SCHEMA:
-        raise RecordFileError(
-            f"line {number}: record schema {header.get('schema')!r}, expected {RECORD_SCHEMA}"
-        )
-    cycles: list[dict[str, Any]] = []
-    result = None
-    for number, value in parsed[1:]:
-        if result is not None:
-            raise RecordFileError(f"line {number}: data after the result line")
-        if value.get(MARK) == "result":
-            result = value.get("result")
-            if not isinstance(result, dict):
-                raise RecordFileError(f"line {number}: result line without a result object")
-            continue
-        if MARK in value or "seq" not in value:
-            raise RecordFileError(f"line {number}: neither a cycle record nor the result")
-        if value["seq"] != len(cycles) + 1:
-            raise RecordFileError(
-                f"line {number}: cycle {value['seq']!r} out of order (expected {len(cycles) + 1})"
-            )
-        cycles.append(value)
-    hand = header.get("hand", DEFAULT_HAND)
-    if not isinstance(hand, str):
-        raise RecordFileError(f"line {parsed[0][0]}: hand must be a name, got {hand!r}")
-    return Recording(header["request"], cycles, result, hand)
+__all__ = [
+    "RecordFileError",
+    "add_arguments",
+    "describe",
+    "first_difference",
+    "read_recording",
+    "record_from_dict",
+    "resolve_hand",
+    "run",
+    "verify",
+]
 
 
 def resolve_hand(name: str) -> Any:
@@ -156,81 +64,9 @@ def resolve_hand(name: str) -> Any:
     return factory()
 
 
-def record_from_dict(data: dict[str, Any]) -> CycleRecord:
-    """A :class:`CycleRecord` back from its JSON form (board values stay JSON values)."""
-    return CycleRecord(
-        seq=data["seq"],
-        stage=data["stage"],
-        stage_cycle=data["stage_cycle"],
-        ratings=tuple(
-            AgentRating(
-                r["agent"],
-                r["default"],
-                r["opportunistic"],
-                r["learned"],
-                r["total"],
-                r.get("eligible", True),
-            )
-            for r in data["ratings"]
-        ),
-        weights=Weights.from_dict(data["weights"]),
-        chosen=data["chosen"],
-        outcome=None if data["outcome"] is None else Outcome(data["outcome"]),
-        detail=data["detail"],
-        changes=tuple(BoardChange(c["key"], c["old"], c["new"]) for c in data["changes"]),
-        elapsed_s=data["elapsed_s"],
-    )
-
-
-# --- comparing -----------------------------------------------------------------------------
-def normalise(value: Any) -> Any:
-    """The JSON value as it would be read back from a record file (tuples become lists)."""
-    return json.loads(json.dumps(value, allow_nan=False))
-
-
-def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str, Any, Any] | None:
-    """The first differing field between two JSON values, as (dotted path, recorded, replayed),
-    ignoring :data:`TIMING_FIELDS`; ``None`` when they agree exactly."""
-    if isinstance(recorded, dict) and isinstance(replayed, dict):
-        for key in list(recorded) + [k for k in replayed if k not in recorded]:
-            if key in TIMING_FIELDS:
-                continue
-            where = f"{path}.{key}" if path else str(key)
-            if key not in recorded or key not in replayed:
-                return where, recorded.get(key, "<absent>"), replayed.get(key, "<absent>")
-            diff = first_difference(recorded[key], replayed[key], where)
-            if diff is not None:
-                return diff
-        return None
-    if isinstance(recorded, list) and isinstance(replayed, list):
-        if len(recorded) != len(replayed):
-            return f"{path} (length)", len(recorded), len(replayed)
-        for i, (a, b) in enumerate(zip(recorded, replayed, strict=True)):
-            diff = first_difference(a, b, f"{path}[{i}]")
-            if diff is not None:
-                return diff
-        return None
-    if type(recorded) is not type(replayed) or recorded != replayed:
-        return path, recorded, replayed
-    return None
-
-
-class Verification:
-    """Outcome of a re-run: ``divergences`` lists (where, path, recorded, replayed)."""
-
-    def __init__(self) -> None:
-        self.divergences: list[tuple[str, str, Any, Any]] = []
-        self.cycles_compared = 0
-        self.replayed_result: dict[str, Any] | None = None
-
-    @property
-    def identical(self) -> bool:
-        return not self.divergences
-
-
 def verify(recording: Recording) -> Verification:
     """Re-run the recorded request (with the recorded hand) and compare it cycle by cycle,
-    then the result.
+    then the result (:func:`eos_svc.recording.compare_run`).
 
     Raises:
         RecordFileError: the recorded hand is unknown.
@@ -242,20 +78,7 @@ def verify(recording: Recording) -> Verification:
     hand = resolve_hand(recording.hand)
     replayed: list[dict[str, Any]] = []
     result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())), hand=hand)
-    out = Verification()
-    out.replayed_result = normalise(result.to_dict())
-    for recorded, again in zip(recording.cycles, replayed, strict=False):
-        out.cycles_compared += 1
-        diff = first_difference(recorded, again)
-        if diff is not None:
-            out.divergences.append((f"cycle {recorded['seq']}", *diff))
-    if len(recording.cycles) != len(replayed):
-        out.divergences.append(("cycles", "count", len(recording.cycles), len(replayed)))
-    if recording.result is not None:
-        diff = first_difference(recording.result, out.replayed_result)
-        if diff is not None:
-            out.divergences.append(("result", *diff))
-    return out
+    return compare_run(recording, replayed, normalise(result.to_dict()))
 
 
 def _short(value: Any, limit: int = 160) -> str:
@@ -290,8 +113,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from eos_svc.cli.plan import format_cycle, format_result
-
     try:
         recording = read_recording(args.file)
     except OSError as exc:

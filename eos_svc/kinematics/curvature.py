@@ -41,6 +41,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from eos_svc.errors import ValidationError
+
 __all__ = [
     "DEFAULT_FLAT_CURVATURE",
     "CurvatureEstimate",
@@ -156,26 +158,27 @@ def lstsq_solution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 _EPS = float(np.finfo(float).eps)
 
 
-class UnderdeterminedError(ValueError):
-    """The samples do not determine the curvature form (roll along two directions)."""
+class UnderdeterminedError(ValidationError):
+    """The samples do not determine the curvature form (roll along two directions);
+    ``field`` is ``"samples"``."""
 
 
 def _vec2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float).reshape(-1)
     if a.shape != (2,) or not all(map(math.isfinite, a.tolist())):
-        raise ValueError(f"{name}: expected 2 finite numbers, got {value!r}")
+        raise ValidationError(name, f"expected 2 finite numbers, got {value!r}")
     return a
 
 
 def _mat2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float)
     if a.shape != (2, 2):
-        raise ValueError(f"{name}: expected a finite 2x2 matrix, got {value!r}")
+        raise ValidationError(name, f"expected a finite 2x2 matrix, got {value!r}")
     (a00, a01), (a10, a11) = a.tolist()
     if not all(map(math.isfinite, (a00, a01, a10, a11))):
-        raise ValueError(f"{name}: expected a finite 2x2 matrix, got {value!r}")
+        raise ValidationError(name, f"expected a finite 2x2 matrix, got {value!r}")
     if abs(a01 - a10) > 1e-9 * (1.0 + max(abs(a00), abs(a01), abs(a10), abs(a11))):
-        raise ValueError(f"{name}: curvature form must be symmetric, got {a.tolist()}")
+        raise ValidationError(name, f"curvature form must be symmetric, got {a.tolist()}")
     return a
 
 
@@ -286,7 +289,9 @@ class CurvatureEstimator:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.flat_curvature) and self.flat_curvature > 0):
-            raise ValueError(f"flat_curvature: must be a positive number, got {self.flat_curvature}")
+            raise ValidationError(
+                "flat_curvature", f"must be a positive number, got {self.flat_curvature}"
+            )
 
     @property
     def samples(self) -> tuple[CurvatureSample, ...]:
@@ -324,6 +329,7 @@ class CurvatureEstimator:
         m = len(self._samples)
         if m < 2:
             raise UnderdeterminedError(
+                "samples",
                 f"need samples from two independent roll directions, have {m} sample(s)"
             )
         # CurvatureSample.rows() of every sample, stacked (vectorised: one array op per term)
@@ -345,7 +351,8 @@ class CurvatureEstimator:
         ev_min = float(ev.min())
         if scale == 0.0 or ev_min == 0.0 or float(ev.max()) / ev_min > 1e12:
             raise UnderdeterminedError(
-                "samples do not determine the curvature form: roll along two independent "
+                "samples",
+                "do not determine the curvature form: roll along two independent "
                 "tangent directions (contact velocities are parallel or zero)"
             )
         theta = _solve(AtA, A.T @ b)

@@ -34,6 +34,7 @@ import numpy as np
 import pinocchio as pin
 
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
+from .geometry import tangent_pair
 from .hand import HandModel, HandState, KinematicsError
 from .objects import Box, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
@@ -101,18 +102,8 @@ def contact_frame(normal: np.ndarray) -> np.ndarray:
     z0, z1, z2 = (-np.asarray(normal, dtype=float)).tolist()
     nz = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
     z0, z1, z2 = z0 / nz, z1 / nz, z2 / nz
-    f0, f1, f2 = (0.0, 0.0, 1.0) if abs(z2) < 0.9 else (0.0, 1.0, 0.0)
-    d = f0 * z0 + f1 * z1 + f2 * z2
-    x0, x1, x2 = f0 - d * z0, f1 - d * z1, f2 - d * z2
-    nx = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
-    x0, x1, x2 = x0 / nx, x1 / nx, x2 / nx
-    return np.array(
-        [
-            [x0, z1 * x2 - z2 * x1, z0],
-            [x1, z2 * x0 - z0 * x2, z1],
-            [x2, z0 * x1 - z1 * x0, z2],
-        ]
-    )
+    x0, x1, x2, y0, y1, y2 = tangent_pair(z0, z1, z2, prefer=2)
+    return np.array([[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]])
 
 
 def ground_truth_form(obj: SurfaceObject, point: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -213,7 +204,7 @@ def _roller(
     key = (id(scene), finger, float(dt), solver)
     rq = cache.pop(key, None)
     if rq is not None and (
-        rq.scene is not scene or rq.hand is not state.hand or rq._obj_shape is not scene.object.geometry
+        rq.scene is not scene or rq.hand is not state.hand or rq.object_geometry is not scene.object.geometry
     ):
         rq = None  # the object was replaced: build a new roller
     if rq is None:
@@ -253,6 +244,44 @@ def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     return out
 
 
+def _checked_ep1_arguments(
+    omega: float, steps_per_direction: int, dt: float, directions: Sequence[float]
+) -> list[float]:
+    """:func:`run_ep1`'s scalar arguments checked (:class:`EP1Error` names the bad one); the
+    directions as floats."""
+    if not (math.isfinite(omega) and omega > 0):
+        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
+    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
+        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
+    dirs = [float(d) for d in directions]
+    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
+        raise EP1Error("directions", "need at least two finite directions (degrees)")
+    return dirs
+
+
+def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) -> np.ndarray:
+    """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with
+    the frame's x (``ex_t``, tip frame) projected on the tangent plane at b as the chart's first
+    axis; scalar arithmetic on the 3-vectors."""
+    ex_t0, ex_t1, ex_t2 = ex_t
+    b0, b1, b2 = P.mean(axis=0).tolist()
+    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+    b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
+    d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
+    e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
+    ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
+    return _log_chart(
+        P,
+        np.array((b0, b1, b2)),
+        np.array((e0, e1, e2)),
+        np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
+        r,
+    )
+
+
 def run_ep1(
     scene: Scene,
     state: HandState,
@@ -281,15 +310,7 @@ def run_ep1(
     Raises:
         EP1Error: no contact at the start or bad parameters; RollingQPError: the QP failed.
     """
-    if not (math.isfinite(omega) and omega > 0):
-        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
-    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
-        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
-    dirs = [float(d) for d in directions]
-    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
-        raise EP1Error("directions", "need at least two finite directions (degrees)")
+    dirs = _checked_ep1_arguments(omega, steps_per_direction, dt, directions)
     hand: HandModel = scene.hand
     ct0 = scene.contact(state, finger)
     if abs(ct0.distance) > CONTACT_TOLERANCE:
@@ -335,7 +356,7 @@ def run_ep1(
                 rq = _roller(scene, state, finger, tactile_sensor, axis, sign * omega, dt, solver)
             else:
                 rq.retarget(axis, sign * omega, project_axis=False)
-            R_view = rq._R_view  # live: the kinematics of the step's reading
+            R_view = rq.tip_rotation  # live: the kinematics of the step's reading
             step = rq.step
             for _ in range(n_steps):
                 st = step()
@@ -361,23 +382,7 @@ def run_ep1(
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            # basis at b (the readings' mean direction): the frame's x, y (tip frame)
-            # projected on the tangent plane at b; scalar arithmetic on the 3-vectors
-            b0, b1, b2 = P.mean(axis=0).tolist()
-            nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-            b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
-            d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
-            e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
-            ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
-            c = _log_chart(
-                P,
-                np.array((b0, b1, b2)),
-                np.array((e0, e1, e2)),
-                np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
-                r,
-            )
-            s = _fit_slope(th_all[sel], c)
+            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r))
             samples.append(est.add_sample(a_xy, s, K_f))
     assert rq is not None
     state.update(rq.q)

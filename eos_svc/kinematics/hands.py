@@ -38,13 +38,8 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from .hand import (
-    FingerDescription,
-    HandDescription,
-    HandModel,
-    UrdfLoadError,
-    _capture_stderr,
-)
+from .hand import FingerDescription, HandDescription, HandModel, UrdfLoadError
+from .urdf_loading import capture_stderr
 
 __all__ = [
     "ALLEGRO_MOUNT_XYZ",
@@ -251,7 +246,7 @@ def load_composite_hand(
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as f:
             f.write(text)
-        with _capture_stderr() as err:
+        with capture_stderr() as err:
             model = pin.buildModelFromXML(text)
             gmodel = pin.buildGeomFromUrdf(model, tmp, pin.COLLISION, package_dirs=dirs)
     except Exception as exc:  # Pinocchio raises ValueError/RuntimeError with a parser message

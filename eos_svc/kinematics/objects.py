@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
+from .geometry import tangent_basis
 from .hand import KinematicsError
 
 __all__ = [
@@ -76,15 +77,6 @@ def _point(field: str, p: object) -> np.ndarray:
     if arr.shape != (3,) or not np.isfinite(arr).all():
         raise KinematicsError(field, f"must be a finite 3-vector, got {p!r}")
     return arr
-
-
-def _tangent_basis(n: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Two unit vectors completing n to a right-handed orthonormal frame."""
-    a = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    e1 = a - (a @ n) * n
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(n, e1)
-    return e1, e2
 
 
 class SurfaceObject(ABC):
@@ -176,7 +168,7 @@ class SurfaceObject(ABC):
         k1 ≥ k2 (1/m, positive where the surface bends away from its outward normal) and their
         unit directions in world axes."""
         _, n, S = self._local_form(p_world)
-        e1, e2 = _tangent_basis(n)
+        e1, e2 = tangent_basis(n)
         E = np.stack([e1, e2], axis=1)  # 3×2
         II = E.T @ S @ E
         w, V = np.linalg.eigh(0.5 * (II + II.T))

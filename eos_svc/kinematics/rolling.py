@@ -25,49 +25,33 @@ carrying a copy of the problem.
 from __future__ import annotations
 
 import math
-import operator
 import struct
-import threading
-import weakref
 from dataclasses import dataclass
 from typing import Any
 
 import coal
 import numpy as np
-import osqp
 import pinocchio as pin
 import qpsolvers
-import scipy.sparse as sp
-from scipy.linalg import lapack
 
 from ._slots import slot_setters
+from .chain_model import chain_model
+from .geometry import tangent_pair, unit_vector
 from .hand import HandState, KinematicsError
+from .rolling_solvers import (
+    RollingQPError,
+    available_solvers,
+    cached_osqp,
+    min_norm_within_bounds,
+    solve_with_backend,
+)
 from .scene import Contact, Scene
-from .tactile import TactileReading, TactileSensor
+from .tactile import TactileReading, TactileSensor, read_sphere_tip
+from .tip_contact import SphereTipProbe
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
-
-
-def available_solvers() -> list[str]:
-    """Installed qpsolvers backends usable by :class:`RollingQP`."""
-    return list(qpsolvers.available_solvers)
-
-
-class RollingQPError(RuntimeError):
-    """The rolling QP failed (infeasible, not solved, bad output).
-
-    Attributes:
-        problem: a copy of the :class:`qpsolvers.Problem` that failed.
-        solver: backend name; ``status``: the backend's status text.
-    """
-
-    def __init__(self, message: str, problem: qpsolvers.Problem, solver: str, status: str) -> None:
-        super().__init__(f"rolling QP ({solver}): {message} [status: {status}]")
-        self.problem = problem
-        self.solver = solver
-        self.status = status
 
 
 @dataclass(frozen=True, slots=True)
@@ -99,97 +83,16 @@ _S_CONTACT, _S_READING, _S_QDOT, _S_SLIP, _S_NORMAL, _S_OMEGA, _S_ITER = slot_se
     RollingStep, "contact", "reading", "qdot", "slip_speed", "normal_residual", "omega_residual",
     "iterations",
 )  # fmt: skip
-_DGELS = lapack.dgels
+_MIN_NORM = min_norm_within_bounds
 # struct.pack_into on a memoryview of a float64 array writes the same doubles as a numpy slice
 # assignment from a tuple, ~1 µs cheaper (no sequence-to-array discovery)
 _PACK18 = struct.Struct("18d").pack_into
 _PACK6 = struct.Struct("6d").pack_into
-_LE = operator.le
-_SC_FINGER, _SC_DISTANCE, _SC_POINT_TIP, _SC_POINT_OBJECT, _SC_NORMAL = slot_setters(
-    Contact, "finger", "distance", "point_tip", "point_object", "normal"
-)
-_SR_FINGER, _SR_POINT, _SR_NORMAL, _SR_IN, _SR_DIST = slot_setters(
-    TactileReading, "finger", "point_tip", "normal_tip", "in_contact", "distance"
-)
 _FK = pin.forwardKinematics
 _JJ = pin.computeJointJacobians
 _GFJ = pin.getFrameJacobian
 _GFCA = pin.getFrameClassicalAcceleration
 _matmul = np.matmul
-
-
-def _unit(name: str, v: object) -> np.ndarray:
-    a = np.asarray(v, dtype=float).reshape(-1)
-    if a.shape == (3,):
-        x, y, z = a.tolist()
-        na = math.sqrt(x * x + y * y + z * z)
-        if math.isfinite(na) and na >= 1e-12:
-            return np.array((x / na, y / na, z / na))
-        if np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:  # huge entries: x * x overflowed
-            out: np.ndarray = a / np.linalg.norm(a)
-            return out
-    raise KinematicsError(name, f"must be a finite non-zero 3-vector, got {v!r}")
-
-
-_OSQP_CACHE = threading.local()
-# per hand: finger -> (Pinocchio model reduced to the tip's chain, the tip frame's id in it)
-_CHAIN_MODELS: weakref.WeakKeyDictionary[Any, dict[str, tuple[Any, int]]] = weakref.WeakKeyDictionary()
-
-
-def _chain_model(hand: Any, finger: str, fid: int, chain: list[int]) -> tuple[Any, int]:
-    """``hand``'s model with every joint off the tip's kinematic chain locked (built once per
-    hand and finger, ~0.25 ms; read-only, shared by the rollers, each with its own data)."""
-    per_hand = _CHAIN_MODELS.setdefault(hand, {})
-    if finger not in per_hand:
-        model = hand.model
-        kept = set(chain)
-        lock = [j for j in range(1, model.njoints) if int(model.idx_vs[j]) not in kept]
-        frame = model.frames[fid]
-        reduced = pin.buildReducedModel(model, lock, pin.neutral(model))
-        per_hand[finger] = (reduced, int(reduced.getFrameId(frame.name, frame.type)))
-    return per_hand[finger]
-
-
-def _cached_osqp(rq: RollingQP) -> tuple[Any, Any]:
-    """An OSQP solver for ``rq``'s problem structure, set up once per thread and reused.
-
-    Every rolling QP with ``nx`` variables has the same sparsity ([C; I], C dense 6×nx;
-    P diagonal), so one set-up serves every roll of every EP1 run; the caller then
-    overwrites all the data (q, l, u, P, A). Thread-local: OSQP objects are not shared
-    between threads (the service plans concurrently).
-    """
-    key = (rq.nx, rq.eps, rq.check_termination)
-    cache: dict = getattr(_OSQP_CACHE, "solvers", None) or {}
-    _OSQP_CACHE.solvers = cache
-    if key not in cache:
-        nx = rq.nx
-        # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
-        indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
-        A = sp.csc_matrix((rq._Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
-        s = osqp.OSQP(algebra="builtin")  # naming it skips a per-object import probe (~1 ms)
-        s.setup(
-            sp.csc_matrix(np.triu(rq._P)),
-            rq._qlin,
-            A,
-            rq._l,
-            rq._u,
-            eps_abs=rq.eps,
-            eps_rel=rq.eps,
-            eps_prim_inf=1e-12,
-            eps_dual_inf=1e-12,
-            warm_starting=True,
-            polishing=False,
-            verbose=False,
-            max_iter=20000,
-            check_termination=rq.check_termination,
-            scaling=0,  # small, well-scaled problem: no re-scaling on every update
-            adaptive_rho=False,
-            rho=0.05,
-        )
-        # The extension object behind osqp.OSQP: update/solve without the wrapper's
-        # per-call Python glue (np.maximum on l/u, derivative cache, info namespace).
-        cache[key] = (s, s._solver)
-    return cache[key]
 
 
 class RollingQP:
@@ -251,6 +154,29 @@ class RollingQP:
         self.scene = scene
         self.finger = finger
         self.tactile = tactile
+        self._check_arguments(solver, dt, omega, gap_gain, eps)
+        self._set_up_kinematics(finger)
+        # the contact: a coal distance functor with reused transforms and result
+        self._probe = SphereTipProbe(finger, self._r, scene.object.geometry)
+        self._n: tuple[float, float, float] = (0.0, 0.0, 1.0)
+
+        self.check_termination = check_termination
+        #: Second-order integration: the QP targets the step's average velocities (see _build).
+        self.second_order = bool(second_order)
+        self._zero_nv = np.zeros(self._model.nv)
+        self._J = np.zeros((6, self._model.nv))  # the tip's frame Jacobian, set by kinematics()
+        #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
+        self.fast_tactile = True
+        #: Closed-form solve when the bounds are inactive (see the class doc).
+        self.direct = bool(direct)
+
+        self._set_up_qp(weights)
+        self._set_up_step_buffers()
+        self._retarget(state, axis, omega, project_axis)
+
+    # ------------------------------------------------------------------ set-up (once per roller)
+    def _check_arguments(self, solver: str, dt: float, omega: float, gap_gain: float, eps: float) -> None:
+        """Check and keep the scalar arguments (:class:`KinematicsError` names the bad one)."""
         if not (math.isfinite(dt) and dt > 0):
             raise KinematicsError("dt", f"must be a finite number > 0 s, got {dt!r}")
         if not math.isfinite(omega):
@@ -266,6 +192,11 @@ class RollingQP:
         self.dt = float(dt)
         self.gap_gain = float(gap_gain)
         self.eps = float(eps)
+
+    def _set_up_kinematics(self, finger: str) -> None:
+        """The active joints (wrist, then the finger), the tip, the (reduced) Pinocchio model and
+        data, and live views of the tip placement."""
+        hand = self.hand
         model = hand.model
         self._fid = hand.tip_frame_id(finger)
         self._r = hand.tip_radius(finger)
@@ -293,7 +224,7 @@ class RollingQP:
         chain = [int(model.idx_vs[j]) for j in list(model.supports[model.frames[self._fid].parentJoint])[1:]]
         self._reduced = chain == self._cols.tolist()
         if self._reduced:
-            model, self._fid = _chain_model(hand, finger, self._fid, chain)
+            model, self._fid = chain_model(hand, finger, self._fid, chain)
         self._model = model
         self._data = model.createData()
         # live views of the tip placement in self._data (indexing data.oMf from Python
@@ -302,31 +233,11 @@ class RollingQP:
         self._c_view = tip.translation
         self._R_view = tip.rotation
 
-        # Fast contact: coal distance functor with reused transforms/result.
-        # keep the shapes referenced: the functor holds raw pointers to them
-        self._tip_shape = coal.Sphere(self._r)
-        obj = scene.object
-        self._obj_shape = obj.geometry
-        self._dist = coal.ComputeDistance(self._obj_shape, self._tip_shape)
-        self._tf_obj = coal.Transform3s()
-        self._tf_tip = coal.Transform3s()
-        self._req = coal.DistanceRequest()
-        self._req.enable_signed_distance = True
-        self._req.gjk_tolerance = 1e-12
-        self._res = coal.DistanceResult()
-        self._n: tuple[float, float, float] = (0.0, 0.0, 1.0)
 
-        self.check_termination = check_termination
-        #: Second-order integration: the QP targets the step's average velocities (see _build).
-        self.second_order = bool(second_order)
-        self._zero_nv = np.zeros(model.nv)
-        self._J = np.zeros((6, model.nv))  # the tip's frame Jacobian, set by kinematics()
-        #: Use the scalar re-implementation of ``TactileSensor.read`` (same readings).
-        self.fast_tactile = True
-        #: Closed-form solve when the bounds are inactive (see the class doc).
-        self.direct = bool(direct)
-
-        # Preallocated QP data.
+    def _set_up_qp(self, weights: object) -> None:
+        """The QP's arrays, preallocated: W, the OSQP constraint matrix [C; I] and the bounds,
+        with C, b, lb, ub as views into them, and the ``qpsolvers.Problem`` over them."""
+        hand, nx = self.hand, self.nx
         w = np.ones(nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
         if w.shape != (nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise KinematicsError("weights", f"must be {nx} finite numbers > 0")
@@ -369,9 +280,19 @@ class RollingQP:
         self._free_steps = 0  # bound evaluations that may be skipped (see _bounds)
         self._lb_tol: list[float] = []
         self._ub_tol: list[float] = []
+        #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
+        self.problem = qpsolvers.Problem(
+            self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
+        )
+        self._osqp: Any = None
+        self._osqp_solver: Any = None
+
+    def _set_up_step_buffers(self) -> None:
+        """The step's scratch arrays and the q̇ views the kinematics and the integration use."""
+        nx = self.nx
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
-        self._qdot = np.zeros(hand.model.nv)
+        self._qdot = np.zeros(self.hand.model.nv)
         # what the kinematics take (see _retarget): the reduced model's q̇ (a view of the active
         # joints' q̇, or its own copy when they are not contiguous), or the full q̇
         self._qdot_r: np.ndarray | None = None
@@ -386,13 +307,6 @@ class RollingQP:
         self._jsel: slice | np.ndarray | None = None if self._reduced else self._sel
         # the active joints' q̇ (slice case): a buffer for struct.pack_into (see step, the integration)
         self._qdot_a_buf: Any = self._qdot[self._sel].data if type(self._sel) is slice else None
-        #: The QP of the current step as a qpsolvers Problem (live arrays, see module doc).
-        self.problem = qpsolvers.Problem(
-            self._P, self._qlin, None, None, self._C, self._b, self._lb, self._ub
-        )
-        self._osqp: Any = None
-        self._osqp_solver: Any = None
-        self._retarget(state, axis, omega, project_axis)
 
     def retarget(
         self,
@@ -430,13 +344,13 @@ class RollingQP:
         self.steps = 0
         self._osqp = None  # re-upload the whole problem on the first solve
         M = self.scene.object.placement
-        self._tf_obj.setTransform(np.asarray(M.rotation), np.asarray(M.translation))
+        self._probe.place_object(M)
         # Axis: tangent at the current contact.
         self.kinematics_only()
         self.contact()
         n0, n1, n2 = self._n
-        # _unit, then the projection, in scalars (numpy on 3-vectors costs µs per call)
-        a0, a1, a2 = _unit("axis", axis).tolist()
+        # unit_vector, then the projection, in scalars (numpy on 3-vectors costs µs per call)
+        a0, a1, a2 = unit_vector("axis", axis).tolist()
         if project_axis:
             d = a0 * n0 + a1 * n1 + a2 * n2
             a0, a1, a2 = a0 - d * n0, a1 - d * n1, a2 - d * n2
@@ -472,30 +386,19 @@ class RollingQP:
         """Contact of the rolling tip at the current q (coal), kinematics already computed.
 
         Also leaves the normal as floats in ``self._n`` (for :meth:`_read` and :meth:`_build`)."""
-        c = self._c_view
-        self._tf_tip.setTranslation(c)
-        res = self._res
-        res.clear()  # needed: a result at distance <= 0 would satisfy the next request as is
-        d = self._dist(self._tf_obj, self._tf_tip, self._req, res)  # = res.min_distance
-        p_obj = res.getNearestPoint1()
-        cx, cy, cz = c.tolist()
-        ox, oy, oz = p_obj.tolist()
-        dx, dy, dz = cx - ox, cy - oy, cz - oz
-        nn = math.sqrt(dx * dx + dy * dy + dz * dz)
-        r = self._r
-        if nn > 1e-12 and d > -0.5 * r:  # tip centre outside the object
-            s = 1.0 / nn
-            nx_, ny_, nz_ = dx * s, dy * s, dz * s
-        else:
-            nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
-        n = self._n = (nx_, ny_, nz_)
-        contact: Contact = _new(Contact)  # as _fast_contact(...), without the call
-        _SC_FINGER(contact, self.finger)
-        _SC_DISTANCE(contact, d)
-        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
-        _SC_POINT_OBJECT(contact, p_obj)
-        _SC_NORMAL(contact, np.array(n))
+        contact, self._n = self._probe.measure(self._c_view)
         return contact
+
+    @property
+    def tip_rotation(self) -> np.ndarray:
+        """The rolling tip frame's world rotation at the last kinematics (a live 3×3 view:
+        it follows every step; copy it to keep it)."""
+        return self._R_view
+
+    @property
+    def object_geometry(self) -> Any:
+        """The coal shape of the object this roller measures contacts with."""
+        return self._probe.object_shape
 
     # ------------------------------------------------------------------ the step
     def _build(self, contact: Contact, n: tuple[float, ...] | None = None) -> tuple[float, ...]:
@@ -511,14 +414,7 @@ class RollingQP:
             Jb = self._Jb
             J.take(jsel, axis=1, out=Jb)
         nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
-        # tangents t1 ⟂ n, t2 = n × t1 (hand-written: np.cross is slow on 3-vectors)
-        if abs(nx_) < 0.9:
-            t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
-        else:
-            t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
-        s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-        t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-        t2x, t2y, t2z = ny_ * t1z - nz_ * t1y, nz_ * t1x - nx_ * t1z, nx_ * t1y - ny_ * t1x
+        t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(nx_, ny_, nz_)  # t1 ⟂ n, t2 = n × t1
         # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
         # t1 × n = −t2, t2 × n = t1. One slice assignment (item writes cost ~0.3 µs each).
         r = self._r
@@ -603,38 +499,16 @@ class RollingQP:
         return None if sol is None else sol[0]
 
     def _direct(self) -> tuple[np.ndarray, list[float]] | None:
-        """:meth:`_solve_direct`'s solution and the same as floats, or None."""
-        nx = self.nx
-        if nx < 6:
-            return None  # over-determined equalities: the backend decides
-        ws = self._wscale
-        if ws is None:
-            A = self._C
-        else:
-            A = self._Cw
-            np.multiply(self._C, ws, out=A)
-        _, x, info = _DGELS(A, self._b_ext)
-        if info != 0:
-            return None  # rank-deficient
-        # dgels' solution has max(6, nx) = nx rows
-        if ws is not None:
-            x = x * ws
-        xs: list[float] = x.tolist()
-        # Taken when within the bounds to OSQP's own tolerance eps (_lb_tol = lb − eps, _ub_tol =
-        # ub + eps, set by _bounds): OSQP's solutions meet the bounds only to ≈ eps·(1 + |q̇|)
-        # too (rolling at the wrist's velocity limit puts the
-        # unconstrained optimum a few 1e-8 rad/s beyond it; OSQP returns a point within ~1e-6
-        # of the unconstrained optimum there, while clamping exactly would move the finger by
-        # ~1e-3 rad/s — the problem is nearly degenerate in that direction).
-        # lo <= x_i <= hi for every i (False on NaN), the loop in C
-        if all(map(_LE, self._lb_tol, xs)) and all(map(_LE, xs, self._ub_tol)):
-            return x, xs
-        return None
+        """:meth:`_solve_direct`'s solution and the same as floats, or None
+        (:func:`~eos_svc.kinematics.rolling_solvers.min_norm_within_bounds`)."""
+        return _MIN_NORM(self._C, self._b_ext, self._wscale, self._Cw, self._lb_tol, self._ub_tol)
 
     def _solve_osqp(self) -> tuple[np.ndarray, int]:
         self._u[:6] = self._b
         if self._osqp is None:
-            self._osqp, self._osqp_solver = _cached_osqp(self)
+            self._osqp, self._osqp_solver = cached_osqp(
+                self.nx, self.eps, self.check_termination, self._P, self._qlin, self._Ax, self._l, self._u
+            )
             slv = self._osqp_solver
             slv.update_data_vec(q=self._qlin, l=self._l, u=self._u)
             slv.update_data_mat(P_x=np.ascontiguousarray(np.diag(self._P)), P_i=None, A_x=self._Ax, A_i=None)
@@ -654,12 +528,7 @@ class RollingQP:
         return slv.solution.x, int(info.iter)
 
     def _solve_generic(self) -> tuple[np.ndarray, int]:
-        sol = qpsolvers.solve_problem(self.problem, solver=self.solver)
-        if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-            raise RollingQPError(
-                "no solution found", self.problem_copy(), self.solver, str(sol.extras or "not found")
-            )
-        return sol.x, 0
+        return solve_with_backend(self.problem, self.solver)
 
     def build(self) -> qpsolvers.Problem:
         """The QP of the next step at the current q, without solving it (pink's ``build_ik``):
@@ -717,46 +586,7 @@ class RollingQP:
         if type(sensor) is not TactileSensor or not self.fast_tactile:
             self.sync()
             return sensor.read(self._state, contact)
-        r = self._r
-        # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
-        (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = self._R_view.tolist()
-        n0, n1, n2 = n
-        px = -r * (n0 * r00 + n1 * r10 + n2 * r20)
-        py = -r * (n0 * r01 + n1 * r11 + n2 * r21)
-        pz = -r * (n0 * r02 + n1 * r12 + n2 * r22)
-        d = contact.distance
-        if type(d) is not float:
-            d = float(d)
-        in_contact = d <= sensor.contact_tolerance  # a bool (floats)
-        if in_contact:
-            if sensor.noise_std > 0.0:
-                nx_, ny_, nz_ = px / r, py / r, pz / r
-                if abs(nx_) < 0.9:
-                    t1x, t1y, t1z = 1.0 - nx_ * nx_, -nx_ * ny_, -nx_ * nz_
-                else:
-                    t1x, t1y, t1z = -ny_ * nx_, 1.0 - ny_ * ny_, -ny_ * nz_
-                s = 1.0 / math.sqrt(t1x * t1x + t1y * t1y + t1z * t1z)
-                t1x, t1y, t1z = t1x * s, t1y * s, t1z * s
-                t2x = ny_ * t1z - nz_ * t1y
-                t2y = nz_ * t1x - nx_ * t1z
-                t2z = nx_ * t1y - ny_ * t1x
-                g0, g1 = sensor.rng.normal(0.0, sensor.noise_std, size=2).tolist()
-                px, py, pz = px + g0 * t1x + g1 * t2x, py + g0 * t1y + g1 * t2y, pz + g0 * t1z + g1 * t2z
-                s = r / math.sqrt(px * px + py * py + pz * pz)
-                px, py, pz = px * s, py * s, pz * s
-            if sensor.pitch is not None:
-                h = sensor.pitch
-                px, py, pz = round(px / h) * h, round(py / h) * h, round(pz / h) * h
-                pn = math.sqrt(px * px + py * py + pz * pz)
-                if pn > 1e-12:
-                    px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-        reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
-        _SR_FINGER(reading, contact.finger)
-        _SR_POINT(reading, np.array((px, py, pz)))
-        _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
-        _SR_IN(reading, in_contact)
-        _SR_DIST(reading, d)
-        return reading
+        return read_sphere_tip(sensor, contact, self._R_view, n, self._r)
 
     def _bounds_infeasible(self) -> bool:
         return bool((self._lb > self._ub).any())
@@ -766,11 +596,22 @@ class RollingQP:
         :meth:`kinematics`, :meth:`contact`, the tactile reading, ``_build`` (rows, targets,
         bounds), the closed-form solve (``_direct``) or the backend, and the integration."""
         self.kinematics()
-        contact = self.contact()
-        n = self._n
-        reading = None if self.tactile is None else self._read(contact, n)
+        # contact(), _read() and _direct() written out: one Python call each instead of two
+        contact, n = self._probe.measure(self._c_view)
+        self._n = n
+        sensor = self.tactile
+        if sensor is None:
+            reading = None
+        elif type(sensor) is TactileSensor and self.fast_tactile:
+            reading = read_sphere_tip(sensor, contact, self._R_view, n, self._r)
+        else:
+            reading = self._read(contact, n)
         b0, b1, b2, b3, b4, b5 = self._build(contact, n)
-        sol = self._direct() if self.direct else None
+        sol = (
+            _MIN_NORM(self._C, self._b_ext, self._wscale, self._Cw, self._lb_tol, self._ub_tol)
+            if self.direct
+            else None
+        )
         it = 0
         if sol is None:
             if self._bounds_infeasible():

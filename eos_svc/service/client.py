@@ -83,8 +83,8 @@ class PlanOutcome:
         )
 
 
-class _LostError(Exception):
-    pass
+class _LostError(EosError):
+    """The instance answering an attempt was lost (liveliness token gone); try another."""
 
 
 class _Stream:

@@ -33,7 +33,7 @@ from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any
 
 from eos_svc.agents.request import PlanRequest
-from eos_svc.errors import ValidationError
+from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
 
 #: version of the message schemas (the ``"schema"`` field of every message)
@@ -143,7 +143,7 @@ def goal_keys(pfx: str, goal_id: str = "*") -> str:
 
 
 def _reject_constant(name: str) -> Any:
-    raise ValueError(f"{name} is not valid JSON")
+    raise ValidationError("payload", f"{name} is not valid JSON")
 
 
 #: one strict decoder for every message (``json.loads`` with options builds a new one per call)
@@ -159,7 +159,9 @@ def _text(data: bytes | bytearray | str) -> str:
             raise json.JSONDecodeError("Unexpected UTF-8 BOM (decode using utf-8-sig)", data, 0)
         return data
     if not isinstance(data, (bytes, bytearray)):
-        raise TypeError(f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}")
+        raise ContractError(
+            "payload", f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}"
+        )
     return data.decode(json.detect_encoding(data), "surrogatepass")
 
 

@@ -28,6 +28,7 @@ from typing import Any
 import zenoh
 
 from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import ComputationError, ValidationError
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient, PlanOutcome
 from eos_svc.service.session import free_port, loopback, make_config
@@ -85,7 +86,8 @@ def start_servers(
         line = proc.stdout.readline()
         if "serving" not in line:
             proc.kill()
-            raise RuntimeError(f"eos serve did not start: {line}{proc.stderr.read() if proc.stderr else ''}")
+            err = proc.stderr.read() if proc.stderr else ""
+            raise ComputationError(f"eos serve did not start: {line}{err}")
         servers.append(Server(port, proc, f"inst-{i}"))
     return servers
 
@@ -208,7 +210,7 @@ def run(
 ) -> Report:
     """One bounded run; ``mode`` is ``load``, ``fault`` (SIGKILL) or ``freeze`` (SIGSTOP)."""
     if mode not in ("load", "fault", "freeze"):
-        raise ValueError(f"mode must be load, fault or freeze, got {mode!r}")
+        raise ValidationError("mode", f"must be load, fault or freeze, got {mode!r}")
     if mode != "load":
         instances = max(instances, 2)
     report = Report(mode, requested=clients * plans)

@@ -37,6 +37,7 @@ import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.controller import CancelToken
+from eos_svc.errors import ContractError
 from eos_svc.records import CycleRecord, to_jsonable
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
@@ -453,7 +454,7 @@ class PlanService:
             with self._lock:
                 self.stats.cycles_published += seq
         if not isinstance(result, dict):
-            raise TypeError(f"planner result is a {type(result).__name__}, not a mapping")
+            raise ContractError("planner", f"its result is a {type(result).__name__}, not a mapping")
         if result.get("cycles") is not None and result.get("cycles") != seq:
             log.warning(
                 "goal %s: planner reports %s cycles, %d published", job.goal_id, result.get("cycles"), seq

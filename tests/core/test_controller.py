@@ -109,14 +109,17 @@ def test_always_policy_repeats_on_default_alone():
     assert result.status is RunStatus.CYCLE_LIMIT
 
 
-def test_opportunistic_zero_at_stage_start_and_set_by_previous_actor():
-    # a sets b's opportunistic sub-rating; at the stage's first cycle all are 0.
+def test_opportunistic_asked_at_stage_start_and_set_by_previous_actor():
+    # a sets b's opportunistic sub-rating; at the stage's first cycle every precondition test
+    # is asked too (a's says 1.0), and nothing carries over from before the stage.
     a = Scripted("a", ["s"], 0.6, sets={"b": 1.0}, key="a_want")
     b = Scripted("b", ["s"], 0.1, [Outcome.FINISHED])
     board = Board({"a_want": 1.0})
     result = Controller([a, b], ["s"], Weights(0.5, 0.5)).run(board)
     first, second = result.trace[0], result.trace[1]
-    assert first.rating_of("a").opportunistic == 0.0
+    assert first.rating_of("a").opportunistic == 1.0
+    assert first.rating_of("b").opportunistic == 0.0
+    assert first.rating_of("a").total == pytest.approx(0.8)
     assert first.chosen == "a"
     # cycle 2: a's own test says 1.0 (0.3 + 0.5), b was set to 1.0 by a (0.05 + 0.5)
     assert second.rating_of("b").opportunistic == 1.0

@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import pytest
 
+import eos_svc
 from eos_svc import RunStatus, Weights
 from eos_svc.demo import RootProblem, default_problem, solve_root
 
@@ -41,3 +43,20 @@ def test_default_only_runs_a_fixed_sequence_and_stops():
     result, _ = solve_root(default_problem(), Weights(1.0, 0.0))
     assert result.agents_run() == ["scan", "widen"]
     assert result.status is RunStatus.STALLED
+
+
+def test_the_core_modules_import_no_domain_library():
+    """The package root (board, agent, ratings, controller, records, recording, errors) is
+    domain-free: importing it in a fresh interpreter loads no Pinocchio, coal, Drake or Zenoh."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, eos_svc, eos_svc.recording, eos_svc.demo\n"
+        "print(sorted(m for m in ('pinocchio', 'coal', 'pydrake', 'zenoh', 'numpy') if m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], check=True, capture_output=True, text=True,
+        env={"PYTHONPATH": str(Path(eos_svc.__file__).parents[1]), "PATH": "/usr/bin:/bin"},
+    ).stdout  # fmt: skip
+    assert out.strip() == "[]"

@@ -1,0 +1,82 @@
+"""Small geometry on 3-vectors: the tangent basis of a normal.
+
+One convention everywhere (tactile noise, the rolling QP's no-slip rows, the EP1 contact frame,
+curvature ground truth, friction cones): for a unit normal ``n``, ``t1`` is a preferred world
+axis ``e_k`` projected onto the plane ⟂ ``n`` and normalised — world ``y`` instead when ``n``
+is within ~25° of ``e_k`` (``|n_k| ≥ 0.9``) — and ``t2 = n × t1``, so ``(t1, t2, n)`` is a
+right-handed orthonormal frame.
+
+:func:`tangent_pair` is the scalar form used on hot paths (numpy costs microseconds per call on
+3-vectors); :func:`tangent_basis` returns arrays; :func:`tangent_basis_reference` is the plain
+numpy construction the tests compare both with.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from eos_svc.errors import ValidationError
+
+__all__ = ["tangent_basis", "tangent_basis_reference", "tangent_pair", "unit_vector"]
+
+#: |n_k| at or above which the preferred axis e_k is too close to n and world y is used
+NEAR_AXIS = 0.9
+
+
+def tangent_pair(
+    nx: float, ny: float, nz: float, prefer: int = 0
+) -> tuple[float, float, float, float, float, float]:
+    """``t1`` and ``t2`` (six floats) of the unit normal ``(nx, ny, nz)``; ``prefer`` is the
+    index of the preferred world axis (0 = x, 2 = z). Scalar arithmetic: the hot-path form of
+    :func:`tangent_basis`."""
+    if prefer == 0:
+        if abs(nx) < NEAR_AXIS:
+            tx, ty, tz = 1.0 - nx * nx, -nx * ny, -nx * nz
+        else:
+            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
+    elif prefer == 2:
+        if abs(nz) < NEAR_AXIS:
+            tx, ty, tz = -nz * nx, -nz * ny, 1.0 - nz * nz
+        else:
+            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
+    else:
+        raise ValidationError("prefer", f"must be 0 (world x) or 2 (world z), got {prefer!r}")
+    s = 1.0 / math.sqrt(tx * tx + ty * ty + tz * tz)
+    tx, ty, tz = tx * s, ty * s, tz * s
+    return tx, ty, tz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
+
+
+def tangent_basis(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """``(t1, t2)`` as arrays for the unit normal ``n`` (see the module docstring)."""
+    x, y, z = np.asarray(n, dtype=float).reshape(3).tolist()
+    t = tangent_pair(x, y, z, prefer)
+    return np.array(t[:3]), np.array(t[3:])
+
+
+def tangent_basis_reference(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The same basis built the plain way with numpy (projection, ``np.cross``): what the tests
+    compare :func:`tangent_pair` and :func:`tangent_basis` with."""
+    nv = np.asarray(n, dtype=float).reshape(3)
+    a = np.eye(3)[prefer] if abs(nv[prefer]) < NEAR_AXIS else np.eye(3)[1]
+    t1 = a - (a @ nv) * nv
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(nv, t1)
+
+
+def unit_vector(name: str, v: object) -> np.ndarray:
+    """``v`` normalised (a new array); :class:`~eos_svc.errors.ValidationError` naming ``name``
+    unless it is a finite non-zero 3-vector. Scalar arithmetic first (numpy's norm costs µs on
+    3-vectors), numpy when the squares overflow."""
+    a = np.asarray(v, dtype=float).reshape(-1)
+    if a.shape == (3,):
+        x, y, z = a.tolist()
+        na = math.sqrt(x * x + y * y + z * z)
+        if math.isfinite(na) and na >= 1e-12:
+            return np.array((x / na, y / na, z / na))
+        if np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:  # huge entries: x * x overflowed
+            out: np.ndarray = a / np.linalg.norm(a)
+            return out
+    raise ValidationError(name, f"must be a finite non-zero 3-vector, got {v!r}")

@@ -1,0 +1,230 @@
+"""The state of one hand: ``q``, Pinocchio data and geometry data kept consistent (like pink's
+``Configuration``): every read after :meth:`HandState.update` refers to the same ``q``.
+Motions (:meth:`HandState.close_finger`, :meth:`HandState.move_wrist`) return a new ``q``.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+import pinocchio as pin
+
+from .errors import ConfigurationError, UnknownNameError, WorkspaceError
+
+if TYPE_CHECKING:
+    from .hand_model import HandModel
+
+__all__ = ["HandState"]
+
+_LWA = pin.LOCAL_WORLD_ALIGNED
+_F64 = np.dtype(np.float64)
+
+
+class HandState:
+    """q, Pinocchio data and geometry data of one hand, kept consistent.
+
+    :meth:`update` runs forward kinematics, frame placements and joint Jacobians once (geometry
+    placements once, when first needed); every query afterwards reads those results.
+    """
+
+    __slots__ = ("_gdata", "_geom_stale", "_gmodel", "_q", "_tips", "data", "hand", "model")
+
+    def __init__(self, hand: HandModel, q: object = None) -> None:
+        self.hand = hand
+        self.model = hand.model
+        self.data = hand.model.createData()
+        self._gmodel = hand.collision_model
+        self._gdata = pin.GeometryData(hand.collision_model)
+        self._geom_stale = True
+        # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
+        # joint id, the joint placement (a live reference into data.oMi), the tip translation
+        # (a live view into data.oMf; never handed out), and a reusable point placement.
+        self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
+        for name in hand.finger_names:
+            fid = hand.tip_frame_id(name)
+            jid = int(hand.model.frames[fid].parentJoint)
+            self._tips[name] = (
+                fid,
+                jid,
+                self.data.oMi[jid],
+                self.data.oMf[fid].translation,
+                pin.SE3.Identity(),
+            )
+        self._q = hand.neutral()
+        self.update(self._q if q is None else q)
+
+    @property
+    def q(self) -> np.ndarray:
+        """The current configuration (a copy)."""
+        return self._q.copy()
+
+    def update(self, q: object) -> None:
+        """Set ``q`` (validated: length, finite) and recompute kinematics (joint Jacobians,
+        frame placements); the geometry placements follow on first use of :attr:`geometry_data`."""
+        hand = self.hand
+        if (  # inlined fast path of HandModel.validate_q (this is the hot path)
+            type(q) is np.ndarray
+            and q.dtype is _F64
+            and q.shape == hand._q_shape
+            and math.isfinite(sum(q.tolist()))
+        ):
+            qa = q.copy()
+        else:
+            qa = hand.validate_q(q)
+        model, data = self.model, self.data
+        pin.computeJointJacobians(model, data, qa)  # also computes data.oMi (forward kinematics)
+        pin.updateFramePlacements(model, data)
+        # geometry placements are computed on first use (most updates only need the tips)
+        self._geom_stale = True
+        self._q = qa
+
+    @property
+    def geometry_data(self) -> pin.GeometryData:
+        """Pinocchio geometry data (collision placements ``oMg``) at the current q."""
+        if self._geom_stale:
+            pin.updateGeometryPlacements(self.model, self.data, self._gmodel, self._gdata)
+            self._geom_stale = False
+        return self._gdata
+
+    def copy(self) -> HandState:
+        """An independent state at the same q."""
+        return HandState(self.hand, self._q)
+
+    # -- placements
+    def frame_placement(self, frame: str) -> pin.SE3:
+        """World placement of any frame (a copy)."""
+        return pin.SE3(self.data.oMf[self.hand.frame_id(frame)])
+
+    def tip_placement(self, finger: str) -> pin.SE3:
+        """World placement of the fingertip frame (sphere centre), a copy."""
+        return pin.SE3(self.data.oMf[self.hand.tip_frame_id(finger)])
+
+    def tip_position(self, finger: str) -> np.ndarray:
+        """World position of the fingertip sphere centre, m (a copy)."""
+        out: np.ndarray = self.data.oMf[self.hand.tip_frame_id(finger)].translation.copy()
+        return out
+
+    def palm_placement(self) -> pin.SE3:
+        """World placement of the palm frame, a copy."""
+        return pin.SE3(self.data.oMf[self.hand.palm_frame_id])
+
+    def geometry_placement(self, name: str) -> pin.SE3:
+        """World placement of a collision geometry, a copy."""
+        return pin.SE3(self.geometry_data.oMg[self.hand.geometry_id(name)])
+
+    # -- Jacobians
+    def tip_jacobian(self, finger: str) -> np.ndarray:
+        """6×nv Jacobian of the tip frame origin (the fingertip sphere's centre, a material point
+        of the fingertip body) and of the fingertip's orientation, LOCAL_WORLD_ALIGNED
+        ([v; ω] in world axes)."""
+        tip = self._tips.get(finger)
+        if tip is None:
+            tip = self._tip(finger)  # raises UnknownNameError
+        return pin.getFrameJacobian(self.model, self.data, tip[0], _LWA)
+
+    def _tip(self, finger: str) -> tuple[int, int, pin.SE3, np.ndarray, pin.SE3]:
+        try:
+            return self._tips[finger]
+        except KeyError:
+            raise UnknownNameError(
+                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
+            ) from None
+
+    def tip_point_jacobian(self, finger: str, point_world: np.ndarray) -> np.ndarray:
+        """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
+        is currently at ``point_world`` (m), per unit joint velocity."""
+        tip = self._tips.get(finger)
+        if tip is None:
+            tip = self._tip(finger)  # raises UnknownNameError
+        _, jid, oMi, _, M = tip
+        if type(point_world) is not np.ndarray or point_world.shape != (3,):
+            point_world = np.asarray(point_world, dtype=float)
+            if point_world.shape != (3,):
+                raise ConfigurationError("point_world", f"must be a 3-vector, got {point_world!r}")
+        M.translation = oMi.actInv(point_world)  # the point in the tip body's joint frame
+        J = pin.getFrameJacobian(self.model, self.data, jid, M, pin.LOCAL_WORLD_ALIGNED)
+        out: np.ndarray = J[:3]
+        return out
+
+    def tip_angular_jacobian(self, finger: str) -> np.ndarray:
+        """3×nv Jacobian of the fingertip body's angular velocity in world axes."""
+        J = pin.getFrameJacobian(
+            self.model, self.data, self.hand.tip_frame_id(finger), pin.LOCAL_WORLD_ALIGNED
+        )
+        out: np.ndarray = J[3:].copy()
+        return out
+
+    # -- motions (return a new q; the state is not changed)
+    def close_finger(self, finger: str, dtheta: float) -> tuple[np.ndarray, bool]:
+        """New q with every joint of ``finger`` changed by ``dtheta`` rad (positive closes),
+        clipped to the joint limits; the flag is True when a limit was hit.
+
+        Scalar arithmetic over the finger's few joints: it is on the planner's hot path.
+        """
+        if not math.isfinite(dtheta):
+            raise ConfigurationError("dtheta", f"must be finite, got {dtheta!r}")
+        q = self._q.copy()
+        at_limit = False
+        for i, lo, hi in self.hand.finger_joint_limits(finger):
+            target = q[i] + dtheta
+            if target <= lo:
+                q[i], at_limit = lo, True
+            elif target >= hi:
+                q[i], at_limit = hi, True
+            else:
+                q[i] = target
+        return q, at_limit
+
+    def move_wrist(
+        self,
+        dp_world: np.ndarray,
+        drpy: np.ndarray | None = None,
+        clip: bool = False,
+    ) -> np.ndarray:
+        """New q with the wrist translated by ``dp_world`` (m, world axes) and its roll, pitch,
+        yaw joints changed by ``drpy`` (rad).
+
+        The first three wrist joints must be the x, y, z prismatic joints and the next three
+        the roll, pitch, yaw joints (hand3x3). Leaving the joint limits raises
+        :class:`WorkspaceError`, or clips when ``clip`` is True.
+        """
+        widx = self.hand._wrist_q
+        if len(widx) < 3:
+            raise WorkspaceError("wrist_joints", "this hand has no x, y, z wrist joints")
+        dp = np.asarray(dp_world, dtype=float)
+        if dp.shape != (3,) or not np.isfinite(dp).all():
+            raise WorkspaceError("dp_world", f"must be a finite 3-vector, got {dp_world!r}")
+        q = self._q.copy()
+        q[widx[:3]] += dp
+        if drpy is not None:
+            dr = np.asarray(drpy, dtype=float)
+            if dr.shape != (3,) or not np.isfinite(dr).all():
+                raise WorkspaceError("drpy", f"must be a finite 3-vector, got {drpy!r}")
+            if len(widx) < 6:
+                raise WorkspaceError("drpy", "this hand has no roll, pitch, yaw wrist joints")
+            q[widx[3:6]] += dr
+        lo, hi = self.hand.lower[widx], self.hand.upper[widx]
+        if np.any(q[widx] < lo - 1e-12) or np.any(q[widx] > hi + 1e-12):
+            if clip:
+                q[widx] = np.clip(q[widx], lo, hi)
+            else:
+                names = self.hand.description.wrist_joints
+                bad = [
+                    f"{names[k]}={q[i]:.4g} not in [{lo[k]:.4g}, {hi[k]:.4g}]"
+                    for k, i in enumerate(widx)
+                    if q[i] < lo[k] - 1e-12 or q[i] > hi[k] + 1e-12
+                ]
+                raise WorkspaceError("wrist", "outside the workspace: " + ", ".join(bad))
+        return q
+
+    def integrate(self, v: np.ndarray, dt: float) -> np.ndarray:
+        """New q = integrate(q, v·dt) (Pinocchio), v in joint velocity units, dt in s."""
+        va = np.asarray(v, dtype=float)
+        if va.shape != (self.hand.nv,) or not np.isfinite(va).all():
+            raise ConfigurationError("v", f"must be a finite vector of shape ({self.hand.nv},)")
+        if not math.isfinite(dt):
+            raise ConfigurationError("dt", f"must be finite, got {dt!r}")
+        out: np.ndarray = pin.integrate(self.model, self._q, va * dt)
+        return out

@@ -1,0 +1,243 @@
+"""The record file of a plan: its format, written by ``eos plan --record`` and read by
+``eos replay`` (and by any program: the module is domain-free, JSON and the core's records only).
+
+A record file is JSON lines:
+
+- line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
+  — the plan request in its JSON form (``PlanRequest.to_dict()``) and the hand's name
+  (``hand3x3``, the default, or a ``<name>_hand()`` factory of ``eos_svc.kinematics``);
+- one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
+- last line, the result: ``{"eos_record": "result", "result": {...}}`` —
+  ``PlanResult.to_dict()`` without the trace (absent when the run was interrupted).
+
+Two runs are compared cycle by cycle and then by their results, ignoring only wall-clock fields
+(``elapsed_s``, ``wall_time_s``): :func:`compare_run` gives every divergence with the cycle, the
+field path and both values.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from eos_svc.agent import Outcome
+from eos_svc.board import BoardChange
+from eos_svc.errors import EosError
+from eos_svc.ratings import Weights
+from eos_svc.records import AgentRating, CycleRecord
+
+__all__ = [
+    "DEFAULT_HAND",
+    "MARK",
+    "RECORD_SCHEMA",
+    "TIMING_FIELDS",
+    "RecordFileError",
+    "Recording",
+    "Verification",
+    "compare_run",
+    "cycle_line",
+    "first_difference",
+    "header_line",
+    "normalise",
+    "read_recording",
+    "record_from_dict",
+    "result_line",
+]
+
+#: version of the record file layout (header / cycles / result)
+RECORD_SCHEMA = 1
+#: the key marking the header and result lines (cycle lines never have it)
+MARK = "eos_record"
+#: fields that measure wall-clock time: never compared
+TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
+#: the planner's default hand
+DEFAULT_HAND = "hand3x3"
+
+
+# --- writing ----------------------------------------------------------------------------------
+def header_line(request: Any, hand: str = DEFAULT_HAND) -> str:
+    """The header line of a record file for ``request`` (a PlanRequest) planned with ``hand``."""
+    return json.dumps(
+        {MARK: "header", "schema": RECORD_SCHEMA, "request": request.to_dict(), "hand": hand},
+        allow_nan=False,
+    )
+
+
+def cycle_line(record: CycleRecord) -> str:
+    """One cycle line: :meth:`CycleRecord.to_dict` as JSON."""
+    return json.dumps(record.to_dict(), allow_nan=False)
+
+
+def result_line(result: Any) -> str:
+    """The final line: the plan result (a PlanResult) without its trace."""
+    return json.dumps({MARK: "result", "result": result.to_dict()}, allow_nan=False)
+
+
+# --- reading -------------------------------------------------------------------------------
+class RecordFileError(EosError, ValueError):
+    """A record file that cannot be replayed (the message says where and why)."""
+
+
+class Recording:
+    """A parsed record file: the request, the cycle dicts, the result dict (or None), the hand."""
+
+    def __init__(
+        self,
+        request: dict[str, Any],
+        cycles: list[dict[str, Any]],
+        result: dict[str, Any] | None,
+        hand: str = DEFAULT_HAND,
+    ):
+        self.request = request
+        self.cycles = cycles
+        self.result = result
+        self.hand = hand
+
+
+def read_recording(path: str | Path) -> Recording:
+    """Parse a record file.
+
+    Raises:
+        RecordFileError: unreadable, not JSON lines, no header, unknown schema, cycles out
+            of order.
+        OSError: the file cannot be opened.
+    """
+    text = Path(path).read_text(encoding="utf-8")
+    lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
+    if not lines:
+        raise RecordFileError("empty file: no header line")
+    parsed: list[tuple[int, dict[str, Any]]] = []
+    for number, line in lines:
+        try:
+            value = json.loads(line)
+        except json.JSONDecodeError as exc:
+            raise RecordFileError(f"line {number}: not JSON ({exc.msg})") from None
+        if not isinstance(value, dict):
+            raise RecordFileError(f"line {number}: not a JSON object")
+        parsed.append((number, value))
+    number, header = parsed[0]
+    if header.get(MARK) != "header" or not isinstance(header.get("request"), dict):
+        raise RecordFileError(
+            f"line {number}: no header with the request (record with `eos plan --record FILE`)"
+        )
+    if header.get("schema") != RECORD_SCHEMA:
+        raise RecordFileError(
+            f"line {number}: record schema {header.get('schema')!r}, expected {RECORD_SCHEMA}"
+        )
+    cycles: list[dict[str, Any]] = []
+    result = None
+    for number, value in parsed[1:]:
+        if result is not None:
+            raise RecordFileError(f"line {number}: data after the result line")
+        if value.get(MARK) == "result":
+            result = value.get("result")
+            if not isinstance(result, dict):
+                raise RecordFileError(f"line {number}: result line without a result object")
+            continue
+        if MARK in value or "seq" not in value:
+            raise RecordFileError(f"line {number}: neither a cycle record nor the result")
+        if value["seq"] != len(cycles) + 1:
+            raise RecordFileError(
+                f"line {number}: cycle {value['seq']!r} out of order (expected {len(cycles) + 1})"
+            )
+        cycles.append(value)
+    hand = header.get("hand", DEFAULT_HAND)
+    if not isinstance(hand, str):
+        raise RecordFileError(f"line {parsed[0][0]}: hand must be a name, got {hand!r}")
+    return Recording(header["request"], cycles, result, hand)
+
+
+def record_from_dict(data: dict[str, Any]) -> CycleRecord:
+    """A :class:`CycleRecord` back from its JSON form (board values stay JSON values)."""
+    return CycleRecord(
+        seq=data["seq"],
+        stage=data["stage"],
+        stage_cycle=data["stage_cycle"],
+        ratings=tuple(
+            AgentRating(
+                r["agent"],
+                r["default"],
+                r["opportunistic"],
+                r["learned"],
+                r["total"],
+                r.get("eligible", True),
+            )
+            for r in data["ratings"]
+        ),
+        weights=Weights.from_dict(data["weights"]),
+        chosen=data["chosen"],
+        outcome=None if data["outcome"] is None else Outcome(data["outcome"]),
+        detail=data["detail"],
+        changes=tuple(BoardChange(c["key"], c["old"], c["new"]) for c in data["changes"]),
+        elapsed_s=data["elapsed_s"],
+    )
+
+
+# --- comparing -----------------------------------------------------------------------------
+def normalise(value: Any) -> Any:
+    """The JSON value as it would be read back from a record file (tuples become lists)."""
+    return json.loads(json.dumps(value, allow_nan=False))
+
+
+def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str, Any, Any] | None:
+    """The first differing field between two JSON values, as (dotted path, recorded, replayed),
+    ignoring :data:`TIMING_FIELDS`; ``None`` when they agree exactly."""
+    if isinstance(recorded, dict) and isinstance(replayed, dict):
+        for key in list(recorded) + [k for k in replayed if k not in recorded]:
+            if key in TIMING_FIELDS:
+                continue
+            where = f"{path}.{key}" if path else str(key)
+            if key not in recorded or key not in replayed:
+                return where, recorded.get(key, "<absent>"), replayed.get(key, "<absent>")
+            diff = first_difference(recorded[key], replayed[key], where)
+            if diff is not None:
+                return diff
+        return None
+    if isinstance(recorded, list) and isinstance(replayed, list):
+        if len(recorded) != len(replayed):
+            return f"{path} (length)", len(recorded), len(replayed)
+        for i, (a, b) in enumerate(zip(recorded, replayed, strict=True)):
+            diff = first_difference(a, b, f"{path}[{i}]")
+            if diff is not None:
+                return diff
+        return None
+    if type(recorded) is not type(replayed) or recorded != replayed:
+        return path, recorded, replayed
+    return None
+
+
+class Verification:
+    """Outcome of a comparison: ``divergences`` lists (where, path, recorded, replayed)."""
+
+    def __init__(self) -> None:
+        self.divergences: list[tuple[str, str, Any, Any]] = []
+        self.cycles_compared = 0
+        self.replayed_result: dict[str, Any] | None = None
+
+    @property
+    def identical(self) -> bool:
+        """Whether the runs agree (timing fields aside)."""
+        return not self.divergences
+
+
+def compare_run(
+    recording: Recording, replayed_cycles: Sequence[dict[str, Any]], replayed_result: dict[str, Any]
+) -> Verification:
+    """Compare a re-run (its cycle dicts and result dict, as :func:`normalise` gives them) with
+    ``recording``, cycle by cycle and then the result."""
+    out = Verification()
+    out.replayed_result = replayed_result
+    for recorded, again in zip(recording.cycles, replayed_cycles, strict=False):
+        out.cycles_compared += 1
+        diff = first_difference(recorded, again)
+        if diff is not None:
+            out.divergences.append((f"cycle {recorded['seq']}", *diff))
+    if len(recording.cycles) != len(replayed_cycles):
+        out.divergences.append(("cycles", "count", len(recording.cycles), len(replayed_cycles)))
+    if recording.result is not None:
+        diff = first_difference(recording.result, replayed_result)
+        if diff is not None:
+            out.divergences.append(("result", *diff))
+    return out
