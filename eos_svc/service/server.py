@@ -37,6 +37,7 @@ import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.controller import CancelToken
+from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
@@ -48,6 +49,8 @@ _BLOCK = zenoh.CongestionControl.BLOCK
 
 #: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
 Planner = Callable[..., Any]
+#: admission check of a decoded request: raises ValidationError(field, reason) to refuse it
+Admission = Callable[[PlanRequest], None]
 
 
 def default_planner() -> Planner:
@@ -55,6 +58,20 @@ def default_planner() -> Planner:
     from eos_svc.agents.planner import plan  # lazy: Pinocchio and coal load here
 
     return plan
+
+
+def default_admission() -> Admission:
+    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable`)."""
+    from eos_svc.agents.admission import check_plannable  # lazy: Pinocchio and coal load here
+
+    return check_plannable
+
+
+def _is_grasp_planner(planner: Planner | None) -> bool:
+    return planner is None or (
+        getattr(planner, "__module__", None) == "eos_svc.agents.planner"
+        and getattr(planner, "__name__", "") == "plan"
+    )
 
 
 def _encode(obj: Any) -> bytes:
@@ -103,6 +120,10 @@ class PlanService:
         workers: threads running plans concurrently (≥ 1).
         queue_size: accepted plans waiting for a worker before ``busy`` (≥ 0).
         max_request_bytes: largest request payload accepted (bytes).
+        admission: called with every decoded request before it is queued; a
+            ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
+            Default: :func:`~eos_svc.agents.admission.check_plannable` when the planner is
+            the grasp planner, none otherwise.
     """
 
     def __init__(
@@ -115,6 +136,7 @@ class PlanService:
         workers: int = 2,
         queue_size: int = 16,
         max_request_bytes: int = proto.MAX_REQUEST_BYTES,
+        admission: Admission | None = None,
     ) -> None:
         if workers < 1:
             raise proto.RequestError(proto.E_INVALID, "workers", f"must be ≥ 1, got {workers}")
@@ -126,6 +148,8 @@ class PlanService:
             proto.check_id(instance, "instance") if instance else f"{os.getpid()}-{secrets.token_hex(4)}"
         )
         self._planner = planner
+        self._admission: Admission | None = admission
+        self._default_admission = admission is None and _is_grasp_planner(planner)
         self.workers = workers
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
@@ -159,6 +183,10 @@ class PlanService:
             return self
         if self._planner is None:
             self._planner = default_planner()
+        if self._default_admission:
+            self._admission = default_admission()
+            warm = PlanRequest()
+            self._admission(warm)  # loads the hand and measures its span now, not on the first request
         try:  # the grasp planner can skip keeping its trace: the service streams every cycle instead
             params = inspect.signature(self._planner).parameters
             self._planner_kwargs = {"keep_trace": False} if "keep_trace" in params else {}
@@ -236,6 +264,7 @@ class PlanService:
 
     # ------------------------------------------------------------------ threads
     def _reply_err(self, query: zenoh.Query, err: proto.RequestError) -> None:
+        log.info("refused goal %s: %s", err.goal_id, err)  # one line per refusal, never a traceback
         with self._lock:
             self.stats.replied_err += 1
             if err.code == proto.E_BUSY:
@@ -285,6 +314,11 @@ class PlanService:
             )
         except proto.RequestError as err:
             return err
+        if self._admission is not None:
+            try:
+                self._admission(request)
+            except ValidationError as exc:  # the planner could not plan it: refused here, named
+                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
         job = _Job(query, goal_id, request)
         refusal: proto.RequestError
         with self._lock:
@@ -407,6 +441,10 @@ class PlanService:
         except proto.RequestError as err:
             if not answered:
                 self._reply_err(query, err)
+        except ValidationError as exc:  # the planner refused the request (admission let it through)
+            if not answered:
+                self._done_refused(goal_id)
+                self._reply_err(query, proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id))
         except Exception as exc:
             log.exception("plan %s failed", goal_id)
             if not answered:
@@ -429,6 +467,13 @@ class PlanService:
                     publisher.undeclare()
                 except Exception:
                     log.debug("undeclare failed", exc_info=True)
+
+    def _done_refused(self, goal_id: str) -> None:
+        """Close a goal whose ``running`` was published but the planner refused: ``done``, no cycle."""
+        try:
+            self._status(goal_id, proto.STATE_DONE, status="refused", cycles=0, result=None)
+        except Exception:
+            log.debug("status publication failed", exc_info=True)
 
     def _plan(self, job: _Job, publisher: Any, head: str) -> dict[str, Any]:
         seq = 0
