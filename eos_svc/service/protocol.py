@@ -1,7 +1,12 @@
 """Wire protocol of the EOS planning service: key expressions and message schemas.
 
-Everything on the wire is UTF-8 JSON (strict: no NaN/Infinity) carrying
-``"schema": 1``. Key expressions live under a versioned prefix
+Everything on the wire is UTF-8 JSON (RFC 8259) carrying ``"schema": 1``, read
+strictly: UTF-8 only (a leading UTF-8 byte-order mark is ignored; UTF-16/32 and
+invalid bytes such as encoded surrogates are refused), no NaN/Infinity, no
+duplicate keys in an object, no integer beyond ±2**64 (refused naming its
+field). Every error reply is bounded: the field and reason it echoes are
+clipped (:data:`MAX_FIELD_JSON`, :data:`MAX_REASON_JSON`), so a reply stays
+under 4 KiB whatever the request. Key expressions live under a versioned prefix
 ``eos/@v1`` (``@v1`` is a verbatim chunk: wildcards never cross it), with an
 optional namespace: ``eos/@v1/<namespace>``. With ``P`` the prefix:
 
@@ -63,6 +68,22 @@ STATE_RUNNING = "running"
 STATE_DONE = "done"
 
 
+#: largest JSON size of the field name an error reply echoes (bytes, escaped)
+MAX_FIELD_JSON = 256
+#: largest JSON size of the reason an error reply carries (bytes, escaped)
+MAX_REASON_JSON = 1536
+
+
+def clip(text: str, max_json: int) -> str:
+    """``text`` cut (with a trailing ``…``) so that its JSON string form is at most ``max_json`` bytes."""
+    if len(text) * 12 + 2 <= max_json or len(_json_str(text)) <= max_json:  # 12: \udXXX\udXXX
+        return text
+    cut = text[: max_json - 3]
+    while len(_json_str(cut + "…")) > max_json:
+        cut = cut[: len(cut) - max(1, len(cut) // 8)]
+    return cut + "…"
+
+
 class RequestError(ValidationError):
     """A request the service refuses; sent back as an error reply.
 
@@ -74,7 +95,7 @@ class RequestError(ValidationError):
     """
 
     def __init__(self, code: str, field: str, reason: str, goal_id: str | None = None) -> None:
-        super().__init__(field, reason)
+        super().__init__(clip(field, MAX_FIELD_JSON), clip(reason, MAX_REASON_JSON))
         self.code = code
         self.goal_id = goal_id
 
@@ -146,25 +167,66 @@ def _reject_constant(name: str) -> Any:
     raise ValueError(f"{name} is not valid JSON")
 
 
+class DuplicateKeyError(ValueError):
+    """An object of the message has the same key twice (RFC 8259: names SHOULD be unique)."""
+
+    def __init__(self, key: str) -> None:
+        super().__init__(f"duplicate key {key!r}")
+        self.key = key
+
+
+class _HugeInt:
+    """An integer literal too long to be any field's value (kept as text, named later)."""
+
+    __slots__ = ("digits",)
+
+    def __init__(self, digits: str) -> None:
+        self.digits = digits
+
+
+def _parse_int(literal: str) -> Any:
+    """``int`` for literals up to 20 digits (all ≤ 2**64 need); longer ones are never converted
+    (Python refuses > 4,300 digits, and big ones cost quadratic time): a :class:`_HugeInt`."""
+    return int(literal) if len(literal) <= 21 else _HugeInt(literal)
+
+
+def _unique_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object, refusing a key given twice."""
+    obj = dict(pairs)
+    if len(obj) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise DuplicateKeyError(key)
+            seen.add(key)
+    return obj
+
+
 #: one strict decoder for every message (``json.loads`` with options builds a new one per call)
-_DECODER = json.JSONDecoder(parse_constant=_reject_constant)
+_DECODER = json.JSONDecoder(
+    parse_constant=_reject_constant, parse_int=_parse_int, object_pairs_hook=_unique_object
+)
 #: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
 _ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+_BOM = b"\xef\xbb\xbf"
 
 
 def _text(data: bytes | bytearray | str) -> str:
-    """JSON text from bytes exactly as ``json.loads`` reads them (UTF-8/16/32 detection, BOM)."""
+    """JSON text from UTF-8 bytes (strict: invalid bytes, encoded surrogates, UTF-16/32 refused;
+    a leading UTF-8 byte-order mark ignored, as RFC 8259 §8.1 allows)."""
     if isinstance(data, str):
-        if data.startswith("\ufeff"):
-            raise json.JSONDecodeError("Unexpected UTF-8 BOM (decode using utf-8-sig)", data, 0)
-        return data
+        return data[1:] if data.startswith("\ufeff") else data
     if not isinstance(data, (bytes, bytearray)):
         raise TypeError(f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}")
-    return data.decode(json.detect_encoding(data), "surrogatepass")
+    if data.startswith(_BOM):
+        data = data[3:]
+    elif b"\x00" in data[:4] or data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # what json.detect_encoding reads
+        raise UnicodeDecodeError("utf-8", bytes(data[:4]), 0, 1, "UTF-16 or UTF-32 text (the wire is UTF-8)")
+    return data.decode("utf-8")  # strict: a UnicodeDecodeError (a ValueError) names the byte
 
 
 def loads_strict(data: bytes | str) -> Any:
-    """Parse strict JSON (NaN/Infinity rejected); raises ValueError or RecursionError."""
+    """Parse strict JSON (see the module doc); raises ValueError or RecursionError."""
     return _DECODER.decode(_text(data))
 
 
@@ -299,7 +361,7 @@ MAX_WIRE_INT = 2**64
 
 
 #: 20 digits in a row: the only way to write an integer with |x| > 2**64 (= 18446744073709551616)
-_LONG_DIGITS = re.compile(r"[0-9]{20}")
+_LONG_DIGITS = re.compile(rb"[0-9]{20}")
 
 
 def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
@@ -311,8 +373,13 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
             stack.extend((item, f"{where}.{k}" if where else str(k)) for k, item in v.items())
         elif isinstance(v, list):
             stack.extend((item, f"{where}[{i}]") for i, item in enumerate(v))
-        elif isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT:
-            raise RequestError(E_INVALID, where or "request", "integer too large (|x| > 2**64)", goal_id)
+        elif isinstance(v, _HugeInt) or (
+            isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT
+        ):
+            digits = len(v.digits.lstrip("-")) if isinstance(v, _HugeInt) else len(str(abs(v)))
+            raise RequestError(
+                E_INVALID, where or "request", f"integer too large ({digits} digits; |x| ≤ 2**64)", goal_id
+            )
 
 
 def decode_request(
@@ -328,15 +395,25 @@ def decode_request(
     """
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
+    raw = payload if isinstance(payload, bytes) else bytes(payload)
     try:
-        text = _text(payload if isinstance(payload, bytes) else bytes(payload))
-        data = _DECODER.decode(text)
-    except (ValueError, RecursionError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        data = _DECODER.decode(_text(raw))
+    except DuplicateKeyError as exc:
+        raise RequestError(E_NOT_JSON, clip(exc.key, MAX_FIELD_JSON), "duplicate key in an object") from None
+    except UnicodeDecodeError as exc:
+        raise RequestError(
+            E_NOT_JSON,
+            "request",
+            f"not UTF-8: byte {exc.start} ({raw[exc.start : exc.start + 1]!r}): {exc.reason}",
+        ) from None
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError is a ValueError
         raise RequestError(E_NOT_JSON, "request", f"not JSON: {str(exc)[:200]}") from None
     if not isinstance(data, dict):
         raise RequestError(E_INVALID, "request", f"must be a JSON object, got {type(data).__name__}")
     goal_raw = data.get("goal_id")
     goal_id = goal_raw if isinstance(goal_raw, str) and ID_PATTERN.fullmatch(goal_raw) else None
+    if _LONG_DIGITS.search(raw):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
+        _check_integers(data, "", goal_id)
     if "schema" not in data:
         raise RequestError(E_SCHEMA, "schema", "is required", goal_id)
     schema = data["schema"]
@@ -351,14 +428,12 @@ def decode_request(
     check_id(goal_raw, "goal_id")
     assert goal_id is not None
     body = {k: v for k, v in data.items() if k not in ("schema", "goal_id")}
-    if _LONG_DIGITS.search(text):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
-        _check_integers(body, "", goal_id)
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
-        raise RequestError(E_INVALID, "request", f"unacceptable value: {exc}", goal_id) from None
+        raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
     return goal_id, request
 
 
