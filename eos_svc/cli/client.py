@@ -3,7 +3,8 @@
 eos client list                             # instances alive (liveliness tokens)
 eos client plan --seed 7                    # one plan, cycles printed live, then the result
 eos client plan --json --quiet              # the result only, as JSON
-eos client cancel GOAL_ID                   # cancel a queued or running goal
+eos client plan --goal-id g1 --cancel-token SECRET   # a goal another shell can cancel
+eos client cancel g1 --token SECRET         # cancel it (only with the goal's token)
 eos client watch                            # every cycle and status on the network
 
 By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
@@ -13,6 +14,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import secrets
+import sys
 import threading
 from typing import Any
 
@@ -57,6 +60,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser("plan", help="request one plan; print its cycles live, then the result")
     c = sub.add_parser("cancel", help="cancel a goal by id")
     c.add_argument("goal_id", metavar="GOAL_ID")
+    c.add_argument(
+        "--token",
+        required=True,
+        metavar="TOKEN",
+        help="the goal's cancel token (given to eos client plan --cancel-token, or printed by it)",
+    )
     w = sub.add_parser("watch", help="print every cycle and status message on the network (Ctrl-C to stop)")
     for sp in (lst, p, c, w):
         add_connection_arguments(sp, default_listen=False)
@@ -70,6 +79,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = add_request_arguments(p, friction_default=None)
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
+    g.add_argument(
+        "--cancel-token",
+        default=None,
+        metavar="TOKEN",
+        help="the goal's secret for eos client cancel (16-128 of A-Z a-z 0-9 _ -; default: random, printed)",
+    )
     g.add_argument(
         "--request",
         default=None,
@@ -116,6 +131,11 @@ def run(args: argparse.Namespace) -> int:
             proto.check_id(args.goal_id, "goal_id")
         except ValidationError as exc:
             fail(f"GOAL_ID: {exc.reason}")
+    token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
+    if token is not None and not proto.TOKEN_PATTERN.fullmatch(token):
+        fail(
+            f"{'--token' if args.action == 'cancel' else '--cancel-token'}: must be 16-128 of A-Z a-z 0-9 _ -"
+        )
     try:
         client = EosClient.open(conf, namespace=args.namespace)
     except ValidationError as exc:
@@ -131,7 +151,11 @@ def run(args: argparse.Namespace) -> int:
                 print("no instance found")
             return 0 if found else 1
         if args.action == "cancel":
-            had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0)
+            try:
+                had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0, cancel_token=args.token)
+            except proto.RequestError as err:
+                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
+                return 1
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
@@ -151,10 +175,21 @@ def run(args: argparse.Namespace) -> int:
                 sub.undeclare()
             return 0
         client.discover(timeout=1.0)
+        goal_id = args.goal_id or f"g-{secrets.token_hex(6)}"
+        cancel_token = args.cancel_token or proto.new_cancel_token()
+        print(
+            f"goal {goal_id}; cancel with: eos client cancel {goal_id} --token {cancel_token}",
+            file=sys.stderr,
+        )
         show = None if args.quiet or args.json else (lambda msg: print(format_cycle(msg), flush=True))
         try:
             outcome = client.plan(
-                request, goal_id=args.goal_id, on_cycle=show, instance=args.instance, timeout=args.timeout
+                request,
+                goal_id=goal_id,
+                on_cycle=show,
+                instance=args.instance,
+                timeout=args.timeout,
+                cancel_token=cancel_token,
             )
         except proto.RequestError as err:
             print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")

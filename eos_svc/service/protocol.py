@@ -17,7 +17,9 @@ key expression                     Zenoh entity               message
 ``P/plan/<iid>``                   queryable (one/instance)   request: :func:`encode_request`; reply: the
                                                               plan result, or an error reply
                                                               (:class:`RequestError`)
-``P/cancel/<goal_id>``             queryable ``P/cancel/*``   reply: ``{"goal_id", "instance", "found"}``
+``P/cancel/<goal_id>``             queryable ``P/cancel/*``   request: :func:`encode_cancel` (the goal's
+                                                              ``cancel_token``); reply: ``{"goal_id",
+                                                              "instance", "found"}`` or ``forbidden``
 ``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
 ``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
@@ -30,10 +32,13 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 
 from __future__ import annotations
 
+import hmac
 import json
 import math
 import re
+import secrets
 from collections.abc import Mapping
+from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any
 
@@ -59,9 +64,25 @@ E_BUSY = "busy"
 E_DUPLICATE = "duplicate_goal"
 E_UNAVAILABLE = "unavailable"
 E_INTERNAL = "internal_error"
+E_FORBIDDEN = "forbidden"
 ERROR_CODES = frozenset(
-    {E_TOO_LARGE, E_NOT_JSON, E_SCHEMA, E_INVALID, E_BUSY, E_DUPLICATE, E_UNAVAILABLE, E_INTERNAL}
+    {
+        E_TOO_LARGE,
+        E_NOT_JSON,
+        E_SCHEMA,
+        E_INVALID,
+        E_BUSY,
+        E_DUPLICATE,
+        E_UNAVAILABLE,
+        E_INTERNAL,
+        E_FORBIDDEN,
+    }
 )
+#: a cancel token: the goal owner's secret (16-128 URL-safe characters), sent with the request and
+#: with a cancel, never published
+TOKEN_PATTERN = re.compile(r"[A-Za-z0-9_\-]{16,128}")
+#: largest cancel request accepted (bytes of JSON)
+MAX_CANCEL_BYTES = 1024
 
 #: plan states published on ``P/goal/<goal_id>/status``
 STATE_RUNNING = "running"
@@ -347,13 +368,48 @@ def cycle_record_json(record: CycleRecord) -> str:
     )
 
 
-def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> bytes:
-    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., <PlanRequest fields>}``."""
+def new_cancel_token() -> str:
+    """A fresh random cancel token (128 bits, URL-safe)."""
+    return secrets.token_urlsafe(16)
+
+
+def encode_request(
+    goal_id: str, request: PlanRequest | Mapping[str, Any], cancel_token: str | None = None
+) -> bytes:
+    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,] <PlanRequest
+    fields>}``. Without a ``cancel_token`` nobody can cancel the goal."""
     body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
-    if not body or "schema" in body or "goal_id" in body:  # the envelope's fields win, as in a merged dict
-        return dumps({"schema": SCHEMA_VERSION, "goal_id": goal_id, **body})
+    envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
+    if cancel_token is not None:
+        envelope["cancel_token"] = cancel_token
+    if not body or body.keys() & envelope.keys():  # the body's fields win, as in a merged dict
+        return dumps({**envelope, **body})
     # the envelope spliced before the body's own JSON (no merged dict): the same bytes
-    return b'{"schema":%d,"goal_id":%s,%s' % (SCHEMA_VERSION, dumps(goal_id), dumps(body)[1:])
+    return dumps(envelope)[:-1] + b"," + dumps(body)[1:]
+
+
+def encode_cancel(cancel_token: str | None) -> bytes:
+    """A cancel request (the payload of a query on ``P/cancel/<goal_id>``)."""
+    return dumps({"schema": SCHEMA_VERSION, "cancel_token": cancel_token})
+
+
+def decode_cancel(payload: bytes | None) -> str | None:
+    """The cancel token of a cancel request (``None`` when absent or unreadable)."""
+    if not payload or len(payload) > MAX_CANCEL_BYTES:
+        return None
+    try:
+        data = loads_strict(payload)
+    except (ValueError, RecursionError):
+        return None
+    token = data.get("cancel_token") if isinstance(data, dict) else None
+    return token if isinstance(token, str) and TOKEN_PATTERN.fullmatch(token) else None
+
+
+def token_matches(expected: str | None, given: str | None) -> bool:
+    """Whether a cancel carries the goal's token (constant-time compare; no token: never)."""
+    if expected is None or given is None:
+        return False
+    return hmac.compare_digest(expected.encode(), given.encode())
 
 
 #: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)
@@ -382,13 +438,25 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
             )
 
 
+@dataclass(frozen=True)
+class Envelope:
+    """A decoded plan request: its goal id, the request, and the owner's cancel token (or ``None``)."""
+
+    goal_id: str
+    request: PlanRequest
+    cancel_token: str | None = None
+
+
 def decode_request(
     payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES
 ) -> tuple[str, PlanRequest]:
-    """Decode and validate a plan request.
+    """Decode and validate a plan request: ``(goal_id, request)`` (see :func:`decode_envelope`)."""
+    env = decode_envelope(payload, max_bytes)
+    return env.goal_id, env.request
 
-    Returns:
-        ``(goal_id, request)``.
+
+def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES) -> Envelope:
+    """Decode and validate a plan request with its envelope (goal id, cancel token).
 
     Raises:
         RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
@@ -427,14 +495,17 @@ def decode_request(
         raise RequestError(E_INVALID, "goal_id", "is required")
     check_id(goal_raw, "goal_id")
     assert goal_id is not None
-    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id")}
+    token = data.get("cancel_token")
+    if token is not None and not (isinstance(token, str) and TOKEN_PATTERN.fullmatch(token)):
+        raise RequestError(E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -", goal_id)
+    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id", "cancel_token")}
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
         raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
-    return goal_id, request
+    return Envelope(goal_id, request, token)
 
 
 def error_from_payload(payload: bytes) -> RequestError:

@@ -87,6 +87,7 @@ class _Job:
     query: zenoh.Query
     goal_id: str
     request: PlanRequest
+    cancel_token: str | None = None  # the owner's secret: a cancel must carry it
     cancel: CancelToken = field(default_factory=CancelToken)
     received: float = field(default_factory=time.monotonic)
 
@@ -306,20 +307,26 @@ class PlanService:
         with self._lock:
             self.stats.received += 1
         payload = query.payload
+        if self._stopping:
+            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
+        size = 0 if payload is None else len(payload)
+        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
+            return proto.RequestError(
+                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
+            )
         try:
-            if self._stopping:
-                raise proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
-            goal_id, request = proto.decode_request(
+            env = proto.decode_envelope(
                 b"" if payload is None else payload.to_bytes(), self.max_request_bytes
             )
         except proto.RequestError as err:
-            return err
+            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
+        goal_id, request = env.goal_id, env.request
         if self._admission is not None:
             try:
                 self._admission(request)
             except ValidationError as exc:  # the planner could not plan it: refused here, named
                 return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        job = _Job(query, goal_id, request)
+        job = _Job(query, goal_id, request, env.cancel_token)
         refusal: proto.RequestError
         with self._lock:
             if goal_id in self._active:
@@ -341,10 +348,28 @@ class PlanService:
         return refusal
 
     def _cancel(self, query: zenoh.Query) -> None:
+        """Cancel a goal of this instance if the query carries the goal's cancel token.
+
+        Every instance answers: ``found`` false when it does not have the goal, a ``forbidden``
+        error when it has it and the token is missing or wrong (goal ids are public: anyone
+        subscribed to ``P/goal/*/status`` learns them; the token is the owner's secret).
+        """
         goal_id = str(query.key_expr).rsplit("/", 1)[-1]
         with self._lock:
             job = self._active.get(goal_id)
         if job is not None:
+            payload = query.payload
+            given = proto.decode_cancel(
+                None if payload is None or len(payload) > proto.MAX_CANCEL_BYTES else payload.to_bytes()
+            )
+            if not proto.token_matches(job.cancel_token, given):
+                reason = (
+                    "this goal was sent without a cancel_token: it cannot be cancelled"
+                    if job.cancel_token is None
+                    else "the cancel_token does not match the goal's (only its owner can cancel it)"
+                )
+                self._reply_err(query, proto.RequestError(proto.E_FORBIDDEN, "cancel_token", reason, goal_id))
+                return
             job.cancel.cancel("cancelled by client")
         try:
             query.reply(
