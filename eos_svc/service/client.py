@@ -269,6 +269,8 @@ class EosClient:
             goal_id = f"{self._goal_prefix}{next(self._goal_numbers)}"
         else:
             proto.check_id(goal_id, "goal_id")
+        if instance is not None:
+            proto.check_id(instance, "instance")  # one instance, never a wildcard
         if cancel_token is None:
             cancel_token = proto.new_cancel_token()
         elif not proto.TOKEN_PATTERN.fullmatch(cancel_token):

@@ -164,6 +164,7 @@ class PlanService:
         self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._entities: list[Any] = []
+        self._peers: set[str] = set()  # instance ids whose liveliness token is alive
         self._stopping = False
         self._owns_session = False
         self._started = False
@@ -196,6 +197,7 @@ class PlanService:
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
+        self._plan_key_text = str(self._plan_key)
         self._threads.append(
             threading.Thread(target=self._dispatch, name=f"eos-dispatch-{self.instance}", daemon=True)
         )
@@ -206,6 +208,12 @@ class PlanService:
         for t in self._threads:
             t.start()
         s = self.session
+        # the other instances (their tokens): who answers a plan query that names no single instance
+        self._entities.append(
+            s.liveliness().declare_subscriber(
+                proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
+            )
+        )
         self._entities.append(
             s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
         )
@@ -247,12 +255,25 @@ class PlanService:
         self.stop()
 
     # ------------------------------------------------------------------ Zenoh callbacks
+    def _on_token(self, sample: zenoh.Sample) -> None:
+        iid = str(sample.key_expr).rsplit("/", 1)[-1]
+        with self._lock:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._peers.add(iid)
+            else:
+                self._peers.discard(iid)
+
     def _on_plan(self, query: zenoh.Query) -> None:
         """In Zenoh's thread: decode and admit at once (pure Python: never blocks, never calls Zenoh).
 
         An admitted plan goes straight to the workers' queue (one thread hop less);
         a refusal goes to the dispatcher thread, which sends the error reply.
         """
+        if str(query.key_expr) != self._plan_key_text:  # a wildcard: it reached every instance it names
+            with self._lock:
+                self.stats.received += 1
+            self._inbox.put(("wildcard", query, self._wildcard_refusal(query)))
+            return
         try:
             refusal = self._admit(query)
         except Exception as exc:  # a bug must not leave the query unanswered
@@ -282,9 +303,11 @@ class PlanService:
             item = self._inbox.get()
             if item is None:
                 break
-            _kind, query, refusal = item
+            kind, query, refusal = item
             try:
-                if refusal is not None:
+                if kind == "wildcard" and refusal is None:  # another instance answers it
+                    query.drop()
+                elif refusal is not None:
                     self._reply_err(query, refusal)
                 else:
                     self._cancel(query)
@@ -301,6 +324,27 @@ class PlanService:
                 self._reply_err(
                     item[1], item[2] or proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
                 )
+
+    def _wildcard_refusal(self, query: zenoh.Query) -> proto.RequestError | None:
+        """The one answer to a plan query whose key names no single instance, or ``None`` to stay
+        silent: of the live instances the key matches, only the first by id answers (with the
+        keys to use), so the query gets one error, never one plan per instance."""
+        key = query.key_expr
+        with self._lock:
+            named = sorted(
+                {self.instance} | {i for i in self._peers if key.intersects(proto.plan_key(self.prefix, i))}
+            )
+        if named[0] != self.instance:
+            return None
+        keys = ", ".join(proto.plan_key(self.prefix, i) for i in named[:8]) + (
+            " ..." if len(named) > 8 else ""
+        )
+        return proto.RequestError(
+            proto.E_INVALID,
+            "key_expr",
+            f"{str(key)[:200]} names {len(named)} instance(s); send a plan to exactly one: {keys} "
+            f"(find them with a liveliness query on {proto.instance_key(self.prefix)})",
+        )
 
     def _admit(self, query: zenoh.Query) -> proto.RequestError | None:
         """Queue the plan for a worker, or return why not."""
