@@ -19,7 +19,7 @@ import sys
 import threading
 from typing import Any
 
-from eos_svc.cli.common import fail, positive_float
+from eos_svc.cli.common import fail, int_at_least, positive_float
 from eos_svc.cli.plan import add_request_arguments
 from eos_svc.cli.plan import request_dict as plan_request_dict
 from eos_svc.cli.serve import add_connection_arguments, session_config
@@ -90,6 +90,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="FILE",
         help="send this JSON request file (schema/goal_id added) instead of the options",
+    )
+    g.add_argument(
+        "--repeat",
+        type=int_at_least(1),
+        default=1,
+        metavar="N",
+        help="send the request N times, one after the other (goal ids ID-1 .. ID-N; a load generator); "
+        "with --json one line per plan",
     )
     g.add_argument("--json", action="store_true", help="print the result as JSON")
     g.add_argument("--quiet", action="store_true", help="do not print the cycles")
@@ -182,33 +190,48 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         show = None if args.quiet or args.json else (lambda msg: print(format_cycle(msg), flush=True))
-        try:
-            outcome = client.plan(
-                request,
-                goal_id=goal_id,
-                on_cycle=show,
-                instance=args.instance,
-                timeout=args.timeout,
-                cancel_token=cancel_token,
-            )
-        except proto.RequestError as err:
-            print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
-            return 1
-        except ServiceUnavailableError as exc:
-            print(f"eos client: no service: {exc}")
-            return 1
-        if args.json:
-            print(
-                json.dumps(
-                    {"goal_id": outcome.goal_id, "instance": outcome.instance, "result": outcome.result},
-                    allow_nan=False,
+        code = 0
+        for k in range(1, args.repeat + 1):
+            goal = goal_id if args.repeat == 1 else f"{goal_id}-{k}"
+            try:
+                outcome = client.plan(
+                    request,
+                    goal_id=goal,
+                    on_cycle=show,
+                    instance=args.instance,
+                    timeout=args.timeout,
+                    cancel_token=cancel_token,
                 )
-            )
-        else:
-            r = outcome.result
-            print(
-                f"goal {outcome.goal_id} on {outcome.instance}: {r.get('status')} — {r.get('reason')} "
-                f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
-                f"{outcome.round_trip_s * 1000:.1f} ms)"
-            )
-        return 0 if outcome.status not in ("error", "cancelled") else 1
+            except proto.RequestError as err:
+                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}", flush=True)
+                code = 1
+                continue
+            except ServiceUnavailableError as exc:
+                print(f"eos client: no service: {exc}", flush=True)
+                code = 1
+                continue
+            print_outcome(outcome, args.json)
+            if outcome.status in ("error", "cancelled"):
+                code = 1
+        return code
+
+
+def print_outcome(outcome: Any, as_json: bool) -> None:
+    """One plan's outcome: a JSON line, or a short sentence."""
+    if as_json:
+        line = {
+            "goal_id": outcome.goal_id,
+            "instance": outcome.instance,
+            "attempts": outcome.attempts,
+            "complete": outcome.complete,
+            "result": outcome.result,
+        }
+        print(json.dumps(line, allow_nan=False), flush=True)
+    else:
+        r = outcome.result
+        print(
+            f"goal {outcome.goal_id} on {outcome.instance}: {r.get('status')} — {r.get('reason')} "
+            f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
+            f"{outcome.round_trip_s * 1000:.1f} ms)",
+            flush=True,
+        )
