@@ -35,7 +35,7 @@ from eos_svc.kinematics import HandModel
 SPAN_SAMPLES = 7
 
 #: per hand (by id, with the hand kept so the id cannot be reused): its span and neutral geometry
-_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry]]] = {}
+_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry], np.ndarray, np.ndarray]] = {}
 
 
 class _Geometry:
@@ -63,10 +63,14 @@ def hand_span(hand: HandModel) -> float:
     return _hand_data(hand)[1]
 
 
-def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry]]:
+def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], np.ndarray, np.ndarray]:
+    """(hand, span, geometries at the start, their bounding-sphere centres (n, 3) and radii (n,))."""
     entry = _PER_HAND.get(id(hand))
     if entry is None or entry[0] is not hand:
-        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand))
+        geometries = _neutral_placements(hand)
+        centres = np.array([g.centre for g in geometries]).reshape(-1, 3)
+        radii = np.array([g.radius for g in geometries])
+        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), geometries, centres, radii)
     return entry
 
 
@@ -148,7 +152,7 @@ def check_plannable(
     hand = hand or planner.default_hand()
     params = params or planner.parameters_for(hand)
     spec = request.obj
-    _, span, geometries = _hand_data(hand)
+    _, span, geometries, centres, radii = _hand_data(hand)
 
     width, size_field = smallest_width(spec)
     if width > span:
@@ -158,30 +162,44 @@ def check_plannable(
             "(widest opening between two fingertips): no grasp exists",
         )
 
-    obj = planner.make_object(spec)
-    tf_obj = coal.Transform3s(np.array(obj.placement.rotation), np.array(obj.placement.translation))
-    lo = np.asarray(params.search_box_lo, dtype=float) + np.asarray(params.grasp_centre, dtype=float)
-    hi = np.asarray(params.search_box_hi, dtype=float) + np.asarray(params.grasp_centre, dtype=float)
-    region = coal.Box(*(hi - lo))
-    tf_region = coal.Transform3s(np.eye(3), 0.5 * (lo + hi))
-    res = _distance(obj.geometry, tf_obj, region, tf_region)
-    gap = float(res.min_distance)
-    if gap > params.envelope_radius:
-        pos = ", ".join(f"{v:.3f}" for v in spec.position)
-        separation = np.abs(np.asarray(res.getNearestPoint1()) - np.asarray(res.getNearestPoint2()))
-        raise ValidationError(
-            f"object.position[{int(np.argmax(separation))}]",  # the axis it is farthest out along
-            f"out of reach: the object at [{pos}] m stays {gap:.3f} m from every grasp-centre "
-            f"position the search can reach ([{lo[0]:.3f}, {hi[0]:.3f}] x [{lo[1]:.3f}, {hi[1]:.3f}] "
-            f"x [{lo[2]:.3f}, {hi[2]:.3f}] m), more than the envelope radius {params.envelope_radius} m",
-        )
+    # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
+    # centre's distance to it and at least that minus the bounding radius: coal only in between.
+    centre = spec.position
+    radius = 0.5 * _diameter(spec)
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
+    outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
+    centre_gap = math.sqrt(sum(d * d for d in outside))
+    shape: coal.ShapeBase | None = None
+    tf_obj: coal.Transform3s | None = None
+    if centre_gap > params.envelope_radius:
+        gap, axis = centre_gap - radius, max(range(3), key=outside.__getitem__)
+        if gap <= params.envelope_radius:  # undecided by the bounds: the exact distance
+            shape, tf_obj = _coal_object(spec)
+            res = _distance(
+                shape,
+                tf_obj,
+                coal.Box(*(np.subtract(hi, lo))),
+                coal.Transform3s(np.eye(3), 0.5 * np.add(lo, hi)),
+            )
+            gap = float(res.min_distance)
+            separation = np.abs(np.asarray(res.getNearestPoint1()) - np.asarray(res.getNearestPoint2()))
+            axis = int(np.argmax(separation))
+        if gap > params.envelope_radius:
+            pos = ", ".join(f"{v:.3f}" for v in centre)
+            raise ValidationError(
+                f"object.position[{axis}]",  # the axis it is farthest out along
+                f"out of reach: the object at [{pos}] m stays ≥ {gap:.3f} m from every grasp-centre "
+                f"position the search can reach ([{lo[0]:.3f}, {hi[0]:.3f}] x [{lo[1]:.3f}, {hi[1]:.3f}] "
+                f"x [{lo[2]:.3f}, {hi[2]:.3f}] m), more than the envelope radius {params.envelope_radius} m",
+            )
 
-    position = np.asarray(spec.position, dtype=float)
-    reach = 0.5 * _diameter(spec) + params.clearance
-    for g in geometries:
-        if float(np.linalg.norm(position - g.centre)) - g.radius > reach:
-            continue  # the bounding spheres are apart: no query needed
-        d = float(_distance(obj.geometry, tf_obj, g.shape, g.transform).min_distance)
+    # Overlap: only the hand geometries whose bounding spheres come within clearance of the object's.
+    near = np.linalg.norm(centres - np.asarray(centre), axis=1) - radii <= radius + params.clearance
+    for g in (geometries[i] for i in np.flatnonzero(near)):
+        if shape is None or tf_obj is None:
+            shape, tf_obj = _coal_object(spec)
+        d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)
         if d < params.clearance:
             raise ValidationError(
                 "object.position",
@@ -189,6 +207,16 @@ def check_plannable(
                 f"distance {d * 1000:.1f} mm < clearance {params.clearance * 1000:.1f} mm); "
                 "place it in front of the open hand",
             )
+
+
+def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
+    """The object's coal shape and placement (as :func:`eos_svc.agents.planner.make_object` builds)."""
+    from eos_svc.agents import planner
+
+    obj = planner.make_object(spec)
+    return obj.geometry, coal.Transform3s(
+        np.array(obj.placement.rotation), np.array(obj.placement.translation)
+    )
 
 
 def _diameter(spec: ObjectSpec) -> float:
