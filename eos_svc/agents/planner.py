@@ -216,6 +216,7 @@ def plan(
     params: WorldParameters | None = None,
     keep_trace: bool = True,
     memory: GraspMemory | None = None,
+    check: bool = True,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -231,6 +232,9 @@ def plan(
         memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
             plan reaches grasping, records how it went (give the request a learned weight
             P(B_l) > 0 for recall to be chosen).
+        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` only
+            when the caller has just run it on this request, hand and parameters, as the
+            service does at admission).
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
@@ -241,7 +245,8 @@ def plan(
     request = request if request is not None else PlanRequest()
     hand = hand or default_hand()
     params = params or parameters_for(hand)
-    check_plannable(request, hand, params)
+    if check:
+        check_plannable(request, hand, params)
     world = build_world(request, hand, params, check=False)
     agents = build_agents(world, memory=memory)
     controller = Controller(

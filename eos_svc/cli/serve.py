@@ -74,7 +74,7 @@ def session_config(args: argparse.Namespace, *, serving: bool) -> Any:
     listen = list(getattr(args, "listen", None) or [])
     connect = list(args.connect or [])
     if args.config is None:
-        if serving and not listen:
+        if serving and not listen and args.mode != "client":  # a Zenoh client does not listen
             listen = [DEFAULT_LISTEN]
         if not serving and not connect:
             connect = [DEFAULT_LISTEN]

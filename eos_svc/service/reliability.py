@@ -151,7 +151,10 @@ class Report:
             ok=self.ok,
         )
         notes = [self.event] if self.event else []
-        notes.append(f"retried {self.retried}, streams complete {self.requested - len(self.incomplete)}")
+        notes.append(
+            f"retried {self.retried}, streams complete {self.requested - len(self.incomplete)}, "
+            f"observer gaps {len(self.observer_gaps)}, {self.wall_s:.1f} s"
+        )
         probe.detail = "; ".join(notes)
         return probe
 

@@ -187,13 +187,16 @@ class PlanService:
             self._planner = default_planner()
         if self._default_admission:
             self._admission = default_admission()
-            warm = PlanRequest()
-            self._admission(warm)  # loads the hand and measures its span now, not on the first request
-        try:  # the grasp planner can skip keeping its trace: the service streams every cycle instead
-            params = inspect.signature(self._planner).parameters
-            self._planner_kwargs = {"keep_trace": False} if "keep_trace" in params else {}
+            self._admission(PlanRequest())  # loads the hand, measures its span: now, not on a request
+        try:
+            accepted = set(inspect.signature(self._planner).parameters)
         except (TypeError, ValueError):
-            self._planner_kwargs = {}
+            accepted = set()
+        # the grasp planner can skip keeping its trace (the service streams every cycle instead)
+        # and its own admission check when the service has just run the same one
+        self._planner_kwargs = {"keep_trace": False} if "keep_trace" in accepted else {}
+        if "check" in accepted and self._admission is not None and self._admission is default_admission():
+            self._planner_kwargs["check"] = False
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
