@@ -102,7 +102,7 @@ class _Stream:
     def accept(self, payload: bytes) -> dict[str, Any] | None:
         """Parse a cycle or status message of this attempt's instance; record a cycle. None: not ours."""
         try:
-            msg = proto.loads_strict(payload)
+            msg = proto.loads_message(payload)
         except (ValueError, RecursionError):
             return None
         if not isinstance(msg, dict) or msg.get("instance") != self.iid:
@@ -426,7 +426,7 @@ class EosClient:
                 final = item
             elif kind == "reply":
                 if item.ok is not None:
-                    reply = proto.loads_strict(item.ok.payload.to_bytes())
+                    reply = proto.loads_message(item.ok.payload.to_bytes())
                 else:
                     error = proto.error_from_payload(item.err.payload.to_bytes())
                 grace_at = time.monotonic() + self.status_grace_s
@@ -477,7 +477,7 @@ class EosClient:
         ):
             if reply.ok is not None:
                 try:
-                    found = found or bool(proto.loads_strict(reply.ok.payload.to_bytes()).get("found"))
+                    found = found or bool(proto.loads_message(reply.ok.payload.to_bytes()).get("found"))
                 except (ValueError, AttributeError):
                     continue
             elif reply.err is not None:
@@ -496,7 +496,7 @@ class EosClient:
 
         def on_sample(sample: zenoh.Sample) -> None:
             try:
-                msg = proto.loads_strict(sample.payload.to_bytes())
+                msg = proto.loads_message(sample.payload.to_bytes())
             except (ValueError, RecursionError):
                 return
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"

@@ -42,6 +42,8 @@ from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any
 
+import msgspec
+
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
@@ -230,6 +232,8 @@ _DECODER = json.JSONDecoder(
 #: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
 _ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
 _BOM = b"\xef\xbb\xbf"
+_msgspec_decode = msgspec.json.Decoder().decode
+_msgspec_encode = msgspec.json.Encoder().encode
 
 
 def _text(data: bytes | bytearray | str) -> str:
@@ -249,6 +253,22 @@ def _text(data: bytes | bytearray | str) -> str:
 def loads_strict(data: bytes | str) -> Any:
     """Parse strict JSON (see the module doc); raises ValueError or RecursionError."""
     return _DECODER.decode(_text(data))
+
+
+def loads_message(data: bytes) -> Any:
+    """Parse a message *from the service* (reply, cycle, status) fast, with msgspec: strict
+    UTF-8, no NaN/Infinity (a duplicate key keeps its last value: requests, which come from
+    anyone, go through :func:`decode_envelope` instead). Raises ValueError or RecursionError."""
+    return _msgspec_decode(data)
+
+
+def encode_result(obj: Any) -> bytes:
+    """A plan result (or any message body) as compact JSON bytes, fast (msgspec; non-finite
+    floats become ``null``); values msgspec cannot encode go through ``to_jsonable`` first."""
+    try:
+        return _msgspec_encode(obj)
+    except (TypeError, ValueError, OverflowError, msgspec.EncodeError):
+        return dumps(to_jsonable(obj))
 
 
 def dumps(obj: Any) -> bytes:

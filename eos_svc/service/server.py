@@ -38,7 +38,7 @@ import zenoh
 from eos_svc.agents.request import PlanRequest
 from eos_svc.controller import CancelToken
 from eos_svc.errors import ValidationError
-from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.records import CycleRecord
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 
@@ -75,11 +75,8 @@ def _is_grasp_planner(planner: Planner | None) -> bool:
 
 
 def _encode(obj: Any) -> bytes:
-    """Strict JSON bytes; values JSON does not take (arrays, NaN, ...) go through ``to_jsonable``."""
-    try:
-        return proto.dumps(obj)
-    except (TypeError, ValueError):
-        return proto.dumps(to_jsonable(obj))
+    """Strict JSON bytes of a result (see :func:`~eos_svc.service.protocol.encode_result`)."""
+    return proto.encode_result(obj)
 
 
 @dataclass
