@@ -79,6 +79,38 @@ def _encode(obj: Any) -> bytes:
     return proto.encode_result(obj)
 
 
+class _CycleSink:
+    """Where a goal's cycles go: the first cycle is a plain ``put``; a publisher is declared only
+    when a second comes (declaring one costs more than a put, and a 1-cycle plan needs none).
+    Same key, encoding and congestion control either way, so the cycles stay in order."""
+
+    __slots__ = ("_key", "_publisher", "_sent", "_session")
+
+    def __init__(self, session: zenoh.Session, key: str) -> None:
+        self._session = session
+        self._key = key
+        self._publisher: Any = None
+        self._sent = False
+
+    def put(self, body: bytes) -> None:
+        """Publish one cycle message."""
+        if self._publisher is not None:
+            self._publisher.put(body)
+        elif not self._sent:
+            self._session.put(self._key, body, encoding=_JSON, congestion_control=_BLOCK)
+            self._sent = True
+        else:
+            self._publisher = self._session.declare_publisher(
+                self._key, encoding=_JSON, congestion_control=_BLOCK
+            )
+            self._publisher.put(body)
+
+    def undeclare(self) -> None:
+        """Undeclare the publisher, if one was declared."""
+        if self._publisher is not None:
+            self._publisher.undeclare()
+
+
 @dataclass
 class _Job:
     query: zenoh.Query
@@ -457,11 +489,11 @@ class PlanService:
         """Run one plan: publish its cycles and status, then answer its query exactly once.
 
         The critical path after the plan is: result to JSON (once), the ``done`` status, the
-        reply; the cycle publisher is undeclared and the query dropped after the reply.
+        reply; the cycle publisher (if any) is undeclared and the query dropped after the reply.
         """
         goal_id, query = job.goal_id, job.query
         answered = False
-        publisher: Any = None
+        publisher: _CycleSink | None = None
         try:
             if self._stopping:  # never ran, or cut short by stop(): let the client go elsewhere
                 raise proto.RequestError(
@@ -477,9 +509,7 @@ class PlanService:
                     "seed": job.request.seed,
                 }
             else:
-                publisher = self.session.declare_publisher(
-                    proto.cycle_key(self.prefix, goal_id), encoding=_JSON, congestion_control=_BLOCK
-                )
+                publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
                 self.session.put(
                     status_key,
                     (head + '"state":"running"}').encode(),
@@ -544,7 +574,7 @@ class PlanService:
         except Exception:
             log.debug("status publication failed", exc_info=True)
 
-    def _plan(self, job: _Job, publisher: Any, head: str) -> dict[str, Any]:
+    def _plan(self, job: _Job, publisher: _CycleSink, head: str) -> dict[str, Any]:
         seq = 0
         head += '"seq":'
         put = publisher.put
