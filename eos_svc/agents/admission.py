@@ -20,6 +20,7 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -35,13 +36,13 @@ from eos_svc.kinematics import HandModel
 SPAN_SAMPLES = 7
 
 #: per hand (by id, with the hand kept so the id cannot be reused): its span and neutral geometry
-_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry], np.ndarray, np.ndarray]] = {}
+_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry]]] = {}
 
 
 class _Geometry:
     """One hand collision geometry at the start configuration, with its bounding sphere (world)."""
 
-    __slots__ = ("centre", "name", "radius", "shape", "transform")
+    __slots__ = ("centre", "centre_xyz", "name", "radius", "shape", "transform")
 
     def __init__(self, name: str, shape: coal.ShapeBase, transform: coal.Transform3s) -> None:
         shape.computeLocalAABB()
@@ -50,6 +51,7 @@ class _Geometry:
         self.transform = transform
         self.centre = transform.transform(np.asarray(shape.aabb_center, dtype=float))
         self.radius = float(shape.aabb_radius)
+        self.centre_xyz = (float(self.centre[0]), float(self.centre[1]), float(self.centre[2]))
 
 
 def hand_span(hand: HandModel) -> float:
@@ -63,14 +65,11 @@ def hand_span(hand: HandModel) -> float:
     return _hand_data(hand)[1]
 
 
-def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], np.ndarray, np.ndarray]:
-    """(hand, span, geometries at the start, their bounding-sphere centres (n, 3) and radii (n,))."""
+def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry]]:
+    """(hand, span, its collision geometries at the start configuration), built once per hand."""
     entry = _PER_HAND.get(id(hand))
     if entry is None or entry[0] is not hand:
-        geometries = _neutral_placements(hand)
-        centres = np.array([g.centre for g in geometries]).reshape(-1, 3)
-        radii = np.array([g.radius for g in geometries])
-        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), geometries, centres, radii)
+        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand))
     return entry
 
 
@@ -105,6 +104,14 @@ def _neutral_placements(hand: HandModel) -> list[_Geometry]:
             _Geometry(go.name, go.geometry, coal.Transform3s(np.array(m.rotation), np.array(m.translation)))
         )
     return out
+
+
+@functools.lru_cache(maxsize=16)
+def _swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
+    """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
+    return lo, hi
 
 
 def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
@@ -152,7 +159,7 @@ def check_plannable(
     hand = hand or planner.default_hand()
     params = params or planner.parameters_for(hand)
     spec = request.obj
-    _, span, geometries, centres, radii = _hand_data(hand)
+    _, span, geometries = _hand_data(hand)
 
     width, size_field = smallest_width(spec)
     if width > span:
@@ -166,8 +173,7 @@ def check_plannable(
     # centre's distance to it and at least that minus the bounding radius: coal only in between.
     centre = spec.position
     radius = 0.5 * _diameter(spec)
-    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
-    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
+    lo, hi = _swept_box(params)
     outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
     centre_gap = math.sqrt(sum(d * d for d in outside))
     shape: coal.ShapeBase | None = None
@@ -195,8 +201,12 @@ def check_plannable(
             )
 
     # Overlap: only the hand geometries whose bounding spheres come within clearance of the object's.
-    near = np.linalg.norm(centres - np.asarray(centre), axis=1) - radii <= radius + params.clearance
-    for g in (geometries[i] for i in np.flatnonzero(near)):
+    cx, cy, cz = centre
+    reach = radius + params.clearance
+    for g in geometries:
+        gx, gy, gz = g.centre_xyz
+        if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
+            continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
         if shape is None or tf_obj is None:
             shape, tf_obj = _coal_object(spec)
         d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)

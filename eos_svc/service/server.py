@@ -5,8 +5,12 @@ prefix ``P`` (see :mod:`eos_svc.service.protocol`):
 
 - a liveliness token ``P/instance/<iid>`` (discovery);
 - a queryable ``P/plan/<iid>`` — a plan request in, exactly one reply out
-  (the result, or an error reply with a code, the field and the reason);
-- a queryable ``P/cancel/*`` — cancel a queued or running goal by id;
+  (the result, or an error reply with a code, the field and the reason); a query
+  whose key is not exactly this one (``P/plan/*``) reaches every instance it
+  matches: of those, only the first by id answers, with an error naming the keys
+  to use (each instance follows the others' liveliness tokens);
+- a queryable ``P/cancel/*`` — cancel a queued or running goal by id, with the
+  goal's secret ``cancel_token``;
 
 and publishes every cycle of a plan on ``P/goal/<goal_id>/cycle`` and its
 status on ``P/goal/<goal_id>/status``, reliably (``CongestionControl.BLOCK``).
@@ -17,7 +21,8 @@ callback decodes and validates the request and either queues it for the
 ``workers`` worker threads that run the planner (at most ``workers +
 queue_size`` goals admitted; past that a ``busy`` error) or hands the refusal
 to a dispatcher thread, which sends the error reply (it also serves cancel).
-Every query ends in exactly one ``reply`` or ``reply_err`` and is dropped.
+Every query on this instance's key ends in exactly one ``reply`` or ``reply_err`` and is
+dropped (a wildcard one another instance answers is only dropped).
 """
 
 from __future__ import annotations
@@ -304,7 +309,11 @@ class PlanService:
         if str(query.key_expr) != self._plan_key_text:  # a wildcard: it reached every instance it names
             with self._lock:
                 self.stats.received += 1
-            self._inbox.put(("wildcard", query, self._wildcard_refusal(query)))
+            try:
+                answer = self._wildcard_refusal(query)
+            except Exception as exc:  # a bug must not leave the query unanswered
+                answer = proto.RequestError(proto.E_INTERNAL, "request", repr(exc)[:300])
+            self._inbox.put(("wildcard", query, answer))
             return
         try:
             refusal = self._admit(query)
