@@ -19,8 +19,11 @@
    thread, with a request and a reply of the same sizes as the plan's (the
    transport floor in the same conditions). Goal: the 1-cycle plan's
    overhead (no stream) ≤ 2× that bare get→reply.
-2. Throughput (plans/s) with one and with two service processes on this
-   machine, the same plans sent by concurrent client threads, peer to peer and
+2. Scale-out: plans per second with one and with two service processes (one
+   worker each), the same plans sent by concurrent client threads, in
+   alternating batches on the same two processes ("one": every plan to the
+   first, the second idle; "two": spread over both), so both figures share the
+   machine's conditions; median of the per-round ratios. Peer to peer and
    through a router (a Python Zenoh router process; instances and the client
    are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes.
 
@@ -36,7 +39,6 @@ import argparse
 import importlib.metadata
 import os
 import queue
-import resource
 import signal
 import statistics
 import subprocess
@@ -200,57 +202,61 @@ def start_clients_of(router_port: int, n: int, workers: int) -> list[Server]:
     return servers
 
 
-def throughput(
-    n_servers: int, requests: list[PlanRequest], threads: int, workers: int, via_router: bool = False
-) -> tuple[float, dict[str, float]]:
-    """Plans per second through ``n_servers`` service processes, ``threads`` concurrent client threads
-    (peer to peer, or all as Zenoh clients of a router process)."""
-    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
+def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instance: str | None) -> float:
+    """Plans per second for ``requests`` sent by ``threads`` client threads (to ``instance`` only,
+    or spread over every instance)."""
+    todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
+    for r in requests:
+        todo.put(r)
+
+    def work() -> None:
+        while True:
+            try:
+                r = todo.get_nowait()
+            except queue.Empty:
+                return
+            client.plan(r, watch=False, instance=instance)
+
+    pool = [threading.Thread(target=work) for _ in range(threads)]
+    t0 = time.perf_counter()
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    return len(requests) / (time.perf_counter() - t0)
+
+
+def scale_out(
+    requests: list[PlanRequest], threads: int, rounds: int, via_router: bool = False
+) -> tuple[list[float], list[float]]:
+    """Plans/s with one and with two service processes, in alternating batches on the same two
+    processes (one worker each): "one" sends every plan to inst-0 (inst-1 idles), "two" spreads
+    them. Peer to peer, or every session a Zenoh client of a router process. Returns the rates
+    of each round: (one, two)."""
     router = None
     if via_router:
         router, router_port = start_router()
-        servers = start_clients_of(router_port, n_servers, workers)
+        servers = start_clients_of(router_port, 2, workers=1)
         config = make_config(mode="client", connect=[loopback(router_port)])
     else:
-        servers = start_servers(n_servers, planner="grasp", workers=workers)
+        servers = start_servers(2, planner="grasp", workers=1)
         config = make_config(connect=[loopback(s.port) for s in servers])
+    one, two = [], []
     try:
         client = EosClient.open(config)
-        client.wait_for_instances(n_servers, timeout=15)
-        for r in requests[: 2 * n_servers]:  # warm-up: imports and first plans in every process
+        client.wait_for_instances(2, timeout=15)
+        for r in requests[:4]:  # warm-up: first plans in both processes
             client.plan(r, watch=False)
-        todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
-        for r in requests:
-            todo.put(r)
-        used: dict[str, float] = {}
-        lock = threading.Lock()
-
-        def work() -> None:
-            while True:
-                try:
-                    r = todo.get_nowait()
-                except queue.Empty:
-                    return
-                out = client.plan(r, watch=False)
-                with lock:
-                    used[out.instance] = used.get(out.instance, 0) + 1
-
-        pool = [threading.Thread(target=work) for _ in range(threads)]
-        t0 = time.perf_counter()
-        for t in pool:
-            t.start()
-        for t in pool:
-            t.join()
-        wall = time.perf_counter() - t0
+        for _ in range(rounds):
+            one.append(_batch(client, requests, threads, servers[0].instance))
+            two.append(_batch(client, requests, threads, None))
         client.close()
     finally:
         stop_servers(servers)
         if router is not None:
             router.terminate()
             router.wait(10)
-    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the servers' CPU time, once they are reaped
-    used["cpu_s"] = round(cpu1.ru_utime + cpu1.ru_stime - cpu0.ru_utime - cpu0.ru_stime, 1)
-    return len(requests) / wall, used
+    return one, two
 
 
 # ---------------------------------------------------------------------------------------- --breakdown
@@ -498,7 +504,7 @@ def main() -> int:
         breakdown(40 if args.quick else 120)
         return 0
     n_rt = 60 if args.quick else 150
-    n_tp = 24 if args.quick else 60
+    n_tp = 24 if args.quick else 40
     version = importlib.metadata.version("eclipse-zenoh")
     print(
         f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
@@ -564,19 +570,22 @@ def main() -> int:
 
     seeds = [1, 2, 3, 4, 6, 7]  # plans of 50-120 cycles
     requests = [PlanRequest(seed=seeds[i % len(seeds)]) for i in range(n_tp)]
-    print(f"\n2. throughput: {n_tp} plans (seeds {seeds}), 4 client threads, no stream, one worker each")
+    rounds = 2 if args.quick else 4
+    print(
+        f"\n2. scale-out: {n_tp} plans (seeds {seeds}) per batch, 4 client threads, no stream; two eos serve "
+        f"processes (one worker each), {rounds} rounds of alternating batches: 'one' = every plan to inst-0, "
+        "'two' = spread over both"
+    )
     ratios = {}
     for topology, via_router in (("peer to peer", False), ("through a router", True)):
-        rates: dict[int, float] = {}
-        for k in (1, 2):
-            rate, used = throughput(k, requests, threads=4, workers=1, via_router=via_router)
-            rates[k] = rate
-            print(
-                f"   {topology}, {k} process(es): {rate:6.2f} plans/s   plans per instance, "
-                f"server CPU s: {used}"
-            )
-        ratios[topology] = rates[2] / rates[1]
-        print(f"   {topology}: two processes / one = {ratios[topology]:.2f}x")
+        one, two = scale_out(requests, threads=4, rounds=rounds, via_router=via_router)
+        per_round = [b / a for a, b in zip(one, two, strict=True)]
+        ratios[topology] = statistics.median(per_round)
+        print(
+            f"   {topology:<17} one {statistics.median(one):6.2f} plans/s, two {statistics.median(two):6.2f} "
+            f"plans/s; two / one per round {', '.join(f'{r:.2f}' for r in per_round)} -> median "
+            f"{ratios[topology]:.2f}x"
+        )
     print(
         "   goal ≥ 1.8x from one to two processes: "
         + ", ".join(f"{t} {'met' if r >= 1.8 else 'NOT met'}" for t, r in ratios.items())
