@@ -251,8 +251,15 @@ def _text(data: bytes | bytearray | str) -> str:
 
 
 def loads_strict(data: bytes | str) -> Any:
-    """Parse strict JSON (see the module doc); raises ValueError or RecursionError."""
-    return _DECODER.decode(_text(data))
+    """Parse strict JSON (see the module doc); raises ValueError (an integer beyond ±2**64
+    included, named by where it is) or RecursionError."""
+    value = _DECODER.decode(_text(data))
+    if _LONG_DIGITS.search(data.encode() if isinstance(data, str) else data):
+        try:
+            _check_integers(value, "", None)
+        except RequestError as err:
+            raise ValueError(f"{err.field}: {err.reason}") from None
+    return value
 
 
 def loads_message(data: bytes) -> Any:

@@ -105,3 +105,21 @@ def test_clip_keeps_short_text_and_bounds_long_text():
     for s in ["a" * 1000, "😀" * 1000, '"\\' * 1000]:
         c = proto.clip(s, 256)
         assert len(proto.dumps(c)) <= 256 and c.endswith("…") and s.startswith(c[:-1])
+
+
+def test_loads_strict_names_a_huge_integer_instead_of_returning_it():
+    with pytest.raises(ValueError, match=r"object\.position\[1\]: integer too large"):
+        proto.loads_strict('{"object": {"position": [0.2, ' + "9" * 40 + ", 0]}}")
+    assert proto.loads_strict(b'{"seed": 18446744073709551616}') == {"seed": 2**64}
+
+
+def test_cli_request_file_with_a_huge_integer_exits_2_naming_it(tmp_path, capsys):
+    from eos_svc.cli import main
+
+    path = tmp_path / "request.json"
+    path.write_text('{"seed": ' + "7" * 5000 + "}")
+    with pytest.raises(SystemExit) as info:
+        main(["client", "plan", "--request", str(path)])
+    assert info.value.code == 2
+    err = capsys.readouterr().err
+    assert "--request" in err and "seed" in err and len(err) < 500
