@@ -27,6 +27,7 @@ from typing import Any
 import zenoh
 
 from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import EosError
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient
 
@@ -58,7 +59,7 @@ def rss_mb(pid: int) -> float:
         for line in fh:
             if line.startswith("VmRSS:"):
                 return int(line.split()[1]) / 1024.0
-    raise OSError(f"no VmRSS for pid {pid}")
+    raise EosError(f"no VmRSS for pid {pid}")
 
 
 def _ask(session: zenoh.Session, key: str, payload: bytes, timeout: float = 10.0) -> list[str]:

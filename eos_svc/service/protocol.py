@@ -190,11 +190,11 @@ def _reject_constant(name: str) -> Any:
     raise ValueError(f"{name} is not valid JSON")
 
 
-class DuplicateKeyError(ValueError):
+class DuplicateKeyError(ValidationError):
     """An object of the message has the same key twice (RFC 8259: names SHOULD be unique)."""
 
     def __init__(self, key: str) -> None:
-        super().__init__(f"duplicate key {key!r}")
+        super().__init__(key, "duplicate key in an object")
         self.key = key
 
 
@@ -246,7 +246,7 @@ def _text(data: bytes | bytearray | str) -> str:
     if data.startswith(_BOM):
         data = data[3:]
     elif b"\x00" in data[:4] or data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # what json.detect_encoding reads
-        raise UnicodeDecodeError("utf-8", bytes(data[:4]), 0, 1, "UTF-16 or UTF-32 text (the wire is UTF-8)")
+        raise ValidationError("payload", "not UTF-8: UTF-16 or UTF-32 text (the wire is UTF-8)")
     return data.decode("utf-8")  # strict: a UnicodeDecodeError (a ValueError) names the byte
 
 
@@ -258,7 +258,7 @@ def loads_strict(data: bytes | str) -> Any:
         try:
             _check_integers(value, "", None)
         except RequestError as err:
-            raise ValueError(f"{err.field}: {err.reason}") from None
+            raise ValidationError(err.field, err.reason) from None
     return value
 
 
@@ -495,6 +495,8 @@ def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MA
         data = _DECODER.decode(_text(raw))
     except DuplicateKeyError as exc:
         raise RequestError(E_NOT_JSON, clip(exc.key, MAX_FIELD_JSON), "duplicate key in an object") from None
+    except ValidationError as exc:  # not UTF-8 at all (UTF-16/32), NaN/Infinity
+        raise RequestError(E_NOT_JSON, "request", exc.reason) from None
     except UnicodeDecodeError as exc:
         raise RequestError(
             E_NOT_JSON,

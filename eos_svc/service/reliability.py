@@ -35,7 +35,7 @@ import zenoh
 from eos_svc.agents.request import PlanRequest
 from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import EosClient, PlanOutcome
+from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
 from eos_svc.service.session import free_port, loopback, make_config
 
 
@@ -376,7 +376,7 @@ def _start_more(first: Server, planner: str) -> list[Server]:
     line = proc.stdout.readline()
     if "serving" not in line:
         proc.kill()
-        raise RuntimeError(f"eos serve did not start: {line}")
+        raise ServiceUnavailableError(f"eos serve did not start: {line}")
     return [Server(port, proc, "inst-1")]
 
 
