@@ -104,7 +104,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the chosen action; exit 0 on success, 1 on a refused/failed request or no service."""
+    """Run the chosen action; exit 0 on success (a plan: only status ``success``, a good grasp; with
+    --repeat, every plan), 1 on any other plan status, a refused request or no service."""
     if args.action is None:
         fail("ACTION: choose one of list, plan, cancel, watch")
     conf = session_config(args, serving=False)
@@ -211,7 +212,7 @@ def run(args: argparse.Namespace) -> int:
                 code = 1
                 continue
             print_outcome(outcome, args.json)
-            if outcome.status in ("error", "cancelled"):
+            if outcome.status != "success":  # exit 0 only when every plan was a good grasp
                 code = 1
         return code
 
