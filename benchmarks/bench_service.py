@@ -14,13 +14,18 @@
    the request, the hand-off to a worker, the ``running`` and ``done`` status
    messages, JSON-encoding and publishing every cycle (the service always
    publishes; "no stream" only means the client does not subscribe), the result
-   to JSON, the reply and its parsing. Goal: ≤ 1 ms median for the 1-cycle
-   plan without stream. Measured in the same loop, for reference: a bare
+   to JSON, the reply and its parsing. Measured in the same loop: a bare
    Zenoh get→reply to a queryable in another process answering from its own
-   thread with a reply of the same size (the transport floor in the same
-   conditions).
-2. Throughput (plans/s) with one and with two service processes on this
-   machine, the same plans sent by concurrent client threads. Goal: ≥ 1.7×.
+   thread, with a request and a reply of the same sizes as the plan's (the
+   transport floor in the same conditions). Goal: the 1-cycle plan's
+   overhead (no stream) ≤ 2× that bare get→reply.
+2. Scale-out: plans per second with one and with two service processes (one
+   worker each), the same plans sent by concurrent client threads, in
+   alternating batches on the same two processes ("one": every plan to the
+   first, the second idle; "two": spread over both), so both figures share the
+   machine's conditions; median of the per-round ratios. Peer to peer and
+   through a router (a Python Zenoh router process; instances and the client
+   are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes.
 
 ``--breakdown`` times one request's path across both processes (timestamps on
 the monotonic clock, which both share) and prints the median of every step.
@@ -34,7 +39,6 @@ import argparse
 import importlib.metadata
 import os
 import queue
-import resource
 import signal
 import statistics
 import subprocess
@@ -49,7 +53,8 @@ import zenoh
 from eos_svc.agents.planner import plan
 from eos_svc.agents.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
-from eos_svc.service.reliability import start_servers, stop_servers
+from eos_svc.service import protocol as proto
+from eos_svc.service.reliability import Server, start_servers, stop_servers
 
 
 def median_ms(xs: list[float]) -> float:
@@ -85,18 +90,18 @@ def bare_zenoh_round_trip(n: int) -> float:
     return median_ms(ts[n // 10 :])
 
 
-#: size of a 1-cycle plan's reply (bytes): the echo server answers with as much
-ECHO_REPLY_BYTES = 2700
+#: default size of the echo server's reply (bytes): about a 1-cycle plan's reply
+ECHO_REPLY_BYTES = 1600
 
 
-def echo_server(port: int) -> None:
+def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES) -> None:
     """``--echo-server``: a queryable answering every get at once from its own thread (loopback)."""
     session = zenoh.open(make_config(listen=[loopback(port)]))
     inbox: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
     qable = session.declare_queryable(
         "bench/echo", zenoh.handlers.Callback(inbox.put, indirect=False), complete=True
     )
-    body = b"x" * ECHO_REPLY_BYTES
+    body = b"x" * reply_bytes
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
 
@@ -113,10 +118,12 @@ def echo_server(port: int) -> None:
     session.close()
 
 
-def start_echo() -> tuple[subprocess.Popen[str], zenoh.Session]:
+def start_echo(reply_bytes: int) -> tuple[subprocess.Popen[str], zenoh.Session]:
     port = free_port()
     proc = subprocess.Popen(
-        [sys.executable, __file__, "--echo-server", str(port)], stdout=subprocess.PIPE, text=True
+        [sys.executable, __file__, "--echo-server", str(port), str(reply_bytes)],
+        stdout=subprocess.PIPE,
+        text=True,
     )
     assert proc.stdout is not None and "echo ready" in proc.stdout.readline()
     session = zenoh.open(make_config(connect=[loopback(port)]))
@@ -149,7 +156,7 @@ def overhead(
     """Interleaved medians (ms): in-process plan, service round trip, bare echo; and the plan's cycles."""
     local, remote, bare = [], [], []
     cycles = 0
-    payload = b"x" * 300  # a plan request's size
+    payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
     for i in range(n + 5):
         t0 = time.perf_counter()
         plan(request, keep_trace=False)
@@ -168,46 +175,88 @@ def overhead(
     return median_ms(local), median_ms(remote), median_ms(bare), cycles
 
 
-def throughput(
-    n_servers: int, requests: list[PlanRequest], threads: int, workers: int
-) -> tuple[float, dict[str, float]]:
-    """Plans per second through ``n_servers`` service processes, ``threads`` concurrent client threads."""
-    cpu0 = resource.getrusage(resource.RUSAGE_CHILDREN)
-    servers = start_servers(n_servers, planner="grasp", workers=workers)
+def start_router() -> tuple[subprocess.Popen[str], int]:
+    """A Python Zenoh router process on loopback (``python -m eos_svc.service.router``)."""
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "eos_svc.service.router", "--listen", loopback(port)],
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert proc.stdout is not None and "running" in proc.stdout.readline()
+    return proc, port
+
+
+def start_clients_of(router_port: int, n: int, workers: int) -> list[Server]:
+    """``n`` ``eos serve`` processes as Zenoh clients of the router."""
+    servers = []
+    for i in range(n):
+        cmd = [
+            sys.executable, "-m", "eos_svc.cli", "serve", "--mode", "client",
+            "--connect", loopback(router_port), "--instance", f"inst-{i}", "--workers", str(workers),
+            "--log-level", "warning",
+        ]  # fmt: skip
+        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        assert proc.stdout is not None and "serving" in proc.stdout.readline()
+        servers.append(Server(router_port, proc, f"inst-{i}"))
+    return servers
+
+
+def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instance: str | None) -> float:
+    """Plans per second for ``requests`` sent by ``threads`` client threads (to ``instance`` only,
+    or spread over every instance)."""
+    todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
+    for r in requests:
+        todo.put(r)
+
+    def work() -> None:
+        while True:
+            try:
+                r = todo.get_nowait()
+            except queue.Empty:
+                return
+            client.plan(r, watch=False, instance=instance)
+
+    pool = [threading.Thread(target=work) for _ in range(threads)]
+    t0 = time.perf_counter()
+    for t in pool:
+        t.start()
+    for t in pool:
+        t.join()
+    return len(requests) / (time.perf_counter() - t0)
+
+
+def scale_out(
+    requests: list[PlanRequest], threads: int, rounds: int, via_router: bool = False
+) -> tuple[list[float], list[float]]:
+    """Plans/s with one and with two service processes, in alternating batches on the same two
+    processes (one worker each): "one" sends every plan to inst-0 (inst-1 idles), "two" spreads
+    them. Peer to peer, or every session a Zenoh client of a router process. Returns the rates
+    of each round: (one, two)."""
+    router = None
+    if via_router:
+        router, router_port = start_router()
+        servers = start_clients_of(router_port, 2, workers=1)
+        config = make_config(mode="client", connect=[loopback(router_port)])
+    else:
+        servers = start_servers(2, planner="grasp", workers=1)
+        config = make_config(connect=[loopback(s.port) for s in servers])
+    one, two = [], []
     try:
-        client = EosClient.open(make_config(connect=[loopback(s.port) for s in servers]))
-        client.wait_for_instances(n_servers, timeout=15)
-        for r in requests[: 2 * n_servers]:  # warm-up: imports and first plans in every process
+        client = EosClient.open(config)
+        client.wait_for_instances(2, timeout=15)
+        for r in requests[:4]:  # warm-up: first plans in both processes
             client.plan(r, watch=False)
-        todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
-        for r in requests:
-            todo.put(r)
-        used: dict[str, float] = {}
-        lock = threading.Lock()
-
-        def work() -> None:
-            while True:
-                try:
-                    r = todo.get_nowait()
-                except queue.Empty:
-                    return
-                out = client.plan(r, watch=False)
-                with lock:
-                    used[out.instance] = used.get(out.instance, 0) + 1
-
-        pool = [threading.Thread(target=work) for _ in range(threads)]
-        t0 = time.perf_counter()
-        for t in pool:
-            t.start()
-        for t in pool:
-            t.join()
-        wall = time.perf_counter() - t0
+        for _ in range(rounds):
+            one.append(_batch(client, requests, threads, servers[0].instance))
+            two.append(_batch(client, requests, threads, None))
         client.close()
     finally:
         stop_servers(servers)
-    cpu1 = resource.getrusage(resource.RUSAGE_CHILDREN)  # the servers' CPU time, once they are reaped
-    used["cpu_s"] = round(cpu1.ru_utime + cpu1.ru_stime - cpu0.ru_utime - cpu0.ru_stime, 1)
-    return len(requests) / wall, used
+        if router is not None:
+            router.terminate()
+            router.wait(10)
+    return one, two
 
 
 # ---------------------------------------------------------------------------------------- --breakdown
@@ -262,7 +311,7 @@ def probe_server(port: int, out: str) -> None:
     from eos_svc.service import server as srv
 
     sys.setswitchinterval(0.001)  # as eos serve
-    _timed(proto, "decode_request", "decode0", "decode1")
+    _timed(proto, "decode_envelope", "decode0", "decode1")
     _timed(srv, "_encode", "json0", "json1")
 
     class Result:
@@ -282,7 +331,7 @@ def probe_server(port: int, out: str) -> None:
             _stamp("cycle1")
 
         _stamp("plan0")
-        r = plan(request, on_cycle=cycle, cancel=cancel, keep_trace=keep_trace)
+        r = plan(request, on_cycle=cycle, cancel=cancel, keep_trace=keep_trace, check=False)
         _stamp("plan1")
         return Result(r)
 
@@ -297,13 +346,26 @@ def probe_server(port: int, out: str) -> None:
             super()._run(job)
             _stamp("worker_end")
 
+    from eos_svc.agents.admission import check_plannable
+
+    def admission(request: Any) -> None:  # the service's admission, as eos serve runs it
+        _stamp("admission0")
+        check_plannable(request)
+        _stamp("admission1")
+
     session = zenoh.open(make_config(listen=[loopback(port)]))
-    service = Probed(session, instance="probe", planner=planner, workers=1)
+    service = Probed(session, instance="probe", planner=planner, workers=1, admission=admission)
     service.session = _Proxy(  # type: ignore[assignment]
         session,
         {
             "declare_publisher": "declare",
-            "put": lambda a: "running" if b'"state":"running"' in bytes(a[1]) else "done",
+            "put": lambda a: (
+                "running"
+                if b'"state":"running"' in bytes(a[1])
+                else "done"
+                if b'"state":"done"' in bytes(a[1])
+                else "cycleput"
+            ),
         },
     )
     service.start()
@@ -325,10 +387,10 @@ _STEPS = [
     ("get0", "callback", "transport: get -> server callback (GIL taken)"),
     ("callback", "decode0", "server: payload bytes, counters"),
     ("decode0", "decode1", "server: decode + validate request"),
-    ("decode1", "admitted", "server: admit, job, queue"),
+    ("admission0", "admission1", "server: admission (check_plannable)"),
+    ("admission1", "admitted", "server: job, queue"),
     ("admitted", "worker", "server: wake the worker thread"),
-    ("worker", "declare0", "server: message heads"),
-    ("declare0", "declare1", "server: declare cycle publisher"),
+    ("worker", "running0", "server: message heads"),
     ("running0", "running1", "server: put status running"),
     ("plan0", "plan1", "plan in the server (incl. cycles)"),
     ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),
@@ -361,7 +423,7 @@ def breakdown(n: int) -> None:
     )
     assert proc.stdout is not None and "probe ready" in proc.stdout.readline()
     _timed(proto, "encode_request", "encode0", "encode1")
-    _timed(proto, "loads_strict", "loads0", "loads1")
+    _timed(proto, "loads_message", "loads0", "loads1")
     direct = cli.direct_callback
 
     def stamped_callback(cb: Any, drop: Any = None) -> Any:
@@ -429,11 +491,11 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repetitions")
     parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
-    parser.add_argument("--echo-server", type=int, metavar="PORT", help=argparse.SUPPRESS)
+    parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
     parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo_server is not None:
-        echo_server(args.echo_server)
+        echo_server(*args.echo_server)
         return 0
     if args.probe_server is not None:
         probe_server(int(args.probe_server[0]), args.probe_server[1])
@@ -442,7 +504,7 @@ def main() -> int:
         breakdown(40 if args.quick else 120)
         return 0
     n_rt = 60 if args.quick else 150
-    n_tp = 24 if args.quick else 60
+    n_tp = 24 if args.quick else 40
     version = importlib.metadata.version("eclipse-zenoh")
     print(
         f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
@@ -452,10 +514,17 @@ def main() -> int:
     print(f"bare Zenoh get->reply round trip, back to back (two sessions, one process): {bare:.3f} ms median")
 
     servers = start_servers(1, planner="grasp", workers=1)
-    echo_proc, echo = start_echo()
+    echo_proc = None
     try:
         client = EosClient.open(make_config(connect=[loopback(servers[0].port)]))
         client.wait_for_instances(1, timeout=15)
+        reply_bytes = len(  # the echo answers with as many bytes as a 1-cycle plan's reply
+            b'{"schema":1,"goal_id":"g-000000000000-1","instance":"%s","result":'
+            % servers[0].instance.encode()
+            + proto.encode_result(client.plan(PlanRequest(seed=3, max_cycles=1), watch=False).result)
+            + b"}"
+        )
+        echo_proc, echo = start_echo(reply_bytes)
         rows: list[tuple[str, float, float, float, int]] = []
         one = PlanRequest(seed=3, max_cycles=1)
         for label, req, n, watch in (
@@ -468,9 +537,10 @@ def main() -> int:
         client.close()
     finally:
         stop_servers(servers)
-        echo.close()
-        echo_proc.terminate()
-        echo_proc.wait(10)
+        if echo_proc is not None:
+            echo.close()
+            echo_proc.terminate()
+            echo_proc.wait(10)
     print("\n1. round-trip overhead over the in-process plan (medians of interleaved runs)")
     print(
         "   in-process: plan(request, keep_trace=False), no cycle callback; overhead = service - in-process,"
@@ -482,8 +552,12 @@ def main() -> int:
     )
     for label, loc, rem, bare_rt, cyc in rows:
         print(f"   {label:<38} {loc:9.2f}ms {rem:7.2f}ms {rem - loc:7.2f}ms {cyc:7d} {bare_rt:14.2f}ms")
-    goal = rows[0][2] - rows[0][1]
-    print(f"   goal ≤ 1 ms median overhead (1-cycle plan, no stream): {'met' if goal <= 1.0 else 'NOT met'}")
+    ratio = (rows[0][2] - rows[0][1]) / rows[0][3]
+    print(
+        f"   1-cycle plan, no stream: overhead / bare get->reply = {ratio:.2f}x "
+        f"(request {len(proto.encode_request('g-000000000000-1', one, proto.new_cancel_token()))} B, "
+        f"reply {reply_bytes} B); goal ≤ 2x: {'met' if ratio <= 2.0 else 'NOT met'}"
+    )
     per_cycle = (rows[2][2] - rows[2][1] - (rows[1][2] - rows[1][1])) / max(1, rows[2][4] - 1)
     print(
         f"   streaming: ≈ {per_cycle * 1e3:.0f} µs of overhead per further cycle "
@@ -496,22 +570,26 @@ def main() -> int:
 
     seeds = [1, 2, 3, 4, 6, 7]  # plans of 50-120 cycles
     requests = [PlanRequest(seed=seeds[i % len(seeds)]) for i in range(n_tp)]
-    print(f"\n2. throughput: {n_tp} plans (seeds {seeds}), 4 client threads, no stream")
-    ratios = {}
-    for workers in (1, 2):
-        rates: dict[int, float] = {}
-        for k in (1, 2):
-            rate, used = throughput(k, requests, threads=4, workers=workers)
-            rates[k] = rate
-            print(
-                f"   workers={workers}, {k} process(es): {rate:6.2f} plans/s   plans per instance, "
-                f"server CPU s: {used}"
-            )
-        ratios[workers] = rates[2] / rates[1]
-        print(f"   workers={workers}: two processes / one = {ratios[workers]:.2f}x")
+    rounds = 2 if args.quick else 4
     print(
-        f"   goal ≥ 1.7x from one to two processes (one worker each): "
-        f"{'met' if ratios[1] >= 1.7 else 'NOT met'}"
+        f"\n2. scale-out: {n_tp} plans (seeds {seeds}) per batch, 4 client threads, no stream; two eos serve "
+        f"processes (one worker each), {rounds} rounds of alternating batches: 'one' = every plan to inst-0, "
+        "'two' = spread over both"
+    )
+    ratios = {}
+    for topology, via_router in (("peer to peer", False), ("through a router", True)):
+        one, two = scale_out(requests, threads=4, rounds=rounds, via_router=via_router)
+        per_round = [b / a for a, b in zip(one, two, strict=True)]
+        ratios[topology] = statistics.median(per_round)
+        print(
+            f"   {topology:<17} one {statistics.median(one):6.2f} plans/s, two {statistics.median(two):6.2f} "
+            f"plans/s; two / one per round {', '.join(f'{r:.2f}' for r in per_round)} -> median "
+            f"{ratios[topology]:.2f}x"
+        )
+    print(
+        "   goal ≥ 1.8x from one to two processes: "
+        + ", ".join(f"{t} {'met' if r >= 1.8 else 'NOT met'}" for t, r in ratios.items())
+        + f" (load average now {os.getloadavg()[0]:.2f}: other processes share the 2 CPUs)"
     )
     return 0
 

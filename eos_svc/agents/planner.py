@@ -38,6 +38,7 @@ import numpy as np
 
 from eos_svc.agent import Agent
 from eos_svc.agents import keys
+from eos_svc.agents.admission import check_plannable
 from eos_svc.agents.base import STAGES
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
@@ -124,15 +125,26 @@ def parameters_for(hand: HandModel) -> WorldParameters:
 
 
 def build_world(
-    request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
+    request: PlanRequest,
+    hand: HandModel | None = None,
+    params: WorldParameters | None = None,
+    *,
+    check: bool = True,
 ) -> GraspWorld:
     """The world of one plan: hand at its start pose, the object, seeded randomness.
 
+    Args:
+        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` when
+            the caller already has).
+
     Raises:
-        ValidationError: the object is outside the search workspace or overlaps the hand.
+        ValidationError: the object is out of reach, overlaps the hand or is too large
+            (see :mod:`eos_svc.agents.admission`).
     """
     hand = hand or default_hand()
     params = params or parameters_for(hand)
+    if check:
+        check_plannable(request, hand, params)
     obj = make_object(request.obj)
     search_seed, sensor_seed = np.random.SeedSequence(request.seed).spawn(2)
     state = hand.state(hand.neutral())
@@ -146,20 +158,6 @@ def build_world(
         estimator=CurvatureEstimator(),
         sweeps=_sweeps(hand),
     )
-    # The object must be findable: its centre within envelope reach of the region the
-    # grasp centre can sweep, and not overlapping the hand at the start.
-    lo = np.asarray(params.search_box_lo) + np.asarray(params.grasp_centre) - params.envelope_radius
-    hi = np.asarray(params.search_box_hi) + np.asarray(params.grasp_centre) + params.envelope_radius
-    centre = np.asarray(request.obj.position)
-    for i, axis in enumerate("xyz"):
-        if not lo[i] <= centre[i] <= hi[i]:
-            raise ValidationError(
-                f"object.position[{i}]",
-                f"{axis} = {centre[i]:.3f} m is outside the hand's search workspace "
-                f"[{lo[i]:.3f}, {hi[i]:.3f}] m",
-            )
-    if world.hand_clearance() < params.clearance:
-        raise ValidationError("object.position", "the object overlaps the hand at its start pose")
     return world
 
 
@@ -200,6 +198,7 @@ def plan(
     keep_trace: bool = True,
     memory: GraspMemory | None = None,
     oracle_postulate: bool = False,
+    check: bool = True,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -218,14 +217,22 @@ def plan(
         oracle_postulate: grasp_points plans on the request's true object instead of
             post_shape's postulate — for measuring the grasp stage apart from recognition
             only; off by default, never used by the command line or the service.
+        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` only
+            when the caller has just run it on this request, hand and parameters, as the
+            service does at admission).
 
     Raises:
-        ValidationError: a request the planner cannot start (object outside the workspace,
-            overlapping the hand). Every planning outcome is a status in the result.
+        ValidationError: a request the planner cannot plan, refused before any cycle by
+            :func:`~eos_svc.agents.admission.check_plannable` (object out of reach, overlapping
+            the hand, wider than the hand's span). Every planning outcome is a status in the result.
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
-    world = build_world(request, hand, params)
+    hand = hand or default_hand()
+    params = params or parameters_for(hand)
+    if check:
+        check_plannable(request, hand, params)
+    world = build_world(request, hand, params, check=False)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
     controller = Controller(
         agents,

@@ -3,7 +3,8 @@
 eos client list                             # instances alive (liveliness tokens)
 eos client plan --seed 7                    # one plan, cycles printed live, then the result
 eos client plan --json --quiet              # the result only, as JSON
-eos client cancel GOAL_ID                   # cancel a queued or running goal
+eos client plan --goal-id g1 --cancel-token SECRET   # a goal another shell can cancel
+eos client cancel g1 --token SECRET         # cancel it (only with the goal's token)
 eos client watch                            # every cycle and status on the network
 
 By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
@@ -13,10 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
+import secrets
+import sys
 import threading
 from typing import Any
 
-from eos_svc.cli.common import fail, positive_float
+from eos_svc.cli.common import fail, int_at_least, positive_float
 from eos_svc.cli.plan import add_request_arguments
 from eos_svc.cli.plan import request_dict as plan_request_dict
 from eos_svc.cli.serve import add_connection_arguments, session_config
@@ -57,6 +60,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser("plan", help="request one plan; print its cycles live, then the result")
     c = sub.add_parser("cancel", help="cancel a goal by id")
     c.add_argument("goal_id", metavar="GOAL_ID")
+    c.add_argument(
+        "--token",
+        required=True,
+        metavar="TOKEN",
+        help="the goal's cancel token (given to eos client plan --cancel-token, or printed by it)",
+    )
     w = sub.add_parser("watch", help="print every cycle and status message on the network (Ctrl-C to stop)")
     for sp in (lst, p, c, w):
         add_connection_arguments(sp, default_listen=False)
@@ -71,18 +80,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
     g.add_argument(
+        "--cancel-token",
+        default=None,
+        metavar="TOKEN",
+        help="the goal's secret for eos client cancel (16-128 of A-Z a-z 0-9 _ -; default: random, printed)",
+    )
+    g.add_argument(
         "--request",
         default=None,
         metavar="FILE",
         help="send this JSON request file (schema/goal_id added) instead of the options",
+    )
+    g.add_argument(
+        "--repeat",
+        type=int_at_least(1),
+        default=1,
+        metavar="N",
+        help="send the request N times, one after the other (goal ids ID-1 .. ID-N; a load generator); "
+        "with --json one line per plan",
     )
     g.add_argument("--json", action="store_true", help="print the result as JSON")
     g.add_argument("--quiet", action="store_true", help="do not print the cycles")
 
 
 def run(args: argparse.Namespace) -> int:
-    """Run the chosen action; exit 0 on success (a plan: only status ``success``, a good grasp),
-    1 on any other plan status, a refused request or no service."""
+    """Run the chosen action; exit 0 on success (a plan: only status ``success``, a good grasp; with
+    --repeat, every plan), 1 on any other plan status, a refused request or no service."""
     if args.action is None:
         fail("ACTION: choose one of list, plan, cancel, watch")
     conf = session_config(args, serving=False)
@@ -117,6 +140,11 @@ def run(args: argparse.Namespace) -> int:
             proto.check_id(args.goal_id, "goal_id")
         except ValidationError as exc:
             fail(f"GOAL_ID: {exc.reason}")
+    token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
+    if token is not None and not proto.TOKEN_PATTERN.fullmatch(token):
+        fail(
+            f"{'--token' if args.action == 'cancel' else '--cancel-token'}: must be 16-128 of A-Z a-z 0-9 _ -"
+        )
     try:
         client = EosClient.open(conf, namespace=args.namespace)
     except ValidationError as exc:
@@ -132,7 +160,11 @@ def run(args: argparse.Namespace) -> int:
                 print("no instance found")
             return 0 if found else 1
         if args.action == "cancel":
-            had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0)
+            try:
+                had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0, cancel_token=args.token)
+            except proto.RequestError as err:
+                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
+                return 1
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
@@ -152,29 +184,55 @@ def run(args: argparse.Namespace) -> int:
                 sub.undeclare()
             return 0
         client.discover(timeout=1.0)
+        goal_id = args.goal_id or f"g-{secrets.token_hex(6)}"
+        cancel_token = args.cancel_token or proto.new_cancel_token()
+        print(
+            f"goal {goal_id}; cancel with: eos client cancel {goal_id} --token {cancel_token}",
+            file=sys.stderr,
+        )
         show = None if args.quiet or args.json else (lambda msg: print(format_cycle(msg), flush=True))
-        try:
-            outcome = client.plan(
-                request, goal_id=args.goal_id, on_cycle=show, instance=args.instance, timeout=args.timeout
-            )
-        except proto.RequestError as err:
-            print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
-            return 1
-        except ServiceUnavailableError as exc:
-            print(f"eos client: no service: {exc}")
-            return 1
-        if args.json:
-            print(
-                json.dumps(
-                    {"goal_id": outcome.goal_id, "instance": outcome.instance, "result": outcome.result},
-                    allow_nan=False,
+        code = 0
+        for k in range(1, args.repeat + 1):
+            goal = goal_id if args.repeat == 1 else f"{goal_id}-{k}"
+            try:
+                outcome = client.plan(
+                    request,
+                    goal_id=goal,
+                    on_cycle=show,
+                    instance=args.instance,
+                    timeout=args.timeout,
+                    cancel_token=cancel_token,
                 )
-            )
-        else:
-            r = outcome.result
-            print(
-                f"goal {outcome.goal_id} on {outcome.instance}: {r.get('status')} — {r.get('reason')} "
-                f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
-                f"{outcome.round_trip_s * 1000:.1f} ms)"
-            )
-        return 0 if outcome.status == "success" else 1
+            except proto.RequestError as err:
+                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}", flush=True)
+                code = 1
+                continue
+            except ServiceUnavailableError as exc:
+                print(f"eos client: no service: {exc}", flush=True)
+                code = 1
+                continue
+            print_outcome(outcome, args.json)
+            if outcome.status != "success":  # exit 0 only when every plan was a good grasp
+                code = 1
+        return code
+
+
+def print_outcome(outcome: Any, as_json: bool) -> None:
+    """One plan's outcome: a JSON line, or a short sentence."""
+    if as_json:
+        line = {
+            "goal_id": outcome.goal_id,
+            "instance": outcome.instance,
+            "attempts": outcome.attempts,
+            "complete": outcome.complete,
+            "result": outcome.result,
+        }
+        print(json.dumps(line, allow_nan=False), flush=True)
+    else:
+        r = outcome.result
+        print(
+            f"goal {outcome.goal_id} on {outcome.instance}: {r.get('status')} — {r.get('reason')} "
+            f"({r.get('cycles')} cycles, {len(outcome.cycles)} received, "
+            f"{outcome.round_trip_s * 1000:.1f} ms)",
+            flush=True,
+        )

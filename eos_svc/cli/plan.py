@@ -163,6 +163,26 @@ def format_result(result: Any) -> str:
     return "\n".join(lines)
 
 
+def chosen_hand(args: argparse.Namespace) -> Any:
+    """The hand ``--hand`` names: ``None`` for hand3x3 (the planner's default), else its model."""
+    if getattr(args, "hand", "hand3x3") == "allegro":
+        from eos_svc.kinematics import allegro_hand
+
+        return allegro_hand()
+    return None
+
+
+def admit(request: Any, hand: Any) -> None:
+    """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
+    overlapping the hand, wider than its span (:func:`eos_svc.agents.admission.check_plannable`)."""
+    from eos_svc.agents.admission import check_plannable
+
+    try:
+        check_plannable(request, hand)
+    except ValidationError as exc:
+        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+
+
 def run(args: argparse.Namespace) -> int:
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
     from eos_svc.recording import cycle_line, header_line, result_line
@@ -171,6 +191,8 @@ def run(args: argparse.Namespace) -> int:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
         fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
+    hand = chosen_hand(args)
+    admit(request, hand)
     record_file: IO[str] | None = None
     if args.record:
         try:
@@ -186,11 +208,6 @@ def run(args: argparse.Namespace) -> int:
         if not args.json and not args.quiet:
             print(format_cycle(record), flush=True)
 
-    hand = None  # hand3x3, the planner's default
-    if getattr(args, "hand", "hand3x3") == "allegro":
-        from eos_svc.kinematics import allegro_hand
-
-        hand = allegro_hand()
     memory = None
     if getattr(args, "memory", None):
         from eos_svc.agents.memory import GraspMemory

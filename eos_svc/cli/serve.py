@@ -74,7 +74,7 @@ def session_config(args: argparse.Namespace, *, serving: bool) -> Any:
     listen = list(getattr(args, "listen", None) or [])
     connect = list(args.connect or [])
     if args.config is None:
-        if serving and not listen:
+        if serving and not listen and args.mode != "client":  # a Zenoh client does not listen
             listen = [DEFAULT_LISTEN]
         if not serving and not connect:
             connect = [DEFAULT_LISTEN]
@@ -137,7 +137,7 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.server import PlanService, default_planner
+    from eos_svc.service.server import PlanService, default_admission, default_planner
 
     try:
         if args.namespace is not None:
@@ -162,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             queue_size=args.queue,
             max_request_bytes=args.max_request_bytes,
+            admission=default_admission() if args.planner == "grasp" else None,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config
         fail(f"cannot start the Zenoh session: {exc}", code=1)

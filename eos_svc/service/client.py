@@ -102,7 +102,7 @@ class _Stream:
     def accept(self, payload: bytes) -> dict[str, Any] | None:
         """Parse a cycle or status message of this attempt's instance; record a cycle. None: not ours."""
         try:
-            msg = proto.loads_strict(payload)
+            msg = proto.loads_message(payload)
         except (ValueError, RecursionError):
             return None
         if not isinstance(msg, dict) or msg.get("instance") != self.iid:
@@ -157,6 +157,7 @@ class EosClient:
         self._goal_numbers = itertools.count(1)
         self._turn = itertools.count()
         self._owns_session = False
+        self._tokens: dict[str, str] = {}  # goal id -> cancel token, while the plan is in flight
         self._live_changed = threading.Condition(self._lock)
         self._token_sub = session.liveliness().declare_subscriber(
             proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
@@ -243,6 +244,7 @@ class EosClient:
         watch: bool = True,
         timeout: float | None = None,
         max_attempts: int = 3,
+        cancel_token: str | None = None,
     ) -> PlanOutcome:
         """Request one plan and wait for its result.
 
@@ -255,6 +257,8 @@ class EosClient:
             timeout: seconds to wait for one instance's answer (default: the
                 request's deadline + ``timeout_margin_s``).
             max_attempts: instances to try before giving up.
+            cancel_token: the goal's secret for :meth:`cancel` (default: a fresh random one,
+                kept by this client while the plan runs; never published by the service).
 
         Raises:
             RequestError: the service refused the request (code, field, reason).
@@ -265,7 +269,34 @@ class EosClient:
             goal_id = f"{self._goal_prefix}{next(self._goal_numbers)}"
         else:
             proto.check_id(goal_id, "goal_id")
-        payload = proto.encode_request(goal_id, req)
+        if instance is not None:
+            proto.check_id(instance, "instance")  # one instance, never a wildcard
+        if cancel_token is None:
+            cancel_token = proto.new_cancel_token()
+        elif not proto.TOKEN_PATTERN.fullmatch(cancel_token):
+            raise proto.RequestError(
+                proto.E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -"
+            )
+        payload = proto.encode_request(goal_id, req, cancel_token)
+        with self._lock:
+            self._tokens[goal_id] = cancel_token
+        try:
+            return self._plan(goal_id, req, payload, on_cycle, instance, watch, timeout, max_attempts)
+        finally:
+            with self._lock:
+                self._tokens.pop(goal_id, None)
+
+    def _plan(
+        self,
+        goal_id: str,
+        req: PlanRequest | Mapping[str, Any],
+        payload: bytes,
+        on_cycle: CycleHandler | None,
+        instance: str | None,
+        watch: bool,
+        timeout: float | None,
+        max_attempts: int,
+    ) -> PlanOutcome:
         if timeout is None:
             deadline = req.deadline_s if isinstance(req, PlanRequest) else req.get("deadline_s", 10.0)
             timeout = (deadline if isinstance(deadline, (int, float)) else 60.0) + self.timeout_margin_s
@@ -395,7 +426,7 @@ class EosClient:
                 final = item
             elif kind == "reply":
                 if item.ok is not None:
-                    reply = proto.loads_strict(item.ok.payload.to_bytes())
+                    reply = proto.loads_message(item.ok.payload.to_bytes())
                 else:
                     error = proto.error_from_payload(item.err.payload.to_bytes())
                 grace_at = time.monotonic() + self.status_grace_s
@@ -422,21 +453,37 @@ class EosClient:
         )
 
     # ------------------------------------------------------------------ cancel / watch
-    def cancel(self, goal_id: str, timeout: float = 2.0) -> bool:
-        """Cancel a queued or running goal on whichever instance has it; True when one had it."""
+    def cancel(self, goal_id: str, timeout: float = 2.0, *, cancel_token: str | None = None) -> bool:
+        """Cancel a queued or running goal on whichever instance has it; True when one had it.
+
+        Only the goal's owner can: the cancel carries the goal's ``cancel_token`` (default: the
+        one this client sent with the plan, while it runs).
+
+        Raises:
+            RequestError: ``forbidden`` — the instance running the goal refused the token.
+        """
         proto.check_id(goal_id, "goal_id")
+        if cancel_token is None:
+            with self._lock:
+                cancel_token = self._tokens.get(goal_id)
         found = False
+        refusal: proto.RequestError | None = None
         for reply in self.session.get(
             proto.cancel_key(self.prefix, goal_id),
+            payload=proto.encode_cancel(cancel_token),
             target=zenoh.QueryTarget.ALL,
             consolidation=zenoh.ConsolidationMode.NONE,
             timeout=timeout,
         ):
             if reply.ok is not None:
                 try:
-                    found = found or bool(proto.loads_strict(reply.ok.payload.to_bytes()).get("found"))
+                    found = found or bool(proto.loads_message(reply.ok.payload.to_bytes()).get("found"))
                 except (ValueError, AttributeError):
                     continue
+            elif reply.err is not None:
+                refusal = proto.error_from_payload(reply.err.payload.to_bytes())
+        if refusal is not None and not found:
+            raise refusal
         return found
 
     def watch(self, callback: Callable[[str, dict[str, Any]], None], goal_id: str = "*") -> Any:
@@ -449,7 +496,7 @@ class EosClient:
 
         def on_sample(sample: zenoh.Sample) -> None:
             try:
-                msg = proto.loads_strict(sample.payload.to_bytes())
+                msg = proto.loads_message(sample.payload.to_bytes())
             except (ValueError, RecursionError):
                 return
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"

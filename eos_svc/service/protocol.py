@@ -1,7 +1,12 @@
 """Wire protocol of the EOS planning service: key expressions and message schemas.
 
-Everything on the wire is UTF-8 JSON (strict: no NaN/Infinity) carrying
-``"schema": 1``. Key expressions live under a versioned prefix
+Everything on the wire is UTF-8 JSON (RFC 8259) carrying ``"schema": 1``, read
+strictly: UTF-8 only (a leading UTF-8 byte-order mark is ignored; UTF-16/32 and
+invalid bytes such as encoded surrogates are refused), no NaN/Infinity, no
+duplicate keys in an object, no integer beyond ±2**64 (refused naming its
+field). Every error reply is bounded: the field and reason it echoes are
+clipped (:data:`MAX_FIELD_JSON`, :data:`MAX_REASON_JSON`), so a reply stays
+under 4 KiB whatever the request. Key expressions live under a versioned prefix
 ``eos/@v1`` (``@v1`` is a verbatim chunk: wildcards never cross it), with an
 optional namespace: ``eos/@v1/<namespace>``. With ``P`` the prefix:
 
@@ -12,7 +17,9 @@ key expression                     Zenoh entity               message
 ``P/plan/<iid>``                   queryable (one/instance)   request: :func:`encode_request`; reply: the
                                                               plan result, or an error reply
                                                               (:class:`RequestError`)
-``P/cancel/<goal_id>``             queryable ``P/cancel/*``   reply: ``{"goal_id", "instance", "found"}``
+``P/cancel/<goal_id>``             queryable ``P/cancel/*``   request: :func:`encode_cancel` (the goal's
+                                                              ``cancel_token``); reply: ``{"goal_id",
+                                                              "instance", "found"}`` or ``forbidden``
 ``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
 ``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
@@ -25,12 +32,17 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 
 from __future__ import annotations
 
+import hmac
 import json
 import math
 import re
+import secrets
 from collections.abc import Mapping
+from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any
+
+import msgspec
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
@@ -54,13 +66,45 @@ E_BUSY = "busy"
 E_DUPLICATE = "duplicate_goal"
 E_UNAVAILABLE = "unavailable"
 E_INTERNAL = "internal_error"
+E_FORBIDDEN = "forbidden"
 ERROR_CODES = frozenset(
-    {E_TOO_LARGE, E_NOT_JSON, E_SCHEMA, E_INVALID, E_BUSY, E_DUPLICATE, E_UNAVAILABLE, E_INTERNAL}
+    {
+        E_TOO_LARGE,
+        E_NOT_JSON,
+        E_SCHEMA,
+        E_INVALID,
+        E_BUSY,
+        E_DUPLICATE,
+        E_UNAVAILABLE,
+        E_INTERNAL,
+        E_FORBIDDEN,
+    }
 )
+#: a cancel token: the goal owner's secret (16-128 URL-safe characters), sent with the request and
+#: with a cancel, never published
+TOKEN_PATTERN = re.compile(r"[A-Za-z0-9_\-]{16,128}")
+#: largest cancel request accepted (bytes of JSON)
+MAX_CANCEL_BYTES = 1024
 
 #: plan states published on ``P/goal/<goal_id>/status``
 STATE_RUNNING = "running"
 STATE_DONE = "done"
+
+
+#: largest JSON size of the field name an error reply echoes (bytes, escaped)
+MAX_FIELD_JSON = 256
+#: largest JSON size of the reason an error reply carries (bytes, escaped)
+MAX_REASON_JSON = 1536
+
+
+def clip(text: str, max_json: int) -> str:
+    """``text`` cut (with a trailing ``…``) so that its JSON string form is at most ``max_json`` bytes."""
+    if len(text) * 12 + 2 <= max_json or len(_json_str(text)) <= max_json:  # 12: \udXXX\udXXX
+        return text
+    cut = text[: max_json - 3]
+    while len(_json_str(cut + "…")) > max_json:
+        cut = cut[: len(cut) - max(1, len(cut) // 8)]
+    return cut + "…"
 
 
 class RequestError(ValidationError):
@@ -74,7 +118,7 @@ class RequestError(ValidationError):
     """
 
     def __init__(self, code: str, field: str, reason: str, goal_id: str | None = None) -> None:
-        super().__init__(field, reason)
+        super().__init__(clip(field, MAX_FIELD_JSON), clip(reason, MAX_REASON_JSON))
         self.code = code
         self.goal_id = goal_id
 
@@ -146,28 +190,94 @@ def _reject_constant(name: str) -> Any:
     raise ValidationError("payload", f"{name} is not valid JSON")
 
 
+class DuplicateKeyError(ValidationError):
+    """An object of the message has the same key twice (RFC 8259: names SHOULD be unique)."""
+
+    def __init__(self, key: str) -> None:
+        super().__init__(key, "duplicate key in an object")
+        self.key = key
+
+
+class _HugeInt:
+    """An integer literal too long to be any field's value (kept as text, named later)."""
+
+    __slots__ = ("digits",)
+
+    def __init__(self, digits: str) -> None:
+        self.digits = digits
+
+
+def _parse_int(literal: str) -> Any:
+    """``int`` for literals up to 20 digits (all ≤ 2**64 need); longer ones are never converted
+    (Python refuses > 4,300 digits, and big ones cost quadratic time): a :class:`_HugeInt`."""
+    return int(literal) if len(literal) <= 21 else _HugeInt(literal)
+
+
+def _unique_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
+    """A JSON object, refusing a key given twice."""
+    obj = dict(pairs)
+    if len(obj) != len(pairs):
+        seen: set[str] = set()
+        for key, _ in pairs:
+            if key in seen:
+                raise DuplicateKeyError(key)
+            seen.add(key)
+    return obj
+
+
 #: one strict decoder for every message (``json.loads`` with options builds a new one per call)
-_DECODER = json.JSONDecoder(parse_constant=_reject_constant)
+_DECODER = json.JSONDecoder(
+    parse_constant=_reject_constant, parse_int=_parse_int, object_pairs_hook=_unique_object
+)
 #: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
 _ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+_BOM = b"\xef\xbb\xbf"
+_msgspec_decode = msgspec.json.Decoder().decode
+_msgspec_encode = msgspec.json.Encoder().encode
 
 
 def _text(data: bytes | bytearray | str) -> str:
-    """JSON text from bytes exactly as ``json.loads`` reads them (UTF-8/16/32 detection, BOM)."""
+    """JSON text from UTF-8 bytes (strict: invalid bytes, encoded surrogates, UTF-16/32 refused;
+    a leading UTF-8 byte-order mark ignored, as RFC 8259 §8.1 allows)."""
     if isinstance(data, str):
-        if data.startswith("\ufeff"):
-            raise json.JSONDecodeError("Unexpected UTF-8 BOM (decode using utf-8-sig)", data, 0)
-        return data
+        return data[1:] if data.startswith("\ufeff") else data
     if not isinstance(data, (bytes, bytearray)):
         raise ContractError(
             "payload", f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}"
         )
-    return data.decode(json.detect_encoding(data), "surrogatepass")
+    if data.startswith(_BOM):
+        data = data[3:]
+    elif b"\x00" in data[:4] or data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # what json.detect_encoding reads
+        raise ValidationError("payload", "not UTF-8: UTF-16 or UTF-32 text (the wire is UTF-8)")
+    return data.decode("utf-8")  # strict: a UnicodeDecodeError (a ValueError) names the byte
 
 
 def loads_strict(data: bytes | str) -> Any:
-    """Parse strict JSON (NaN/Infinity rejected); raises ValueError or RecursionError."""
-    return _DECODER.decode(_text(data))
+    """Parse strict JSON (see the module doc); raises ValueError (an integer beyond ±2**64
+    included, named by where it is) or RecursionError."""
+    value = _DECODER.decode(_text(data))
+    if _LONG_DIGITS.search(data.encode() if isinstance(data, str) else data):
+        try:
+            _check_integers(value, "", None)
+        except RequestError as err:
+            raise ValidationError(err.field, err.reason) from None
+    return value
+
+
+def loads_message(data: bytes) -> Any:
+    """Parse a message *from the service* (reply, cycle, status) fast, with msgspec: strict
+    UTF-8, no NaN/Infinity (a duplicate key keeps its last value: requests, which come from
+    anyone, go through :func:`decode_envelope` instead). Raises ValueError or RecursionError."""
+    return _msgspec_decode(data)
+
+
+def encode_result(obj: Any) -> bytes:
+    """A plan result (or any message body) as compact JSON bytes, fast (msgspec; non-finite
+    floats become ``null``); values msgspec cannot encode go through ``to_jsonable`` first."""
+    try:
+        return _msgspec_encode(obj)
+    except (TypeError, ValueError, OverflowError, msgspec.EncodeError):
+        return dumps(to_jsonable(obj))
 
 
 def dumps(obj: Any) -> bytes:
@@ -287,13 +397,48 @@ def cycle_record_json(record: CycleRecord) -> str:
     )
 
 
-def encode_request(goal_id: str, request: PlanRequest | Mapping[str, Any]) -> bytes:
-    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., <PlanRequest fields>}``."""
+def new_cancel_token() -> str:
+    """A fresh random cancel token (128 bits, URL-safe)."""
+    return secrets.token_urlsafe(16)
+
+
+def encode_request(
+    goal_id: str, request: PlanRequest | Mapping[str, Any], cancel_token: str | None = None
+) -> bytes:
+    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,] <PlanRequest
+    fields>}``. Without a ``cancel_token`` nobody can cancel the goal."""
     body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
-    if not body or "schema" in body or "goal_id" in body:  # the envelope's fields win, as in a merged dict
-        return dumps({"schema": SCHEMA_VERSION, "goal_id": goal_id, **body})
+    envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
+    if cancel_token is not None:
+        envelope["cancel_token"] = cancel_token
+    if not body or body.keys() & envelope.keys():  # the body's fields win, as in a merged dict
+        return dumps({**envelope, **body})
     # the envelope spliced before the body's own JSON (no merged dict): the same bytes
-    return b'{"schema":%d,"goal_id":%s,%s' % (SCHEMA_VERSION, dumps(goal_id), dumps(body)[1:])
+    return dumps(envelope)[:-1] + b"," + dumps(body)[1:]
+
+
+def encode_cancel(cancel_token: str | None) -> bytes:
+    """A cancel request (the payload of a query on ``P/cancel/<goal_id>``)."""
+    return dumps({"schema": SCHEMA_VERSION, "cancel_token": cancel_token})
+
+
+def decode_cancel(payload: bytes | None) -> str | None:
+    """The cancel token of a cancel request (``None`` when absent or unreadable)."""
+    if not payload or len(payload) > MAX_CANCEL_BYTES:
+        return None
+    try:
+        data = loads_strict(payload)
+    except (ValueError, RecursionError):
+        return None
+    token = data.get("cancel_token") if isinstance(data, dict) else None
+    return token if isinstance(token, str) and TOKEN_PATTERN.fullmatch(token) else None
+
+
+def token_matches(expected: str | None, given: str | None) -> bool:
+    """Whether a cancel carries the goal's token (constant-time compare; no token: never)."""
+    if expected is None or given is None:
+        return False
+    return hmac.compare_digest(expected.encode(), given.encode())
 
 
 #: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)
@@ -301,7 +446,7 @@ MAX_WIRE_INT = 2**64
 
 
 #: 20 digits in a row: the only way to write an integer with |x| > 2**64 (= 18446744073709551616)
-_LONG_DIGITS = re.compile(r"[0-9]{20}")
+_LONG_DIGITS = re.compile(rb"[0-9]{20}")
 
 
 def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
@@ -313,32 +458,61 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
             stack.extend((item, f"{where}.{k}" if where else str(k)) for k, item in v.items())
         elif isinstance(v, list):
             stack.extend((item, f"{where}[{i}]") for i, item in enumerate(v))
-        elif isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT:
-            raise RequestError(E_INVALID, where or "request", "integer too large (|x| > 2**64)", goal_id)
+        elif isinstance(v, _HugeInt) or (
+            isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT
+        ):
+            digits = len(v.digits.lstrip("-")) if isinstance(v, _HugeInt) else len(str(abs(v)))
+            raise RequestError(
+                E_INVALID, where or "request", f"integer too large ({digits} digits; |x| ≤ 2**64)", goal_id
+            )
+
+
+@dataclass(frozen=True)
+class Envelope:
+    """A decoded plan request: its goal id, the request, and the owner's cancel token (or ``None``)."""
+
+    goal_id: str
+    request: PlanRequest
+    cancel_token: str | None = None
 
 
 def decode_request(
     payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES
 ) -> tuple[str, PlanRequest]:
-    """Decode and validate a plan request.
+    """Decode and validate a plan request: ``(goal_id, request)`` (see :func:`decode_envelope`)."""
+    env = decode_envelope(payload, max_bytes)
+    return env.goal_id, env.request
 
-    Returns:
-        ``(goal_id, request)``.
+
+def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES) -> Envelope:
+    """Decode and validate a plan request with its envelope (goal id, cancel token).
 
     Raises:
         RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
     """
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
+    raw = payload if isinstance(payload, bytes) else bytes(payload)
     try:
-        text = _text(payload if isinstance(payload, bytes) else bytes(payload))
-        data = _DECODER.decode(text)
-    except (ValueError, RecursionError) as exc:  # JSONDecodeError and UnicodeDecodeError are ValueErrors
+        data = _DECODER.decode(_text(raw))
+    except DuplicateKeyError as exc:
+        raise RequestError(E_NOT_JSON, clip(exc.key, MAX_FIELD_JSON), "duplicate key in an object") from None
+    except ValidationError as exc:  # not UTF-8 at all (UTF-16/32), NaN/Infinity
+        raise RequestError(E_NOT_JSON, "request", exc.reason) from None
+    except UnicodeDecodeError as exc:
+        raise RequestError(
+            E_NOT_JSON,
+            "request",
+            f"not UTF-8: byte {exc.start} ({raw[exc.start : exc.start + 1]!r}): {exc.reason}",
+        ) from None
+    except (ValueError, RecursionError) as exc:  # JSONDecodeError is a ValueError
         raise RequestError(E_NOT_JSON, "request", f"not JSON: {str(exc)[:200]}") from None
     if not isinstance(data, dict):
         raise RequestError(E_INVALID, "request", f"must be a JSON object, got {type(data).__name__}")
     goal_raw = data.get("goal_id")
     goal_id = goal_raw if isinstance(goal_raw, str) and ID_PATTERN.fullmatch(goal_raw) else None
+    if _LONG_DIGITS.search(raw):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
+        _check_integers(data, "", goal_id)
     if "schema" not in data:
         raise RequestError(E_SCHEMA, "schema", "is required", goal_id)
     schema = data["schema"]
@@ -352,16 +526,17 @@ def decode_request(
         raise RequestError(E_INVALID, "goal_id", "is required")
     check_id(goal_raw, "goal_id")
     assert goal_id is not None
-    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id")}
-    if _LONG_DIGITS.search(text):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
-        _check_integers(body, "", goal_id)
+    token = data.get("cancel_token")
+    if token is not None and not (isinstance(token, str) and TOKEN_PATTERN.fullmatch(token)):
+        raise RequestError(E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -", goal_id)
+    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id", "cancel_token")}
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
-        raise RequestError(E_INVALID, "request", f"unacceptable value: {exc}", goal_id) from None
-    return goal_id, request
+        raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
+    return Envelope(goal_id, request, token)
 
 
 def error_from_payload(payload: bytes) -> RequestError:

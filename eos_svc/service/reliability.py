@@ -3,13 +3,18 @@
     python -m eos_svc.service.reliability load   [--instances 2 --clients 4 --plans 25]
     python -m eos_svc.service.reliability fault  # two instances, one SIGKILLed mid-load
     python -m eos_svc.service.reliability freeze # two instances, one SIGSTOPped mid-load
+    python -m eos_svc.service.reliability abuse  # big payloads, mutated requests, wildcard, stranger cancel
+    python -m eos_svc.service.reliability all    # every run above, one table
 
 Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
 scouting off), N client threads (each its own Zenoh session) sending M plans
 each, and an observer session subscribed to every cycle and status. It checks
 that every request is answered exactly once, that every answered plan's cycle
 stream is complete and contiguous (seq 1..n as seen by the client, and by the
-observer), and prints the counts. Exit code 0 when every check holds.
+observer), and prints the counts. ``abuse`` runs the probes of
+:mod:`eos_svc.service.abuse` against two ``eos serve`` processes and measures
+the first one's memory (RSS) before and after. Every mode prints one table,
+one row per check. Exit code 0 when every check holds.
 """
 
 from __future__ import annotations
@@ -21,7 +26,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections import defaultdict
+from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -29,8 +34,9 @@ import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ComputationError, ValidationError
+from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import EosClient, PlanOutcome
+from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
 from eos_svc.service.session import free_port, loopback, make_config
 
 
@@ -136,6 +142,23 @@ class Report:
             and not self.incomplete
             and not self.observer_gaps
         )
+
+    def row(self) -> abuse.Probe:
+        """This run as one row of the table."""
+        probe = abuse.Probe(
+            f"{self.mode}: {self.requested} plans",
+            sent=self.requested,
+            answered_once=self.answered if not self.failed else self.answered - len(self.failed),
+            codes=Counter(self.statuses),
+            ok=self.ok,
+        )
+        notes = [self.event] if self.event else []
+        notes.append(
+            f"retried {self.retried}, streams complete {self.requested - len(self.incomplete)}, "
+            f"observer gaps {len(self.observer_gaps)}, {self.wall_s:.1f} s"
+        )
+        probe.detail = "; ".join(notes)
+        return probe
 
     def print(self) -> None:
         """Human-readable counts."""
@@ -290,12 +313,92 @@ def run(
     return report
 
 
+#: growth of the server's RSS under abuse that still counts as bounded (MB)
+RSS_BOUND_MB = 50.0
+
+
+def run_abuse(
+    *, big: int = 100, big_mb: float = 10.0, mutated: int = 10_000, planner: str = "grasp"
+) -> list[abuse.Probe]:
+    """The abuse probes against two ``eos serve`` processes; the last row is inst-0's memory.
+
+    inst-0 serves normally and takes the big payloads, the mutated and the unplannable requests;
+    inst-1 (every cycle slowed to 20 ms) runs the goal a stranger tries to cancel.
+    """
+    servers = start_servers(1, planner=planner)
+    servers += _start_more(servers[0], planner)
+    endpoints = [loopback(s.port) for s in servers]
+    rows: list[abuse.Probe] = []
+    owner = EosClient.open(make_config(connect=endpoints))
+    stranger = EosClient.open(make_config(connect=endpoints))
+    try:
+        owner.wait_for_instances(2, timeout=15)
+        stranger.wait_for_instances(2, timeout=15)
+        time.sleep(0.3)  # the instances see each other's tokens
+        session = owner.session
+        key = proto.plan_key(owner.prefix, servers[0].instance)
+        for seed in (1, 2, 3):  # warm: the planner's caches, the first replies
+            owner.plan(PlanRequest(seed=seed), instance=servers[0].instance)
+        pid = servers[0].proc.pid
+        start = abuse.rss_mb(pid)
+        rows.append(abuse.big_payloads(session, key, big, int(big_mb * 1e6)))
+        after_big = abuse.rss_mb(pid)
+        rows.append(abuse.mutated_requests(session, key, mutated))
+        after_mutated = abuse.rss_mb(pid)
+        if planner == "grasp":  # admission is the grasp planner's (the root demo has none)
+            rows.append(abuse.unplannable(session, key))
+        rows.append(abuse.wildcard_plan(session, owner.prefix, len(servers)))
+        rows.append(abuse.stranger_cancel(owner, stranger, instance=servers[1].instance))
+        memory = abuse.Probe(f"memory of {servers[0].instance} (RSS)")
+        growth = after_mutated - start
+        memory.ok = growth <= RSS_BOUND_MB
+        memory.detail = (
+            f"{start:.0f} MB at start, {after_big:.0f} after the big payloads, {after_mutated:.0f} after "
+            f"the mutated requests: +{growth:.1f} MB (bound +{RSS_BOUND_MB:.0f})"
+        )
+        rows.append(memory)
+    finally:
+        owner.close()
+        stranger.close()
+        stop_servers(servers)
+    if servers[0].stats is not None:
+        rows[-1].detail += f"; {servers[0].instance}: {servers[0].stats}"
+    return rows
+
+
+def _start_more(first: Server, planner: str) -> list[Server]:
+    """A second instance connected to ``first``, every cycle slowed to 20 ms (long goals to cancel)."""
+    port = free_port()
+    cmd = [
+        sys.executable, "-m", "eos_svc.cli", "serve", "--listen", loopback(port), "--connect",
+        loopback(first.port), "--instance", "inst-1", "--planner", planner, "--cycle-delay", "0.02",
+        "--log-level", "warning",
+    ]  # fmt: skip
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    if "serving" not in line:
+        proc.kill()
+        raise ServiceUnavailableError(f"eos serve did not start: {line}")
+    return [Server(port, proc, "inst-1")]
+
+
+def print_table(rows: list[abuse.Probe]) -> None:
+    """One table: what was sent, how many got exactly one reply, the replies, the verdict."""
+    print(f"{'check':<44} {'sent':>6} {'1 reply':>7}  {'ok':<4} replies / notes")
+    for r in rows:
+        codes = ", ".join(f"{k} {v}" for k, v in sorted(r.codes.items()))
+        print(f"{r.name[:44]:<44} {r.sent:>6} {r.answered_once:>7}  {'OK' if r.ok else 'FAIL':<4} {codes}")
+        if r.detail:
+            print(f"{'':<44} {'':>6} {'':>7}  {'':<4} {r.detail}")
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Command line: run one mode and print its counts."""
+    """Command line: run one mode (or all) and print one table."""
     parser = argparse.ArgumentParser(
         prog="python -m eos_svc.service.reliability", description=__doc__.splitlines()[0]
     )
-    parser.add_argument("mode", choices=("load", "fault", "freeze"))
+    parser.add_argument("mode", choices=("load", "fault", "freeze", "abuse", "all"))
     parser.add_argument("--instances", type=int, default=2, help="service processes (fault/freeze: ≥ 2)")
     parser.add_argument("--clients", type=int, default=4, help="concurrent clients, each its own session")
     parser.add_argument("--plans", type=int, default=25, help="plans per client")
@@ -303,22 +406,34 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--time-limit", type=float, default=120.0, help="s")
     parser.add_argument("--lease-ms", type=int, default=1000, help="freeze: transport lease (ms)")
     parser.add_argument("--cycle-delay", type=float, default=None, help="sleep per cycle in the servers (s)")
+    parser.add_argument("--big", type=int, default=100, help="abuse: oversized payloads sent")
+    parser.add_argument("--big-mb", type=float, default=10.0, help="abuse: size of each (MB)")
+    parser.add_argument("--mutated", type=int, default=10_000, help="abuse: mutated requests sent")
     args = parser.parse_args(argv)
     for name in ("instances", "clients", "plans"):
         if getattr(args, name) < 1 or getattr(args, name) > 1000:
             parser.error(f"--{name}: must be in [1, 1000]")
-    report = run(
-        args.mode,
-        instances=args.instances,
-        clients=args.clients,
-        plans=args.plans,
-        planner=args.planner,
-        time_limit_s=args.time_limit,
-        lease_ms=args.lease_ms,
-        cycle_delay=args.cycle_delay,
-    )
-    report.print()
-    return 0 if report.ok else 1
+    if not 0 <= args.big <= 10_000 or not 0 <= args.mutated <= 1_000_000 or not 0 < args.big_mb <= 100:
+        parser.error("--big: [0, 10000]; --mutated: [0, 1000000]; --big-mb: (0, 100]")
+    rows: list[abuse.Probe] = []
+    modes = ("load", "fault", "freeze", "abuse") if args.mode == "all" else (args.mode,)
+    for mode in modes:
+        if mode == "abuse":
+            rows += run_abuse(big=args.big, big_mb=args.big_mb, mutated=args.mutated, planner=args.planner)
+            continue
+        report = run(
+            mode,
+            instances=args.instances,
+            clients=args.clients,
+            plans=args.plans,
+            planner=args.planner,
+            time_limit_s=args.time_limit,
+            lease_ms=args.lease_ms,
+            cycle_delay=args.cycle_delay,
+        )
+        rows.append(report.row())
+    print_table(rows)
+    return 0 if all(r.ok for r in rows) else 1
 
 
 if __name__ == "__main__":

@@ -5,8 +5,12 @@ prefix ``P`` (see :mod:`eos_svc.service.protocol`):
 
 - a liveliness token ``P/instance/<iid>`` (discovery);
 - a queryable ``P/plan/<iid>`` — a plan request in, exactly one reply out
-  (the result, or an error reply with a code, the field and the reason);
-- a queryable ``P/cancel/*`` — cancel a queued or running goal by id;
+  (the result, or an error reply with a code, the field and the reason); a query
+  whose key is not exactly this one (``P/plan/*``) reaches every instance it
+  matches: of those, only the first by id answers, with an error naming the keys
+  to use (each instance follows the others' liveliness tokens);
+- a queryable ``P/cancel/*`` — cancel a queued or running goal by id, with the
+  goal's secret ``cancel_token``;
 
 and publishes every cycle of a plan on ``P/goal/<goal_id>/cycle`` and its
 status on ``P/goal/<goal_id>/status``, reliably (``CongestionControl.BLOCK``).
@@ -17,7 +21,8 @@ callback decodes and validates the request and either queues it for the
 ``workers`` worker threads that run the planner (at most ``workers +
 queue_size`` goals admitted; past that a ``busy`` error) or hands the refusal
 to a dispatcher thread, which sends the error reply (it also serves cancel).
-Every query ends in exactly one ``reply`` or ``reply_err`` and is dropped.
+Every query on this instance's key ends in exactly one ``reply`` or ``reply_err`` and is
+dropped (a wildcard one another instance answers is only dropped).
 """
 
 from __future__ import annotations
@@ -37,8 +42,8 @@ import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.controller import CancelToken
-from eos_svc.errors import ContractError
-from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.errors import ContractError, ValidationError
+from eos_svc.records import CycleRecord
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 
@@ -49,6 +54,8 @@ _BLOCK = zenoh.CongestionControl.BLOCK
 
 #: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
 Planner = Callable[..., Any]
+#: admission check of a decoded request: raises ValidationError(field, reason) to refuse it
+Admission = Callable[[PlanRequest], None]
 
 
 def default_planner() -> Planner:
@@ -58,12 +65,55 @@ def default_planner() -> Planner:
     return plan
 
 
+def default_admission() -> Admission:
+    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable`)."""
+    from eos_svc.agents.admission import check_plannable  # lazy: Pinocchio and coal load here
+
+    return check_plannable
+
+
+def _is_grasp_planner(planner: Planner | None) -> bool:
+    return planner is None or (
+        getattr(planner, "__module__", None) == "eos_svc.agents.planner"
+        and getattr(planner, "__name__", "") == "plan"
+    )
+
+
 def _encode(obj: Any) -> bytes:
-    """Strict JSON bytes; values JSON does not take (arrays, NaN, ...) go through ``to_jsonable``."""
-    try:
-        return proto.dumps(obj)
-    except (TypeError, ValueError):
-        return proto.dumps(to_jsonable(obj))
+    """Strict JSON bytes of a result (see :func:`~eos_svc.service.protocol.encode_result`)."""
+    return proto.encode_result(obj)
+
+
+class _CycleSink:
+    """Where a goal's cycles go: the first cycle is a plain ``put``; a publisher is declared only
+    when a second comes (declaring one costs more than a put, and a 1-cycle plan needs none).
+    Same key, encoding and congestion control either way, so the cycles stay in order."""
+
+    __slots__ = ("_key", "_publisher", "_sent", "_session")
+
+    def __init__(self, session: zenoh.Session, key: str) -> None:
+        self._session = session
+        self._key = key
+        self._publisher: Any = None
+        self._sent = False
+
+    def put(self, body: bytes) -> None:
+        """Publish one cycle message."""
+        if self._publisher is not None:
+            self._publisher.put(body)
+        elif not self._sent:
+            self._session.put(self._key, body, encoding=_JSON, congestion_control=_BLOCK)
+            self._sent = True
+        else:
+            self._publisher = self._session.declare_publisher(
+                self._key, encoding=_JSON, congestion_control=_BLOCK
+            )
+            self._publisher.put(body)
+
+    def undeclare(self) -> None:
+        """Undeclare the publisher, if one was declared."""
+        if self._publisher is not None:
+            self._publisher.undeclare()
 
 
 @dataclass
@@ -71,6 +121,7 @@ class _Job:
     query: zenoh.Query
     goal_id: str
     request: PlanRequest
+    cancel_token: str | None = None  # the owner's secret: a cancel must carry it
     cancel: CancelToken = field(default_factory=CancelToken)
     received: float = field(default_factory=time.monotonic)
 
@@ -104,6 +155,10 @@ class PlanService:
         workers: threads running plans concurrently (≥ 1).
         queue_size: accepted plans waiting for a worker before ``busy`` (≥ 0).
         max_request_bytes: largest request payload accepted (bytes).
+        admission: called with every decoded request before it is queued; a
+            ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
+            Default: :func:`~eos_svc.agents.admission.check_plannable` when the planner is
+            the grasp planner, none otherwise.
     """
 
     def __init__(
@@ -116,6 +171,7 @@ class PlanService:
         workers: int = 2,
         queue_size: int = 16,
         max_request_bytes: int = proto.MAX_REQUEST_BYTES,
+        admission: Admission | None = None,
     ) -> None:
         if workers < 1:
             raise proto.RequestError(proto.E_INVALID, "workers", f"must be ≥ 1, got {workers}")
@@ -127,6 +183,8 @@ class PlanService:
             proto.check_id(instance, "instance") if instance else f"{os.getpid()}-{secrets.token_hex(4)}"
         )
         self._planner = planner
+        self._admission: Admission | None = admission
+        self._default_admission = admission is None and _is_grasp_planner(planner)
         self.workers = workers
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
@@ -140,6 +198,7 @@ class PlanService:
         self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._entities: list[Any] = []
+        self._peers: set[str] = set()  # instance ids whose liveliness token is alive
         self._stopping = False
         self._owns_session = False
         self._started = False
@@ -160,14 +219,22 @@ class PlanService:
             return self
         if self._planner is None:
             self._planner = default_planner()
-        try:  # the grasp planner can skip keeping its trace: the service streams every cycle instead
-            params = inspect.signature(self._planner).parameters
-            self._planner_kwargs = {"keep_trace": False} if "keep_trace" in params else {}
+        if self._default_admission:
+            self._admission = default_admission()
+            self._admission(PlanRequest())  # loads the hand, measures its span: now, not on a request
+        try:
+            accepted = set(inspect.signature(self._planner).parameters)
         except (TypeError, ValueError):
-            self._planner_kwargs = {}
+            accepted = set()
+        # the grasp planner can skip keeping its trace (the service streams every cycle instead)
+        # and its own admission check when the service has just run the same one
+        self._planner_kwargs = {"keep_trace": False} if "keep_trace" in accepted else {}
+        if "check" in accepted and self._admission is not None and self._admission is default_admission():
+            self._planner_kwargs["check"] = False
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
+        self._plan_key_text = str(self._plan_key)
         self._threads.append(
             threading.Thread(target=self._dispatch, name=f"eos-dispatch-{self.instance}", daemon=True)
         )
@@ -178,6 +245,12 @@ class PlanService:
         for t in self._threads:
             t.start()
         s = self.session
+        # the other instances (their tokens): who answers a plan query that names no single instance
+        self._entities.append(
+            s.liveliness().declare_subscriber(
+                proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
+            )
+        )
         self._entities.append(
             s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
         )
@@ -219,12 +292,29 @@ class PlanService:
         self.stop()
 
     # ------------------------------------------------------------------ Zenoh callbacks
+    def _on_token(self, sample: zenoh.Sample) -> None:
+        iid = str(sample.key_expr).rsplit("/", 1)[-1]
+        with self._lock:
+            if sample.kind == zenoh.SampleKind.PUT:
+                self._peers.add(iid)
+            else:
+                self._peers.discard(iid)
+
     def _on_plan(self, query: zenoh.Query) -> None:
         """In Zenoh's thread: decode and admit at once (pure Python: never blocks, never calls Zenoh).
 
         An admitted plan goes straight to the workers' queue (one thread hop less);
         a refusal goes to the dispatcher thread, which sends the error reply.
         """
+        if str(query.key_expr) != self._plan_key_text:  # a wildcard: it reached every instance it names
+            with self._lock:
+                self.stats.received += 1
+            try:
+                answer = self._wildcard_refusal(query)
+            except Exception as exc:  # a bug must not leave the query unanswered
+                answer = proto.RequestError(proto.E_INTERNAL, "request", repr(exc)[:300])
+            self._inbox.put(("wildcard", query, answer))
+            return
         try:
             refusal = self._admit(query)
         except Exception as exc:  # a bug must not leave the query unanswered
@@ -237,6 +327,7 @@ class PlanService:
 
     # ------------------------------------------------------------------ threads
     def _reply_err(self, query: zenoh.Query, err: proto.RequestError) -> None:
+        log.info("refused goal %s: %s", err.goal_id, err)  # one line per refusal, never a traceback
         with self._lock:
             self.stats.replied_err += 1
             if err.code == proto.E_BUSY:
@@ -253,9 +344,11 @@ class PlanService:
             item = self._inbox.get()
             if item is None:
                 break
-            _kind, query, refusal = item
+            kind, query, refusal = item
             try:
-                if refusal is not None:
+                if kind == "wildcard" and refusal is None:  # another instance answers it
+                    query.drop()
+                elif refusal is not None:
                     self._reply_err(query, refusal)
                 else:
                     self._cancel(query)
@@ -273,20 +366,52 @@ class PlanService:
                     item[1], item[2] or proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
                 )
 
+    def _wildcard_refusal(self, query: zenoh.Query) -> proto.RequestError | None:
+        """The one answer to a plan query whose key names no single instance, or ``None`` to stay
+        silent: of the live instances the key matches, only the first by id answers (with the
+        keys to use), so the query gets one error, never one plan per instance."""
+        key = query.key_expr
+        with self._lock:
+            named = sorted(
+                {self.instance} | {i for i in self._peers if key.intersects(proto.plan_key(self.prefix, i))}
+            )
+        if named[0] != self.instance:
+            return None
+        keys = ", ".join(proto.plan_key(self.prefix, i) for i in named[:8]) + (
+            " ..." if len(named) > 8 else ""
+        )
+        return proto.RequestError(
+            proto.E_INVALID,
+            "key_expr",
+            f"{str(key)[:200]} names {len(named)} instance(s); send a plan to exactly one: {keys} "
+            f"(find them with a liveliness query on {proto.instance_key(self.prefix)})",
+        )
+
     def _admit(self, query: zenoh.Query) -> proto.RequestError | None:
         """Queue the plan for a worker, or return why not."""
         with self._lock:
             self.stats.received += 1
         payload = query.payload
+        if self._stopping:
+            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
+        size = 0 if payload is None else len(payload)
+        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
+            return proto.RequestError(
+                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
+            )
         try:
-            if self._stopping:
-                raise proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
-            goal_id, request = proto.decode_request(
+            env = proto.decode_envelope(
                 b"" if payload is None else payload.to_bytes(), self.max_request_bytes
             )
         except proto.RequestError as err:
-            return err
-        job = _Job(query, goal_id, request)
+            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
+        goal_id, request = env.goal_id, env.request
+        if self._admission is not None:
+            try:
+                self._admission(request)
+            except ValidationError as exc:  # the planner could not plan it: refused here, named
+                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
+        job = _Job(query, goal_id, request, env.cancel_token)
         refusal: proto.RequestError
         with self._lock:
             if goal_id in self._active:
@@ -308,10 +433,28 @@ class PlanService:
         return refusal
 
     def _cancel(self, query: zenoh.Query) -> None:
+        """Cancel a goal of this instance if the query carries the goal's cancel token.
+
+        Every instance answers: ``found`` false when it does not have the goal, a ``forbidden``
+        error when it has it and the token is missing or wrong (goal ids are public: anyone
+        subscribed to ``P/goal/*/status`` learns them; the token is the owner's secret).
+        """
         goal_id = str(query.key_expr).rsplit("/", 1)[-1]
         with self._lock:
             job = self._active.get(goal_id)
         if job is not None:
+            payload = query.payload
+            given = proto.decode_cancel(
+                None if payload is None or len(payload) > proto.MAX_CANCEL_BYTES else payload.to_bytes()
+            )
+            if not proto.token_matches(job.cancel_token, given):
+                reason = (
+                    "this goal was sent without a cancel_token: it cannot be cancelled"
+                    if job.cancel_token is None
+                    else "the cancel_token does not match the goal's (only its owner can cancel it)"
+                )
+                self._reply_err(query, proto.RequestError(proto.E_FORBIDDEN, "cancel_token", reason, goal_id))
+                return
             job.cancel.cancel("cancelled by client")
         try:
             query.reply(
@@ -355,11 +498,11 @@ class PlanService:
         """Run one plan: publish its cycles and status, then answer its query exactly once.
 
         The critical path after the plan is: result to JSON (once), the ``done`` status, the
-        reply; the cycle publisher is undeclared and the query dropped after the reply.
+        reply; the cycle publisher (if any) is undeclared and the query dropped after the reply.
         """
         goal_id, query = job.goal_id, job.query
         answered = False
-        publisher: Any = None
+        publisher: _CycleSink | None = None
         try:
             if self._stopping:  # never ran, or cut short by stop(): let the client go elsewhere
                 raise proto.RequestError(
@@ -375,9 +518,7 @@ class PlanService:
                     "seed": job.request.seed,
                 }
             else:
-                publisher = self.session.declare_publisher(
-                    proto.cycle_key(self.prefix, goal_id), encoding=_JSON, congestion_control=_BLOCK
-                )
+                publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
                 self.session.put(
                     status_key,
                     (head + '"state":"running"}').encode(),
@@ -408,6 +549,10 @@ class PlanService:
         except proto.RequestError as err:
             if not answered:
                 self._reply_err(query, err)
+        except ValidationError as exc:  # the planner refused the request (admission let it through)
+            if not answered:
+                self._done_refused(goal_id)
+                self._reply_err(query, proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id))
         except Exception as exc:
             log.exception("plan %s failed", goal_id)
             if not answered:
@@ -431,7 +576,14 @@ class PlanService:
                 except Exception:
                     log.debug("undeclare failed", exc_info=True)
 
-    def _plan(self, job: _Job, publisher: Any, head: str) -> dict[str, Any]:
+    def _done_refused(self, goal_id: str) -> None:
+        """Close a goal whose ``running`` was published but the planner refused: ``done``, no cycle."""
+        try:
+            self._status(goal_id, proto.STATE_DONE, status="refused", cycles=0, result=None)
+        except Exception:
+            log.debug("status publication failed", exc_info=True)
+
+    def _plan(self, job: _Job, publisher: _CycleSink, head: str) -> dict[str, Any]:
         seq = 0
         head += '"seq":'
         put = publisher.put

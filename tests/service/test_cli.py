@@ -131,7 +131,10 @@ def test_watch_all_sees_every_cycle(port, server, clients):
         (["serve", "--namespace", "a/b"], "--namespace"),
         (["serve", "--cycle-delay", "nan"], "--cycle-delay"),
         (["client", "plan", "--goal-id", "a b"], "--goal-id"),
-        (["client", "cancel", "*"], "GOAL_ID"),
+        (["client", "cancel", "*", "--token", "t" * 16], "GOAL_ID"),
+        (["client", "cancel", "g1", "--token", "short"], "--token"),
+        (["client", "cancel", "g1"], "--token"),
+        (["client", "plan", "--cancel-token", "not a token!!!!!!"], "--cancel-token"),
         (["client"], "ACTION"),
     ],
 )

@@ -171,11 +171,14 @@ def test_cycle_record_json_on_real_runs(grasp_planner):
     ],
 )
 def test_loads_strict_reads_what_json_loads_reads(payload):
+    """What ``json.loads`` reads, except that only UTF-8 is read (UTF-16/32 and surrogate bytes refused)."""
+
     def reference(data: bytes) -> Any:
         def reject(name: str) -> Any:
             raise ValueError(name)
 
-        return json.loads(data, parse_constant=reject)
+        data = data.removeprefix(b"\xef\xbb\xbf")
+        return json.loads(data.decode("utf-8"), parse_constant=reject)
 
     try:
         expected: Any = reference(payload)

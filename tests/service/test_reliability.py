@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from eos_svc.service.reliability import run
+from eos_svc.service import protocol as proto
+from eos_svc.service.reliability import RSS_BOUND_MB, print_table, run, run_abuse
 
 
 def test_quick_load_every_request_answered_once_nothing_lost():
@@ -32,3 +33,23 @@ def test_full_reliability_runs_with_the_grasp_planner(mode):
     report = run(mode, instances=2, clients=4, plans=15, planner="grasp", time_limit_s=120)
     report.print()
     assert report.ok, report
+
+
+def _check_abuse(rows, big: int, mutated: int) -> None:
+    print_table(rows)
+    by_name = {r.name.split(" ")[0] if r.name[0].isdigit() else r.name: r for r in rows}
+    assert all(r.ok for r in rows), [r for r in rows if not r.ok]
+    assert by_name[str(big)].codes == {proto.E_TOO_LARGE: big}
+    mutants = by_name[str(mutated)]
+    assert mutants.answered_once == mutated and mutants.codes[proto.E_INTERNAL] == 0
+    assert f"bound +{RSS_BOUND_MB:.0f}" in rows[-1].detail
+
+
+def test_quick_abuse_memory_stays_bounded_and_every_probe_gets_its_answer():
+    """Server in its own process: 20 x 10 MB payloads and 1,500 mutated requests, RSS within +50 MB."""
+    _check_abuse(run_abuse(big=20, mutated=1500), 20, 1500)
+
+
+@pytest.mark.slow
+def test_full_abuse_100_big_payloads_and_10000_mutated_requests():
+    _check_abuse(run_abuse(big=100, mutated=10_000), 100, 10_000)

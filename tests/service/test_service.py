@@ -103,6 +103,21 @@ MALFORMED: list[tuple[str, bytes | None, str, str]] = [
         "tactile_noise",
     ),
     ("deep nesting", b"[" * 30_000 + b"]" * 30_000, proto.E_NOT_JSON, "request"),
+    ("UTF-16", '{"schema": 1, "goal_id": "g1"}'.encode("utf-16"), proto.E_NOT_JSON, "request"),
+    ("surrogate bytes", b'{"schema": 1, "goal_id": "g1", "x\xed\xa0\x80": 1}', proto.E_NOT_JSON, "request"),
+    ("duplicate key", b'{"schema": 1, "goal_id": "g1", "seed": 1, "seed": 2}', proto.E_NOT_JSON, "seed"),
+    (
+        "5000-digit seed",
+        b'{"schema": 1, "goal_id": "g1", "seed": ' + b"9" * 5000 + b"}",
+        proto.E_INVALID,
+        "seed",
+    ),
+    (
+        "60,000-char field",
+        b'{"schema": 1, "goal_id": "g1", "' + b"f" * 60_000 + b'": 1}',
+        proto.E_INVALID,
+        "fff",
+    ),
     (
         "oversized",
         b'{"schema": 1, "goal_id": "g1", "pad": "' + b"x" * 70_000 + b'"}',
@@ -122,6 +137,7 @@ def test_malformed_request_gets_an_error_reply(name, payload, code, field, port,
     assert len(replies) == 1, "exactly one reply"
     err = replies[0].err
     assert err is not None, f"{name}: expected an error reply"
+    assert len(err.payload) <= 4096  # bounded, whatever the request echoes
     body = json.loads(err.payload.to_bytes())
     assert body["code"] == code
     assert body["field"].startswith(field)

@@ -1,0 +1,242 @@
+"""Admission: refuse, before any planning, the objects the grasp planner cannot plan for.
+
+:func:`check_plannable` is called first by :func:`eos_svc.agents.plan`, by ``eos plan`` and by
+the Zenoh service at admission, so a request the planner would refuse is refused at the edge
+with a :class:`~eos_svc.errors.ValidationError` naming the field and the reason. Three tests,
+each a real geometric query on the hand's model (coal distances, Pinocchio kinematics):
+
+* **reach** (``object.position``): the search moves the wrist inside the axis-aligned box
+  [``search_box_lo``, ``search_box_hi``] (world, m) without turning it, so the grasp centre
+  sweeps that box shifted by ``grasp_centre``. The object is *located* when its surface comes
+  within ``envelope_radius`` of the grasp centre; if the coal distance between the object and
+  the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
+* **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
+  object must clear every hand collision geometry by ``clearance`` (coal distances).
+* **size** (the size field that sets the object's smallest width): two fingertips can touch
+  opposite sides of an object only if its smallest width is at most the hand's *span*, the
+  largest distance between the surfaces of two fingertips over the fingers' joint ranges
+  (:func:`hand_span`). Wider in every direction: no grasp exists.
+"""
+
+from __future__ import annotations
+
+import functools
+import itertools
+import math
+
+import coal
+import numpy as np
+
+from eos_svc.agents.postulate import make_object
+from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.agents.world import WorldParameters
+from eos_svc.errors import ValidationError
+from eos_svc.kinematics import HandModel
+
+#: joint samples per finger joint when measuring the hand's span (a grid over the joint range)
+SPAN_SAMPLES = 7
+
+#: per hand (by id, with the hand kept so the id cannot be reused): its span and neutral geometry
+_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry]]] = {}
+
+
+class _Geometry:
+    """One hand collision geometry at the start configuration, with its bounding sphere (world)."""
+
+    __slots__ = ("centre", "centre_xyz", "name", "radius", "shape", "transform")
+
+    def __init__(self, name: str, shape: coal.ShapeBase, transform: coal.Transform3s) -> None:
+        shape.computeLocalAABB()
+        self.name = name
+        self.shape = shape
+        self.transform = transform
+        self.centre = transform.transform(np.asarray(shape.aabb_center, dtype=float))
+        self.radius = float(shape.aabb_radius)
+        self.centre_xyz = (float(self.centre[0]), float(self.centre[1]), float(self.centre[2]))
+
+
+def hand_span(hand: HandModel) -> float:
+    """Largest distance between the surfaces of two fingertips, over each finger's joint range (m).
+
+    Every finger's joints are sampled on a grid of :data:`SPAN_SAMPLES` values per joint
+    (wrist at the origin); the span is the largest centre distance of two different fingers'
+    tips minus both tip radii. An object wider than this in every direction cannot be touched
+    on opposite sides by two fingertips.
+    """
+    return _hand_data(hand)[1]
+
+
+def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry]]:
+    """(hand, span, its collision geometries at the start configuration), built once per hand."""
+    entry = _PER_HAND.get(id(hand))
+    if entry is None or entry[0] is not hand:
+        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand))
+    return entry
+
+
+def _measure_span(hand: HandModel) -> float:
+    state = hand.state(hand.neutral())
+    tips: dict[str, np.ndarray] = {}
+    for finger in hand.finger_names:
+        limits = hand.finger_joint_limits(finger)
+        grids = [np.linspace(lo, hi, SPAN_SAMPLES) for _idx, lo, hi in limits]
+        points = []
+        for values in itertools.product(*grids):
+            q = hand.neutral()
+            for (idx, _lo, _hi), v in zip(limits, values, strict=True):
+                q[idx] = v
+            state.update(q)
+            points.append(state.tip_position(finger).copy())
+        tips[finger] = np.asarray(points)
+    span = 0.0
+    for a, b in itertools.combinations(hand.finger_names, 2):
+        pa, pb = tips[a], tips[b]
+        d = np.sqrt(((pa[:, None, :] - pb[None, :, :]) ** 2).sum(axis=2)).max()
+        span = max(span, float(d) - hand.tip_radius(a) - hand.tip_radius(b))
+    return span
+
+
+def _neutral_placements(hand: HandModel) -> list[_Geometry]:
+    state = hand.state(hand.neutral())
+    out = []
+    for gid, go in enumerate(hand.collision_model.geometryObjects):
+        m = state.geometry_data.oMg[gid]
+        out.append(
+            _Geometry(go.name, go.geometry, coal.Transform3s(np.array(m.rotation), np.array(m.translation)))
+        )
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
+    """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
+    return lo, hi
+
+
+def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
+    """The object's smallest width (m) and the size field that sets it (``object.<field>``)."""
+    s = spec.size
+    if spec.shape in ("sphere", "capsule"):
+        return 2.0 * s["radius"], "object.radius"
+    if spec.shape == "ellipsoid":
+        return 2.0 * min(s["radii"]), "object.radii"
+    if spec.shape == "cylinder":
+        if s["length"] < 2.0 * s["radius"]:
+            return s["length"], "object.length"
+        return 2.0 * s["radius"], "object.radius"
+    return min(s["size"]), "object.size"
+
+
+def _distance(
+    a: coal.ShapeBase, ta: coal.Transform3s, b: coal.ShapeBase, tb: coal.Transform3s
+) -> coal.DistanceResult:
+    """coal's signed distance between two placed shapes (a fresh result: callers run in parallel)."""
+    req = coal.DistanceRequest()
+    req.enable_signed_distance = True
+    res = coal.DistanceResult()
+    coal.distance(a, ta, b, tb, req, res)
+    return res
+
+
+def check_plannable(
+    request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
+) -> None:
+    """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
+
+    Args:
+        request: a validated plan request.
+        hand: the hand (default: hand3x3, cached).
+        params: world constants (default: ``WorldParameters.for_hand(hand)``).
+
+    Raises:
+        ValidationError: ``object.position`` when the object is out of reach or overlaps the
+            hand at its start configuration; the size field when it is wider than the hand's
+            span in every direction.
+    """
+    from eos_svc.agents import planner  # planner imports this module: resolve at call time
+
+    hand = hand or planner.default_hand()
+    params = params or planner.parameters_for(hand)
+    spec = request.obj
+    _, span, geometries = _hand_data(hand)
+
+    width, size_field = smallest_width(spec)
+    if width > span:
+        raise ValidationError(
+            size_field,
+            f"the {spec.shape}'s smallest width {width:.3f} m exceeds the hand's span {span:.3f} m "
+            "(widest opening between two fingertips): no grasp exists",
+        )
+
+    # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
+    # centre's distance to it and at least that minus the bounding radius: coal only in between.
+    centre = spec.position
+    radius = 0.5 * _diameter(spec)
+    lo, hi = _swept_box(params)
+    outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
+    centre_gap = math.sqrt(sum(d * d for d in outside))
+    shape: coal.ShapeBase | None = None
+    tf_obj: coal.Transform3s | None = None
+    if centre_gap > params.envelope_radius:
+        gap, axis = centre_gap - radius, max(range(3), key=outside.__getitem__)
+        if gap <= params.envelope_radius:  # undecided by the bounds: the exact distance
+            shape, tf_obj = _coal_object(spec)
+            res = _distance(
+                shape,
+                tf_obj,
+                coal.Box(*(np.subtract(hi, lo))),
+                coal.Transform3s(np.eye(3), 0.5 * np.add(lo, hi)),
+            )
+            gap = float(res.min_distance)
+            separation = np.abs(np.asarray(res.getNearestPoint1()) - np.asarray(res.getNearestPoint2()))
+            axis = int(np.argmax(separation))
+        if gap > params.envelope_radius:
+            pos = ", ".join(f"{v:.3f}" for v in centre)
+            raise ValidationError(
+                f"object.position[{axis}]",  # the axis it is farthest out along
+                f"out of reach: the object at [{pos}] m stays ≥ {gap:.3f} m from every grasp-centre "
+                f"position the search can reach ([{lo[0]:.3f}, {hi[0]:.3f}] x [{lo[1]:.3f}, {hi[1]:.3f}] "
+                f"x [{lo[2]:.3f}, {hi[2]:.3f}] m), more than the envelope radius {params.envelope_radius} m",
+            )
+
+    # Overlap: only the hand geometries whose bounding spheres come within clearance of the object's.
+    cx, cy, cz = centre
+    reach = radius + params.clearance
+    for g in geometries:
+        gx, gy, gz = g.centre_xyz
+        if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
+            continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
+        if shape is None or tf_obj is None:
+            shape, tf_obj = _coal_object(spec)
+        d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)
+        if d < params.clearance:
+            raise ValidationError(
+                "object.position",
+                f"the object overlaps the hand at its start configuration ({g.name}: "
+                f"distance {d * 1000:.1f} mm < clearance {params.clearance * 1000:.1f} mm); "
+                "place it in front of the open hand",
+            )
+
+
+def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
+    """The object's coal shape and placement (as :func:`eos_svc.agents.postulate.make_object` builds)."""
+    obj = make_object(spec)
+    return obj.geometry, coal.Transform3s(
+        np.array(obj.placement.rotation), np.array(obj.placement.translation)
+    )
+
+
+def _diameter(spec: ObjectSpec) -> float:
+    """Diameter of the smallest sphere about the object's centre that contains it (m)."""
+    s = spec.size
+    if spec.shape == "sphere":
+        return 2.0 * s["radius"]
+    if spec.shape == "ellipsoid":
+        return 2.0 * max(s["radii"])
+    if spec.shape == "cylinder":
+        return 2.0 * math.hypot(s["radius"], 0.5 * s["length"])
+    if spec.shape == "capsule":
+        return 2.0 * s["radius"] + s["length"]
+    return float(np.linalg.norm(s["size"]))

@@ -1,0 +1,212 @@
+"""Hostile traffic against a running service instance, with what each should get back.
+
+Each probe sends real queries on an open Zenoh session to one instance and counts what
+came back; :mod:`eos_svc.service.reliability` runs them against ``eos serve`` processes
+and prints one table. The probes:
+
+- :func:`big_payloads`: plan requests far over the size limit (``payload_too_large``, one
+  reply each, the server's memory flat);
+- :func:`mutated_requests`: a valid request with random bytes overwritten (one reply each,
+  never ``internal_error``);
+- :func:`wildcard_plan`: a plan query on ``P/plan/*`` (one error reply, no plan run);
+- :func:`stranger_cancel`: a second session that learned a running goal's id from its status
+  tries to cancel it (``forbidden``; the owner's cancel works);
+- :func:`unplannable`: objects out of reach, overlapping the hand, too large
+  (``invalid_request`` naming the field).
+"""
+
+from __future__ import annotations
+
+import random
+import threading
+import time
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any
+
+import zenoh
+
+from eos_svc.agents.request import PlanRequest
+from eos_svc.errors import EosError
+from eos_svc.service import protocol as proto
+from eos_svc.service.client import EosClient
+
+
+@dataclass
+class Probe:
+    """What one probe sent and got back.
+
+    Attributes:
+        name: what was sent, in words.
+        sent: queries sent.
+        answered_once: queries that got exactly one reply.
+        codes: reply codes (``ok`` for a plan result) and how many of each.
+        ok: whether every reply was the expected one.
+        detail: a short note (memory, fields named, ...).
+    """
+
+    name: str
+    sent: int = 0
+    answered_once: int = 0
+    codes: Counter[str] = field(default_factory=Counter)
+    ok: bool = False
+    detail: str = ""
+
+
+def rss_mb(pid: int) -> float:
+    """Resident set size of process ``pid`` (MB, from /proc)."""
+    with open(f"/proc/{pid}/status", encoding="ascii") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    raise EosError(f"no VmRSS for pid {pid}")
+
+
+def _ask(session: zenoh.Session, key: str, payload: bytes, timeout: float = 10.0) -> list[str]:
+    """Send one query; the code of every reply (``ok`` for a success)."""
+    codes = []
+    for reply in session.get(key, payload=payload, timeout=timeout):
+        if reply.ok is not None:
+            codes.append("ok")
+        else:
+            codes.append(proto.error_from_payload(reply.err.payload.to_bytes()).code)
+    return codes
+
+
+def big_payloads(session: zenoh.Session, key: str, count: int = 100, size: int = 10_000_000) -> Probe:
+    """``count`` requests of ``size`` bytes each: every one refused ``payload_too_large``."""
+    probe = Probe(f"{count} x {size / 1e6:g} MB payloads")
+    junk = b'{"schema":1,"goal_id":"big","pad":"' + b"x" * size + b'"}'
+    for _ in range(count):
+        codes = _ask(session, key, junk)
+        probe.sent += 1
+        probe.answered_once += len(codes) == 1
+        probe.codes.update(codes)
+    probe.ok = probe.answered_once == count and probe.codes == Counter({proto.E_TOO_LARGE: count})
+    return probe
+
+
+def mutated_requests(session: zenoh.Session, key: str, count: int = 10_000, seed: int = 1) -> Probe:
+    """``count`` copies of a valid request with 1-4 random bytes overwritten (fixed seed).
+
+    A mutation may leave the request valid: then it plans (a short plan, ``max_cycles`` 5).
+    Expected: one reply each, never ``internal_error``.
+    """
+    probe = Probe(f"{count} mutated requests")
+    base = proto.encode_request(
+        "m0",
+        {"object": {"shape": "sphere", "radius": 0.03, "position": [0.21, 0.02, -0.015]}, "max_cycles": 5},
+    )
+    rng = random.Random(seed)
+    for i in range(count):
+        data = bytearray(base)
+        for _ in range(rng.randint(1, 4)):
+            data[rng.randrange(len(data))] = rng.randrange(256)
+        data[23:25] = b"%02d" % (i % 100)  # goal id "m0" -> "mNN": mutants rarely collide as duplicates
+        codes = _ask(session, key, bytes(data))
+        probe.sent += 1
+        probe.answered_once += len(codes) == 1
+        probe.codes.update(codes)
+    probe.ok = probe.answered_once == count and probe.codes[proto.E_INTERNAL] == 0
+    return probe
+
+
+def wildcard_plan(session: zenoh.Session, prefix: str, instances: int) -> Probe:
+    """A valid plan query on ``P/plan/*`` and ``P/plan/**`` with the default and the ALL targets:
+    one ``invalid_request`` each (naming the keys to use), no plan run."""
+    probe = Probe(f"plan query on {prefix}/plan/* ({instances} instances)")
+    payload = proto.encode_request("wild", PlanRequest(max_cycles=3))
+    for suffix in ("*", "**"):
+        for target in (zenoh.QueryTarget.BEST_MATCHING, zenoh.QueryTarget.ALL):
+            codes = []
+            for reply in session.get(
+                f"{prefix}/plan/{suffix}",
+                payload=payload,
+                target=target,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                timeout=5,
+            ):
+                codes.append(
+                    "ok"
+                    if reply.ok is not None
+                    else proto.error_from_payload(reply.err.payload.to_bytes()).code
+                )
+            probe.sent += 1
+            probe.answered_once += len(codes) == 1
+            probe.codes.update(codes)
+    probe.ok = probe.answered_once == probe.sent and probe.codes == Counter({proto.E_INVALID: probe.sent})
+    return probe
+
+
+def stranger_cancel(owner: EosClient, stranger: EosClient, instance: str | None = None) -> Probe:
+    """The owner runs a long plan; the stranger reads its goal id from the status topic and tries
+    to cancel it without and with a guessed token (``forbidden`` both times); the owner's cancel
+    then ends it (``cancelled``)."""
+    probe = Probe("stranger cancels a running goal")
+    learned: list[str] = []
+    sub = stranger.watch(
+        lambda kind, msg: learned.append(msg.get("goal_id", "")) if kind == "status" else None
+    )
+    box: dict[str, Any] = {}
+    started = threading.Event()
+
+    def run() -> None:
+        box["out"] = owner.plan(
+            PlanRequest(max_cycles=100_000, deadline_s=60.0),
+            instance=instance,
+            on_cycle=lambda m: started.set() if m["seq"] >= 2 else None,
+        )
+
+    t = threading.Thread(target=run, daemon=True)
+    t.start()
+    started.wait(30)
+    deadline = time.monotonic() + 5
+    while not learned and time.monotonic() < deadline:
+        time.sleep(0.01)
+    goal = learned[0] if learned else ""
+    for token in (None, proto.new_cancel_token()):
+        probe.sent += 1
+        try:
+            code = "ok" if stranger.cancel(goal, cancel_token=token) else "not_found"
+        except proto.RequestError as err:
+            code = err.code
+        probe.codes[code] += 1
+        probe.answered_once += 1
+    sub.undeclare()
+    owner_ok = owner.cancel(goal)
+    t.join(15)
+    status = box["out"].status if "out" in box else "no answer"
+    probe.ok = probe.codes == Counter({proto.E_FORBIDDEN: 2}) and owner_ok and status == "cancelled"
+    probe.detail = f"goal id read from the status topic; owner's cancel -> {status}"
+    return probe
+
+
+#: requests the planner cannot plan, and the field each refusal must name
+UNPLANNABLE: tuple[tuple[dict[str, Any], str], ...] = (
+    ({"shape": "sphere", "radius": 0.03, "position": [9.0, 9.0, 9.0]}, "object.position"),
+    ({"shape": "sphere", "radius": 0.03, "position": [0.21, 0.0, 0.3]}, "object.position"),
+    ({"shape": "sphere", "radius": 0.03, "position": [0.0, 0.0, 0.0]}, "object.position"),
+    ({"shape": "sphere", "radius": 0.2, "position": [0.4, 0.0, 0.0]}, "object.radius"),
+)
+
+
+def unplannable(session: zenoh.Session, key: str) -> Probe:
+    """Objects out of reach, above the reach, inside the hand, too large: ``invalid_request``
+    naming the field, no plan run."""
+    probe = Probe("unplannable objects (reach, overlap, size)")
+    named = []
+    for i, (obj, wanted) in enumerate(UNPLANNABLE):
+        payload = proto.encode_request(f"u{i}", {"object": obj}, proto.new_cancel_token())
+        replies = list(session.get(key, payload=payload, timeout=10.0))
+        probe.sent += 1
+        probe.answered_once += len(replies) == 1
+        for reply in replies:
+            if reply.ok is not None:
+                probe.codes["ok"] += 1
+            else:
+                err = proto.error_from_payload(reply.err.payload.to_bytes())
+                probe.codes[err.code] += 1
+                named.append(err.field.startswith(wanted))
+    probe.ok = probe.codes == Counter({proto.E_INVALID: len(UNPLANNABLE)}) and all(named)
+    probe.detail = "fields named: " + ("yes" if all(named) and named else "no")
+    return probe

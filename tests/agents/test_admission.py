@@ -1,0 +1,143 @@
+"""Admission (check_plannable): real coal distances and hand kinematics against closed forms."""
+
+from __future__ import annotations
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from eos_svc.agents.admission import check_plannable, hand_span, smallest_width
+from eos_svc.agents.planner import _sweeps, default_hand, parameters_for, plan
+from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.errors import ValidationError
+
+PARAMS = parameters_for(default_hand())
+#: the box the grasp centre sweeps (world, m) and the envelope radius
+LO = np.add(PARAMS.search_box_lo, PARAMS.grasp_centre)
+HI = np.add(PARAMS.search_box_hi, PARAMS.grasp_centre)
+ENVELOPE = PARAMS.envelope_radius
+
+
+def refusal(spec: ObjectSpec) -> ValidationError | None:
+    try:
+        check_plannable(PlanRequest(obj=spec))
+    except ValidationError as exc:
+        return exc
+    return None
+
+
+def sphere(radius: float, position: tuple[float, float, float]) -> ObjectSpec:
+    return ObjectSpec("sphere", {"radius": radius}, position)
+
+
+# behind the swept box (-x) is the hand itself: that side is the overlap test's
+@pytest.mark.parametrize(("axis", "side"), [(0, 1), (1, -1), (1, 1), (2, -1), (2, 1)])
+def test_reach_boundary_is_the_envelope_around_the_swept_box(axis, side):
+    r = 0.02
+    for margin, refused in ((-1e-4, False), (1e-4, True)):
+        p = [0.5 * (LO[i] + HI[i]) for i in range(3)]
+        edge = HI[axis] if side > 0 else LO[axis]
+        p[axis] = edge + side * (ENVELOPE + r + margin)
+        err = refusal(sphere(r, (p[0], p[1], p[2])))
+        assert (err is not None) == refused, (p, err)
+        if refused:
+            assert err is not None and err.field == f"object.position[{axis}]"
+            assert "out of reach" in err.reason
+
+
+def test_reach_near_a_corner_uses_the_true_distance():
+    # 4 cm out in x and in y from an edge of the box: per axis within reach, in fact 5.66 cm away
+    r = 0.005
+    p = (HI[0] + 0.04 + r / math.sqrt(2), HI[1] + 0.04 + r / math.sqrt(2), 0.0)
+    err = refusal(sphere(r, p))
+    assert err is not None and err.field.startswith("object.position")
+    p_in = (HI[0] + 0.03, HI[1] + 0.03, 0.0)  # 4.24 cm - r from the edge: reachable
+    assert refusal(sphere(r, p_in)) is None
+
+
+def test_a_big_object_is_reachable_by_its_surface_not_its_centre():
+    # a 16 cm cube whose centre is 12 cm past the box: its face is 4 cm away, within the envelope
+    spec = ObjectSpec("box", {"size": [0.16, 0.16, 0.16]}, (HI[0] + 0.12, 0.0, 0.0))
+    assert refusal(spec) is None
+    far = ObjectSpec("box", {"size": [0.16, 0.16, 0.16]}, (HI[0] + 0.14, 0.0, 0.0))
+    err = refusal(far)
+    assert err is not None and err.field == "object.position[0]"
+
+
+@pytest.mark.parametrize("position", [(0.0, 0.0, 0.0), (0.02, 0.0, 0.0), (0.13, 0.015, 0.06)])
+def test_overlap_with_the_hand_at_its_start_configuration(position):
+    err = refusal(sphere(0.03, position))
+    assert err is not None and err.field == "object.position"
+    assert "overlaps the hand" in err.reason
+
+
+def test_span_covers_the_fingers_opening_and_sizes_around_it():
+    hand = default_hand()
+    span = hand_span(hand)
+    # closed form from the closing sweeps: the two farthest tips when all joints open together
+    sweeps = _sweeps(hand)
+    opened = max(
+        float(np.linalg.norm(sweeps[a].points[0] - sweeps[b].points[0])) - 2 * hand.tip_radius(a)
+        for a in sweeps
+        for b in sweeps
+        if a != b
+    )
+    assert opened <= span < opened + 0.05
+    assert refusal(sphere(0.5 * span - 1e-3, (0.35, 0.0, 0.0))) is None
+    err = refusal(sphere(0.5 * span + 1e-3, (0.35, 0.0, 0.0)))
+    assert err is not None and err.field == "object.radius" and "span" in err.reason
+
+
+@pytest.mark.parametrize(
+    ("spec", "width", "field"),
+    [
+        (ObjectSpec("ellipsoid", {"radii": [0.3, 0.2, 0.25]}, (0.4, 0, 0)), 0.4, "object.radii"),
+        (ObjectSpec("cylinder", {"radius": 0.2, "length": 0.3}, (0.4, 0, 0)), 0.3, "object.length"),
+        (ObjectSpec("cylinder", {"radius": 0.15, "length": 0.9}, (0.4, 0, 0)), 0.3, "object.radius"),
+        (ObjectSpec("capsule", {"radius": 0.15, "length": 0.1}, (0.4, 0, 0)), 0.3, "object.radius"),
+        (ObjectSpec("box", {"size": [0.5, 0.3, 0.6]}, (0.5, 0, 0)), 0.3, "object.size"),
+    ],
+)
+def test_too_large_in_every_direction_names_the_size_field(spec, width, field):
+    assert smallest_width(spec) == (pytest.approx(width), field)
+    err = refusal(spec)
+    assert err is not None and err.field == field
+
+
+def test_a_long_thin_object_is_not_too_large():
+    # 60 cm long but 2 cm thick: graspable across
+    spec = ObjectSpec("cylinder", {"radius": 0.01, "length": 0.6}, (0.25, 0.0, 0.0), (0.0, 0.0, 0.0))
+    assert refusal(spec) is None
+
+
+def test_plan_refuses_before_any_cycle():
+    seen: list[object] = []
+    with pytest.raises(ValidationError) as info:
+        plan(PlanRequest(obj=sphere(0.03, (0.21, 0.0, 0.3))), on_cycle=seen.append)
+    assert info.value.field == "object.position[2]" and seen == []
+
+
+@pytest.mark.parametrize(
+    ("args", "option"),
+    [
+        (["--position", "9", "9", "9"], "--position"),
+        (["--position", "0.21", "0", "0.3"], "--position"),
+        (["--position", "0", "0", "0"], "--position"),
+        (["--radius", "0.2", "--position", "0.4", "0", "0"], "--radius"),
+    ],
+)
+def test_cli_plan_exits_2_naming_the_option(args, option, tmp_path):
+    record = tmp_path / "run.jsonl"
+    proc = subprocess.run(
+        [sys.executable, "-m", "eos_svc.cli", "plan", *args, "--record", str(record)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.startswith(f"eos: error: {option}:"), proc.stderr
+    assert "Traceback" not in proc.stderr
+    assert not record.exists()  # refused before anything was written

@@ -1,0 +1,95 @@
+"""Only a goal's owner cancels it: the cancel must carry the goal's secret cancel token
+(real Zenoh sessions on loopback; a second session learns the goal id from the status topic)."""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+import pytest
+
+from eos_svc.agents.request import PlanRequest
+from eos_svc.service import protocol as proto
+from eos_svc.service.client import PlanOutcome
+from eos_svc.service.demo_planner import slowed
+
+
+def _start_long_plan(client: Any, goal: str, **kwargs: Any) -> tuple[threading.Thread, dict[str, Any]]:
+    box: dict[str, Any] = {}
+    started = threading.Event()
+
+    def on_cycle(msg: dict[str, Any]) -> None:
+        if msg["seq"] >= 2:
+            started.set()
+
+    def run() -> None:
+        box["out"] = client.plan(
+            PlanRequest(max_cycles=100_000, deadline_s=60.0), goal_id=goal, on_cycle=on_cycle, **kwargs
+        )
+
+    t = threading.Thread(target=run)
+    t.start()
+    assert started.wait(30), "the plan did not start"
+    return t, box
+
+
+def test_a_stranger_knowing_the_goal_id_cannot_cancel_the_owner_can(port, services, clients, grasp_planner):
+    a = services(port, planner=slowed(grasp_planner, 0.02))
+    b = services(connect=(port,), planner=slowed(grasp_planner, 0.02))
+    owner = clients(port)
+    stranger = clients(port)
+    owner.wait_for_instances(2)
+    stranger.wait_for_instances(2)
+    seen: list[tuple[str, dict[str, Any]]] = []
+    sub = stranger.watch(lambda kind, msg: seen.append((kind, msg)))  # every goal's messages
+    t, box = _start_long_plan(owner, "mine-1", cancel_token="owner-secret-0123456789")
+    learned = {msg["goal_id"] for kind, msg in list(seen) if kind == "status"}
+    assert "mine-1" in learned  # the goal id is public
+    for token in (None, "wrong-secret-0123456789", "owner-secret-012345678X"):
+        with pytest.raises(proto.RequestError) as info:
+            stranger.cancel("mine-1", cancel_token=token)
+        assert info.value.code == proto.E_FORBIDDEN and info.value.field == "cancel_token"
+    assert t.is_alive()  # still running
+    assert owner.cancel("mine-1")  # the owner's client remembers the token it sent
+    t.join(15)
+    out: PlanOutcome = box["out"]
+    assert out.result["status"] == "cancelled"
+    sub.undeclare()
+    # the token was never published on any cycle or status message
+    assert not any("owner-secret" in str(msg) for _kind, msg in seen)
+    assert (a.stats.cancelled + b.stats.cancelled) == 1
+
+
+def test_another_process_with_the_token_can_cancel(port, services, clients, grasp_planner):
+    services(port, planner=slowed(grasp_planner, 0.02))
+    owner = clients(port)
+    helper = clients(port)  # e.g. ``eos client cancel g --token T`` from another shell
+    owner.wait_for_instances(1)
+    helper.wait_for_instances(1)
+    t, box = _start_long_plan(owner, "shared-1", cancel_token="shared-secret-0123456789")
+    assert helper.cancel("shared-1", cancel_token="shared-secret-0123456789")
+    t.join(15)
+    assert box["out"].result["status"] == "cancelled"
+
+
+def test_a_goal_sent_without_a_token_cannot_be_cancelled(port, services, clients, grasp_planner):
+    svc = services(port, planner=slowed(grasp_planner, 0.02))
+    client = clients(port)
+    client.wait_for_instances(1)
+    payload = proto.encode_request("tokenless", PlanRequest(max_cycles=30))  # no cancel_token
+    handler = client.session.get(proto.plan_key(client.prefix, svc.instance), payload=payload, timeout=20)
+    deadline = threading.Event()
+    while "tokenless" not in svc._active and not deadline.wait(0.01):
+        pass
+    with pytest.raises(proto.RequestError) as info:
+        client.cancel("tokenless", cancel_token="any-secret-0123456789")
+    assert info.value.code == proto.E_FORBIDDEN and "without a cancel_token" in info.value.reason
+    replies = list(handler)
+    assert len(replies) == 1 and replies[0].ok is not None  # it ran to its end
+    assert proto.loads_strict(replies[0].ok.payload.to_bytes())["result"]["status"] == "cycle_limit"
+
+
+def test_a_malformed_cancel_token_in_a_request_is_named():
+    with pytest.raises(proto.RequestError) as info:
+        proto.decode_request(proto.encode_request("g1", PlanRequest(), "short"))
+    assert (info.value.code, info.value.field) == (proto.E_INVALID, "cancel_token")
