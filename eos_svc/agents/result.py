@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -50,6 +51,8 @@ class PlanResult:
         d_over_h: estimated diameter over hand height (None if never estimated).
         seed: the request's seed. ``wall_time_s``: seconds for the whole call.
         trace: every cycle record (when kept).
+        validation: the Drake validation of the final grasp
+            (:meth:`eos_svc.validation.GraspValidation.to_dict`), None unless asked for.
     """
 
     status: str
@@ -77,11 +80,17 @@ class PlanResult:
     friction: float = 0.5
     quality: dict | None = None
     q_final: tuple[float, ...] | None = field(default=None, repr=False)
+    validation: dict | None = None
 
     @property
     def success(self) -> bool:
         """All fingertips touch the object."""
         return self.status == "success"
+
+    def with_validation(self, validation: Any) -> PlanResult:
+        """A copy carrying ``validation`` (a GraspValidation or its dict form)."""
+        data = validation.to_dict() if hasattr(validation, "to_dict") else dict(validation)
+        return dataclasses.replace(self, validation=data)
 
     def agents_run(self) -> list[str]:
         """The chosen agent of every cycle, in order."""
@@ -153,6 +162,7 @@ class PlanResult:
             "weights": self.weights,
             "wall_time_s": self.wall_time_s,
             "request": self.request,
+            "validation": self.validation,
         }
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]
