@@ -90,13 +90,17 @@ def format_validation(validation: dict[str, Any]) -> str:
 
 
 def validate_or_fail(result: Any, **options: Any) -> Any:
-    """:func:`validate_grasp` of a result; a bad field exits with status 2 naming it."""
-    from eos_svc.validation import validate_grasp
+    """:func:`validate_grasp` of a result; a bad field exits with status 2 naming it, a Drake
+    failure with status 1."""
+    from eos_svc.validation import SimulationError, validate_grasp
 
     try:
         return validate_grasp(result, **options)
     except ValidationError as exc:
         fail(f"{OPTION_NAMES.get(exc.field, exc.field)}: {exc.reason}")
+        raise  # unreachable
+    except SimulationError as exc:
+        fail(f"validation: {exc}", code=1)
         raise  # unreachable
 
 

@@ -28,7 +28,7 @@ from eos_svc.cli.common import int_at_least, positive_float
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import SuiteObject, fixed_suite, held_back_suite, quick_suite
-from eos_svc.validation import validate_grasp
+from eos_svc.validation import SimulationError, validate_grasp
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
@@ -41,7 +41,22 @@ def plan_and_validate(obj: SuiteObject, seed: int, validation: dict[str, Any]) -
         result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {**row, "status": "rejected", "reason": str(exc), "good_grasp": None, "held": None}
-    check = validate_grasp(result, **validation)
+    try:
+        check = validate_grasp(result, **validation)
+    except SimulationError as exc:  # counted as not held, and said so
+        return {
+            **row,
+            "status": result.status,
+            "reason": result.reason,
+            "good_grasp": bool(result.good_grasp),
+            "held": False,
+            "epsilon": result.epsilon,
+            "plan_time_s": result.wall_time_s,
+            "validation_time_s": 0.0,
+            "max_displacement_m": None,
+            "dropped_along": "",
+            "validation_reason": str(exc),
+        }
     dropped = [o.direction for o in check.outcomes if not o.held]
     return {
         **row,

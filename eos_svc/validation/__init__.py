@@ -12,6 +12,7 @@ See ``docs/validation.md`` for what is modelled and what is not.
 
 from eos_svc.validation.report import DIRECTIONS, DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import GraspSetup, grasp_setup
+from eos_svc.validation.simulation import SimulationError
 from eos_svc.validation.validate import validate_grasp
 
 __all__ = [
@@ -19,6 +20,7 @@ __all__ = [
     "DirectionOutcome",
     "GraspSetup",
     "GraspValidation",
+    "SimulationError",
     "grasp_setup",
     "validate_grasp",
 ]

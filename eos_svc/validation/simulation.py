@@ -55,13 +55,17 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from eos_svc.agents.request import ObjectSpec
-from eos_svc.errors import ValidationError
+from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 
 #: name of the object's body and model instance in the plant
 OBJECT_NAME = "object"
 #: name of the hand part made of the palm and every hand body outside the fingers
 PALM_PART = "palm"
+
+
+class SimulationError(EosError, RuntimeError):
+    """Drake failed while building or simulating a grasp (the message says why)."""
 
 
 def vec(values: Sequence[float] | np.ndarray) -> Any:

@@ -22,7 +22,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
-from eos_svc.validation.simulation import GraspSimulation
+from eos_svc.validation.simulation import GraspSimulation, SimulationError
 
 #: standard gravity (m/s²): the load is the object's weight
 GRAVITY = 9.81
@@ -78,6 +78,7 @@ def validate_grasp(
 
     Raises:
         ValidationError: naming the bad field of ``result`` or the bad argument.
+        SimulationError: Drake failed while simulating (an :class:`~eos_svc.errors.EosError`).
     """
     t_start = time.perf_counter()
     description = description or HandDescription.hand3x3()
@@ -100,29 +101,32 @@ def validate_grasp(
     if not path.is_file():
         raise ValidationError("urdf", f"no such file: {path}")
 
-    sim = GraspSimulation(
-        path,
-        description,
-        setup.q_final,
-        setup.obj,
-        friction=setup.friction,
-        mass=mass,
-        squeeze=float(squeeze),
-        kp=kp,
-        kd=kd,
-        contact_stiffness=contact_stiffness,
-        time_step=time_step,
-    )
-    settled = sim.settle(settle_seconds)
-    settle_touching = sim.touching()
-    outcomes = []
-    for name in names:
-        axis = np.zeros(3)
-        axis["xyz".index(name[1])] = 1.0 if name[0] == "+" else -1.0
-        largest, final, early = sim.load(axis, mass * GRAVITY, seconds, SAMPLE_S, stop_distance)
-        touching = sim.touching()
-        held = largest < hold_tolerance and len(touching) >= min_parts
-        outcomes.append(DirectionOutcome(name, largest, final, touching, held, early))
+    try:
+        sim = GraspSimulation(
+            path,
+            description,
+            setup.q_final,
+            setup.obj,
+            friction=setup.friction,
+            mass=mass,
+            squeeze=float(squeeze),
+            kp=kp,
+            kd=kd,
+            contact_stiffness=contact_stiffness,
+            time_step=time_step,
+        )
+        settled = sim.settle(settle_seconds)
+        settle_touching = sim.touching()
+        outcomes = []
+        for name in names:
+            axis = np.zeros(3)
+            axis["xyz".index(name[1])] = 1.0 if name[0] == "+" else -1.0
+            largest, final, early = sim.load(axis, mass * GRAVITY, seconds, SAMPLE_S, stop_distance)
+            touching = sim.touching()
+            held = largest < hold_tolerance and len(touching) >= min_parts
+            outcomes.append(DirectionOutcome(name, largest, final, touching, held, early))
+    except RuntimeError as exc:  # Drake's own failures (e.g. the contact solver not converging)
+        raise SimulationError(f"Drake could not simulate the grasp: {exc}") from exc
     dropped = [o for o in outcomes if not o.held]
     if not dropped:
         reason = "held in every direction"
