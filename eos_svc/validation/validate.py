@@ -12,9 +12,9 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -23,6 +23,9 @@ from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
 from eos_svc.validation.simulation import GraspSimulation, SimulationError
+
+if TYPE_CHECKING:
+    from eos_svc.agents.result import PlanResult
 
 #: standard gravity (m/s²): the load is the object's weight
 GRAVITY = 9.81
@@ -40,7 +43,7 @@ def _positive(value: object, name: str, upper: float = math.inf) -> float:
 
 
 def validate_grasp(
-    result: Any,
+    result: PlanResult | Mapping[str, Any],
     *,
     directions: int | Sequence[str] = 6,
     seconds: float = 1.5,

@@ -33,19 +33,31 @@ def shifted(result, dx: float) -> dict:
     return data
 
 
-def test_good_sphere_grasp_is_held_in_all_six_directions(good_plan):
-    check = validate_grasp(good_plan)
-    assert check.held, check.reason
-    assert check.directions == DIRECTIONS
-    assert all(d < 0.01 for d in check.displacement_m.values())
-    assert all(len(o.touching) >= 2 for o in check.outcomes)
+def eos(capsys, *args: str) -> tuple[int, str, str]:
+    """Run ``eos ARGS`` in this process: (exit status, stdout, stderr)."""
+    try:
+        code = main(list(args))
+    except SystemExit as exc:
+        code = int(exc.code or 0)
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+def test_plan_validate_holds_the_good_sphere_grasp_in_all_six_directions(good_plan, capsys):
+    """``eos plan --validate --json``: the default plan (the fixture's) with its Drake verdict."""
+    code, out, err = eos(capsys, "plan", "--quiet", "--validate", "--json")
+    assert code == 0, err
+    data = json.loads(out)
+    assert data["q_final"] == list(good_plan.q_final)  # the same plan as the fixture
+    check = data["validation"]
+    assert check["held"] is True, check["reason"]
+    assert check["directions"] == list(DIRECTIONS) == list(check["displacement_m"])
+    assert all(d < 0.01 for d in check["displacement_m"].values())
+    assert all(len(o["touching"]) >= 2 and not o["stopped_early"] for o in check["outcomes"])
     # the squeeze moves the object a little before any load, and all three fingers hold it
-    assert 0.0 < check.settle_displacement_m < 0.01
-    assert check.settle_touching == ("finger1", "finger2", "finger3")
-    data = good_plan.with_validation(check).to_dict()
-    assert data["validation"]["held"] is True
-    assert set(data["validation"]["displacement_m"]) == set(DIRECTIONS)
-    json.dumps(data, allow_nan=False)
+    assert 0.0 < check["settle_displacement_m"] < 0.01
+    assert check["settle_touching"] == ["finger1", "finger2", "finger3"]
+    assert check["seconds"] == 1.5 and check["mass_kg"] == 0.1 and check["friction"] == 0.5
 
 
 def test_contacts_in_front_of_the_centre_drop_the_object(good_plan):
@@ -129,16 +141,6 @@ def test_bad_arguments_name_the_argument(good_plan, kwargs, field):
 def test_result_has_no_validation_unless_asked(good_plan):
     assert good_plan.validation is None
     assert good_plan.to_dict()["validation"] is None
-
-
-def eos(capsys, *args: str) -> tuple[int, str, str]:
-    """Run ``eos ARGS`` in this process: (exit status, stdout, stderr)."""
-    try:
-        code = main(list(args))
-    except SystemExit as exc:
-        code = int(exc.code or 0)
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 def test_cli_validates_a_record_file(tmp_path, capsys):
