@@ -29,6 +29,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import SuiteObject, fixed_suite, held_back_suite, quick_suite
 from eos_svc.validation import SimulationError, validate_grasp
+from eos_svc.validation.validate import MAX_SECONDS
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
@@ -243,7 +244,10 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment grasps [options]``."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if args.seconds > MAX_SECONDS:
+        parser.error(f"argument --seconds: must be ≤ {MAX_SECONDS:g}, got {args.seconds:g}")
     seeds = args.seeds or (2 if args.quick else 5)
     if args.held_back:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"

@@ -31,6 +31,8 @@ if TYPE_CHECKING:
 GRAVITY = 9.81
 #: the load is sampled this often (s) for the largest displacement
 SAMPLE_S = 0.1
+#: longest load and squeeze accepted (s of simulated time)
+MAX_SECONDS = 60.0
 
 
 def _positive(value: object, name: str, upper: float = math.inf) -> float:
@@ -88,9 +90,9 @@ def validate_grasp(
     joints = len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers)
     setup = grasp_setup(result, joints)
     names = load_directions(directions)
-    seconds = _positive(seconds, "seconds", 60.0)
+    seconds = _positive(seconds, "seconds", MAX_SECONDS)
     mass = _positive(mass, "mass", 100.0)
-    settle_seconds = _positive(settle_seconds, "settle_seconds", 60.0)
+    settle_seconds = _positive(settle_seconds, "settle_seconds", MAX_SECONDS)
     hold_tolerance = _positive(hold_tolerance, "hold_tolerance", 1.0)
     time_step = _positive(time_step, "time_step", 0.01)
     stop_distance = max(_positive(stop_distance, "stop_distance", 10.0), hold_tolerance)
