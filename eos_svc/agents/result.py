@@ -9,6 +9,7 @@ cancelled, error).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
@@ -59,6 +60,8 @@ class PlanResult:
         d_over_h: estimated diameter over hand height (None if never estimated).
         seed: the request's seed. ``wall_time_s``: seconds for the whole call.
         trace: every cycle record (when kept).
+        validation: the Drake validation of the final grasp
+            (:meth:`eos_svc.validation.GraspValidation.to_dict`), None unless asked for.
     """
 
     status: str
@@ -86,6 +89,7 @@ class PlanResult:
     friction: float = 0.5
     quality: dict | None = None
     q_final: tuple[float, ...] | None = field(default=None, repr=False)
+    validation: dict | None = None
 
     @property
     def success(self) -> bool:
@@ -96,6 +100,11 @@ class PlanResult:
     def precision_grip(self) -> bool:
         """Every fingertip touches the object (the paper's Fig. 3 criterion; good or not)."""
         return bool(self.contacts) and all(c.get("touching") for c in self.contacts.values())
+
+    def with_validation(self, validation: Any) -> PlanResult:
+        """A copy carrying ``validation`` (a GraspValidation or its dict form)."""
+        data = validation.to_dict() if hasattr(validation, "to_dict") else dict(validation)
+        return dataclasses.replace(self, validation=data)
 
     def agents_run(self) -> list[str]:
         """The chosen agent of every cycle, in order."""
@@ -157,6 +166,7 @@ class PlanResult:
             "weights": self.weights,
             "wall_time_s": self.wall_time_s,
             "request": self.request,
+            "validation": self.validation,
         }
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]

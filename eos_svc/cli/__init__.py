@@ -18,6 +18,7 @@ from collections.abc import Sequence
 COMMANDS: dict[str, tuple[str, str]] = {
     "plan": ("eos_svc.cli.plan", "plan one grasp on a scene and print the cycle trace"),
     "replay": ("eos_svc.cli.replay", "replay a recorded plan and check it is deterministic"),
+    "validate": ("eos_svc.cli.validate", "simulate a planned grasp in Drake: does it hold the object?"),
     "ep1": ("eos_svc.cli.ep1", "run EP1 alone: roll a fingertip and estimate curvature"),
     "experiment": ("eos_svc.cli.experiment", "run one of the paper's experiments"),
     "serve": ("eos_svc.cli.serve", "run the planner as a Zenoh service"),

@@ -7,6 +7,7 @@ eos plan --record run.jsonl               # request, every cycle record, result 
 eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
 eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
 eos plan --hand allegro                   # the Allegro hand of example-robot-data
+eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
 """
 
 from __future__ import annotations
@@ -101,6 +102,32 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     out.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
+    add_validate_argument(out)
+
+
+def add_validate_argument(group: argparse._ArgumentGroup) -> None:
+    """``--validate``: simulate the final grasp in Drake (see ``eos validate``)."""
+    group.add_argument(
+        "--validate",
+        action="store_true",
+        help="simulate the final grasp in Drake (hand3x3 only) and add the verdict to the result; "
+        "the exit status still follows the plan",
+    )
+
+
+def check_validate_option(args: argparse.Namespace) -> None:
+    """Before planning: ``--validate`` needs hand3x3 (exit 2 otherwise)."""
+    if getattr(args, "validate", False) and getattr(args, "hand", "hand3x3") != "hand3x3":
+        fail("--validate: the Drake validation models hand3x3 only")
+
+
+def validated(result: Any, args: argparse.Namespace) -> Any:
+    """The result with its Drake validation when ``--validate`` was given (exit 2 on a bad case)."""
+    if not getattr(args, "validate", False):
+        return result
+    from eos_svc.cli.validate import validate_or_fail
+
+    return result.with_validation(validate_or_fail(result))
 
 
 def request_dict(args: argparse.Namespace) -> dict[str, Any]:
@@ -160,6 +187,10 @@ def format_result(result: Any) -> str:
         eps = result.epsilon
         lines.append(f"quality: {closure} at μ = {result.friction:g}, ε = {eps:.3f} (Ferrari-Canny)")
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
+    if getattr(result, "validation", None):
+        from eos_svc.cli.validate import format_validation
+
+        lines.append(format_validation(result.validation))
     return "\n".join(lines)
 
 
@@ -191,6 +222,7 @@ def run(args: argparse.Namespace) -> int:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
         fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
+    check_validate_option(args)
     hand = chosen_hand(args)
     admit(request, hand)
     record_file: IO[str] | None = None
@@ -234,6 +266,7 @@ def run(args: argparse.Namespace) -> int:
             draw_result(result, args.picture, hand=hand)
         except OSError as exc:
             fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
+    result = validated(result, args)
     if args.json:
         print(result.to_json())
     else:

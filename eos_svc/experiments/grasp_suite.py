@@ -1,0 +1,140 @@
+"""The objects of ``eos experiment grasps``: a fixed suite and a seeded held-back suite.
+
+Every object is an :class:`~eos_svc.agents.ObjectSpec` with a label. The fixed suite covers
+every class and the poses that matter for a three-finger hand approaching along +x:
+
+- spheres of diameter d = 0.2 … 0.95 × the hand height h;
+- ellipsoids, longest axis along each world axis;
+- cylinders and capsules upright (axis z), lying across the approach (axis y), lying along it
+  (axis x) and at an angle (axis in the x-y plane at 45°, tilted 30° up);
+- boxes of three aspect ratios (cube, plate, bar) at yaw 0°, 30° and 60°.
+
+The held-back suite draws other sizes, orientations and positions from a seeded generator
+(seed :data:`HELD_BACK_SEED`), so a goal can be checked on objects nobody tuned on.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from eos_svc.agents import ObjectSpec
+from eos_svc.agents.planner import default_hand
+from eos_svc.agents.request import DEFAULT_OBJECT
+
+#: sphere diameters of the fixed suite, as d/h
+SPHERE_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
+#: seed of the held-back suite's generator
+HELD_BACK_SEED = 20260
+#: roll, pitch, yaw (rad) putting a cylinder's or capsule's local z axis …
+POSES: dict[str, tuple[float, float, float]] = {
+    "upright": (0.0, 0.0, 0.0),  # … along world z
+    "across": (math.pi / 2, 0.0, 0.0),  # … along world y (across the approach)
+    "along": (0.0, math.pi / 2, 0.0),  # … along world x (the approach)
+    "angled": (math.pi / 2 - math.radians(30), 0.0, math.radians(45)),  # … 45° in x-y, 30° up
+}
+#: box aspect ratios (full edges x, y, z in m) and the yaw angles (deg) each is planned at
+BOXES: dict[str, tuple[float, float, float]] = {
+    "cube 50": (0.05, 0.05, 0.05),
+    "plate 60x60x30": (0.06, 0.06, 0.03),
+    "bar 30x30x80": (0.03, 0.03, 0.08),
+}
+BOX_YAWS_DEG = (0.0, 30.0, 60.0)
+
+
+class SuiteObject(NamedTuple):
+    """One object of a suite: a readable label and the object."""
+
+    label: str
+    spec: ObjectSpec
+
+
+def default_position() -> tuple[float, float, float]:
+    """Where the default request puts its object (m)."""
+    x, y, z = DEFAULT_OBJECT["position"]
+    return (float(x), float(y), float(z))
+
+
+def fixed_suite() -> list[SuiteObject]:
+    """The fixed suite (29 objects), all at the default object position."""
+    p = default_position()
+    h = default_hand().hand_height
+    out = [
+        SuiteObject(f"sphere d/h {r:.2f}", ObjectSpec("sphere", {"radius": 0.5 * r * h}, p))
+        for r in SPHERE_RATIOS
+    ]
+    for label, radii in (
+        ("ellipsoid long x", (0.04, 0.03, 0.025)),
+        ("ellipsoid long y", (0.025, 0.04, 0.03)),
+        ("ellipsoid long z", (0.025, 0.03, 0.04)),
+    ):
+        out.append(SuiteObject(label, ObjectSpec("ellipsoid", {"radii": radii}, p)))
+    for shape, size in (
+        ("cylinder", {"radius": 0.02, "length": 0.08}),
+        ("capsule", {"radius": 0.02, "length": 0.05}),
+    ):
+        for pose, rpy in POSES.items():
+            out.append(SuiteObject(f"{shape} {pose}", ObjectSpec(shape, size, p, rpy)))
+    for name, edges in BOXES.items():
+        for yaw in BOX_YAWS_DEG:
+            out.append(
+                SuiteObject(
+                    f"box {name} yaw {yaw:.0f}",
+                    ObjectSpec("box", {"size": edges}, p, (0, 0, math.radians(yaw))),
+                )
+            )
+    return out
+
+
+def quick_suite() -> list[SuiteObject]:
+    """A small subset of the fixed suite: one object per class."""
+    wanted = {
+        "sphere d/h 0.50",
+        "ellipsoid long z",
+        "cylinder across",
+        "capsule upright",
+        "box cube 50 yaw 30",
+    }
+    return [o for o in fixed_suite() if o.label in wanted]
+
+
+def held_back_suite(per_class: int = 3, seed: int = HELD_BACK_SEED) -> list[SuiteObject]:
+    """``per_class`` objects of every class with sizes, orientations and positions drawn from a
+    seeded generator (uniform ranges; positions within ±1 cm of the default)."""
+    rng = np.random.default_rng(seed)
+    h = default_hand().hand_height
+    base = np.asarray(default_position())
+    out = []
+
+    def position() -> tuple[float, float, float]:
+        x, y, z = base + rng.uniform(-0.01, 0.01, 3)
+        return (round(float(x), 4), round(float(y), 4), round(float(z), 4))
+
+    def mm(lo: float, hi: float) -> float:
+        return round(float(rng.uniform(lo, hi)), 4)
+
+    for i in range(per_class):
+        r = mm(0.25, 0.9) * h / 2
+        out.append(
+            SuiteObject(
+                f"hb sphere {i} r{r * 1000:.0f}", ObjectSpec("sphere", {"radius": round(r, 4)}, position())
+            )
+        )
+    for i in range(per_class):
+        radii = tuple(mm(0.018, 0.042) for _ in range(3))
+        rpy = (0.0, 0.0, mm(-math.pi / 2, math.pi / 2))
+        out.append(
+            SuiteObject(f"hb ellipsoid {i}", ObjectSpec("ellipsoid", {"radii": radii}, position(), rpy))
+        )
+    for shape in ("cylinder", "capsule"):
+        for i in range(per_class):
+            size = {"radius": mm(0.014, 0.028), "length": mm(0.03, 0.08)}
+            rpy = (mm(0.0, math.pi / 2), 0.0, mm(-math.pi / 2, math.pi / 2))
+            out.append(SuiteObject(f"hb {shape} {i}", ObjectSpec(shape, size, position(), rpy)))
+    for i in range(per_class):
+        edges = tuple(mm(0.025, 0.07) for _ in range(3))
+        yaw = (0.0, 0.0, mm(0.0, math.pi / 2))
+        out.append(SuiteObject(f"hb box {i}", ObjectSpec("box", {"size": edges}, position(), yaw)))
+    return out

@@ -1,0 +1,296 @@
+"""The grasp in Drake: hand3x3 welded at its planned wrist pose, fingers squeezing, a free object.
+
+Built with Drake's ``MultibodyPlant`` (discrete, SAP solver, point contact) from the same URDF
+the planner loads with Pinocchio, parsed by Drake's own ``Parser``. Drake-only adjustments are
+made here in code, never in the URDF:
+
+- the six wrist joints are removed and the palm is welded to the world at the pose Drake's
+  own forward kinematics gives for the planned wrist coordinates (the links between world and
+  palm, which carry no geometry, are welded too);
+- a joint actuator with an implicit PD controller (gains ``kp``, ``kd``, the URDF's effort
+  limit) is added to every finger joint (the URDF declares no transmissions);
+- collisions between hand bodies are filtered out (the planner checks only hand–object
+  distances, and the finger links are not meant to touch one another);
+- every hand and object collision geometry gets the request's Coulomb μ and one point-contact
+  stiffness;
+- gravity is off: the object's weight is applied as an external force along one direction
+  at a time.
+
+Reference: Drake, https://drake.mit.edu (MultibodyPlant, SAP: Castro et al., "An Unconstrained
+Convex Formulation of Compliant Contact", IEEE T-RO 2023).
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from pydrake.geometry import (
+    AddContactMaterial,
+    Box,
+    Capsule,
+    CollisionFilterDeclaration,
+    Cylinder,
+    Ellipsoid,
+    ProximityProperties,
+    RoleAssign,
+    Shape,
+    Sphere,
+)
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.math import SpatialForce
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import (
+    AddMultibodyPlant,
+    CoulombFriction,
+    ExternallyAppliedSpatialForce,
+    MultibodyPlant,
+    MultibodyPlantConfig,
+)
+from pydrake.multibody.tree import PdControllerGains, SpatialInertia
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+
+from eos_svc.agents.request import ObjectSpec
+from eos_svc.errors import EosError, ValidationError
+from eos_svc.kinematics.hand import HandDescription
+
+#: name of the object's body and model instance in the plant
+OBJECT_NAME = "object"
+#: name of the hand part made of the palm and every hand body outside the fingers
+PALM_PART = "palm"
+
+
+class SimulationError(EosError, RuntimeError):
+    """Drake failed while building or simulating a grasp (the message says why)."""
+
+
+def vec(values: Sequence[float] | np.ndarray) -> Any:
+    """A float array for pydrake (its stubs type arrays in a way numpy's stubs reject)."""
+    return np.asarray(values, dtype=float)
+
+
+#: the local z axis: the axis of Drake's (and coal's) cylinders and capsules
+Z_AXIS = (0.0, 0.0, 1.0)
+
+
+def urdf_effort_limits(urdf: Path) -> dict[str, float]:
+    """Every joint's ``<limit effort>`` (N·m or N) in a URDF file, by joint name."""
+    out = {}
+    for joint in ET.parse(urdf).getroot().iter("joint"):
+        limit = joint.find("limit")
+        if limit is not None and "effort" in limit.attrib:
+            out[joint.attrib["name"]] = float(limit.attrib["effort"])
+    return out
+
+
+def object_shape(spec: ObjectSpec) -> tuple[Shape, SpatialInertia]:
+    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled later)."""
+    s = spec.size
+    if spec.shape == "sphere":
+        return Sphere(s["radius"]), SpatialInertia.SolidSphereWithMass(1.0, s["radius"])
+    if spec.shape == "ellipsoid":
+        a, b, c = s["radii"]
+        return Ellipsoid(a, b, c), SpatialInertia.SolidEllipsoidWithMass(1.0, a, b, c)
+    if spec.shape == "cylinder":  # Drake's and coal's cylinders: axis local z, full length
+        return (
+            Cylinder(s["radius"], s["length"]),
+            SpatialInertia.SolidCylinderWithMass(1.0, s["radius"], s["length"], vec(Z_AXIS)),
+        )
+    if spec.shape == "capsule":  # length: the straight part, as coal's
+        return (
+            Capsule(s["radius"], s["length"]),
+            SpatialInertia.SolidCapsuleWithMass(1.0, s["radius"], s["length"], vec(Z_AXIS)),
+        )
+    x, y, z = s["size"]
+    return Box(x, y, z), SpatialInertia.SolidBoxWithMass(1.0, x, y, z)
+
+
+def palm_pose(urdf: Path, description: HandDescription, wrist_q: Sequence[float]) -> RigidTransform:
+    """The palm's pose in the world for the wrist coordinates ``wrist_q`` (Drake's kinematics)."""
+    plant = MultibodyPlant(0.0)
+    Parser(plant).AddModels(urdf)
+    plant.Finalize()
+    context = plant.CreateDefaultContext()
+    q = plant.GetPositions(context)
+    for name, value in zip(description.wrist_joints, wrist_q, strict=True):
+        q[plant.GetJointByName(name).position_start()] = value
+    plant.SetPositions(context, q)
+    return plant.EvalBodyPoseInWorld(context, plant.GetBodyByName(description.palm_frame))
+
+
+class GraspSimulation:
+    """One grasp ready to simulate: call :meth:`settle`, then :meth:`load` per direction.
+
+    Args:
+        urdf: the hand's URDF.
+        description: which joints are the wrist and the fingers.
+        q_final: every joint value in the planner's order (wrist joints then finger joints).
+        obj: the object (shape, size, pose).
+        friction: Coulomb μ of every contact.
+        mass: object mass (kg).
+        squeeze: added to the planned finger angles as the PD target (rad; closing is +).
+        kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
+        contact_stiffness: point-contact stiffness of every geometry (N/m).
+        time_step: the discrete plant's step (s).
+    """
+
+    def __init__(
+        self,
+        urdf: Path,
+        description: HandDescription,
+        q_final: Sequence[float],
+        obj: ObjectSpec,
+        *,
+        friction: float,
+        mass: float,
+        squeeze: float,
+        kp: float,
+        kd: float,
+        contact_stiffness: float,
+        time_step: float,
+    ) -> None:
+        wrist = description.wrist_joints
+        finger_joints = [j for f in description.fingers for j in f.joints]
+        if len(q_final) != len(wrist) + len(finger_joints):
+            raise ValidationError("q_final", f"must have {len(wrist) + len(finger_joints)} values")
+        efforts = urdf_effort_limits(urdf)
+        self.effort_limit = min(efforts.get(j, np.inf) for j in finger_joints)
+        if not np.isfinite(self.effort_limit):
+            raise ValidationError("urdf", f"{urdf}: the finger joints have no effort limit")
+        X_WP = palm_pose(urdf, description, q_final[: len(wrist)])
+
+        builder = DiagramBuilder()
+        config = MultibodyPlantConfig(
+            time_step=time_step, contact_model="point", discrete_contact_approximation="sap"
+        )
+        plant, scene_graph = AddMultibodyPlant(config, builder)
+        (hand,) = Parser(plant).AddModels(urdf)
+        palm = plant.GetBodyByName(description.palm_frame)
+        between = {
+            plant.get_joint(j).child_body().index()
+            for j in plant.GetJointIndices(hand)
+            if plant.get_joint(j).name() in wrist
+        } - {palm.index()}
+        for name in wrist:
+            plant.RemoveJoint(plant.GetJointByName(name))
+        plant.WeldFrames(plant.world_frame(), palm.body_frame(), X_WP)
+        for index in sorted(between):  # no geometry: only so they are not free bodies
+            plant.WeldFrames(plant.world_frame(), plant.get_body(index).body_frame(), RigidTransform())
+        for name in finger_joints:
+            joint = plant.GetJointByName(name)
+            actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts[name])
+            actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
+
+        material = ProximityProperties()
+        AddContactMaterial(
+            dissipation=None,
+            point_stiffness=contact_stiffness,
+            friction=CoulombFriction(friction, friction),
+            properties=material,
+        )
+        shape, unit_inertia = object_shape(obj)
+        instance = plant.AddModelInstance(OBJECT_NAME)
+        inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
+        body = plant.AddRigidBody(OBJECT_NAME, instance, inertia)
+        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, OBJECT_NAME, material)
+        plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
+        plant.Finalize()
+
+        hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(hand)]
+        for b in hand_bodies:
+            for geometry in plant.GetCollisionGeometriesForBody(b):
+                scene_graph.AssignRole(plant.get_source_id(), geometry, material, RoleAssign.kReplace)
+        scene_graph.collision_filter_manager().Apply(
+            CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(hand_bodies))
+        )
+        # hand parts: each finger (its bodies outboard of its first joint) and the palm (the rest)
+        self._part: dict[int, str] = {int(b.index()): PALM_PART for b in hand_bodies}
+        for finger in description.fingers:
+            first = plant.GetJointByName(finger.joints[0]).index()
+            for index in plant.GetBodiesKinematicallyAffectedBy([first]):
+                self._part[int(index)] = finger.name
+
+        self.plant = plant
+        self.body = body
+        self.hand = hand
+        self.mass = mass
+        self.diagram = builder.Build()
+        self.simulator = Simulator(self.diagram)
+        self.context = self.simulator.get_mutable_context()
+        self._plant_context = plant.GetMyMutableContextFromRoot(self.context)
+        pc = self._plant_context
+        q = plant.GetPositions(pc)
+        for name, value in zip(finger_joints, q_final[len(wrist) :], strict=True):
+            q[plant.GetJointByName(name).position_start()] = value
+        plant.SetPositions(pc, q)
+        plant.SetFreeBodyPose(pc, body, RigidTransform(RollPitchYaw(vec(obj.rpy)), vec(obj.position)))
+        # actuated joints in actuator order = finger_joints order (added in that order)
+        target = np.asarray(q_final[len(wrist) :], dtype=float) + squeeze
+        plant.get_desired_state_input_port(hand).FixValue(pc, np.concatenate([target, np.zeros(len(target))]))
+        plant.get_actuation_input_port().FixValue(pc, np.zeros(plant.num_actuated_dofs()))
+        self._apply(np.zeros(3))
+        self.start = self.position()
+        self._settled = self.context.Clone()
+
+    def _apply(self, force: np.ndarray) -> None:
+        """The external force on the object's centre of mass (N, world frame)."""
+        f = ExternallyAppliedSpatialForce()
+        f.body_index = self.body.index()
+        f.p_BoBq_B = vec((0.0, 0.0, 0.0))
+        f.F_Bq_W = SpatialForce(vec((0.0, 0.0, 0.0)), vec(force))
+        self.plant.get_applied_spatial_force_input_port().FixValue(self._plant_context, [f])
+
+    def position(self) -> np.ndarray:
+        """The object's centre in the world (m)."""
+        return np.array(self.plant.EvalBodyPoseInWorld(self._plant_context, self.body).translation())
+
+    def body_position(self, name: str) -> np.ndarray:
+        """The origin of the plant's body ``name`` in the world now (m)."""
+        body = self.plant.GetBodyByName(name)
+        return np.array(self.plant.EvalBodyPoseInWorld(self._plant_context, body).translation())
+
+    def touching(self) -> tuple[str, ...]:
+        """The hand parts (palm, finger names) in contact with the object now, sorted."""
+        results = self.plant.get_contact_results_output_port().Eval(self._plant_context)
+        me = self.body.index()
+        parts = set()
+        for i in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(i)
+            a, b = info.bodyA_index(), info.bodyB_index()
+            if me in (a, b):
+                other = int(b if a == me else a)
+                if other in self._part:
+                    parts.add(self._part[other])
+        return tuple(sorted(parts))
+
+    def settle(self, seconds: float) -> np.ndarray:
+        """Squeeze with no load for ``seconds``; returns the object's centre after it (m)."""
+        self.simulator.Initialize()
+        self.simulator.AdvanceTo(self.context.get_time() + seconds)
+        self._settled = self.context.Clone()
+        return self.position()
+
+    def load(
+        self, direction: np.ndarray, force: float, seconds: float, sample: float, stop_distance: float
+    ) -> tuple[float, float, bool]:
+        """From the settled state, pull the object with ``force`` N along unit ``direction``
+        for ``seconds``; sample its displacement every ``sample`` s, stop once it is
+        ``stop_distance`` m away. Returns (largest displacement, final displacement, stopped early)."""
+        self.context.SetTimeStateAndParametersFrom(self._settled)
+        origin = self.position()
+        self._apply(force * np.asarray(direction, dtype=float))
+        self.simulator.Initialize()
+        t0 = self.context.get_time()
+        largest = final = 0.0
+        steps = max(1, round(seconds / sample))
+        for k in range(1, steps + 1):
+            self.simulator.AdvanceTo(t0 + seconds * k / steps)
+            final = float(np.linalg.norm(self.position() - origin))
+            largest = max(largest, final)
+            if final >= stop_distance:
+                return largest, final, k < steps
+        return largest, final, False
