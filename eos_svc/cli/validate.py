@@ -43,7 +43,7 @@ def read_result(path: str) -> dict[str, Any]:
 
     Exits with status 2 and a message naming the problem when the file is unusable.
     """
-    from eos_svc.cli.replay import MARK, RecordFileError, read_recording
+    from eos_svc.recording import MARK, RecordFileError, read_recording
 
     try:
         text = Path(path).read_text(encoding="utf-8")
