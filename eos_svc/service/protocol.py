@@ -16,8 +16,9 @@ key expression                     Zenoh entity               message
 ``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
 ``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
-                                                              ...}`` — ``running``, then ``done`` with
-                                                              ``status``, ``cycles`` and ``result``
+                                                              ...}`` — ``running`` with the ``request``,
+                                                              then ``done`` with ``status``, ``cycles``
+                                                              and ``result``
 =================================  =========================  ==========================================
 
 This module is pure (no Zenoh import) so the decoder can be fuzzed alone.

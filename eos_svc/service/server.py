@@ -377,9 +377,10 @@ class PlanService:
                 publisher = self.session.declare_publisher(
                     proto.cycle_key(self.prefix, goal_id), encoding=_JSON, congestion_control=_BLOCK
                 )
+                running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
                 self.session.put(
                     status_key,
-                    (head + '"state":"running"}').encode(),
+                    head.encode() + running[1:],  # with the request: a watcher can draw the object
                     encoding=_JSON,
                     congestion_control=_BLOCK,
                 )

@@ -21,6 +21,7 @@ import json
 import logging
 from collections.abc import Iterable, Mapping, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -70,7 +71,7 @@ def export_meshcat() -> Meshcat:
         return Meshcat(params)
 
 
-def _same(a: np.ndarray, b: np.ndarray) -> bool:
+def _same(a: Any, b: Any) -> bool:
     return bool(np.max(np.abs(a - b)) <= POSE_EPS)
 
 
@@ -82,7 +83,7 @@ def animate_hand(anim: MeshcatAnimation, drawing: HandDrawing, timeline: Timelin
         the number of transform keys written.
     """
     paths = [p.path for p in drawing.parts]
-    last: list[tuple[int, np.ndarray] | None] = [None] * len(paths)
+    last: list[tuple[int, Any] | None] = [None] * len(paths)
     prev_frame = -1
     written = 0
     for frame, q in timeline.keyframes:
@@ -131,13 +132,31 @@ def _result_text(request: PlanRequest, result: Mapping[str, Any] | None) -> str:
     )
 
 
-def plan_page(
+@dataclass
+class PlanScene:
+    """A plan drawn and animated in a MeshCat instance (before it is written as a page).
+
+    Attributes:
+        meshcat: the instance holding the scene and the animation.
+        timeline: the plan's timeline.
+        info: what the page's panel shows (title, duration, one entry per cycle).
+        postulates: postulated objects drawn; contacts: touching contacts drawn.
+    """
+
+    meshcat: Meshcat
+    timeline: Timeline
+    info: dict[str, Any]
+    postulates: int
+    contacts: int
+
+
+def plan_scene(
     request: Mapping[str, Any] | PlanRequest,
     records: Iterable[Mapping[str, Any]],
     result: Mapping[str, Any] | None = None,
     hand: HandModel | None = None,
-) -> str:
-    """The HTML page of a plan.
+) -> PlanScene:
+    """Draw and animate a plan in a new MeshCat instance.
 
     Args:
         request: the plan request (JSON form or :class:`PlanRequest`).
@@ -154,36 +173,44 @@ def plan_page(
     drawing = HandDrawing(hand)
     timeline = build_timeline(records, hand.neutral())
     meshcat = export_meshcat()
-    try:
-        drawing.add_to(meshcat)
-        drawing.pose_in(meshcat, timeline.keyframes[0][1])
-        add_object(meshcat, OBJECT, req.obj, OBJECT_RGBA)
-        anim = MeshcatAnimation(timeline.fps)
-        animate_hand(anim, drawing, timeline)
-        _postulates(meshcat, anim, timeline)
-        verdict = timeline.verdict
-        contacts = (result or {}).get("contacts") or (verdict[1].get("contacts") if verdict else None)
-        friction = (result or {}).get("friction", req.friction)
-        if add_contacts(meshcat, contacts, friction):
-            anim.SetProperty(0, CONTACTS, "visible", False)
-            anim.SetProperty(verdict[0] if verdict else timeline.frames, CONTACTS, "visible", True)
-        anim.set_autoplay(True)
-        anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
-        anim.set_clamp_when_finished(True)
-        meshcat.SetAnimation(anim)
-        set_camera(meshcat, req.obj.position)
-        meshcat.SetProperty("/Grid", "visible", False)
-        meshcat.SetProperty("/Axes", "visible", False)
-        page = meshcat.StaticHtml()
-    finally:
-        del meshcat
+    drawing.add_to(meshcat)
+    drawing.pose_in(meshcat, timeline.keyframes[0][1])
+    add_object(meshcat, OBJECT, req.obj, OBJECT_RGBA)
+    anim = MeshcatAnimation(timeline.fps)
+    animate_hand(anim, drawing, timeline)
+    postulates = _postulates(meshcat, anim, timeline)
+    verdict = timeline.verdict
+    contacts = (result or {}).get("contacts") or (verdict[1].get("contacts") if verdict else None)
+    friction = (result or {}).get("friction", req.friction)
+    drawn = add_contacts(meshcat, contacts, friction)
+    if drawn:
+        anim.SetProperty(0, CONTACTS, "visible", False)
+        anim.SetProperty(verdict[0] if verdict else timeline.frames, CONTACTS, "visible", True)
+    anim.set_autoplay(True)
+    anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
+    anim.set_clamp_when_finished(True)
+    meshcat.SetAnimation(anim)
+    set_camera(meshcat, req.obj.position)
+    meshcat.SetProperty("/Grid", "visible", False)
+    meshcat.SetProperty("/Axes", "visible", False)
     info = {
         "title": _result_text(req, result),
         "duration": timeline.duration_s,
         "fps": timeline.fps,
         "cycles": [s.to_dict(timeline.fps) for s in timeline.spans],
     }
-    return inject_panel(page, info)
+    return PlanScene(meshcat, timeline, info, postulates, len(drawn))
+
+
+def plan_page(
+    request: Mapping[str, Any] | PlanRequest,
+    records: Iterable[Mapping[str, Any]],
+    result: Mapping[str, Any] | None = None,
+    hand: HandModel | None = None,
+) -> str:
+    """The self-contained HTML page of a plan (arguments as :func:`plan_scene`)."""
+    scene = plan_scene(request, records, result, hand)
+    return inject_panel(scene.meshcat.StaticHtml(), scene.info)
 
 
 def inject_panel(page: str, info: Mapping[str, Any]) -> str:
@@ -291,7 +318,8 @@ PANEL_JS = """
     var lo = 0, hi = plan.cycles.length - 1, found = -1;
     while (lo <= hi) {
       var mid = (lo + hi) >> 1;
-      if (plan.cycles[mid].t0 <= t + 1e-9) { found = mid; lo = mid + 1; } else { hi = mid - 1; }
+      // cycle k covers (t0, t1]: at its t1 the cycle is done and shown
+      if (plan.cycles[mid].t0 < t - 1e-9) { found = mid; lo = mid + 1; } else { hi = mid - 1; }
     }
     return found < 0 ? null : plan.cycles[found];
   }

@@ -70,6 +70,11 @@ NORMAL_LENGTH = 0.03
 CONE_HEIGHT = 0.02
 
 
+def vec(values: Any) -> Any:
+    """A float array for pydrake (typed Any: pydrake's stubs type arrays so no ndarray matches)."""
+    return np.asarray(values, dtype=float)
+
+
 def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:
     """The MeshCat primitive of an object and its pose in the world (the request's convention:
     box ``size`` full edges, cylinder/capsule ``length`` along the local z axis)."""
@@ -85,7 +90,7 @@ def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:
         shape = Capsule(s["radius"], s["length"])
     else:
         shape = Box(*s["size"])
-    pose = RigidTransform(RollPitchYaw(*spec.rpy), np.asarray(spec.position, dtype=float))
+    pose = RigidTransform(RollPitchYaw(*spec.rpy), vec(spec.position))
     return shape, pose
 
 
@@ -119,7 +124,7 @@ def _coal_shape(geometry: Any) -> tuple[Shape, RigidTransform]:
     geometry.computeLocalAABB()
     box = geometry.aabb_local
     lo, hi = np.asarray(box.min_, dtype=float), np.asarray(box.max_, dtype=float)
-    return Box(*(hi - lo)), RigidTransform(0.5 * (lo + hi))
+    return Box(*(hi - lo)), RigidTransform(vec(0.5 * (lo + hi)))
 
 
 @dataclass(frozen=True)
@@ -210,7 +215,7 @@ def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.
 
 def _frame_along(axis: np.ndarray) -> RotationMatrix:
     """A rotation whose z axis is the unit vector ``axis``."""
-    return RotationMatrix.MakeFromOneVector(axis, 2)
+    return RotationMatrix.MakeFromOneVector(vec(axis), 2)
 
 
 def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: float | None) -> list[str]:
@@ -225,16 +230,16 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
         path = f"{CONTACTS}/{finger}"
         inward = -normal
         meshcat.SetObject(f"{path}/dot", Sphere(CONTACT_DOT), CONTACT_RGBA)
-        meshcat.SetTransform(f"{path}/dot", RigidTransform(point))
+        meshcat.SetTransform(f"{path}/dot", RigidTransform(vec(point)))
         meshcat.SetLine(
             f"{path}/normal",
-            np.column_stack([point, point + NORMAL_LENGTH * inward]),
+            vec(np.column_stack([point, point + NORMAL_LENGTH * inward])),
             line_width=3.0,
             rgba=CONTACT_RGBA,
         )
         radius = mu * CONE_HEIGHT
         meshcat.SetObject(f"{path}/cone", MeshcatCone(CONE_HEIGHT, radius, radius), CONE_RGBA)
-        meshcat.SetTransform(f"{path}/cone", RigidTransform(_frame_along(inward), point))
+        meshcat.SetTransform(f"{path}/cone", RigidTransform(_frame_along(inward), vec(point)))
         paths.append(path)
     return paths
 

@@ -132,7 +132,7 @@ class TimelineBuilder:
         fps: frames per second.
     """
 
-    def __init__(self, q0: Sequence[float], fps: int = FPS) -> None:
+    def __init__(self, q0: Sequence[float] | Any, fps: int = FPS) -> None:
         self.q = tuple(float(x) for x in q0)
         self.timeline = Timeline(keyframes=[(0, self.q)], fps=fps)
         self.frame = 0
@@ -186,7 +186,9 @@ class TimelineBuilder:
         return span
 
 
-def build_timeline(records: Iterable[Mapping[str, Any]], q0: Sequence[float], fps: int = FPS) -> Timeline:
+def build_timeline(
+    records: Iterable[Mapping[str, Any]], q0: Sequence[float] | Any, fps: int = FPS
+) -> Timeline:
     """The timeline of a plan's cycle records (JSON form), the hand starting at ``q0``."""
     builder = TimelineBuilder(q0, fps)
     for record in records:
