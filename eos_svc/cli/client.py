@@ -5,6 +5,7 @@ eos client plan --seed 7                    # one plan, cycles printed live, the
 eos client plan --json --quiet              # the result only, as JSON
 eos client cancel GOAL_ID                   # cancel a queued or running goal
 eos client watch                            # every cycle and status on the network
+eos client watch --view                     # and a live 3-D view of the plans (URL on stderr)
 
 By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
 """
@@ -13,9 +14,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import threading
+import time
 from typing import Any
 
+from eos_svc.cli import view as view_options
 from eos_svc.cli.common import fail, positive_float
 from eos_svc.cli.plan import add_request_arguments
 from eos_svc.cli.plan import request_dict as plan_request_dict
@@ -65,8 +67,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             type=positive_float,
             default=None,
             metavar="S",
-            help="seconds to wait for an answer (plan: the request's deadline + 10)",
+            help="seconds to wait for an answer (plan: the request's deadline + 10; watch: stop after S s)",
         )
+    view_options.add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
@@ -135,16 +138,21 @@ def run(args: argparse.Namespace) -> int:
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
-            stop = threading.Event()
-            sub = client.watch(
-                lambda kind, msg: print(
-                    format_cycle(msg) if kind == "cycle" else format_status(msg),
-                    flush=True,
-                )
-            )
+            stream = view_options.open_stream_view(args)  # --view: a live page of the plans watched
+
+            def on_message(kind: str, msg: dict[str, Any]) -> None:
+                print(format_cycle(msg) if kind == "cycle" else format_status(msg), flush=True)
+                if stream is not None:
+                    stream.on_message(kind, msg)  # queued; drawn below, in this thread
+
+            sub = client.watch(on_message)
+            end = None if args.timeout is None else time.monotonic() + args.timeout
             try:
-                while not stop.wait(0.5):
-                    pass
+                while end is None or time.monotonic() < end:
+                    if stream is not None:
+                        stream.pump(0.1)
+                    else:
+                        time.sleep(0.1)
             except KeyboardInterrupt:
                 pass
             finally:

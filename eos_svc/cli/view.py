@@ -71,6 +71,17 @@ def open_view(args: argparse.Namespace, hand: Any = None) -> Any:
     return view
 
 
+def open_stream_view(args: argparse.Namespace) -> Any:
+    """``eos client watch --view``: a :class:`~eos_svc.view.live.StreamView` fed by the watched
+    messages (its URL printed), or None without ``--view``."""
+    view = open_view(args)
+    if view is None:
+        return None
+    from eos_svc.view.live import StreamView
+
+    return StreamView(view)
+
+
 def wait_for_browser(view: Any, seconds: float | None) -> None:
     """``--view-wait``: wait until a browser shows the view (or ``seconds`` pass)."""
     if view is None or not seconds:

@@ -26,7 +26,7 @@ from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
 
 from eos_svc.agents import keys
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.request import PlanRequest
+from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.kinematics import HandModel
 from eos_svc.view.replay_html import animate_hand, quiet_drake
 from eos_svc.view.scene import (
@@ -108,6 +108,7 @@ class LiveView:
         self.drawing.pose_in(self.meshcat, self.q)
         self.meshcat.SetProperty("/Grid", "visible", False)
         self.meshcat.SetProperty("/Axes", "visible", False)
+        set_camera(self.meshcat, ObjectSpec().position)  # where the default object lies
         self.request: PlanRequest | None = None
         self._builder = TimelineBuilder(self.q)
         self._label: str | None = None
