@@ -42,7 +42,7 @@ from eos_svc.view.scene import (
     postulated_object,
     set_camera,
 )
-from eos_svc.view.timeline import TimelineBuilder
+from eos_svc.view.timeline import as_q, build_timeline
 
 #: most hand updates sent to the browsers per second while a plan runs
 MAX_UPDATES_PER_S = 30.0
@@ -87,7 +87,7 @@ class LiveView:
         url: the page's address.
         cycles_seen: cycles given to :meth:`cycle` since :meth:`start`.
         updates_sent: hand poses sent to connected browsers since :meth:`start`.
-        q: the hand's latest configuration.
+        q: the hand's latest configuration (property).
     """
 
     def __init__(
@@ -104,13 +104,14 @@ class LiveView:
         self.hand = hand or default_hand()
         self.drawing = HandDrawing(self.hand)
         self.drawing.add_to(self.meshcat)
-        self.q: tuple[float, ...] = tuple(float(x) for x in self.hand.neutral())
-        self.drawing.pose_in(self.meshcat, self.q)
+        self._q0: tuple[float, ...] = tuple(float(x) for x in self.hand.neutral())
+        self._q_new: Any = None  # the last hand_q written (JSON form), converted when drawn
+        self._records: list[dict[str, Any]] = []  # the cycles' entries a view reads, for finish()
+        self.drawing.pose_in(self.meshcat, self._q0)
         self.meshcat.SetProperty("/Grid", "visible", False)
         self.meshcat.SetProperty("/Axes", "visible", False)
         set_camera(self.meshcat, ObjectSpec().position)  # where the default object lies
         self.request: PlanRequest | None = None
-        self._builder = TimelineBuilder(self.q)
         self._label: str | None = None
         self._postulate: dict[str, Any] | None = None
         self._last_push = 0.0
@@ -129,13 +130,13 @@ class LiveView:
         self.request = None
         if request is not None:
             self.show_object(request)
-        self.q = tuple(float(x) for x in self.hand.neutral())
-        self._builder = TimelineBuilder(self.q)
+        self._q_new = None
+        self._records = []
         self._postulate = None
         self.cycles_seen = 0
         self.updates_sent = 0
         self.finished = False
-        self.drawing.pose_in(mc, self.q)
+        self.drawing.pose_in(mc, self._q0)
         self._show_label("waiting for the first cycle")
 
     def show_object(self, request: PlanRequest | Mapping[str, Any]) -> None:
@@ -150,13 +151,16 @@ class LiveView:
         set_camera(self.meshcat, req.obj.position)
 
     def cycle(self, record: Any) -> None:
-        """Follow one cycle (a :class:`CycleRecord` or its JSON form); cheap when nobody watches."""
+        """Follow one cycle (a :class:`CycleRecord` or its JSON form); cheap when nobody watches:
+        the record's few entries a view reads are kept for :meth:`finish`, nothing is drawn."""
         light = light_record(record)
-        self._builder.add(light)
+        self._records.append(light)
         self.cycles_seen += 1
-        self.q = self._builder.q
         for change in light.get("changes") or ():
-            if change.get("key") == keys.SHAPE:
+            key = change.get("key")
+            if key == keys.HAND_Q:
+                self._q_new = change.get("new")
+            elif key == keys.SHAPE:
                 self._postulate = change.get("new")
         if self.meshcat.GetNumActiveConnections() == 0:
             return
@@ -165,21 +169,26 @@ class LiveView:
             self._push(light)
             self._last_push = now
 
+    @property
+    def q(self) -> tuple[float, ...]:
+        """The hand's latest configuration (the last ``hand_q`` seen, or the start)."""
+        q = as_q(self._q_new, len(self._q0))
+        return self._q0 if q is None else q
+
     def finish(self, result: Mapping[str, Any]) -> None:
         """Show how the plan ended: the final hand, the contacts with their friction cones, the
         postulate, the verdict; and the whole plan as the page's animation (play it from the
         controls' Animations folder)."""
         if self.request is None and isinstance(result.get("request"), Mapping):
             self.show_object(result["request"])
-        q_final = result.get("q_final")
-        if isinstance(q_final, (list, tuple)) and len(q_final) == len(self.q):
-            self.q = tuple(float(x) for x in q_final)
+        if as_q(result.get("q_final"), len(self._q0)) is not None:
+            self._q_new = result["q_final"]
         mc = self.meshcat
         self.drawing.pose_in(mc, self.q)
         self._draw_postulate()
         friction = result.get("friction", self.request.friction if self.request else None)
         add_contacts(mc, result.get("contacts"), friction)
-        timeline = self._builder.timeline
+        timeline = build_timeline(self._records, self._q0)
         if len(timeline.keyframes) > 1:
             anim = MeshcatAnimation(timeline.fps)
             animate_hand(anim, self.drawing, timeline)

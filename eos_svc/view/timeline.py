@@ -4,9 +4,11 @@ Built from cycle records in their JSON form (:meth:`CycleRecord.to_dict`, as in 
 or the service's cycle stream), which carry the hand's configuration after every cycle that
 moved it (board entry ``hand_q``, written by :class:`~eos_svc.agents.pose_board.PoseBoard`) and
 the sampled path of every EP1 roll (``hand_path``). Each cycle gets at least
-:data:`CYCLE_FRAMES` frames; a move is split into keyframes of at most :data:`MAX_STEP_RAD` per
-joint and :data:`MAX_STEP_M` of wrist travel (interpolated in joint space, so the bodies follow
-the kinematics between keyframes), an EP1 roll adds one keyframe per sample.
+:data:`CYCLE_FRAMES` frames; a move that turns joints is split into keyframes of at most
+:data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel (interpolated in joint
+space, so the bodies follow the kinematics between keyframes; a pure wrist translation needs no
+split), an EP1 roll adds one keyframe per sample. The page interpolates each body's pose
+linearly between keyframes.
 """
 
 from __future__ import annotations
@@ -94,9 +96,12 @@ class Timeline:
 
 def _steps_between(a: Sequence[float], b: Sequence[float]) -> int:
     """How many keyframes a move from ``a`` to ``b`` needs (≥ 1): wrist x, y, z are the first
-    three entries (m), every other entry an angle (rad)."""
+    three entries (m), every other entry an angle (rad). A pure wrist translation needs one
+    (every body translates with the wrist: interpolating their poses is exact)."""
+    if a[3:] == b[3:]:
+        return 1
     travel = math.sqrt(sum((b[i] - a[i]) ** 2 for i in range(min(3, len(a)))))
-    turn = max((abs(y - x) for x, y in zip(a[3:], b[3:], strict=True)), default=0.0)
+    turn = max(abs(y - x) for x, y in zip(a[3:], b[3:], strict=True))
     return max(1, math.ceil(travel / MAX_STEP_M - 1e-9), math.ceil(turn / MAX_STEP_RAD - 1e-9))
 
 
@@ -104,7 +109,7 @@ def _lerp(a: Sequence[float], b: Sequence[float], s: float) -> tuple[float, ...]
     return tuple(x + s * (y - x) for x, y in zip(a, b, strict=True))
 
 
-def _as_q(value: Any, nq: int) -> tuple[float, ...] | None:
+def as_q(value: Any, nq: int) -> tuple[float, ...] | None:
     """A configuration from a board value, or None when it is not one of length ``nq``."""
     if not isinstance(value, (list, tuple)) or len(value) != nq:
         return None
@@ -159,8 +164,8 @@ class TimelineBuilder:
         path = written.get(keys.HAND_PATH)
         waypoints: list[tuple[float, ...]] = []
         if isinstance(path, list):
-            waypoints.extend(q for q in (_as_q(p, nq) for p in path) if q is not None)
-        end_q = _as_q(written.get(keys.HAND_Q), nq)
+            waypoints.extend(q for q in (as_q(p, nq) for p in path) if q is not None)
+        end_q = as_q(written.get(keys.HAND_Q), nq)
         if end_q is not None:
             waypoints.append(end_q)
         for i, q in enumerate(waypoints):

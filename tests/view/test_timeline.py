@@ -27,11 +27,13 @@ def test_keyframes_visit_every_recorded_configuration_in_order(planned):
             if change["key"] == keys.HAND_Q:
                 assert tuple(change["new"]) in visited
     assert np.allclose(tl.keyframes[-1][1], result.q_final, atol=1e-7)
-    # small steps between keyframes: the bodies follow the kinematics between them
+    # small steps between keyframes where joints turn: the bodies follow the kinematics between
+    # them (a pure wrist translation needs none: every body translates with the wrist)
     for (_, a), (_, b) in zip(tl.keyframes, tl.keyframes[1:], strict=False):
         a, b = np.array(a), np.array(b)
-        assert np.linalg.norm(b[:3] - a[:3]) <= MAX_STEP_M + 1e-9
-        assert np.max(np.abs(b[3:] - a[3:])) <= MAX_STEP_RAD + 1e-9
+        if np.any(a[3:] != b[3:]):
+            assert np.linalg.norm(b[:3] - a[:3]) <= MAX_STEP_M + 1e-9
+            assert np.max(np.abs(b[3:] - a[3:])) <= MAX_STEP_RAD + 1e-9
 
 
 def test_cycle_spans_tile_the_time_and_ep1_takes_longer(planned):
