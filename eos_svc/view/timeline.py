@@ -63,7 +63,8 @@ class Timeline:
     Attributes:
         keyframes: ``(frame, q)`` in increasing frame order; q holds every joint of the hand.
         spans: one per cycle.
-        postulates: ``(frame, postulate dict)`` for every cycle that wrote ``keys.SHAPE``.
+        postulates: ``(frame, postulate dict)`` for every cycle that wrote ``keys.SHAPE``, at
+            the cycle's end.
         verdict: ``(frame, verdict dict)`` of the end agent's ``keys.OUTCOME``, or None.
         fps: frames per second.
     """
@@ -183,8 +184,8 @@ class TimelineBuilder:
         )
         tl = self.timeline
         tl.spans.append(span)
-        if keys.SHAPE in written:
-            tl.postulates.append((start, written[keys.SHAPE]))
+        if keys.SHAPE in written:  # shown once the cycle that postulated it is done
+            tl.postulates.append((self.frame, written[keys.SHAPE]))
         verdict = written.get(keys.OUTCOME)
         if isinstance(verdict, Mapping):
             tl.verdict = (self.frame, verdict)

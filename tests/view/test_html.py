@@ -8,7 +8,7 @@ import re
 import pytest
 
 from eos_svc.agents import PlanRequest, keys, plan
-from eos_svc.view import write_result_html
+from eos_svc.view import write_plan_html, write_result_html
 from eos_svc.view.browser import dump_dom, find_chromium, screenshot
 from eos_svc.view.replay_html import plan_scene
 from eos_svc.view.scene import CONTACTS, OBJECT, POSTULATE
@@ -43,20 +43,47 @@ def test_page_is_self_contained_and_lists_every_cycle(page, result):
     assert info["duration"] == pytest.approx(info["cycles"][-1]["t1"])
 
 
+#: a postulated object in the request's JSON form (the postulate's ``object``), off the truth
+GUESS = {
+    "shape": "ellipsoid",
+    "radii": [0.033, 0.028, 0.03],
+    "position": [0.212, 0.02, -0.014],
+    "rpy": [0, 0, 0.3],
+}
+
+
+def with_postulated_object(records):
+    """The records with ``GUESS`` as the ``object`` of every sized postulate; the first such cycle."""
+    first = None
+    for record in records:
+        for change in record["changes"]:
+            if change["key"] == keys.SHAPE and change["new"]["grasp_radius"] is not None:
+                change["new"] = {**change["new"], "object": GUESS, "pose_known": False}
+                first = first or record["seq"]
+    return records, first
+
+
 def test_scene_holds_the_object_the_contacts_and_the_postulate(result):
-    """A postulate carrying an ``object`` (the request's JSON form) is drawn; one without is not."""
+    """A postulate carrying an ``object`` is drawn; one without (as the planner writes today) is not."""
     records = [r.to_dict() for r in result.trace]
     scene = plan_scene(result.request, records, result.to_dict())
     assert scene.meshcat.HasPath(OBJECT)
     assert scene.contacts == 3 and all(scene.meshcat.HasPath(f"{CONTACTS}/finger{i}") for i in (1, 2, 3))
-    assert scene.postulates == 0 and not scene.meshcat.HasPath(POSTULATE)
-    guessed = {"shape": "sphere", "radius": 0.029, "position": [0.21, 0.02, -0.014], "rpy": [0, 0, 0]}
-    for record in records:
-        for change in record["changes"]:
-            if change["key"] == keys.SHAPE and change["new"]["grasp_radius"] is not None:
-                change["new"] = {**change["new"], "object": guessed, "pose_known": False}
+    if not any(c["key"] == keys.SHAPE and "object" in c["new"] for r in records for c in r["changes"]):
+        assert scene.postulates == 0 and not scene.meshcat.HasPath(POSTULATE)
+    records, _ = with_postulated_object(records)
     scene = plan_scene(result.request, records, result.to_dict())
     assert scene.postulates >= 1 and scene.meshcat.HasPath(f"{POSTULATE}/1")
+
+
+@needs_chromium
+def test_chromium_shows_the_postulate_from_its_cycle_on(result, tmp_path):
+    records, first = with_postulated_object([r.to_dict() for r in result.trace])
+    page = write_plan_html(tmp_path / "postulate.html", result.request, records, result.to_dict())
+    before = colour_regions(screenshot(f"{page.as_uri()}#cycle={first - 1}", tmp_path / "before.png"))
+    after = colour_regions(screenshot(f"{page.as_uri()}#cycle={first}", tmp_path / "after.png"))
+    assert before["postulate"][0] < 50 < 200 < after["postulate"][0]  # translucent yellow appears
+    assert after["object"][0] < 0.8 * before["object"][0]  # over the blue object
 
 
 @needs_chromium
