@@ -1,6 +1,7 @@
 """Screenshots of a view in headless Chromium, offline (for the tests and the README picture).
 
     screenshot("file:///tmp/plan.html#cycle=70", "shot.png")
+    # or: python -m eos_svc.view.browser "file:///tmp/plan.html#cycle=70" shot.png
 
 Chromium runs headless with software WebGL (SwiftShader), a fresh profile, no background
 traffic and no network at all: every host name resolves to nothing and the proxy is a closed
@@ -92,7 +93,7 @@ def dump_dom(url: str, *, budget_ms: int = 8000, offline: bool = True, timeout_s
     Raises:
         BrowserError: no Chromium, or it printed nothing.
     """
-    with tempfile.TemporaryDirectory(prefix="eos-chromium-") as profile:
+    with tempfile.TemporaryDirectory(prefix="eos-chromium-", ignore_cleanup_errors=True) as profile:
         cmd = screenshot_command(url, "unused.png", profile, budget_ms=budget_ms, offline=offline)
         cmd = [c for c in cmd if not c.startswith("--screenshot=")]
         cmd.insert(-1, "--dump-dom")
@@ -118,9 +119,30 @@ def screenshot(
     """
     out = Path(png).resolve()
     out.unlink(missing_ok=True)
-    with tempfile.TemporaryDirectory(prefix="eos-chromium-") as profile:
+    with tempfile.TemporaryDirectory(prefix="eos-chromium-", ignore_cleanup_errors=True) as profile:
         cmd = screenshot_command(url, out, profile, size=size, budget_ms=budget_ms, offline=offline)
         proc = _run(cmd, url, timeout_s)
     if not out.exists():
         raise BrowserError(f"Chromium wrote no screenshot (exit {proc.returncode}): {proc.stderr[-500:]}")
     return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m eos_svc.view.browser URL PNG [WIDTH HEIGHT]``: one offline screenshot."""
+    import sys
+
+    args = sys.argv[1:] if argv is None else argv
+    if len(args) not in (2, 4):
+        print("usage: python -m eos_svc.view.browser URL PNG [WIDTH HEIGHT]", file=sys.stderr)
+        return 2
+    size = (int(args[2]), int(args[3])) if len(args) == 4 else (1024, 768)
+    try:
+        print(screenshot(args[0], args[1], size=size))
+    except BrowserError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

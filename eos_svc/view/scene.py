@@ -247,5 +247,5 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
 def set_camera(meshcat: Meshcat, target: Sequence[float]) -> None:
     """Look at ``target`` (world, m; the object) and the hand behind it from the left (−y),
     above (the hand approaches along +x)."""
-    t = np.asarray(target, dtype=float) - np.array([0.05, 0.0, 0.0])
-    meshcat.SetCameraPose(t + np.array([-0.06, -0.26, 0.12]), t)
+    t = np.asarray(target, dtype=float) + np.array([-0.09, 0.0, 0.035])  # the hand, below the panel
+    meshcat.SetCameraPose(t + np.array([-0.02, -0.22, 0.1]), t)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import signal
 import subprocess
 import tempfile
 import time
@@ -51,13 +53,14 @@ def test_watcher_follows_a_remote_plan_over_zenoh_in_a_browser(tmp_path):
     client = EosClient.open(make_config(connect=[loopback(port)]))
     stream = StreamView(LiveView())
     watching = client.watch(stream.on_message)
-    profile = tempfile.TemporaryDirectory(prefix="eos-chromium-")
+    profile = tempfile.TemporaryDirectory(prefix="eos-chromium-", ignore_cleanup_errors=True)
     browser = subprocess.Popen(
         screenshot_command(
             _local(stream.view.url), tmp_path / "during.png", profile.name, budget_ms=30000, offline=False
         ),
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
+        start_new_session=True,  # its own process group: stopped with its renderers below
     )
     try:
         client.wait_for_instances(1)
@@ -71,7 +74,8 @@ def test_watcher_follows_a_remote_plan_over_zenoh_in_a_browser(tmp_path):
             stream.pump(0.1)
     finally:
         watching.undeclare()
-        browser.kill()
+        if browser.poll() is None:
+            os.killpg(browser.pid, signal.SIGKILL)
         browser.wait()
         profile.cleanup()
         client.close()
