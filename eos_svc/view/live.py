@@ -46,6 +46,8 @@ from eos_svc.view.timeline import as_q, build_timeline
 
 #: most hand updates sent to the browsers per second while a plan runs
 MAX_UPDATES_PER_S = 30.0
+#: goals a stream view remembers as done (their late messages are ignored)
+GOALS_KEPT = 1000
 #: board entries a live view reads from a cycle record
 WANTED = frozenset({keys.HAND_Q, keys.HAND_PATH, keys.SHAPE, keys.OUTCOME})
 
@@ -287,4 +289,5 @@ class StreamView:
             result = msg.get("result")
             self.view.finish(result if isinstance(result, Mapping) else {})
             self.goals_done.append(goal)
+            del self.goals_done[:-GOALS_KEPT]
             self.goal = None

@@ -37,6 +37,7 @@ def test_plan_followed_by_a_live_view_nobody_watches():
     assert view.updates_sent == 1  # nobody connected: only the final state was drawn
     assert np.allclose(view.q, result.q_final, atol=1e-7)
     assert view.meshcat.HasPath(OBJECT)
+    assert view.meshcat.GetButtonNames() == [f"{result.status} after {result.cycles} cycles; good grasp: yes"]
     touching = [f for f, c in result.contacts.items() if c["touching"]]
     assert touching and all(view.meshcat.HasPath(f"{CONTACTS}/{f}") for f in touching)
     with urllib.request.urlopen(_local(view.url), timeout=10) as reply:  # the page is served
@@ -86,6 +87,7 @@ def test_watcher_follows_a_remote_plan_over_zenoh_in_a_browser(tmp_path):
     assert view.updates_sent >= 2  # pushed while the plan ran (throttled), then the end
     assert np.allclose(view.q, outcome.result["q_final"], atol=1e-7)
     assert view.request is not None and view.request.seed == 6  # from the running status
+    assert view.meshcat.GetButtonNames()[0].startswith(f"{outcome.result['status']} after ")
     shot = colour_regions(screenshot(_local(view.url), tmp_path / "after.png", offline=False))
     assert shot["object"][0] > 2000 and shot["tip2"][0] > 100 and shot["tip3"][0] > 100
     assert distance(shot["tip2"][1], shot["object"][1]) < 120  # closed on the object
