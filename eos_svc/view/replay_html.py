@@ -63,9 +63,11 @@ def quiet_drake() -> Any:
 
 
 def export_meshcat() -> Meshcat:
-    """A MeshCat instance used only to build a page (its server stays on localhost)."""
+    """A MeshCat instance used only to build a page (its server on localhost, on an ephemeral
+    port: it never takes one of the 7000–7099 a live view would use)."""
     params = MeshcatParams()
     params.host = "localhost"
+    params.port = 0
     params.show_stats_plot = False
     with quiet_drake():
         return Meshcat(params)
