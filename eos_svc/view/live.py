@@ -27,6 +27,7 @@ from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
 from eos_svc.agents import keys
 from eos_svc.agents.planner import default_hand
 from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.view.replay_html import animate_hand, quiet_drake
 from eos_svc.view.scene import (
@@ -42,7 +43,7 @@ from eos_svc.view.scene import (
     postulated_object,
     set_camera,
 )
-from eos_svc.view.timeline import as_q, build_timeline
+from eos_svc.view.timeline import FPS, as_q, build_timeline
 
 #: most hand updates sent to the browsers per second while a plan runs
 MAX_UPDATES_PER_S = 30.0
@@ -57,7 +58,13 @@ def light_record(record: Any) -> dict[str, Any]:
     :class:`~eos_svc.records.CycleRecord` (without building its full ``to_dict()``) or from a
     record already in JSON form."""
     if isinstance(record, Mapping):
-        return dict(record)
+        seq, changes = record.get("seq"), record.get("changes")
+        if isinstance(seq, bool) or not isinstance(seq, int) or not isinstance(changes, list):
+            raise TypeError("not a cycle record: seq must be an integer and changes a list")
+        return {
+            **{k: record.get(k) for k in ("seq", "stage", "chosen", "outcome", "detail")},
+            "changes": [c for c in changes if isinstance(c, Mapping) and c.get("key") in WANTED],
+        }
     outcome = record.outcome
     return {
         "seq": record.seq,
@@ -124,14 +131,19 @@ class LiveView:
     # --- what a plan does to the view ----------------------------------------------------------
     def start(self, request: PlanRequest | Mapping[str, Any] | None = None) -> None:
         """Show a new plan: the hand at its start, no contacts or postulate, and its object
-        (when the request is known; else from :meth:`show_object` or the result later)."""
+        (when the request is known; else from :meth:`show_object` or the result later).
+
+        Raises:
+            ValidationError: the request is not a valid plan request (the view is reset, with
+                no object).
+        """
         mc = self.meshcat
         mc.Delete(CONTACTS)
         mc.Delete(POSTULATE)
         mc.Delete(OBJECT)
+        if self.finished:
+            mc.SetAnimation(MeshcatAnimation(FPS))  # forget the previous plan's animation
         self.request = None
-        if request is not None:
-            self.show_object(request)
         self._q_new = None
         self._records = []
         self._postulate = None
@@ -140,6 +152,8 @@ class LiveView:
         self.finished = False
         self.drawing.pose_in(mc, self._q0)
         self._show_label("waiting for the first cycle")
+        if request is not None:
+            self.show_object(request)
 
     def show_object(self, request: PlanRequest | Mapping[str, Any]) -> None:
         """Draw the plan's object and look at it.
@@ -251,6 +265,8 @@ class StreamView:
         self.goal: str | None = None
         self.inbox: queue.SimpleQueue[tuple[str, dict[str, Any]]] = queue.SimpleQueue()
         self.goals_done: list[str] = []
+        self.rejected = 0
+        self.last_rejection = ""
 
     def on_message(self, kind: str, msg: dict[str, Any]) -> None:
         """``EosClient.watch`` callback: queue the message (never blocks)."""
@@ -272,6 +288,17 @@ class StreamView:
                 return done
 
     def _handle(self, kind: str, msg: dict[str, Any]) -> None:
+        """Draw one message; one the view cannot read (a malformed request, record or result)
+        is counted in :attr:`rejected` and skipped."""
+        try:
+            self._draw(kind, msg)
+        except (ValidationError, TypeError, ValueError, KeyError) as exc:
+            self.rejected += 1
+            self.last_rejection = f"{kind} message of goal {msg.get('goal_id')!r}: {exc}"
+
+    def _draw(self, kind: str, msg: dict[str, Any]) -> None:
+        if not isinstance(msg, Mapping):
+            raise TypeError(f"not a JSON object: {type(msg).__name__}")
         goal = msg.get("goal_id")
         if not isinstance(goal, str):
             return
@@ -283,11 +310,13 @@ class StreamView:
             self.view.start(request if isinstance(request, Mapping) else None)
         if goal != self.goal:
             return
-        if kind == "cycle" and isinstance(msg.get("record"), Mapping):
+        if kind == "cycle":
+            if not isinstance(msg.get("record"), Mapping):
+                raise TypeError("a cycle message without a record object")
             self.view.cycle(msg["record"])
         elif kind == "status" and msg.get("state") == "done":
-            result = msg.get("result")
-            self.view.finish(result if isinstance(result, Mapping) else {})
             self.goals_done.append(goal)
             del self.goals_done[:-GOALS_KEPT]
-            self.goal = None
+            self.goal = None  # done, even when its result cannot be drawn
+            result = msg.get("result")
+            self.view.finish(result if isinstance(result, Mapping) else {})

@@ -91,3 +91,28 @@ def test_watcher_follows_a_remote_plan_over_zenoh_in_a_browser(tmp_path):
     shot = colour_regions(screenshot(_local(view.url), tmp_path / "after.png", offline=False))
     assert shot["object"][0] > 2000 and shot["tip2"][0] > 100 and shot["tip3"][0] > 100
     assert distance(shot["tip2"][1], shot["object"][1]) < 120  # closed on the object
+
+
+def test_stream_view_skips_messages_it_cannot_read():
+    """Malformed messages (a bad request, a record that is not one, garbage) are counted and
+    skipped; the next goal is drawn."""
+    stream = StreamView(LiveView())
+    bad_request = {"object": {"shape": "cone"}}
+    for kind, msg in [
+        ("status", {"goal_id": "g1", "state": "running", "request": bad_request}),
+        ("cycle", {"goal_id": "g1", "seq": 1, "record": {"seq": "one", "changes": "x"}}),
+        ("cycle", {"goal_id": "g1", "seq": 2, "record": ["not", "a", "record"]}),
+        ("status", {"goal_id": "g1", "state": "done", "result": {"request": bad_request}}),
+    ]:
+        stream.on_message(kind, msg)
+    stream.pump()
+    assert stream.rejected == 4 and "'g1'" in stream.last_rejection
+    request = PlanRequest(seed=2)
+    result = plan(request)
+    stream.on_message("status", {"goal_id": "g2", "state": "running", "request": request.to_dict()})
+    for r in result.trace:
+        stream.on_message("cycle", {"goal_id": "g2", "seq": r.seq, "record": r.to_dict()})
+    stream.on_message("status", {"goal_id": "g2", "state": "done", "result": result.to_dict()})
+    stream.pump()
+    assert "g2" in stream.goals_done and stream.view.cycles_seen == result.cycles
+    assert np.allclose(stream.view.q, result.q_final, atol=1e-7)
