@@ -129,9 +129,12 @@ def write_html(
     hand: Any = None,
 ) -> None:
     """``--html FILE``: write the page (exit 2 naming the option when it cannot be written)."""
+    from eos_svc.errors import ValidationError
     from eos_svc.view import write_plan_html
 
     try:
         write_plan_html(path, request, records, result, hand)
     except OSError as exc:
         fail(f"--html: cannot write {path!r}: {exc.strerror}")
+    except ValidationError as exc:  # a recorded request this version does not accept
+        fail(f"--html: the plan's request is not valid: {exc}")

@@ -40,7 +40,7 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.agents.request import DEFAULT_FRICTION, ObjectSpec
 from eos_svc.kinematics import HandModel
 
 #: root of everything this package draws in a MeshCat scene
@@ -198,19 +198,31 @@ def add_object(meshcat: Meshcat, path: str, spec: ObjectSpec, rgba: Rgba) -> Non
 def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """``(finger, point, outward normal)`` of every touching contact of a result's ``contacts``
     (world, m; entries without a point or normal are skipped)."""
-    out = []
-    for finger, c in (contacts or {}).items():
+    out: list[tuple[str, np.ndarray, np.ndarray]] = []
+    if not isinstance(contacts, Mapping):
+        return out
+    for finger, c in contacts.items():
         if not isinstance(c, Mapping) or not c.get("touching"):
             continue
         point, normal = c.get("point"), c.get("normal")
         if point is None or normal is None:
             continue
-        n = np.asarray(normal, dtype=float)
-        norm = float(np.linalg.norm(n))
-        if norm < 1e-12:
+        try:
+            p, n = np.asarray(point, dtype=float), np.asarray(normal, dtype=float)
+        except (TypeError, ValueError):
             continue
-        out.append((str(finger), np.asarray(point, dtype=float), n / norm))
+        norm = float(np.linalg.norm(n)) if n.shape == (3,) and p.shape == (3,) else 0.0
+        if not (norm > 1e-12 and np.all(np.isfinite(p))):
+            continue
+        out.append((str(finger), p, n / norm))
     return out
+
+
+def friction_or_default(friction: object) -> float:
+    """``friction`` when it is a positive finite number, else the request's default μ."""
+    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
+    value = float(friction) if number else math.nan  # type: ignore[arg-type]
+    return value if math.isfinite(value) and value > 0 else DEFAULT_FRICTION
 
 
 def _frame_along(axis: np.ndarray) -> RotationMatrix:
@@ -218,13 +230,14 @@ def _frame_along(axis: np.ndarray) -> RotationMatrix:
     return RotationMatrix.MakeFromOneVector(vec(axis), 2)
 
 
-def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: float | None) -> list[str]:
-    """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`.
+def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: object) -> list[str]:
+    """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`;
+    the cone's μ is ``friction`` (the request's default when it is not a positive number).
 
     Returns:
         the scene paths drawn, one per contact (each a folder).
     """
-    mu = 0.5 if friction is None or not math.isfinite(friction) or friction <= 0 else float(friction)
+    mu = friction_or_default(friction)
     paths = []
     for finger, point, normal in touching_contacts(contacts):
         path = f"{CONTACTS}/{finger}"

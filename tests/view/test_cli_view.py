@@ -73,3 +73,16 @@ def test_bad_view_options_exit_2_naming_the_option(args, message):
     assert proc.returncode == 2
     assert message in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_replay_html_of_a_request_this_version_refuses_names_it(tmp_path):
+    """--no-verify (no re-run) and a recorded request this version refuses: exit 2 naming the
+    field, never a traceback."""
+    record = tmp_path / "run.jsonl"
+    assert main(["plan", "--quiet", "--record", str(record)]) == 0
+    lines = [json.loads(line) for line in record.read_text().splitlines()]
+    lines[0]["request"]["object"]["shape"] = "cone"
+    record.write_text("\n".join(json.dumps(x) for x in lines) + "\n")
+    proc = eos("replay", str(record), "--quiet", "--no-verify", "--html", str(tmp_path / "b.html"))
+    assert proc.returncode == 2 and "--html: the plan's request is not valid" in proc.stderr
+    assert "object.shape" in proc.stderr and "Traceback" not in proc.stderr

@@ -60,3 +60,23 @@ def test_every_shape_planned_and_drawn(spec, seed):
     assert len(scene.info["cycles"]) == result.cycles
     if result.q_final is not None:
         assert np.allclose(scene.timeline.keyframes[-1][1], result.q_final, atol=1e-7)
+
+
+def test_a_damaged_result_draws_no_contacts():
+    """Contacts that are not a mapping, points or normals that are not 3-vectors, a friction that
+    is not a number: nothing drawn for them, nothing raised."""
+    result = plan(PlanRequest(seed=1))
+    records = [r.to_dict() for r in result.trace]
+    for contacts in (
+        ["a", "list"],
+        {"finger1": {"touching": True, "point": [0, 0], "normal": [0, 0, 1]}},
+        {"finger1": {"touching": True, "point": [0, 0, 0], "normal": "up"}},
+    ):
+        for record in records:  # the end agent's verdict too
+            for change in record["changes"]:
+                if change["key"] == "grasp_outcome":
+                    change["new"] = {**change["new"], "contacts": contacts}
+        scene = plan_scene(result.request, records, {"contacts": contacts, "friction": "high"})
+        assert scene.contacts == 0 and not scene.meshcat.HasPath(CONTACTS)
+    good = plan_scene(result.request, records, {"contacts": result.contacts, "friction": "high"})
+    assert good.contacts == 3  # drawn with the default μ
