@@ -40,7 +40,7 @@ FALLBACK_SOLVER = "daqp"
 #: lowest opportunistic sub-rating of EP1 while the shape is not known
 RATING_FLOOR = 0.05
 #: EP1 keeps the hand's configuration every this many rolling steps for viewers (keys.HAND_PATH)
-PATH_EVERY = 4
+PATH_EVERY = 8
 #: how far above/below the hand's grasp centre the exploration aims (m): far enough that the
 #: closest surface point is the object's top (bottom)
 PROBE_REACH = 0.5

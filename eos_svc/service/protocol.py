@@ -210,7 +210,21 @@ def _value_json(v: Any) -> str:
         return "false"
     if t is int:
         return int.__repr__(v)
+    if t is tuple and v and all([type(x) is float for x in v]):
+        # a flat tuple of floats: the hand's configuration (board entry hand_q), written as the
+        # new value of one cycle and the old value of the next — the same tuple, encoded once
+        last = _last_vector[0]
+        if v is last[0]:
+            return last[1]
+        text = "[" + ",".join([_float_repr(x) if math.isfinite(x) else "null" for x in v]) + "]"
+        _last_vector[0] = (v, text)
+        return text
     return _ENCODER.encode(to_jsonable(v))
+
+
+#: (the last float tuple encoded, its JSON) in one slot, read and replaced whole (thread-safe as
+#: _last_weights); tuples are immutable, so the same object always has the same text
+_last_vector: list[tuple[Any, str]] = [((), "")]
 
 
 #: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)

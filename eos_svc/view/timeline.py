@@ -25,7 +25,7 @@ FPS = 16
 #: frames of a cycle (the least; a long move or a roll takes more)
 CYCLE_FRAMES = 4
 #: frames per EP1 roll sample
-PATH_FRAMES = 1
+PATH_FRAMES = 2
 #: largest joint change (rad) and wrist travel (m) between two keyframes
 MAX_STEP_RAD = 0.15
 MAX_STEP_M = 0.01
