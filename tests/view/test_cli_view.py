@@ -26,7 +26,8 @@ def _cycles(page):
 def test_plan_and_replay_write_the_same_page_content(tmp_path, capsys):
     record, planned, replayed = tmp_path / "run.jsonl", tmp_path / "plan.html", tmp_path / "replay.html"
     shape = ["--shape", "capsule", "--radius", "0.02", "--length", "0.05", "--seed", "5"]
-    assert main(["plan", "--quiet", *shape, "--record", str(record), "--html", str(planned)]) == 0
+    # exit 0 or 1 by the plan's status: any status is drawn
+    assert main(["plan", "--quiet", *shape, "--record", str(record), "--html", str(planned)]) in (0, 1)
     assert main(["replay", str(record), "--quiet", "--html", str(replayed)]) == 0
     out = capsys.readouterr().out
     assert "replay: deterministic" in out and f"html: {replayed}" in out
