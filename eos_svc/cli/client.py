@@ -14,10 +14,9 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
+import threading
 from typing import Any
 
-from eos_svc.cli import view as view_options
 from eos_svc.cli.common import fail, positive_float
 from eos_svc.cli.plan import add_request_arguments
 from eos_svc.cli.plan import request_dict as plan_request_dict
@@ -69,7 +68,9 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             metavar="S",
             help="seconds to wait for an answer (plan: the request's deadline + 10; watch: stop after S s)",
         )
-    view_options.add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
+    from eos_svc.cli.view import add_view_arguments
+
+    add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
@@ -138,21 +139,19 @@ def run(args: argparse.Namespace) -> int:
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
-            stream = view_options.open_stream_view(args)  # --view: a live page of the plans watched
+            from eos_svc.cli.view import open_stream_view, watch_until
+
+            stop = threading.Event()
+            stream = open_stream_view(args)  # --view: a live page of the plans watched
 
             def on_message(kind: str, msg: dict[str, Any]) -> None:
                 print(format_cycle(msg) if kind == "cycle" else format_status(msg), flush=True)
                 if stream is not None:
-                    stream.on_message(kind, msg)  # queued; drawn below, in this thread
+                    stream.on_message(kind, msg)  # queued; drawn by watch_until, in this thread
 
             sub = client.watch(on_message)
-            end = None if args.timeout is None else time.monotonic() + args.timeout
             try:
-                while end is None or time.monotonic() < end:
-                    if stream is not None:
-                        stream.pump(0.1)
-                    else:
-                        time.sleep(0.1)
+                watch_until(stop, stream, args.timeout)
             except KeyboardInterrupt:
                 pass
             finally:

@@ -82,6 +82,17 @@ def open_stream_view(args: argparse.Namespace) -> Any:
     return StreamView(view)
 
 
+def watch_until(stop: Any, stream: Any, seconds: float | None) -> None:
+    """``eos client watch``: wait until ``stop`` is set or ``seconds`` pass (None: until Ctrl-C),
+    drawing the watched messages meanwhile when there is a view (``stream``)."""
+    end = None if seconds is None else time.monotonic() + seconds
+    while not stop.is_set() and (end is None or time.monotonic() < end):
+        if stream is not None:
+            stream.pump(0.1)
+        else:
+            stop.wait(0.1)
+
+
 def wait_for_browser(view: Any, seconds: float | None) -> None:
     """``--view-wait``: wait until a browser shows the view (or ``seconds`` pass)."""
     if view is None or not seconds:

@@ -366,6 +366,7 @@ class PlanService:
                 )
             head = self._head(goal_id)
             status_key = proto.status_key(self.prefix, goal_id)
+            running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
             if job.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
@@ -377,7 +378,6 @@ class PlanService:
                 publisher = self.session.declare_publisher(
                     proto.cycle_key(self.prefix, goal_id), encoding=_JSON, congestion_control=_BLOCK
                 )
-                running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
                 self.session.put(
                     status_key,
                     head.encode() + running[1:],  # with the request: a watcher can draw the object
