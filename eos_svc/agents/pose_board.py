@@ -10,7 +10,7 @@ the same with it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from eos_svc.agents import keys
@@ -45,3 +45,28 @@ class PoseBoard(Board):
         if self._changes is not None:
             self.set(keys.HAND_Q, hand_q(self._world))
         return super().end_cycle()
+
+
+#: board entries only viewers read: the hand's configuration and EP1's sampled path
+VIEW_KEYS = frozenset({keys.HAND_Q, keys.HAND_PATH})
+
+
+def has_hand_q(cycles: Sequence[Mapping[str, Any]]) -> bool:
+    """Whether any cycle record (JSON form) writes the hand's configuration — false for a
+    recording made before ``hand_q`` existed."""
+    return any(
+        isinstance(c, Mapping) and c.get("key") == keys.HAND_Q
+        for record in cycles
+        for c in record.get("changes") or ()
+    )
+
+
+def view_entries_as_recorded(
+    recorded: Sequence[Mapping[str, Any]], replayed: list[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """``replayed`` cycle records (JSON form) as comparable with ``recorded``: unchanged when
+    the recording has the view entries (:data:`VIEW_KEYS`), else without them (a recording
+    made before they existed)."""
+    if has_hand_q(recorded) or not has_hand_q(replayed):
+        return replayed
+    return [{**c, "changes": [ch for ch in c["changes"] if ch.get("key") not in VIEW_KEYS]} for c in replayed]

@@ -33,7 +33,6 @@ from typing import Any
 
 from eos_svc.agent import Outcome
 from eos_svc.board import BoardChange
-from eos_svc.cli import view as view_options
 from eos_svc.cli.common import fail
 from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord
@@ -224,7 +223,6 @@ class Verification:
         self.divergences: list[tuple[str, str, Any, Any]] = []
         self.cycles_compared = 0
         self.replayed_result: dict[str, Any] | None = None
-        self.replayed_cycles: list[dict[str, Any]] = []
 
     @property
     def identical(self) -> bool:
@@ -240,16 +238,16 @@ def verify(recording: Recording) -> Verification:
         ValidationError: the recorded request is not valid (any more).
     """
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
+    from eos_svc.agents.pose_board import view_entries_as_recorded
 
     request = PlanRequest.from_dict(recording.request)
     hand = resolve_hand(recording.hand)
     replayed: list[dict[str, Any]] = []
     result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())), hand=hand)
+    replayed = view_entries_as_recorded(recording.cycles, replayed)  # older recordings lack hand_q
     out = Verification()
     out.replayed_result = normalise(result.to_dict())
-    out.replayed_cycles = replayed
-    compared = replayed if _has_hand_q(recording.cycles) else [_without_view_keys(c) for c in replayed]
-    for recorded, again in zip(recording.cycles, compared, strict=False):
+    for recorded, again in zip(recording.cycles, replayed, strict=False):
         out.cycles_compared += 1
         diff = first_difference(recorded, again)
         if diff is not None:
@@ -288,11 +286,13 @@ def describe(verification: Verification, recording: Recording) -> Iterable[str]:
 
 # --- the command -----------------------------------------------------------------------------
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from eos_svc.cli.view import add_html_argument
+
     parser.add_argument("file", metavar="FILE", help="a record file written by `eos plan --record FILE`")
     parser.add_argument("--no-verify", action="store_true", help="print the recording without re-running it")
     parser.add_argument("--quiet", action="store_true", help="no trace, only the result and the verdict")
     parser.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
-    view_options.add_html_argument(parser)  # --html (3-D page of the plan)
+    add_html_argument(parser)  # --html (3-D page of the plan)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -337,33 +337,16 @@ def run(args: argparse.Namespace) -> int:
             fail(f"FILE: {args.file}: {exc}")
         draw_result(final, args.picture, hand=hand)
         print(f"picture: {args.picture}")
-    if getattr(args, "html", None):  # --html FILE: the recorded cycles (the replayed ones if they
-        # carry the hand's configuration and the recorded ones, from an older recording, do not)
+    if getattr(args, "html", None):  # --html FILE: the recorded plan in 3-D
+        from eos_svc.cli.view import write_recording_html
+
         try:
             hand = resolve_hand(recording.hand)
         except RecordFileError as exc:
             fail(f"FILE: {args.file}: {exc}")
-        cycles = recording.cycles
-        if not args.no_verify and not _has_hand_q(cycles) and _has_hand_q(verification.replayed_cycles):
-            cycles = verification.replayed_cycles
-        view_options.write_html(args.html, recording.request, cycles, final, hand)
+        write_recording_html(args.html, recording, final, hand)
         print(f"html: {args.html}")
     return code
-
-
-#: board entries only viewers read (the hand's configuration and EP1's path): a recording made
-#: before they existed lacks them, and its cycles are compared without them
-VIEW_KEYS = frozenset({"hand_q", "hand_path"})
-
-
-def _without_view_keys(cycle: dict[str, Any]) -> dict[str, Any]:
-    """``cycle`` without the :data:`VIEW_KEYS` board changes."""
-    return {**cycle, "changes": [c for c in cycle.get("changes", ()) if c.get("key") not in VIEW_KEYS]}
-
-
-def _has_hand_q(cycles: list[dict[str, Any]]) -> bool:
-    """Whether any cycle record writes the hand's configuration (recordings since it exists)."""
-    return any(c.get("key") == "hand_q" for record in cycles for c in record.get("changes", ()))
 
 
 if __name__ == "__main__":  # pragma: no cover

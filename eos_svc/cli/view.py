@@ -149,3 +149,23 @@ def write_html(
         fail(f"--html: cannot write {path!r}: {exc.strerror}")
     except ValidationError as exc:  # a recorded request this version does not accept
         fail(f"--html: the plan's request is not valid: {exc}")
+
+
+def write_recording_html(
+    path: str, recording: Any, result: Mapping[str, Any] | None, hand: Any = None
+) -> None:
+    """``eos replay FILE --html``: the recorded cycles; a recording made before the hand's
+    configuration was recorded is planned again (same request, seed and hand) for it."""
+    from eos_svc.agents.pose_board import has_hand_q
+
+    cycles = recording.cycles
+    if cycles and not has_hand_q(cycles):
+        from eos_svc.agents import PlanRequest, plan
+        from eos_svc.errors import ValidationError
+
+        try:
+            again = plan(PlanRequest.from_dict(recording.request), hand=hand)
+        except ValidationError as exc:
+            fail(f"--html: the plan's request is not valid: {exc}")
+        cycles = [r.to_dict() for r in again.trace]
+    write_html(path, recording.request, cycles, result, hand)
