@@ -23,7 +23,7 @@ Q_DECIMALS = 7
 
 def hand_q(world: GraspWorld) -> tuple[float, ...]:
     """The world's hand configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
-    return tuple([round(x, Q_DECIMALS) for x in world.q_list()])
+    return tuple(world.state.q.round(Q_DECIMALS).tolist())
 
 
 class PoseBoard(Board):
