@@ -22,10 +22,21 @@ $(STAMP): pyproject.toml setup.py
 run: $(STAMP)
 	$(VENV)/bin/eos plan
 
-test: $(STAMP)
+test: $(STAMP) chromium
 	$(PY) -m pytest -q
 
-test-all: $(STAMP)
+# Headless Chromium for the 3-D view's browser tests (tests/view): installed with apt-get when
+# missing and running as root; elsewhere those tests are skipped and say why.
+chromium:
+	@command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1 || \
+	if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+		echo "installing chromium (apt-get) for the browser tests"; \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium >/dev/null; \
+	else \
+		echo "chromium is missing and cannot be installed here (needs root and apt-get): the browser tests will be skipped"; \
+	fi
+
+test-all: $(STAMP) chromium
 	$(PY) -m pytest -q -m "slow or not slow"
 
 lint: $(STAMP)

@@ -39,6 +39,8 @@ from eos_svc.kinematics.rolling import RollingQPError
 FALLBACK_SOLVER = "daqp"
 #: lowest opportunistic sub-rating of EP1 while the shape is not known
 RATING_FLOOR = 0.05
+#: EP1 keeps the hand's configuration every this many rolling steps for viewers (keys.HAND_PATH)
+PATH_EVERY = 8
 #: how far above/below the hand's grasp centre the exploration aims (m): far enough that the
 #: closest surface point is the object's top (bottom)
 PROBE_REACH = 0.5
@@ -104,6 +106,7 @@ class EP1Agent(GraspAgent):
             directions=p.ep1_directions,
             solver=solver,
             estimator=estimator,
+            path_every=PATH_EVERY,
         )
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
@@ -166,6 +169,7 @@ class EP1Agent(GraspAgent):
             "normal": np.round(normal, 6).tolist(),
         }
         board.set(keys.EP1_CONTACT, contacts)
+        board.set(keys.HAND_PATH, [[round(x, 7) for x in q.tolist()] for q in result.path])
         k1, k2 = est.principal_curvatures
         return ActionResult(
             Outcome.PROGRESS,

@@ -26,3 +26,5 @@ FINGER_ANGLE = "finger_angle"  #: dict finger -> joint angle (rad)
 OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict
 FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the request; read by end)
 Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)
+HAND_Q = "hand_q"  #: tuple: the hand's configuration after the cycle (rad/m, 1e-7; written by PoseBoard)
+HAND_PATH = "hand_path"  #: list of q: the hand's path during an EP1 roll (sampled; for viewers)

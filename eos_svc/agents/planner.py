@@ -45,6 +45,7 @@ from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
+from eos_svc.agents.pose_board import PoseBoard
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
@@ -243,7 +244,7 @@ def plan(
         keep_trace=keep_trace,
         callbacks=[on_cycle] if on_cycle is not None else [],
     )
-    board = Board({keys.FRICTION: request.friction})
+    board = PoseBoard(world, {keys.FRICTION: request.friction})  # records the hand's q per cycle
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"

@@ -6,6 +6,7 @@ eos client plan --json --quiet              # the result only, as JSON
 eos client plan --goal-id g1 --cancel-token SECRET   # a goal another shell can cancel
 eos client cancel g1 --token SECRET         # cancel it (only with the goal's token)
 eos client watch                            # every cycle and status on the network
+eos client watch --view                     # and a live 3-D view of the plans (URL on stderr)
 
 By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
 """
@@ -74,8 +75,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             type=positive_float,
             default=None,
             metavar="S",
-            help="seconds to wait for an answer (plan: the request's deadline + 10)",
+            help="seconds to wait for an answer (plan: the request's deadline + 10; watch: stop after S s)",
         )
+    from eos_svc.cli.view import add_view_arguments
+
+    add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
@@ -168,16 +172,19 @@ def run(args: argparse.Namespace) -> int:
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
+            from eos_svc.cli.view import open_stream_view, watch_until
+
             stop = threading.Event()
-            sub = client.watch(
-                lambda kind, msg: print(
-                    format_cycle(msg) if kind == "cycle" else format_status(msg),
-                    flush=True,
-                )
-            )
+            stream = open_stream_view(args)  # --view: a live page of the plans watched
+
+            def on_message(kind: str, msg: dict[str, Any]) -> None:
+                print(format_cycle(msg) if kind == "cycle" else format_status(msg), flush=True)
+                if stream is not None:
+                    stream.on_message(kind, msg)  # queued; drawn by watch_until, in this thread
+
+            sub = client.watch(on_message)
             try:
-                while not stop.wait(0.5):
-                    pass
+                watch_until(stop, stream, args.timeout)
             except KeyboardInterrupt:
                 pass
             finally:

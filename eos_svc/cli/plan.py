@@ -8,6 +8,8 @@ eos plan --picture grasp.png              # draw the final grasp (hand, object, 
 eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
 eos plan --hand allegro                   # the Allegro hand of example-robot-data
 eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
+eos plan --html plan.html                 # the plan animated in 3-D, one self-contained page
+eos plan --view                           # a live 3-D view on localhost (URL on stderr)
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import sqlite3
 import sys
 from typing import IO, Any
 
+from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
 from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord
@@ -102,6 +105,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     out.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
+    view_options.add_html_argument(out)  # --html (3-D page of the plan)
+    view_options.add_view_arguments(out)  # --view, --view-port, --view-wait, --view-hold
     add_validate_argument(out)
 
 
@@ -248,8 +253,12 @@ def run(args: argparse.Namespace) -> int:
             memory = GraspMemory(args.memory)
         except (OSError, sqlite3.Error) as exc:
             fail(f"--memory: cannot open {args.memory!r}: {exc}")
+    view = view_options.open_view(args, hand)  # --view: a live page following the cycles
+    if view is not None:
+        view.start(request)
+        view_options.wait_for_browser(view, args.view_wait)
     try:
-        result = plan(request, on_cycle=on_cycle, hand=hand, memory=memory)
+        result = plan(request, on_cycle=view_options.with_view(on_cycle, view), hand=hand, memory=memory)
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
@@ -267,10 +276,16 @@ def run(args: argparse.Namespace) -> int:
         except OSError as exc:
             fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
     result = validated(result, args)
+    if getattr(args, "html", None):  # --html FILE
+        records = [r.to_dict() for r in result.trace]
+        view_options.write_html(args.html, request, records, result.to_dict(), hand)
     if args.json:
         print(result.to_json())
     else:
         print(format_result(result))
+    if view is not None:  # --view: the final grasp and the whole plan as the page's animation
+        view.finish(result.to_dict())
+        view_options.hold_view(view, args.view_hold)
     return plan_exit_code(result.status)
 
 

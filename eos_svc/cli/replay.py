@@ -4,6 +4,7 @@ eos plan --record run.jsonl               # record a run
 eos replay run.jsonl                      # print its trace and result, re-run it, compare
 eos replay run.jsonl --no-verify          # only print what was recorded
 eos replay run.jsonl --picture grasp.png  # and draw the final grasp
+eos replay run.jsonl --html plan.html     # and write the plan animated in 3-D (one HTML page)
 
 The record file's format is :mod:`eos_svc.recording`. Verification re-runs the recorded request
 (same seed, same hand) and compares cycle by cycle and then the result, ignoring only
@@ -73,11 +74,13 @@ def verify(recording: Recording) -> Verification:
         ValidationError: the recorded request is not valid (any more).
     """
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
+    from eos_svc.agents.pose_board import view_entries_as_recorded
 
     request = PlanRequest.from_dict(recording.request)
     hand = resolve_hand(recording.hand)
     replayed: list[dict[str, Any]] = []
     result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())), hand=hand)
+    replayed = view_entries_as_recorded(recording.cycles, replayed)  # older recordings lack hand_q
     return compare_run(recording, replayed, normalise(result.to_dict()))
 
 
@@ -106,10 +109,13 @@ def describe(verification: Verification, recording: Recording) -> Iterable[str]:
 
 # --- the command -----------------------------------------------------------------------------
 def add_arguments(parser: argparse.ArgumentParser) -> None:
+    from eos_svc.cli.view import add_html_argument
+
     parser.add_argument("file", metavar="FILE", help="a record file written by `eos plan --record FILE`")
     parser.add_argument("--no-verify", action="store_true", help="print the recording without re-running it")
     parser.add_argument("--quiet", action="store_true", help="no trace, only the result and the verdict")
     parser.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
+    add_html_argument(parser)  # --html (3-D page of the plan)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -152,6 +158,15 @@ def run(args: argparse.Namespace) -> int:
             fail(f"FILE: {args.file}: {exc}")
         draw_result(final, args.picture, hand=hand)
         print(f"picture: {args.picture}")
+    if getattr(args, "html", None):  # --html FILE: the recorded plan in 3-D
+        from eos_svc.cli.view import write_recording_html
+
+        try:
+            hand = resolve_hand(recording.hand)
+        except RecordFileError as exc:
+            fail(f"FILE: {args.file}: {exc}")
+        write_recording_html(args.html, recording, final, hand)
+        print(f"html: {args.html}")
     return code
 
 

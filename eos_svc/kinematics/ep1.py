@@ -79,6 +79,8 @@ class EP1Result:
         frame: 3×3 world contact frame (columns x, y, z) the form is expressed in.
         contact_point: world contact point (object side) at the start, m.
         normal: world object normal at the start (object → fingertip).
+        path: configurations along the roll, every ``path_every`` steps from the start (empty
+            unless asked): what a viewer animates.
     """
 
     estimate: CurvatureEstimate
@@ -90,6 +92,7 @@ class EP1Result:
     frame: np.ndarray
     contact_point: np.ndarray
     normal: np.ndarray
+    path: tuple[np.ndarray, ...] = ()
 
 
 def contact_frame(normal: np.ndarray) -> np.ndarray:
@@ -294,6 +297,7 @@ def run_ep1(
     directions: Sequence[float] = DEFAULT_DIRECTIONS,
     solver: str = "osqp",
     estimator: CurvatureEstimator | None = None,
+    path_every: int = 0,
 ) -> EP1Result:
     """Run EP1 from ``state`` (the fingertip must touch the object), estimate the curvature.
 
@@ -306,6 +310,8 @@ def run_ep1(
         dt: time step, s. directions: roll directions, degrees in the tangent plane (≥ 2
             independent ones). solver: QP backend (see :class:`~.rolling.RollingQP`).
         estimator: accumulate into this estimator (repeated EP1); default: a new one.
+        path_every: > 0: keep the configuration every this many steps in
+            :attr:`EP1Result.path` (it does not change the roll).
 
     Raises:
         EP1Error: no contact at the start or bad parameters; RollingQPError: the QP failed.
@@ -342,6 +348,8 @@ def run_ep1(
     ex_t2 = r02 * fx0 + r12 * fx1 + r22 * fx2
     steps = 0
     rq: RollingQP | None = None
+    path: list[np.ndarray] = [state.q.copy()] if path_every > 0 else []
+    taken = 0  # steps so far, for the path's sampling
     for phi_deg in dirs:
         phi = math.radians(phi_deg)
         a_xy = np.array([math.cos(phi), math.sin(phi)])
@@ -371,6 +379,10 @@ def run_ep1(
                     inc.append(False)
                 slips.append(st.slip_speed)
                 gaps.append(abs(st.contact.distance))
+                if path_every > 0:
+                    taken += 1
+                    if taken % path_every == 0:
+                        path.append(rq.q)
             steps += n_steps
         P_all = P_buf[:i]
         R_all = R_buf[:i]
@@ -398,6 +410,7 @@ def run_ep1(
         frame=F,
         contact_point=np.array(ct0.point_object, dtype=float),
         normal=np.array(ct0.normal, dtype=float),
+        path=tuple(path),
     )
 
 

@@ -23,8 +23,9 @@ key expression                     Zenoh entity               message
 ``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
 ``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
-                                                              ...}`` — ``running``, then ``done`` with
-                                                              ``status``, ``cycles`` and ``result``
+                                                              ...}`` — ``running`` with the ``request``,
+                                                              then ``done`` with ``status``, ``cycles``
+                                                              and ``result``
 =================================  =========================  ==========================================
 
 This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
@@ -321,7 +322,21 @@ def _value_json(v: Any) -> str:
         return "false"
     if t is int:
         return int.__repr__(v)
+    if t is tuple and v and all([type(x) is float for x in v]):
+        # a flat tuple of floats: the hand's configuration (board entry hand_q), written as the
+        # new value of one cycle and the old value of the next — the same tuple, encoded once
+        last = _last_vector[0]
+        if v is last[0]:
+            return last[1]
+        text = "[" + ",".join([_float_repr(x) if math.isfinite(x) else "null" for x in v]) + "]"
+        _last_vector[0] = (v, text)
+        return text
     return _ENCODER.encode(to_jsonable(v))
+
+
+#: (the last float tuple encoded, its JSON) in one slot, read and replaced whole (thread-safe as
+#: _last_weights); tuples are immutable, so the same object always has the same text
+_last_vector: list[tuple[Any, str]] = [((), "")]
 
 
 #: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)

@@ -510,6 +510,7 @@ class PlanService:
                 )
             head = self._head(goal_id)
             status_key = proto.status_key(self.prefix, goal_id)
+            running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
             if job.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
@@ -521,7 +522,7 @@ class PlanService:
                 publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
                 self.session.put(
                     status_key,
-                    (head + '"state":"running"}').encode(),
+                    head.encode() + running[1:],  # with the request: a watcher can draw the object
                     encoding=_JSON,
                     congestion_control=_BLOCK,
                 )

@@ -1,0 +1,72 @@
+"""The planner's information board: the core :class:`~eos_svc.board.Board` plus the hand's pose.
+
+At the end of every cycle it writes the hand's configuration (``keys.HAND_Q``: every joint of
+the hand model in order — wrist x, y, z in m, roll, pitch, yaw in rad, then the finger joints
+in rad — rounded to 1e-7) when the cycle moved the hand, so the cycle record itself says where
+the hand went: a recording, a replay or a remote watcher of the service's cycle stream can draw
+the hand cycle by cycle (:mod:`eos_svc.view`). No agent reads the entry: the cycles' choices are
+the same with it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from eos_svc.agents import keys
+from eos_svc.agents.world import GraspWorld
+from eos_svc.board import Board, BoardChange
+
+#: decimals kept of every joint value in ``keys.HAND_Q`` (0.1 µm, 0.1 µrad)
+Q_DECIMALS = 7
+
+
+def hand_q(world: GraspWorld) -> tuple[float, ...]:
+    """The world's hand configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
+    return tuple(world.state.q.round(Q_DECIMALS).tolist())
+
+
+class PoseBoard(Board):
+    """A board that records the hand's configuration at the end of every cycle that moved it.
+
+    Args:
+        world: the world whose hand is recorded.
+        entries: initial entries (set up by the caller, not recorded as changes).
+    """
+
+    __slots__ = ("_world",)
+
+    def __init__(self, world: GraspWorld, entries: Mapping[str, Any] | None = None) -> None:
+        super().__init__({**(entries or {}), keys.HAND_Q: hand_q(world)})
+        self._world = world
+
+    def end_cycle(self) -> tuple[BoardChange, ...]:
+        """Write ``keys.HAND_Q`` (a change only when the hand moved), then end the cycle."""
+        if self._changes is not None:
+            self.set(keys.HAND_Q, hand_q(self._world))
+        return super().end_cycle()
+
+
+#: board entries only viewers read: the hand's configuration and EP1's sampled path
+VIEW_KEYS = frozenset({keys.HAND_Q, keys.HAND_PATH})
+
+
+def has_hand_q(cycles: Sequence[Mapping[str, Any]]) -> bool:
+    """Whether any cycle record (JSON form) writes the hand's configuration — false for a
+    recording made before ``hand_q`` existed."""
+    return any(
+        isinstance(c, Mapping) and c.get("key") == keys.HAND_Q
+        for record in cycles
+        for c in record.get("changes") or ()
+    )
+
+
+def view_entries_as_recorded(
+    recorded: Sequence[Mapping[str, Any]], replayed: list[dict[str, Any]]
+) -> list[dict[str, Any]]:
+    """``replayed`` cycle records (JSON form) as comparable with ``recorded``: unchanged when
+    the recording has the view entries (:data:`VIEW_KEYS`), else without them (a recording
+    made before they existed)."""
+    if has_hand_q(recorded) or not has_hand_q(replayed):
+        return replayed
+    return [{**c, "changes": [ch for ch in c["changes"] if ch.get("key") not in VIEW_KEYS]} for c in replayed]

@@ -1,0 +1,171 @@
+"""The 3-D view options of ``eos plan``, ``eos replay`` and ``eos client watch`` (:mod:`eos_svc.view`).
+
+eos plan --html plan.html                 # the whole plan animated in one self-contained page
+eos replay run.jsonl --html plan.html     # the same from a recording
+eos plan --view                           # a live MeshCat page on localhost following the cycles
+eos client watch --view                   # the same for the plans of the service, over Zenoh
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
+
+from eos_svc.cli.common import fail, positive_float
+
+
+def add_html_argument(group: argparse._ArgumentGroup | argparse.ArgumentParser) -> None:
+    """``--html FILE``."""
+    group.add_argument(
+        "--html",
+        metavar="FILE",
+        help="write the plan as one self-contained HTML page (3-D animation of every cycle, opens offline)",
+    )
+
+
+def add_view_arguments(group: argparse._ArgumentGroup, waits: bool = True) -> None:
+    """``--view`` and its options (``--view-wait`` only where a plan starts here)."""
+    group.add_argument(
+        "--view", action="store_true", help="serve a live 3-D view on localhost (URL printed on stderr)"
+    )
+    group.add_argument(
+        "--view-port", type=int, default=None, metavar="PORT", help="port of the view (default: 7000-7099)"
+    )
+    if waits:
+        group.add_argument(
+            "--view-wait",
+            type=positive_float,
+            default=None,
+            metavar="S",
+            help="with --view: wait up to S s for a browser to connect before planning",
+        )
+        group.add_argument(
+            "--view-hold",
+            type=float,
+            default=None,
+            metavar="S",
+            help="with --view: keep serving S s after the plan (default: until Ctrl-C)",
+        )
+
+
+def _check_port(port: int | None) -> None:
+    if port is not None and not 1 <= port <= 65535:
+        fail(f"--view-port: must be a TCP port in [1, 65535], got {port}")
+
+
+def open_view(args: argparse.Namespace, hand: Any = None) -> Any:
+    """The :class:`~eos_svc.view.live.LiveView` ``--view`` asks for (its URL printed), or None."""
+    if not getattr(args, "view", False):
+        return None
+    _check_port(args.view_port)
+    from eos_svc.view.live import LiveView
+
+    try:
+        view = LiveView(hand=hand, port=args.view_port)
+    except RuntimeError as exc:  # Drake: the port is taken
+        fail(f"--view-port: cannot serve the view: {exc}")
+    print(f"view: {view.url}", file=sys.stderr, flush=True)
+    return view
+
+
+def open_stream_view(args: argparse.Namespace) -> Any:
+    """``eos client watch --view``: a :class:`~eos_svc.view.live.StreamView` fed by the watched
+    messages (its URL printed), or None without ``--view``."""
+    view = open_view(args)
+    if view is None:
+        return None
+    from eos_svc.view.live import StreamView
+
+    return StreamView(view)
+
+
+def watch_until(stop: Any, stream: Any, seconds: float | None) -> None:
+    """``eos client watch``: wait until ``stop`` is set or ``seconds`` pass (None: until Ctrl-C),
+    drawing the watched messages meanwhile when there is a view (``stream``)."""
+    end = None if seconds is None else time.monotonic() + seconds
+    while not stop.is_set() and (end is None or time.monotonic() < end):
+        if stream is not None:
+            stream.pump(0.1)
+        else:
+            stop.wait(0.1)
+
+
+def wait_for_browser(view: Any, seconds: float | None) -> None:
+    """``--view-wait``: wait until a browser shows the view (or ``seconds`` pass)."""
+    if view is None or not seconds:
+        return
+    print(f"view: waiting up to {seconds:g} s for a browser at {view.url}", file=sys.stderr, flush=True)
+    end = time.monotonic() + seconds
+    while view.meshcat.GetNumActiveConnections() == 0 and time.monotonic() < end:
+        time.sleep(0.05)
+
+
+def with_view(on_cycle: Callable[[Any], None], view: Any) -> Callable[[Any], None]:
+    """``on_cycle`` followed by the view's (unchanged without a view)."""
+    if view is None:
+        return on_cycle
+    follow = view.cycle
+
+    def both(record: Any) -> None:
+        on_cycle(record)
+        follow(record)
+
+    return both
+
+
+def hold_view(view: Any, seconds: float | None) -> None:
+    """Keep serving the view ``seconds`` (None: until Ctrl-C)."""
+    if view is None:
+        return
+    if seconds is not None and seconds <= 0:
+        return
+    what = "until Ctrl-C" if seconds is None else f"for {seconds:g} s"
+    print(f"view: {view.url} — serving {what}", file=sys.stderr, flush=True)
+    end = None if seconds is None else time.monotonic() + seconds
+    try:
+        while end is None or time.monotonic() < end:
+            time.sleep(0.1 if end is None else max(0.0, min(0.1, end - time.monotonic())))
+    except KeyboardInterrupt:
+        print("", file=sys.stderr)
+
+
+def write_html(
+    path: str,
+    request: Mapping[str, Any] | Any,
+    records: Sequence[Mapping[str, Any]],
+    result: Mapping[str, Any] | None,
+    hand: Any = None,
+) -> None:
+    """``--html FILE``: write the page (exit 2 naming the option when it cannot be written)."""
+    from eos_svc.errors import ValidationError
+    from eos_svc.view import write_plan_html
+
+    try:
+        write_plan_html(path, request, records, result, hand)
+    except OSError as exc:
+        fail(f"--html: cannot write {path!r}: {exc.strerror}")
+    except ValidationError as exc:  # a recorded request this version does not accept
+        fail(f"--html: the plan's request is not valid: {exc}")
+
+
+def write_recording_html(
+    path: str, recording: Any, result: Mapping[str, Any] | None, hand: Any = None
+) -> None:
+    """``eos replay FILE --html``: the recorded cycles; a recording made before the hand's
+    configuration was recorded is planned again (same request, seed and hand) for it."""
+    from eos_svc.agents.pose_board import has_hand_q
+
+    cycles = recording.cycles
+    if cycles and not has_hand_q(cycles):
+        from eos_svc.agents import PlanRequest, plan
+        from eos_svc.errors import ValidationError
+
+        try:
+            again = plan(PlanRequest.from_dict(recording.request), hand=hand)
+        except ValidationError as exc:
+            fail(f"--html: the plan's request is not valid: {exc}")
+        cycles = [r.to_dict() for r in again.trace]
+    write_html(path, recording.request, cycles, result, hand)

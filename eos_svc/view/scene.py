@@ -1,0 +1,264 @@
+"""What a plan's 3-D view draws, in Drake's MeshCat: the hand, the object, the postulate, contacts.
+
+Shared by the replay file (:mod:`eos_svc.view.replay_html`) and the live view
+(:mod:`eos_svc.view.live`). Every solid is a MeshCat primitive placed in the world frame (z up,
+metres):
+
+- the hand: every collision geometry of its Pinocchio GeometryModel (palm box, link cylinders,
+  fingertip spheres), placed by ``GeometryData.oMg`` at a configuration q
+  (:meth:`HandDrawing.poses`); a geometry that is not a primitive is drawn as its local
+  bounding box;
+- the object (ground truth) from the request's primitive at its pose, translucent blue;
+- the postulated object (post_shape's ``object``, when the postulate carries one) translucent
+  yellow over it;
+- each touching contact of the final grasp: a red dot at the contact point, a red line along
+  the contact force's direction (−outward normal, into the object) and the Coulomb friction
+  cone about it (half-angle atan μ, apex at the contact), translucent red.
+
+Colours follow :mod:`eos_svc.agents.picture` (the PNG of the final grasp).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import coal
+import numpy as np
+from pydrake.geometry import (
+    Box,
+    Capsule,
+    Cylinder,
+    Ellipsoid,
+    Meshcat,
+    MeshcatCone,
+    Rgba,
+    Shape,
+    Sphere,
+)
+from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
+
+from eos_svc.agents.request import DEFAULT_FRICTION, ObjectSpec
+from eos_svc.kinematics import HandModel
+
+#: root of everything this package draws in a MeshCat scene
+ROOT = "/eos"
+HAND = f"{ROOT}/hand"
+OBJECT = f"{ROOT}/object"
+POSTULATE = f"{ROOT}/postulate"
+CONTACTS = f"{ROOT}/contacts"
+
+#: colours (RGBA, 0..1); the fingertips per finger in the hand's order
+OBJECT_RGBA = Rgba(0.298, 0.608, 0.910, 0.45)
+POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.35)
+LINK_RGBA = Rgba(0.60, 0.60, 0.62, 1.0)
+PALM_RGBA = Rgba(0.43, 0.43, 0.45, 1.0)
+TIP_RGBAS = (
+    Rgba(0.910, 0.639, 0.235, 1.0),  # orange
+    Rgba(0.345, 0.722, 0.361, 1.0),  # green
+    Rgba(0.710, 0.396, 0.788, 1.0),  # purple
+    Rgba(0.890, 0.467, 0.761, 1.0),
+    Rgba(0.090, 0.745, 0.812, 1.0),
+)
+CONTACT_RGBA = Rgba(0.839, 0.153, 0.157, 1.0)
+CONE_RGBA = Rgba(0.839, 0.153, 0.157, 0.35)
+#: drawn size of a contact: dot radius, normal line length, friction cone height (m)
+CONTACT_DOT = 0.0025
+NORMAL_LENGTH = 0.03
+CONE_HEIGHT = 0.02
+
+
+def vec(values: Any) -> Any:
+    """A float array for pydrake (typed Any: pydrake's stubs type arrays so no ndarray matches)."""
+    return np.asarray(values, dtype=float)
+
+
+def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:
+    """The MeshCat primitive of an object and its pose in the world (the request's convention:
+    box ``size`` full edges, cylinder/capsule ``length`` along the local z axis)."""
+    s = spec.size
+    shape: Shape
+    if spec.shape == "sphere":
+        shape = Sphere(s["radius"])
+    elif spec.shape == "ellipsoid":
+        shape = Ellipsoid(*s["radii"])
+    elif spec.shape == "cylinder":
+        shape = Cylinder(s["radius"], s["length"])
+    elif spec.shape == "capsule":
+        shape = Capsule(s["radius"], s["length"])
+    else:
+        shape = Box(*s["size"])
+    pose = RigidTransform(RollPitchYaw(*spec.rpy), vec(spec.position))
+    return shape, pose
+
+
+def postulated_object(shape: Mapping[str, Any] | None) -> ObjectSpec | None:
+    """The object a post_shape postulate describes: its ``object`` entry (request JSON form)
+    when present and valid, else ``None`` (the class is a plane, the size is not known yet,
+    or an older postulate without ``object``)."""
+    if not isinstance(shape, Mapping):
+        return None
+    data = shape.get("object")
+    if not isinstance(data, Mapping):
+        return None
+    try:
+        return ObjectSpec.from_dict(dict(data))
+    except (ValueError, TypeError):  # ValidationError is a ValueError
+        return None
+
+
+def _coal_shape(geometry: Any) -> tuple[Shape, RigidTransform]:
+    """MeshCat primitive of a coal collision geometry and its offset in the geometry's frame."""
+    if isinstance(geometry, coal.Sphere):
+        return Sphere(float(geometry.radius)), RigidTransform()
+    if isinstance(geometry, coal.Ellipsoid):
+        return Ellipsoid(*(float(r) for r in geometry.radii)), RigidTransform()
+    if isinstance(geometry, coal.Box):
+        return Box(*(2.0 * float(h) for h in geometry.halfSide)), RigidTransform()
+    if isinstance(geometry, coal.Capsule):
+        return Capsule(float(geometry.radius), 2.0 * float(geometry.halfLength)), RigidTransform()
+    if isinstance(geometry, coal.Cylinder):
+        return Cylinder(float(geometry.radius), 2.0 * float(geometry.halfLength)), RigidTransform()
+    geometry.computeLocalAABB()
+    box = geometry.aabb_local
+    lo, hi = np.asarray(box.min_, dtype=float), np.asarray(box.max_, dtype=float)
+    return Box(*(hi - lo)), RigidTransform(vec(0.5 * (lo + hi)))
+
+
+@dataclass(frozen=True)
+class HandPart:
+    """One drawn hand geometry: its scene path, primitive, offset in its frame, colour."""
+
+    path: str
+    shape: Shape
+    offset: RigidTransform
+    rgba: Rgba
+
+
+class HandDrawing:
+    """The hand's collision geometries as MeshCat objects, and their poses at a configuration.
+
+    Args:
+        hand: the hand model (Pinocchio model and GeometryModel).
+    """
+
+    def __init__(self, hand: HandModel) -> None:
+        self.hand = hand
+        tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
+        parts = []
+        for gid, g in enumerate(hand.collision_model.geometryObjects):
+            if gid in tips:
+                rgba = TIP_RGBAS[tips[gid] % len(TIP_RGBAS)]
+            elif g.name.startswith("palm"):
+                rgba = PALM_RGBA
+            else:
+                rgba = LINK_RGBA
+            shape, offset = _coal_shape(g.geometry)
+            parts.append(HandPart(f"{HAND}/{g.name}", shape, offset, rgba))
+        self.parts: tuple[HandPart, ...] = tuple(parts)
+        self._state = hand.state(hand.neutral())
+
+    @property
+    def nq(self) -> int:
+        """Length of a configuration of this hand."""
+        return int(self.hand.model.nq)
+
+    def poses(self, q: Sequence[float] | np.ndarray) -> list[RigidTransform]:
+        """World pose of every part at configuration ``q`` (in :attr:`parts` order)."""
+        state = self._state
+        state.update(np.asarray(q, dtype=float))
+        oMg = state.geometry_data.oMg
+        out = []
+        for gid, part in enumerate(self.parts):
+            m = oMg[gid]
+            pose = RigidTransform(RotationMatrix(m.rotation), m.translation)
+            out.append(pose if part.offset.IsExactlyIdentity() else pose @ part.offset)
+        return out
+
+    def add_to(self, meshcat: Meshcat) -> None:
+        """Create the hand's objects in ``meshcat`` (at the origin until posed)."""
+        for part in self.parts:
+            meshcat.SetObject(part.path, part.shape, part.rgba)
+
+    def pose_in(self, meshcat: Meshcat, q: Sequence[float] | np.ndarray) -> None:
+        """Place the hand's objects in ``meshcat`` at configuration ``q``."""
+        for part, pose in zip(self.parts, self.poses(q), strict=True):
+            meshcat.SetTransform(part.path, pose)
+
+
+def add_object(meshcat: Meshcat, path: str, spec: ObjectSpec, rgba: Rgba) -> None:
+    """Draw object ``spec`` at ``path`` (its pose on the path's transform)."""
+    shape, pose = object_shape(spec)
+    meshcat.SetObject(path, shape, rgba)
+    meshcat.SetTransform(path, pose)
+
+
+def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.ndarray, np.ndarray]]:
+    """``(finger, point, outward normal)`` of every touching contact of a result's ``contacts``
+    (world, m; entries without a point or normal are skipped)."""
+    out: list[tuple[str, np.ndarray, np.ndarray]] = []
+    if not isinstance(contacts, Mapping):
+        return out
+    for finger, c in contacts.items():
+        if not isinstance(c, Mapping) or not c.get("touching"):
+            continue
+        point, normal = c.get("point"), c.get("normal")
+        if point is None or normal is None:
+            continue
+        try:
+            p, n = np.asarray(point, dtype=float), np.asarray(normal, dtype=float)
+        except (TypeError, ValueError):
+            continue
+        norm = float(np.linalg.norm(n)) if n.shape == (3,) and p.shape == (3,) else 0.0
+        if not (norm > 1e-12 and np.all(np.isfinite(p))):
+            continue
+        out.append((str(finger), p, n / norm))
+    return out
+
+
+def friction_or_default(friction: object) -> float:
+    """``friction`` when it is a positive finite number, else the request's default μ."""
+    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
+    value = float(friction) if number else math.nan  # type: ignore[arg-type]
+    return value if math.isfinite(value) and value > 0 else DEFAULT_FRICTION
+
+
+def _frame_along(axis: np.ndarray) -> RotationMatrix:
+    """A rotation whose z axis is the unit vector ``axis``."""
+    return RotationMatrix.MakeFromOneVector(vec(axis), 2)
+
+
+def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: object) -> list[str]:
+    """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`;
+    the cone's μ is ``friction`` (the request's default when it is not a positive number).
+
+    Returns:
+        the scene paths drawn, one per contact (each a folder).
+    """
+    mu = friction_or_default(friction)
+    paths = []
+    for finger, point, normal in touching_contacts(contacts):
+        path = f"{CONTACTS}/{finger}"
+        inward = -normal
+        meshcat.SetObject(f"{path}/dot", Sphere(CONTACT_DOT), CONTACT_RGBA)
+        meshcat.SetTransform(f"{path}/dot", RigidTransform(vec(point)))
+        meshcat.SetLine(
+            f"{path}/normal",
+            vec(np.column_stack([point, point + NORMAL_LENGTH * inward])),
+            line_width=3.0,
+            rgba=CONTACT_RGBA,
+        )
+        radius = mu * CONE_HEIGHT
+        meshcat.SetObject(f"{path}/cone", MeshcatCone(CONE_HEIGHT, radius, radius), CONE_RGBA)
+        meshcat.SetTransform(f"{path}/cone", RigidTransform(_frame_along(inward), vec(point)))
+        paths.append(path)
+    return paths
+
+
+def set_camera(meshcat: Meshcat, target: Sequence[float]) -> None:
+    """Look at ``target`` (world, m; the object) and the hand behind it from the left (−y),
+    above (the hand approaches along +x)."""
+    t = np.asarray(target, dtype=float) + np.array([-0.09, 0.0, 0.035])  # the hand, below the panel
+    meshcat.SetCameraPose(t + np.array([-0.02, -0.22, 0.1]), t)
