@@ -1,0 +1,107 @@
+"""The search's coverage plan: where the hand looks, in a seeded space-filling order.
+
+The search stage (paper §4) is a seeded random search of a bounded workspace. A random walk
+revisits places and has a long tail (some seeds need hundreds of moves). Here every search
+move is a *sweep*: the hand retreats to the back of the search box (−x), crosses to one
+column ``(y_j, z_k)`` of a lattice and sweeps forward (+x) through the whole box, sensing
+the object all the way (it stops where the object enters the envelope, or short of a
+contact). The columns are visited once each, in a seeded space-filling order:
+
+- **Columns.** A grid over the (y, z) face of the wrist's search box, its corners included,
+  at most ``√2·envelope_radius`` apart along y and z: every point of the grasp-centre box
+  ``B = [search_box_lo, search_box_hi] + grasp_centre`` is then within ``envelope_radius``
+  of a column's sweep line (half a cell's diagonal).
+- **Order.** The columns are visited in the order a scrambled Sobol sequence (Owen
+  scrambling seeded by the run's generator) first comes nearest them: the first 4 fall one
+  in each quadrant of the face, the first 16 one in each of 16 sub-blocks, so the search
+  looks everywhere coarsely before it looks anywhere finely — no long tail — and another
+  seed gives another order. A sweep stopped by a bump (a hand part within the clearance of
+  the object) moves the column nearest the bump to the front of the queue.
+
+**Findable** (what the search guarantees, :func:`findable`): the object's signed distance
+from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
+``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius``, and the hand
+can sweep that line up to there without touching the object. A sufficient closed form: the
+object reaches within ``envelope_radius − spacing/√2`` of ``B`` (0 with the default spacing:
+the object reaches into ``B``).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+from scipy.stats import qmc
+
+if TYPE_CHECKING:
+    from eos_svc.agents.world import WorldParameters
+    from eos_svc.kinematics import SurfaceObject
+
+
+def coverage_spacing(params: WorldParameters) -> float:
+    """Largest column spacing along y and z whose sweep tubes cover the box (m)."""
+    return math.sqrt(2.0) * params.envelope_radius
+
+
+def column_counts(params: WorldParameters) -> tuple[int, int]:
+    """Columns along y and z (corners included)."""
+    spacing = coverage_spacing(params)
+    lo, hi = params.search_box_lo, params.search_box_hi
+    ny = max(1, math.ceil((hi[1] - lo[1] - 1e-12) / spacing) + 1)
+    nz = max(1, math.ceil((hi[2] - lo[2] - 1e-12) / spacing) + 1)
+    return ny, nz
+
+
+@functools.lru_cache(maxsize=16)
+def _columns(lo: tuple[float, ...], hi: tuple[float, ...], counts: tuple[int, int]) -> np.ndarray:
+    ys = np.linspace(lo[1], hi[1], counts[0]) if counts[0] > 1 else np.array([0.5 * (lo[1] + hi[1])])
+    zs = np.linspace(lo[2], hi[2], counts[1]) if counts[1] > 1 else np.array([0.5 * (lo[2] + hi[2])])
+    grid = np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
+    grid.setflags(write=False)
+    return grid
+
+
+def wrist_columns(params: WorldParameters) -> np.ndarray:
+    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m (read-only)."""
+    return _columns(tuple(params.search_box_lo), tuple(params.search_box_hi), column_counts(params))
+
+
+def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
+    """Every column index once, in a seeded space-filling order.
+
+    A scrambled Sobol sequence in the unit square, scaled to the index grid and floored to a
+    column; each column is kept at its first occurrence, and the columns the sequence never
+    hits follow in a seeded random order.
+    """
+    sobol = qmc.Sobol(d=2, scramble=True, seed=rng)
+    total = counts[0] * counts[1]
+    u = sobol.random_base2(max(4, math.ceil(math.log2(max(total, 2))) + 2))
+    idx = np.minimum((u * np.asarray(counts, dtype=float)).astype(int), np.asarray(counts) - 1)
+    seen: set[tuple[int, int]] = set()
+    order: list[tuple[int, int]] = []
+    for i, j in idx.tolist():
+        if (i, j) not in seen:
+            seen.add((i, j))
+            order.append((i, j))
+    rest = [(i, j) for i in range(counts[0]) for j in range(counts[1]) if (i, j) not in seen]
+    order.extend(rest[n] for n in rng.permutation(len(rest)).tolist())
+    return order
+
+
+def findable(obj: SurfaceObject, params: WorldParameters, samples_per_metre: int = 1000) -> bool:
+    """Whether some sweep line passes within ``envelope_radius`` of ``obj`` (signed distance,
+    sampled every ``1/samples_per_metre`` m along x; the first half of the rule in the module
+    docstring — the second, an unblocked sweep, needs the hand: see ``tests/agents``)."""
+    gc = np.asarray(params.grasp_centre, dtype=float)
+    lo, hi = params.search_box_lo[0], params.search_box_hi[0]
+    xs = np.linspace(lo, hi, max(2, math.ceil((hi - lo) * samples_per_metre) + 1))
+    c = np.asarray(obj.placement.translation, dtype=float)
+    reach = 0.5 * float(obj.diameter) + params.envelope_radius
+    for y, z in wrist_columns(params).reshape(-1, 2).tolist():
+        points = np.column_stack([xs, np.full_like(xs, y), np.full_like(xs, z)]) + gc
+        near = points[np.linalg.norm(points - c, axis=1) <= reach + 1e-9]
+        if any(obj.signed_distance(p) <= params.envelope_radius for p in near):
+            return True
+    return False
