@@ -1,0 +1,168 @@
+"""Choose the class by model evidence and state how sure we are.
+
+Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`); its Bayesian information
+criterion ``BIC = χ² + k·ln m`` (m whitened contact residuals) approximates −2 log of its
+evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``.
+
+The **confidence** of the postulate is the probability that the class is right *and* the
+object's size and centre are within tolerance: ``P(class) · Π erf(tol/(√2·σ))`` over the
+fitted sizes (relative tolerance :data:`SIZE_TOLERANCE`) and centre coordinates (tolerance
+``SIZE_TOLERANCE`` × the mean half size), with σ from the fit's covariance — a direction
+the touches do not constrain (a box's unseen back) has a large σ and drags the confidence
+down. A best fit far worse than the noise model allows (:func:`fit_probability`) drags it
+down too. ``eos experiment recognition`` checks that it is calibrated.
+
+A **plane** is postulated when every sensed normal lies within :data:`PLANE_ANGLE` of their
+mean: a single face, too large for the probes to bound; it has no object.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from eos_svc.shape.fit import ClassFit, fit_class
+from eos_svc.shape.touches import Touches
+
+#: the classes fitted, in the order ties are broken
+CLASSES: tuple[str, ...] = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
+#: relative size tolerance the confidence refers to
+SIZE_TOLERANCE = 0.10
+#: normals all within this angle of their mean (rad) → a plane
+PLANE_ANGLE = math.radians(12.0)
+#: how much looser than the noise model a fit's χ² is judged (model and gap imperfections)
+FIT_SLACK = 2.0
+#: fewest contacts needed to fit the classes
+MIN_CONTACTS = 4
+
+
+@dataclass(frozen=True)
+class Postulate:
+    """The chosen class, its confidence and the object, with the evidence behind them.
+
+    Attributes:
+        kind: sphere, ellipsoid, cylinder, capsule, box or plane.
+        confidence: P(class right and size within tolerance).
+        probabilities: posterior of every class fitted.
+        fits: the class fits (empty for a plane).
+        contacts: number of contacts used.
+    """
+
+    kind: str
+    confidence: float
+    probabilities: dict[str, float]
+    fits: dict[str, ClassFit]
+    contacts: int
+
+    @property
+    def best(self) -> ClassFit | None:
+        """The chosen class's fit (None for a plane)."""
+        return self.fits.get(self.kind)
+
+    def object(self) -> dict[str, Any] | None:
+        """The postulated object in the request's JSON form (None for a plane)."""
+        fit = self.best
+        return None if fit is None else object_dict(fit)
+
+    def evidence(self) -> dict[str, Any]:
+        """Contacts used, fit residual and the competing classes (JSON-friendly)."""
+        out: dict[str, Any] = {
+            "contacts": self.contacts,
+            "classes": {k: round(v, 6) for k, v in sorted(self.probabilities.items(), key=lambda kv: -kv[1])},
+        }
+        fit = self.best
+        if fit is not None:
+            m = 3 * self.contacts
+            out["fit_chi2"] = round(fit.chi2, 3)
+            out["fit_rms"] = round(math.sqrt(fit.chi2 / max(m, 1)), 4)
+            out["size_sigma_rel"] = [round(float(s), 6) for s in fit.size_sigmas()]
+            out["centre_sigma_m"] = [round(float(s), 7) for s in fit.centre_sigmas()]
+        return out
+
+
+def _rpy(R: np.ndarray) -> list[float]:
+    """Roll, pitch, yaw (rad) of R = Rz(yaw)·Ry(pitch)·Rx(roll) (Pinocchio's convention)."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if abs(math.cos(pitch)) < 1e-9:
+        return [0.0, pitch, math.atan2(-R[0, 1], R[1, 1])]
+    return [math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])]
+
+
+def object_dict(fit: ClassFit) -> dict[str, Any]:
+    """A fitted class as an object in the request's JSON form (sizes as the request takes
+    them: a box's full edges, a cylinder's or capsule's full straight length)."""
+    g = fit.geometry
+    out: dict[str, Any] = {"shape": g.kind}
+    s = g.sizes
+    if g.kind == "sphere":
+        out["radius"] = round(s[0], 6)
+    elif g.kind == "ellipsoid":
+        out["radii"] = [round(v, 6) for v in s]
+    elif g.kind == "box":
+        out["size"] = [round(2.0 * v, 6) for v in s]
+    else:
+        out["radius"] = round(s[0], 6)
+        out["length"] = round(2.0 * s[1], 6)
+    out["position"] = [round(float(v), 6) for v in g.centre]
+    out["rpy"] = [0.0, 0.0, 0.0] if g.kind == "sphere" else [round(v, 6) for v in _rpy(g.rotation)]
+    return out
+
+
+def _within(tolerance: np.ndarray, sigma: np.ndarray) -> float:
+    p = 1.0
+    for t, s in zip(tolerance.tolist(), sigma.tolist(), strict=True):
+        p *= 1.0 if s <= 0.0 else math.erf(t / (math.sqrt(2.0) * s))
+    return p
+
+
+def tolerance_probability(fit: ClassFit) -> float:
+    """P(every size within ±SIZE_TOLERANCE and the centre within SIZE_TOLERANCE × the mean
+    half size), from the fit's Gaussian covariance (independent parameters)."""
+    sizes = np.asarray(fit.geometry.sizes)
+    p_size = _within(np.full(len(sizes), SIZE_TOLERANCE), fit.size_sigmas())
+    p_centre = _within(np.full(3, SIZE_TOLERANCE * float(np.mean(sizes))), fit.centre_sigmas())
+    return p_size * p_centre
+
+
+def is_plane(touches: Touches) -> bool:
+    """Every sensed normal within PLANE_ANGLE of their mean."""
+    mean = touches.normals.mean(axis=0)
+    norm = float(np.linalg.norm(mean))
+    if norm < 1e-9:
+        return False
+    cos = touches.normals @ (mean / norm)
+    return bool(np.all(cos >= math.cos(PLANE_ANGLE)))
+
+
+def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postulate:
+    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors).
+
+    Raises:
+        ValueError: fewer than MIN_CONTACTS contacts.
+    """
+    if touches.count < MIN_CONTACTS:
+        raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
+    if is_plane(touches):
+        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
+    fits = {kind: fit_class(kind, touches) for kind in classes}
+    m = 3 * touches.count
+    bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
+    low = min(bic.values())
+    weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
+    total = sum(weights.values())
+    probs = {k: w / total for k, w in weights.items()}
+    kind = max(classes, key=lambda k: (probs[k], -classes.index(k)))
+    confidence = probs[kind] * tolerance_probability(fits[kind]) * fit_probability(fits[kind], m)
+    return Postulate(kind, confidence, probs, fits, touches.count)
+
+
+def fit_probability(fit: ClassFit, m: int) -> float:
+    """How plausible the best fit's χ² is under the noise model, taken FIT_SLACK times
+    looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
+    even the best class misses them (an object none of the classes describes)."""
+    dof = max(m - fit.n_params, 1)
+    return float(stats.chi2.sf(fit.chi2 / FIT_SLACK, dof))
