@@ -18,6 +18,7 @@ explores the object's top and bottom, and at which angle).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -221,6 +222,29 @@ def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
         tip = hand.tip_geometry_id(finger)
         out[finger] = [i for i, g in enumerate(geometries) if g.parentJoint in moving and i != tip]
     return out
+
+
+@dataclass(frozen=True)
+class ProbeOutcome:
+    """What one guarded probe found (:meth:`GraspWorld.guarded_probe`).
+
+    Attributes:
+        event: "touched", "missed" or "blocked".
+        finger: the probing finger.
+        centre: touched: the tip's centre (world, m).
+        normal: touched: the sensed outward object normal (unit, world; tactile noise).
+        free: missed: tip-centre samples of the free path (N, 3), m.
+        travelled: length moved (m).
+        why: blocked: the reason.
+    """
+
+    event: str
+    finger: str
+    centre: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    free: np.ndarray | None = None
+    travelled: float = 0.0
+    why: str = ""
 
 
 @dataclass
@@ -472,6 +496,81 @@ class GraspWorld:
             if travelled >= length - 1e-12:
                 return travelled, False
         return travelled, True
+
+    def guarded_probe(
+        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+    ) -> ProbeOutcome:
+        """Move ``finger``'s tip in a straight line from ``start`` along ``direction`` (world,
+        m) for at most ``travel`` m, stopping at first touch (EP2's guarded move).
+
+        The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
+        ``angle`` and every other finger opened, so that the tip's centre is at ``start``
+        (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
+        there). Conservative advancement: each sub-step is at most the tip's gap beyond half
+        the contact tolerance and the other geometries' clearance beyond ``clearance``, so
+        only the tip can touch, and it never pushes the object.
+
+        Returns:
+            the outcome: touched (tip centre, sensed normal), missed (tip-centre samples
+            along the free path) or blocked (another part of the hand, or the wrist's limits).
+        """
+        p = self.params
+        hand = self.hand
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        q = self.state.q
+        q[self._wrist_q[3:6]] = 0.0
+        for f in hand.finger_names:
+            idx = self._finger_q[f]
+            q[idx] = angle if f == finger else hand.lower[idx]
+        self.set_q(q)
+        offset = self.state.tip_position(finger) - self.wrist_position()
+        lo, hi = hand.lower[self._wrist_q[:3]], hand.upper[self._wrist_q[:3]]
+        start = np.asarray(start, dtype=float)
+        for back in (0.0, 0.02, 0.04, 0.06):
+            wrist = start - back * d - offset
+            if np.any(wrist < lo) or np.any(wrist > hi):
+                return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
+            q[self._wrist_q[:3]] = wrist
+            self.set_q(q)
+            if self.exact_clearance() >= p.clearance:
+                travel += back
+                break
+        else:
+            return ProbeOutcome("blocked", finger, why="no clear start")
+        tip_gid = hand.tip_geometry_id(finger)
+        others = [g for g in range(len(self._bounds)) if g != tip_gid]
+        tol = p.contact_tolerance
+        wrist0 = self.wrist_position().copy()
+        travelled = 0.0
+        free = [self.state.tip_position(finger).copy()]
+        for _ in range(300):
+            tip_gap = self.tip_distance(finger)
+            if tip_gap <= tol:
+                contact = self.scene.contact(self.state, finger)
+                reading = self.sensor.read(self.state, contact)
+                M = self.state.data.oMf[hand.tip_frame_id(finger)]
+                normal = -(M.rotation @ reading.normal_tip)
+                return ProbeOutcome(
+                    "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
+                )
+            other = self._min_gap(others, math.inf) - p.clearance
+            if other < 1e-5:
+                return ProbeOutcome("blocked", finger, why="another part of the hand would touch first")
+            step = min(travel - travelled, tip_gap - 0.5 * tol, other)
+            travelled += step
+            q[self._wrist_q[:3]] = wrist0 + d * travelled
+            self.set_q(q)
+            free.append(self.state.tip_position(finger).copy())
+            if travelled >= travel - 1e-12:
+                break
+        # the path between the samples is free too (each step ≤ the gap): keep ≤ 5 mm spacing
+        path = np.array(free)
+        dense = [path[0]]
+        for a, b in itertools.pairwise(path):
+            n = max(1, math.ceil(float(np.linalg.norm(b - a)) / 0.005))
+            dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
+        return ProbeOutcome("missed", finger, free=np.array(dense), travelled=travelled)
 
     def exact_clearance(self) -> float:
         """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's

@@ -37,6 +37,8 @@ N_PARAMS = {"sphere": 4, "ellipsoid": 9, "box": 9, "cylinder": 7, "capsule": 7}
 SIZE_INDEX = {"sphere": (3,), "ellipsoid": (6, 7, 8), "box": (6, 7, 8), "cylinder": (5, 6), "capsule": (5, 6)}
 #: smallest half size a start may take (m)
 MIN_HALF = 0.004
+#: χ²/dof under which a start's fit is accepted without trying the others
+GOOD_FIT = 3.0
 #: relative step of the finite-difference Jacobian
 JACOBIAN_STEP = 1e-8
 #: ridge added to JᵀJ before inverting it (whitened units)
@@ -73,6 +75,21 @@ class Geometry:
     centre: np.ndarray
     rotation: np.ndarray
     sizes: tuple[float, ...]  # sphere (r,), ellipsoid (a, b, c), box (hx, hy, hz), cyl/capsule (r, h)
+
+    def half_extents(self) -> np.ndarray:
+        """Half extents of the instance's bounds along the world x, y, z axes (m)."""
+        R, s = self.rotation, self.sizes
+        if self.kind == "sphere":
+            return np.full(3, s[0])
+        if self.kind == "box":
+            out: np.ndarray = np.abs(R) @ np.asarray(s)
+            return out
+        if self.kind == "ellipsoid":
+            return np.sqrt((R**2) @ (np.asarray(s) ** 2))
+        axial = np.abs(R[:, 2])
+        if self.kind == "cylinder":
+            return axial * s[1] + s[0] * np.sqrt(np.maximum(1.0 - axial**2, 0.0))
+        return axial * s[1] + s[0]
 
     def signed_distance(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(signed distance (N,), outward gradient (N, 3), world) at world ``points``."""
@@ -302,7 +319,7 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
     return out
 
 
-def fit_class(kind: str, touches: Touches, max_nfev: int = 40) -> ClassFit:
+def fit_class(kind: str, touches: Touches, max_nfev: int = 20) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts)."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
@@ -326,6 +343,8 @@ def fit_class(kind: str, touches: Touches, max_nfev: int = 40) -> ClassFit:
         chi2 = float(2.0 * res.cost)
         if best is None or chi2 < best[0]:
             best = (chi2, res, r0)
+        if chi2 <= GOOD_FIT * max(m - k, 1):
+            break  # this start explains the touches to within the noise: no other start needed
     assert best is not None
     chi2, res, r0 = best
     J = res.jac
