@@ -14,8 +14,8 @@ pushes the object.
 Each round plans, around the current estimate (centre and half extents along the world axes:
 EP1's top and bottom contacts and the approach point at first, the fitted object after),
 probes of the front (+x), of both sides (±y), of the top (−z) and of the bottom (+z), and
-three *slides* over the top (toward the back and to both sides): short guarded probes every
-3 mm, the fingertip dragged over the surface, until it drops over an edge (the last contact
+*slides* over the top (toward the back and to both sides at first, along the postulated
+object's own horizontal axes once it has an orientation): short guarded probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the last contact
 is on the edge: the object's extent that way), a link would touch first (a curved top past
 its apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator,
 so repeated rounds feel new places.
@@ -158,15 +158,20 @@ class EP2Agent(GraspAgent):
             "radius": self.world.hand.tip_radius(finger),
         }
 
-    def slide(self, start: np.ndarray, axis: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    def slide(
+        self, start: np.ndarray, axis: np.ndarray
+    ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
         """Drag the top finger over the top from the tip centre ``start`` along the horizontal
         ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
         height. Returns the contacts (tip centre, sensed normal) up to and including the one
-        where the tip dropped by more than a step (an edge, or the surface curving away)."""
+        where the tip dropped by more than a step (an edge, or the surface curving away), and
+        the free tip path of the probe that ended the slide (nothing felt, or a link would
+        have touched first: the surface does not go on at that height)."""
         world = self.world
         finger = world.probe.finger("top")
         angle = world.probe.angles[finger]
         out: list[tuple[np.ndarray, np.ndarray]] = []
+        beyond: list[np.ndarray] = []
         last: tuple[np.ndarray, np.ndarray] | None = None
         z = float(start[2])
         for k in range(1, SLIDE_STEPS + 1):
@@ -176,6 +181,7 @@ class EP2Agent(GraspAgent):
                 finger, p, np.array([0.0, 0.0, -1.0]), 0.002 + 4 * SLIDE_STEP, angle
             )
             if outcome.event != "touched":
+                beyond = [] if outcome.free is None else list(outcome.free)
                 break
             assert outcome.centre is not None and outcome.normal is not None
             last = (outcome.centre, outcome.normal)
@@ -187,7 +193,32 @@ class EP2Agent(GraspAgent):
             z = float(outcome.centre[2])
         if last is not None:
             out.append(last)
-        return out
+        return out, beyond
+
+    @staticmethod
+    def slide_axes(board: Board) -> list[np.ndarray]:
+        """Horizontal directions to slide along: toward the back (+x) and to both sides (±y)
+        at first; along the postulated object's own horizontal axes (both ways) once post_shape
+        has fitted an oriented one, so that a slide crosses the edge it runs toward."""
+        obj = (board.get(keys.SHAPE) or {}).get("object")
+        if obj is None or not (board.get(keys.SHAPE) or {}).get("pose_known"):
+            return [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
+        r, p, y = obj["rpy"]
+        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+        R = np.array(
+            [
+                [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                [-sp, cp * sr, cp * cr],
+            ]
+        )
+        axes = []
+        for k in range(3):
+            h = np.array([R[0, k], R[1, k], 0.0])
+            n = float(np.linalg.norm(h))
+            if n > 0.5:
+                axes.extend([h / n, -h / n])
+        return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         estimate = estimate_box(board)
@@ -208,13 +239,12 @@ class EP2Agent(GraspAgent):
                 assert outcome.centre is not None and outcome.normal is not None
                 touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
                 counts[probe.face] = counts.get(probe.face, 0) + 1
-            elif outcome.event == "missed":
-                assert outcome.free is not None
-                r = world.hand.tip_radius(probe.finger)
-                free.extend([*np.round(p, 7).tolist(), r] for p in outcome.free)
-                missed += 1
             else:
-                blocked += 1
+                if outcome.free is not None:
+                    r = world.hand.tip_radius(probe.finger)
+                    free.extend([*np.round(p, 7).tolist(), r] for p in outcome.free)
+                missed += outcome.event == "missed"
+                blocked += outcome.event == "blocked"
         # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
         # +x (toward the back), +y and −y until the tip drops over an edge, a link would
         # touch first, or nothing is felt
@@ -229,10 +259,13 @@ class EP2Agent(GraspAgent):
         ]
         if tops:
             start = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
-            for axis in (np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])):
-                for centre, normal in self.slide(start, axis):
+            for axis in self.slide_axes(board):
+                slid, beyond = self.slide(start, axis)
+                for centre, normal in slid:
                     touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
+                r = world.hand.tip_radius(world.probe.finger("top"))
+                free.extend([*np.round(p, 7).tolist(), r] for p in beyond)
         self.rounds += 1
         board.set(keys.EP2_TOUCHES, touches)
         board.set(keys.EP2_FREE, free)

@@ -233,7 +233,7 @@ class ProbeOutcome:
         finger: the probing finger.
         centre: touched: the tip's centre (world, m).
         normal: touched: the sensed outward object normal (unit, world; tactile noise).
-        free: missed: tip-centre samples of the free path (N, 3), m.
+        free: missed or blocked: tip-centre samples of the free path (N, 3), m.
         travelled: length moved (m).
         why: blocked: the reason.
     """
@@ -507,12 +507,15 @@ class GraspWorld:
         ``angle`` and every other finger opened, so that the tip's centre is at ``start``
         (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
         there). Conservative advancement: each sub-step is at most the tip's gap beyond half
-        the contact tolerance and the other geometries' clearance beyond ``clearance``, so
-        only the tip can touch, and it never pushes the object.
+        the contact tolerance and the other geometries' gap beyond half the contact tolerance
+        (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
+        above the face its tip touches), so only the tip can touch, and it never pushes the
+        object.
 
         Returns:
-            the outcome: touched (tip centre, sensed normal), missed (tip-centre samples
-            along the free path) or blocked (another part of the hand, or the wrist's limits).
+            the outcome: touched (tip centre, sensed normal), missed or blocked (another part
+            of the hand would touch first, or the wrist's limits), the last two with the
+            tip-centre samples of the free path.
         """
         p = self.params
         hand = self.hand
@@ -554,9 +557,15 @@ class GraspWorld:
                 return ProbeOutcome(
                     "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
                 )
-            other = self._min_gap(others, math.inf) - p.clearance
+            other = self._min_gap(others, math.inf) - 0.5 * tol
             if other < 1e-5:
-                return ProbeOutcome("blocked", finger, why="another part of the hand would touch first")
+                return ProbeOutcome(
+                    "blocked",
+                    finger,
+                    free=_densify(np.array(free)),
+                    travelled=travelled,
+                    why="another part of the hand would touch first",
+                )
             step = min(travel - travelled, tip_gap - 0.5 * tol, other)
             travelled += step
             q[self._wrist_q[:3]] = wrist0 + d * travelled
@@ -564,13 +573,7 @@ class GraspWorld:
             free.append(self.state.tip_position(finger).copy())
             if travelled >= travel - 1e-12:
                 break
-        # the path between the samples is free too (each step ≤ the gap): keep ≤ 5 mm spacing
-        path = np.array(free)
-        dense = [path[0]]
-        for a, b in itertools.pairwise(path):
-            n = max(1, math.ceil(float(np.linalg.norm(b - a)) / 0.005))
-            dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
-        return ProbeOutcome("missed", finger, free=np.array(dense), travelled=travelled)
+        return ProbeOutcome("missed", finger, free=_densify(np.array(free)), travelled=travelled)
 
     def exact_clearance(self) -> float:
         """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
@@ -786,6 +789,16 @@ class GraspWorld:
                     lower = math.sqrt(px * px + py * py + pz * pz) - ball
             bounds.append((lower - obj_radius, gid))
         return bounds
+
+
+def _densify(path: np.ndarray, spacing: float = 0.005) -> np.ndarray:
+    """The polyline ``path`` (N, 3) resampled at most ``spacing`` m apart (a guarded probe's tip
+    path is free between its samples: each step was shorter than the tip's gap)."""
+    dense = [path[0]]
+    for a, b in itertools.pairwise(path):
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))
+        dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
+    return np.array(dense)
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world

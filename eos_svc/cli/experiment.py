@@ -19,6 +19,10 @@ EXPERIMENTS = {
     ),
     "shapes": ("eos_svc.experiments.shapes", "every shape end to end: success and good-grasp rates"),
     "learning": ("eos_svc.experiments.learning", "paper §7: learned sub-rating on a stream with repeats"),
+    "recognition": (
+        "eos_svc.experiments.recognition",
+        "knowing the object by touch: confusion, shape error, calibration, search length",
+    ),
 }
 
 
