@@ -15,10 +15,11 @@ Each round plans, around the current estimate (centre and half extents along the
 EP1's top and bottom contacts and the approach point at first, the fitted object after),
 probes of the front (+x), of both sides (±y), of the top (−z) and of the bottom (+z), and
 *slides* over the top (toward the back and to both sides at first, along the postulated
-object's own horizontal axes once it has an orientation): short guarded probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the last contact
-is on the edge: the object's extent that way), a link would touch first (a curved top past
-its apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator,
-so repeated rounds feel new places.
+object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
+the fingertip dragged over the surface, until it drops over an edge (the last contact is on
+the edge: the object's extent that way), a link would touch first (a curved top past its
+apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
+repeated rounds feel new places.
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
