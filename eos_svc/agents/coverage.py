@@ -20,10 +20,12 @@ contact). The columns are visited once each, in a seeded space-filling order:
 
 **Findable** (what the search guarantees, :func:`findable`): the object's signed distance
 from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
-``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius``, and the hand
-can sweep that line up to there without touching the object. A sufficient closed form: the
-object reaches within ``envelope_radius − spacing/√2`` of ``B`` (0 with the default spacing:
-the object reaches into ``B``).
+``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius`` (a sufficient
+closed form: the object reaches within ``envelope_radius − spacing/√2`` of ``B``, i.e. into
+``B`` with the default spacing), and the object lies wholly ahead of the hand's reach from
+the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``clearance``,
+0.042 m for hand3x3), so the crossings at the rear cannot bump into it. Objects closer to
+the rear are often found too, but a crossing the fingers cannot make may stall the search.
 """
 
 from __future__ import annotations
@@ -90,14 +92,32 @@ def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> li
     return order
 
 
-def findable(obj: SurfaceObject, params: WorldParameters, samples_per_metre: int = 1000) -> bool:
-    """Whether some sweep line passes within ``envelope_radius`` of ``obj`` (signed distance,
-    sampled every ``1/samples_per_metre`` m along x; the first half of the rule in the module
-    docstring — the second, an unblocked sweep, needs the hand: see ``tests/agents``)."""
+#: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
+#: 0.13 m) plus the tip radius
+HAND3X3_FORWARD_REACH = 0.14
+
+
+def findable(
+    obj: SurfaceObject,
+    params: WorldParameters,
+    forward_reach: float = HAND3X3_FORWARD_REACH,
+    samples_per_metre: int = 1000,
+) -> bool:
+    """Whether the search is guaranteed to locate ``obj`` (the rule of the module docstring):
+
+    1. some sweep line passes within ``envelope_radius`` of the object (signed distance,
+       sampled every ``1/samples_per_metre`` m along x), and
+    2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
+       point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
+       rear never bump into it.
+    """
     gc = np.asarray(params.grasp_centre, dtype=float)
     lo, hi = params.search_box_lo[0], params.search_box_hi[0]
-    xs = np.linspace(lo, hi, max(2, math.ceil((hi - lo) * samples_per_metre) + 1))
     c = np.asarray(obj.placement.translation, dtype=float)
+    rear = obj.closest_surface_point(c - np.array([10.0, 0.0, 0.0]))  # the object's rearmost point
+    if rear[0] <= lo + forward_reach + params.clearance:
+        return False
+    xs = np.linspace(lo, hi, max(2, math.ceil((hi - lo) * samples_per_metre) + 1))
     reach = 0.5 * float(obj.diameter) + params.envelope_radius
     for y, z in wrist_columns(params).reshape(-1, 2).tolist():
         points = np.column_stack([xs, np.full_like(xs, y), np.full_like(xs, z)]) + gc

@@ -70,6 +70,16 @@ def test_findable_objects_are_found_within_one_pass(position):
     assert max(lengths) <= ny * nz, lengths
 
 
+def test_object_within_the_fingers_reach_from_the_rear_is_not_findable():
+    params = parameters_for(default_hand())
+    rear = ObjectSpec("sphere", {"radius": 0.03}, (0.05, -0.1, 0.1))  # the fingers reach it at the rear
+    assert not findable(make_object(rear), params)
+    ahead = ObjectSpec("sphere", {"radius": 0.03}, (0.09, -0.1, 0.1))
+    assert findable(make_object(ahead), params)
+    ny, nz = column_counts(params)
+    assert max(search_length(ahead, seed) for seed in range(1, 6)) <= ny * nz
+
+
 def test_object_beyond_every_sweep_is_not_findable():
     params = parameters_for(default_hand())
     far = ObjectSpec("sphere", {"radius": 0.02}, (0.30, 0.0, 0.25))  # 8 cm above the box's top
