@@ -49,6 +49,8 @@ from eos_svc.shape.selection import MIN_CONTACTS
 SPHERE_TOLERANCE = 0.15
 #: the size tolerance the confidence refers to (relative)
 SIZE_TOLERANCE = 0.10
+#: most free-space samples given to the fit
+MAX_FREE_SAMPLES = 60
 #: probability that EP1's curvature class is right (see the module docstring)
 EP1_CLASS_PROBABILITY = 0.5
 
@@ -89,6 +91,8 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
         normals.append(np.asarray(t["normal"], dtype=float))
         radii.append(float(t["radius"]))
     free = np.asarray(board.get(keys.EP2_FREE, []), dtype=float).reshape(-1, 4)
+    if len(free) > MAX_FREE_SAMPLES:  # an even subset: the fit's cost grows with them
+        free = free[np.linspace(0, len(free) - 1, MAX_FREE_SAMPLES).astype(int)]
     return Touches(
         np.array(centres).reshape(-1, 3),
         np.array(normals).reshape(-1, 3),

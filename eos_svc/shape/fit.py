@@ -289,7 +289,7 @@ def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
         return [(np.array([*c, math.log(r)]), np.eye(3))]
     V = _normal_scatter_axes(touches.normals)
     if kind in ("ellipsoid", "box"):
-        frames = [*_face_frames(touches.normals), np.eye(3), V]
+        frames = [*_face_frames(touches.normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
         for r0 in frames:
             c = mid if kind == "box" else _normal_line_centre(S, touches.normals, mid)
             half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
@@ -319,8 +319,13 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
     return out
 
 
-def fit_class(kind: str, touches: Touches, max_nfev: int = 20) -> ClassFit:
-    """The least-squares fit of ``kind`` (the best of its starts)."""
+def fit_class(kind: str, touches: Touches, max_nfev: int = 20, hopeless: float = math.inf) -> ClassFit:
+    """The least-squares fit of ``kind`` (the best of its starts).
+
+    ``hopeless``: a χ² above which the class cannot compete with a class already fitted
+    (:func:`~eos_svc.shape.selection.select_class` passes a bound far above that class's
+    χ²): once a start ends above it, the remaining starts are skipped (their posterior would
+    be 0 whatever they reach)."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k = N_PARAMS[kind]
@@ -345,6 +350,8 @@ def fit_class(kind: str, touches: Touches, max_nfev: int = 20) -> ClassFit:
             best = (chi2, res, r0)
         if chi2 <= GOOD_FIT * max(m - k, 1):
             break  # this start explains the touches to within the noise: no other start needed
+        if chi2 > hopeless:
+            break
     assert best is not None
     chi2, res, r0 = best
     J = res.jac

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from eos_svc.shape.fit import ClassFit, fit_class
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, fit_class
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -36,6 +36,10 @@ SIZE_TOLERANCE = 0.10
 PLANE_ANGLE = math.radians(12.0)
 #: how much looser than the noise model a fit's χ² is judged (model and gap imperfections)
 FIT_SLACK = 2.0
+#: χ² margin beyond the best class so far past which a class's other starts are skipped
+HOPELESS = 2000.0
+#: iterations that show a class hopeless once another fits
+QUICK_NFEV = 6
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
 
@@ -148,8 +152,18 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     if is_plane(touches):
         return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
-    fits = {kind: fit_class(kind, touches) for kind in classes}
     m = 3 * touches.count
+    fits: dict[str, ClassFit] = {}
+    for kind in classes:
+        # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
+        # a few iterations show it, the full fit is kept for the competitive ones
+        best = min((f.chi2 for f in fits.values()), default=math.inf)
+        if best <= GOOD_FIT * m:
+            quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+            if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+                fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
+                continue
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
     weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
