@@ -18,6 +18,7 @@ mean: a single face, too large for the probes to bound; it has no object.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 from typing import Any
@@ -96,12 +97,52 @@ def _rpy(R: np.ndarray) -> list[float]:
     return [math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])]
 
 
+def _signed_permutations() -> list[np.ndarray]:
+    """The 24 proper rotations that permute and flip the coordinate axes."""
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            P = np.zeros((3, 3))
+            for col, (row, sign) in enumerate(zip(perm, signs, strict=True)):
+                P[row, col] = sign
+            if np.linalg.det(P) > 0:
+                out.append(P)
+    return out
+
+
+_SYMMETRIES = _signed_permutations()
+
+
+def canonical_pose(
+    kind: str, rotation: np.ndarray, sizes: tuple[float, ...]
+) -> tuple[np.ndarray, tuple[float, ...]]:
+    """The same object with its symmetric description nearest the world axes: a box's or an
+    ellipsoid's axes relabelled (sizes permuted with them) to the rotation closest to the
+    identity; a cylinder's or capsule's axis pointing up (or +x, +y when level), its frame's x
+    axis the world x projected across the axis."""
+    if kind in ("box", "ellipsoid"):
+        best = max(_SYMMETRIES, key=lambda P: float(np.trace(rotation @ P)))
+        order = [int(np.argmax(np.abs(best[:, c]))) for c in range(3)]
+        return rotation @ best, tuple(sizes[i] for i in order)
+    if kind in ("cylinder", "capsule"):
+        z = rotation[:, 2].copy()
+        level = abs(z[2]) < 1e-6
+        if (not level and z[2] < 0.0) or (level and z[int(np.argmax(np.abs(z)))] < 0.0):
+            z = -z
+        ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        x = ref - (ref @ z) * z
+        x /= np.linalg.norm(x)
+        return np.column_stack([x, np.cross(z, x), z]), sizes
+    return np.eye(3), sizes
+
+
 def object_dict(fit: ClassFit) -> dict[str, Any]:
     """A fitted class as an object in the request's JSON form (sizes as the request takes
-    them: a box's full edges, a cylinder's or capsule's full straight length)."""
+    them: a box's full edges, a cylinder's or capsule's full straight length; the pose in
+    its canonical description, :func:`canonical_pose`)."""
     g = fit.geometry
     out: dict[str, Any] = {"shape": g.kind}
-    s = g.sizes
+    rotation, s = canonical_pose(g.kind, g.rotation, g.sizes)
     if g.kind == "sphere":
         out["radius"] = round(s[0], 6)
     elif g.kind == "ellipsoid":
@@ -112,7 +153,7 @@ def object_dict(fit: ClassFit) -> dict[str, Any]:
         out["radius"] = round(s[0], 6)
         out["length"] = round(2.0 * s[1], 6)
     out["position"] = [round(float(v), 6) for v in g.centre]
-    out["rpy"] = [0.0, 0.0, 0.0] if g.kind == "sphere" else [round(v, 6) for v in _rpy(g.rotation)]
+    out["rpy"] = [0.0, 0.0, 0.0] if g.kind == "sphere" else [round(v, 6) + 0.0 for v in _rpy(rotation)]
     return out
 
 
