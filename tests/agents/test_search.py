@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import numpy as np
@@ -49,13 +50,14 @@ def test_order_visits_every_column_once_and_follows_the_seed():
     c = space_filling_order(counts, np.random.default_rng(4))
     assert a == b and a != c
     assert sorted(a) == [(i, j) for i in range(6) for j in range(6)]
-    # space filling: the first four columns lie one in each quadrant
-    assert {(i >= 3, j >= 3) for i, j in a[:4]} == {
-        (False, False),
-        (False, True),
-        (True, False),
-        (True, True),
-    }
+    # maximin: each column is the farthest from those before it, so that distance never grows
+    pts = np.array(a, dtype=float)
+    gaps = [float(np.min(np.linalg.norm(pts[:k] - pts[k], axis=1))) for k in range(1, len(pts))]
+    assert all(later <= earlier + 1e-9 for earlier, later in itertools.pairwise(gaps))
+    for k in range(1, len(pts)):  # and it is the farthest of the columns left
+        rest = pts[k:]
+        far = max(float(np.min(np.linalg.norm(pts[:k] - p, axis=1))) for p in rest)
+        assert gaps[k - 1] >= far - 1e-9
 
 
 @pytest.mark.parametrize(
