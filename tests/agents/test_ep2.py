@@ -88,3 +88,16 @@ def test_a_capsule_is_told_from_an_ellipsoid():
     )
     result = plan(PlanRequest(obj=spec, seed=3))
     assert result.shape["class"] == "capsule", result.shape["evidence"]
+
+
+def test_ep1_repeats_while_its_curvature_is_not_trusted_then_ep2():
+    # the paper's EP1 behaviour is kept: post_shape asks EP1 to roll again while EP1's own size
+    # confidence is under 60 %, and only then asks EP2 for the surface
+    result = plan(PlanRequest(seed=1))
+    info = [r for r in result.trace if r.stage == "information"]
+    details = [(r.chosen, r.detail) for r in info]
+    again = next(i for i, (who, d) in enumerate(details) if who == "post_shape" and "roll again" in d)
+    first_ep2 = next(i for i, (who, _) in enumerate(details) if who == "ep2")
+    assert details[again + 1][0] == "ep1" and again < first_ep2
+    assert result.ep1_runs >= 3
+    assert result.shape["class"] == "sphere" and result.shape["confidence"] >= 0.9
