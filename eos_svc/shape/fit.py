@@ -217,6 +217,40 @@ class ClassFit:
         return np.sqrt(np.maximum(np.diag(self.covariance)[:3], 0.0))
 
 
+def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.ndarray:
+    """Per size of ``fit``: the largest likelihood ratio ``exp(−Δχ²/2)`` of the same object with
+    that size ``step`` larger or smaller while one of its two faces along that direction stays
+    put (the centre shifted by the change), against the fit. ≈ 0 when the touches bound the
+    size on both sides; ≈ 1 when one side is free — a far face no contact or free sample sees
+    (the least-squares covariance, a local quadratic, misses that: the fit sits on the
+    nearest contact, where the residuals do not change when the far face moves away)."""
+    kind, theta, r0 = fit.kind, fit.theta, fit.r0
+    g = fit.geometry
+    variants = []
+    owners = []
+    for n, i in enumerate(SIZE_INDEX[kind]):
+        half = g.sizes[n]
+        if kind in ("box", "ellipsoid"):
+            axis = g.rotation[:, n]
+        elif kind in ("cylinder", "capsule") and n == 1:
+            axis = g.rotation[:, 2]
+        else:
+            axis = np.zeros(3)  # a radius: both sides move together
+        for factor in (1.0 + step, 1.0 - step):
+            for side in (1.0, -1.0):
+                t = theta.copy()
+                t[i] = theta[i] + math.log(factor)
+                t[:3] = theta[:3] + side * (factor - 1.0) * half * axis
+                variants.append(t)
+                owners.append(n)
+    R = batch_residuals(np.array(variants), kind, r0, touches)
+    delta = np.maximum(np.sum(R * R, axis=1) - fit.chi2, 0.0)
+    ratios = np.zeros(len(SIZE_INDEX[kind]))
+    for n, d in zip(owners, delta, strict=True):
+        ratios[n] = max(ratios[n], math.exp(-0.5 * float(d)))
+    return ratios
+
+
 def _normal_scatter_axes(normals: np.ndarray) -> np.ndarray:
     """Eigenvectors (columns, ascending eigenvalue) of Σ n nᵀ, right-handed."""
     _, V = np.linalg.eigh(normals.T @ normals)

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from eos_svc.shape.fit import GOOD_FIT, ClassFit, fit_class
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, extent_ratios, fit_class
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -164,11 +164,16 @@ def _within(tolerance: np.ndarray, sigma: np.ndarray) -> float:
     return p
 
 
-def tolerance_probability(fit: ClassFit) -> float:
+def tolerance_probability(fit: ClassFit, touches: Touches | None = None) -> float:
     """P(every size within ±SIZE_TOLERANCE and the centre within SIZE_TOLERANCE × the mean
-    half size), from the fit's Gaussian covariance (independent parameters)."""
+    half size), from the fit's Gaussian covariance (independent parameters) and, given the
+    touches, times ``1 − r`` per size with ``r`` the likelihood ratio of a size 10 % off with
+    one face kept (:func:`~eos_svc.shape.fit.extent_ratios`: a size bounded on one side only
+    is not known)."""
     sizes = np.asarray(fit.geometry.sizes)
     p_size = _within(np.full(len(sizes), SIZE_TOLERANCE), fit.size_sigmas())
+    if touches is not None:
+        p_size *= float(np.prod(1.0 - extent_ratios(fit, touches, SIZE_TOLERANCE)))
     p_centre = _within(np.full(3, SIZE_TOLERANCE * float(np.mean(sizes))), fit.centre_sigmas())
     return p_size * p_centre
 
@@ -199,11 +204,13 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
         # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
         # a few iterations show it, the full fit is kept for the competitive ones
         best = min((f.chi2 for f in fits.values()), default=math.inf)
-        if best <= GOOD_FIT * m:
-            quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
-            if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
-                fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
-                continue
+        if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
+            fits[kind] = fit_class(kind, touches)
+            continue
+        quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+            fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
+            continue
         fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
@@ -211,7 +218,7 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     total = sum(weights.values())
     probs = {k: w / total for k, w in weights.items()}
     kind = max(classes, key=lambda k: (probs[k], -classes.index(k)))
-    confidence = probs[kind] * tolerance_probability(fits[kind]) * fit_probability(fits[kind], m)
+    confidence = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
     return Postulate(kind, confidence, probs, fits, touches.count)
 
 
