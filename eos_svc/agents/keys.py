@@ -8,7 +8,7 @@ from __future__ import annotations
 
 LOCATED = "located"  #: bool: the object is within the hand's envelope
 GAP = "gap_to_object"  #: float m: object surface to the grasp centre
-SEARCH_MOVES = "search_moves"  #: int: random search moves made
+SEARCH_MOVES = "search_moves"  #: int: search moves (sweeps) made
 CURVATURE = (
     "curvature"  #: dict: EP1's curvature estimate on the object's top (principal curvatures, σ, rating)
 )
