@@ -95,7 +95,7 @@ def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> li
 
 
 #: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
-#: 0.13 m) plus the tip radius
+#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.world.forward_reach``
 HAND3X3_FORWARD_REACH = 0.14
 
 

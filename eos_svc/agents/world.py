@@ -210,6 +210,13 @@ class ProbeChoice:
         return self.bottom if side == "bottom" else self.top
 
 
+def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:
+    """How far ahead of the wrist the hand reaches (m): the largest x of any fingertip centre
+    over its closing path, plus its radius (0.14 m for hand3x3). The search's findability rule
+    (:func:`eos_svc.agents.coverage.findable`) needs it."""
+    return max(float(s.points[:, 0].max()) + hand.tip_radius(f) for f, s in sweeps.items())
+
+
 def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
     """Per finger, the collision geometries that move when it closes, except its tip:
     those on the bodies its first listed joint carries."""

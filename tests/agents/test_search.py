@@ -86,3 +86,12 @@ def test_object_beyond_every_sweep_is_not_findable():
     params = parameters_for(default_hand())
     far = ObjectSpec("sphere", {"radius": 0.02}, (0.30, 0.0, 0.25))  # 8 cm above the box's top
     assert not findable(make_object(far), params)
+
+
+def test_forward_reach_of_hand3x3_is_the_default_of_the_rule():
+    from eos_svc.agents.coverage import HAND3X3_FORWARD_REACH
+    from eos_svc.agents.planner import _sweeps
+    from eos_svc.agents.world import forward_reach
+
+    hand = default_hand()
+    assert forward_reach(hand, _sweeps(hand)) == pytest.approx(HAND3X3_FORWARD_REACH, abs=1e-3)
