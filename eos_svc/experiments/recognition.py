@@ -90,6 +90,17 @@ def surface_error(truth: ObjectSpec, postulate: dict | None, rng: np.random.Gene
     return float(np.sqrt(np.mean(np.square(err))) / (0.5 * true_obj.diameter))
 
 
+def pose_and_size_error(truth: ObjectSpec, postulate: dict | None) -> tuple[float, float]:
+    """(distance between the postulated and the true centre in m, relative error of the
+    bounding diameter); NaN without a postulated object."""
+    if postulate is None:
+        return math.nan, math.nan
+    guess = ObjectSpec.from_dict(postulate)
+    distance = float(np.linalg.norm(np.asarray(guess.position) - np.asarray(truth.position)))
+    d_true = make_object(truth).diameter
+    return distance, abs(make_object(guess).diameter - d_true) / d_true
+
+
 def search_lengths(seeds: int = 100, limit: int = 2000) -> list[int]:
     """Search moves to locate the default object for seeds 1…``seeds`` (``limit + 1`` if not)."""
     out = []
@@ -130,6 +141,7 @@ def run(
             guess = shape.get("class", "none")
             obj = shape.get("object")
             err = surface_error(request.obj, obj, np.random.default_rng(request.seed))
+            pos_err, size_err = pose_and_size_error(request.obj, obj)
             right = guess == request.obj.shape and math.isfinite(err) and err <= TOLERANCE
             rows.append(
                 {
@@ -141,6 +153,8 @@ def run(
                     "confidence": float(shape.get("confidence", 0.0)),
                     "class_right": guess == request.obj.shape,
                     "surface_error": err,
+                    "position_error_m": pos_err,
+                    "size_error": size_err,
                     "right": right,
                     "status": result.status,
                     "search_cycles": result.cycles_per_stage.get("search", 0),
@@ -176,6 +190,10 @@ def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list
             [r["surface_error"] for r in sub if r["class_right"] and math.isfinite(r["surface_error"])]
         )
         confident = [r for r in sub if r["confidence"] >= 0.9]
+        pos = [
+            r["position_error_m"] for r in sub if r["class_right"] and math.isfinite(r["position_error_m"])
+        ]
+        size = [r["size_error"] for r in sub if r["class_right"] and math.isfinite(r["size_error"])]
         per_noise[f"{noise:g}"] = {
             "runs": len(sub),
             "class_accuracy": float(np.mean([r["class_right"] for r in sub])) if sub else math.nan,
@@ -183,6 +201,8 @@ def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list
             "confusion": confusion,
             "error_median": float(np.median(errs)) if len(errs) else None,
             "error_p90": float(np.percentile(errs, 90)) if len(errs) else None,
+            "position_error_median_m": float(np.median(pos)) if pos else None,
+            "size_error_median": float(np.median(size)) if size else None,
             "confident": len(confident),
             "confident_right": float(np.mean([r["right"] for r in confident])) if confident else None,
             "wrong_class_confident": sum(1 for r in confident if not r["class_right"]),
