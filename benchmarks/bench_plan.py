@@ -8,20 +8,20 @@ controller's per-cycle recording only (the trace) vs with a live per-cycle callb
 that formats the trace line as `eos plan` does, to show what observation costs.
 Goals: ≤ 60 µs per cycle and ≤ 20 ms per plan (median, default scene).
 
-    .venv/bin/python benchmarks/bench_plan.py --baseline 256976e
-
-also times the default plan of another git revision (its tree exported to a temporary
-folder, planned in a child process) interleaved with this tree's, rounds of 10 plans each,
-and prints the ratio of the medians (the grasp-synthesis goal: within 2× of the revision
-before it).
+The information stage's cost per plan (cycles and ms: EP1, EP2's probes, post_shape's fits)
+is reported for every class, and the default plan's median time is compared with the same
+plan at a baseline revision (``--baseline REV``, default the commit before EP2 and the
+fitting: ``256976e``), run from a ``git archive`` of it in a subprocess in the same run.
 """
 
 from __future__ import annotations
 
-import os
+import argparse
+import math
 import statistics
 import subprocess
 import sys
+import tarfile
 import tempfile
 import time
 from pathlib import Path
@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from _harness import table
 
-from eos_svc.agents import PlanRequest, plan
+from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import ratio_sphere_request
 from eos_svc.cli.plan import format_cycle
 
@@ -60,47 +60,75 @@ def time_plans(
     return statistics.median(samples), cycles
 
 
-#: a child process that times ``n`` default plans and prints their times (s), one per line
-_CHILD = """
-import sys, time
+ROOT = Path(__file__).resolve().parents[1]
+#: objects of every class for the information-stage cost (cylinder and capsule across the approach)
+CLASS_OBJECTS = {
+    "sphere": ObjectSpec(),
+    "ellipsoid": ObjectSpec("ellipsoid", {"radii": [0.035, 0.03, 0.025]}),
+    "cylinder": ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, rpy=(math.pi / 2, 0.0, 0.0)),
+    "capsule": ObjectSpec("capsule", {"radius": 0.02, "length": 0.06}, rpy=(math.pi / 2, 0.0, 0.0)),
+    "box": ObjectSpec("box", {"size": [0.05, 0.06, 0.04]}),
+}
+BASELINE_SCRIPT = """
+import statistics, time
 from eos_svc.agents import PlanRequest, plan
 plan(PlanRequest())
-for _ in range(int(sys.argv[1])):
-    t0 = time.perf_counter(); plan(PlanRequest()); print(time.perf_counter() - t0)
+samples = []
+for _ in range({repeats}):
+    t0 = time.perf_counter(); plan(PlanRequest()); samples.append(time.perf_counter() - t0)
+print(statistics.median(samples))
 """
 
 
-def _child_times(tree: Path, n: int) -> list[float]:
-    """Times of ``n`` default plans by the package in ``tree`` (a child process)."""
-    env = {**os.environ, "PYTHONPATH": str(tree)}
-    out = subprocess.run(
-        [sys.executable, "-c", _CHILD, str(n)], env=env, capture_output=True, text=True, check=True
-    ).stdout
-    return [float(x) for x in out.split()]
+def information_cost(request: PlanRequest, repeats: int = 3) -> tuple[int, float, float, str, float]:
+    """(information cycles, median ms of the stage, median ms of EP2's and post_shape's fitting
+    cycles, postulated class, confidence) of ``request``."""
+    stage_ms, touch_ms = [], []
+    cycles, kind, conf = 0, "", 0.0
+    for _ in range(repeats):
+        result = plan(request)
+        previous, total, touch = 0.0, 0.0, 0.0
+        for record in result.trace:
+            dt = record.elapsed_s - previous
+            previous = record.elapsed_s
+            if record.stage == "information":
+                total += dt
+                if record.chosen == "ep2" or (record.chosen == "post_shape" and "fitted" in record.detail):
+                    touch += dt
+        stage_ms.append(total * 1e3)
+        touch_ms.append(touch * 1e3)
+        cycles = result.cycles_per_stage.get("information", 0)
+        kind, conf = (result.shape or {}).get("class", "none"), (result.shape or {}).get("confidence", 0.0)
+    return cycles, statistics.median(stage_ms), statistics.median(touch_ms), kind, conf
 
 
-def baseline_ratio(rev: str, rounds: int = 4, per_round: int = 10) -> None:
-    """Median default-plan time of this tree and of git revision ``rev``, interleaved rounds."""
-    root = Path(__file__).resolve().parents[1]
-    with tempfile.TemporaryDirectory(prefix="eos_plan_baseline_") as tmp:
-        archive = subprocess.run(
-            ["git", "-C", str(root), "archive", rev, "eos_svc", "urdf"], capture_output=True, check=True
+def baseline_plan_time(rev: str, repeats: int) -> float | None:
+    """Median default-plan time (s) of revision ``rev`` (``git archive`` into a temporary folder,
+    timed in a subprocess), or None when the revision is not available."""
+    with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
+        archive = Path(tmp) / "rev.tar"
+        done = subprocess.run(
+            ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"],
+            capture_output=True,
         )
-        subprocess.run(["tar", "-x", "-C", tmp], input=archive.stdout, check=True)
-        ours: list[float] = []
-        theirs: list[float] = []
-        for _ in range(rounds):
-            ours += _child_times(root, per_round)
-            theirs += _child_times(Path(tmp), per_round)
-    a, b = statistics.median(ours), statistics.median(theirs)
-    print(f"\ndefault plan, {rounds} interleaved rounds of {per_round} plans each (child processes)")
-    print(f"  this tree {a * 1e3:.1f} ms, {rev} {b * 1e3:.1f} ms: ratio {a / b:.2f}")
+        if done.returncode != 0:
+            return None
+        with tarfile.open(archive) as tar:
+            tar.extractall(tmp, filter="data")
+        out = subprocess.run(
+            [sys.executable, "-c", BASELINE_SCRIPT.format(repeats=repeats)],
+            capture_output=True,
+            text=True,
+            cwd=tmp,
+            env={"PYTHONPATH": tmp, "PATH": "/usr/bin:/bin"},
+        )
+        return float(out.stdout.strip()) if out.returncode == 0 and out.stdout.strip() else None
 
 
-def main() -> int:
-    if "--baseline" in sys.argv:
-        baseline_ratio(sys.argv[sys.argv.index("--baseline") + 1])
-        return 0
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="whole plans: time, cycles, information-stage cost")
+    parser.add_argument("--baseline", default="256976e", help="git revision to compare the default plan with")
+    args = parser.parse_args(argv)
     plan(PlanRequest())  # load the hand, warm caches
     default = PlanRequest()
     per_agent: dict = {}
@@ -127,6 +155,17 @@ def main() -> int:
     for (stage, agent), (n, times) in per_agent.items():
         t = statistics.median(times)
         print(f"  {stage:<12} {agent or '-':<13} {n:3d} x {t * 1e6:9.1f} µs = {n * t * 1e3:6.2f} ms")
+    base = baseline_plan_time(args.baseline, REPEATS)
+    if base is not None:
+        print(
+            f"\ndefault plan vs {args.baseline} (same run): {t_plan * 1e3:.1f} ms vs {base * 1e3:.1f} ms "
+            f"= {t_plan / base:.2f}x (goal: within 2x -> {'met' if t_plan <= 2.0 * base else 'NOT met'})"
+        )
+    print("\ninformation stage per plan (seed 1, median of 3): cycles, ms, of which EP2 + fitting")
+    print("  object      cycles  stage ms  EP2+fit ms  postulate (confidence)")
+    for name, spec in CLASS_OBJECTS.items():
+        cycles_i, ms, touch, kind, conf = information_cost(PlanRequest(obj=spec))
+        print(f"  {name:<10} {cycles_i:6d}  {ms:8.1f}  {touch:10.1f}  {kind} ({conf:.0%})")
     print("\nratio sweep (3 seeds each, 1 run per seed)")
     print("  d/h   status(es)            cycles  plan ms  µs/cycle")
     for ratio in (0.2, 0.35, 0.5, 0.65, 0.8, 0.95):

@@ -14,11 +14,11 @@ the opposing finger. The probing finger is set to its probe angle (straight,
 clear of the object. The sensed contact point and normal of each side
 go on the board (``keys.EP1_CONTACT``).
 
-Opportunistic sub-rating: after post_shape has pondered a new estimate and is
-not yet confident (< 60 %), the complement of the estimate's relative radius
-error, ``1 − σ_R/R`` (paper §2.2), floored at 0.05 so that EP1 keeps being
-chosen while the shape is unknown; 0 once the shape is postulated with
-enough confidence.
+Opportunistic sub-rating: after post_shape has pondered a new estimate and asks
+EP1 for the bottom or for more rolling (its curvature not trusted yet), the
+complement of the estimate's relative radius error, ``1 − σ_R/R`` (paper §2.2),
+floored at 0.05 so that EP1 keeps being chosen while its curvature is not
+trusted; 0 once post_shape asks for something else (EP2, or nothing).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ class EP1Agent(GraspAgent):
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
-        if shape is None or shape["confidence"] >= self.world.params.confidence_threshold:
+        if shape is None or shape.get("needs") not in ("bottom", "curvature"):
             return 0.0
         if not ctx.changed(keys.SHAPE):
             return 0.0

@@ -8,15 +8,18 @@ from __future__ import annotations
 
 LOCATED = "located"  #: bool: the object is within the hand's envelope
 GAP = "gap_to_object"  #: float m: object surface to the grasp centre
-SEARCH_MOVES = "search_moves"  #: int: random search moves made
+SEARCH_MOVES = "search_moves"  #: int: search moves (sweeps) made
 CURVATURE = (
     "curvature"  #: dict: EP1's curvature estimate on the object's top (principal curvatures, σ, rating)
 )
 CURVATURE_BOTTOM = "curvature_bottom"  #: dict: the same on the object's bottom, when explored
 EP1_RUNS = "ep1_runs"  #: int: EP1 runs so far
 EP1_CONTACT = "ep1_contact"  #: dict side -> {finger, point, normal}: sensed EP1 contact (world)
+EP2_TOUCHES = "ep2_touches"  #: list of {face, finger, centre, normal, radius}: EP2's contacts (world, m)
+EP2_FREE = "ep2_free"  #: list of [x, y, z, tip radius]: tip-centre samples of EP2 probes that touched nothing
+EP2_RUNS = "ep2_runs"  #: int: EP2 rounds so far
 APPROACH = "approach"  #: dict: proximity point of the object nearest the hand and the direction to it
-SHAPE = "shape"  #: dict: post_shape's postulate (class, radius, diameter, centre, confidence)
+SHAPE = "shape"  #: dict: post_shape's postulate (class, confidence, object, evidence, centre, size; C1)
 TARGET = "grasp_target"  #: dict: grasp_points' target (wrist goal, pre-grasp, predicted contacts)
 D_OVER_H = "d_over_h"  #: float: estimated object diameter over hand height
 AT_TARGET = "wrist_at_target"  #: bool: the wrist reached its grasp position

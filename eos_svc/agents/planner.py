@@ -13,6 +13,7 @@ finger2        search, grasping          0.7
 finger3        search, grasping          0.6
 wrist          search, grasping          0.9
 ep1            information               0.9
+ep2            information               0.8
 post_shape     information               0.7
 grasp_points   information               0.6
 end            grasping                  0.2
@@ -42,6 +43,7 @@ from eos_svc.agents.admission import check_plannable
 from eos_svc.agents.base import STAGES
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
+from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
@@ -76,6 +78,7 @@ DEFAULT_RATINGS: dict[str, float] = {
     "finger3": 0.6,
     "wrist": 0.9,
     "ep1": 0.9,
+    "ep2": 0.8,
     "post_shape": 0.7,
     "grasp_points": 0.6,
     "end": 0.2,
@@ -169,9 +172,10 @@ def build_agents(
     memory: GraspMemory | None = None,
     oracle: ObjectSpec | None = None,
 ) -> list[Agent]:
-    """The eight agents in list order (ties go to the first); with a grasp memory, ``recall``
-    joins them just before ``end`` (learned sub-rating, paper §7). ``oracle``: grasp_points
-    plans on this object instead of post_shape's postulate (measurement only).
+    """The paper's eight agents and ep2 (the paper's EP2, its future work) in list order (ties
+    go to the first); with a grasp memory, ``recall`` joins them just before ``end`` (learned
+    sub-rating, paper §7). ``oracle``: grasp_points plans on this object instead of
+    post_shape's postulate (measurement only).
 
     One finger agent per finger of the world's hand, in the hand's order, named after the
     finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents)."""
@@ -182,6 +186,7 @@ def build_agents(
         *(FingerAgent(finger, r[finger], world) for finger in fingers),
         WristAgent(r["wrist"], world),
         EP1Agent(r["ep1"], world, solver=solver),
+        EP2Agent(r["ep2"], world),
         PostShapeAgent(r["post_shape"], world),
         GraspPointsAgent(r["grasp_points"], world, oracle=oracle),
         *recall,

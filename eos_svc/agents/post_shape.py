@@ -1,35 +1,39 @@
-"""post_shape: postulates the object's shape and size from what EP1 felt.
+"""post_shape: postulates the object — class, size, pose and a calibrated confidence.
 
-Classes, from the principal curvatures k1 ≥ k2 on the object's top and their σ (1/m):
+Two sources, in the order the information stage gathers them:
 
-- ``plane``: both flat;
-- ``cylinder``: k2 flat, k1 not;
-- ``sphere``: |k1 − k2| within max(2σ, 15 % of the mean curvature);
-- ``ellipsoid``: otherwise.
+1. **EP1 alone** (the top's curvature, then the bottom's contact): the class from the
+   principal curvatures k1 ≥ k2 and their σ (1/m) — ``plane`` (both flat), ``cylinder`` (k2
+   flat), ``sphere`` (|k1 − k2| within max(2σ, 15 % of the mean curvature)), else
+   ``ellipsoid`` — and the vertical half extent from the top and bottom contacts (the centre
+   between them, one half extent behind the surface point nearest the hand). Two curvature
+   readings cannot tell a sphere from an upright capsule or ellipsoid, nor a box's face from
+   a large cylinder, nor give depth or orientation: the class probability is
+   :data:`EP1_CLASS_PROBABILITY`, so the confidence (that times P(size within ±10 %) under the
+   estimate's σ — EP1's relative radius error for a sphere, the paper's criterion, else the
+   tactile noise over the half extent) stays below the 60 % the grasp needs. post_shape asks
+   EP1 for the bottom (``needs: "bottom"``), for more rolling while EP1's own size
+   confidence is under 60 % (``needs: "curvature"``: the paper's "EP1 repeats"), then for
+   more of the surface (``needs: "surface"``: EP2).
+2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
+   least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
+   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again.
 
-Size along the closing direction (the vertical half-extent, what the grasp
-needs): the top's curvature cannot size a plane, a cylinder or an ellipsoid (and
-mistakes an ellipsoid's top for a bigger sphere), so post_shape asks EP1 to feel
-the bottom too (``needs: "bottom"``); the half-extent is half the height between
-the two sensed contacts, the centre's height their midpoint, and its horizontal
-position one half-extent behind the surface point nearest the hand along the
-approach (the object taken as about as deep as it is high: exact for spheres
-and for cylinders lying across the approach). The curvature radius of the top
-(1/H) is reported beside it.
+The postulate (board entry ``keys.SHAPE``) keeps ``class``, ``confidence``,
+``grasp_radius`` (the vertical half extent, what the grasp closes on), ``diameter``,
+``centre``, ``needs``, ``principal_curvatures`` and ``curvature_radius`` (EP1's, on top), and
+adds ``object`` — the postulated object in the request's JSON form (shape, size fields,
+position, rpy), None for a plane or before the size is known — ``pose_known`` (False when the
+orientation is assumed upright), ``evidence`` (contacts used, fit residual, competing classes
+with their probabilities) and ``bounds`` (the object's world-axis bounds, m).
 
-Confidence: the probability, under the estimate's Gaussian uncertainty, that the
-true size lies within ±10 % of the postulated one: ``erf(0.1 / (√2 · σ/size))``.
-For a sphere σ/size is EP1's relative radius error (the paper's criterion: EP1
-repeats until its curvature radius is trusted); for the other classes it is the
-tactile noise over the half-extent. 0 while the bottom is not felt. 60 % needs
-σ/size ≤ 0.12. (The plain complement ``1 − σ_R/R`` would
-accept a 40 % error at 60 %, too loose to tell d/h ≥ 1.) Opportunistic
-sub-rating: 1 right after EP1 wrote a new estimate, else 0.
+Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
 """
 
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 
@@ -38,11 +42,17 @@ from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.shape import Touches, select_class
+from eos_svc.shape.selection import MIN_CONTACTS
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
 #: the size tolerance the confidence refers to (relative)
 SIZE_TOLERANCE = 0.10
+#: most free-space samples given to the fit
+MAX_FREE_SAMPLES = 60
+#: probability that EP1's curvature class is right (see the module docstring)
+EP1_CLASS_PROBABILITY = 0.5
 
 
 def size_confidence(relative_error: float | None) -> float:
@@ -67,27 +77,109 @@ def classify(curvature: dict) -> tuple[str, float]:
     return "ellipsoid", 1.0 / mean
 
 
+def touches_from(board: Board, world: GraspWorld) -> Touches:
+    """EP1's and EP2's contacts and EP2's free samples as fit measurements."""
+    centres, normals, radii = [], [], []
+    for contact in board.get(keys.EP1_CONTACT, {}).values():
+        r = world.hand.tip_radius(contact["finger"])
+        n = np.asarray(contact["normal"], dtype=float)
+        centres.append(np.asarray(contact["point"], dtype=float) + r * n)
+        normals.append(n)
+        radii.append(r)
+    for t in board.get(keys.EP2_TOUCHES, []):
+        centres.append(np.asarray(t["centre"], dtype=float))
+        normals.append(np.asarray(t["normal"], dtype=float))
+        radii.append(float(t["radius"]))
+    free = np.asarray(board.get(keys.EP2_FREE, []), dtype=float).reshape(-1, 4)
+    if len(free) > MAX_FREE_SAMPLES:  # an even subset: the fit's cost grows with them
+        free = free[np.linspace(0, len(free) - 1, MAX_FREE_SAMPLES).astype(int)]
+    return Touches(
+        np.array(centres).reshape(-1, 3),
+        np.array(normals).reshape(-1, 3),
+        np.array(radii),
+        free[:, :3],
+        free[:, 3],
+        tactile_noise=world.sensor.noise_std,
+        contact_tolerance=world.params.contact_tolerance,
+    )
+
+
 class PostShapeAgent(GraspAgent):
-    """Turns the curvature estimate into a shape postulate with a confidence."""
+    """Turns what the fingers felt into a postulated object with a confidence."""
 
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("post_shape", (INFO,), default, world)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
-        return 1.0 if ctx.changed(keys.CURVATURE) or ctx.changed(keys.CURVATURE_BOTTOM) else 0.0
+        new = (
+            ctx.changed(keys.CURVATURE) or ctx.changed(keys.CURVATURE_BOTTOM) or ctx.changed(keys.EP2_TOUCHES)
+        )
+        return 1.0 if new else 0.0
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         curvature = board.get(keys.CURVATURE)
         contacts = board.get(keys.EP1_CONTACT, {})
         if curvature is None or "top" not in contacts:
             return ActionResult(Outcome.CANNOT_ACT, "no curvature estimate of the object's top to ponder yet")
+        if keys.EP2_TOUCHES in board:
+            touches = touches_from(board, self.world)
+            if touches.count >= MIN_CONTACTS:
+                return self._from_touches(board, curvature, touches)
+        return self._from_ep1(board, curvature, contacts)
+
+    def _write(self, board: Board, shape: dict[str, Any]) -> None:
+        board.set(keys.SHAPE, shape)
+        if shape["grasp_radius"] is not None:
+            board.set(keys.D_OVER_H, round(2.0 * shape["grasp_radius"] / self.world.hand.hand_height, 6))
+
+    def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
+        post = select_class(touches)
+        threshold = self.world.params.confidence_threshold
+        fit = post.best
+        radius = classify(curvature)[1]
+        shape: dict[str, Any] = {
+            "class": post.kind,
+            "confidence": round(post.confidence, 6),
+            "grasp_radius": None,
+            "diameter": None,
+            "centre": None,
+            "needs": None if post.confidence >= threshold else "surface",
+            "principal_curvatures": curvature["principal_curvatures"],
+            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
+            "object": post.object(),
+            "pose_known": fit is not None,
+            "evidence": {
+                **post.evidence(),
+                "source": "fit to EP1 and EP2 contacts",
+                "free_samples": len(touches.free),
+            },
+            "bounds": None,
+        }
+        if fit is not None:
+            g = fit.geometry
+            half = g.half_extents()
+            shape["grasp_radius"] = round(float(half[2]), 6)
+            shape["diameter"] = round(2.0 * float(half[2]), 6)
+            shape["centre"] = np.round(g.centre, 6).tolist()
+            shape["bounds"] = [np.round(g.centre - half, 6).tolist(), np.round(g.centre + half, 6).tolist()]
+        self._write(board, shape)
+        rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
+        ask = "" if shape["needs"] is None else "; asks EP2 for more of the surface"
+        size = "" if fit is None else f", half-height {shape['grasp_radius'] * 1000:.2f} mm"
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"fitted every class to {touches.count} contacts: a {post.kind}{size} ({rivals}), "
+            f"confidence {post.confidence:.0%}{ask}",
+        )
+
+    def _from_ep1(self, board: Board, curvature: dict, contacts: dict) -> ActionResult:
         kind, radius = classify(curvature)
         top = contacts["top"]
-        needs = None
+        needs: str | None
         centre: list[float] | None = None
         half: float | None = None
+        own = 0.0
         if "bottom" not in contacts:
-            confidence = 0.0
             needs = "bottom"
             how = "size unknown until the bottom is felt"
         else:
@@ -99,23 +191,24 @@ class PostShapeAgent(GraspAgent):
             approach = board.get(keys.APPROACH)
             if approach is not None:
                 # depth: assume the object is about as deep as it is high, measured from the
-                # surface point nearest the hand along the approach (exact for spheres and
-                # for cylinders lying across the approach)
+                # surface point nearest the hand along the approach
                 d = np.asarray(approach["direction"], dtype=float)
-                d_xy = np.array([d[0], d[1], 0.0])
-                n_xy = float(np.linalg.norm(d_xy))
+                n_xy = float(np.hypot(d[0], d[1]))
                 if n_xy > 1e-6:
-                    mid[:2] = np.asarray(approach["point"])[:2] + half * d_xy[:2] / n_xy
+                    mid[:2] = np.asarray(approach["point"])[:2] + half * d[:2] / n_xy
             centre = mid.round(6).tolist()
             if kind == "sphere":
-                # the paper's EP1 criterion: how sure is the top's curvature radius
                 rel = curvature.get("relative_error")
-                confidence = size_confidence(None if rel is None else float(rel))
+                own = size_confidence(None if rel is None else float(rel))
                 how = f"curvature radius {radius * 1000:.2f} mm on top, centre between top and bottom"
             else:
-                noise = max(self.world.sensor.noise_std, 1e-6)
-                confidence = size_confidence(noise / half)
+                own = size_confidence(max(self.world.sensor.noise_std, 1e-6) / half)
                 how = "from the top and bottom contacts"
+            needs = "curvature" if own < self.world.params.confidence_threshold else "surface"
+        confidence = EP1_CLASS_PROBABILITY * own
+        obj = None
+        if kind == "sphere" and half is not None and centre is not None:
+            obj = {"shape": "sphere", "radius": round(half, 6), "position": centre, "rpy": [0.0, 0.0, 0.0]}
         shape = {
             "class": kind,
             "grasp_radius": None if half is None else round(half, 6),
@@ -125,11 +218,23 @@ class PostShapeAgent(GraspAgent):
             "principal_curvatures": curvature["principal_curvatures"],
             "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "needs": needs,
+            "object": obj,
+            "pose_known": False,
+            "evidence": {
+                "contacts": len(contacts),
+                "classes": {kind: EP1_CLASS_PROBABILITY},
+                "source": "EP1 curvature (top) and the top and bottom contacts; pose assumed upright",
+                "size_confidence": round(own, 6),
+            },
+            "bounds": None,
         }
-        board.set(keys.SHAPE, shape)
-        if half is not None:
-            board.set(keys.D_OVER_H, round(2.0 * half / self.world.hand.hand_height, 6))
+        self._write(board, shape)
         size = "" if half is None else f", half-height {half * 1000:.2f} mm"
+        asks = {
+            "bottom": "asks EP1 to feel the bottom",
+            "curvature": f"EP1's size not trusted yet ({own:.0%}): asks EP1 to roll again",
+            "surface": "class and extent ambiguous from two curvature readings: asks EP2 for the surface",
+        }[needs]
         return ActionResult(
-            Outcome.PROGRESS, f"postulated a {kind}{size} ({how}), confidence {confidence:.0%}"
+            Outcome.PROGRESS, f"postulated a {kind}{size} ({how}), confidence {confidence:.0%}; {asks}"
         )

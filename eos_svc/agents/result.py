@@ -42,7 +42,10 @@ class PlanResult:
         reason: why, in words.
         cycles: cycles in total; ``cycles_per_stage`` per stage entered.
         stages_completed: stages exited gracefully, in order.
-        shape: post_shape's postulate (class, grasp radius, centre, confidence) or None.
+        shape: post_shape's postulate or None: ``class``, ``confidence`` (P(class right and size
+            within tolerance)), ``object`` (the postulated object in the request's JSON form, None
+            for a plane or before the size is known), ``pose_known``, ``evidence`` (contacts,
+            fit residual, competing classes), ``grasp_radius``, ``diameter``, ``centre``.
         curvature: EP1's last curvature estimate (principal curvatures, σ, radii).
         ground_truth: the real object (shape, size, pose, diameter, d/h).
         contacts: per finger: touching, distance (m), contact point and normal (world).

@@ -1,9 +1,12 @@
-"""The search stage's behaviour (paper §4): a random search of a bounded workspace.
+"""The search stage's behaviour (paper §4): a seeded random search of a bounded workspace.
 
-Each move picks a direction among ±x, ±y, ±z and a step length, both from the
-run's seeded generator. The object is *located* when its surface comes within
-the hand's envelope (``WorldParameters.envelope_radius`` of the grasp centre,
-between the fingers) — a proximity sense of the palm, documented in
+The paper's search picks a random direction and step each move; a random walk revisits
+places and has a long tail. Here each move goes straight to the next point of a coverage
+lattice over the workspace, visited once each in a seeded space-filling order
+(:mod:`eos_svc.agents.coverage`, which also states which objects the search is guaranteed
+to find). The object is *located* when its surface comes within the hand's envelope
+(``WorldParameters.envelope_radius`` of the grasp centre, between the fingers) — a
+proximity sense of the palm, active all along a move (the move stops there), documented in
 ``docs/planner.md``. Any of the motion agents (finger1–3, wrist) can make a
 search move: the finger agents lead the hand with their fingertip, the wrist
 moves it; the paper allows all four in the search stage.
@@ -23,16 +26,18 @@ def search_rating(board: Board) -> float:
 
 
 def search_move(world: GraspWorld, board: Board, who: str) -> ActionResult:
-    """Make one random search move and report whether the object is now located."""
+    """Make one search move and report whether the object is now located."""
     if world.located():
         board.set(keys.LOCATED, True)
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
         return ActionResult(Outcome.STAGE_COMPLETE, "object already within the hand's envelope")
-    label, moved, blocked = world.random_search_step()
+    label, moved, blocked = world.search_step()
     board.set(keys.SEARCH_MOVES, int(board.get(keys.SEARCH_MOVES, 0)) + 1)
     gap = world.object_gap_to_grasp_centre()
     board.set(keys.GAP, round(gap, 6))
-    what = f"{who} moved the hand {label} by {moved * 1000:.1f} mm" + (" (blocked)" if blocked else "")
+    what = f"{who} moved the hand {moved * 1000:.1f} mm sweeping column {label}" + (
+        " (stopped short of a contact)" if blocked else ""
+    )
     if world.located():
         board.set(keys.LOCATED, True)
         return ActionResult(Outcome.STAGE_COMPLETE, f"{what}: object located, {gap * 1000:.1f} mm away")

@@ -2,7 +2,7 @@
 
 :class:`GraspWorld` holds the hand (Pinocchio), the scene (coal), the tactile
 sensor and the run's random generator, and offers the few guarded motions the
-agents make: a random search step of the hand, a wrist step toward a target, a
+agents make: a search move of the hand over a coverage lattice, a wrist step toward a target, a
 finger closing step that stops at first touch. Agents keep what they *know* on
 the board; the world is what they act on.
 
@@ -20,6 +20,7 @@ explores the object's top and bottom, and at which angle).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -28,6 +29,7 @@ from typing import Any
 import coal
 import numpy as np
 
+from eos_svc.agents.coverage import column_counts, space_filling_order, wrist_columns
 from eos_svc.kinematics import HandDescription, HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 
@@ -38,7 +40,6 @@ class WorldParameters:
 
     Attributes:
         search_box_lo, search_box_hi: bounds of the wrist's search workspace (m).
-        search_step_min, search_step_max: random search step length range (m).
         envelope_radius: the object is *located* when its surface comes within this
             distance of the hand's grasp centre (m).
         grasp_centre: the grasp centre in the palm frame (m): between the fingers.
@@ -63,8 +64,6 @@ class WorldParameters:
 
     search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
     search_box_hi: tuple[float, float, float] = (0.30, 0.15, 0.15)
-    search_step_min: float = 0.01
-    search_step_max: float = 0.04
     envelope_radius: float = 0.05
     grasp_centre: tuple[float, float, float] = (0.11, 0.0, 0.0)
     clearance: float = 0.002
@@ -216,6 +215,13 @@ class ProbeChoice:
         return self.bottom if side == "bottom" else self.top
 
 
+def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:
+    """How far ahead of the wrist the hand reaches (m): the largest x of any fingertip centre
+    over its closing path, plus its radius (0.14 m for hand3x3). The search's findability rule
+    (:func:`eos_svc.agents.coverage.findable`) needs it."""
+    return max(float(s.points[:, 0].max()) + hand.tip_radius(f) for f, s in sweeps.items())
+
+
 def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
     """Per finger, the collision geometries that move when it closes, except its tip:
     those on the bodies its first listed joint carries."""
@@ -228,6 +234,29 @@ def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
         tip = hand.tip_geometry_id(finger)
         out[finger] = [i for i, g in enumerate(geometries) if g.parentJoint in moving and i != tip]
     return out
+
+
+@dataclass(frozen=True)
+class ProbeOutcome:
+    """What one guarded probe found (:meth:`GraspWorld.guarded_probe`).
+
+    Attributes:
+        event: "touched", "missed" or "blocked".
+        finger: the probing finger.
+        centre: touched: the tip's centre (world, m).
+        normal: touched: the sensed outward object normal (unit, world; tactile noise).
+        free: missed or blocked: tip-centre samples of the free path (N, 3), m.
+        travelled: length moved (m).
+        why: blocked: the reason.
+    """
+
+    event: str
+    finger: str
+    centre: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    free: np.ndarray | None = None
+    travelled: float = 0.0
+    why: str = ""
 
 
 @dataclass
@@ -273,6 +302,9 @@ class GraspWorld:
         # for a world's lifetime (a plan never moves it); moving it with
         # scene.set_object_placement would need these refreshed (_refresh_object_bound).
         self._refresh_object_bound()
+        # the search's lattice order, drawn from rng at the first search move (see search_step)
+        self._search_order: list[tuple[int, int]] | None = None
+        self._search_columns = np.empty((0, 0, 2))
 
     def _refresh_object_bound(self) -> None:
         """Re-read the object's bounding ball (centre, m; radius, m) from the scene."""
@@ -385,34 +417,189 @@ class GraspWorld:
         self.version += 1
         self._memo.clear()
 
-    def random_search_step(self) -> tuple[str, float, bool]:
-        """One random search move: direction among ±x, ±y, ±z and length from the run's rng.
-
-        The move is clipped to the search box and shortened (halved up to 4 times) if it
-        would bring the hand closer than the clearance to the object.
+    def search_step(self) -> tuple[str, float, bool]:
+        """One search move: a sweep of the next column of the coverage plan in this run's
+        seeded space-filling order (:mod:`eos_svc.agents.coverage`): back to the box's rear
+        (−x), across to the column (y, z), forward through the box (+x), each leg a guarded
+        straight move (:meth:`guarded_wrist_move`) that stops where the object enters the
+        envelope or short of a contact.
 
         Returns:
-            (direction label, length actually moved in m, blocked flag).
+            (label of the column "(j, k)", length moved in m, blocked flag).
         """
         p = self.params
-        axis = int(self.rng.integers(3))
-        sign = 1.0 if self.rng.integers(2) else -1.0
-        length = float(self.rng.uniform(p.search_step_min, p.search_step_max))
-        label = ("+" if sign > 0 else "-") + "xyz"[axis]
-        start = self.wrist_position()
-        lo, hi = np.asarray(p.search_box_lo), np.asarray(p.search_box_hi)
-        q0 = self.state.q
-        for _ in range(5):
-            target = start.copy()
-            target[axis] = min(max(start[axis] + sign * length, lo[axis]), hi[axis])
-            q = q0.copy()
-            q[self._wrist_q[:3]] = target
+        if self._search_order is None:
+            self._search_order = space_filling_order(column_counts(p), self.rng)
+            self._search_columns = wrist_columns(p)
+        if not self._search_order:  # every column swept: sweep them again
+            self._search_order = space_filling_order(column_counts(p), self.rng)
+        j, k = self._search_order.pop(0)
+        y, z = (float(v) for v in self._search_columns[j, k])
+        x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
+        moved = 0.0
+        for leg in (
+            (x_lo, *self.wrist_xyz()[1:]),
+            (x_lo, y, z),
+            (x_hi, y, z),
+        ):
+            length, blocked = self.guarded_wrist_move(np.array(leg), stop_when_located=True)
+            moved += length
+            if self.located():
+                return f"({j}, {k})", moved, False
+            if blocked:
+                self._bumped()
+                return f"({j}, {k})", moved, True
+        return f"({j}, {k})", moved, False
+
+    def _bumped(self) -> None:
+        """After a bump: sweep next the column that puts the grasp centre's line nearest the
+        point of the object the hand bumped into (the object is there)."""
+        order = self._search_order
+        if not order:
+            return
+        witness = np.asarray(self.scene.min_distance(self.state).point_object)
+        cols = self._search_columns
+        want = witness[1:] - np.asarray(self.params.grasp_centre)[1:]
+        n = min(range(len(order)), key=lambda i: float(np.sum((cols[order[i]] - want) ** 2)))
+        order.insert(0, order.pop(n))
+
+    def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> tuple[float, bool]:
+        """Translate the wrist in a straight line toward ``target`` (world, m), guarded.
+
+        Conservative advancement: each sub-step is at most the hand's clearance beyond
+        ``params.clearance`` (a translation changes every hand–object distance by at most its
+        length, so no sub-step can bring the hand closer than that) and, with
+        ``stop_when_located``, at most the grasp centre's gap beyond the envelope (floored at
+        0.5 mm). Stops when the object is located, when the hand is within 0.1 mm of the
+        clearance (blocked) or at the target.
+
+        Returns:
+            (length moved in m, blocked flag).
+        """
+        p = self.params
+        start = self.wrist_position().copy()
+        delta = np.asarray(target, dtype=float) - start
+        length = float(np.linalg.norm(delta))
+        if length < 1e-12:
+            return 0.0, False
+        unit = delta / length
+        q = self.state.q
+        travelled = 0.0
+        for _ in range(500):
+            if stop_when_located and self.located():
+                return travelled, False
+            clearance = self.exact_clearance()
+            room = clearance - p.clearance
+            if room < 1e-4:
+                # touching distance: go on only if the move leads away from the object
+                trial = min(1e-3, length - travelled)
+                q[self._wrist_q[:3]] = start + unit * (travelled + trial)
+                self.set_q(q)
+                if self.exact_clearance() <= clearance:
+                    q[self._wrist_q[:3]] = start + unit * travelled
+                    self.set_q(q)
+                    return travelled, True
+                step = trial
+            else:
+                step = min(length - travelled, room)
+            if stop_when_located:
+                step = min(step, max(self.object_gap_to_grasp_centre() - p.envelope_radius, 5e-4))
+            travelled += step
+            q[self._wrist_q[:3]] = start + unit * travelled
             self.set_q(q)
-            if self.hand_clear(p.clearance):
-                return label, float(abs(target[axis] - start[axis])), False
-            length *= 0.5
-        self.set_q(q0)
-        return label, 0.0, True
+            if travelled >= length - 1e-12:
+                return travelled, False
+        return travelled, True
+
+    def guarded_probe(
+        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+    ) -> ProbeOutcome:
+        """Move ``finger``'s tip in a straight line from ``start`` along ``direction`` (world,
+        m) for at most ``travel`` m, stopping at first touch (EP2's guarded move).
+
+        The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
+        ``angle`` and every other finger opened, so that the tip's centre is at ``start``
+        (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
+        there). Conservative advancement: each sub-step is at most the tip's gap beyond half
+        the contact tolerance and the other geometries' gap beyond half the contact tolerance
+        (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
+        above the face its tip touches), so only the tip can touch, and it never pushes the
+        object.
+
+        Returns:
+            the outcome: touched (tip centre, sensed normal), missed or blocked (another part
+            of the hand would touch first, or the wrist's limits), the last two with the
+            tip-centre samples of the free path.
+        """
+        p = self.params
+        hand = self.hand
+        d = np.asarray(direction, dtype=float)
+        d = d / np.linalg.norm(d)
+        q = self.state.q
+        q[self._wrist_q[3:6]] = 0.0
+        for f in hand.finger_names:
+            idx = self._finger_q[f]
+            q[idx] = angle if f == finger else hand.lower[idx]
+        self.set_q(q)
+        offset = self.state.tip_position(finger) - self.wrist_position()
+        lo, hi = hand.lower[self._wrist_q[:3]], hand.upper[self._wrist_q[:3]]
+        start = np.asarray(start, dtype=float)
+        for back in (0.0, 0.02, 0.04, 0.06):
+            wrist = start - back * d - offset
+            if np.any(wrist < lo) or np.any(wrist > hi):
+                return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
+            q[self._wrist_q[:3]] = wrist
+            self.set_q(q)
+            if self.exact_clearance() >= p.clearance:
+                travel += back
+                break
+        else:
+            return ProbeOutcome("blocked", finger, why="no clear start")
+        tip_gid = hand.tip_geometry_id(finger)
+        others = [g for g in range(len(self._bounds)) if g != tip_gid]
+        tol = p.contact_tolerance
+        wrist0 = self.wrist_position().copy()
+        travelled = 0.0
+        free = [self.state.tip_position(finger).copy()]
+        for _ in range(300):
+            tip_gap = self.tip_distance(finger)
+            if tip_gap <= tol:
+                contact = self.scene.contact(self.state, finger)
+                reading = self.sensor.read(self.state, contact)
+                M = self.state.data.oMf[hand.tip_frame_id(finger)]
+                normal = -(M.rotation @ reading.normal_tip)
+                return ProbeOutcome(
+                    "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
+                )
+            other = self._min_gap(others, math.inf) - 0.5 * tol
+            if other < 1e-5:
+                return ProbeOutcome(
+                    "blocked",
+                    finger,
+                    free=_densify(np.array(free)),
+                    travelled=travelled,
+                    why="another part of the hand would touch first",
+                )
+            step = min(travel - travelled, tip_gap - 0.5 * tol, other)
+            travelled += step
+            q[self._wrist_q[:3]] = wrist0 + d * travelled
+            self.set_q(q)
+            free.append(self.state.tip_position(finger).copy())
+            if travelled >= travel - 1e-12:
+                break
+        return ProbeOutcome("missed", finger, free=_densify(np.array(free)), travelled=travelled)
+
+    def exact_clearance(self) -> float:
+        """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
+        bound (the plain lower bound ``gap − hand_bound`` beyond that), m."""
+        gap = self.object_gap_to_grasp_centre()
+        if gap - self.params.hand_bound > self.params.clearance + 5e-3:
+            return gap - self.params.hand_bound
+        memo = self._memo
+        value = memo.get("exact_clearance")
+        if value is None:
+            value = memo["exact_clearance"] = self._min_gap(range(len(self._bounds)), math.inf)
+        return value
 
     def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
         """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
@@ -616,6 +803,16 @@ class GraspWorld:
                     lower = math.sqrt(px * px + py * py + pz * pz) - ball
             bounds.append((lower - obj_radius, gid))
         return bounds
+
+
+def _densify(path: np.ndarray, spacing: float = 0.005) -> np.ndarray:
+    """The polyline ``path`` (N, 3) resampled at most ``spacing`` m apart (a guarded probe's tip
+    path is free between its samples: each step was shorter than the tip's gap)."""
+    dense = [path[0]]
+    for a, b in itertools.pairwise(path):
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))
+        dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
+    return np.array(dense)
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world

@@ -20,6 +20,10 @@ EXPERIMENTS = {
     "shapes": ("eos_svc.experiments.shapes", "every shape end to end: success and good-grasp rates"),
     "learning": ("eos_svc.experiments.learning", "paper §7: learned sub-rating on a stream with repeats"),
     "grasps": ("eos_svc.experiments.grasps", "a suite of objects planned and validated in Drake: held?"),
+    "recognition": (
+        "eos_svc.experiments.recognition",
+        "knowing the object by touch: confusion, shape error, calibration, search length",
+    ),
 }
 
 

@@ -168,6 +168,29 @@ def format_cycle(record: CycleRecord) -> str:
     return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}{outcome}: {record.detail}"
 
 
+def _postulate_lines(shape: dict[str, Any]) -> list[str]:
+    """The postulated object (request form) and the competing classes, when post_shape gave them."""
+    obj = shape.get("object")
+    if obj is None:
+        return []
+    sizes = {k: v for k, v in obj.items() if k not in ("shape", "position", "rpy")}
+    fmt = ", ".join(
+        f"{k} {[round(x * 1000, 1) for x in v] if isinstance(v, list) else round(v * 1000, 1)} mm"
+        for k, v in sizes.items()
+    )
+    pos = [round(x * 1000, 1) for x in obj["position"]]
+    pose = (
+        "rpy " + str([round(x, 3) + 0.0 for x in obj["rpy"]])
+        if shape.get("pose_known")
+        else "pose assumed upright"
+    )
+    out = [f"postulate: {obj['shape']} {fmt} at {pos} mm, {pose}"]
+    classes = (shape.get("evidence") or {}).get("classes")
+    if classes:
+        out.append("classes: " + ", ".join(f"{k} {v:.0%}" for k, v in classes.items()))
+    return out
+
+
 def format_result(result: Any) -> str:
     """A short human summary of a :class:`~eos_svc.agents.PlanResult`."""
     lines = [
@@ -182,6 +205,7 @@ def format_result(result: Any) -> str:
         lines.append(
             f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs})"
         )
+        lines.extend(_postulate_lines(s))
     truth = result.ground_truth
     diameter_mm = truth["diameter"] * 1000
     lines.append(f"truth: {truth['shape']}, diameter {diameter_mm:.1f} mm, d/h {truth['d_over_h']:.2f}")

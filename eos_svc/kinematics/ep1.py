@@ -36,7 +36,7 @@ import pinocchio as pin
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
 from .geometry import tangent_pair
 from .hand import HandModel, HandState, KinematicsError
-from .objects import Box, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from .objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
 from .scene import Scene
 from .tactile import TactileSensor
@@ -124,7 +124,8 @@ def place_hand_for_ep1(
 
     Translates the wrist (x, y, z) of ``q`` (default: neutral) so the fingertip sphere
     centre sits at ``s + r_f n``, with ``s`` the object's surface point closest to ``point``
-    (default: closest to the fingertip centre) and ``n`` its outward normal.
+    (default: closest to the fingertip centre) and ``n`` its outward normal (on an edge or a
+    corner, the direction from ``s`` to ``point``).
 
     Raises:
         WorkspaceError: the wrist would leave its workspace.
@@ -135,7 +136,13 @@ def place_hand_for_ep1(
     obj = scene.object
     target = c if point is None else np.asarray(point, dtype=float)
     s = obj.closest_surface_point(target)
-    n = obj.surface_normal(target)
+    try:
+        n = obj.surface_normal(target)
+    except CurvatureUndefinedError:
+        # an edge or a corner (a tilted box's ridge seen from above): the tip touches it along
+        # the direction from the edge to the target, the normal of the tip's contact
+        away = target - s
+        n = away / np.linalg.norm(away)
     if point is None and obj.signed_distance(c) < 0:
         n = -n if (c - s) @ n < 0 else n  # tip centre inside: still put the tip outside
     dp = s + hand.tip_radius(finger) * n - c

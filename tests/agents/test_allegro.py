@@ -76,7 +76,18 @@ def test_allegro_world_is_derived_from_the_hand(hand):
     assert world.probe.top == "middle" and world.probe.bottom == "thumb"
     agents = build_agents(world)
     names = [a.name for a in agents]
-    assert names == ["index", "middle", "ring", "thumb", "wrist", "ep1", "post_shape", "grasp_points", "end"]
+    assert names == [
+        "index",
+        "middle",
+        "ring",
+        "thumb",
+        "wrist",
+        "ep1",
+        "ep2",
+        "post_shape",
+        "grasp_points",
+        "end",
+    ]
     assert [a.default for a in agents[:4]] == [0.8, 0.7, 0.6, 0.5]
 
 

@@ -41,3 +41,16 @@ def test_shapes_experiment_measures_the_grasp_stage_with_the_true_object(tmp_pat
     # closes across the axis, a good grasp
     assert row["oracle_success_rate"] == 1.0 and row["oracle_statuses"] == "success"
     assert "oracle success" in shapes.report(data)
+
+
+def test_recognition_experiment_writes_its_files(tmp_path):
+    from eos_svc.experiments import recognition
+
+    data = recognition.run(seeds=1, sizes=1, noises=(2e-4,), search_seeds=4, out=tmp_path, quiet=True)
+    rows = json.loads((tmp_path / "recognition.json").read_text())["rows"]
+    assert {r["truth"] for r in rows} == set(recognition.CLASSES)
+    d = data["per_noise"]["0.0002"]
+    assert sum(sum(row.values()) for row in d["confusion"].values()) == len(rows) == 5
+    assert data["search"]["seeds"] == 4 and data["search"]["hit_limit"] == 0
+    for name in ("recognition_confusion.png", "recognition_calibration.png", "recognition_search.png"):
+        assert (tmp_path / name).stat().st_size > 1000

@@ -58,7 +58,7 @@ def test_search_steps_stay_in_the_box_and_follow_the_seed():
         world = world_with_sphere(position=(0.35, 0.1, 0.1), radius=0.02, seed=7)
         path = []
         for _ in range(50):
-            world.random_search_step()
+            world.search_step()
             p = world.wrist_position()
             assert np.all(p >= np.array(world.params.search_box_lo) - 1e-12)
             assert np.all(p <= np.array(world.params.search_box_hi) + 1e-12)

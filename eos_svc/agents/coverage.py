@@ -1,0 +1,129 @@
+"""The search's coverage plan: where the hand looks, in a seeded space-filling order.
+
+The search stage (paper §4) is a seeded random search of a bounded workspace. A random walk
+revisits places and has a long tail (some seeds need hundreds of moves). Here every search
+move is a *sweep*: the hand retreats to the back of the search box (−x), crosses to one
+column ``(y_j, z_k)`` of a lattice and sweeps forward (+x) through the whole box, sensing
+the object all the way (it stops where the object enters the envelope, or short of a
+contact). The columns are visited once each, in a seeded space-filling order:
+
+- **Columns.** A grid over the (y, z) face of the wrist's search box, its corners included,
+  at most ``√2·envelope_radius`` apart along y and z: every point of the grasp-centre box
+  ``B = [search_box_lo, search_box_hi] + grasp_centre`` is then within ``envelope_radius``
+  of a column's sweep line (half a cell's diagonal).
+- **Order.** The columns are visited in a seeded farthest-point (maximin) order: a first
+  column drawn by the run's generator, then always the column farthest from every column
+  swept so far, so the search looks everywhere coarsely before it looks anywhere finely —
+  no long tail — and another seed gives another order. (A scrambled Sobol order was tried
+  first: median 3 sweeps but p99 14 on the default object; maximin: median 5, max 9.) A
+  sweep stopped by a bump (a hand part within the clearance of the object) moves the column
+  nearest the bump to the front of the queue.
+
+**Findable** (what the search guarantees, :func:`findable`): the object's signed distance
+from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
+``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius`` (a sufficient
+closed form: the object reaches within ``envelope_radius − spacing/√2`` of ``B``, i.e. into
+``B`` with the default spacing), and the object lies wholly ahead of the hand's reach from
+the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``clearance``,
+0.042 m for hand3x3), so the crossings at the rear cannot bump into it. Objects closer to
+the rear are often found too, but a crossing the fingers cannot make may stall the search.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+if TYPE_CHECKING:
+    from eos_svc.agents.world import WorldParameters
+    from eos_svc.kinematics import SurfaceObject
+
+
+def coverage_spacing(params: WorldParameters) -> float:
+    """Largest column spacing along y and z whose sweep tubes cover the box (m)."""
+    return math.sqrt(2.0) * params.envelope_radius
+
+
+def column_counts(params: WorldParameters) -> tuple[int, int]:
+    """Columns along y and z (corners included)."""
+    spacing = coverage_spacing(params)
+    lo, hi = params.search_box_lo, params.search_box_hi
+    ny = max(1, math.ceil((hi[1] - lo[1] - 1e-12) / spacing) + 1)
+    nz = max(1, math.ceil((hi[2] - lo[2] - 1e-12) / spacing) + 1)
+    return ny, nz
+
+
+@functools.lru_cache(maxsize=16)
+def _columns(lo: tuple[float, ...], hi: tuple[float, ...], counts: tuple[int, int]) -> np.ndarray:
+    ys = np.linspace(lo[1], hi[1], counts[0]) if counts[0] > 1 else np.array([0.5 * (lo[1] + hi[1])])
+    zs = np.linspace(lo[2], hi[2], counts[1]) if counts[1] > 1 else np.array([0.5 * (lo[2] + hi[2])])
+    grid = np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
+    grid.setflags(write=False)
+    return grid
+
+
+def wrist_columns(params: WorldParameters) -> np.ndarray:
+    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m (read-only)."""
+    return _columns(tuple(params.search_box_lo), tuple(params.search_box_hi), column_counts(params))
+
+
+def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
+    """Every column index once, in a seeded farthest-point (maximin) order.
+
+    The first column is drawn by ``rng``; each next one is the column farthest from every
+    column visited so far (ties broken by a seeded jitter), so the visited columns cover the
+    face ever more finely and evenly: after k columns every column is within the k-th
+    column's distance of a visited one, and that distance never grows.
+    """
+    ny, nz = counts
+    points = np.array([(i, j) for i in range(ny) for j in range(nz)], dtype=float)
+    jitter = rng.uniform(0.0, 1e-3, len(points))
+    first = int(rng.integers(len(points)))
+    order = [first]
+    nearest = np.linalg.norm(points - points[first], axis=1)
+    nearest[first] = -1.0
+    for _ in range(len(points) - 1):
+        k = int(np.argmax(np.where(nearest >= 0.0, nearest + jitter, -1.0)))
+        order.append(k)
+        to_k = np.linalg.norm(points - points[k], axis=1)
+        nearest = np.where(nearest >= 0.0, np.minimum(nearest, to_k), -1.0)
+        nearest[k] = -1.0
+    return [(int(points[k][0]), int(points[k][1])) for k in order]
+
+
+#: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
+#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.world.forward_reach``
+HAND3X3_FORWARD_REACH = 0.14
+
+
+def findable(
+    obj: SurfaceObject,
+    params: WorldParameters,
+    forward_reach: float = HAND3X3_FORWARD_REACH,
+    samples_per_metre: int = 1000,
+) -> bool:
+    """Whether the search is guaranteed to locate ``obj`` (the rule of the module docstring):
+
+    1. some sweep line passes within ``envelope_radius`` of the object (signed distance,
+       sampled every ``1/samples_per_metre`` m along x), and
+    2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
+       point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
+       rear never bump into it.
+    """
+    gc = np.asarray(params.grasp_centre, dtype=float)
+    lo, hi = params.search_box_lo[0], params.search_box_hi[0]
+    c = np.asarray(obj.placement.translation, dtype=float)
+    rear = obj.closest_surface_point(c - np.array([10.0, 0.0, 0.0]))  # the object's rearmost point
+    if rear[0] <= lo + forward_reach + params.clearance:
+        return False
+    xs = np.linspace(lo, hi, max(2, math.ceil((hi - lo) * samples_per_metre) + 1))
+    reach = 0.5 * float(obj.diameter) + params.envelope_radius
+    for y, z in wrist_columns(params).reshape(-1, 2).tolist():
+        points = np.column_stack([xs, np.full_like(xs, y), np.full_like(xs, z)]) + gc
+        near = points[np.linalg.norm(points - c, axis=1) <= reach + 1e-9]
+        if any(obj.signed_distance(p) <= params.envelope_radius for p in near):
+            return True
+    return False

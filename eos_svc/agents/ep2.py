@@ -1,0 +1,279 @@
+"""ep2: the exploratory procedure EP2 as an agent — probe more of the surface (information).
+
+EP1 feels the curvature at one contact (top, then bottom): it cannot tell a box's face from
+a large cylinder's side, nor give the object's depth or orientation. EP2 (Charlebois, Gupta
+and Payandeh, ICRA 1996: fingers dragged over the surface, "the surface approximated with a
+small number of sampled points") gathers more of it. Here each EP2 action is a round of
+**guarded probes** (:meth:`~eos_svc.agents.world.GraspWorld.guarded_probe`): a fingertip moves
+in a straight line toward the object and stops at first touch — a contact point (the tip's
+centre, from the kinematics) and a normal (from the tactile reading, with its noise); a
+probe that runs its whole travel touches nothing and tells where the object is *not* (its
+free path); one another part of the hand would touch first is abandoned. The hand never
+pushes the object.
+
+Each round plans, around the current estimate (centre and half extents along the world axes:
+EP1's top and bottom contacts and the approach point at first, the fitted object after),
+probes of the front (+x), of both sides (±y), of the top (−z) and of the bottom (+z), and
+*slides* over the top (toward the back and to both sides at first, along the postulated
+object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
+the fingertip dragged over the surface, until it drops over an edge (the last contact is on
+the edge: the object's extent that way), a link would touch first (a curved top past its
+apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
+repeated rounds feel new places.
+The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
+class to them (:mod:`eos_svc.shape`).
+
+Opportunistic sub-rating: when post_shape has just pondered and asks for more of the surface
+(``needs: "surface"``: EP1's curvature is trusted but the class or the extent is ambiguous),
+the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and after
+:data:`MAX_ROUNDS` rounds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.agent import ActionResult, CycleContext, Outcome
+from eos_svc.agents import keys
+from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.world import GraspWorld
+from eos_svc.board import Board
+
+#: most EP2 rounds in one plan
+MAX_ROUNDS = 3
+#: lowest opportunistic sub-rating while post_shape asks for the surface
+RATING_FLOOR = 0.05
+#: how far outside the estimated surface a probe starts (m)
+STANDOFF = 0.03
+#: step of a slide over the top (m): below the fingertip's radius less its links' (so that
+#: over an edge some step lands the tip on the edge before a link touches the face)
+SLIDE_STEP = 0.003
+#: most steps of one slide
+SLIDE_STEPS = 30
+
+
+@dataclass(frozen=True)
+class Probe:
+    """One planned guarded probe: which face, finger (at joint ``angle``, rad), start of the
+    tip centre and direction (world), travel (m)."""
+
+    face: str
+    finger: str
+    start: np.ndarray
+    direction: np.ndarray
+    travel: float
+    angle: float
+
+
+def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
+    """(centre, half extents along x, y, z) of the object as known now (world, m): the
+    postulated object's axis-aligned bounds when post_shape has fitted one, else EP1's top and
+    bottom contacts (height) and the approach point (front), the object taken as deep and as
+    wide as it is high."""
+    shape = board.get(keys.SHAPE) or {}
+    bounds = shape.get("bounds")
+    if bounds is not None:
+        lo, hi = np.asarray(bounds[0], dtype=float), np.asarray(bounds[1], dtype=float)
+        return 0.5 * (lo + hi), np.maximum(0.5 * (hi - lo), 0.005)
+    contacts = board.get(keys.EP1_CONTACT, {})
+    if "top" not in contacts or "bottom" not in contacts:
+        return None
+    top, bottom = np.asarray(contacts["top"]["point"]), np.asarray(contacts["bottom"]["point"])
+    half = max(0.5 * float(top[2] - bottom[2]), 0.005)
+    centre = 0.5 * (top + bottom)
+    approach = board.get(keys.APPROACH)
+    if approach is not None:
+        centre[0] = float(approach["point"][0]) + half
+    return centre, np.array([half, half, half])
+
+
+class EP2Agent(GraspAgent):
+    """Probes the object's front, sides, top and bottom with guarded fingertip moves."""
+
+    def __init__(self, default: float, world: GraspWorld) -> None:
+        super().__init__("ep2", (INFO,), default, world)
+        self.rounds = 0
+        hand = world.hand
+        upper = [f for f in hand.finger_names if f != hand.description.opposing_finger]
+        state = hand.state(hand.neutral())
+        y = {f: float(state.tip_position(f)[1]) for f in upper}
+        # the finger that leads a move along +y (largest y) and along −y (smallest y)
+        self.side_fingers = {+1: max(upper, key=lambda f: y[f]), -1: min(upper, key=lambda f: y[f])}
+
+    def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
+        shape = board.get(keys.SHAPE)
+        if shape is None or shape.get("needs") != "surface" or self.rounds >= MAX_ROUNDS:
+            return 0.0
+        if not ctx.changed(keys.SHAPE):
+            return 0.0
+        return max(RATING_FLOOR, min(1.0, 1.0 - float(shape["confidence"])))
+
+    def plan_round(self, centre: np.ndarray, half: np.ndarray) -> list[Probe]:
+        """The probes of this round around the estimate (see the module docstring)."""
+        world = self.world
+        probe = world.probe
+        top, bottom = probe.finger("top"), probe.finger("bottom")
+        straight = probe.angles
+        rng = world.rng
+        f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
+        cx, cy, cz = centre.tolist()
+        hx, hy, hz = half.tolist()
+        ex, ey, ez = np.eye(3)
+        probes: list[Probe] = []
+        # front: along +x at the centre and off it
+        for dy, dz in (
+            (0.0, 0.0),
+            (0.0, f(0.5) * hz),
+            (0.0, -f(0.5) * hz),
+            (f(0.5) * hy, 0.0),
+            (-f(0.5) * hy, 0.0),
+        ):
+            start = np.array([cx - hx - STANDOFF, cy + dy, cz + dz])
+            probes.append(Probe("front", top, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[top]))
+        # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
+        # front of the widest section (the links trail the tip toward −x)
+        for sign in (+1, -1):
+            finger = self.side_fingers[sign]
+            for dx in (-f(0.25) * hx, -f(0.6) * hx):
+                start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
+                travel = 2.0 * hy + 2.0 * STANDOFF
+                probes.append(Probe("side", finger, start, sign * ey, travel, straight.get(finger, 0.0)))
+        # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
+        # bottom: along +z with the opposing finger
+        for dx, dy in ((-f(0.6) * hx, 0.0), (-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
+            start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
+            probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
+        for dx in (-f(0.6) * hx, -f(0.25) * hx):
+            start = np.array([cx + dx, cy, cz - hz - STANDOFF])
+            probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
+        return probes
+
+    def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
+        return {
+            "face": face,
+            "finger": finger,
+            "centre": np.round(centre, 7).tolist(),
+            "normal": np.round(normal, 6).tolist(),
+            "radius": self.world.hand.tip_radius(finger),
+        }
+
+    def slide(
+        self, start: np.ndarray, axis: np.ndarray
+    ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
+        """Drag the top finger over the top from the tip centre ``start`` along the horizontal
+        ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
+        height. Returns the contacts (tip centre, sensed normal) up to and including the one
+        where the tip dropped by more than a step (an edge, or the surface curving away), and
+        the free tip path of the probe that ended the slide (nothing felt, or a link would
+        have touched first: the surface does not go on at that height)."""
+        world = self.world
+        finger = world.probe.finger("top")
+        angle = world.probe.angles[finger]
+        out: list[tuple[np.ndarray, np.ndarray]] = []
+        beyond: list[np.ndarray] = []
+        last: tuple[np.ndarray, np.ndarray] | None = None
+        z = float(start[2])
+        for k in range(1, SLIDE_STEPS + 1):
+            p = start + axis * (k * SLIDE_STEP)
+            p[2] = z + 0.002
+            outcome = world.guarded_probe(
+                finger, p, np.array([0.0, 0.0, -1.0]), 0.002 + 4 * SLIDE_STEP, angle
+            )
+            if outcome.event != "touched":
+                beyond = [] if outcome.free is None else list(outcome.free)
+                break
+            assert outcome.centre is not None and outcome.normal is not None
+            last = (outcome.centre, outcome.normal)
+            if k % 3 == 0:
+                out.append(last)  # every third step (and the last, below)
+                last = None
+            if z - float(outcome.centre[2]) > SLIDE_STEP:
+                break  # dropped over an edge
+            z = float(outcome.centre[2])
+        if last is not None:
+            out.append(last)
+        return out, beyond
+
+    @staticmethod
+    def slide_axes(board: Board) -> list[np.ndarray]:
+        """Horizontal directions to slide along: toward the back (+x) and to both sides (±y)
+        at first; along the postulated object's own horizontal axes (both ways) once post_shape
+        has fitted an oriented one, so that a slide crosses the edge it runs toward."""
+        obj = (board.get(keys.SHAPE) or {}).get("object")
+        if obj is None or not (board.get(keys.SHAPE) or {}).get("pose_known"):
+            return [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
+        r, p, y = obj["rpy"]
+        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
+        R = np.array(
+            [
+                [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
+                [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
+                [-sp, cp * sr, cp * cr],
+            ]
+        )
+        axes = []
+        for k in range(3):
+            h = np.array([R[0, k], R[1, k], 0.0])
+            n = float(np.linalg.norm(h))
+            if n > 0.5:
+                axes.extend([h / n, -h / n])
+        return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
+
+    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        estimate = estimate_box(board)
+        if estimate is None:
+            return ActionResult(
+                Outcome.CANNOT_ACT, "no estimate of the object to plan probes around yet (EP1 feels it first)"
+            )
+        world = self.world
+        touches = list(board.get(keys.EP2_TOUCHES, []))
+        free = list(board.get(keys.EP2_FREE, []))
+        counts: dict[str, int] = {}
+        missed = blocked = 0
+        for probe in self.plan_round(*estimate):
+            outcome = world.guarded_probe(
+                probe.finger, probe.start, probe.direction, probe.travel, probe.angle
+            )
+            if outcome.event == "touched":
+                assert outcome.centre is not None and outcome.normal is not None
+                touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
+                counts[probe.face] = counts.get(probe.face, 0) + 1
+            else:
+                if outcome.free is not None:
+                    r = world.hand.tip_radius(probe.finger)
+                    free.extend([*np.round(p, 7).tolist(), r] for p in outcome.free)
+                missed += outcome.event == "missed"
+                blocked += outcome.event == "blocked"
+        # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
+        # +x (toward the back), +y and −y until the tip drops over an edge, a link would
+        # touch first, or nothing is felt
+        tops = [t for t in touches if t["face"] in ("top", "slide")] + [
+            {
+                "centre": list(
+                    np.asarray(c["point"]) + world.hand.tip_radius(c["finger"]) * np.asarray(c["normal"])
+                )
+            }
+            for side, c in board.get(keys.EP1_CONTACT, {}).items()
+            if side == "top"
+        ]
+        if tops:
+            start = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            for axis in self.slide_axes(board):
+                slid, beyond = self.slide(start, axis)
+                for centre, normal in slid:
+                    touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
+                    counts["slide"] = counts.get("slide", 0) + 1
+                r = world.hand.tip_radius(world.probe.finger("top"))
+                free.extend([*np.round(p, 7).tolist(), r] for p in beyond)
+        self.rounds += 1
+        board.set(keys.EP2_TOUCHES, touches)
+        board.set(keys.EP2_FREE, free)
+        board.set(keys.EP2_RUNS, self.rounds)
+        felt = ", ".join(f"{face} {n}" for face, n in counts.items()) or "nothing"
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"EP2 round {self.rounds}: guarded probes touched {sum(counts.values())} ({felt}), "
+            f"missed {missed}, blocked {blocked}; {len(touches)} contacts in all",
+        )

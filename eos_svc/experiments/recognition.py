@@ -1,0 +1,348 @@
+"""Knowing the object by touch: how often the postulate is right, how close, how sure.
+
+Plans objects of every class — several sizes, poses and seeds, at tactile noise 0, the
+default (0.2 mm) and twice the default — with the real planner (search, EP1, EP2, fit,
+grasp), and compares post_shape's postulate with the truth:
+
+- **class**: the confusion matrix (truth × postulate) per noise level;
+- **shape-and-pose error**: RMS distance from points of the true surface to the postulated
+  surface, over the true half extent (half the bounding diameter);
+- **calibration**: "right" = class right and shape-and-pose error ≤ 10 % (the confidence's
+  tolerance); accuracy per confidence bin, and the wrong postulates with confidence ≥ 0.9;
+- **search length**: moves to locate the default object over 100 seeds (median, p90, p99,
+  max; none may end in the cycle limit).
+
+The objects are drawn by a seeded generator (sizes within each class's range, positions
+around the default, yaw and tilt), so they are not the ones the planner was tuned on.
+
+    eos experiment recognition --seeds 3 --out results/recognition
+    eos experiment recognition --quick
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from eos_svc.agents import ObjectSpec, PlanRequest, keys
+from eos_svc.agents.planner import build_world, make_object
+from eos_svc.agents.search import search_move
+from eos_svc.board import Board
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
+
+CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
+POSTULATES = (*CLASSES, "plane", "none")
+NOISES = (0.0, 2e-4, 4e-4)
+#: the tolerance "right" refers to (relative shape-and-pose error)
+TOLERANCE = 0.10
+DEFAULT_POSITION = (0.21, 0.02, -0.015)
+
+
+def random_object(kind: str, size_index: int, rng: np.random.Generator) -> ObjectSpec:
+    """An object of ``kind``: size class ``size_index`` (0 small, 1 medium, 2 large), a position
+    within ±2 cm of the default and a random pose (yaw ±0.5 rad; cylinders and capsules lying
+    across the approach or upright, boxes and ellipsoids tilted up to ±0.3 rad)."""
+    scale = (0.75, 1.0, 1.25)[size_index]
+    jitter = rng.uniform(0.9, 1.1, size=3)
+    px, py, pz = (float(v) for v in np.asarray(DEFAULT_POSITION) + rng.uniform(-0.02, 0.02, size=3))
+    position = (px, py, pz)
+    yaw = float(rng.uniform(-0.5, 0.5))
+    if kind == "sphere":
+        return ObjectSpec("sphere", {"radius": 0.024 * scale * jitter[0]}, position)
+    if kind == "ellipsoid":
+        radii = (0.032 * scale * jitter[0], 0.026 * scale * jitter[1], 0.021 * scale * jitter[2])
+        rpy = (float(rng.uniform(-0.3, 0.3)), 0.0, yaw)
+        return ObjectSpec("ellipsoid", {"radii": radii}, position, rpy)
+    if kind in ("cylinder", "capsule"):
+        radius = 0.018 * scale * jitter[0]
+        length = 0.05 * scale * jitter[1]
+        lying = bool(rng.integers(2))
+        rpy = (math.pi / 2, 0.0, yaw) if lying else (0.0, 0.0, yaw)
+        return ObjectSpec(kind, {"radius": radius, "length": length}, position, rpy)
+    size = (0.045 * scale * jitter[0], 0.055 * scale * jitter[1], 0.04 * scale * jitter[2])
+    return ObjectSpec("box", {"size": size}, position, (float(rng.uniform(-0.3, 0.3)), 0.0, yaw))
+
+
+def surface_error(truth: ObjectSpec, postulate: dict | None, rng: np.random.Generator, n: int = 200) -> float:
+    """RMS distance (m) from ``n`` points of the true surface to the postulated one, over the
+    true half extent; NaN without a postulated object."""
+    if postulate is None:
+        return math.nan
+    true_obj = make_object(truth)
+    guess = make_object(ObjectSpec.from_dict(postulate))
+    c = np.asarray(truth.position)
+    dirs = rng.normal(size=(n, 3))
+    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    err = [guess.signed_distance(true_obj.closest_surface_point(c + 0.3 * d)) for d in dirs]
+    return float(np.sqrt(np.mean(np.square(err))) / (0.5 * true_obj.diameter))
+
+
+def pose_and_size_error(truth: ObjectSpec, postulate: dict | None) -> tuple[float, float]:
+    """(distance between the postulated and the true centre in m, relative error of the
+    bounding diameter); NaN without a postulated object."""
+    if postulate is None:
+        return math.nan, math.nan
+    guess = ObjectSpec.from_dict(postulate)
+    distance = float(np.linalg.norm(np.asarray(guess.position) - np.asarray(truth.position)))
+    d_true = make_object(truth).diameter
+    return distance, abs(make_object(guess).diameter - d_true) / d_true
+
+
+def search_lengths(seeds: int = 100, limit: int = 2000) -> list[int]:
+    """Search moves to locate the default object for seeds 1…``seeds`` (``limit + 1`` if not)."""
+    out = []
+    for seed in range(1, seeds + 1):
+        world = build_world(PlanRequest(seed=seed))
+        board = Board()
+        n = limit + 1
+        for k in range(1, limit + 1):
+            search_move(world, board, "wrist")
+            if board.get(keys.LOCATED):
+                n = k
+                break
+        out.append(n)
+    return out
+
+
+def run(
+    seeds: int = 3,
+    sizes: int = 3,
+    noises: Sequence[float] = NOISES,
+    search_seeds: int = 100,
+    out: Path = Path("results/recognition"),
+    quiet: bool = False,
+) -> dict[str, Any]:
+    """Run the experiment; write recognition.csv, recognition.json and three PNGs into ``out``."""
+    rng = np.random.default_rng(20261201)
+    specs = [(k, s, random_object(k, s, rng)) for k in CLASSES for s in range(sizes) for _ in range(1)]
+    rows: list[dict[str, Any]] = []
+    for noise in noises:
+        requests = [
+            PlanRequest(obj=spec, seed=seed, tactile_noise=noise)
+            for _, _, spec in specs
+            for seed in range(1, seeds + 1)
+        ]
+        results = run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
+        for request, result in zip(requests, results, strict=True):
+            shape = result.shape or {}
+            guess = shape.get("class", "none")
+            obj = shape.get("object")
+            err = surface_error(request.obj, obj, np.random.default_rng(request.seed))
+            pos_err, size_err = pose_and_size_error(request.obj, obj)
+            right = guess == request.obj.shape and math.isfinite(err) and err <= TOLERANCE
+            rows.append(
+                {
+                    "noise_m": noise,
+                    "truth": request.obj.shape,
+                    "object": ObjectSpec.to_dict(request.obj),
+                    "seed": request.seed,
+                    "postulate": guess,
+                    "confidence": float(shape.get("confidence", 0.0)),
+                    "class_right": guess == request.obj.shape,
+                    "surface_error": err,
+                    "position_error_m": pos_err,
+                    "size_error": size_err,
+                    "right": right,
+                    "status": result.status,
+                    "search_cycles": result.cycles_per_stage.get("search", 0),
+                    "information_cycles": result.cycles_per_stage.get("information", 0),
+                    "ep2_rounds": sum(1 for r in result.trace if r.chosen == "ep2"),
+                    "wall_time_s": result.wall_time_s,
+                }
+            )
+    lengths = search_lengths(search_seeds)
+    data = summarize(rows, noises, lengths)
+    write_csv(out / "recognition.csv", [{**r, "object": str(r["object"])} for r in rows])
+    write_json(out / "recognition.json", {**data, "rows": [clean(r) for r in rows]})
+    plot_confusion(data, out / "recognition_confusion.png")
+    plot_calibration(data, out / "recognition_calibration.png")
+    plot_search(lengths, out / "recognition_search.png")
+    return data
+
+
+def clean(row: dict[str, Any]) -> dict[str, Any]:
+    """A row with NaN as None (strict JSON)."""
+    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
+
+
+def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list[int]) -> dict[str, Any]:
+    """Confusion matrices, accuracies, error percentiles, calibration bins, search lengths."""
+    per_noise = {}
+    for noise in noises:
+        sub = [r for r in rows if r["noise_m"] == noise]
+        confusion = {t: {p: 0 for p in POSTULATES} for t in CLASSES}
+        for r in sub:
+            confusion[r["truth"]][r["postulate"] if r["postulate"] in POSTULATES else "none"] += 1
+        errs = np.array(
+            [r["surface_error"] for r in sub if r["class_right"] and math.isfinite(r["surface_error"])]
+        )
+        confident = [r for r in sub if r["confidence"] >= 0.9]
+        pos = [
+            r["position_error_m"] for r in sub if r["class_right"] and math.isfinite(r["position_error_m"])
+        ]
+        size = [r["size_error"] for r in sub if r["class_right"] and math.isfinite(r["size_error"])]
+        per_noise[f"{noise:g}"] = {
+            "runs": len(sub),
+            "class_accuracy": float(np.mean([r["class_right"] for r in sub])) if sub else math.nan,
+            "right": float(np.mean([r["right"] for r in sub])) if sub else math.nan,
+            "confusion": confusion,
+            "error_median": float(np.median(errs)) if len(errs) else None,
+            "error_p90": float(np.percentile(errs, 90)) if len(errs) else None,
+            "position_error_median_m": float(np.median(pos)) if pos else None,
+            "size_error_median": float(np.median(size)) if size else None,
+            "confident": len(confident),
+            "confident_right": float(np.mean([r["right"] for r in confident])) if confident else None,
+            "wrong_class_confident": sum(1 for r in confident if not r["class_right"]),
+            "median_information_cycles": float(np.median([r["information_cycles"] for r in sub]))
+            if sub
+            else None,
+            "median_wall_time_s": float(np.median([r["wall_time_s"] for r in sub])) if sub else None,
+        }
+    edges = [0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 1.0001]
+    bins = []
+    for lo, hi in itertools.pairwise(edges):
+        sub = [r for r in rows if lo <= r["confidence"] < hi]
+        bins.append(
+            {
+                "lo": lo,
+                "hi": min(hi, 1.0),
+                "n": len(sub),
+                "mean_confidence": float(np.mean([r["confidence"] for r in sub])) if sub else None,
+                "accuracy": float(np.mean([r["right"] for r in sub])) if sub else None,
+            }
+        )
+    arr = np.array(lengths)
+    search = {
+        "seeds": len(lengths),
+        "median": float(np.median(arr)),
+        "p90": float(np.percentile(arr, 90)),
+        "p99": float(np.percentile(arr, 99)),
+        "max": int(arr.max()),
+        "hit_limit": int(np.sum(arr > 2000)),
+    }
+    return {"per_noise": per_noise, "calibration": bins, "search": search, "tolerance": TOLERANCE}
+
+
+def plot_confusion(data: dict[str, Any], path: Path) -> Path:
+    """One confusion matrix per noise level."""
+    plt = pyplot()
+    noises = list(data["per_noise"])
+    fig, axes = plt.subplots(1, len(noises), figsize=(4.2 * len(noises), 3.6), dpi=110, squeeze=False)
+    for ax, noise in zip(axes[0], noises, strict=True):
+        conf = data["per_noise"][noise]["confusion"]
+        m = np.array([[conf[t][p] for p in POSTULATES] for t in CLASSES])
+        ax.imshow(m, cmap="Blues")
+        for i in range(m.shape[0]):
+            for j in range(m.shape[1]):
+                if m[i, j]:
+                    ax.text(j, i, str(m[i, j]), ha="center", va="center", fontsize=8)
+        ax.set_xticks(range(len(POSTULATES)), POSTULATES, rotation=45, fontsize=7)
+        ax.set_yticks(range(len(CLASSES)), CLASSES, fontsize=7)
+        ax.set_title(f"noise {float(noise) * 1000:.1f} mm", fontsize=9)
+        ax.set_xlabel("postulated", fontsize=8)
+    axes[0][0].set_ylabel("truth", fontsize=8)
+    return save_figure(fig, path)
+
+
+def plot_calibration(data: dict[str, Any], path: Path) -> Path:
+    """Accuracy against confidence (bins), with the diagonal."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 4.0), dpi=110)
+    bins = [b for b in data["calibration"] if b["n"]]
+    ax.plot([0, 1], [0, 1], ":", color="grey")
+    ax.plot([b["mean_confidence"] for b in bins], [b["accuracy"] for b in bins], "o-")
+    for b in bins:
+        ax.annotate(
+            str(b["n"]),
+            (b["mean_confidence"], b["accuracy"]),
+            fontsize=7,
+            xytext=(3, -10),
+            textcoords="offset points",
+        )
+    ax.set_xlabel("confidence")
+    ax.set_ylabel("fraction right (class and ≤ 10 % error)")
+    ax.set_xlim(0, 1.02)
+    ax.set_ylim(0, 1.02)
+    ax.set_title("Calibration of post_shape's confidence", fontsize=9)
+    return save_figure(fig, path)
+
+
+def plot_search(lengths: list[int], path: Path) -> Path:
+    """Histogram of search moves over seeds."""
+    plt = pyplot()
+    fig, ax = plt.subplots(figsize=(4.5, 3.2), dpi=110)
+    ax.hist(lengths, bins=range(1, max(lengths) + 2), color="tab:blue")
+    ax.set_xlabel("search moves to locate the default object")
+    ax.set_ylabel("seeds")
+    ax.set_title(f"{len(lengths)} seeds: median {np.median(lengths):.0f}, max {max(lengths)}", fontsize=9)
+    return save_figure(fig, path)
+
+
+def report(data: dict[str, Any]) -> str:
+    """Human-readable summary."""
+    lines = ["  noise    runs  class  right  err med  err p90  conf≥0.9 (right)  wrong&conf≥0.9  time med"]
+    for noise, d in data["per_noise"].items():
+        med = "—" if d["error_median"] is None else f"{d['error_median']:.1%}"
+        p90 = "—" if d["error_p90"] is None else f"{d['error_p90']:.1%}"
+        cr = "—" if d["confident_right"] is None else f"{d['confident_right']:.0%}"
+        lines.append(
+            f"  {float(noise) * 1000:4.1f} mm {d['runs']:5d}  {d['class_accuracy']:5.0%}  {d['right']:5.0%}"
+            f"  {med:>7}  {p90:>7}  {d['confident']:4d} ({cr:>4})  {d['wrong_class_confident']:14d}"
+            f"  {d['median_wall_time_s']:6.2f} s"
+        )
+    s = data["search"]
+    lines.append(
+        f"  search over {s['seeds']} seeds: median {s['median']:.0f}, p90 {s['p90']:.0f}, "
+        f"p99 {s['p99']:.0f}, max {s['max']} moves; {s['hit_limit']} hit the cycle limit"
+    )
+    for b in data["calibration"]:
+        if b["n"]:
+            lines.append(
+                f"  confidence [{b['lo']:.1f}, {b['hi']:.1f}): {b['n']:4d} postulates, "
+                f"{b['accuracy']:.0%} right"
+            )
+    return "\n".join(lines)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Command-line options of this experiment."""
+    parser = experiment_parser("recognition", __doc__, "results/recognition")
+    parser.add_argument("--seeds", type=int, default=3, help="seeds per object and noise (3)")
+    parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
+    parser.add_argument("--search-seeds", type=int, default=100, help="seeds of the search-length run (100)")
+    parser.add_argument(
+        "--quick", action="store_true", help="one size, one seed, default noise, 10 search seeds"
+    )
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment recognition [options]``."""
+    args = build_parser().parse_args(argv)
+    if args.quick:
+        data = run(seeds=1, sizes=1, noises=(2e-4,), search_seeds=10, out=args.out)
+    else:
+        data = run(args.seeds, args.sizes, NOISES, args.search_seeds, args.out)
+    print(report(data))
+    print(
+        f"wrote {args.out}/recognition.csv, recognition.json, recognition_confusion.png, "
+        "recognition_calibration.png, recognition_search.png"
+    )
+    return 0
+
+
+if __name__ == "__main__":  # pragma: no cover
+    raise SystemExit(main())

@@ -1,0 +1,398 @@
+"""Least-squares fit of one primitive class to the touches (scipy.optimize.least_squares).
+
+Parameters per class (sizes as logarithms, so they stay positive and their σ is relative):
+
+=========  ==================================================  ==
+class      parameters                                          k
+=========  ==================================================  ==
+sphere     centre (3), log radius                               4
+ellipsoid  centre (3), rotation (3), log semi-axes (3)          9
+box        centre (3), rotation (3), log half sides (3)         9
+cylinder   centre (3), axis tilt (2), log radius, log half len  7
+capsule    centre (3), axis tilt (2), log radius, log half len  7
+=========  ==================================================  ==
+
+Rotations are local charts about a start orientation ``R0``: ``R = R0·exp([ω]×)`` for the
+box and the ellipsoid; for the cylinder and the capsule the axis is ``R0·(α, β, 1)/‖·‖``.
+Each class is fitted from a few starts (orientations from the world axes and from the
+normals' scatter) and the lowest χ² kept. The residuals are whitened by the touches' noise
+model (:class:`~eos_svc.shape.touches.Touches`), so χ² is a log-likelihood and the fit's
+covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import least_squares
+
+from eos_svc.shape import primitives
+from eos_svc.shape.touches import Touches
+
+#: number of parameters of each class
+N_PARAMS = {"sphere": 4, "ellipsoid": 9, "box": 9, "cylinder": 7, "capsule": 7}
+#: indices of the log-size parameters of each class
+SIZE_INDEX = {"sphere": (3,), "ellipsoid": (6, 7, 8), "box": (6, 7, 8), "cylinder": (5, 6), "capsule": (5, 6)}
+#: smallest half size a start may take (m)
+MIN_HALF = 0.004
+#: χ²/dof under which a start's fit is accepted without trying the others
+GOOD_FIT = 3.0
+#: relative step of the finite-difference Jacobian
+JACOBIAN_STEP = 1e-8
+#: ridge added to JᵀJ before inverting it (whitened units)
+RIDGE = 1e-6
+#: range of the log half sizes a fit may take (ln m): 0.1 mm to 1 m
+LOG_SIZE_RANGE = (math.log(1e-4), 0.0)
+
+
+def rotation_vector(omega: np.ndarray) -> np.ndarray:
+    """exp([ω]×): the rotation matrix of rotation vector ``omega`` (Rodrigues)."""
+    theta = float(np.linalg.norm(omega))
+    if theta < 1e-12:
+        return np.eye(3)
+    k = omega / theta
+    K = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+    out: np.ndarray = np.eye(3) + math.sin(theta) * K + (1.0 - math.cos(theta)) * (K @ K)
+    return out
+
+
+def frame_with_z(axis: np.ndarray) -> np.ndarray:
+    """A right-handed rotation whose third column is ``axis`` (unit)."""
+    z = axis / np.linalg.norm(axis)
+    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    x = a - (a @ z) * z
+    x /= np.linalg.norm(x)
+    return np.column_stack([x, np.cross(z, x), z])
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """A class instance: centre (m, world), rotation (world ← local), half sizes (m)."""
+
+    kind: str
+    centre: np.ndarray
+    rotation: np.ndarray
+    sizes: tuple[float, ...]  # sphere (r,), ellipsoid (a, b, c), box (hx, hy, hz), cyl/capsule (r, h)
+
+    def half_extents(self) -> np.ndarray:
+        """Half extents of the instance's bounds along the world x, y, z axes (m)."""
+        R, s = self.rotation, self.sizes
+        if self.kind == "sphere":
+            return np.full(3, s[0])
+        if self.kind == "box":
+            out: np.ndarray = np.abs(R) @ np.asarray(s)
+            return out
+        if self.kind == "ellipsoid":
+            return np.sqrt((R**2) @ (np.asarray(s) ** 2))
+        axial = np.abs(R[:, 2])
+        if self.kind == "cylinder":
+            return axial * s[1] + s[0] * np.sqrt(np.maximum(1.0 - axial**2, 0.0))
+        return axial * s[1] + s[0]
+
+    def signed_distance(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(signed distance (N,), outward gradient (N, 3), world) at world ``points``."""
+        d, g = batch_signed_distance(
+            self.kind,
+            np.asarray(points, dtype=float).reshape(1, -1, 3),
+            self.centre[None],
+            self.rotation[None],
+            np.asarray(self.sizes, dtype=float)[None],
+        )
+        return d[0], g[0]
+
+
+def batch_signed_distance(
+    kind: str, points: np.ndarray, centres: np.ndarray, rotations: np.ndarray, sizes: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
+    (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3)."""
+    local = np.einsum("kni,kij->knj", points - centres[:, None, :], rotations)
+    if kind == "sphere":
+        d, g = primitives.sphere(local, sizes[:, :1])
+    elif kind == "ellipsoid":
+        d, g = primitives.ellipsoid(local, sizes[:, None, :])
+    elif kind == "box":
+        d, g = primitives.box(local, sizes[:, None, :])
+    elif kind == "cylinder":
+        d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
+    else:
+        d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
+    return d, np.einsum("knj,kij->kni", g, rotations)
+
+
+def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
+    """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
+    theta = np.linalg.norm(omega, axis=1)
+    k = omega / np.maximum(theta, 1e-12)[:, None]
+    K = np.zeros((len(omega), 3, 3))
+    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
+    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
+    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+
+
+def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
+    """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
+    z = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
+    x = a - np.sum(a * z, axis=1, keepdims=True) * z
+    x /= np.linalg.norm(x, axis=1, keepdims=True)
+    return np.stack([x, np.cross(z, x), z], axis=2)
+
+
+def batch_geometry(
+    kind: str, thetas: np.ndarray, r0: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0``."""
+    centres = thetas[:, :3]
+    sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
+    K = len(thetas)
+    if kind == "sphere":
+        rotations = np.broadcast_to(np.eye(3), (K, 3, 3))
+    elif kind in ("ellipsoid", "box"):
+        rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
+    else:
+        tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
+        rotations = _batch_frames_with_z(tilt @ r0.T)
+    return centres, rotations, sizes
+
+
+def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
+    """Whitened residuals (K, m) of K parameter vectors: tip-centre distances, normals,
+    free-space hinges."""
+    centres, rotations, sizes = batch_geometry(kind, thetas, r0)
+    d, g = batch_signed_distance(kind, touches.centres[None], centres, rotations, sizes)
+    K = len(thetas)
+    r_d = (d - touches.radii - touches.gap_offset) / touches.sigma_distance
+    r_n = ((g - touches.normals) / touches.sigma_normal).reshape(K, -1)
+    parts = [r_d, r_n]
+    if len(touches.free):
+        f, _ = batch_signed_distance(kind, touches.free[None], centres, rotations, sizes)
+        parts.append(np.minimum(f - touches.free_radii, 0.0) / touches.sigma_distance)
+    return np.concatenate(parts, axis=1)
+
+
+def geometry_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> Geometry:
+    """The geometry of parameters ``theta`` about start orientation ``r0``."""
+    centres, rotations, sizes = batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0)
+    return Geometry(kind, centres[0].copy(), np.array(rotations[0]), tuple(float(v) for v in sizes[0]))
+
+
+def residuals(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
+    """Whitened residuals of one parameter vector (see :func:`batch_residuals`)."""
+    out: np.ndarray = batch_residuals(np.asarray(theta, dtype=float)[None], kind, r0, touches)[0]
+    return out
+
+
+@dataclass(frozen=True)
+class ClassFit:
+    """The best fit of one class.
+
+    Attributes:
+        kind: the class.
+        geometry: the fitted instance.
+        chi2: Σ of the squared whitened residuals at the optimum.
+        n_params: k.
+        covariance: (k, k) covariance of the parameters.
+        theta: the parameters; ``r0``: their start orientation.
+    """
+
+    kind: str
+    geometry: Geometry
+    chi2: float
+    n_params: int
+    covariance: np.ndarray = field(repr=False)
+    theta: np.ndarray = field(repr=False)
+    r0: np.ndarray = field(repr=False)
+
+    def size_sigmas(self) -> np.ndarray:
+        """σ of the log sizes (≈ relative σ of each size)."""
+        idx = list(SIZE_INDEX[self.kind])
+        return np.sqrt(np.maximum(np.diag(self.covariance)[idx], 0.0))
+
+    def centre_sigmas(self) -> np.ndarray:
+        """σ of the centre coordinates (m)."""
+        return np.sqrt(np.maximum(np.diag(self.covariance)[:3], 0.0))
+
+
+def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.ndarray:
+    """Per size of ``fit``: the largest likelihood ratio ``exp(−Δχ²/2)`` of the same object with
+    that size ``step`` larger or smaller while one of its two faces along that direction stays
+    put (the centre shifted by the change), against the fit. ≈ 0 when the touches bound the
+    size on both sides; ≈ 1 when one side is free — a far face no contact or free sample sees
+    (the least-squares covariance, a local quadratic, misses that: the fit sits on the
+    nearest contact, where the residuals do not change when the far face moves away)."""
+    kind, theta, r0 = fit.kind, fit.theta, fit.r0
+    g = fit.geometry
+    variants = []
+    owners = []
+    for n, i in enumerate(SIZE_INDEX[kind]):
+        half = g.sizes[n]
+        if kind in ("box", "ellipsoid"):
+            axis = g.rotation[:, n]
+        elif kind in ("cylinder", "capsule") and n == 1:
+            axis = g.rotation[:, 2]
+        else:
+            axis = np.zeros(3)  # a radius: both sides move together
+        for factor in (1.0 + step, 1.0 - step):
+            for side in (1.0, -1.0):
+                t = theta.copy()
+                t[i] = theta[i] + math.log(factor)
+                t[:3] = theta[:3] + side * (factor - 1.0) * half * axis
+                variants.append(t)
+                owners.append(n)
+    R = batch_residuals(np.array(variants), kind, r0, touches)
+    delta = np.maximum(np.sum(R * R, axis=1) - fit.chi2, 0.0)
+    ratios = np.zeros(len(SIZE_INDEX[kind]))
+    for n, d in zip(owners, delta, strict=True):
+        ratios[n] = max(ratios[n], math.exp(-0.5 * float(d)))
+    return ratios
+
+
+def _normal_scatter_axes(normals: np.ndarray) -> np.ndarray:
+    """Eigenvectors (columns, ascending eigenvalue) of Σ n nᵀ, right-handed."""
+    _, V = np.linalg.eigh(normals.T @ normals)
+    if np.linalg.det(V) < 0:
+        V[:, 0] = -V[:, 0]
+    return V
+
+
+def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarray) -> np.ndarray:
+    """The point nearest every inward normal line (a sphere's centre), regularised toward
+    ``prior`` where the lines are parallel."""
+    A = np.zeros((3, 3))
+    b = np.zeros(3)
+    for s, n in zip(points, normals, strict=True):
+        P = np.eye(3) - np.outer(n, n)
+        A += P
+        b += P @ s
+    lam = 1e-3 * len(points)
+    out: np.ndarray = np.linalg.solve(A + lam * np.eye(3), b + lam * prior)
+    return out
+
+
+def _normal_clusters(normals: np.ndarray, angle: float = math.radians(15.0)) -> list[np.ndarray]:
+    """Mean directions of the sensed normals grouped greedily within ``angle``, largest first."""
+    left = list(range(len(normals)))
+    groups: list[tuple[int, np.ndarray]] = []
+    cos = math.cos(angle)
+    while left:
+        n0 = normals[left[0]]
+        members = [i for i in left if normals[i] @ n0 >= cos]
+        mean = normals[members].sum(axis=0)
+        groups.append((len(members), mean / np.linalg.norm(mean)))
+        left = [i for i in left if i not in members]
+    groups.sort(key=lambda g: -g[0])
+    return [g[1] for g in groups]
+
+
+def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
+    """Box orientations from pairs of roughly orthogonal groups of normals (the largest
+    groups first, at most three frames)."""
+    clusters = _normal_clusters(normals)[:4]
+    frames = []
+    for i, x in enumerate(clusters):
+        for c in clusters[i + 1 :]:
+            if abs(c @ x) < 0.3:
+                y = c - (c @ x) * x
+                y /= np.linalg.norm(y)
+                frames.append(np.column_stack([x, y, np.cross(x, y)]))
+    return frames[:3]
+
+
+def _distinct(axes: list[np.ndarray], angle: float = math.radians(15.0)) -> list[np.ndarray]:
+    out: list[np.ndarray] = []
+    for a in axes:
+        a = a / np.linalg.norm(a)
+        if all(abs(a @ b) < math.cos(angle) for b in out):
+            out.append(a)
+    return out
+
+
+def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Start parameters and orientations ``(theta0, r0)`` of ``kind`` from the touches."""
+    S = touches.surface_points
+    lo, hi = S.min(axis=0), S.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    out: list[tuple[np.ndarray, np.ndarray]] = []
+    if kind == "sphere":
+        c = _normal_line_centre(S, touches.normals, mid)
+        r = max(float(np.mean(np.linalg.norm(S - c, axis=1))), MIN_HALF)
+        return [(np.array([*c, math.log(r)]), np.eye(3))]
+    V = _normal_scatter_axes(touches.normals)
+    if kind in ("ellipsoid", "box"):
+        frames = [*_face_frames(touches.normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
+        for r0 in frames:
+            c = mid if kind == "box" else _normal_line_centre(S, touches.normals, mid)
+            half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
+            out.append((np.array([*c, 0.0, 0.0, 0.0, *np.log(half)]), r0))
+        return out
+    for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
+        r0 = frame_with_z(axis)
+        c = mid
+        local = (S - c) @ r0
+        radius = max(float(np.median(np.hypot(local[:, 0], local[:, 1]))), MIN_HALF)
+        half = float(np.max(np.abs(local[:, 2])))
+        half = max(half - radius, MIN_HALF) if kind == "capsule" else max(half, MIN_HALF)
+        out.append((np.array([*c, 0.0, 0.0, math.log(radius), math.log(half)]), r0))
+    return out
+
+
+def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
+    """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
+    (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
+    straddles)."""
+    k = len(theta)
+    h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
+    thetas = np.repeat(theta[None], k + 1, axis=0)
+    thetas[np.arange(k), np.arange(k)] += h
+    R = batch_residuals(thetas, kind, r0, touches)
+    out: np.ndarray = ((R[:k] - R[k]) / h[:, None]).T
+    return out
+
+
+def fit_class(kind: str, touches: Touches, max_nfev: int = 20, hopeless: float = math.inf) -> ClassFit:
+    """The least-squares fit of ``kind`` (the best of its starts).
+
+    ``hopeless``: a χ² above which the class cannot compete with a class already fitted
+    (:func:`~eos_svc.shape.selection.select_class` passes a bound far above that class's
+    χ²): once a start ends above it, the remaining starts are skipped (their posterior would
+    be 0 whatever they reach)."""
+    if kind not in N_PARAMS:
+        raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
+    k = N_PARAMS[kind]
+    best = None
+    for theta0, r0 in starts(kind, touches):
+        m = len(residuals(theta0, kind, r0, touches))
+        method = "lm" if m >= k else "trf"
+        res = least_squares(
+            residuals,
+            theta0,
+            jac=_jacobian,
+            args=(kind, r0, touches),
+            method=method,
+            x_scale="jac",
+            max_nfev=max_nfev,
+            ftol=1e-8,
+            xtol=1e-8,
+            gtol=1e-8,
+        )
+        chi2 = float(2.0 * res.cost)
+        if best is None or chi2 < best[0]:
+            best = (chi2, res, r0)
+        if chi2 <= GOOD_FIT * max(m - k, 1):
+            break  # this start explains the touches to within the noise: no other start needed
+        if chi2 > hopeless:
+            break
+    assert best is not None
+    chi2, res, r0 = best
+    J = res.jac
+    m = len(res.fun)
+    # a direction no residual constrains (e.g. a length at its bound) gets a variance of
+    # 1/RIDGE, not pinv's 0
+    cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
+    dof = max(m - k, 1)
+    cov = cov * max(1.0, chi2 / dof)
+    return ClassFit(kind, geometry_from(kind, res.x, r0), chi2, k, cov, res.x, r0)

@@ -1,0 +1,104 @@
+"""Signed distance and its gradient for each primitive class, in the class's own frame.
+
+Every function takes local points ``P`` (..., N, 3) and the class's sizes broadcastable
+against the leading axes (``(..., 1)`` scalars, ``(..., 1, 3)`` vectors: several parameter
+sets at once, as the fit's finite-difference Jacobian needs), and returns ``(d, g)``: the
+signed distance (..., N) in m (negative inside) and its gradient (..., N, 3) (unit: the
+outward normal at the closest surface point). Conventions match
+:mod:`eos_svc.kinematics.objects` (and coal): centred shapes, cylinder and capsule axes
+along local z, a capsule's straight part of half length ``h``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+Array = np.ndarray
+_TINY = 1e-15
+
+
+def _unit(v: Array, fallback: tuple[float, float, float]) -> Array:
+    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    return np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
+
+
+def sphere(P: Array, radius: Array) -> tuple[Array, Array]:
+    """Sphere of ``radius``."""
+    return np.linalg.norm(P, axis=-1) - radius, _unit(P, (0.0, 0.0, 1.0))
+
+
+def box(P: Array, half: Array) -> tuple[Array, Array]:
+    """Box of half sides ``half`` (..., 1, 3)."""
+    q = np.abs(P) - half
+    qp = np.maximum(q, 0.0)
+    out = np.linalg.norm(qp, axis=-1)
+    d = out + np.minimum(q.max(axis=-1), 0.0)
+    sign = np.where(P >= 0.0, 1.0, -1.0)
+    g_out = sign * qp / np.maximum(out, _TINY)[..., None]
+    k = np.argmax(q, axis=-1)[..., None]
+    g_in = np.zeros_like(P)
+    np.put_along_axis(g_in, k, np.take_along_axis(sign, k, axis=-1), axis=-1)
+    return d, np.where((out > _TINY)[..., None], g_out, g_in)
+
+
+def cylinder(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
+    """Cylinder of ``radius`` and half length ``half_length`` along z (flat caps)."""
+    x, y, z = P[..., 0], P[..., 1], P[..., 2]
+    rho = np.hypot(x, y)
+    zero = np.zeros_like(rho)
+    radial = np.stack([x, y, zero], axis=-1) / np.maximum(rho, _TINY)[..., None]
+    radial = np.where((rho > _TINY)[..., None], radial, np.array([1.0, 0.0, 0.0]))
+    dr = rho - radius
+    dz = np.abs(z) - half_length
+    axial = np.stack([zero, zero, np.where(z >= 0.0, 1.0, -1.0)], axis=-1)
+    a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
+    out = np.hypot(a, b)
+    d = out + np.minimum(np.maximum(dr, dz), 0.0)
+    g_out = (a[..., None] * radial + b[..., None] * axial) / np.maximum(out, _TINY)[..., None]
+    g_in = np.where((dr > dz)[..., None], radial, axial)
+    return d, np.where((out > _TINY)[..., None], g_out, g_in)
+
+
+def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
+    """Capsule of ``radius`` around the z segment of half length ``half_length``."""
+    zc = np.clip(P[..., 2], -half_length, half_length)
+    v = P.copy()
+    v[..., 2] -= zc
+    return np.linalg.norm(v, axis=-1) - radius, _unit(v, (1.0, 0.0, 0.0))
+
+
+def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Array]:
+    """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
+
+    The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
+    ``F(t) = Σ (a_i p_i / (t + a_i²))² − 1`` on ``t > −min a_i²``; F is convex and decreasing
+    there, so Newton's method from a point left of the root (``t = 0`` outside; near the pole
+    of the shortest axis inside) rises monotonically to it.
+    """
+    a = np.broadcast_to(radii, P.shape)
+    a2 = a * a
+    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    k = np.argmin(a, axis=-1)[..., None]
+    amin = np.take_along_axis(a, k, axis=-1)[..., 0]
+    pmin = np.abs(np.take_along_axis(P, k, axis=-1)[..., 0])
+    t = np.where(inside, -amin * amin + amin * pmin + 1e-12 * amin * amin, 0.0)
+    for _ in range(iterations):
+        den = t[..., None] + a2
+        u = a * P / den
+        uu = u * u
+        F = uu.sum(axis=-1) - 1.0
+        dF = -2.0 * (uu / den).sum(axis=-1)
+        step = F / np.minimum(dF, -1e-300)
+        t = t - step
+        if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
+            break
+    S = a2 * P / (t[..., None] + a2)
+    v = P - S
+    dist = np.linalg.norm(v, axis=-1)
+    sign = np.where(inside, -1.0, 1.0)
+    g = np.where(
+        (dist > 1e-12)[..., None],
+        sign[..., None] * v / np.maximum(dist, 1e-12)[..., None],
+        _unit(S / a2, (0.0, 0.0, 1.0)),
+    )
+    return sign * dist, g

@@ -1,0 +1,230 @@
+"""Choose the class by model evidence and state how sure we are.
+
+Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`); its Bayesian information
+criterion ``BIC = χ² + k·ln m`` (m whitened contact residuals) approximates −2 log of its
+evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``.
+
+The **confidence** of the postulate is the probability that the class is right *and* the
+object's size and centre are within tolerance: ``P(class) · Π erf(tol/(√2·σ))`` over the
+fitted sizes (relative tolerance :data:`SIZE_TOLERANCE`) and centre coordinates (tolerance
+``SIZE_TOLERANCE`` × the mean half size), with σ from the fit's covariance — a direction
+the touches do not constrain (a box's unseen back) has a large σ and drags the confidence
+down. A best fit far worse than the noise model allows (:func:`fit_probability`) drags it
+down too. ``eos experiment recognition`` checks that it is calibrated.
+
+A **plane** is postulated when every sensed normal lies within :data:`PLANE_ANGLE` of their
+mean: a single face, too large for the probes to bound; it has no object.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy import stats
+
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, extent_ratios, fit_class
+from eos_svc.shape.touches import Touches
+
+#: the classes fitted, in the order ties are broken
+CLASSES: tuple[str, ...] = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
+#: relative size tolerance the confidence refers to
+SIZE_TOLERANCE = 0.10
+#: normals all within this angle of their mean (rad) → a plane
+PLANE_ANGLE = math.radians(12.0)
+#: how much looser than the noise model a fit's χ² is judged (model and gap imperfections)
+FIT_SLACK = 2.0
+#: χ² margin beyond the best class so far past which a class's other starts are skipped
+HOPELESS = 2000.0
+#: iterations that show a class hopeless once another fits
+QUICK_NFEV = 6
+#: fewest contacts needed to fit the classes
+MIN_CONTACTS = 4
+
+
+@dataclass(frozen=True)
+class Postulate:
+    """The chosen class, its confidence and the object, with the evidence behind them.
+
+    Attributes:
+        kind: sphere, ellipsoid, cylinder, capsule, box or plane.
+        confidence: P(class right and size within tolerance).
+        probabilities: posterior of every class fitted.
+        fits: the class fits (empty for a plane).
+        contacts: number of contacts used.
+    """
+
+    kind: str
+    confidence: float
+    probabilities: dict[str, float]
+    fits: dict[str, ClassFit]
+    contacts: int
+
+    @property
+    def best(self) -> ClassFit | None:
+        """The chosen class's fit (None for a plane)."""
+        return self.fits.get(self.kind)
+
+    def object(self) -> dict[str, Any] | None:
+        """The postulated object in the request's JSON form (None for a plane)."""
+        fit = self.best
+        return None if fit is None else object_dict(fit)
+
+    def evidence(self) -> dict[str, Any]:
+        """Contacts used, fit residual and the competing classes (JSON-friendly)."""
+        out: dict[str, Any] = {
+            "contacts": self.contacts,
+            "classes": {k: round(v, 6) for k, v in sorted(self.probabilities.items(), key=lambda kv: -kv[1])},
+        }
+        fit = self.best
+        if fit is not None:
+            m = 3 * self.contacts
+            out["fit_chi2"] = round(fit.chi2, 3)
+            out["fit_rms"] = round(math.sqrt(fit.chi2 / max(m, 1)), 4)
+            out["size_sigma_rel"] = [round(float(s), 6) for s in fit.size_sigmas()]
+            out["centre_sigma_m"] = [round(float(s), 7) for s in fit.centre_sigmas()]
+        return out
+
+
+def _rpy(R: np.ndarray) -> list[float]:
+    """Roll, pitch, yaw (rad) of R = Rz(yaw)·Ry(pitch)·Rx(roll) (Pinocchio's convention)."""
+    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
+    if abs(math.cos(pitch)) < 1e-9:
+        return [0.0, pitch, math.atan2(-R[0, 1], R[1, 1])]
+    return [math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])]
+
+
+def _signed_permutations() -> list[np.ndarray]:
+    """The 24 proper rotations that permute and flip the coordinate axes."""
+    out = []
+    for perm in itertools.permutations(range(3)):
+        for signs in itertools.product((1.0, -1.0), repeat=3):
+            P = np.zeros((3, 3))
+            for col, (row, sign) in enumerate(zip(perm, signs, strict=True)):
+                P[row, col] = sign
+            if np.linalg.det(P) > 0:
+                out.append(P)
+    return out
+
+
+_SYMMETRIES = _signed_permutations()
+
+
+def canonical_pose(
+    kind: str, rotation: np.ndarray, sizes: tuple[float, ...]
+) -> tuple[np.ndarray, tuple[float, ...]]:
+    """The same object with its symmetric description nearest the world axes: a box's or an
+    ellipsoid's axes relabelled (sizes permuted with them) to the rotation closest to the
+    identity; a cylinder's or capsule's axis pointing up (or +x, +y when level), its frame's x
+    axis the world x projected across the axis."""
+    if kind in ("box", "ellipsoid"):
+        best = max(_SYMMETRIES, key=lambda P: float(np.trace(rotation @ P)))
+        order = [int(np.argmax(np.abs(best[:, c]))) for c in range(3)]
+        return rotation @ best, tuple(sizes[i] for i in order)
+    if kind in ("cylinder", "capsule"):
+        z = rotation[:, 2].copy()
+        level = abs(z[2]) < 1e-6
+        if (not level and z[2] < 0.0) or (level and z[int(np.argmax(np.abs(z)))] < 0.0):
+            z = -z
+        ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+        x = ref - (ref @ z) * z
+        x /= np.linalg.norm(x)
+        return np.column_stack([x, np.cross(z, x), z]), sizes
+    return np.eye(3), sizes
+
+
+def object_dict(fit: ClassFit) -> dict[str, Any]:
+    """A fitted class as an object in the request's JSON form (sizes as the request takes
+    them: a box's full edges, a cylinder's or capsule's full straight length; the pose in
+    its canonical description, :func:`canonical_pose`)."""
+    g = fit.geometry
+    out: dict[str, Any] = {"shape": g.kind}
+    rotation, s = canonical_pose(g.kind, g.rotation, g.sizes)
+    if g.kind == "sphere":
+        out["radius"] = round(s[0], 6)
+    elif g.kind == "ellipsoid":
+        out["radii"] = [round(v, 6) for v in s]
+    elif g.kind == "box":
+        out["size"] = [round(2.0 * v, 6) for v in s]
+    else:
+        out["radius"] = round(s[0], 6)
+        out["length"] = round(2.0 * s[1], 6)
+    out["position"] = [round(float(v), 6) for v in g.centre]
+    out["rpy"] = [0.0, 0.0, 0.0] if g.kind == "sphere" else [round(v, 6) + 0.0 for v in _rpy(rotation)]
+    return out
+
+
+def _within(tolerance: np.ndarray, sigma: np.ndarray) -> float:
+    p = 1.0
+    for t, s in zip(tolerance.tolist(), sigma.tolist(), strict=True):
+        p *= 1.0 if s <= 0.0 else math.erf(t / (math.sqrt(2.0) * s))
+    return p
+
+
+def tolerance_probability(fit: ClassFit, touches: Touches | None = None) -> float:
+    """P(every size within ±SIZE_TOLERANCE and the centre within SIZE_TOLERANCE × the mean
+    half size), from the fit's Gaussian covariance (independent parameters) and, given the
+    touches, times ``1 − r`` per size with ``r`` the likelihood ratio of a size 10 % off with
+    one face kept (:func:`~eos_svc.shape.fit.extent_ratios`: a size bounded on one side only
+    is not known)."""
+    sizes = np.asarray(fit.geometry.sizes)
+    p_size = _within(np.full(len(sizes), SIZE_TOLERANCE), fit.size_sigmas())
+    if touches is not None:
+        p_size *= float(np.prod(1.0 - extent_ratios(fit, touches, SIZE_TOLERANCE)))
+    p_centre = _within(np.full(3, SIZE_TOLERANCE * float(np.mean(sizes))), fit.centre_sigmas())
+    return p_size * p_centre
+
+
+def is_plane(touches: Touches) -> bool:
+    """Every sensed normal within PLANE_ANGLE of their mean."""
+    mean = touches.normals.mean(axis=0)
+    norm = float(np.linalg.norm(mean))
+    if norm < 1e-9:
+        return False
+    cos = touches.normals @ (mean / norm)
+    return bool(np.all(cos >= math.cos(PLANE_ANGLE)))
+
+
+def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postulate:
+    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors).
+
+    Raises:
+        ValueError: fewer than MIN_CONTACTS contacts.
+    """
+    if touches.count < MIN_CONTACTS:
+        raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
+    if is_plane(touches):
+        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
+    m = 3 * touches.count
+    fits: dict[str, ClassFit] = {}
+    for kind in classes:
+        # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
+        # a few iterations show it, the full fit is kept for the competitive ones
+        best = min((f.chi2 for f in fits.values()), default=math.inf)
+        if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
+            fits[kind] = fit_class(kind, touches)
+            continue
+        quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+            fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
+            continue
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
+    bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
+    low = min(bic.values())
+    weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
+    total = sum(weights.values())
+    probs = {k: w / total for k, w in weights.items()}
+    kind = max(classes, key=lambda k: (probs[k], -classes.index(k)))
+    confidence = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
+    return Postulate(kind, confidence, probs, fits, touches.count)
+
+
+def fit_probability(fit: ClassFit, m: int) -> float:
+    """How plausible the best fit's χ² is under the noise model, taken FIT_SLACK times
+    looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
+    even the best class misses them (an object none of the classes describes)."""
+    dof = max(m - fit.n_params, 1)
+    return float(stats.chi2.sf(fit.chi2 / FIT_SLACK, dof))
