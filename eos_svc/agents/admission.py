@@ -27,9 +27,10 @@ import math
 import coal
 import numpy as np
 
+from eos_svc.agents.coverage import centre_in_grasp_box, findable
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.request import ObjectSpec, PlanRequest
-from eos_svc.agents.world import WorldParameters
+from eos_svc.agents.world import WorldParameters, forward_reach
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 
@@ -218,6 +219,21 @@ def check_plannable(
                 f"distance {d * 1000:.1f} mm < clearance {params.clearance * 1000:.1f} mm); "
                 "place it in front of the open hand",
             )
+
+    # Findable: the search sweeps a lattice of columns and guarantees to locate only objects that
+    # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
+    reach_ahead = forward_reach(hand, planner.finger_sweeps(hand))
+    rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
+    surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
+    if not surely and not findable(make_object(spec), params, reach_ahead):
+        pos = ", ".join(f"{v:.3f}" for v in centre)
+        raise ValidationError(
+            "object.position",
+            f"the search cannot be sure to find the object at [{pos}] m: it must come within "
+            f"{params.envelope_radius} m of a sweep line and lie wholly ahead of x = "
+            f"{rear_limit:.3f} m "
+            "(what the fingers reach from the rear of the search box)",
+        )
 
 
 def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:

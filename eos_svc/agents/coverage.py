@@ -104,6 +104,7 @@ def findable(
     params: WorldParameters,
     forward_reach: float = HAND3X3_FORWARD_REACH,
     samples_per_metre: int = 1000,
+    exhaustive: bool = False,
 ) -> bool:
     """Whether the search is guaranteed to locate ``obj`` (the rule of the module docstring):
 
@@ -112,6 +113,10 @@ def findable(
     2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
        point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
        rear never bump into it.
+
+    Condition 1 holds at once when the object's centre lies in the grasp-centre box
+    (:func:`centre_in_grasp_box`); ``exhaustive=True`` samples every sweep line regardless
+    (the plain test the shortcut is checked against).
     """
     gc = np.asarray(params.grasp_centre, dtype=float)
     lo, hi = params.search_box_lo[0], params.search_box_hi[0]
@@ -119,6 +124,8 @@ def findable(
     rear = obj.closest_surface_point(c - np.array([10.0, 0.0, 0.0]))  # the object's rearmost point
     if rear[0] <= lo + forward_reach + params.clearance:
         return False
+    if not exhaustive and centre_in_grasp_box(c, params):
+        return True
     xs = np.linspace(lo, hi, max(2, math.ceil((hi - lo) * samples_per_metre) + 1))
     reach = 0.5 * float(obj.diameter) + params.envelope_radius
     for y, z in wrist_columns(params).reshape(-1, 2).tolist():
@@ -127,3 +134,13 @@ def findable(
         if any(obj.signed_distance(p) <= params.envelope_radius for p in near):
             return True
     return False
+
+
+def centre_in_grasp_box(centre: np.ndarray, params: WorldParameters) -> bool:
+    """Whether ``centre`` lies in the grasp-centre box ``B`` (m). Then some sweep line passes
+    within half a lattice cell's diagonal (≤ ``envelope_radius``) of it, and the object's
+    signed distance from that point is at most the distance to its centre: condition 1 of
+    :func:`findable` holds without sampling."""
+    gc = params.grasp_centre
+    lo, hi = params.search_box_lo, params.search_box_hi
+    return all(lo[i] + gc[i] <= float(centre[i]) <= hi[i] + gc[i] for i in range(3))

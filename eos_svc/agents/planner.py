@@ -119,7 +119,8 @@ def _derived(hand: HandModel) -> tuple[HandModel, dict[str, FingerSweep], WorldP
     return entry
 
 
-def _sweeps(hand: HandModel) -> dict[str, FingerSweep]:
+def finger_sweeps(hand: HandModel) -> dict[str, FingerSweep]:
+    """Each finger's closing sweep (palm frame), derived once per hand."""
     return _derived(hand)[1]
 
 
@@ -160,7 +161,7 @@ def build_world(
         rng=np.random.default_rng(search_seed),
         params=params,
         estimator=CurvatureEstimator(),
-        sweeps=_sweeps(hand),
+        sweeps=finger_sweeps(hand),
     )
     return world
 
