@@ -25,8 +25,12 @@ from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
 closed form: the object reaches within ``envelope_radius − spacing/√2`` of ``B``, i.e. into
 ``B`` with the default spacing), and the object lies wholly ahead of the hand's reach from
 the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``clearance``,
-0.042 m for hand3x3), so the crossings at the rear cannot bump into it. Objects closer to
-the rear are often found too, but a crossing the fingers cannot make may stall the search.
+0.042 m for hand3x3), so the crossings at the rear cannot bump into it, and its centre lies
+within ``B``'s height range (the upper and lower fingers would otherwise bump into it on every
+sweep). Objects closer to the rear are often found too, but a crossing the fingers cannot make
+may stall the search; the admission check (:mod:`eos_svc.agents.admission`) refuses every
+object this rule does not promise, and a search that has swept every column twice without
+locating the object ends the run (``failed``) rather than sweeping on.
 """
 
 from __future__ import annotations
@@ -112,7 +116,11 @@ def findable(
        sampled every ``1/samples_per_metre`` m along x), and
     2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
        point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
-       rear never bump into it.
+       rear never bump into it, and
+    3. its centre lies within the grasp-centre box's height range: the upper and lower fingers
+       sit above and below the grasp centre, so an object centred above or below that range is
+       bumped by them on every sweep before the grasp centre comes near it (measured: such
+       objects ran the search into the cycle limit).
 
     Condition 1 holds at once when the object's centre lies in the grasp-centre box
     (:func:`centre_in_grasp_box`); ``exhaustive=True`` samples every sweep line regardless
@@ -123,6 +131,9 @@ def findable(
     c = np.asarray(obj.placement.translation, dtype=float)
     rear = obj.closest_surface_point(c - np.array([10.0, 0.0, 0.0]))  # the object's rearmost point
     if rear[0] <= lo + forward_reach + params.clearance:
+        return False
+    z_lo, z_hi = params.search_box_lo[2] + gc[2], params.search_box_hi[2] + gc[2]
+    if not z_lo <= float(c[2]) <= z_hi:
         return False
     if not exhaustive and centre_in_grasp_box(c, params):
         return True

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from eos_svc.agent import ActionResult, Outcome
 from eos_svc.agents import keys
+from eos_svc.agents.coverage import column_counts
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 
@@ -25,14 +26,30 @@ def search_rating(board: Board) -> float:
     return 0.0 if board.get(keys.LOCATED) else 1.0
 
 
+def search_move_limit(world: GraspWorld) -> int:
+    """Sweeps after which the search gives up: every column of the coverage lattice twice
+    (:func:`eos_svc.agents.coverage.column_counts`)."""
+    ny, nz = column_counts(world.params)
+    return 2 * ny * nz
+
+
 def search_move(world: GraspWorld, board: Board, who: str) -> ActionResult:
     """Make one search move and report whether the object is now located."""
     if world.located():
         board.set(keys.LOCATED, True)
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
         return ActionResult(Outcome.STAGE_COMPLETE, "object already within the hand's envelope")
+    moves = int(board.get(keys.SEARCH_MOVES, 0))
+    limit = search_move_limit(world)
+    if moves >= limit:
+        return ActionResult(
+            Outcome.FINISHED,
+            f"object not located after sweeping every column of the search lattice twice "
+            f"({moves} sweeps): it is not where the search can find it",
+            succeeded=False,
+        )
     label, moved, blocked = world.search_step()
-    board.set(keys.SEARCH_MOVES, int(board.get(keys.SEARCH_MOVES, 0)) + 1)
+    board.set(keys.SEARCH_MOVES, moves + 1)
     gap = world.object_gap_to_grasp_centre()
     board.set(keys.GAP, round(gap, 6))
     what = f"{who} moved the hand {moved * 1000:.1f} mm sweeping column {label}" + (

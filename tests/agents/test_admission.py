@@ -179,3 +179,15 @@ def test_the_findable_shortcut_agrees_with_sampling_every_sweep_line():
         assert verdict == findable(obj, params, reach, exhaustive=True)
         verdicts.append(verdict)
     assert any(verdicts) and not all(verdicts)  # both answers were exercised
+
+
+def test_an_object_above_the_grasp_centre_box_is_refused_and_a_forced_plan_gives_up():
+    # centred 5 cm above the box the grasp centre sweeps: within the envelope's reach, but the
+    # upper fingers bump into it on every sweep before the grasp centre comes near
+    request = PlanRequest(obj=ObjectSpec("sphere", {"radius": 0.026}, (0.35, -0.03, 0.205)), seed=3)
+    with pytest.raises(ValidationError) as err:
+        check_plannable(request)
+    assert err.value.field == "object.position" and "cannot be sure to find" in err.value.reason
+    result = plan(request, check=False, keep_trace=False)  # planned anyway: a bounded search
+    assert result.status == "failed" and "not located" in result.reason
+    assert result.cycles_per_stage["search"] <= 2 * 36 + 1
