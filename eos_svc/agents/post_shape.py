@@ -70,6 +70,9 @@ def classify(curvature: dict) -> tuple[str, float]:
 class PostShapeAgent(GraspAgent):
     """Turns the curvature estimate into a shape postulate with a confidence."""
 
+    reads = frozenset({keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH})
+    writes = frozenset({keys.SHAPE, keys.D_OVER_H})
+
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("post_shape", (INFO,), default, world)
 
