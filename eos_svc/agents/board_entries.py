@@ -198,6 +198,10 @@ ENTRIES: dict[str, Entry] = {
 
 #: entries the planner writes before the first cycle, from the request
 SET_UP: frozenset[str] = frozenset({keys.FRICTION})
+#: entries the planner reads after the run, for its result and the grasp memory
+AFTER_RUN: frozenset[str] = frozenset(
+    {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
+)
 
 #: names the table prints for the aliases above
 _ALIASES: dict[str, Any] = {"Vector": Vector, "FingerState": FingerState}
@@ -282,7 +286,9 @@ def _check(value: Any, tp: Any, field: str) -> None:
     else:
         ok = isinstance(value, tp)
     if not ok:
-        raise ContractError(field, f"must be a {_type_name(tp)}, got {type(value).__name__} {value!r:.60}")
+        name = _type_name(tp)
+        article = "an" if name[0] in "aeiou" else "a"
+        raise ContractError(field, f"must be {article} {name}, got {type(value).__name__} {value!r:.60}")
 
 
 # --- the documentation's table ---------------------------------------------------------------
@@ -303,7 +309,8 @@ def _type_name(tp: Any) -> str:
 
 def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES) -> str:
     """A Markdown table of every entry: its type, meaning, who writes and who reads it (from the
-    agents' declarations; ``plan set-up`` writes :data:`SET_UP`)."""
+    agents' declarations; ``plan set-up`` writes :data:`SET_UP`, ``plan result`` reads
+    :data:`AFTER_RUN`)."""
     access = access_map(agents)
     lines = [
         "| entry | type | meaning | written by | read by |",
@@ -313,6 +320,8 @@ def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES
         writers, readers = access.get(key, ([], []))
         if key in SET_UP:
             writers = ["plan set-up", *writers]
+        if key in AFTER_RUN:
+            readers = [*readers, "plan result"]
         entry = entries[key]
         lines.append(
             f"| `{key}` | `{_type_name(entry.type)}` | {entry.meaning} | "
