@@ -13,19 +13,23 @@ present, no undeclared field, and each field of the declared type (``float`` acc
 ``int``; ``list`` a tuple).
 """
 
-from __future__ import annotations
-
 import functools
+import sys
 import types
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, TypedDict, Union, get_args, get_origin, get_type_hints, is_typeddict
+from typing import Any, Literal, Union, get_args, get_origin
 
 from eos_svc.agent import Agent
 from eos_svc.agents import keys
 from eos_svc.agents.recall import RECALLED
 from eos_svc.board_access import access_map
 from eos_svc.errors import ContractError
+
+if sys.version_info >= (3, 11):
+    from typing import NotRequired, TypedDict, get_type_hints, is_typeddict
+else:  # pragma: no cover - Python 3.10: PEP 655's backport
+    from typing_extensions import NotRequired, TypedDict, get_type_hints, is_typeddict
 
 #: a point or a direction in the world frame (m; unit for a direction)
 Vector = list[float]
@@ -70,16 +74,9 @@ class ApproachEntry(TypedDict):
     direction: Vector
 
 
-class _ShapeOptional(TypedDict, total=False):
-    object: dict[str, Any] | None
-    pose_known: bool
-    evidence: dict[str, Any]
-    bounds: list[Vector] | None
-
-
-# "class" cannot be a class-syntax field name: the functional form declares the required part.
-_ShapeRequiredFields = TypedDict(
-    "_ShapeRequiredFields",
+# "class" cannot be a field name in the class syntax: the functional form declares the postulate.
+ShapeEntry = TypedDict(
+    "ShapeEntry",
     {
         "class": str,
         "grasp_radius": float | None,
@@ -89,21 +86,22 @@ _ShapeRequiredFields = TypedDict(
         "principal_curvatures": list[float],
         "curvature_radius": float | None,
         "needs": str | None,
+        "object": NotRequired[dict[str, Any] | None],
+        "pose_known": NotRequired[bool],
+        "evidence": NotRequired[dict[str, Any]],
+        "bounds": NotRequired[list[Vector] | None],
     },
 )
+ShapeEntry.__doc__ = """post_shape's postulate.
 
-
-class ShapeEntry(_ShapeRequiredFields, _ShapeOptional):
-    """post_shape's postulate.
-
-    Required: ``class`` (plane, cylinder, sphere, ellipsoid, …), ``grasp_radius`` (vertical
-    half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (world, m, or
-    ``None``), ``confidence`` in [0, 1], the top's ``principal_curvatures`` (1/m) and
-    ``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for
-    next, e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the
-    request's JSON form, or ``None``), ``pose_known`` (its orientation was sensed),
-    ``evidence`` (what the postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
-    """
+Required: ``class`` (plane, cylinder, sphere, ellipsoid, …), ``grasp_radius`` (vertical
+half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (world, m, or
+``None``), ``confidence`` in [0, 1], the top's ``principal_curvatures`` (1/m) and
+``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
+e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
+JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
+postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
+"""
 
 
 class LandingEntry(TypedDict):
@@ -115,11 +113,7 @@ class LandingEntry(TypedDict):
     normal: Vector
 
 
-class _TargetOptional(TypedDict, total=False):
-    repredicted: bool
-
-
-class TargetEntry(_TargetOptional):
+class TargetEntry(TypedDict):
     """grasp_points' target (world, m and rad): the wrist's goal and angles, the pre-grasp, the
     postulated centre, approach and closing directions, the grasp's label, its ε and angle
     across the centre (deg), each finger's chosen contact, the postulated object (request
@@ -139,6 +133,7 @@ class TargetEntry(_TargetOptional):
     object: dict[str, Any]
     pose_assumed_upright: bool
     postulate: str
+    repredicted: NotRequired[bool]
 
 
 class FingertipContact(TypedDict):
