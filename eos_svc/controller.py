@@ -148,9 +148,11 @@ class Controller:
         self.repeat_policy = RepeatPolicy(repeat_policy)
         self.keep_trace = keep_trace
         self.callbacks: list[CycleCallback] = list(callbacks)
+        if not isinstance(check_access, bool):
+            raise ValidationError("check_access", f"must be a bool, got {check_access!r}")
         if entry_check is not None and not check_access:
             raise ValidationError("entry_check", "checks entries only with check_access=True")
-        self.check_access = bool(check_access)
+        self.check_access = check_access
         self.entry_check = entry_check
         # Per stage: the allowed agents in list order, with flags telling whether
         # they override the precondition / learned hooks (skip the call if not).

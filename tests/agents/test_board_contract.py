@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import re
 from pathlib import Path
 
@@ -175,3 +176,17 @@ def test_entry_check_names_the_entry_and_the_field(key, value, field, words):
         check_entry(key, value)
     assert info.value.field == field
     assert words in info.value.reason
+
+
+def test_eos_plan_check_board(capsys):
+    from eos_svc.cli import main
+
+    args = ["plan", "--json", "--seed", "2", "--shape", "ellipsoid", "--radii", "0.03", "0.027", "0.024"]
+    plain_code = main(args)
+    plain = json.loads(capsys.readouterr().out)
+    code = main([*args, "--check-board"])
+    checked = json.loads(capsys.readouterr().out)
+    assert checked["status"] != "error", checked["reason"]
+    assert code == plain_code
+    for field in ("status", "reason", "cycles", "cycles_per_stage", "q_final"):
+        assert checked[field] == plain[field]

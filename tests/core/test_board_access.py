@@ -142,6 +142,9 @@ def test_entry_check_sees_every_write_and_its_error_names_agent_and_field():
     with pytest.raises(ValidationError) as bad:
         Controller([Counter("c", ["s"], 0.5)], ["s"], entry_check=small)
     assert bad.value.field == "entry_check"
+    with pytest.raises(ValidationError) as bad:
+        Controller([Counter("c", ["s"], 0.5)], ["s"], check_access="yes")
+    assert bad.value.field == "check_access" and "must be a bool" in bad.value.reason
 
 
 def test_demo_declares_its_entries_and_runs_identically_checked():
