@@ -241,6 +241,8 @@ def plan(
         check_plannable(request, hand, params)
     world = build_world(request, hand, params, check=False)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    if check_board:  # the entries the planner writes before the first cycle (board_entries.SET_UP)
+        check_entry(keys.FRICTION, request.friction)
     controller = Controller(
         agents,
         STAGES,
@@ -253,9 +255,6 @@ def plan(
         entry_check=check_entry if check_board else None,
     )
     board = Board({keys.FRICTION: request.friction})
-    if check_board:
-        for key, value in board.items():  # the set-up's entries (board_entries.SET_UP)
-            check_entry(key, value)
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"
