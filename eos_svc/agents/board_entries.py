@@ -191,8 +191,9 @@ ENTRIES: dict[str, Entry] = {
     RECALLED: Entry(str, "the grasp-memory key recall applied"),
 }
 
-#: entries the planner writes before the first cycle, from the request
-SET_UP: frozenset[str] = frozenset({keys.FRICTION})
+#: entries written by others than the agents: entry -> who (the planner before the first cycle,
+#: from the request)
+OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up"}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
     {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
@@ -304,7 +305,7 @@ def _type_name(tp: Any) -> str:
 
 def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES) -> str:
     """A Markdown table of every entry: its type, meaning, who writes and who reads it (from the
-    agents' declarations; ``plan set-up`` writes :data:`SET_UP`, ``plan result`` reads
+    agents' declarations; :data:`OUTSIDE_WRITERS` write some, ``plan result`` reads
     :data:`AFTER_RUN`)."""
     access = access_map(agents)
     lines = [
@@ -313,8 +314,8 @@ def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES
     ]
     for key in sorted(entries):
         writers, readers = access.get(key, ([], []))
-        if key in SET_UP:
-            writers = ["plan set-up", *writers]
+        if key in OUTSIDE_WRITERS:
+            writers = [OUTSIDE_WRITERS[key], *writers]
         if key in AFTER_RUN:
             readers = [*readers, "plan result"]
         entry = entries[key]

@@ -241,7 +241,7 @@ def plan(
         check_plannable(request, hand, params)
     world = build_world(request, hand, params, check=False)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
-    if check_board:  # the entries the planner writes before the first cycle (board_entries.SET_UP)
+    if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
     controller = Controller(
         agents,
