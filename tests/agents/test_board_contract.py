@@ -77,7 +77,7 @@ def _checked(label: str):
 def test_checked_plan_keeps_the_contract_and_runs_the_same_cycles(label):
     checked = _checked(label)
     _same_plan(checked, plan(PlanRequest.from_dict(CASES[label])))
-    assert checked.cycles > 3
+    assert checked.trace and checked.trace[0].chosen is not None
 
 
 def test_checked_plans_reach_every_writer(tmp_path):
