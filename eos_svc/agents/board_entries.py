@@ -4,7 +4,7 @@ The entries stay plain JSON-able values (dicts, lists, numbers) — the form the
 and the wire carry — and their shapes are declared here as ``TypedDict``s. :data:`ENTRIES`
 maps every entry name (:mod:`eos_svc.agents.keys`) to its type and meaning; which agent reads
 and writes which entry is declared on the agents themselves (``reads`` / ``writes``, see
-:class:`eos_svc.agent.Agent`) and tabulated by :func:`access_table` (the table in
+:class:`eos_svc.agent.Agent`) and tabulated by :mod:`eos_svc.agents.board_table` (the table in
 ``docs/planner.md``).
 
 In the debug mode ``plan(..., check_board=True)`` the controller checks every access against
@@ -16,14 +16,11 @@ present, no undeclared field, and each field of the declared type (``float`` acc
 import functools
 import sys
 import types
-from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, Union, get_args, get_origin
 
-from eos_svc.agent import Agent
 from eos_svc.agents import keys
 from eos_svc.agents.recall import RECALLED
-from eos_svc.board_access import access_map
 from eos_svc.errors import ContractError
 
 if sys.version_info >= (3, 11):
@@ -250,7 +247,7 @@ def _check(value: Any, tp: Any, field: str) -> None:
                 return
             except ContractError:
                 continue
-        raise ContractError(field, f"must be {_type_name(tp)}, got {value!r:.60}")
+        raise ContractError(field, f"must be {type_name(tp)}, got {value!r:.60}")
     if origin is Literal:
         if value not in get_args(tp):
             raise ContractError(field, f"must be one of {list(get_args(tp))}, got {value!r}")
@@ -282,14 +279,14 @@ def _check(value: Any, tp: Any, field: str) -> None:
     else:
         ok = isinstance(value, tp)
     if not ok:
-        name = _type_name(tp)
+        name = type_name(tp)
         article = "an" if name[0] in "aeiou" else "a"
         raise ContractError(field, f"must be {article} {name}, got {type(value).__name__} {value!r:.60}")
 
 
-# --- the documentation's table ---------------------------------------------------------------
-def _type_name(tp: Any) -> str:
-    """How the table prints a declared type."""
+# --- how a declared type reads ----------------------------------------------------------------
+def type_name(tp: Any) -> str:
+    """A declared type as the table and the errors print it (aliases by name: ``Vector``)."""
     for name, alias in _ALIASES.items():
         if tp == alias:
             return name
@@ -297,40 +294,7 @@ def _type_name(tp: Any) -> str:
         return "None"
     origin = get_origin(tp)
     if origin is Union or origin is types.UnionType:
-        return " | ".join(_type_name(a) for a in get_args(tp))
+        return " | ".join(type_name(a) for a in get_args(tp))
     if origin in (list, dict):
-        return f"{origin.__name__}[{', '.join(_type_name(a) for a in get_args(tp))}]"
+        return f"{origin.__name__}[{', '.join(type_name(a) for a in get_args(tp))}]"
     return getattr(tp, "__name__", str(tp))
-
-
-def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES) -> str:
-    """A Markdown table of every entry: its type, meaning, who writes and who reads it (from the
-    agents' declarations; :data:`OUTSIDE_WRITERS` write some, ``plan result`` reads
-    :data:`AFTER_RUN`)."""
-    access = access_map(agents)
-    lines = [
-        "| entry | type | meaning | written by | read by |",
-        "|---|---|---|---|---|",
-    ]
-    for key in sorted(entries):
-        writers, readers = access.get(key, ([], []))
-        if key in OUTSIDE_WRITERS:
-            writers = [OUTSIDE_WRITERS[key], *writers]
-        if key in AFTER_RUN:
-            readers = [*readers, "plan result"]
-        entry = entries[key]
-        lines.append(
-            f"| `{key}` | `{_type_name(entry.type)}` | {entry.meaning} | "
-            f"{', '.join(writers) or '—'} | {', '.join(readers) or '—'} |"
-        )
-    return "\n".join(lines)
-
-
-def planner_access_table() -> str:
-    """:func:`access_table` for the default planner's agents (hand3x3, with ``recall``)."""
-    from eos_svc.agents.memory import GraspMemory
-    from eos_svc.agents.planner import build_agents, build_world
-    from eos_svc.agents.request import PlanRequest
-
-    world = build_world(PlanRequest())
-    return access_table(build_agents(world, memory=GraspMemory(":memory:")))

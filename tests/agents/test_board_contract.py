@@ -19,11 +19,11 @@ from eos_svc.agents.board_entries import (
     OUTSIDE_WRITERS,
     ShapeEntry,
     check_entry,
-    planner_access_table,
 )
+from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_table, update_table
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.board_access import access_map, undeclared_entries
-from eos_svc.errors import ContractError
+from eos_svc.errors import ContractError, ValidationError
 from eos_svc.kinematics import allegro_hand
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -131,9 +131,21 @@ def test_docs_table_matches_the_declarations():
     found = re.search(r"<!-- board-entries:begin -->\n(.*?)\n<!-- board-entries:end -->", text, flags=re.S)
     assert found, "docs/planner.md lost its board-entries table"
     assert found.group(1) == planner_access_table(), (
-        "the table in docs/planner.md is stale: regenerate it with "
-        "eos_svc.agents.board_entries.planner_access_table()"
+        "the table in docs/planner.md is stale: python -m eos_svc.agents.board_table docs/planner.md"
     )
+
+
+def test_update_table_rewrites_only_the_block(tmp_path):
+    doc = tmp_path / "doc.md"
+    doc.write_text("# T\n\n<!-- board-entries:begin -->\nold\n<!-- board-entries:end -->\n\nafter\n", "utf-8")
+    assert update_table(str(doc)) is True
+    table = planner_access_table()
+    assert doc.read_text("utf-8") == f"# T\n\n{TABLE_BEGIN}\n{table}\n{TABLE_END}\n\nafter\n"
+    assert update_table(str(doc)) is False
+    (tmp_path / "bare.md").write_text("no table\n", "utf-8")
+    with pytest.raises(ValidationError) as info:
+        update_table(str(tmp_path / "bare.md"))
+    assert info.value.field == "path"
 
 
 def _shape(**fields) -> dict:
