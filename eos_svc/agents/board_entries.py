@@ -196,8 +196,8 @@ AFTER_RUN: frozenset[str] = frozenset(
     {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
 )
 
-#: names the table prints for the aliases above
-_ALIASES: dict[str, Any] = {"Vector": Vector, "FingerState": FingerState}
+#: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)
+_ALIASES: dict[str, Any] = {"FingerState": FingerState}
 
 
 # --- the runtime check --------------------------------------------------------------------
@@ -286,7 +286,7 @@ def _check(value: Any, tp: Any, field: str) -> None:
 
 # --- how a declared type reads ----------------------------------------------------------------
 def type_name(tp: Any) -> str:
-    """A declared type as the table and the errors print it (aliases by name: ``Vector``)."""
+    """A declared type as the table and the errors print it (``FingerState`` by name)."""
     for name, alias in _ALIASES.items():
         if tp == alias:
             return name
