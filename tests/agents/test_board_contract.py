@@ -179,7 +179,7 @@ def test_entry_check_accepts_the_declared_forms():
         (keys_module.SHAPE, {"class": "sphere"}, "board.shape", "missing required field(s) ['centre'"),
         (keys_module.SHAPE, _shape(colour="red"), "board.shape", "['colour'] not declared in ShapeEntry"),
         (keys_module.SHAPE, _shape(confidence="high"), "board.shape.confidence", "must be a float"),
-        (keys_module.SHAPE, _shape(centre=[0.2, None, 0.0]), "board.shape.centre", "must be list[float] | None"),
+        (keys_module.SHAPE, _shape(centre=[0.2, None, 0.0]), "board.shape.centre", "list[float] | None"),
         (keys_module.FINGER_STATE, {"finger1": "opn"}, "board.finger_state.finger1", "must be one of"),
         (keys_module.LOCATED, np.bool_(True), "board.located", "must be a bool"),
         (keys_module.EP1_RUNS, True, "board.ep1_runs", "must be an int"),
