@@ -10,8 +10,9 @@ own agents. The grasping domain lives in :mod:`eos_svc.kinematics` and
 
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
 from eos_svc.board import Board, BoardChange
+from eos_svc.board_access import BoardClient
 from eos_svc.controller import CancelToken, Controller, CycleCallback, RepeatPolicy
-from eos_svc.errors import EosError, ValidationError
+from eos_svc.errors import BoardAccessError, EosError, ValidationError
 from eos_svc.ratings import Weights, check_probability
 from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus, to_jsonable
 
@@ -22,7 +23,9 @@ __all__ = [
     "Agent",
     "AgentRating",
     "Board",
+    "BoardAccessError",
     "BoardChange",
+    "BoardClient",
     "CancelToken",
     "Controller",
     "CycleCallback",

@@ -13,7 +13,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, Any, NamedTuple
+from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
 
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import check_probability
@@ -96,6 +96,13 @@ class Agent(ABC):
 
     Subclasses implement :meth:`act`, and usually :meth:`opportunistic`.
 
+    Board contract (as py_trees' blackboard clients register their keys): a subclass declares
+    the board entries its precondition test, learned hook and action read (:attr:`reads`) and
+    write (:attr:`writes`, deletions included); both are empty by default. A controller made
+    with ``check_access=True`` hands each agent a view of the board that raises
+    :class:`~eos_svc.errors.BoardAccessError` on any other entry
+    (:class:`~eos_svc.board_access.BoardClient`).
+
     Args:
         name: unique name of the agent in a controller.
         stages: stages in which the agent may be rated and chosen.
@@ -107,6 +114,11 @@ class Agent(ABC):
     """
 
     __slots__ = ("_default", "_learned", "name", "stages")
+
+    #: board entries this agent reads (a write needs :attr:`writes`; reading one back needs both)
+    reads: ClassVar[frozenset[str]] = frozenset()
+    #: board entries this agent writes or deletes
+    writes: ClassVar[frozenset[str]] = frozenset()
 
     def __init__(self, name: str, stages: Iterable[str], default: float, learned: float = 0.0) -> None:
         if not isinstance(name, str) or not name:

@@ -29,6 +29,13 @@ Rules the paper leaves open, fixed here (and visible in every cycle record):
    exited it gracefully). Cancellation, the cycle limit and the deadline are checked
    before every cycle. An exception raised by an agent ends the run with status
    ``error`` and the exception in the reason; nothing escapes :meth:`run`.
+4. **Board contract (debug mode).** With ``check_access=True`` every agent reads and writes
+   the board through a :class:`~eos_svc.board_access.BoardClient` limited to its declared
+   ``reads`` and ``writes``: an undeclared access raises
+   :class:`~eos_svc.errors.BoardAccessError` in the agent, and the run ends with status
+   ``error`` naming the agent and the entry (rule 3). ``entry_check`` validates every value
+   written as well. Off by default (agents get the board itself); the choices are the same
+   either way.
 """
 
 from __future__ import annotations
@@ -38,9 +45,11 @@ import threading
 import time
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from enum import Enum
+from typing import Any
 
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
 from eos_svc.board import Board
+from eos_svc.board_access import EntryCheck, clients_for
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.ratings import Weights, check_probability
 from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus
@@ -87,10 +96,14 @@ class Controller:
         repeat_policy: see :class:`RepeatPolicy`.
         keep_trace: keep every cycle record in :attr:`RunResult.trace`.
         callbacks: called with every :class:`CycleRecord` as it is made.
+        check_access: debug mode: hand each agent a board client limited to its declared
+            ``reads`` and ``writes`` (module docstring, rule 4).
+        entry_check: with ``check_access``, validates every value an agent writes:
+            ``entry_check(key, value)`` raises a :class:`~eos_svc.errors.ContractError`.
 
     Raises:
         ValidationError: on duplicate agent names, an agent allowed in an
-            unknown stage, no stages, or a bad limit.
+            unknown stage, no stages, a bad limit, or ``entry_check`` without ``check_access``.
     """
 
     def __init__(
@@ -104,6 +117,8 @@ class Controller:
         repeat_policy: RepeatPolicy = RepeatPolicy.ONCE_UNLESS_ASKED,
         keep_trace: bool = True,
         callbacks: Iterable[CycleCallback] = (),
+        check_access: bool = False,
+        entry_check: EntryCheck | None = None,
     ) -> None:
         self.stages: tuple[str, ...] = tuple(stages)
         if not self.stages:
@@ -133,6 +148,12 @@ class Controller:
         self.repeat_policy = RepeatPolicy(repeat_policy)
         self.keep_trace = keep_trace
         self.callbacks: list[CycleCallback] = list(callbacks)
+        if not isinstance(check_access, bool):
+            raise ValidationError("check_access", f"must be a bool, got {check_access!r}")
+        if entry_check is not None and not check_access:
+            raise ValidationError("entry_check", "checks entries only with check_access=True")
+        self.check_access = check_access
+        self.entry_check = entry_check
         # Per stage: the allowed agents in list order, with flags telling whether
         # they override the precondition / learned hooks (skip the call if not).
         self._by_stage: dict[str, tuple[tuple[Agent, bool, bool], ...]] = {
@@ -171,7 +192,7 @@ class Controller:
         max_cycles = self.max_cycles
         clock = time.monotonic
         new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__
-        tables = self._stage_tables()
+        tables = self._stage_tables(board)
         log = _CycleLog(self.callbacks, self.keep_trace, clock)
         emit = log.emit
         deadline_at = None if self.deadline_s is None else log.t0 + self.deadline_s
@@ -195,22 +216,21 @@ class Controller:
             # --- rate ---------------------------------------------------------
             rows: list[AgentRating] = []
             best: Agent | None = None
+            best_view = board
             best_total = -1.0
             name = ""
             try:
-                for agent, name, default, weighted_default, has_pre, has_learned, learned in table:
+                for agent, name, default, weighted_default, has_pre, has_learned, learned, view in table:
                     opp = hints.get(name, 0.0) if hints else 0.0  # rule 1
                     if has_pre:
-                        own = agent.opportunistic(board, ctx)
+                        own = agent.opportunistic(view, ctx)
                         if own is not None:
                             if own.__class__ is not float or not 0.0 <= own <= 1.0:
                                 own = check_probability(own, f"agents.{name}.opportunistic")
                             if own > opp:
                                 opp = own
                     if has_learned:
-                        learned = check_probability(
-                            agent.learned_rating(board, ctx), f"agents.{name}.learned"
-                        )
+                        learned = check_probability(agent.learned_rating(view, ctx), f"agents.{name}.learned")
                     variable = opp * wo + learned * wl
                     total = weighted_default + variable
                     eligible = always or variable > 0.0 or name not in acted
@@ -218,6 +238,7 @@ class Controller:
                     if eligible and total > best_total:
                         best = agent
                         best_total = total
+                        best_view = view
             except Exception as exc:
                 reason = f"agent {name!r} failed its rating: {type(exc).__name__}: {exc}"
                 emit((seq, stage, stage_cycle, tuple(rows), weights, None, None, reason, ()))
@@ -233,7 +254,7 @@ class Controller:
             name = best.name
             board.begin_cycle()
             try:
-                result = best.act(board, ctx)
+                result = best.act(best_view, ctx)
                 if result.__class__ is not ActionResult and not isinstance(result, ActionResult):
                     raise ContractError(
                         f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
@@ -271,13 +292,18 @@ class Controller:
             return log.result(status, reason, seq, per_stage, completed, stage)
 
     # --- once per run or per stage ----------------------------------------------------
-    def _stage_tables(self) -> dict[str, tuple[tuple, ...]]:
+    def _stage_tables(self, board: Board) -> dict[str, tuple[tuple, ...]]:
         """Per stage, per allowed agent, what does not change during a run: (agent, name,
-        default, weighted default, has a precondition test, has a learned hook, learned)."""
+        default, weighted default, has a precondition test, has a learned hook, learned, the
+        board as the agent sees it — the board itself, or its client in debug mode)."""
         wd = self.weights.default
+        views: dict[str, Any] = {}
+        if self.check_access:
+            views = clients_for(board, self.agents, self.entry_check)
         return {
             stage: tuple(
-                (a, a.name, a._default, a._default * wd, pre, lea, a._learned) for a, pre, lea in rows
+                (a, a.name, a._default, a._default * wd, pre, lea, a._learned, views.get(a.name, board))
+                for a, pre, lea in rows
             )
             for stage, rows in self._by_stage.items()
         }

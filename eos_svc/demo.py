@@ -10,6 +10,9 @@ It shows how another planner embeds the controller with its own agents:
   much its last step shrank |f|, and ``done`` finishes when the bracket is
   narrower than the tolerance.
 
+Each agent declares the board entries it reads and writes (``reads`` / ``writes``);
+``solve_root(..., check_access=True)`` holds them to it.
+
 Domain-free: only the standard library and the EOS core.
 """
 
@@ -33,6 +36,9 @@ STAGES = ("bracket", "refine")
 class Scan(Agent):
     """Samples the interval on a grid once, looking for a sign change."""
 
+    reads = frozenset({"interval"})
+    writes = frozenset({"bracket"})
+
     def __init__(self, f: Function, samples: int = 8) -> None:
         super().__init__("scan", ["bracket"], default=0.9)
         self.f, self.samples = f, samples
@@ -49,6 +55,9 @@ class Scan(Agent):
 
 class Widen(Agent):
     """Doubles the interval about its centre while no bracket is known."""
+
+    reads = frozenset({"interval", "bracket"})
+    writes = frozenset({"interval", "bracket"})
 
     def __init__(self, f: Function) -> None:
         super().__init__("widen", ["bracket"], default=0.5)
@@ -89,6 +98,9 @@ def _shrink(board: Board, f: Function, x: float) -> None:
 class Bisect(Agent):
     """Halves the bracket: slow and sure."""
 
+    reads = frozenset({"bracket", "best"})
+    writes = frozenset({"bracket", "best"})
+
     def __init__(self, f: Function, tolerance: float) -> None:
         super().__init__("bisect", ["refine"], default=0.6)
         self.f, self.tolerance = f, tolerance
@@ -104,6 +116,9 @@ class Bisect(Agent):
 
 class Secant(Agent):
     """Jumps to the secant root of the bracket; rated by its last gain."""
+
+    reads = frozenset({"bracket", "best", "secant_gain"})
+    writes = frozenset({"bracket", "best", "secant_gain"})
 
     def __init__(self, f: Function, tolerance: float) -> None:
         super().__init__("secant", ["refine"], default=0.4)
@@ -126,6 +141,9 @@ class Secant(Agent):
 
 class Done(Agent):
     """Finishes the run once the bracket is narrower than the tolerance."""
+
+    reads = frozenset({"bracket", "best"})
+    writes = frozenset({"root"})
 
     def __init__(self, tolerance: float) -> None:
         super().__init__("done", ["refine"], default=0.1)
@@ -159,13 +177,20 @@ def solve_root(
     weights: Weights | None = None,
     max_cycles: int = 200,
     callbacks: tuple[CycleCallback, ...] = (),
+    check_access: bool = False,
 ) -> tuple[RunResult, Board]:
-    """Solve ``problem`` with the EOS controller; returns the run result and the board."""
+    """Solve ``problem`` with the EOS controller; returns the run result and the board
+    (``check_access``: every agent touches only the board entries it declares)."""
     f = problem.f
     tol = problem.tolerance
     agents = [Scan(f), Widen(f), Bisect(f, tol), Secant(f, tol), Done(tol)]
     controller = Controller(
-        agents, STAGES, weights or Weights(0.5, 0.5), max_cycles=max_cycles, callbacks=callbacks
+        agents,
+        STAGES,
+        weights or Weights(0.5, 0.5),
+        max_cycles=max_cycles,
+        callbacks=callbacks,
+        check_access=check_access,
     )
     board = Board({"interval": problem.interval})
     return controller.run(board), board

@@ -47,6 +47,53 @@ class ContractError(FieldError, TypeError):
     (e.g. an agent whose ``act`` does not return an ``ActionResult``)."""
 
 
+class BoardAccessError(ContractError):
+    """An agent read or wrote a board entry it does not declare (``Agent.reads`` /
+    ``Agent.writes``); raised only when the controller checks board access
+    (``Controller(..., check_access=True)``). Made by :meth:`undeclared`.
+
+    Attributes:
+        agent: the agent's name.
+        key: the board entry.
+        access: ``"read"`` or ``"write"``.
+    """
+
+    def __init__(self, field: str, reason: str, agent: str = "", key: str = "", access: str = "") -> None:
+        super().__init__(field, reason)
+        self.agent = agent
+        self.key = key
+        self.access = access
+
+    @classmethod
+    def undeclared(cls, agent: str, key: str, access: str, declared: frozenset[str]) -> BoardAccessError:
+        """The error for ``agent`` reading (``access="read"``) or writing ``key`` undeclared."""
+        attribute, verb = ("reads", "read") if access == "read" else ("writes", "wrote")
+        return cls(
+            f"agents.{agent}.{attribute}",
+            f"agent {agent!r} {verb} board entry {key!r}, which is not in its {attribute} "
+            f"(declared: {sorted(declared)})",
+            agent,
+            key,
+            access,
+        )
+
+
+class BoardEntryError(ContractError):
+    """A board entry written with a value that does not have the entry's declared type; raised
+    only when the controller checks entries. ``field`` is the entry (``board.shape``) or the
+    part of it at fault (``board.shape.confidence``).
+
+    Attributes:
+        agent: the agent that wrote it ("" when written outside a run).
+        key: the board entry.
+    """
+
+    def __init__(self, field: str, reason: str, agent: str = "", key: str = "") -> None:
+        super().__init__(field, reason)
+        self.agent = agent
+        self.key = key
+
+
 class NotFoundError(FieldError, KeyError):
     """A name that is not there (an agent, a finger, a frame); ``field`` says which kind."""
 

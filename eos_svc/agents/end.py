@@ -79,6 +79,9 @@ def grasp_geometry(world: GraspWorld, friction: float = DEFAULT_FRICTION) -> dic
 class EndAgent(GraspAgent):
     """Judges the grasp and ends the run."""
 
+    reads = frozenset({keys.FINGER_STATE, keys.FRICTION})
+    writes = frozenset({keys.OUTCOME})
+
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("end", (GRASP,), default, world)
 

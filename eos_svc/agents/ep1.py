@@ -49,6 +49,11 @@ PROBE_REACH = 0.5
 class EP1Agent(GraspAgent):
     """Rolls a fingertip on the object (top, then bottom if asked) and estimates its curvature."""
 
+    reads = frozenset({keys.SHAPE, keys.CURVATURE, keys.APPROACH, keys.EP1_RUNS, keys.EP1_CONTACT})
+    writes = frozenset(
+        {keys.APPROACH, keys.CURVATURE, keys.CURVATURE_BOTTOM, keys.EP1_RUNS, keys.EP1_CONTACT}
+    )
+
     def __init__(self, default: float, world: GraspWorld, solver: str = "osqp") -> None:
         super().__init__("ep1", (INFO,), default, world)
         self.solver = solver

@@ -43,6 +43,11 @@ DONE_STATES = frozenset({"touching", "missed", "link"})
 class FingerAgent(GraspAgent):
     """Closes one finger; makes search moves in the search stage."""
 
+    reads = frozenset(
+        {keys.LOCATED, keys.SEARCH_MOVES, keys.TARGET, keys.FINGER_STATE, keys.FINGER_ANGLE, keys.D_OVER_H}
+    )
+    writes = frozenset({keys.LOCATED, keys.GAP, keys.SEARCH_MOVES, keys.FINGER_STATE, keys.FINGER_ANGLE})
+
     def __init__(self, finger: str, default: float, world: GraspWorld) -> None:
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger

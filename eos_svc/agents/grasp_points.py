@@ -59,6 +59,9 @@ class GraspPointsAgent(GraspAgent):
             oracle_postulate=True)``); never the planner's default.
     """
 
+    reads = frozenset({keys.SHAPE, keys.TARGET, keys.FRICTION})
+    writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})
+
     def __init__(self, default: float, world: GraspWorld, oracle: ObjectSpec | None = None) -> None:
         super().__init__("grasp_points", (INFO,), default, world)
         self.oracle = oracle

@@ -1,7 +1,8 @@
 """Names of the information-board entries the grasp agents share.
 
 Keeping them in one place documents what the agents know and lets tests and
-clients read the board without guessing strings.
+clients read the board without guessing strings. Each entry's type, and which agent
+reads and writes it: :mod:`eos_svc.agents.board_entries`.
 """
 
 from __future__ import annotations

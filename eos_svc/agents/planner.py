@@ -41,6 +41,7 @@ from eos_svc.agent import Agent
 from eos_svc.agents import keys
 from eos_svc.agents.admission import check_plannable
 from eos_svc.agents.base import STAGES
+from eos_svc.agents.board_entries import check_entry
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
@@ -206,6 +207,7 @@ def plan(
     memory: GraspMemory | None = None,
     oracle_postulate: bool = False,
     check: bool = True,
+    check_board: bool = False,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -227,6 +229,11 @@ def plan(
         check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` only
             when the caller has just run it on this request, hand and parameters, as the
             service does at admission).
+        check_board: debug mode: every agent reads and writes the board only through the
+            entries it declares (``reads`` / ``writes``), and every value written is checked
+            against its declared type (:mod:`eos_svc.agents.board_entries`); a breach ends the
+            plan with status ``error`` naming the agent and the entry. Off by default; the
+            plan's cycles are the same either way.
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
@@ -241,6 +248,8 @@ def plan(
         check_plannable(request, hand, params)
     world = build_world(request, hand, params, check=False)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
+        check_entry(keys.FRICTION, request.friction)
     controller = Controller(
         agents,
         STAGES,
@@ -249,6 +258,8 @@ def plan(
         deadline_s=request.deadline_s,
         keep_trace=keep_trace,
         callbacks=[on_cycle] if on_cycle is not None else [],
+        check_access=check_board,
+        entry_check=check_entry if check_board else None,
     )
     board = PoseBoard(world, {keys.FRICTION: request.friction})  # records the hand's q per cycle
     run = controller.run(board, cancel=cancel)

@@ -107,6 +107,9 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
 class PostShapeAgent(GraspAgent):
     """Turns what the fingers felt into a postulated object with a confidence."""
 
+    reads = frozenset({keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH})
+    writes = frozenset({keys.SHAPE, keys.D_OVER_H})
+
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("post_shape", (INFO,), default, world)
 

@@ -26,6 +26,9 @@ RECALLED = "recalled"  #: board entry: the memory key recall applied
 class RecallAgent(GraspAgent):
     """Pre-shapes the hand to a remembered grasp."""
 
+    reads = frozenset({keys.SHAPE, keys.D_OVER_H, RECALLED})
+    writes = frozenset({RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
+
     def __init__(self, world: GraspWorld, memory: GraspMemory) -> None:
         super().__init__("recall", (GRASP,), 0.0, world)
         self.memory = memory

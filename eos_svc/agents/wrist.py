@@ -29,6 +29,13 @@ from eos_svc.board import Board
 class WristAgent(GraspAgent):
     """Moves the whole hand."""
 
+    reads = frozenset(
+        {keys.LOCATED, keys.SEARCH_MOVES, keys.TARGET, keys.AT_TARGET, keys.FINGER_STATE, keys.D_OVER_H}
+    )
+    writes = frozenset(
+        {keys.LOCATED, keys.GAP, keys.SEARCH_MOVES, keys.TARGET, keys.AT_TARGET, keys.WRIST_LEFT}
+    )
+
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("wrist", (SEARCH, GRASP), default, world)
 

@@ -96,6 +96,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="grasp memory (SQLite file, created if missing): adds the recall agent and records this plan; "
         "give a learned weight, e.g. --w-default 0.25 --w-opportunistic 0.25 --w-learned 0.5",
     )
+    g.add_argument(
+        "--check-board",
+        action="store_true",
+        help="debug mode: every agent may touch only the board entries it declares, every value "
+        "written is checked against its type; a breach ends the plan with status error",
+    )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
     out.add_argument(
@@ -282,7 +288,13 @@ def run(args: argparse.Namespace) -> int:
         view.start(request)
         view_options.wait_for_browser(view, args.view_wait)
     try:
-        result = plan(request, on_cycle=view_options.with_view(on_cycle, view), hand=hand, memory=memory)
+        result = plan(
+            request,
+            on_cycle=view_options.with_view(on_cycle, view),
+            hand=hand,
+            memory=memory,
+            check_board=getattr(args, "check_board", False),
+        )
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:

@@ -1,0 +1,300 @@
+"""The grasp planner's board entries: each one's type, in one place.
+
+The entries stay plain JSON-able values (dicts, lists, numbers) — the form the cycle records
+and the wire carry — and their shapes are declared here as ``TypedDict``s. :data:`ENTRIES`
+maps every entry name (:mod:`eos_svc.agents.keys`) to its type and meaning; which agent reads
+and writes which entry is declared on the agents themselves (``reads`` / ``writes``, see
+:class:`eos_svc.agent.Agent`) and tabulated by :mod:`eos_svc.agents.board_table` (the table in
+``docs/planner.md``).
+
+In the debug mode ``plan(..., check_board=True)`` the controller checks every access against
+the agents' declarations and every value written with :func:`check_entry`: required fields
+present, no undeclared field, and each field of the declared type (``float`` accepts an
+``int``; ``list`` a tuple).
+"""
+
+import functools
+import sys
+import types
+from dataclasses import dataclass
+from typing import Any, Literal, Union, get_args, get_origin
+
+from eos_svc.agents import keys
+from eos_svc.agents.recall import RECALLED
+from eos_svc.errors import ContractError
+
+if sys.version_info >= (3, 11):
+    from typing import NotRequired, TypedDict, get_type_hints, is_typeddict
+else:  # pragma: no cover - Python 3.10: PEP 655's backport
+    from typing_extensions import NotRequired, TypedDict, get_type_hints, is_typeddict
+
+#: a point or a direction in the world frame (m; unit for a direction)
+Vector = list[float]
+#: what a finger is doing in the grasping stage
+FingerState = Literal["open", "closing", "touching", "missed", "link"]
+
+
+class CurvatureEntry(TypedDict):
+    """EP1's curvature estimate of one side (``CurvatureEstimate.to_dict`` and where it rolled).
+
+    Curvatures in 1/m, radii in m (``None`` for a flat direction or an unknown σ)."""
+
+    form: list[list[float]]
+    principal_curvatures: list[float]
+    sigma_curvatures: list[float | None]
+    radii: list[float | None]
+    mean_curvature: float
+    sigma_mean_curvature: float | None
+    mean_radius: float | None
+    relative_error: float | None
+    rating: float
+    flat: list[bool]
+    n_samples: int
+    residual_rms: float
+    finger: str
+    side: Literal["top", "bottom"]
+    max_slip_speed: float
+
+
+class SensedContact(TypedDict):
+    """A contact EP1 sensed (world, m): which finger, the point, the object's outward normal."""
+
+    finger: str
+    point: Vector
+    normal: Vector
+
+
+class ApproachEntry(TypedDict):
+    """The object's surface point nearest the hand and the unit direction from the hand to it."""
+
+    point: Vector
+    direction: Vector
+
+
+# "class" cannot be a field name in the class syntax: the functional form declares the postulate.
+ShapeEntry = TypedDict(
+    "ShapeEntry",
+    {
+        "class": str,
+        "grasp_radius": float | None,
+        "diameter": float | None,
+        "centre": list[float] | None,
+        "confidence": float,
+        "principal_curvatures": list[float],
+        "curvature_radius": float | None,
+        "needs": str | None,
+        "object": NotRequired[dict[str, Any] | None],
+        "pose_known": NotRequired[bool],
+        "evidence": NotRequired[dict[str, Any]],
+        "bounds": NotRequired[list[Vector] | None],
+    },
+)
+ShapeEntry.__doc__ = """post_shape's postulate.
+
+Required: ``class`` (plane, cylinder, sphere, ellipsoid, …), ``grasp_radius`` (vertical
+half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (world, m, or
+``None``), ``confidence`` in [0, 1], the top's ``principal_curvatures`` (1/m) and
+``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
+e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
+JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
+postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
+"""
+
+
+class LandingEntry(TypedDict):
+    """Where a closing fingertip lands: its joint angle (rad), the point and the outward normal
+    (world, m)."""
+
+    angle: float
+    point: Vector
+    normal: Vector
+
+
+class TargetEntry(TypedDict):
+    """grasp_points' target (world, m and rad): the wrist's goal and angles, the pre-grasp, the
+    postulated centre, approach and closing directions, the grasp's label, its ε and angle
+    across the centre (deg), each finger's chosen contact, the postulated object (request
+    form), whether its pose was assumed upright, the postulate's source; ``repredicted`` once
+    the wrist re-predicted the contacts from where it had to stop."""
+
+    wrist: Vector
+    wrist_rpy: list[float]
+    pregrasp: Vector
+    centre: Vector
+    approach: Vector
+    closing: Vector
+    grasp: str
+    epsilon: float
+    angle_deg: float
+    contacts: dict[str, LandingEntry]
+    object: dict[str, Any]
+    pose_assumed_upright: bool
+    postulate: str
+    repredicted: NotRequired[bool]
+
+
+class FingertipContact(TypedDict):
+    """One fingertip as the end agent judged it: touching, distance (m), contact point and the
+    object's outward normal there (world)."""
+
+    touching: bool
+    distance: float
+    point: Vector
+    normal: Vector
+
+
+class OutcomeEntry(TypedDict):
+    """The end agent's verdict (:func:`eos_svc.agents.end.grasp_geometry`): contacts per finger,
+    whether all touch, the grip is good and about the diameter, the angle across the centre
+    (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
+    hand configuration judged."""
+
+    contacts: dict[str, FingertipContact]
+    all_touching: bool
+    good: bool
+    about_diameter: bool
+    diameter_angle_deg: float | None
+    quality: dict[str, Any]
+    q_final: list[float]
+
+
+@dataclass(frozen=True)
+class Entry:
+    """A board entry's declared type and meaning (SI units)."""
+
+    type: Any
+    meaning: str
+
+
+#: every board entry of the grasp planner: name -> declared type and meaning
+ENTRIES: dict[str, Entry] = {
+    keys.LOCATED: Entry(bool, "the object is within the hand's envelope"),
+    keys.GAP: Entry(float, "object surface to the grasp centre (m)"),
+    keys.SEARCH_MOVES: Entry(int, "random search moves made"),
+    keys.CURVATURE: Entry(CurvatureEntry, "EP1's curvature estimate of the object's top"),
+    keys.CURVATURE_BOTTOM: Entry(CurvatureEntry, "the same on the object's bottom, when explored"),
+    keys.EP1_RUNS: Entry(int, "EP1 runs so far"),
+    keys.EP1_CONTACT: Entry(dict[str, SensedContact], "side (top, bottom) -> the contact EP1 sensed"),
+    keys.APPROACH: Entry(ApproachEntry, "the object's point nearest the hand, the direction to it"),
+    keys.SHAPE: Entry(ShapeEntry, "post_shape's postulate"),
+    keys.D_OVER_H: Entry(float, "estimated object diameter over hand height"),
+    keys.TARGET: Entry(TargetEntry, "grasp_points' target"),
+    keys.AT_TARGET: Entry(bool, "the wrist reached its grasp position"),
+    keys.WRIST_LEFT: Entry(float, "distance left to the wrist's grasp position (m)"),
+    keys.FINGER_STATE: Entry(dict[str, FingerState], "finger -> what it is doing"),
+    keys.FINGER_ANGLE: Entry(dict[str, float], "finger -> its joints' angle (rad)"),
+    keys.OUTCOME: Entry(OutcomeEntry, "the end agent's verdict"),
+    keys.FRICTION: Entry(float, "Coulomb μ of the fingertip contacts (the request's)"),
+    RECALLED: Entry(str, "the grasp-memory key recall applied"),
+}
+
+#: entries written by others than the agents: entry -> who (the planner before the first cycle,
+#: from the request)
+OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up"}
+#: entries the planner reads after the run, for its result and the grasp memory
+AFTER_RUN: frozenset[str] = frozenset(
+    {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
+)
+
+#: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)
+_ALIASES: dict[str, Any] = {"FingerState": FingerState}
+
+
+# --- the runtime check --------------------------------------------------------------------
+def check_entry(key: str, value: Any) -> None:
+    """Check ``value`` against entry ``key``'s declared type.
+
+    Raises:
+        ContractError: ``field`` names the entry (``board.shape``) or the part at fault
+            (``board.shape.confidence``), ``reason`` says what is wrong; also for an entry
+            that :data:`ENTRIES` does not declare.
+    """
+    entry = ENTRIES.get(key)
+    if entry is None:
+        raise ContractError(
+            f"board.{key}", "no type is declared for this entry in eos_svc.agents.board_entries"
+        )
+    _check(value, entry.type, f"board.{key}")
+
+
+@functools.cache
+def _fields(typed: type) -> tuple[dict[str, Any], frozenset[str]]:
+    """A TypedDict's field types and required keys."""
+    return get_type_hints(typed), frozenset(typed.__required_keys__)  # type: ignore[attr-defined]
+
+
+def _check(value: Any, tp: Any, field: str) -> None:
+    if tp is Any:
+        return
+    if is_typeddict(tp):
+        if not isinstance(value, dict):
+            raise ContractError(field, f"must be a {tp.__name__} dict, got {type(value).__name__}")
+        hints, required = _fields(tp)
+        missing = sorted(required - value.keys())
+        if missing:
+            raise ContractError(field, f"missing required field(s) {missing} of {tp.__name__}")
+        unknown = sorted(set(value) - hints.keys())
+        if unknown:
+            raise ContractError(field, f"field(s) {unknown} not declared in {tp.__name__}")
+        for name, item in value.items():
+            _check(item, hints[name], f"{field}.{name}")
+        return
+    origin = get_origin(tp)
+    if origin is Union or origin is types.UnionType:
+        for option in get_args(tp):
+            try:
+                _check(value, option, field)
+                return
+            except ContractError:
+                continue
+        raise ContractError(field, f"must be {type_name(tp)}, got {value!r:.60}")
+    if origin is Literal:
+        if value not in get_args(tp):
+            raise ContractError(field, f"must be one of {list(get_args(tp))}, got {value!r}")
+        return
+    if origin is list:
+        if not isinstance(value, (list, tuple)):
+            raise ContractError(field, f"must be a list, got {type(value).__name__}")
+        (item_type,) = get_args(tp)
+        for i, item in enumerate(value):
+            _check(item, item_type, f"{field}[{i}]")
+        return
+    if origin is dict:
+        if not isinstance(value, dict):
+            raise ContractError(field, f"must be a dict, got {type(value).__name__}")
+        key_type, item_type = get_args(tp)
+        for name, item in value.items():
+            if not isinstance(name, key_type):
+                raise ContractError(field, f"key {name!r} must be a {key_type.__name__}")
+            _check(item, item_type, f"{field}.{name}")
+        return
+    if tp is None or tp is type(None):
+        if value is not None:
+            raise ContractError(field, f"must be None, got {value!r:.60}")
+        return
+    if tp is float:
+        ok = isinstance(value, (int, float)) and not isinstance(value, bool)
+    elif tp is int:
+        ok = isinstance(value, int) and not isinstance(value, bool)
+    else:
+        ok = isinstance(value, tp)
+    if not ok:
+        name = type_name(tp)
+        article = "an" if name[0] in "aeiou" else "a"
+        raise ContractError(field, f"must be {article} {name}, got {type(value).__name__} {value!r:.60}")
+
+
+# --- how a declared type reads ----------------------------------------------------------------
+def type_name(tp: Any) -> str:
+    """A declared type as the table and the errors print it (``FingerState`` by name)."""
+    for name, alias in _ALIASES.items():
+        if tp == alias:
+            return name
+    if tp is type(None) or tp is None:
+        return "None"
+    origin = get_origin(tp)
+    if origin is Union or origin is types.UnionType:
+        return " | ".join(type_name(a) for a in get_args(tp))
+    if origin in (list, dict):
+        return f"{origin.__name__}[{', '.join(type_name(a) for a in get_args(tp))}]"
+    return getattr(tp, "__name__", str(tp))
