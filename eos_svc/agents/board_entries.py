@@ -101,6 +101,17 @@ postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
 """
 
 
+class EP2Touch(TypedDict):
+    """A contact an EP2 probe made (world, m): the face probed (``front``, ``top``, ``slide``, …),
+    the finger, its tip centre, the sensed outward normal and the tip radius."""
+
+    face: str
+    finger: str
+    centre: Vector
+    normal: Vector
+    radius: float
+
+
 class LandingEntry(TypedDict):
     """Where a closing fingertip lands: its joint angle (rad), the point and the outward normal
     (world, m)."""
@@ -175,6 +186,15 @@ ENTRIES: dict[str, Entry] = {
     keys.CURVATURE_BOTTOM: Entry(CurvatureEntry, "the same on the object's bottom, when explored"),
     keys.EP1_RUNS: Entry(int, "EP1 runs so far"),
     keys.EP1_CONTACT: Entry(dict[str, SensedContact], "side (top, bottom) -> the contact EP1 sensed"),
+    keys.EP2_TOUCHES: Entry(list[EP2Touch], "EP2's contacts"),
+    keys.EP2_FREE: Entry(
+        list[list[float]], "tip-centre samples [x, y, z, tip radius] of EP2 probes that touched nothing (m)"
+    ),
+    keys.EP2_RUNS: Entry(int, "EP2 rounds so far"),
+    keys.HAND_Q: Entry(list[float], "the hand's configuration after the cycle (m, rad)"),
+    keys.HAND_PATH: Entry(
+        list[list[float]], "the hand's configurations during an EP1 roll, sampled (for viewers)"
+    ),
     keys.APPROACH: Entry(ApproachEntry, "the object's point nearest the hand, the direction to it"),
     keys.SHAPE: Entry(ShapeEntry, "post_shape's postulate"),
     keys.D_OVER_H: Entry(float, "estimated object diameter over hand height"),
@@ -190,7 +210,7 @@ ENTRIES: dict[str, Entry] = {
 
 #: entries written by others than the agents: entry -> who (the planner before the first cycle,
 #: from the request)
-OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up"}
+OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up", keys.HAND_Q: "PoseBoard, every cycle"}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
     {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}

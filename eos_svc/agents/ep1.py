@@ -51,7 +51,14 @@ class EP1Agent(GraspAgent):
 
     reads = frozenset({keys.SHAPE, keys.CURVATURE, keys.APPROACH, keys.EP1_RUNS, keys.EP1_CONTACT})
     writes = frozenset(
-        {keys.APPROACH, keys.CURVATURE, keys.CURVATURE_BOTTOM, keys.EP1_RUNS, keys.EP1_CONTACT}
+        {
+            keys.APPROACH,
+            keys.CURVATURE,
+            keys.CURVATURE_BOTTOM,
+            keys.EP1_RUNS,
+            keys.EP1_CONTACT,
+            keys.HAND_PATH,
+        }
     )
 
     def __init__(self, default: float, world: GraspWorld, solver: str = "osqp") -> None:

@@ -92,6 +92,9 @@ def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
 class EP2Agent(GraspAgent):
     """Probes the object's front, sides, top and bottom with guarded fingertip moves."""
 
+    reads = frozenset({keys.SHAPE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE})
+    writes = frozenset({keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS})
+
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("ep2", (INFO,), default, world)
         self.rounds = 0

@@ -107,7 +107,7 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
 class PostShapeAgent(GraspAgent):
     """Turns what the fingers felt into a postulated object with a confidence."""
 
-    reads = frozenset({keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH})
+    reads = frozenset({keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE})
     writes = frozenset({keys.SHAPE, keys.D_OVER_H})
 
     def __init__(self, default: float, world: GraspWorld) -> None:
