@@ -52,7 +52,7 @@ CONTACTS = f"{ROOT}/contacts"
 
 #: colours (RGBA, 0..1); the fingertips per finger in the hand's order
 OBJECT_RGBA = Rgba(0.298, 0.608, 0.910, 0.45)
-POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.35)
+POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.2)
 LINK_RGBA = Rgba(0.60, 0.60, 0.62, 1.0)
 PALM_RGBA = Rgba(0.43, 0.43, 0.45, 1.0)
 TIP_RGBAS = (

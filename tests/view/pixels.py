@@ -9,7 +9,7 @@ from PIL import Image
 
 #: hue ranges (degrees) of the drawn colours, as rendered (lit) by MeshCat
 HUES = {
-    "object": (195.0, 225.0),  # blue (translucent over a grey background)
+    "object": (175.0, 225.0),  # blue (translucent over grey), teal under the translucent yellow postulate
     "tip1": (20.0, 44.0),  # orange
     "postulate": (45.0, 75.0),  # translucent yellow
     "tip2": (90.0, 150.0),  # green

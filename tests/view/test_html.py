@@ -88,14 +88,18 @@ def test_chromium_shows_the_postulate_from_its_cycle_on(result, tmp_path):
 
 @needs_chromium
 def test_chromium_draws_the_hand_and_the_object_and_steps_the_animation(page, result, tmp_path):
-    start = screenshot(f"{page.as_uri()}#cycle=1", tmp_path / "start.png")
+    # from the first information cycle (the search's sweeps cross the whole workspace, out of
+    # this close-up camera's frame) to the last
+    first_info = next(r.seq for r in result.trace if r.stage == "information")
+    start = screenshot(f"{page.as_uri()}#cycle={first_info}", tmp_path / "start.png")
     end = screenshot(f"{page.as_uri()}#cycle={result.cycles}", tmp_path / "end.png")
     a, b = colour_regions(start), colour_regions(end)
     for shot in (a, b):
         assert shot["object"][0] > 2000  # the sphere, tens of pixels across
         assert shot["tip2"][0] > 200 and shot["tip3"][0] > 200  # two fingertips
     assert b["tip1"][0] > 50  # the third one, beside the others at the end
-    assert distance(a["object"][1], b["object"][1]) < 10.0  # the object does not move (tips hide a rim)
+    # the object does not move (it is ~120 px across; fingertips and the contact cone hide parts)
+    assert distance(a["object"][1], b["object"][1]) < 15.0
     # the hand closes on it: the fingertips end near the object's centre
     for tip in ("tip2", "tip3"):
         assert distance(b[tip][1], b["object"][1]) < 0.6 * distance(a[tip][1], a["object"][1])
