@@ -28,7 +28,8 @@ VARIANTS: dict[str, dict] = {
     "kp 10": {"kp": 10.0},
     "dt 0.5 ms": {"time_step": 5e-4},
 }
-#: (suite object, seed): good grasps today, and grasps called not good that Drake holds
+#: (suite object, seed): chosen as good grasps and as grasps once called not good that Drake
+#: held; the planner grasps all six well today (a not-good grasp is only printed, not asserted)
 CASES = (
     ("sphere d/h 0.20", 1),
     ("sphere d/h 0.50", 1),
