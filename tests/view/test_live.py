@@ -84,7 +84,10 @@ def test_watcher_follows_a_remote_plan_over_zenoh_in_a_browser(tmp_path):
     view = stream.view
     assert stream.goals_done == ["watched-1"]
     assert view.cycles_seen == outcome.result["cycles"]  # every cycle of the stream
-    assert view.updates_sent >= 2  # pushed while the plan ran (throttled), then the end
+    # the stream is pumped after the plan's reply here, so the cycles arrive in one burst: the
+    # throttle lets at most one pose through before the end's (none when the page's websocket
+    # was reconnecting under load); the page's final picture is checked below
+    assert view.updates_sent >= 1
     assert np.allclose(view.q, outcome.result["q_final"], atol=1e-7)
     assert view.request is not None and view.request.seed == 6  # from the running status
     assert view.meshcat.GetButtonNames()[0].startswith(f"{outcome.result['status']} after ")
