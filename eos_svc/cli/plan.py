@@ -206,7 +206,8 @@ def format_result(result: Any) -> str:
     ]
     if result.shape:
         s = result.shape
-        size = "size unknown" if s["grasp_radius"] is None else f"radius {s['grasp_radius'] * 1000:.2f} mm"
+        half = s["grasp_radius"]
+        size = "size unknown" if half is None else f"half-height {half * 1000:.2f} mm"
         confidence = s["confidence"]
         lines.append(
             f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs})"

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from eos_svc.cli.common import fail, positive_float
+from eos_svc.cli.common import fail, finite_float, positive_float
 
 
 def add_html_argument(group: argparse._ArgumentGroup | argparse.ArgumentParser) -> None:
@@ -44,21 +44,37 @@ def add_view_arguments(group: argparse._ArgumentGroup, waits: bool = True) -> No
         )
         group.add_argument(
             "--view-hold",
-            type=float,
+            type=non_negative_float,
             default=None,
             metavar="S",
             help="with --view: keep serving S s after the plan (default: until Ctrl-C)",
         )
 
 
+def non_negative_float(text: str) -> float:
+    """argparse type: a finite float ≥ 0."""
+    value = finite_float(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {text!r}")
+    return value
+
+
 def _check_port(port: int | None) -> None:
-    if port is not None and not 1 <= port <= 65535:
-        fail(f"--view-port: must be a TCP port in [1, 65535], got {port}")
+    if port is not None and port != 0 and not 1024 <= port <= 65535:
+        fail(f"--view-port: must be a port in [1024, 65535] (MeshCat refuses privileged ports), got {port}")
+
+
+def _check_needs_view(args: argparse.Namespace) -> None:
+    """``--view-port``/``--view-wait``/``--view-hold`` without ``--view`` are mistakes: say so."""
+    for name in ("view_port", "view_wait", "view_hold"):
+        if getattr(args, name, None) is not None:
+            fail(f"--{name.replace('_', '-')}: needs --view")
 
 
 def open_view(args: argparse.Namespace, hand: Any = None) -> Any:
     """The :class:`~eos_svc.view.live.LiveView` ``--view`` asks for (its URL printed), or None."""
     if not getattr(args, "view", False):
+        _check_needs_view(args)
         return None
     _check_port(args.view_port)
     from eos_svc.view.live import LiveView
