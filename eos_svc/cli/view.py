@@ -60,7 +60,7 @@ def non_negative_float(text: str) -> float:
 
 
 def _check_port(port: int | None) -> None:
-    if port is not None and port != 0 and not 1024 <= port <= 65535:
+    if port is not None and not 1024 <= port <= 65535:
         fail(f"--view-port: must be a port in [1024, 65535] (MeshCat refuses privileged ports), got {port}")
 
 

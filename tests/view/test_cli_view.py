@@ -67,7 +67,11 @@ def test_plan_view_serves_a_page_and_prints_its_url(tmp_path):
     ("args", "message"),
     [
         (["plan", "--html", "/nonexistent-dir/plan.html"], "--html: cannot write"),
-        (["plan", "--view", "--view-port", "0"], "--view-port: must be a TCP port"),
+        (["plan", "--view", "--view-port", "0"], "--view-port: must be a port in [1024, 65535]"),
+        (["plan", "--view", "--view-port", "80"], "--view-port: must be a port in [1024, 65535]"),
+        (["plan", "--view-port", "9000"], "--view-port: needs --view"),
+        (["plan", "--view", "--view-hold", "nan"], "--view-hold: must be finite"),
+        (["client", "watch", "--view-port", "99999"], "--view-port: needs --view"),
         (["plan", "--view", "--view-wait", "-1"], "--view-wait"),
         (["replay", "/nonexistent-dir/run.jsonl", "--html", "x.html"], "FILE: cannot read"),
     ],
