@@ -1,4 +1,4 @@
-"""Other hands: the planner with the Allegro hand of example-robot-data (issue 7, item 4).
+"""Other hands: the planner with the Allegro hand of example-robot-data.
 
 The Allegro URDF is found from the installed example-robot-data distribution and put on the
 planner's six wrist joints (``eos_svc.kinematics.allegro_hand``); the planner takes its

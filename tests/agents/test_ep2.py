@@ -1,4 +1,4 @@
-"""EP2 and post_shape: guarded probes, the postulated object (C1), EP1 before EP2."""
+"""EP2 and post_shape: guarded probes, the postulate's object fields, EP1 before EP2."""
 
 from __future__ import annotations
 
@@ -59,7 +59,7 @@ def test_the_postulate_is_an_object_in_the_request_form(box_plan):
     assert shape["class"] == "box"
     assert shape["confidence"] >= 0.6
     assert shape["pose_known"] is True
-    posited = ObjectSpec.from_dict(shape["object"])  # C1: exactly what the request accepts
+    posited = ObjectSpec.from_dict(shape["object"])  # the postulate's object: what the request accepts
     assert posited.shape == "box"
     np.testing.assert_allclose(sorted(posited.size["size"]), sorted(spec.size["size"]), atol=2e-3)
     np.testing.assert_allclose(posited.position, spec.position, atol=2e-3)

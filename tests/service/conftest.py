@@ -16,7 +16,7 @@ from eos_svc.service.session import free_port, loopback, make_config
 
 @pytest.fixture(scope="session")
 def grasp_planner() -> Callable[..., Any]:
-    """The real grasp planner (issue 5); EOS_TEST_PLANNER=root swaps in the core demo (transport only)."""
+    """The real grasp planner; EOS_TEST_PLANNER=root swaps in the core demo (transport only)."""
     if os.environ.get("EOS_TEST_PLANNER") == "root":
         return root_plan
     from eos_svc.agents.planner import plan

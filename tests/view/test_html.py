@@ -64,7 +64,7 @@ def with_postulated_object(records):
 
 
 def test_scene_holds_the_object_the_contacts_and_the_postulate(result):
-    """A postulate carrying an ``object`` is drawn; one without (as the planner writes today) is not."""
+    """A postulate carrying an ``object`` is drawn (every plan now carries one); one without is not."""
     records = [r.to_dict() for r in result.trace]
     scene = plan_scene(result.request, records, result.to_dict())
     assert scene.meshcat.HasPath(OBJECT)
