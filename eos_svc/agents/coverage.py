@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from eos_svc.agents.world import WorldParameters
+    from eos_svc.agents.world_parameters import WorldParameters
     from eos_svc.kinematics import SurfaceObject
 
 
@@ -99,7 +99,7 @@ def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> li
 
 
 #: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
-#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.world.forward_reach``
+#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.sweeps.forward_reach``
 HAND3X3_FORWARD_REACH = 0.14
 
 

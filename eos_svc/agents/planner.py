@@ -54,7 +54,9 @@ from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.agents.result import PlanResult
-from eos_svc.agents.world import FingerSweep, GraspWorld, WorldParameters, build_sweeps
+from eos_svc.agents.sweeps import FingerSweep, build_sweeps
+from eos_svc.agents.world import GraspWorld
+from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller

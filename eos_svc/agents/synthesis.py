@@ -14,7 +14,7 @@ closing axis through the centre of mass across the object, as GraspIt's primitiv
 - box: across each pair of opposite faces, approach along the other face normals.
 
 Each candidate is simulated on the *postulated* object (never the true one): every finger's
-closing sweep (:class:`~eos_svc.agents.world.FingerSweep`, fingertip-centre path in the palm
+closing sweep (:class:`~eos_svc.agents.sweeps.FingerSweep`, fingertip-centre path in the palm
 frame) is run against the object's signed distance until the fingertip touches — its
 *landing*: sweep index, contact point and outward normal. A candidate is kept when the
 wrist can take its pose (joint limits), every fingertip lands from the open hand, the
@@ -38,7 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.agents.quality import grasp_quality
-from eos_svc.agents.world import FingerSweep, WorldParameters
+from eos_svc.agents.sweeps import FingerSweep
+from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.kinematics import (
     Box,
     Capsule,

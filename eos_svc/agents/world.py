@@ -13,14 +13,15 @@ zero in the search and while EP1 explores (the palm frame is then the world
 frame shifted by the wrist's translation, the hand approaching along +x);
 grasp_points turns it to the chosen grasp's orientation. SI units. What depends
 on the hand is derived from it:
-:meth:`WorldParameters.for_hand` (grasp centre, search box, hand bound),
-:func:`build_sweeps` (closing paths), :attr:`GraspWorld.probe` (which finger
-explores the object's top and bottom, and at which angle).
+:meth:`WorldParameters.for_hand` (grasp centre, search box, hand bound:
+:mod:`eos_svc.agents.world_parameters`), :func:`~eos_svc.agents.sweeps.build_sweeps`
+(closing paths), :attr:`GraspWorld.probe` (which finger explores the object's top and bottom,
+and at which angle: :mod:`eos_svc.agents.probing`). The cheap lower bounds on hand–object
+gaps that spare most exact coal queries are :mod:`eos_svc.kinematics.gap_bounds`.
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
@@ -30,233 +31,12 @@ import coal
 import numpy as np
 
 from eos_svc.agents.coverage import column_counts, space_filling_order, wrist_columns
-from eos_svc.kinematics import HandDescription, HandModel, HandState, Scene, SurfaceObject, TactileSensor
+from eos_svc.agents.probing import ProbeChoice, ProbeOutcome, densify
+from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
+from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
-
-
-@dataclass(frozen=True)
-class WorldParameters:
-    """Tunable constants of the grasp world (SI units).
-
-    Attributes:
-        search_box_lo, search_box_hi: bounds of the wrist's search workspace (m).
-        envelope_radius: the object is *located* when its surface comes within this
-            distance of the hand's grasp centre (m).
-        grasp_centre: the grasp centre in the palm frame (m): between the fingers.
-        clearance: smallest hand–object distance a search or approach move may leave (m).
-        wrist_step: length of one wrist approach step in the grasp stage (m).
-        approach_distance: pre-grasp stand-off: how far before its grasp position the
-            hand is placed by grasp_points (m).
-        finger_step: joint increment of one finger closing step (rad, every joint).
-        contact_tolerance: a fingertip within this distance touches (m).
-        ep1_steps: rolling steps per direction in one EP1 run.
-        ep1_omega: rolling rate (rad/s); with ``ep1_dt`` the sweep of one direction is
-            ``ep1_omega · ep1_dt · ep1_steps`` rad (0.32 rad by default: large enough that the
-            contact's travel over the fingertip dominates the tactile noise).
-        ep1_dt: time step of the rolling motion (s).
-        ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
-        confidence_threshold: post_shape confidence needed to leave the information stage.
-        landing_tolerance: a finger closes only when its tip will land within this distance
-            of the contact grasp_points chose for it, on the postulated object (m).
-        hand_bound: radius of a ball about the grasp centre that contains the whole hand at
-            any finger angle (m); objects farther away need no collision query.
-    """
-
-    search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
-    search_box_hi: tuple[float, float, float] = (0.30, 0.15, 0.15)
-    envelope_radius: float = 0.05
-    grasp_centre: tuple[float, float, float] = (0.11, 0.0, 0.0)
-    clearance: float = 0.002
-    wrist_step: float = 0.005
-    approach_distance: float = 0.04
-    finger_step: float = 0.03
-    contact_tolerance: float = 1e-4
-    ep1_steps: int = 16
-    ep1_omega: float = 2.0
-    ep1_dt: float = 0.01
-    ep1_directions: tuple[float, ...] = (0.0, 90.0)
-    confidence_threshold: float = 0.6
-    landing_tolerance: float = 0.002
-    hand_bound: float = 0.2
-
-    @classmethod
-    def for_hand(cls, hand: HandModel, **overrides: object) -> WorldParameters:
-        """Parameters for ``hand``: the defaults (tuned for hand3x3) for hand3x3 itself; for
-        another hand the hand-dependent fields are derived from its model (see
-        :func:`derive_hand_fields`). ``overrides`` replace any field afterwards."""
-        if is_hand3x3(hand):
-            return cls(**overrides)  # type: ignore[arg-type]
-        return cls(**{**derive_hand_fields(hand), **overrides})  # type: ignore[arg-type]
-
-
-def is_hand3x3(hand: HandModel) -> bool:
-    """Whether ``hand`` is described as hand3x3 (the hand the defaults are tuned for)."""
-    radius = hand.tip_radius(hand.finger_names[0])
-    return hand.description == HandDescription.hand3x3(radius)
-
-
-def derive_hand_fields(hand: HandModel, sweeps: dict[str, FingerSweep] | None = None) -> dict[str, object]:
-    """The hand-dependent :class:`WorldParameters` fields, from the hand's model.
-
-    - ``grasp_centre``: on the hand axis (the palm frame's x axis), at the mean x of the
-      points where each finger's closing path comes nearest that axis;
-    - ``search_box_lo``/``hi``: hand3x3's wrist box shifted so the grasp centre sweeps the
-      same region of the world (an object findable by hand3x3 is findable by this hand);
-    - ``hand_bound``: the largest distance from the grasp centre to any point of any
-      collision geometry over every finger's closing path, plus 1 cm.
-    """
-    sweeps = sweeps if sweeps is not None else build_sweeps(hand)
-    xs = []
-    for sweep in sweeps.values():
-        off_axis = np.hypot(sweep.points[:, 1], sweep.points[:, 2])
-        xs.append(float(sweep.points[int(np.argmin(off_axis)), 0]))
-    centre = np.array([round(float(np.mean(xs)), 4), 0.0, 0.0])
-    base = WorldParameters()
-    shift = centre - np.asarray(base.grasp_centre)
-    lo = np.round(np.asarray(base.search_box_lo) - shift, 4)
-    hi = np.round(np.asarray(base.search_box_hi) - shift, 4)
-    return {
-        "grasp_centre": tuple(centre.tolist()),
-        "search_box_lo": tuple(lo.tolist()),
-        "search_box_hi": tuple(hi.tolist()),
-        "hand_bound": round(_hand_reach(hand, sweeps, centre) + 0.01, 3),
-    }
-
-
-def _hand_reach(hand: HandModel, sweeps: dict[str, FingerSweep], centre_palm: np.ndarray) -> float:
-    """Largest distance from ``centre_palm`` to any collision geometry's bounding sphere over
-    the fingers' closing paths (every finger at the same fraction of its range), wrist at 0."""
-    state = hand.state(hand.neutral())
-    palm = state.palm_placement()
-    geometries = hand.collision_model.geometryObjects
-    radii = []
-    for g in geometries:
-        g.geometry.computeLocalAABB()
-        radii.append(float(g.geometry.aabb_radius) + float(np.linalg.norm(g.geometry.aabb_center)))
-    reach = 0.0
-    for fraction in np.linspace(0.0, 1.0, 21):
-        q = hand.neutral()
-        for finger, sweep in sweeps.items():
-            q[hand.finger_q_index(finger)] = sweep.angles[0] + fraction * (sweep.angles[-1] - sweep.angles[0])
-        state.update(q)
-        for gid, radius in enumerate(radii):
-            p = palm.actInv(state.geometry_data.oMg[gid].translation)
-            reach = max(reach, float(np.linalg.norm(p - centre_palm)) + radius)
-    return reach
-
-
-@dataclass
-class FingerSweep:
-    """Fingertip-centre positions in the palm frame as the finger closes (all joints equal).
-
-    Attributes:
-        angles: joint angle of every sample (rad), increasing (closing).
-        points: (N, 3) tip-centre positions in the palm frame (m).
-    """
-
-    angles: np.ndarray
-    points: np.ndarray
-
-    def index_at(self, angle: float) -> int:
-        """Index of the first sample at or beyond ``angle``."""
-        return int(np.searchsorted(self.angles, angle - 1e-12))
-
-    def reaches(self, angle: float, centre_palm: np.ndarray, radius: float) -> bool:
-        """Whether closing from ``angle`` brings the tip centre within ``radius`` of ``centre_palm``."""
-        rest = self.points[self.index_at(angle) :]
-        if len(rest) == 0:
-            return False
-        d = rest - centre_palm
-        return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
-
-    def last_within(self, centre_palm: np.ndarray, radius: float) -> int:
-        """Index of the last sample within ``radius`` of ``centre_palm`` (−1 if none): closing
-        from ``angle`` reaches it (:meth:`reaches`) iff ``index_at(angle) <= last_within(...)``,
-        so one evaluation per centre serves every angle."""
-        d = self.points - centre_palm
-        within = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= radius * radius)
-        return int(within[-1]) if len(within) else -1
-
-
-@dataclass(frozen=True)
-class ProbeChoice:
-    """Which finger EP1 rolls on the object's top and on its bottom, and at which angle.
-
-    Attributes:
-        top: the non-opposing finger whose closing path runs nearest the palm's x–z plane
-            (the first listed on a tie: finger1 for hand3x3, the middle finger for the Allegro).
-        bottom: the opposing finger.
-        angles: per probing finger, the joint angle it is set to while exploring: the angle of
-            its closing path's most forward point (the fingertip moves along ±z there; 0 for
-            hand3x3's straight fingers).
-    """
-
-    top: str
-    bottom: str
-    angles: dict[str, float]
-
-    @classmethod
-    def for_hand(cls, hand: HandModel, sweeps: dict[str, FingerSweep]) -> ProbeChoice:
-        """The choice for ``hand`` from its closing paths."""
-        opposing = hand.description.opposing_finger
-        upper = [f for f in hand.finger_names if f != opposing]
-        side = {f: float(np.min(np.abs(sweeps[f].points[:, 1]))) for f in upper}
-        nearest = min(side.values())
-        top = next(f for f in upper if side[f] <= nearest + 1e-9)
-        angles = {}
-        for finger in (top, opposing):
-            sweep = sweeps[finger]
-            k = int(np.argmax(sweep.points[:, 0]))
-            angles[finger] = round(float(sweep.angles[k]), 6) + 0.0  # + 0.0: never -0.0
-        return cls(top=top, bottom=opposing, angles=angles)
-
-    def finger(self, side: str) -> str:
-        """The finger that explores ``side`` ("top" or "bottom")."""
-        return self.bottom if side == "bottom" else self.top
-
-
-def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:
-    """How far ahead of the wrist the hand reaches (m): the largest x of any fingertip centre
-    over its closing path, plus its radius (0.14 m for hand3x3). The search's findability rule
-    (:func:`eos_svc.agents.coverage.findable`) needs it."""
-    return max(float(s.points[:, 0].max()) + hand.tip_radius(f) for f, s in sweeps.items())
-
-
-def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
-    """Per finger, the collision geometries that move when it closes, except its tip:
-    those on the bodies its first listed joint carries."""
-    model = hand.model
-    geometries = hand.collision_model.geometryObjects
-    out: dict[str, list[int]] = {}
-    for finger in hand.finger_names:
-        first = model.getJointId(hand.description.finger(finger).joints[0])
-        moving = set(model.subtrees[first])
-        tip = hand.tip_geometry_id(finger)
-        out[finger] = [i for i, g in enumerate(geometries) if g.parentJoint in moving and i != tip]
-    return out
-
-
-@dataclass(frozen=True)
-class ProbeOutcome:
-    """What one guarded probe found (:meth:`GraspWorld.guarded_probe`).
-
-    Attributes:
-        event: "touched", "missed" or "blocked".
-        finger: the probing finger.
-        centre: touched: the tip's centre (world, m).
-        normal: touched: the sensed outward object normal (unit, world; tactile noise).
-        free: missed or blocked: tip-centre samples of the free path (N, 3), m.
-        travelled: length moved (m).
-        why: blocked: the reason.
-    """
-
-    event: str
-    finger: str
-    centre: np.ndarray | None = None
-    normal: np.ndarray | None = None
-    free: np.ndarray | None = None
-    travelled: float = 0.0
-    why: str = ""
+from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, shape_bound
 
 
 @dataclass
@@ -283,7 +63,7 @@ class GraspWorld:
         self._angle_q = {f: self.hand.finger_joint_limits(f)[0][0] for f in self.hand.finger_names}
         # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
         # (the object taken as its bounding ball): a min over geometries skips the exact
-        # queries that cannot be the minimum (the result is the same). See _shape_bound.
+        # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
         self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
         self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
         # per finger with a sphere tip (the scene measures it from the tip frame): its frame
@@ -576,7 +356,7 @@ class GraspWorld:
                 return ProbeOutcome(
                     "blocked",
                     finger,
-                    free=_densify(np.array(free)),
+                    free=densify(np.array(free)),
                     travelled=travelled,
                     why="another part of the hand would touch first",
                 )
@@ -587,7 +367,7 @@ class GraspWorld:
             free.append(self.state.tip_position(finger).copy())
             if travelled >= travel - 1e-12:
                 break
-        return ProbeOutcome("missed", finger, free=_densify(np.array(free)), travelled=travelled)
+        return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
 
     def exact_clearance(self) -> float:
         """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
@@ -712,7 +492,7 @@ class GraspWorld:
                 tx, ty, tz = self._frame_translation(tip[0]).tolist()
                 ox, oy, oz = self._obj_centre
                 dx, dy, dz = tx - ox, ty - oy, tz - oz
-                lower = math.sqrt(dx * dx + dy * dy + dz * dz) - tip[1] - self._obj_radius - _BOUND_MARGIN
+                lower = math.sqrt(dx * dx + dy * dy + dz * dz) - tip[1] - self._obj_radius - BOUND_MARGIN
                 if lower > 0.5 * self.params.contact_tolerance and all(
                     bound > 0.0 for bound, _ in self._lower_bounds(self._links[finger])
                 ):
@@ -735,8 +515,8 @@ class GraspWorld:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
         query of a geometry whose lower bound already reaches the minimum (the bound is the
         distance from the object's bounding ball to the geometry's primitive, see
-        :func:`_shape_bound`; a skipped geometry's gap is ≥ its bound ≥ the minimum, so the
-        result is the min over every geometry)."""
+        :func:`~eos_svc.kinematics.gap_bounds.shape_bound`; a skipped geometry's gap is ≥ its
+        bound ≥ the minimum, so the result is the min over every geometry)."""
         return self._min_of(self._lower_bounds(geometry_ids), best)
 
     def _min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
@@ -753,6 +533,7 @@ class GraspWorld:
 
     def _lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
         """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
+        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
         state = self.state
         state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
         views = self._bound_views
@@ -761,58 +542,7 @@ class GraspWorld:
             oMg = state.geometry_data.oMg
             views = self._bound_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
             self._views_of = state
-        ox, oy, oz = self._obj_centre
-        obj_radius = self._obj_radius + _BOUND_MARGIN
-        bounds = []
-        for gid in geometry_ids:
-            kind, a, b, ball = self._bounds[gid]
-            t, R = views[gid]
-            tx, ty, tz = t.tolist()
-            px, py, pz = ox - tx, oy - ty, oz - tz  # object centre relative to the geometry
-            if kind == _SPHERE:  # a ball of radius a about the local point b (usually 0)
-                if b is not None:
-                    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
-                    bx, by, bz = b
-                    px -= r00 * bx + r01 * by + r02 * bz
-                    py -= r10 * bx + r11 * by + r12 * bz
-                    pz -= r20 * bx + r21 * by + r22 * bz
-                lower = math.sqrt(px * px + py * py + pz * pz) - a
-            else:
-                (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
-                # the object centre in the geometry's frame
-                lx = r00 * px + r10 * py + r20 * pz
-                ly = r01 * px + r11 * py + r21 * pz
-                lz = r02 * px + r12 * py + r22 * pz
-                if kind == _BOX:  # half sides a
-                    hx, hy, hz = a
-                    dx = abs(lx) - hx
-                    dy = abs(ly) - hy
-                    dz = abs(lz) - hz
-                    dx = dx if dx > 0.0 else 0.0
-                    dy = dy if dy > 0.0 else 0.0
-                    dz = dz if dz > 0.0 else 0.0
-                    lower = math.sqrt(dx * dx + dy * dy + dz * dz)
-                else:  # _SEGMENT: radius a about the local z segment of half length b
-                    dz = abs(lz) - b
-                    dz = dz if dz > 0.0 else 0.0
-                    lower = math.sqrt(lx * lx + ly * ly + dz * dz) - a
-                if lower <= obj_radius:
-                    # they may overlap, and this bound does not hold for a penetration
-                    # depth (the object's centre may lie inside the primitive): the balls'
-                    # bound (the primitive's local AABB ball, radius ``ball``) does
-                    lower = math.sqrt(px * px + py * py + pz * pz) - ball
-            bounds.append((lower - obj_radius, gid))
-        return bounds
-
-
-def _densify(path: np.ndarray, spacing: float = 0.005) -> np.ndarray:
-    """The polyline ``path`` (N, 3) resampled at most ``spacing`` m apart (a guarded probe's tip
-    path is free between its samples: each step was shorter than the tip's gap)."""
-    dense = [path[0]]
-    for a, b in itertools.pairwise(path):
-        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))
-        dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
-    return np.array(dense)
+        return ball_gap_lower_bounds(self._bounds, views, geometry_ids, self._obj_centre, self._obj_radius)
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
@@ -831,62 +561,10 @@ def _derived_for(
         derived = (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
-            [_shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
+            [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
         )
         entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
         while len(_DERIVED) > 8:  # pop with a default: another thread may evict it first
             _DERIVED.pop(next(iter(_DERIVED), -1), None)
     links, probe, bounds = entry[2]
     return links, probe, bounds
-
-
-#: kinds of lower bound of a hand geometry (see _shape_bound)
-_SPHERE, _BOX, _SEGMENT = 0, 1, 2
-#: subtracted from every lower bound (m): covers the round-off of the bound and of coal's
-#: distance, so a bound never exceeds the exact gap coal would return
-_BOUND_MARGIN = 1e-7
-
-
-def _shape_bound(geometry: Any) -> tuple[int, Any, Any, float]:
-    """How to bound the gap between a hand geometry and a ball (the object's bounding ball)
-    from below, from the ball centre's position in the geometry's frame: the distance to the
-    geometry's primitive less the ball's radius — ``(_BOX, half sides, None, r)`` for a box,
-    ``(_SEGMENT, radius, half length, r)`` for a cylinder or capsule along local z (the
-    cylinder lies inside that capsule), for a sphere ``(_SPHERE, radius, None, r)`` and for
-    any other shape ``(_SPHERE, r, AABB centre or None, r)``, with ``r`` the radius of the
-    primitive's local AABB ball (about its centre, the frame's origin for the primitives). The
-    box and segment bounds hold while the two are apart; where they may overlap the AABB
-    ball's bound holds (for the penetration depth too) and is used instead."""
-    geometry.computeLocalAABB()
-    ball = float(geometry.aabb_radius)
-    if isinstance(geometry, coal.Box):
-        return _BOX, tuple(float(x) for x in geometry.halfSide), None, ball
-    if isinstance(geometry, (coal.Cylinder, coal.Capsule)):
-        return _SEGMENT, float(geometry.radius), float(geometry.halfLength), ball
-    if isinstance(geometry, coal.Sphere):
-        return _SPHERE, float(geometry.radius), None, ball
-    c = tuple(float(x) for x in geometry.aabb_center)
-    return _SPHERE, ball, (None if c == (0.0, 0.0, 0.0) else c), ball
-
-
-def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
-    """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
-
-    Computed once per hand at the neutral wrist (palm = world).
-    """
-    state = hand.state(hand.neutral())
-    palm = state.palm_placement()
-    sweeps: dict[str, FingerSweep] = {}
-    for finger in hand.finger_names:
-        idx = hand.finger_q_index(finger)
-        lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
-        n = max(2, math.ceil((hi - lo) / resolution) + 1)
-        angles = np.linspace(lo, hi, n)
-        points = np.empty((n, 3))
-        q = hand.neutral()
-        for k, a in enumerate(angles):
-            q[idx] = a
-            state.update(q)
-            points[k] = palm.actInv(state.tip_position(finger))
-        sweeps[finger] = FingerSweep(angles, points)
-    return sweeps

@@ -1,0 +1,84 @@
+"""Exploring the object with a fingertip: which finger probes which side
+(:class:`ProbeChoice`, used by EP1 and EP2) and what one guarded probe found
+(:class:`ProbeOutcome`, :meth:`eos_svc.agents.world.GraspWorld.guarded_probe`)."""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.agents.sweeps import FingerSweep
+from eos_svc.kinematics import HandModel
+
+
+@dataclass(frozen=True)
+class ProbeChoice:
+    """Which finger EP1 rolls on the object's top and on its bottom, and at which angle.
+
+    Attributes:
+        top: the non-opposing finger whose closing path runs nearest the palm's x–z plane
+            (the first listed on a tie: finger1 for hand3x3, the middle finger for the Allegro).
+        bottom: the opposing finger.
+        angles: per probing finger, the joint angle it is set to while exploring: the angle of
+            its closing path's most forward point (the fingertip moves along ±z there; 0 for
+            hand3x3's straight fingers).
+    """
+
+    top: str
+    bottom: str
+    angles: dict[str, float]
+
+    @classmethod
+    def for_hand(cls, hand: HandModel, sweeps: dict[str, FingerSweep]) -> ProbeChoice:
+        """The choice for ``hand`` from its closing paths."""
+        opposing = hand.description.opposing_finger
+        upper = [f for f in hand.finger_names if f != opposing]
+        side = {f: float(np.min(np.abs(sweeps[f].points[:, 1]))) for f in upper}
+        nearest = min(side.values())
+        top = next(f for f in upper if side[f] <= nearest + 1e-9)
+        angles = {}
+        for finger in (top, opposing):
+            sweep = sweeps[finger]
+            k = int(np.argmax(sweep.points[:, 0]))
+            angles[finger] = round(float(sweep.angles[k]), 6) + 0.0  # + 0.0: never -0.0
+        return cls(top=top, bottom=opposing, angles=angles)
+
+    def finger(self, side: str) -> str:
+        """The finger that explores ``side`` ("top" or "bottom")."""
+        return self.bottom if side == "bottom" else self.top
+
+
+@dataclass(frozen=True)
+class ProbeOutcome:
+    """What one guarded probe found (:meth:`GraspWorld.guarded_probe`).
+
+    Attributes:
+        event: "touched", "missed" or "blocked".
+        finger: the probing finger.
+        centre: touched: the tip's centre (world, m).
+        normal: touched: the sensed outward object normal (unit, world; tactile noise).
+        free: missed or blocked: tip-centre samples of the free path (N, 3), m.
+        travelled: length moved (m).
+        why: blocked: the reason.
+    """
+
+    event: str
+    finger: str
+    centre: np.ndarray | None = None
+    normal: np.ndarray | None = None
+    free: np.ndarray | None = None
+    travelled: float = 0.0
+    why: str = ""
+
+
+def densify(path: np.ndarray, spacing: float = 0.005) -> np.ndarray:
+    """The polyline ``path`` (N, 3) resampled at most ``spacing`` m apart (a guarded probe's tip
+    path is free between its samples: each step was shorter than the tip's gap)."""
+    dense = [path[0]]
+    for a, b in itertools.pairwise(path):
+        n = max(1, math.ceil(float(np.linalg.norm(b - a)) / spacing))
+        dense.extend(a + (b - a) * (i / n) for i in range(1, n + 1))
+    return np.array(dense)

@@ -1,0 +1,89 @@
+"""The fingers' closing sweeps: fingertip-centre paths in the palm frame as each finger closes,
+computed once per hand, and what follows from them alone (the hand's forward reach, the
+geometries each finger moves)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.kinematics import HandModel
+
+
+@dataclass
+class FingerSweep:
+    """Fingertip-centre positions in the palm frame as the finger closes (all joints equal).
+
+    Attributes:
+        angles: joint angle of every sample (rad), increasing (closing).
+        points: (N, 3) tip-centre positions in the palm frame (m).
+    """
+
+    angles: np.ndarray
+    points: np.ndarray
+
+    def index_at(self, angle: float) -> int:
+        """Index of the first sample at or beyond ``angle``."""
+        return int(np.searchsorted(self.angles, angle - 1e-12))
+
+    def reaches(self, angle: float, centre_palm: np.ndarray, radius: float) -> bool:
+        """Whether closing from ``angle`` brings the tip centre within ``radius`` of ``centre_palm``."""
+        rest = self.points[self.index_at(angle) :]
+        if len(rest) == 0:
+            return False
+        d = rest - centre_palm
+        return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
+
+    def last_within(self, centre_palm: np.ndarray, radius: float) -> int:
+        """Index of the last sample within ``radius`` of ``centre_palm`` (−1 if none): closing
+        from ``angle`` reaches it (:meth:`reaches`) iff ``index_at(angle) <= last_within(...)``,
+        so one evaluation per centre serves every angle."""
+        d = self.points - centre_palm
+        within = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= radius * radius)
+        return int(within[-1]) if len(within) else -1
+
+
+def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
+    """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
+
+    Computed once per hand at the neutral wrist (palm = world).
+    """
+    state = hand.state(hand.neutral())
+    palm = state.palm_placement()
+    sweeps: dict[str, FingerSweep] = {}
+    for finger in hand.finger_names:
+        idx = hand.finger_q_index(finger)
+        lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
+        n = max(2, math.ceil((hi - lo) / resolution) + 1)
+        angles = np.linspace(lo, hi, n)
+        points = np.empty((n, 3))
+        q = hand.neutral()
+        for k, a in enumerate(angles):
+            q[idx] = a
+            state.update(q)
+            points[k] = palm.actInv(state.tip_position(finger))
+        sweeps[finger] = FingerSweep(angles, points)
+    return sweeps
+
+
+def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:
+    """How far ahead of the wrist the hand reaches (m): the largest x of any fingertip centre
+    over its closing path, plus its radius (0.14 m for hand3x3). The search's findability rule
+    (:func:`eos_svc.agents.coverage.findable`) needs it."""
+    return max(float(s.points[:, 0].max()) + hand.tip_radius(f) for f, s in sweeps.items())
+
+
+def finger_link_geometries(hand: HandModel) -> dict[str, list[int]]:
+    """Per finger, the collision geometries that move when it closes, except its tip:
+    those on the bodies its first listed joint carries."""
+    model = hand.model
+    geometries = hand.collision_model.geometryObjects
+    out: dict[str, list[int]] = {}
+    for finger in hand.finger_names:
+        first = model.getJointId(hand.description.finger(finger).joints[0])
+        moving = set(model.subtrees[first])
+        tip = hand.tip_geometry_id(finger)
+        out[finger] = [i for i, g in enumerate(geometries) if g.parentJoint in moving and i != tip]
+    return out
