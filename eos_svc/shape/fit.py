@@ -108,7 +108,7 @@ def batch_signed_distance(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
     (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3)."""
-    local = np.einsum("kni,kij->knj", points - centres[:, None, :], rotations)
+    local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
     elif kind == "ellipsoid":
@@ -119,7 +119,7 @@ def batch_signed_distance(
         d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
     else:
         d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, np.einsum("knj,kij->kni", g, rotations)
+    return d, g @ np.swapaxes(rotations, 1, 2)
 
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
@@ -145,7 +145,8 @@ def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
 def batch_geometry(
     kind: str, thetas: np.ndarray, r0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0``."""
+    """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
+    about its own (K, 3, 3)."""
     centres = thetas[:, :3]
     sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
     K = len(thetas)
@@ -155,23 +156,27 @@ def batch_geometry(
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
         tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
-        rotations = _batch_frames_with_z(tilt @ r0.T)
+        axes = tilt @ r0.T if r0.ndim == 2 else np.einsum("kij,kj->ki", r0, tilt)
+        rotations = _batch_frames_with_z(axes)
     return centres, rotations, sizes
 
 
 def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
-    """Whitened residuals (K, m) of K parameter vectors: tip-centre distances, normals,
+    """Whitened residuals (K, m) of K parameter vectors (about one start orientation ``r0``
+    or each about its own, see :func:`batch_geometry`): tip-centre distances, normals,
     free-space hinges."""
     centres, rotations, sizes = batch_geometry(kind, thetas, r0)
-    d, g = batch_signed_distance(kind, touches.centres[None], centres, rotations, sizes)
+    n = touches.count
+    # the contacts and the free samples in one evaluation of the class's distance
+    points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
+    d, g = batch_signed_distance(kind, points[None], centres, rotations, sizes)
     K = len(thetas)
-    r_d = (d - touches.radii - touches.gap_offset) / touches.sigma_distance
-    r_n = ((g - touches.normals) / touches.sigma_normal).reshape(K, -1)
-    parts = [r_d, r_n]
-    if len(touches.free):
-        f, _ = batch_signed_distance(kind, touches.free[None], centres, rotations, sizes)
-        parts.append(np.minimum(f - touches.free_radii, 0.0) / touches.sigma_distance)
-    return np.concatenate(parts, axis=1)
+    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / touches.sigma_distance
+    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(K, -1)
+    if not len(touches.free):
+        return np.concatenate([r_d, r_n], axis=1)
+    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / touches.sigma_distance
+    return np.concatenate([r_d, r_n, r_f], axis=1)
 
 
 def geometry_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> Geometry:
@@ -340,6 +345,18 @@ def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def ranked_starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`starts` from the lowest χ² at the start itself (ties in their order): fitted in
+    this order, the start nearest the touches is the one that explains them, shows the class
+    hopeless, or screens it (:func:`~eos_svc.shape.selection.screen`)."""
+    out = starts(kind, touches)
+    if len(out) < 2:
+        return out
+    thetas = np.array([theta0 for theta0, _ in out])
+    chi2 = np.sum(batch_residuals(thetas, kind, np.array([r0 for _, r0 in out]), touches) ** 2, axis=1)
+    return [out[i] for i in sorted(range(len(out)), key=lambda i: float(chi2[i]))]
+
+
 def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
     (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
@@ -353,19 +370,46 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
     return out
 
 
-def fit_class(kind: str, touches: Touches, max_nfev: int = 20, hopeless: float = math.inf) -> ClassFit:
+def residual_count(touches: Touches) -> int:
+    """m, the number of whitened residuals (:func:`batch_residuals`): a distance and three
+    normal components per contact, a hinge per free sample."""
+    return 4 * touches.count + len(touches.free)
+
+
+def explains(chi2: float, touches: Touches, kind: str) -> bool:
+    """Whether a fit of ``kind`` with this χ² explains the touches to within the noise
+    (χ²/dof ≤ GOOD_FIT over all the whitened residuals): :func:`fit_class` then tries no
+    other start."""
+    return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
+
+
+def fit_class(
+    kind: str,
+    touches: Touches,
+    max_nfev: int = 20,
+    hopeless: float = math.inf,
+    max_starts: int | None = None,
+    nearest_first: bool = False,
+) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts).
 
     ``hopeless``: a χ² above which the class cannot compete with a class already fitted
     (:func:`~eos_svc.shape.selection.select_class` passes a bound far above that class's
     χ²): once a start ends above it, the remaining starts are skipped (their posterior would
-    be 0 whatever they reach)."""
+    be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
+    ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
+    not in :func:`starts`' order.
+
+    The fit from the first start alone (``max_starts=1``) *is* the fit with the same
+    ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
+    :func:`explains` the touches, or when the class has one start (the sphere): every other
+    start is skipped then."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k = N_PARAMS[kind]
     best = None
-    for theta0, r0 in starts(kind, touches):
-        m = len(residuals(theta0, kind, r0, touches))
+    for theta0, r0 in (ranked_starts if nearest_first else starts)(kind, touches)[:max_starts]:
+        m = residual_count(touches)
         method = "lm" if m >= k else "trf"
         res = least_squares(
             residuals,
@@ -382,7 +426,7 @@ def fit_class(kind: str, touches: Touches, max_nfev: int = 20, hopeless: float =
         chi2 = float(2.0 * res.cost)
         if best is None or chi2 < best[0]:
             best = (chi2, res, r0)
-        if chi2 <= GOOD_FIT * max(m - k, 1):
+        if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break

@@ -67,27 +67,35 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     return np.linalg.norm(v, axis=-1) - radius, _unit(v, (1.0, 0.0, 0.0))
 
 
+def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
+    """A point left of the root of the ellipsoid's ``F`` (see :func:`ellipsoid`), near it:
+    every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;
+    and ``t ≥ 0`` outside, ``t > −min a_i²`` inside (kept 1e-12 relative away from that pole,
+    where ``F`` is infinite)."""
+    amin2 = np.min(a, axis=-1) ** 2
+    floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
+    out: Array = np.maximum(np.max(a * np.abs(P) - a * a, axis=-1), floor)
+    return out
+
+
 def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Array]:
     """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
 
     The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
     ``F(t) = Σ (a_i p_i / (t + a_i²))² − 1`` on ``t > −min a_i²``; F is convex and decreasing
-    there, so Newton's method from a point left of the root (``t = 0`` outside; near the pole
-    of the shortest axis inside) rises monotonically to it.
+    there, so Newton's method from a point left of the root rises monotonically to it. The
+    start is :func:`ellipsoid_root_lower_bound`.
     """
     a = np.broadcast_to(radii, P.shape)
     a2 = a * a
     inside = np.sum((P / a) ** 2, axis=-1) < 1.0
-    k = np.argmin(a, axis=-1)[..., None]
-    amin = np.take_along_axis(a, k, axis=-1)[..., 0]
-    pmin = np.abs(np.take_along_axis(P, k, axis=-1)[..., 0])
-    t = np.where(inside, -amin * amin + amin * pmin + 1e-12 * amin * amin, 0.0)
+    t = ellipsoid_root_lower_bound(P, a, inside)
+    ap2 = (a * P) ** 2
     for _ in range(iterations):
-        den = t[..., None] + a2
-        u = a * P / den
-        uu = u * u
+        inv = 1.0 / (t[..., None] + a2)
+        uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
         F = uu.sum(axis=-1) - 1.0
-        dF = -2.0 * (uu / den).sum(axis=-1)
+        dF = -2.0 * (uu * inv).sum(axis=-1)
         step = F / np.minimum(dF, -1e-300)
         t = t - step
         if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:

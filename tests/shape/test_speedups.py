@@ -1,0 +1,161 @@
+"""The fit's speed helpers against the plain computations they replace."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from eos_svc.shape import Touches, fit_class, select_class
+from eos_svc.shape import fit as shape_fit
+from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound
+from eos_svc.shape.selection import (
+    CLASSES,
+    GOOD_FIT,
+    HOPELESS,
+    QUICK_NFEV,
+    fit_probability,
+    screen,
+    tolerance_probability,
+)
+from tests.shape.synthetic import TIP, objects, touches_on
+
+KINDS = ["sphere", "ellipsoid", "cylinder", "capsule", "box"]
+
+
+def plain_select(touches: Touches) -> tuple[str, float, dict[str, float], shape_fit.ClassFit]:
+    """(class, confidence, posteriors, chosen fit) by fitting the classes in their order, each
+    from its starts in order — no screening, no reuse (the selection before it was sped up)."""
+    m = 3 * touches.count
+    fits: dict[str, shape_fit.ClassFit] = {}
+    for kind in CLASSES:
+        best = min((f.chi2 for f in fits.values()), default=math.inf)
+        if best > GOOD_FIT * m:
+            fits[kind] = fit_class(kind, touches)
+            continue
+        quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+            fits[kind] = quick
+            continue
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
+    bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
+    low = min(bic.values())
+    weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
+    probs = {k: w / sum(weights.values()) for k, w in weights.items()}
+    kind = max(CLASSES, key=lambda k: (probs[k], -CLASSES.index(k)))
+    conf = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
+    return kind, conf, probs, fits[kind]
+
+
+def random_touches(kind: str, seed: int) -> Touches:
+    rng = np.random.default_rng(seed)
+    obj = objects(rpy=tuple(rng.uniform(-1.0, 1.0, 3)))[kind]
+    t = touches_on(obj, rng, n=24)
+    # a few free samples beyond the object (behind it, along +x)
+    c = np.asarray(obj.placement.translation)
+    free = c + np.column_stack([np.full(5, 0.06), rng.uniform(-0.02, 0.02, (5, 2))])
+    return t.merged(Touches(free=free, free_radii=TIP))
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+@pytest.mark.parametrize("kind", KINDS)
+def test_screened_selection_postulates_what_the_plain_selection_does(kind, seed):
+    touches = random_touches(kind, seed)
+    post = select_class(touches)
+    kind0, conf0, probs0, fit0 = plain_select(touches)
+    assert post.kind == kind0 == kind
+    assert post.confidence == pytest.approx(conf0, abs=2e-3)
+    for k, p in probs0.items():
+        assert post.probabilities[k] == pytest.approx(p, abs=2e-3)
+    chosen = post.best
+    assert chosen is not None
+    np.testing.assert_allclose(chosen.geometry.centre, fit0.geometry.centre, atol=2e-5)  # m
+    np.testing.assert_allclose(sorted(chosen.geometry.sizes), sorted(fit0.geometry.sizes), rtol=2e-3)
+    assert chosen.chi2 == pytest.approx(fit0.chi2, rel=1e-3)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_ranked_starts_are_the_starts_from_the_nearest(kind):
+    touches = random_touches(kind, 3)
+    plain = shape_fit.starts(kind, touches)
+    ranked = shape_fit.ranked_starts(kind, touches)
+    assert len(ranked) == len(plain)
+    chi2 = [float(np.sum(shape_fit.residuals(theta, kind, r0, touches) ** 2)) for theta, r0 in ranked]
+    assert chi2 == sorted(chi2)
+    keys = sorted((tuple(t), tuple(r.ravel())) for t, r in plain)
+    assert sorted((tuple(t), tuple(r.ravel())) for t, r in ranked) == keys
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_screening_fit_is_the_quick_fit_it_stands_for(kind):
+    # selection.quick_fit reuses a class's screening fit (its nearest start alone) when that is
+    # above the hopeless bound or explains the touches: then the quick fit over every start
+    # stops at that very start
+    touches = random_touches("box" if kind != "box" else "cylinder", 5)
+    screened = screen(touches, (kind,))[kind]
+    for hopeless in (screened.chi2 - 1.0, math.inf):
+        if hopeless == math.inf and not shape_fit.explains(screened.chi2, touches, kind):
+            continue
+        full = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, nearest_first=True)
+        assert full.chi2 == screened.chi2
+        np.testing.assert_array_equal(full.theta, screened.theta)
+
+
+def test_residual_count_is_the_residuals_length():
+    touches = random_touches("box", 7)
+    for kind in KINDS:
+        theta, r0 = shape_fit.starts(kind, touches)[0]
+        assert len(shape_fit.residuals(theta, kind, r0, touches)) == shape_fit.residual_count(touches)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fused_residuals_equal_contacts_and_free_samples_apart(kind):
+    # batch_residuals evaluates the contacts and the free samples in one call
+    touches = random_touches(kind, 8)
+    rng = np.random.default_rng(9)
+    starts = shape_fit.starts(kind, touches)
+    theta0, r0 = starts[0]
+    thetas = theta0 + rng.normal(scale=0.05, size=(4, len(theta0)))
+    fused = shape_fit.batch_residuals(thetas, kind, r0, touches)
+    for theta, row in zip(thetas, fused, strict=True):
+        g = shape_fit.geometry_from(kind, theta, r0)
+        d, n = g.signed_distance(touches.centres)
+        f, _ = g.signed_distance(touches.free)
+        plain = np.concatenate(
+            [
+                (d - touches.radii - touches.gap_offset) / touches.sigma_distance,
+                ((n - touches.normals) / touches.sigma_normal).ravel(),
+                np.minimum(f - touches.free_radii, 0.0) / touches.sigma_distance,
+            ]
+        )
+        np.testing.assert_allclose(row, plain, rtol=1e-9, atol=1e-9)
+    # each parameter vector about its own start orientation, as ranked_starts evaluates them
+    thetas = np.array([t for t, _ in starts])
+    own = shape_fit.batch_residuals(thetas, kind, np.array([r for _, r in starts]), touches)
+    for (theta, r), row in zip(starts, own, strict=True):
+        np.testing.assert_allclose(row, shape_fit.residuals(theta, kind, r, touches), rtol=1e-12, atol=1e-9)
+
+
+def _ellipsoid_root_function(t: np.ndarray, P: np.ndarray, a: np.ndarray) -> np.ndarray:
+    out: np.ndarray = np.sum((a * P / (t[..., None] + a * a)) ** 2, axis=-1) - 1.0
+    return out
+
+
+def test_ellipsoid_newton_start_is_left_of_the_root_and_near_it():
+    rng = np.random.default_rng(21)
+    a = np.broadcast_to(rng.uniform(0.01, 0.05, 3), (2000, 3))
+    P = rng.normal(scale=0.04, size=(2000, 3))
+    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    assert inside.any() and (~inside).any()
+    t0 = ellipsoid_root_lower_bound(P, a, inside)
+    assert np.all(t0 > -(np.min(a, axis=-1) ** 2))
+    assert np.all(_ellipsoid_root_function(t0, P, a) >= -1e-12)  # F decreasing: t0 ≤ root
+    # the plain start (0 outside, near the shortest axis' pole inside) is never nearer the root
+    amin = np.min(a, axis=-1)
+    plain = np.where(inside, -amin * amin + amin * np.abs(P[np.arange(len(P)), np.argmin(a, axis=-1)]), 0.0)
+    assert np.all(t0 >= plain - 1e-18)
+    d, g = ellipsoid(P, a)
+    # Newton from there converges: the closest point, d along the gradient, is on the surface
+    S = P - d[:, None] * g
+    np.testing.assert_allclose(np.sum((S / a) ** 2, axis=-1), 1.0, atol=1e-8)
