@@ -124,7 +124,7 @@ def batch_signed_distance(
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
-    theta = np.linalg.norm(omega, axis=1)
+    theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
     K = np.zeros((len(omega), 3, 3))
     K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
@@ -135,11 +135,20 @@ def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
 
 def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
     """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
-    z = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    z = axes / primitives.norm(axes)[:, None]
     a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
     x = a - np.sum(a * z, axis=1, keepdims=True) * z
-    x /= np.linalg.norm(x, axis=1, keepdims=True)
-    return np.stack([x, np.cross(z, x), z], axis=2)
+    x /= primitives.norm(x)[:, None]
+    return np.stack([x, _cross(z, x), z], axis=2)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise u × v of (K, 3) arrays: ``np.cross``'s products, without its axis handling."""
+    out: np.ndarray = u[:, _NEXT] * v[:, _AFTER] - u[:, _AFTER] * v[:, _NEXT]
+    return out
+
+
+_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
 
 
 def batch_geometry(

@@ -17,21 +17,28 @@ Array = np.ndarray
 _TINY = 1e-15
 
 
+def norm(v: Array) -> Array:
+    """Euclidean norm over the last axis: ``np.linalg.norm(v, axis=-1)``'s arithmetic
+    without its argument handling (these arrays are small: the call dominates)."""
+    out: Array = np.sqrt(np.sum(v * v, axis=-1))
+    return out
+
+
 def _unit(v: Array, fallback: tuple[float, float, float]) -> Array:
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    n = norm(v)[..., None]
     return np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
 
 
 def sphere(P: Array, radius: Array) -> tuple[Array, Array]:
     """Sphere of ``radius``."""
-    return np.linalg.norm(P, axis=-1) - radius, _unit(P, (0.0, 0.0, 1.0))
+    return norm(P) - radius, _unit(P, (0.0, 0.0, 1.0))
 
 
 def box(P: Array, half: Array) -> tuple[Array, Array]:
     """Box of half sides ``half`` (..., 1, 3)."""
     q = np.abs(P) - half
     qp = np.maximum(q, 0.0)
-    out = np.linalg.norm(qp, axis=-1)
+    out = norm(qp)
     d = out + np.minimum(q.max(axis=-1), 0.0)
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
@@ -64,7 +71,7 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     zc = np.clip(P[..., 2], -half_length, half_length)
     v = P.copy()
     v[..., 2] -= zc
-    return np.linalg.norm(v, axis=-1) - radius, _unit(v, (1.0, 0.0, 0.0))
+    return norm(v) - radius, _unit(v, (1.0, 0.0, 0.0))
 
 
 def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
@@ -102,7 +109,7 @@ def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Arra
             break
     S = a2 * P / (t[..., None] + a2)
     v = P - S
-    dist = np.linalg.norm(v, axis=-1)
+    dist = norm(v)
     sign = np.where(inside, -1.0, 1.0)
     g = np.where(
         (dist > 1e-12)[..., None],

@@ -9,7 +9,7 @@ import pytest
 
 from eos_svc.shape import Touches, fit_class, select_class
 from eos_svc.shape import fit as shape_fit
-from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound
+from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound, norm
 from eos_svc.shape.selection import (
     CLASSES,
     GOOD_FIT,
@@ -159,3 +159,11 @@ def test_ellipsoid_newton_start_is_left_of_the_root_and_near_it():
     # Newton from there converges: the closest point, d along the gradient, is on the surface
     S = P - d[:, None] * g
     np.testing.assert_allclose(np.sum((S / a) ** 2, axis=-1), 1.0, atol=1e-8)
+
+
+def test_norm_and_cross_are_numpys():
+    rng = np.random.default_rng(31)
+    u, v = rng.normal(size=(2, 40, 3))
+    np.testing.assert_array_equal(norm(u), np.linalg.norm(u, axis=-1))
+    np.testing.assert_array_equal(norm(u.reshape(4, 10, 3)), np.linalg.norm(u.reshape(4, 10, 3), axis=-1))
+    np.testing.assert_array_equal(shape_fit._cross(u, v), np.cross(u, v))
