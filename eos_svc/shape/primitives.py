@@ -89,9 +89,11 @@ def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Arra
     """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
 
     The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
-    ``F(t) = Σ (a_i p_i / (t + a_i²))² − 1`` on ``t > −min a_i²``; F is convex and decreasing
-    there, so Newton's method from a point left of the root rises monotonically to it. The
-    start is :func:`ellipsoid_root_lower_bound`.
+    ``Σ (a_i p_i / (t + a_i²))² = 1`` on ``t > −min a_i²``. Written ``h(t) = 1`` with
+    ``h = (Σ (a_i p_i)² (t + a_i²)⁻²)^(−1/2)``, a power mean of exponent −2 of the affine
+    ``t + a_i²`` — increasing and concave (linear for a sphere) — Newton's method from a point
+    left of the root (:func:`ellipsoid_root_lower_bound`) stays left of it and rises
+    monotonically to it, in one step for a sphere, in a few for the ellipsoid.
     """
     a = np.broadcast_to(radii, P.shape)
     a2 = a * a
@@ -101,10 +103,10 @@ def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Arra
     for _ in range(iterations):
         inv = 1.0 / (t[..., None] + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        F = uu.sum(axis=-1) - 1.0
-        dF = -2.0 * (uu * inv).sum(axis=-1)
-        step = F / np.minimum(dF, -1e-300)
-        t = t - step
+        total = uu.sum(axis=-1)  # h⁻²
+        slope = (uu * inv).sum(axis=-1)  # h' · h⁻³
+        step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
+        t = t + step
         if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
             break
     S = a2 * P / (t[..., None] + a2)
