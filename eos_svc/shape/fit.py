@@ -23,10 +23,11 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, leastsq
 
 from eos_svc.shape import primitives
 from eos_svc.shape.touches import Touches
@@ -392,6 +393,45 @@ def explains(chi2: float, touches: Touches, kind: str) -> bool:
     return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
 
 
+class _LastValue:
+    """``fn(θ, *args)`` remembering its last argument and value: MINPACK's driver
+    (``scipy.optimize.leastsq``) evaluates the residuals and the Jacobian at the start once to
+    check their shapes, then again in its first iteration."""
+
+    def __init__(self, fn: Callable[..., np.ndarray]) -> None:
+        self.fn = fn
+        self.theta: np.ndarray | None = None
+        self.value: np.ndarray | None = None
+
+    def __call__(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        if self.theta is None or self.value is None or not np.array_equal(theta, self.theta):
+            self.theta, self.value = np.array(theta, dtype=float), self.fn(theta, *args)
+        return self.value
+
+
+def levenberg_marquardt(
+    theta0: np.ndarray, kind: str, r0: np.ndarray, touches: Touches, max_nfev: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
+    ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
+    Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
+    without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
+    needs that only for the best start)."""
+    args = (kind, r0, touches)
+    x, _, info, _, _ = leastsq(
+        _LastValue(residuals),
+        np.asarray(theta0, dtype=float),
+        args=args,
+        Dfun=_LastValue(_jacobian),
+        full_output=True,
+        ftol=1e-8,
+        xtol=1e-8,
+        gtol=1e-8,
+        maxfev=max_nfev,
+    )
+    return x, info["fvec"]
+
+
 def fit_class(
     kind: str,
     touches: Touches,
@@ -417,35 +457,37 @@ def fit_class(
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k = N_PARAMS[kind]
     best = None
+    m = residual_count(touches)
     for theta0, r0 in (ranked_starts if nearest_first else starts)(kind, touches)[:max_starts]:
-        m = residual_count(touches)
-        method = "lm" if m >= k else "trf"
-        res = least_squares(
-            residuals,
-            theta0,
-            jac=_jacobian,
-            args=(kind, r0, touches),
-            method=method,
-            x_scale="jac",
-            max_nfev=max_nfev,
-            ftol=1e-8,
-            xtol=1e-8,
-            gtol=1e-8,
-        )
-        chi2 = float(2.0 * res.cost)
+        if m >= k:
+            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+        else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
+            res = least_squares(
+                residuals,
+                theta0,
+                jac=_jacobian,
+                args=(kind, r0, touches),
+                method="trf",
+                x_scale="jac",
+                max_nfev=max_nfev,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+            )
+            theta, fun = res.x, res.fun
+        chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
-            best = (chi2, res, r0)
+            best = (chi2, theta, r0)
         if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break
     assert best is not None
-    chi2, res, r0 = best
-    J = res.jac
-    m = len(res.fun)
+    chi2, theta, r0 = best
+    J = _jacobian(theta, kind, r0, touches)
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
     dof = max(m - k, 1)
     cov = cov * max(1.0, chi2 / dof)
-    return ClassFit(kind, geometry_from(kind, res.x, r0), chi2, k, cov, res.x, r0)
+    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0)

@@ -194,3 +194,27 @@ def test_ellipsoid_closest_point_is_the_plain_newtons(radii):
     P = rng.normal(scale=0.04, size=(3000, 3))
     d, g = ellipsoid(P, a)
     np.testing.assert_allclose(P - d[:, None] * g, _ellipsoid_closest_plain(P, a), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_levenberg_marquardt_runs_what_least_squares_runs(kind):
+    from scipy.optimize import least_squares
+
+    touches = random_touches(kind if kind != "box" else "ellipsoid", 13)
+    for theta0, r0 in shape_fit.starts(kind, touches)[:2]:
+        for max_nfev in (QUICK_NFEV, 20):
+            theta, fun = shape_fit.levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+            plain = least_squares(
+                shape_fit.residuals,
+                theta0,
+                jac=shape_fit._jacobian,
+                args=(kind, r0, touches),
+                method="lm",
+                x_scale="jac",
+                max_nfev=max_nfev,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+            )
+            np.testing.assert_array_equal(theta, plain.x)
+            np.testing.assert_array_equal(fun, plain.fun)
