@@ -212,6 +212,7 @@ class ClassFit:
         n_params: k.
         covariance: (k, k) covariance of the parameters.
         theta: the parameters; ``r0``: their start orientation.
+        start: which of :func:`starts` the fit began from.
     """
 
     kind: str
@@ -221,6 +222,7 @@ class ClassFit:
     covariance: np.ndarray = field(repr=False)
     theta: np.ndarray = field(repr=False)
     r0: np.ndarray = field(repr=False)
+    start: int = 0
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""
@@ -360,11 +362,17 @@ def ranked_starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndar
     this order, the start nearest the touches is the one that explains them, shows the class
     hopeless, or screens it (:func:`~eos_svc.shape.selection.screen`)."""
     out = starts(kind, touches)
-    if len(out) < 2:
-        return out
-    thetas = np.array([theta0 for theta0, _ in out])
-    chi2 = np.sum(batch_residuals(thetas, kind, np.array([r0 for _, r0 in out]), touches) ** 2, axis=1)
-    return [out[i] for i in sorted(range(len(out)), key=lambda i: float(chi2[i]))]
+    return [out[i] for i in _nearest_order(kind, touches, out)]
+
+
+def _nearest_order(kind: str, touches: Touches, candidates: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
+    """Indices of ``candidates`` from the lowest χ² at the start itself (ties in their order)."""
+    if len(candidates) < 2:
+        return list(range(len(candidates)))
+    thetas = np.array([theta0 for theta0, _ in candidates])
+    r0s = np.array([r0 for _, r0 in candidates])
+    chi2 = np.sum(batch_residuals(thetas, kind, r0s, touches) ** 2, axis=1)
+    return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
 def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
@@ -458,7 +466,10 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
-    for theta0, r0 in (ranked_starts if nearest_first else starts)(kind, touches)[:max_starts]:
+    candidates = starts(kind, touches)
+    order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
+    for index in list(order)[:max_starts]:
+        theta0, r0 = candidates[index]
         if m >= k:
             theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
@@ -477,17 +488,17 @@ def fit_class(
             theta, fun = res.x, res.fun
         chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
-            best = (chi2, theta, r0)
+            best = (chi2, theta, r0, index)
         if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break
     assert best is not None
-    chi2, theta, r0 = best
+    chi2, theta, r0, index = best
     J = _jacobian(theta, kind, r0, touches)
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
     dof = max(m - k, 1)
     cov = cov * max(1.0, chi2 / dof)
-    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0)
+    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0, index)

@@ -209,25 +209,24 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     if fits[classes[0]].chi2 > GOOD_FIT * m and len(classes) > 1:
         # the first class does not explain the touches: the others, each from its nearest
         # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
-        # explains the touches the rest are shown hopeless against it in a few iterations (the
-        # screening fits reused) instead of being fitted in full before it. The order decides
-        # which fit shows a class hopeless, not the postulate: its posterior is 0 either way.
+        # explains the touches the rest are shown hopeless against it in a few iterations
+        # instead of being fitted in full before it. The order decides which fit shows a class
+        # hopeless, not the postulate: its posterior is 0 either way.
         screened = screen(touches, classes[1:])
-    nearest = bool(screened)
     rest = classes[1:]
-    order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if nearest else rest
+    order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
         # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
         # a few iterations show it, the full fit is kept for the competitive ones
         best = min(f.chi2 for f in fits.values())
         if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
-            fits[kind] = fit_class(kind, touches, nearest_first=nearest)
+            fits[kind] = fit_class(kind, touches)
             continue
         quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind))
         if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
-        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, nearest_first=nearest)
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
     fits = {k: fits[k] for k in classes}
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
@@ -246,15 +245,15 @@ def screen(touches: Touches, classes: tuple[str, ...]) -> dict[str, ClassFit]:
 
 
 def quick_fit(kind: str, touches: Touches, hopeless: float, screened: ClassFit | None = None) -> ClassFit:
-    """``fit_class(kind, touches, QUICK_NFEV, hopeless)`` — from the nearest start first when
-    the class was screened (:func:`screen`); then its screening fit *is* that fit when it is
-    above ``hopeless``, explains the touches, or is the class's only start (see
-    :func:`~eos_svc.shape.fit.fit_class`)."""
-    if screened is None:
+    """``fit_class(kind, touches, QUICK_NFEV, hopeless)``. A screening fit (:func:`screen`)
+    from the class's first start *is* that fit when it is above ``hopeless``, explains the
+    touches, or the class has one start (see :func:`~eos_svc.shape.fit.fit_class`): it is
+    reused then."""
+    if screened is None or screened.start != 0:
         return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
     if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(starts(kind, touches)) == 1:
         return screened
-    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, nearest_first=True)
+    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
 
 
 def fit_probability(fit: ClassFit, m: int) -> float:

@@ -16,6 +16,7 @@ from eos_svc.shape.selection import (
     HOPELESS,
     QUICK_NFEV,
     fit_probability,
+    quick_fit,
     screen,
     tolerance_probability,
 )
@@ -87,19 +88,19 @@ def test_ranked_starts_are_the_starts_from_the_nearest(kind):
     assert sorted((tuple(t), tuple(r.ravel())) for t, r in ranked) == keys
 
 
+@pytest.mark.parametrize("seed", [5, 6])
 @pytest.mark.parametrize("kind", KINDS)
-def test_screening_fit_is_the_quick_fit_it_stands_for(kind):
-    # selection.quick_fit reuses a class's screening fit (its nearest start alone) when that is
-    # above the hopeless bound or explains the touches: then the quick fit over every start
-    # stops at that very start
-    touches = random_touches("box" if kind != "box" else "cylinder", 5)
+def test_quick_fit_from_a_screening_is_the_plain_quick_fit(kind, seed):
+    # selection.quick_fit reuses a class's screening fit when it began from the class's first
+    # start and is above the hopeless bound or explains the touches
+    touches = random_touches("box" if kind != "box" else "cylinder", seed)
     screened = screen(touches, (kind,))[kind]
-    for hopeless in (screened.chi2 - 1.0, math.inf):
-        if hopeless == math.inf and not shape_fit.explains(screened.chi2, touches, kind):
-            continue
-        full = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, nearest_first=True)
-        assert full.chi2 == screened.chi2
-        np.testing.assert_array_equal(full.theta, screened.theta)
+    for hopeless in (screened.chi2 - 1.0, screened.chi2 + 1.0, math.inf):
+        got = quick_fit(kind, touches, hopeless, screened)
+        plain = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
+        assert got.chi2 == plain.chi2 and got.start == plain.start
+        np.testing.assert_array_equal(got.theta, plain.theta)
+        np.testing.assert_array_equal(got.covariance, plain.covariance)
 
 
 def test_residual_count_is_the_residuals_length():
