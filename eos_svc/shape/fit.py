@@ -65,7 +65,7 @@ def frame_with_z(axis: np.ndarray) -> np.ndarray:
     a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = a - (a @ z) * z
     x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
+    return np.column_stack([x, _cross(z[None], x[None])[0], z])
 
 
 @dataclass(frozen=True)
@@ -279,12 +279,9 @@ def _normal_scatter_axes(normals: np.ndarray) -> np.ndarray:
 def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarray) -> np.ndarray:
     """The point nearest every inward normal line (a sphere's centre), regularised toward
     ``prior`` where the lines are parallel."""
-    A = np.zeros((3, 3))
-    b = np.zeros(3)
-    for s, n in zip(points, normals, strict=True):
-        P = np.eye(3) - np.outer(n, n)
-        A += P
-        b += P @ s
+    # Σ (I − n nᵀ) and Σ (I − n nᵀ) s over the contacts
+    A = len(points) * np.eye(3) - normals.T @ normals
+    b = points.sum(axis=0) - normals.T @ np.sum(normals * points, axis=1)
     lam = 1e-3 * len(points)
     out: np.ndarray = np.linalg.solve(A + lam * np.eye(3), b + lam * prior)
     return out
@@ -292,15 +289,14 @@ def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarr
 
 def _normal_clusters(normals: np.ndarray, angle: float = math.radians(15.0)) -> list[np.ndarray]:
     """Mean directions of the sensed normals grouped greedily within ``angle``, largest first."""
-    left = list(range(len(normals)))
+    left = np.arange(len(normals))
     groups: list[tuple[int, np.ndarray]] = []
     cos = math.cos(angle)
-    while left:
-        n0 = normals[left[0]]
-        members = [i for i in left if normals[i] @ n0 >= cos]
-        mean = normals[members].sum(axis=0)
-        groups.append((len(members), mean / np.linalg.norm(mean)))
-        left = [i for i in left if i not in members]
+    while len(left):
+        near = normals[left] @ normals[left[0]] >= cos
+        mean = normals[left[near]].sum(axis=0)
+        groups.append((int(near.sum()), mean / np.linalg.norm(mean)))
+        left = left[~near]
     groups.sort(key=lambda g: -g[0])
     return [g[1] for g in groups]
 
@@ -315,7 +311,7 @@ def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
             if abs(c @ x) < 0.3:
                 y = c - (c @ x) * x
                 y /= np.linalg.norm(y)
-                frames.append(np.column_stack([x, y, np.cross(x, y)]))
+                frames.append(np.column_stack([x, y, _cross(x[None], y[None])[0]]))
     return frames[:3]
 
 

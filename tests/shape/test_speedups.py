@@ -219,3 +219,39 @@ def test_levenberg_marquardt_runs_what_least_squares_runs(kind):
             )
             np.testing.assert_array_equal(theta, plain.x)
             np.testing.assert_array_equal(fun, plain.fun)
+
+
+def test_start_helpers_equal_their_loops():
+    rng = np.random.default_rng(51)
+    touches = random_touches("box", 52)
+    points, normals = touches.surface_points, touches.normals
+    prior = points.mean(axis=0)
+    # the normal lines' nearest point: the sum over contacts written as a loop
+    A, b = np.zeros((3, 3)), np.zeros(3)
+    for s, n in zip(points, normals, strict=True):
+        P = np.eye(3) - np.outer(n, n)
+        A, b = A + P, b + P @ s
+    lam = 1e-3 * len(points)
+    plain = np.linalg.solve(A + lam * np.eye(3), b + lam * prior)
+    got_centre = shape_fit._normal_line_centre(points, normals, prior)
+    np.testing.assert_allclose(got_centre, plain, rtol=0, atol=1e-12)
+    # greedy clusters of the normals, one member test at a time
+    noisy = normals + rng.normal(scale=0.05, size=normals.shape)
+    noisy /= np.linalg.norm(noisy, axis=1, keepdims=True)
+    left, groups = list(range(len(noisy))), []
+    cos = math.cos(math.radians(15.0))
+    while left:
+        members = [i for i in left if noisy[i] @ noisy[left[0]] >= cos]
+        mean = noisy[members].sum(axis=0)
+        groups.append((len(members), mean / np.linalg.norm(mean)))
+        left = [i for i in left if i not in members]
+    groups.sort(key=lambda g: -g[0])
+    got = shape_fit._normal_clusters(noisy)
+    assert len(got) == len(groups) > 3
+    for g, (_, mean) in zip(got, groups, strict=True):
+        np.testing.assert_allclose(g, mean, rtol=0, atol=1e-12)
+    axis = rng.normal(size=3)
+    frame = shape_fit.frame_with_z(axis)
+    np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-12)
+    assert np.linalg.det(frame) == pytest.approx(1.0)
+    assert frame[:, 2] @ axis == pytest.approx(np.linalg.norm(axis))
