@@ -23,10 +23,11 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, leastsq
 
 from eos_svc.shape import primitives
 from eos_svc.shape.touches import Touches
@@ -64,7 +65,7 @@ def frame_with_z(axis: np.ndarray) -> np.ndarray:
     a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     x = a - (a @ z) * z
     x /= np.linalg.norm(x)
-    return np.column_stack([x, np.cross(z, x), z])
+    return np.column_stack([x, _cross(z[None], x[None])[0], z])
 
 
 @dataclass(frozen=True)
@@ -108,7 +109,7 @@ def batch_signed_distance(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
     (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3)."""
-    local = np.einsum("kni,kij->knj", points - centres[:, None, :], rotations)
+    local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
     elif kind == "ellipsoid":
@@ -119,12 +120,12 @@ def batch_signed_distance(
         d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
     else:
         d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, np.einsum("knj,kij->kni", g, rotations)
+    return d, g @ np.swapaxes(rotations, 1, 2)
 
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
-    theta = np.linalg.norm(omega, axis=1)
+    theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
     K = np.zeros((len(omega), 3, 3))
     K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
@@ -135,17 +136,27 @@ def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
 
 def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
     """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
-    z = axes / np.linalg.norm(axes, axis=1, keepdims=True)
+    z = axes / primitives.norm(axes)[:, None]
     a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
     x = a - np.sum(a * z, axis=1, keepdims=True) * z
-    x /= np.linalg.norm(x, axis=1, keepdims=True)
-    return np.stack([x, np.cross(z, x), z], axis=2)
+    x /= primitives.norm(x)[:, None]
+    return np.stack([x, _cross(z, x), z], axis=2)
+
+
+def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Row-wise u × v of (K, 3) arrays: ``np.cross``'s products, without its axis handling."""
+    out: np.ndarray = u[:, _NEXT] * v[:, _AFTER] - u[:, _AFTER] * v[:, _NEXT]
+    return out
+
+
+_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
 
 
 def batch_geometry(
     kind: str, thetas: np.ndarray, r0: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0``."""
+    """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
+    about its own (K, 3, 3)."""
     centres = thetas[:, :3]
     sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
     K = len(thetas)
@@ -155,23 +166,27 @@ def batch_geometry(
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
         tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
-        rotations = _batch_frames_with_z(tilt @ r0.T)
+        axes = tilt @ r0.T if r0.ndim == 2 else np.einsum("kij,kj->ki", r0, tilt)
+        rotations = _batch_frames_with_z(axes)
     return centres, rotations, sizes
 
 
 def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
-    """Whitened residuals (K, m) of K parameter vectors: tip-centre distances, normals,
+    """Whitened residuals (K, m) of K parameter vectors (about one start orientation ``r0``
+    or each about its own, see :func:`batch_geometry`): tip-centre distances, normals,
     free-space hinges."""
     centres, rotations, sizes = batch_geometry(kind, thetas, r0)
-    d, g = batch_signed_distance(kind, touches.centres[None], centres, rotations, sizes)
+    n = touches.count
+    # the contacts and the free samples in one evaluation of the class's distance
+    points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
+    d, g = batch_signed_distance(kind, points[None], centres, rotations, sizes)
     K = len(thetas)
-    r_d = (d - touches.radii - touches.gap_offset) / touches.sigma_distance
-    r_n = ((g - touches.normals) / touches.sigma_normal).reshape(K, -1)
-    parts = [r_d, r_n]
-    if len(touches.free):
-        f, _ = batch_signed_distance(kind, touches.free[None], centres, rotations, sizes)
-        parts.append(np.minimum(f - touches.free_radii, 0.0) / touches.sigma_distance)
-    return np.concatenate(parts, axis=1)
+    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / touches.sigma_distance
+    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(K, -1)
+    if not len(touches.free):
+        return np.concatenate([r_d, r_n], axis=1)
+    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / touches.sigma_distance
+    return np.concatenate([r_d, r_n, r_f], axis=1)
 
 
 def geometry_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> Geometry:
@@ -197,6 +212,7 @@ class ClassFit:
         n_params: k.
         covariance: (k, k) covariance of the parameters.
         theta: the parameters; ``r0``: their start orientation.
+        start: which of :func:`starts` the fit began from.
     """
 
     kind: str
@@ -206,6 +222,7 @@ class ClassFit:
     covariance: np.ndarray = field(repr=False)
     theta: np.ndarray = field(repr=False)
     r0: np.ndarray = field(repr=False)
+    start: int = 0
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""
@@ -262,12 +279,9 @@ def _normal_scatter_axes(normals: np.ndarray) -> np.ndarray:
 def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarray) -> np.ndarray:
     """The point nearest every inward normal line (a sphere's centre), regularised toward
     ``prior`` where the lines are parallel."""
-    A = np.zeros((3, 3))
-    b = np.zeros(3)
-    for s, n in zip(points, normals, strict=True):
-        P = np.eye(3) - np.outer(n, n)
-        A += P
-        b += P @ s
+    # Σ (I − n nᵀ) and Σ (I − n nᵀ) s over the contacts
+    A = len(points) * np.eye(3) - normals.T @ normals
+    b = points.sum(axis=0) - normals.T @ np.sum(normals * points, axis=1)
     lam = 1e-3 * len(points)
     out: np.ndarray = np.linalg.solve(A + lam * np.eye(3), b + lam * prior)
     return out
@@ -275,15 +289,14 @@ def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarr
 
 def _normal_clusters(normals: np.ndarray, angle: float = math.radians(15.0)) -> list[np.ndarray]:
     """Mean directions of the sensed normals grouped greedily within ``angle``, largest first."""
-    left = list(range(len(normals)))
+    left = np.arange(len(normals))
     groups: list[tuple[int, np.ndarray]] = []
     cos = math.cos(angle)
-    while left:
-        n0 = normals[left[0]]
-        members = [i for i in left if normals[i] @ n0 >= cos]
-        mean = normals[members].sum(axis=0)
-        groups.append((len(members), mean / np.linalg.norm(mean)))
-        left = [i for i in left if i not in members]
+    while len(left):
+        near = normals[left] @ normals[left[0]] >= cos
+        mean = normals[left[near]].sum(axis=0)
+        groups.append((int(near.sum()), mean / np.linalg.norm(mean)))
+        left = left[~near]
     groups.sort(key=lambda g: -g[0])
     return [g[1] for g in groups]
 
@@ -298,7 +311,7 @@ def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
             if abs(c @ x) < 0.3:
                 y = c - (c @ x) * x
                 y /= np.linalg.norm(y)
-                frames.append(np.column_stack([x, y, np.cross(x, y)]))
+                frames.append(np.column_stack([x, y, _cross(x[None], y[None])[0]]))
     return frames[:3]
 
 
@@ -340,6 +353,24 @@ def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
     return out
 
 
+def ranked_starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
+    """:func:`starts` from the lowest χ² at the start itself (ties in their order): fitted in
+    this order, the start nearest the touches is the one that explains them, shows the class
+    hopeless, or screens it (:func:`~eos_svc.shape.selection.screen`)."""
+    out = starts(kind, touches)
+    return [out[i] for i in _nearest_order(kind, touches, out)]
+
+
+def _nearest_order(kind: str, touches: Touches, candidates: list[tuple[np.ndarray, np.ndarray]]) -> list[int]:
+    """Indices of ``candidates`` from the lowest χ² at the start itself (ties in their order)."""
+    if len(candidates) < 2:
+        return list(range(len(candidates)))
+    thetas = np.array([theta0 for theta0, _ in candidates])
+    r0s = np.array([r0 for _, r0 in candidates])
+    chi2 = np.sum(batch_residuals(thetas, kind, r0s, touches) ** 2, axis=1)
+    return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
+
+
 def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
     (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
@@ -353,46 +384,117 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
     return out
 
 
-def fit_class(kind: str, touches: Touches, max_nfev: int = 20, hopeless: float = math.inf) -> ClassFit:
+def residual_count(touches: Touches) -> int:
+    """m, the number of whitened residuals (:func:`batch_residuals`): a distance and three
+    normal components per contact, a hinge per free sample."""
+    return 4 * touches.count + len(touches.free)
+
+
+def explains(chi2: float, touches: Touches, kind: str) -> bool:
+    """Whether a fit of ``kind`` with this χ² explains the touches to within the noise
+    (χ²/dof ≤ GOOD_FIT over all the whitened residuals): :func:`fit_class` then tries no
+    other start."""
+    return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
+
+
+class _LastValue:
+    """``fn(θ, *args)`` remembering its last argument and value: MINPACK's driver
+    (``scipy.optimize.leastsq``) evaluates the residuals and the Jacobian at the start once to
+    check their shapes, then again in its first iteration."""
+
+    def __init__(self, fn: Callable[..., np.ndarray]) -> None:
+        self.fn = fn
+        self.theta: np.ndarray | None = None
+        self.value: np.ndarray | None = None
+
+    def __call__(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        if self.theta is None or self.value is None or not np.array_equal(theta, self.theta):
+            self.theta, self.value = np.array(theta, dtype=float), self.fn(theta, *args)
+        return self.value
+
+
+def levenberg_marquardt(
+    theta0: np.ndarray, kind: str, r0: np.ndarray, touches: Touches, max_nfev: int
+) -> tuple[np.ndarray, np.ndarray]:
+    """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
+    ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
+    Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
+    without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
+    needs that only for the best start)."""
+    args = (kind, r0, touches)
+    x, _, info, _, _ = leastsq(
+        _LastValue(residuals),
+        np.asarray(theta0, dtype=float),
+        args=args,
+        Dfun=_LastValue(_jacobian),
+        full_output=True,
+        ftol=1e-8,
+        xtol=1e-8,
+        gtol=1e-8,
+        maxfev=max_nfev,
+    )
+    return x, info["fvec"]
+
+
+def fit_class(
+    kind: str,
+    touches: Touches,
+    max_nfev: int = 20,
+    hopeless: float = math.inf,
+    max_starts: int | None = None,
+    nearest_first: bool = False,
+) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts).
 
     ``hopeless``: a χ² above which the class cannot compete with a class already fitted
     (:func:`~eos_svc.shape.selection.select_class` passes a bound far above that class's
     χ²): once a start ends above it, the remaining starts are skipped (their posterior would
-    be 0 whatever they reach)."""
+    be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
+    ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
+    not in :func:`starts`' order.
+
+    The fit from the first start alone (``max_starts=1``) *is* the fit with the same
+    ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
+    :func:`explains` the touches, or when the class has one start (the sphere): every other
+    start is skipped then."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k = N_PARAMS[kind]
     best = None
-    for theta0, r0 in starts(kind, touches):
-        m = len(residuals(theta0, kind, r0, touches))
-        method = "lm" if m >= k else "trf"
-        res = least_squares(
-            residuals,
-            theta0,
-            jac=_jacobian,
-            args=(kind, r0, touches),
-            method=method,
-            x_scale="jac",
-            max_nfev=max_nfev,
-            ftol=1e-8,
-            xtol=1e-8,
-            gtol=1e-8,
-        )
-        chi2 = float(2.0 * res.cost)
+    m = residual_count(touches)
+    candidates = starts(kind, touches)
+    order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
+    for index in list(order)[:max_starts]:
+        theta0, r0 = candidates[index]
+        if m >= k:
+            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+        else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
+            res = least_squares(
+                residuals,
+                theta0,
+                jac=_jacobian,
+                args=(kind, r0, touches),
+                method="trf",
+                x_scale="jac",
+                max_nfev=max_nfev,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+            )
+            theta, fun = res.x, res.fun
+        chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
-            best = (chi2, res, r0)
-        if chi2 <= GOOD_FIT * max(m - k, 1):
+            best = (chi2, theta, r0, index)
+        if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break
     assert best is not None
-    chi2, res, r0 = best
-    J = res.jac
-    m = len(res.fun)
+    chi2, theta, r0, index = best
+    J = _jacobian(theta, kind, r0, touches)
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
     dof = max(m - k, 1)
     cov = cov * max(1.0, chi2 / dof)
-    return ClassFit(kind, geometry_from(kind, res.x, r0), chi2, k, cov, res.x, r0)
+    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0, index)

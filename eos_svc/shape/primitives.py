@@ -17,21 +17,28 @@ Array = np.ndarray
 _TINY = 1e-15
 
 
+def norm(v: Array) -> Array:
+    """Euclidean norm over the last axis: ``np.linalg.norm(v, axis=-1)``'s arithmetic
+    without its argument handling (these arrays are small: the call dominates)."""
+    out: Array = np.sqrt(np.sum(v * v, axis=-1))
+    return out
+
+
 def _unit(v: Array, fallback: tuple[float, float, float]) -> Array:
-    n = np.linalg.norm(v, axis=-1, keepdims=True)
+    n = norm(v)[..., None]
     return np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
 
 
 def sphere(P: Array, radius: Array) -> tuple[Array, Array]:
     """Sphere of ``radius``."""
-    return np.linalg.norm(P, axis=-1) - radius, _unit(P, (0.0, 0.0, 1.0))
+    return norm(P) - radius, _unit(P, (0.0, 0.0, 1.0))
 
 
 def box(P: Array, half: Array) -> tuple[Array, Array]:
     """Box of half sides ``half`` (..., 1, 3)."""
     q = np.abs(P) - half
     qp = np.maximum(q, 0.0)
-    out = np.linalg.norm(qp, axis=-1)
+    out = norm(qp)
     d = out + np.minimum(q.max(axis=-1), 0.0)
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
@@ -64,37 +71,47 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     zc = np.clip(P[..., 2], -half_length, half_length)
     v = P.copy()
     v[..., 2] -= zc
-    return np.linalg.norm(v, axis=-1) - radius, _unit(v, (1.0, 0.0, 0.0))
+    return norm(v) - radius, _unit(v, (1.0, 0.0, 0.0))
+
+
+def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
+    """A point left of the root of the ellipsoid's ``F`` (see :func:`ellipsoid`), near it:
+    every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;
+    and ``t ≥ 0`` outside, ``t > −min a_i²`` inside (kept 1e-12 relative away from that pole,
+    where ``F`` is infinite)."""
+    amin2 = np.min(a, axis=-1) ** 2
+    floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
+    out: Array = np.maximum(np.max(a * np.abs(P) - a * a, axis=-1), floor)
+    return out
 
 
 def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Array]:
     """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
 
     The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
-    ``F(t) = Σ (a_i p_i / (t + a_i²))² − 1`` on ``t > −min a_i²``; F is convex and decreasing
-    there, so Newton's method from a point left of the root (``t = 0`` outside; near the pole
-    of the shortest axis inside) rises monotonically to it.
+    ``Σ (a_i p_i / (t + a_i²))² = 1`` on ``t > −min a_i²``. Written ``h(t) = 1`` with
+    ``h = (Σ (a_i p_i)² (t + a_i²)⁻²)^(−1/2)``, a power mean of exponent −2 of the affine
+    ``t + a_i²`` — increasing and concave (linear for a sphere) — Newton's method from a point
+    left of the root (:func:`ellipsoid_root_lower_bound`) stays left of it and rises
+    monotonically to it, in one step for a sphere, in a few for the ellipsoid.
     """
     a = np.broadcast_to(radii, P.shape)
     a2 = a * a
     inside = np.sum((P / a) ** 2, axis=-1) < 1.0
-    k = np.argmin(a, axis=-1)[..., None]
-    amin = np.take_along_axis(a, k, axis=-1)[..., 0]
-    pmin = np.abs(np.take_along_axis(P, k, axis=-1)[..., 0])
-    t = np.where(inside, -amin * amin + amin * pmin + 1e-12 * amin * amin, 0.0)
+    t = ellipsoid_root_lower_bound(P, a, inside)
+    ap2 = (a * P) ** 2
     for _ in range(iterations):
-        den = t[..., None] + a2
-        u = a * P / den
-        uu = u * u
-        F = uu.sum(axis=-1) - 1.0
-        dF = -2.0 * (uu / den).sum(axis=-1)
-        step = F / np.minimum(dF, -1e-300)
-        t = t - step
+        inv = 1.0 / (t[..., None] + a2)
+        uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
+        total = uu.sum(axis=-1)  # h⁻²
+        slope = (uu * inv).sum(axis=-1)  # h' · h⁻³
+        step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
+        t = t + step
         if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
             break
     S = a2 * P / (t[..., None] + a2)
     v = P - S
-    dist = np.linalg.norm(v, axis=-1)
+    dist = norm(v)
     sign = np.where(inside, -1.0, 1.0)
     g = np.where(
         (dist > 1e-12)[..., None],

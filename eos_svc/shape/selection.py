@@ -2,7 +2,11 @@
 
 Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`); its Bayesian information
 criterion ``BIC = χ² + k·ln m`` (m whitened contact residuals) approximates −2 log of its
-evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``.
+evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``. Once one class
+explains the touches, a class far worse than it (χ² beyond :data:`HOPELESS`, posterior 0) is
+only fitted for a few iterations; when the sphere, fitted first, does not explain them, a
+brief fit of each other class from its nearest start (:func:`screen`) decides which is
+fitted in full next, so that the others need not be.
 
 The **confidence** of the postulate is the probability that the class is right *and* the
 object's size and centre are within tolerance: ``P(class) · Π erf(tol/(√2·σ))`` over the
@@ -26,7 +30,7 @@ from typing import Any
 import numpy as np
 from scipy import stats
 
-from eos_svc.shape.fit import GOOD_FIT, ClassFit, extent_ratios, fit_class
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, explains, extent_ratios, fit_class, starts
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -200,18 +204,30 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
         return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
     m = 3 * touches.count
     fits: dict[str, ClassFit] = {}
-    for kind in classes:
+    screened: dict[str, ClassFit] = {}
+    fits[classes[0]] = fit_class(classes[0], touches)
+    if fits[classes[0]].chi2 > GOOD_FIT * m and len(classes) > 1:
+        # the first class does not explain the touches: the others, each from its nearest
+        # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
+        # explains the touches the rest are shown hopeless against it in a few iterations
+        # instead of being fitted in full before it. The order decides which fit shows a class
+        # hopeless, not the postulate: its posterior is 0 either way.
+        screened = screen(touches, classes[1:])
+    rest = classes[1:]
+    order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
+    for kind in order:
         # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
         # a few iterations show it, the full fit is kept for the competitive ones
-        best = min((f.chi2 for f in fits.values()), default=math.inf)
+        best = min(f.chi2 for f in fits.values())
         if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
             fits[kind] = fit_class(kind, touches)
             continue
-        quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+        quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind))
         if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
         fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
+    fits = {k: fits[k] for k in classes}
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
     weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
@@ -220,6 +236,24 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     kind = max(classes, key=lambda k: (probs[k], -classes.index(k)))
     confidence = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
     return Postulate(kind, confidence, probs, fits, touches.count)
+
+
+def screen(touches: Touches, classes: tuple[str, ...]) -> dict[str, ClassFit]:
+    """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.ranked_starts`)
+    for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²)."""
+    return {kind: fit_class(kind, touches, QUICK_NFEV, max_starts=1, nearest_first=True) for kind in classes}
+
+
+def quick_fit(kind: str, touches: Touches, hopeless: float, screened: ClassFit | None = None) -> ClassFit:
+    """``fit_class(kind, touches, QUICK_NFEV, hopeless)``. A screening fit (:func:`screen`)
+    from the class's first start *is* that fit when it is above ``hopeless``, explains the
+    touches, or the class has one start (see :func:`~eos_svc.shape.fit.fit_class`): it is
+    reused then."""
+    if screened is None or screened.start != 0:
+        return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
+    if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(starts(kind, touches)) == 1:
+        return screened
+    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
 
 
 def fit_probability(fit: ClassFit, m: int) -> float:

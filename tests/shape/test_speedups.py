@@ -1,0 +1,257 @@
+"""The fit's speed helpers against the plain computations they replace."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from eos_svc.shape import Touches, fit_class, select_class
+from eos_svc.shape import fit as shape_fit
+from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound, norm
+from eos_svc.shape.selection import (
+    CLASSES,
+    GOOD_FIT,
+    HOPELESS,
+    QUICK_NFEV,
+    fit_probability,
+    quick_fit,
+    screen,
+    tolerance_probability,
+)
+from tests.shape.synthetic import TIP, objects, touches_on
+
+KINDS = ["sphere", "ellipsoid", "cylinder", "capsule", "box"]
+
+
+def plain_select(touches: Touches) -> tuple[str, float, dict[str, float], shape_fit.ClassFit]:
+    """(class, confidence, posteriors, chosen fit) by fitting the classes in their order, each
+    from its starts in order — no screening, no reuse (the selection before it was sped up)."""
+    m = 3 * touches.count
+    fits: dict[str, shape_fit.ClassFit] = {}
+    for kind in CLASSES:
+        best = min((f.chi2 for f in fits.values()), default=math.inf)
+        if best > GOOD_FIT * m:
+            fits[kind] = fit_class(kind, touches)
+            continue
+        quick = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=best + HOPELESS)
+        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+            fits[kind] = quick
+            continue
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
+    bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
+    low = min(bic.values())
+    weights = {k: math.exp(-0.5 * (b - low)) for k, b in bic.items()}
+    probs = {k: w / sum(weights.values()) for k, w in weights.items()}
+    kind = max(CLASSES, key=lambda k: (probs[k], -CLASSES.index(k)))
+    conf = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
+    return kind, conf, probs, fits[kind]
+
+
+def random_touches(kind: str, seed: int) -> Touches:
+    rng = np.random.default_rng(seed)
+    obj = objects(rpy=tuple(rng.uniform(-1.0, 1.0, 3)))[kind]
+    t = touches_on(obj, rng, n=24)
+    # a few free samples beyond the object (behind it, along +x)
+    c = np.asarray(obj.placement.translation)
+    free = c + np.column_stack([np.full(5, 0.06), rng.uniform(-0.02, 0.02, (5, 2))])
+    return t.merged(Touches(free=free, free_radii=TIP))
+
+
+@pytest.mark.parametrize("seed", [11, 12])
+@pytest.mark.parametrize("kind", KINDS)
+def test_screened_selection_postulates_what_the_plain_selection_does(kind, seed):
+    touches = random_touches(kind, seed)
+    post = select_class(touches)
+    kind0, conf0, probs0, fit0 = plain_select(touches)
+    assert post.kind == kind0 == kind
+    assert post.confidence == pytest.approx(conf0, abs=2e-3)
+    for k, p in probs0.items():
+        assert post.probabilities[k] == pytest.approx(p, abs=2e-3)
+    chosen = post.best
+    assert chosen is not None
+    np.testing.assert_allclose(chosen.geometry.centre, fit0.geometry.centre, atol=2e-5)  # m
+    np.testing.assert_allclose(sorted(chosen.geometry.sizes), sorted(fit0.geometry.sizes), rtol=2e-3)
+    assert chosen.chi2 == pytest.approx(fit0.chi2, rel=1e-3)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_ranked_starts_are_the_starts_from_the_nearest(kind):
+    touches = random_touches(kind, 3)
+    plain = shape_fit.starts(kind, touches)
+    ranked = shape_fit.ranked_starts(kind, touches)
+    assert len(ranked) == len(plain)
+    chi2 = [float(np.sum(shape_fit.residuals(theta, kind, r0, touches) ** 2)) for theta, r0 in ranked]
+    assert chi2 == sorted(chi2)
+    keys = sorted((tuple(t), tuple(r.ravel())) for t, r in plain)
+    assert sorted((tuple(t), tuple(r.ravel())) for t, r in ranked) == keys
+
+
+@pytest.mark.parametrize("seed", [5, 6])
+@pytest.mark.parametrize("kind", KINDS)
+def test_quick_fit_from_a_screening_is_the_plain_quick_fit(kind, seed):
+    # selection.quick_fit reuses a class's screening fit when it began from the class's first
+    # start and is above the hopeless bound or explains the touches
+    touches = random_touches("box" if kind != "box" else "cylinder", seed)
+    screened = screen(touches, (kind,))[kind]
+    for hopeless in (screened.chi2 - 1.0, screened.chi2 + 1.0, math.inf):
+        got = quick_fit(kind, touches, hopeless, screened)
+        plain = fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
+        assert got.chi2 == plain.chi2 and got.start == plain.start
+        np.testing.assert_array_equal(got.theta, plain.theta)
+        np.testing.assert_array_equal(got.covariance, plain.covariance)
+
+
+def test_residual_count_is_the_residuals_length():
+    touches = random_touches("box", 7)
+    for kind in KINDS:
+        theta, r0 = shape_fit.starts(kind, touches)[0]
+        assert len(shape_fit.residuals(theta, kind, r0, touches)) == shape_fit.residual_count(touches)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fused_residuals_equal_contacts_and_free_samples_apart(kind):
+    # batch_residuals evaluates the contacts and the free samples in one call
+    touches = random_touches(kind, 8)
+    rng = np.random.default_rng(9)
+    starts = shape_fit.starts(kind, touches)
+    theta0, r0 = starts[0]
+    thetas = theta0 + rng.normal(scale=0.05, size=(4, len(theta0)))
+    fused = shape_fit.batch_residuals(thetas, kind, r0, touches)
+    for theta, row in zip(thetas, fused, strict=True):
+        g = shape_fit.geometry_from(kind, theta, r0)
+        d, n = g.signed_distance(touches.centres)
+        f, _ = g.signed_distance(touches.free)
+        plain = np.concatenate(
+            [
+                (d - touches.radii - touches.gap_offset) / touches.sigma_distance,
+                ((n - touches.normals) / touches.sigma_normal).ravel(),
+                np.minimum(f - touches.free_radii, 0.0) / touches.sigma_distance,
+            ]
+        )
+        np.testing.assert_allclose(row, plain, rtol=1e-9, atol=1e-9)
+    # each parameter vector about its own start orientation, as ranked_starts evaluates them
+    thetas = np.array([t for t, _ in starts])
+    own = shape_fit.batch_residuals(thetas, kind, np.array([r for _, r in starts]), touches)
+    for (theta, r), row in zip(starts, own, strict=True):
+        np.testing.assert_allclose(row, shape_fit.residuals(theta, kind, r, touches), rtol=1e-12, atol=1e-9)
+
+
+def _ellipsoid_root_function(t: np.ndarray, P: np.ndarray, a: np.ndarray) -> np.ndarray:
+    out: np.ndarray = np.sum((a * P / (t[..., None] + a * a)) ** 2, axis=-1) - 1.0
+    return out
+
+
+def test_ellipsoid_newton_start_is_left_of_the_root_and_near_it():
+    rng = np.random.default_rng(21)
+    a = np.broadcast_to(rng.uniform(0.01, 0.05, 3), (2000, 3))
+    P = rng.normal(scale=0.04, size=(2000, 3))
+    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    assert inside.any() and (~inside).any()
+    t0 = ellipsoid_root_lower_bound(P, a, inside)
+    assert np.all(t0 > -(np.min(a, axis=-1) ** 2))
+    assert np.all(_ellipsoid_root_function(t0, P, a) >= -1e-12)  # F decreasing: t0 ≤ root
+    # the plain start (0 outside, near the shortest axis' pole inside) is never nearer the root
+    amin = np.min(a, axis=-1)
+    plain = np.where(inside, -amin * amin + amin * np.abs(P[np.arange(len(P)), np.argmin(a, axis=-1)]), 0.0)
+    assert np.all(t0 >= plain - 1e-18)
+    d, g = ellipsoid(P, a)
+    # Newton from there converges: the closest point, d along the gradient, is on the surface
+    S = P - d[:, None] * g
+    np.testing.assert_allclose(np.sum((S / a) ** 2, axis=-1), 1.0, atol=1e-8)
+
+
+def test_norm_and_cross_are_numpys():
+    rng = np.random.default_rng(31)
+    u, v = rng.normal(size=(2, 40, 3))
+    np.testing.assert_array_equal(norm(u), np.linalg.norm(u, axis=-1))
+    np.testing.assert_array_equal(norm(u.reshape(4, 10, 3)), np.linalg.norm(u.reshape(4, 10, 3), axis=-1))
+    np.testing.assert_array_equal(shape_fit._cross(u, v), np.cross(u, v))
+
+
+def _ellipsoid_closest_plain(P: np.ndarray, a: np.ndarray) -> np.ndarray:
+    """Closest points by Newton's method on F(t) = Σ (a_i p_i / (t + a_i²))² − 1 from t = 0
+    outside, from near the shortest axis' pole inside (the plain iteration)."""
+    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    amin = np.min(a, axis=-1)
+    pmin = np.abs(P[np.arange(len(P)), np.argmin(a, axis=-1)])
+    t = np.where(inside, -amin * amin + amin * pmin + 1e-12 * amin * amin, 0.0)
+    for _ in range(200):
+        den = t[:, None] + a * a
+        uu = (a * P / den) ** 2
+        step = (uu.sum(axis=-1) - 1.0) / np.minimum(-2.0 * (uu / den).sum(axis=-1), -1e-300)
+        t = t - step
+        if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-14:
+            break
+    out: np.ndarray = a * a * P / (t[:, None] + a * a)
+    return out
+
+
+@pytest.mark.parametrize("radii", [(0.03, 0.03, 0.03), (0.035, 0.03, 0.022), (0.05, 0.01, 0.004)])
+def test_ellipsoid_closest_point_is_the_plain_newtons(radii):
+    rng = np.random.default_rng(41)
+    a = np.broadcast_to(np.asarray(radii), (3000, 3))
+    P = rng.normal(scale=0.04, size=(3000, 3))
+    d, g = ellipsoid(P, a)
+    np.testing.assert_allclose(P - d[:, None] * g, _ellipsoid_closest_plain(P, a), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_levenberg_marquardt_runs_what_least_squares_runs(kind):
+    from scipy.optimize import least_squares
+
+    touches = random_touches(kind if kind != "box" else "ellipsoid", 13)
+    for theta0, r0 in shape_fit.starts(kind, touches)[:2]:
+        for max_nfev in (QUICK_NFEV, 20):
+            theta, fun = shape_fit.levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+            plain = least_squares(
+                shape_fit.residuals,
+                theta0,
+                jac=shape_fit._jacobian,
+                args=(kind, r0, touches),
+                method="lm",
+                x_scale="jac",
+                max_nfev=max_nfev,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+            )
+            np.testing.assert_array_equal(theta, plain.x)
+            np.testing.assert_array_equal(fun, plain.fun)
+
+
+def test_start_helpers_equal_their_loops():
+    rng = np.random.default_rng(51)
+    touches = random_touches("box", 52)
+    points, normals = touches.surface_points, touches.normals
+    prior = points.mean(axis=0)
+    # the normal lines' nearest point: the sum over contacts written as a loop
+    A, b = np.zeros((3, 3)), np.zeros(3)
+    for s, n in zip(points, normals, strict=True):
+        P = np.eye(3) - np.outer(n, n)
+        A, b = A + P, b + P @ s
+    lam = 1e-3 * len(points)
+    plain = np.linalg.solve(A + lam * np.eye(3), b + lam * prior)
+    got_centre = shape_fit._normal_line_centre(points, normals, prior)
+    np.testing.assert_allclose(got_centre, plain, rtol=0, atol=1e-12)
+    # greedy clusters of the normals, one member test at a time
+    noisy = normals + rng.normal(scale=0.05, size=normals.shape)
+    noisy /= np.linalg.norm(noisy, axis=1, keepdims=True)
+    left, groups = list(range(len(noisy))), []
+    cos = math.cos(math.radians(15.0))
+    while left:
+        members = [i for i in left if noisy[i] @ noisy[left[0]] >= cos]
+        mean = noisy[members].sum(axis=0)
+        groups.append((len(members), mean / np.linalg.norm(mean)))
+        left = [i for i in left if i not in members]
+    groups.sort(key=lambda g: -g[0])
+    got = shape_fit._normal_clusters(noisy)
+    assert len(got) == len(groups) > 3
+    for g, (_, mean) in zip(got, groups, strict=True):
+        np.testing.assert_allclose(g, mean, rtol=0, atol=1e-12)
+    axis = rng.normal(size=3)
+    frame = shape_fit.frame_with_z(axis)
+    np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-12)
+    assert np.linalg.det(frame) == pytest.approx(1.0)
+    assert frame[:, 2] @ axis == pytest.approx(np.linalg.norm(axis))
