@@ -129,7 +129,11 @@ def run(args: argparse.Namespace) -> int:
         for data in recording.cycles:
             print(format_cycle(record_from_dict(data)))
     if recording.result is not None:
-        print(format_result(SimpleNamespace(**recording.result)))
+        try:
+            text = format_result(SimpleNamespace(**recording.result))
+        except (KeyError, TypeError, ValueError, AttributeError) as exc:  # a hand-edited result line
+            fail(f"FILE: {args.file}: the result line is not a plan result ({type(exc).__name__}: {exc})")
+        print(text)
     else:
         print(f"no result line: the recorded run was interrupted after {len(recording.cycles)} cycles")
     code = 0

@@ -151,3 +151,17 @@ def test_recorded_hand_is_replayed(tmp_path, capsys):
     capsys.readouterr()
     assert main(["replay", "--quiet", str(path)]) == 0
     assert "replay: deterministic" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("field", "value"), [("contacts", [1, 2]), ("ground_truth", "a sphere"), ("friction", "high")]
+)
+def test_a_hand_edited_result_line_exits_2(recorded, tmp_path, capsys, field, value):
+    lines = recorded.read_text().splitlines()
+    last = json.loads(lines[-1])
+    last["result"][field] = value
+    path = tmp_path / "edited.jsonl"
+    path.write_text("\n".join([*lines[:-1], json.dumps(last)]) + "\n")
+    with pytest.raises(SystemExit) as exc:
+        main(["replay", str(path), "--quiet", "--no-verify"])
+    assert exc.value.code == 2 and "the result line is not a plan result" in capsys.readouterr().err
