@@ -78,13 +78,28 @@ def main() -> int:
         ("default", default),
         ("d/h 0.2 seed 6", ratio_sphere_request(0.2, 6)),
         ("d/h 0.2 seed 3", ratio_sphere_request(0.2, 3)),
+        # a long plan: tactile noise 2 mm keeps EP1 repeating (the coverage search no longer
+        # has the long random walks that made 100+ cycles common)
+        (
+            "noisy, seed 3",
+            PlanRequest.from_dict(
+                {
+                    "object": {"shape": "sphere", "radius": 0.012, "position": [0.35, 0.13, 0.12]},
+                    "seed": 3,
+                    "tactile_noise": 0.002,
+                }
+            ),
+        ),
     ):
         planned = plan(request)
         size = write_result_html(planned, out / "size.html").stat().st_size
         sizes.append((planned.cycles, size))
         print(f"  {name:<15} {planned.cycles:5d} cycles  {size / 1e6:6.2f} MB")
     hundred = [size for cycles, size in sizes if cycles >= 100]
-    print(f"goal: < 5 MB for >= 100 cycles -> {'met' if max(hundred) < 5e6 else 'NOT met'}")
+    if not hundred:
+        print("goal: < 5 MB for >= 100 cycles -> not measured (no plan of 100 cycles or more)")
+    else:
+        print(f"goal: < 5 MB for >= 100 cycles -> {'met' if max(hundred) < 5e6 else 'NOT met'}")
 
     view = LiveView()
     t_bare, t_view = [], []
