@@ -144,21 +144,20 @@ class EP1Agent(GraspAgent):
         estimator = self.estimators.setdefault(side, CurvatureEstimator())
         fallback = ""
         try:
-            result = self._roll(finger, estimator, self.solver)
+            with world.direct_motion():  # run_ep1 moves the state directly
+                result = self._roll(finger, estimator, self.solver)
         except (RollingQPError, KinematicsError) as exc:
-            world.sync()
             if not isinstance(exc, RollingQPError) or self.solver == FALLBACK_SOLVER:
                 return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}")
             # OSQP can stall on a feasible but badly conditioned roll (max iterations); the
             # dense active-set solver is slower but exact: redo this run with it.
             try:
                 self._place(side, finger)
-                result = self._roll(finger, estimator, FALLBACK_SOLVER)
+                with world.direct_motion():
+                    result = self._roll(finger, estimator, FALLBACK_SOLVER)
             except (RollingQPError, KinematicsError) as exc2:
-                world.sync()
                 return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}; then {exc2}")
             fallback = f" ({self.solver} stalled: {exc.status}; rolled with {FALLBACK_SOLVER})"
-        world.sync()  # run_ep1 moved the state directly
         est = result.estimate
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
         reading = world.sensor.read(world.state, world.scene.contact(world.state, finger))

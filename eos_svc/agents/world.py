@@ -22,8 +22,9 @@ gaps that spare most exact coal queries are :mod:`eos_svc.kinematics.gap_bounds`
 
 from __future__ import annotations
 
+import contextlib
 import math
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -193,9 +194,20 @@ class GraspWorld:
         self._memo.clear()
 
     def sync(self) -> None:
-        """Call after moving ``state`` directly (e.g. EP1's rolling): forget memoised values."""
+        """Forget memoised values after ``state`` was moved directly (prefer
+        :meth:`direct_motion`, which cannot forget to)."""
         self.version += 1
         self._memo.clear()
+
+    @contextlib.contextmanager
+    def direct_motion(self) -> Iterator[HandState]:
+        """``with world.direct_motion() as state:`` — move ``state`` directly inside (e.g. EP1's
+        rolling QP integrates it); on leaving, normally or by an exception, the world forgets
+        what it had memoised about the old pose."""
+        try:
+            yield self.state
+        finally:
+            self.sync()
 
     def search_step(self) -> tuple[str, float, bool]:
         """One search move: a sweep of the next column of the coverage plan in this run's

@@ -91,3 +91,16 @@ def test_hand_bound_contains_the_hand():
     for finger, sweep in world.sweeps.items():
         reach = np.linalg.norm(sweep.points - centre, axis=1).max() + world.hand.tip_radius(finger)
         assert reach < world.params.hand_bound
+
+
+def test_direct_motion_forgets_the_old_pose_even_on_an_error():
+    world = world_with_sphere()
+    before = world.hand_clearance()  # memoised for this pose
+    q = world.state.q.copy()
+    q[world.hand.wrist_q_index[0]] += 0.01  # 1 cm toward the object
+    with pytest.raises(RuntimeError), world.direct_motion() as state:
+        state.update(q)
+        raise RuntimeError("the roll failed half way")
+    fresh = world_with_sphere()
+    fresh.set_q(q)
+    assert world.hand_clearance() == fresh.hand_clearance() != before  # re-measured at the new pose
