@@ -54,12 +54,6 @@ def parts(result) -> tuple[float, float, float]:
             setup.q_final,
             setup.obj,
             friction=setup.friction,
-            mass=0.1,
-            squeeze=0.05,
-            kp=5.0,
-            kd=0.05,
-            contact_stiffness=2e4,
-            time_step=1e-3,
         )
         t1 = time.perf_counter()
         sim.settle(0.3)

@@ -59,6 +59,15 @@ from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 
 #: name of the object's body and model instance in the plant
+#: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles
+#: (rad), finger PD gains (N·m/rad, N·m·s/rad), point-contact stiffness (N/m), plant step (s)
+DEFAULT_MASS = 0.1
+DEFAULT_SQUEEZE = 0.05
+DEFAULT_KP = 5.0
+DEFAULT_KD = 0.05
+DEFAULT_CONTACT_STIFFNESS = 2e4
+DEFAULT_TIME_STEP = 1e-3
+
 OBJECT_NAME = "object"
 #: name of the hand part made of the palm and every hand body outside the fingers
 PALM_PART = "palm"
@@ -146,12 +155,12 @@ class GraspSimulation:
         obj: ObjectSpec,
         *,
         friction: float,
-        mass: float,
-        squeeze: float,
-        kp: float,
-        kd: float,
-        contact_stiffness: float,
-        time_step: float,
+        mass: float = DEFAULT_MASS,
+        squeeze: float = DEFAULT_SQUEEZE,
+        kp: float = DEFAULT_KP,
+        kd: float = DEFAULT_KD,
+        contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
+        time_step: float = DEFAULT_TIME_STEP,
     ) -> None:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]

@@ -22,7 +22,16 @@ from eos_svc.errors import ValidationError
 from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
-from eos_svc.validation.simulation import GraspSimulation, SimulationError
+from eos_svc.validation.simulation import (
+    DEFAULT_CONTACT_STIFFNESS,
+    DEFAULT_KD,
+    DEFAULT_KP,
+    DEFAULT_MASS,
+    DEFAULT_SQUEEZE,
+    DEFAULT_TIME_STEP,
+    GraspSimulation,
+    SimulationError,
+)
 
 if TYPE_CHECKING:
     from eos_svc.agents.result import PlanResult
@@ -49,15 +58,15 @@ def validate_grasp(
     *,
     directions: int | Sequence[str] = 6,
     seconds: float = 1.5,
-    mass: float = 0.1,
-    squeeze: float = 0.05,
-    kp: float = 5.0,
-    kd: float = 0.05,
+    mass: float = DEFAULT_MASS,
+    squeeze: float = DEFAULT_SQUEEZE,
+    kp: float = DEFAULT_KP,
+    kd: float = DEFAULT_KD,
     settle_seconds: float = 0.3,
     hold_tolerance: float = 0.01,
     min_parts: int = 2,
-    contact_stiffness: float = 2e4,
-    time_step: float = 1e-3,
+    contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
+    time_step: float = DEFAULT_TIME_STEP,
     stop_distance: float = 0.05,
     urdf: str | Path = HAND3X3_URDF,
     description: HandDescription | None = None,

@@ -87,12 +87,6 @@ def test_drake_and_pinocchio_agree_on_the_fingertips(good_plan):
         setup.q_final,
         setup.obj,
         friction=0.5,
-        mass=0.1,
-        squeeze=0.05,
-        kp=5.0,
-        kd=0.05,
-        contact_stiffness=2e4,
-        time_step=1e-3,
     )
     state = default_hand().state(np.asarray(good_plan.q_final))
     for finger in ("finger1", "finger2", "finger3"):
