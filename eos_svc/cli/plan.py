@@ -295,6 +295,7 @@ def run(args: argparse.Namespace) -> int:
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
+            check=False,  # admit() has just run check_plannable on this request and hand
         )
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
