@@ -39,7 +39,7 @@ from eos_svc.kinematics import HandModel
 SPAN_SAMPLES = 7
 
 #: per hand (by id, with the hand kept so the id cannot be reused): its span and neutral geometry
-_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry]]] = {}
+_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry], float]] = {}
 
 
 class _Geometry:
@@ -68,11 +68,15 @@ def hand_span(hand: HandModel) -> float:
     return _hand_data(hand)[1]
 
 
-def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry]]:
-    """(hand, span, its collision geometries at the start configuration), built once per hand."""
+def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], float]:
+    """(hand, span, its collision geometries at the start configuration, its forward reach),
+    built once per hand."""
     entry = _PER_HAND.get(id(hand))
     if entry is None or entry[0] is not hand:
-        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand))
+        from eos_svc.agents import planner  # planner imports this module: resolve at call time
+
+        reach = forward_reach(hand, planner.finger_sweeps(hand))
+        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand), reach)
     return entry
 
 
@@ -162,7 +166,7 @@ def check_plannable(
     hand = hand or planner.default_hand()
     params = params or planner.parameters_for(hand)
     spec = request.obj
-    _, span, geometries = _hand_data(hand)
+    _, span, geometries, reach_ahead = _hand_data(hand)
 
     width, size_field = smallest_width(spec)
     if width > span:
@@ -223,7 +227,6 @@ def check_plannable(
 
     # Findable: the search sweeps a lattice of columns and guarantees to locate only objects that
     # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
-    reach_ahead = forward_reach(hand, planner.finger_sweeps(hand))
     rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
     surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
     if not surely and not findable(make_object(spec), params, reach_ahead):
