@@ -13,6 +13,13 @@ is reported for every class, and the default plan's median time is compared with
 plan at a baseline revision (``--baseline REV``, default the commit before EP2 and the
 fitting: ``256976e``), run from a ``git archive`` of it: this tree and the baseline each in
 child processes, in alternating rounds (the machine's load changes within a run).
+
+    .venv/bin/python benchmarks/bench_plan.py --suite [--baseline REV]
+
+compares instead the median plan time over the grasp experiment's fixed suite (29 objects,
+seed 1: spheres d/h 0.2–0.95, ellipsoids, cylinders and capsules in four poses, boxes of three
+aspect ratios at three yaws) with the default plan at the baseline revision, interleaved the
+same way.
 """
 
 from __future__ import annotations
@@ -79,6 +86,17 @@ for _ in range({repeats}):
     t0 = time.perf_counter(); plan(PlanRequest()); samples.append(time.perf_counter() - t0)
 print(*samples)
 """
+SUITE_SCRIPT = """
+import time
+from eos_svc.agents import PlanRequest, plan
+from eos_svc.experiments.grasp_suite import fixed_suite
+plan(PlanRequest())
+samples = []
+for seed in {seeds}:
+    for item in fixed_suite():
+        t0 = time.perf_counter(); plan(PlanRequest(obj=item.spec, seed=seed)); samples.append(time.perf_counter() - t0)
+print(*samples)
+"""
 #: rounds of the interleaved comparison with the baseline revision, plans per round and side
 ROUNDS, ROUND_PLANS = 4, 8
 
@@ -105,11 +123,12 @@ def information_cost(request: PlanRequest, repeats: int = 3) -> tuple[int, float
     return cycles, statistics.median(stage_ms), statistics.median(touch_ms), kind, conf
 
 
-def _child_samples(pythonpath: str, cwd: str, repeats: int) -> list[float]:
-    """Default-plan times (s) of ``repeats`` plans in a fresh interpreter importing eos_svc from
-    ``pythonpath`` (after one warm-up plan); empty when it fails."""
+def _child_samples(pythonpath: str, cwd: str, repeats: int, script: str = BASELINE_SCRIPT) -> list[float]:
+    """Plan times (s) printed by ``script`` (default: ``repeats`` default plans) in a fresh
+    interpreter importing eos_svc from ``pythonpath`` (after one warm-up plan); empty when it
+    fails."""
     out = subprocess.run(
-        [sys.executable, "-c", BASELINE_SCRIPT.format(repeats=repeats)],
+        [sys.executable, "-c", script.format(repeats=repeats, seeds=(1,))],
         capture_output=True,
         text=True,
         cwd=cwd,
@@ -119,12 +138,13 @@ def _child_samples(pythonpath: str, cwd: str, repeats: int) -> list[float]:
 
 
 def interleaved_baseline(
-    rev: str, rounds: int = ROUNDS, plans: int = ROUND_PLANS
+    rev: str, rounds: int = ROUNDS, plans: int = ROUND_PLANS, suite: bool = False
 ) -> tuple[float, float] | None:
     """(median default-plan time of this tree, of revision ``rev``) in s: both in child processes,
     alternating rounds of ``plans`` plans, so that a change of the machine's load hits both
-    (``rev`` is ``git archive``d into a temporary folder). None when the revision or a child
-    fails."""
+    (``rev`` is ``git archive``d into a temporary folder). With ``suite``, this tree's side is
+    the grasp experiment's fixed suite instead (every object once, seed 1 — the median over
+    the suite). None when the revision or a child fails."""
     with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
         archive = Path(tmp) / "rev.tar"
         done = subprocess.run(
@@ -141,9 +161,9 @@ def interleaved_baseline(
         ours: list[float] = []
         theirs: list[float] = []
         for _ in range(rounds):
-            ours += _child_samples(here, here, plans)
+            ours += _child_samples(here, here, plans, SUITE_SCRIPT if suite else BASELINE_SCRIPT)
             theirs += _child_samples(tmp, tmp, plans)
-        if len(ours) < rounds * plans or len(theirs) < rounds * plans:
+        if len(ours) < (1 if suite else rounds * plans) or len(theirs) < rounds * plans:
             return None
         return statistics.median(ours), statistics.median(theirs)
 
@@ -151,7 +171,26 @@ def interleaved_baseline(
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="whole plans: time, cycles, information-stage cost")
     parser.add_argument("--baseline", default="256976e", help="git revision to compare the default plan with")
+    parser.add_argument(
+        "--suite",
+        action="store_true",
+        help="only compare the grasp suite's median plan time (eos experiment grasps' fixed suite, "
+        "seed 1) with the baseline's default plan, interleaved in child processes",
+    )
     args = parser.parse_args(argv)
+    if args.suite:
+        rounds = 2
+        pair = interleaved_baseline(args.baseline, rounds=rounds, suite=True)
+        if pair is None:
+            print(f"could not run the suite or revision {args.baseline}")
+            return 1
+        ours, base = pair
+        print(
+            f"grasp suite (fixed, seed 1) median plan vs the default plan at {args.baseline} (same run, "
+            f"{rounds} alternating rounds in child processes): {ours * 1e3:.1f} ms vs {base * 1e3:.1f} ms "
+            f"= {ours / base:.2f}x (goal: within 2x -> {'met' if ours <= 2.0 * base else 'NOT met'})"
+        )
+        return 0
     plan(PlanRequest())  # load the hand, warm caches
     default = PlanRequest()
     per_agent: dict = {}
