@@ -94,7 +94,9 @@ plan(PlanRequest())
 samples = []
 for seed in {seeds}:
     for item in fixed_suite():
-        t0 = time.perf_counter(); plan(PlanRequest(obj=item.spec, seed=seed)); samples.append(time.perf_counter() - t0)
+        t0 = time.perf_counter()
+        plan(PlanRequest(obj=item.spec, seed=seed))
+        samples.append(time.perf_counter() - t0)
 print(*samples)
 """
 #: rounds of the interleaved comparison with the baseline revision, plans per round and side
