@@ -23,7 +23,6 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -105,15 +104,23 @@ class Geometry:
 
 
 def batch_signed_distance(
-    kind: str, points: np.ndarray, centres: np.ndarray, rotations: np.ndarray, sizes: np.ndarray
+    kind: str,
+    points: np.ndarray,
+    centres: np.ndarray,
+    rotations: np.ndarray,
+    sizes: np.ndarray,
+    groups: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
-    (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3)."""
+    (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3).
+    ``groups``: first indices of groups of instances evaluated as if in separate calls (of
+    the distances, only the ellipsoid's iteration couples the instances of a call, see
+    :func:`~eos_svc.shape.primitives.ellipsoid`)."""
     local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
     elif kind == "ellipsoid":
-        d, g = primitives.ellipsoid(local, sizes[:, None, :])
+        d, g = primitives.ellipsoid(local, sizes[:, None, :], groups=groups)
     elif kind == "box":
         d, g = primitives.box(local, sizes[:, None, :])
     elif kind == "cylinder":
@@ -153,10 +160,12 @@ _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
 
 
 def batch_geometry(
-    kind: str, thetas: np.ndarray, r0: np.ndarray
+    kind: str, thetas: np.ndarray, r0: np.ndarray, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
-    about its own (K, 3, 3)."""
+    about its own (K, 3, 3). ``groups``: first indices of groups of parameter vectors
+    evaluated as if in separate calls (a cylinder's or capsule's axes are one matrix product
+    per call, whose rounding BLAS may choose by the number of rows)."""
     centres = thetas[:, :3]
     sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
     K = len(thetas)
@@ -166,26 +175,69 @@ def batch_geometry(
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
         tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
-        axes = tilt @ r0.T if r0.ndim == 2 else np.einsum("kij,kj->ki", r0, tilt)
+        if r0.ndim == 3:
+            axes = np.einsum("kij,kj->ki", r0, tilt)
+        elif groups is None:
+            axes = tilt @ r0.T
+        else:
+            axes = np.concatenate([part @ r0.T for part in np.split(tilt, groups[1:])])
         rotations = _batch_frames_with_z(axes)
     return centres, rotations, sizes
+
+
+@dataclass(frozen=True)
+class FitData:
+    """What :func:`batch_residuals` needs of the touches, derived once per fit instead of per
+    evaluation: the contacts and free samples as one array of points (m), their radii (m),
+    the sensed normals and the noise model's constants."""
+
+    points: np.ndarray
+    count: int
+    radii: np.ndarray
+    normals: np.ndarray
+    free_radii: np.ndarray
+    gap_offset: float
+    sigma_distance: float
+    sigma_normal: float
+
+    @classmethod
+    def of(cls, touches: Touches) -> FitData:
+        """The fit data of ``touches``."""
+        # the contacts and the free samples in one evaluation of the class's distance
+        points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
+        return cls(
+            points[None],
+            touches.count,
+            touches.radii,
+            touches.normals,
+            touches.free_radii,
+            touches.gap_offset,
+            touches.sigma_distance,
+            touches.sigma_normal,
+        )
 
 
 def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors (about one start orientation ``r0``
     or each about its own, see :func:`batch_geometry`): tip-centre distances, normals,
     free-space hinges."""
-    centres, rotations, sizes = batch_geometry(kind, thetas, r0)
-    n = touches.count
-    # the contacts and the free samples in one evaluation of the class's distance
-    points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
-    d, g = batch_signed_distance(kind, points[None], centres, rotations, sizes)
+    return _whitened_residuals(thetas, kind, r0, FitData.of(touches))
+
+
+def _whitened_residuals(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> np.ndarray:
+    """:func:`batch_residuals` from the touches' :class:`FitData`; ``groups`` (first rows of
+    groups of ``thetas``) as in :func:`batch_signed_distance`."""
+    centres, rotations, sizes = batch_geometry(kind, thetas, r0, groups)
+    n = data.count
+    d, g = batch_signed_distance(kind, data.points, centres, rotations, sizes, groups)
     K = len(thetas)
-    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / touches.sigma_distance
-    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(K, -1)
-    if not len(touches.free):
+    r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
+    r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(K, -1)
+    if not len(data.free_radii):
         return np.concatenate([r_d, r_n], axis=1)
-    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / touches.sigma_distance
+    r_f = np.minimum(d[:, n:] - data.free_radii, 0.0) / data.sigma_distance
     return np.concatenate([r_d, r_n, r_f], axis=1)
 
 
@@ -371,17 +423,64 @@ def _nearest_order(kind: str, touches: Touches, candidates: list[tuple[np.ndarra
     return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
-def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
-    """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
-    (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
-    straddles)."""
+def _difference_points(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(the k + 1 parameter vectors of a forward-difference Jacobian at ``theta`` — each
+    parameter stepped, then ``theta`` itself —, the steps h (k,))."""
     k = len(theta)
     h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
     thetas = np.repeat(theta[None], k + 1, axis=0)
     thetas[np.arange(k), np.arange(k)] += h
-    R = batch_residuals(thetas, kind, r0, touches)
+    return thetas, h
+
+
+def _difference_quotients(R: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The (m, k) Jacobian from the residuals (k + 1, m) at :func:`_difference_points`."""
+    k = len(h)
     out: np.ndarray = ((R[:k] - R[k]) / h[:, None]).T
     return out
+
+
+def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
+    """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
+    (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
+    straddles)."""
+    thetas, h = _difference_points(theta)
+    return _difference_quotients(batch_residuals(thetas, kind, r0, touches), h)
+
+
+class _Evaluations:
+    """The residuals (:func:`residuals`) and their Jacobian (:func:`_jacobian`) of one fit
+    — one class, one start orientation, one set of touches — both from one batched call per
+    parameter vector: MINPACK asks for the Jacobian at every point whose residuals it accepts,
+    so evaluating the k + 1 difference points with the point itself costs one call instead of
+    two (numpy's per-call overhead dominates these small arrays). The residuals and the
+    Jacobian are, to the bit, those of :func:`residuals` and :func:`_jacobian` (the point is
+    evaluated twice in the call: once with the difference points, once on its own, see
+    :func:`batch_signed_distance`'s ``groups``); every evaluated point is remembered."""
+
+    def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
+        self.kind, self.r0, self.data = kind, r0, FitData.of(touches)
+        self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+
+    def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        theta = np.asarray(theta, dtype=float)
+        key = theta.tobytes()
+        if key not in self.known:
+            thetas, h = _difference_points(theta)
+            k = len(theta)
+            R = _whitened_residuals(
+                np.concatenate([thetas, theta[None]]), self.kind, self.r0, self.data, np.array([0, k + 1])
+            )
+            self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h))
+        return self.known[key]
+
+    def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them)."""
+        return self._evaluate(theta)[0]
+
+    def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        """The (m, k) forward-difference Jacobian at ``theta``."""
+        return self._evaluate(theta)[1]
 
 
 def residual_count(touches: Touches) -> int:
@@ -397,36 +496,25 @@ def explains(chi2: float, touches: Touches, kind: str) -> bool:
     return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
 
 
-class _LastValue:
-    """``fn(θ, *args)`` remembering its last argument and value: MINPACK's driver
-    (``scipy.optimize.leastsq``) evaluates the residuals and the Jacobian at the start once to
-    check their shapes, then again in its first iteration."""
-
-    def __init__(self, fn: Callable[..., np.ndarray]) -> None:
-        self.fn = fn
-        self.theta: np.ndarray | None = None
-        self.value: np.ndarray | None = None
-
-    def __call__(self, theta: np.ndarray, *args: object) -> np.ndarray:
-        if self.theta is None or self.value is None or not np.array_equal(theta, self.theta):
-            self.theta, self.value = np.array(theta, dtype=float), self.fn(theta, *args)
-        return self.value
-
-
 def levenberg_marquardt(
-    theta0: np.ndarray, kind: str, r0: np.ndarray, touches: Touches, max_nfev: int
+    theta0: np.ndarray,
+    kind: str,
+    r0: np.ndarray,
+    touches: Touches,
+    max_nfev: int,
+    evaluations: _Evaluations | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
     ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
     Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
     without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
-    needs that only for the best start)."""
-    args = (kind, r0, touches)
+    needs that only for the best start). ``evaluations``: the fit's :class:`_Evaluations`
+    (of ``kind``, ``r0``, ``touches``), to ask for the Jacobian at θ afterwards."""
+    ev = _Evaluations(kind, r0, touches) if evaluations is None else evaluations
     x, _, info, _, _ = leastsq(
-        _LastValue(residuals),
+        ev.residuals,
         np.asarray(theta0, dtype=float),
-        args=args,
-        Dfun=_LastValue(_jacobian),
+        Dfun=ev.jacobian,
         full_output=True,
         ftol=1e-8,
         xtol=1e-8,
@@ -466,8 +554,9 @@ def fit_class(
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
+        evaluations = _Evaluations(kind, r0, touches)
         if m >= k:
-            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev, evaluations)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
             res = least_squares(
                 residuals,
@@ -484,14 +573,14 @@ def fit_class(
             theta, fun = res.x, res.fun
         chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
-            best = (chi2, theta, r0, index)
+            best = (chi2, theta, r0, index, evaluations)
         if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break
     assert best is not None
-    chi2, theta, r0, index = best
-    J = _jacobian(theta, kind, r0, touches)
+    chi2, theta, r0, index, evaluations = best
+    J = evaluations.jacobian(theta)  # usually known: MINPACK evaluated θ
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))

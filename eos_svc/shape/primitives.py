@@ -85,7 +85,9 @@ def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
     return out
 
 
-def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Array]:
+def ellipsoid(
+    P: Array, radii: Array, iterations: int = 30, groups: Array | None = None
+) -> tuple[Array, Array]:
     """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
 
     The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
@@ -93,22 +95,40 @@ def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Arra
     ``h = (Σ (a_i p_i)² (t + a_i²)⁻²)^(−1/2)``, a power mean of exponent −2 of the affine
     ``t + a_i²`` — increasing and concave (linear for a sphere) — Newton's method from a point
     left of the root (:func:`ellipsoid_root_lower_bound`) stays left of it and rises
-    monotonically to it, in one step for a sphere, in a few for the ellipsoid.
+    monotonically to it, in one step for a sphere, in a few for the ellipsoid. Every root is
+    iterated until the largest relative step of the call is below 1e-12.
+
+    ``groups``: for ``P`` of shape (K, N, 3), the first row index of each of several
+    consecutive groups of rows (ascending, from 0): each group is then iterated until *its*
+    largest step is below that bound: each group's roots are, to the bit, those of a separate
+    call on its rows alone (several evaluations in one call, as :mod:`eos_svc.shape.fit`
+    batches them).
     """
     a = np.broadcast_to(radii, P.shape)
     a2 = a * a
     inside = np.sum((P / a) ** 2, axis=-1) < 1.0
     t = ellipsoid_root_lower_bound(P, a, inside)
     ap2 = (a * P) ** 2
+    moving: Array | None = None  # per row of a grouped call: still iterating
     for _ in range(iterations):
         inv = 1.0 / (t[..., None] + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
         total = uu.sum(axis=-1)  # h⁻²
         slope = (uu * inv).sum(axis=-1)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
-        t = t + step
-        if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
+        if groups is None:
+            t = t + step
+            if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
+                break
+            continue
+        t = t + step if moving is None else np.where(moving[:, None], t + step, t)
+        largest = np.maximum.reduceat(np.max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1), groups)
+        still = ~(largest < 1e-12)
+        if moving is not None:
+            still &= np.maximum.reduceat(moving, groups)
+        if not still.any():
             break
+        moving = np.repeat(still, np.diff(np.append(groups, len(t))))
     S = a2 * P / (t[..., None] + a2)
     v = P - S
     dist = norm(v)

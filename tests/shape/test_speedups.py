@@ -255,3 +255,42 @@ def test_start_helpers_equal_their_loops():
     np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-12)
     assert np.linalg.det(frame) == pytest.approx(1.0)
     assert frame[:, 2] @ axis == pytest.approx(np.linalg.norm(axis))
+
+
+@pytest.mark.parametrize("radii", [(0.03, 0.03, 0.03), (0.035, 0.03, 0.022), (0.05, 0.01, 0.004)])
+def test_grouped_ellipsoid_roots_are_those_of_separate_calls(radii):
+    # several evaluations in one call (the fit's residuals with their difference points): each
+    # group iterates as long as it would alone, so its roots are the same to the bit
+    rng = np.random.default_rng(61)
+    a = np.asarray(radii)
+    sizes = np.stack([a, a * 1.01, a * 0.97, a * 1.2, a])[:, None, :]  # (5, 1, 3)
+    P = rng.normal(scale=0.04, size=(5, 30, 3))
+    groups = np.array([0, 3, 4])
+    d, g = ellipsoid(P, sizes, groups=groups)
+    for lo, hi in zip(groups, [*groups[1:], len(P)], strict=True):
+        d_alone, g_alone = ellipsoid(P[lo:hi], sizes[lo:hi])
+        np.testing.assert_array_equal(d[lo:hi], d_alone)
+        np.testing.assert_array_equal(g[lo:hi], g_alone)
+    # and one group is the ungrouped call
+    d_one, g_one = ellipsoid(P, sizes, groups=np.array([0]))
+    d_all, g_all = ellipsoid(P, sizes)
+    np.testing.assert_array_equal(d_one, d_all)
+    np.testing.assert_array_equal(g_one, g_all)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fused_evaluations_are_the_residuals_and_the_jacobian(kind):
+    # _Evaluations computes the residuals and the difference Jacobian of a point in one call
+    # (several seeds: a cylinder's axes rounded as one product of all the rows would differ
+    # from the plain residuals' in a few of these evaluations)
+    for seed in range(14, 20):
+        touches = random_touches(kind, seed)
+        rng = np.random.default_rng(seed + 1)
+        for theta0, r0 in shape_fit.starts(kind, touches)[:2]:
+            evaluations = shape_fit._Evaluations(kind, r0, touches)
+            for theta in theta0 + rng.normal(scale=0.02, size=(3, len(theta0))):
+                J = evaluations.jacobian(theta)  # the Jacobian first, then the (remembered) residuals
+                plain = shape_fit.residuals(theta, kind, r0, touches)
+                np.testing.assert_array_equal(evaluations.residuals(theta), plain)
+                np.testing.assert_array_equal(J, shape_fit._jacobian(theta, kind, r0, touches))
+            assert len(evaluations.known) == 3
