@@ -127,27 +127,38 @@ def batch_signed_distance(
         d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
     else:
         d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, g @ np.swapaxes(rotations, 1, 2)
+    return d, g @ rotations.transpose(0, 2, 1)
+
+
+#: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
+_SKEW_AT, _SKEW_OF, _SKEW_SIGN = [1, 2, 3, 5, 6, 7], [2, 1, 2, 0, 1, 0], np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+_EYE = np.eye(3)
 
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
     theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
-    K = np.zeros((len(omega), 3, 3))
-    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    K = np.zeros((len(omega), 9))
+    K[:, _SKEW_AT] = k[:, _SKEW_OF] * _SKEW_SIGN
+    K = K.reshape(-1, 3, 3)
     s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    out: np.ndarray = _EYE + s * K + (1.0 - c) * (K @ K)
+    return out
+
+
+_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
 
 
 def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
     """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
     z = axes / primitives.norm(axes)[:, None]
-    a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
-    x = a - np.sum(a * z, axis=1, keepdims=True) * z
+    a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], _X_AXIS, _Y_AXIS)
+    x = a - np.add.reduce(a * z, axis=1, keepdims=True) * z
     x /= primitives.norm(x)[:, None]
-    return np.stack([x, _cross(z, x), z], axis=2)
+    out = np.empty((len(axes), 3, 3))
+    out[:, :, 0], out[:, :, 1], out[:, :, 2] = x, _cross(z, x), z
+    return out
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -157,6 +168,8 @@ def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
 
 
 _NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+#: the log-size parameters of each class, as a slice (:data:`SIZE_INDEX`)
+_SIZE_SLICE = {kind: slice(index[0], index[-1] + 1) for kind, index in SIZE_INDEX.items()}
 
 
 def batch_geometry(
@@ -167,14 +180,16 @@ def batch_geometry(
     evaluated as if in separate calls (a cylinder's or capsule's axes are one matrix product
     per call, whose rounding BLAS may choose by the number of rows)."""
     centres = thetas[:, :3]
-    sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
+    # np.clip's arithmetic (the bound or the value itself) without its wrapper
+    sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
     K = len(thetas)
     if kind == "sphere":
-        rotations = np.broadcast_to(np.eye(3), (K, 3, 3))
+        rotations = np.broadcast_to(_EYE, (K, 3, 3))
     elif kind in ("ellipsoid", "box"):
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
-        tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
+        tilt = np.ones((K, 3))
+        tilt[:, :2] = thetas[:, 3:5]
         if r0.ndim == 3:
             axes = np.einsum("kij,kj->ki", r0, tilt)
         elif groups is None:

@@ -20,18 +20,32 @@ _TINY = 1e-15
 def norm(v: Array) -> Array:
     """Euclidean norm over the last axis: ``np.linalg.norm(v, axis=-1)``'s arithmetic
     without its argument handling (these arrays are small: the call dominates)."""
-    out: Array = np.sqrt(np.sum(v * v, axis=-1))
+    out: Array = np.sqrt(_add(v * v, axis=-1))
+    return out
+
+
+# the reductions as ufunc methods: np.sum's and np.max's arithmetic without their wrappers
+_add = np.add.reduce
+_max = np.maximum.reduce
+#: the coordinate axes' indices, to compare with an argmax
+_AXES = np.arange(3)
+
+
+def _unit_from(v: Array, n: Array, fallback: tuple[float, float, float]) -> Array:
+    """``v / n`` (``n`` = :func:`norm` of ``v``, (...,)), or ``fallback`` where ``n`` ≈ 0."""
+    n = n[..., None]
+    out: Array = np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
     return out
 
 
 def _unit(v: Array, fallback: tuple[float, float, float]) -> Array:
-    n = norm(v)[..., None]
-    return np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
+    return _unit_from(v, norm(v), fallback)
 
 
 def sphere(P: Array, radius: Array) -> tuple[Array, Array]:
     """Sphere of ``radius``."""
-    return norm(P) - radius, _unit(P, (0.0, 0.0, 1.0))
+    n = norm(P)
+    return n - radius, _unit_from(P, n, (0.0, 0.0, 1.0))
 
 
 def box(P: Array, half: Array) -> tuple[Array, Array]:
@@ -39,12 +53,11 @@ def box(P: Array, half: Array) -> tuple[Array, Array]:
     q = np.abs(P) - half
     qp = np.maximum(q, 0.0)
     out = norm(qp)
-    d = out + np.minimum(q.max(axis=-1), 0.0)
+    d = out + np.minimum(_max(q, axis=-1), 0.0)
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
-    k = np.argmax(q, axis=-1)[..., None]
-    g_in = np.zeros_like(P)
-    np.put_along_axis(g_in, k, np.take_along_axis(sign, k, axis=-1), axis=-1)
+    # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
+    g_in = np.where(_AXES == np.argmax(q, axis=-1)[..., None], sign, 0.0)
     return d, np.where((out > _TINY)[..., None], g_out, g_in)
 
 
@@ -52,12 +65,14 @@ def cylinder(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]
     """Cylinder of ``radius`` and half length ``half_length`` along z (flat caps)."""
     x, y, z = P[..., 0], P[..., 1], P[..., 2]
     rho = np.hypot(x, y)
-    zero = np.zeros_like(rho)
-    radial = np.stack([x, y, zero], axis=-1) / np.maximum(rho, _TINY)[..., None]
+    across = P.copy()
+    across[..., 2] = 0.0
+    radial = across / np.maximum(rho, _TINY)[..., None]
     radial = np.where((rho > _TINY)[..., None], radial, np.array([1.0, 0.0, 0.0]))
     dr = rho - radius
     dz = np.abs(z) - half_length
-    axial = np.stack([zero, zero, np.where(z >= 0.0, 1.0, -1.0)], axis=-1)
+    axial = np.zeros_like(P)
+    axial[..., 2] = np.where(z >= 0.0, 1.0, -1.0)
     a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
     out = np.hypot(a, b)
     d = out + np.minimum(np.maximum(dr, dz), 0.0)
@@ -71,17 +86,18 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     zc = np.clip(P[..., 2], -half_length, half_length)
     v = P.copy()
     v[..., 2] -= zc
-    return norm(v) - radius, _unit(v, (1.0, 0.0, 0.0))
+    n = norm(v)
+    return n - radius, _unit_from(v, n, (1.0, 0.0, 0.0))
 
 
 def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
     """A point left of the root of the ellipsoid's ``F`` (see :func:`ellipsoid`), near it:
     every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;
     and ``t ≥ 0`` outside, ``t > −min a_i²`` inside (kept 1e-12 relative away from that pole,
-    where ``F`` is infinite)."""
-    amin2 = np.min(a, axis=-1) ** 2
+    where ``F`` is infinite). ``a``: the semi-axes, ``P``'s shape or broadcastable to it."""
+    amin2 = np.minimum.reduce(a, axis=-1) ** 2
     floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
-    out: Array = np.maximum(np.max(a * np.abs(P) - a * a, axis=-1), floor)
+    out: Array = np.maximum(_max(a * np.abs(P) - a * a, axis=-1), floor)
     return out
 
 
@@ -104,38 +120,39 @@ def ellipsoid(
     call on its rows alone (several evaluations in one call, as :mod:`eos_svc.shape.fit`
     batches them).
     """
-    a = np.broadcast_to(radii, P.shape)
+    a = radii  # broadcast against P by every operation (the same numbers as a full array)
     a2 = a * a
-    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    inside = _add((P / a) ** 2, axis=-1) < 1.0
     t = ellipsoid_root_lower_bound(P, a, inside)
     ap2 = (a * P) ** 2
-    moving: Array | None = None  # per row of a grouped call: still iterating
+    bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
+    moving = bounds  # the groups still iterating, (first row, end)
     for _ in range(iterations):
         inv = 1.0 / (t[..., None] + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = uu.sum(axis=-1)  # h⁻²
-        slope = (uu * inv).sum(axis=-1)  # h' · h⁻³
+        total = _add(uu, axis=-1)  # h⁻²
+        slope = _add(uu * inv, axis=-1)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
-        if groups is None:
+        if moving is bounds and len(bounds) == 1:  # one group: the whole call
             t = t + step
-            if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
+            if _max(np.abs(step) / (1e-6 + np.abs(t)), axis=None) < 1e-12:
                 break
             continue
-        t = t + step if moving is None else np.where(moving[:, None], t + step, t)
-        largest = np.maximum.reduceat(np.max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1), groups)
-        still = ~(largest < 1e-12)
-        if moving is not None:
-            still &= np.maximum.reduceat(moving, groups)
-        if not still.any():
+        if moving is bounds:
+            t = t + step
+        else:
+            for lo, hi in moving:
+                t[lo:hi] += step[lo:hi]
+        relative = _max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1)
+        moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
+        if not moving:
             break
-        moving = np.repeat(still, np.diff(np.append(groups, len(t))))
     S = a2 * P / (t[..., None] + a2)
     v = P - S
     dist = norm(v)
     sign = np.where(inside, -1.0, 1.0)
-    g = np.where(
-        (dist > 1e-12)[..., None],
-        sign[..., None] * v / np.maximum(dist, 1e-12)[..., None],
-        _unit(S / a2, (0.0, 0.0, 1.0)),
-    )
+    away = dist > 1e-12
+    g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+    if not away.all():  # on the surface: the normal there
+        g = np.where(away[..., None], g, _unit(S / a2, (0.0, 0.0, 1.0)))
     return sign * dist, g
