@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import least_squares, leastsq
@@ -131,7 +132,8 @@ def batch_signed_distance(
 
 
 #: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
-_SKEW_AT, _SKEW_OF, _SKEW_SIGN = [1, 2, 3, 5, 6, 7], [2, 1, 2, 0, 1, 0], np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+_SKEW_AT, _SKEW_OF = [1, 2, 3, 5, 6, 7], [2, 1, 2, 0, 1, 0]
+_SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
 _EYE = np.eye(3)
 
 
@@ -139,9 +141,9 @@ def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
     theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
-    K = np.zeros((len(omega), 9))
-    K[:, _SKEW_AT] = k[:, _SKEW_OF] * _SKEW_SIGN
-    K = K.reshape(-1, 3, 3)
+    flat = np.zeros((len(omega), 9))
+    flat[:, _SKEW_AT] = k[:, _SKEW_OF] * _SKEW_SIGN
+    K = flat.reshape(-1, 3, 3)
     s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
     out: np.ndarray = _EYE + s * K + (1.0 - c) * (K @ K)
     return out
@@ -154,7 +156,7 @@ def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
     """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
     z = axes / primitives.norm(axes)[:, None]
     a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], _X_AXIS, _Y_AXIS)
-    x = a - np.add.reduce(a * z, axis=1, keepdims=True) * z
+    x = a - primitives.sum3(a * z)[:, None] * z
     x /= primitives.norm(x)[:, None]
     out = np.empty((len(axes), 3, 3))
     out[:, :, 0], out[:, :, 1], out[:, :, 2] = x, _cross(z, x), z
@@ -195,7 +197,8 @@ def batch_geometry(
         elif groups is None:
             axes = tilt @ r0.T
         else:
-            axes = np.concatenate([part @ r0.T for part in np.split(tilt, groups[1:])])
+            ends = [*groups[1:], K]
+            axes = np.concatenate([tilt[lo:hi] @ r0.T for lo, hi in zip(groups, ends, strict=True)])
         rotations = _batch_frames_with_z(axes)
     return centres, rotations, sizes
 
@@ -391,33 +394,79 @@ def _distinct(axes: list[np.ndarray], angle: float = math.radians(15.0)) -> list
     return out
 
 
-def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Start parameters and orientations ``(theta0, r0)`` of ``kind`` from the touches."""
-    S = touches.surface_points
-    lo, hi = S.min(axis=0), S.max(axis=0)
-    mid = 0.5 * (lo + hi)
-    out: list[tuple[np.ndarray, np.ndarray]] = []
-    if kind == "sphere":
-        c = _normal_line_centre(S, touches.normals, mid)
-        r = max(float(np.mean(np.linalg.norm(S - c, axis=1))), MIN_HALF)
-        return [(np.array([*c, math.log(r)]), np.eye(3))]
-    V = _normal_scatter_axes(touches.normals)
-    if kind in ("ellipsoid", "box"):
-        frames = [*_face_frames(touches.normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
-        for r0 in frames:
-            c = mid if kind == "box" else _normal_line_centre(S, touches.normals, mid)
-            half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
-            out.append((np.array([*c, 0.0, 0.0, 0.0, *np.log(half)]), r0))
+class ClassStarts:
+    """Every class's start parameters from one set of touches (:func:`starts`), each class's
+    computed once, on first use, and the pieces several classes share — the normals'
+    scatter axes, the normal lines' nearest point, the cylinder's and the capsule's frames —
+    once for all of them (:func:`~eos_svc.shape.selection.select_class` fits every class to
+    the same touches)."""
+
+    def __init__(self, touches: Touches) -> None:
+        self.touches = touches
+        S = touches.surface_points
+        lo, hi = S.min(axis=0), S.max(axis=0)
+        self.surface, self.mid = S, 0.5 * (lo + hi)
+        self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+
+    def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
+        if kind not in self._of:
+            self._of[kind] = self._starts(kind)
+        return list(self._of[kind])
+
+    @cached_property
+    def scatter_axes(self) -> np.ndarray:
+        """:func:`_normal_scatter_axes` of the normals."""
+        return _normal_scatter_axes(self.touches.normals)
+
+    @cached_property
+    def line_centre(self) -> np.ndarray:
+        """:func:`_normal_line_centre` of the contacts, toward the middle of their bounds."""
+        return _normal_line_centre(self.surface, self.touches.normals, self.mid)
+
+    @cached_property
+    def axial_frames(self) -> list[tuple[np.ndarray, float, float]]:
+        """(frame, median radial distance of the contacts, largest axial one) (m) about each
+        distinct candidate axis of a cylinder or a capsule, centred mid-bounds."""
+        V = self.scatter_axes
+        out = []
+        for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
+            r0 = frame_with_z(axis)
+            local = (self.surface - self.mid) @ r0
+            radial = float(np.median(np.hypot(local[:, 0], local[:, 1])))
+            out.append((r0, radial, float(np.max(np.abs(local[:, 2])))))
         return out
-    for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
-        r0 = frame_with_z(axis)
-        c = mid
-        local = (S - c) @ r0
-        radius = max(float(np.median(np.hypot(local[:, 0], local[:, 1]))), MIN_HALF)
-        half = float(np.max(np.abs(local[:, 2])))
-        half = max(half - radius, MIN_HALF) if kind == "capsule" else max(half, MIN_HALF)
-        out.append((np.array([*c, 0.0, 0.0, math.log(radius), math.log(half)]), r0))
-    return out
+
+    def _starts(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
+        S, mid, normals = self.surface, self.mid, self.touches.normals
+        out: list[tuple[np.ndarray, np.ndarray]] = []
+        if kind == "sphere":
+            c = self.line_centre
+            r = max(float(np.mean(np.linalg.norm(S - c, axis=1))), MIN_HALF)
+            return [(np.array([*c, math.log(r)]), np.eye(3))]
+        V = self.scatter_axes
+        if kind in ("ellipsoid", "box"):
+            frames = [*_face_frames(normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
+            for r0 in frames:
+                c = mid if kind == "box" else self.line_centre
+                half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
+                out.append((np.array([*c, 0.0, 0.0, 0.0, *np.log(half)]), r0))
+            return out
+        for r0, median_radius, axial in self.axial_frames:
+            radius = max(median_radius, MIN_HALF)
+            half = max(axial - radius, MIN_HALF) if kind == "capsule" else max(axial, MIN_HALF)
+            out.append((np.array([*mid, 0.0, 0.0, math.log(radius), math.log(half)]), r0))
+        return out
+
+
+def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Start parameters and orientations ``(theta0, r0)`` of ``kind`` from the touches: the
+    sphere's centre nearest the normal lines, the mean distance its radius; the ellipsoid
+    about the normals' scatter axes and the world axes, centred there too; the box about
+    frames of orthogonal groups of normals, the world axes and the scatter axes, centred
+    mid-bounds; the cylinder and the capsule along each distinct scatter and world axis
+    (:class:`ClassStarts`, which shares the pieces between classes)."""
+    return ClassStarts(touches).of(kind)
 
 
 def ranked_starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -546,6 +595,7 @@ def fit_class(
     hopeless: float = math.inf,
     max_starts: int | None = None,
     nearest_first: bool = False,
+    class_starts: ClassStarts | None = None,
 ) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts).
 
@@ -554,7 +604,8 @@ def fit_class(
     χ²): once a start ends above it, the remaining starts are skipped (their posterior would
     be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
     ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
-    not in :func:`starts`' order.
+    not in :func:`starts`' order. ``class_starts``: the touches' :class:`ClassStarts` (shared
+    by the fits of several classes to the same touches), else computed here.
 
     The fit from the first start alone (``max_starts=1``) *is* the fit with the same
     ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
@@ -565,7 +616,7 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
-    candidates = starts(kind, touches)
+    candidates = (ClassStarts(touches) if class_starts is None else class_starts).of(kind)
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]

@@ -17,15 +17,28 @@ Array = np.ndarray
 _TINY = 1e-15
 
 
-def norm(v: Array) -> Array:
-    """Euclidean norm over the last axis: ``np.linalg.norm(v, axis=-1)``'s arithmetic
-    without its argument handling (these arrays are small: the call dominates)."""
-    out: Array = np.sqrt(_add(v * v, axis=-1))
+def sum3(v: Array) -> Array:
+    """Σ over a last axis of length 3, ``(v₀ + v₁) + v₂``: ``np.sum(v, axis=-1)``'s
+    arithmetic (the same order, the same bits) as two additions of strided views — numpy's
+    reduction over so short an axis costs several times more."""
+    out: Array = v[..., 0] + v[..., 1] + v[..., 2]
     return out
 
 
-# the reductions as ufunc methods: np.sum's and np.max's arithmetic without their wrappers
-_add = np.add.reduce
+def max3(v: Array) -> Array:
+    """Largest entry over a last axis of length 3: ``np.max(v, axis=-1)`` (NaN propagated)."""
+    out: Array = np.maximum(np.maximum(v[..., 0], v[..., 1]), v[..., 2])
+    return out
+
+
+def norm(v: Array) -> Array:
+    """Euclidean norm over the last axis (of length 3): ``np.linalg.norm(v, axis=-1)``'s
+    arithmetic without its argument handling (these arrays are small: the call dominates)."""
+    out: Array = np.sqrt(sum3(v * v))
+    return out
+
+
+# a reduction as a ufunc method: np.max's arithmetic without its wrapper
 _max = np.maximum.reduce
 #: the coordinate axes' indices, to compare with an argmax
 _AXES = np.arange(3)
@@ -53,11 +66,11 @@ def box(P: Array, half: Array) -> tuple[Array, Array]:
     q = np.abs(P) - half
     qp = np.maximum(q, 0.0)
     out = norm(qp)
-    d = out + np.minimum(_max(q, axis=-1), 0.0)
+    d = out + np.minimum(max3(q), 0.0)
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
     # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
-    g_in = np.where(_AXES == np.argmax(q, axis=-1)[..., None], sign, 0.0)
+    g_in = np.where(np.argmax(q, axis=-1)[..., None] == _AXES, sign, 0.0)
     return d, np.where((out > _TINY)[..., None], g_out, g_in)
 
 
@@ -95,9 +108,9 @@ def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
     every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;
     and ``t ≥ 0`` outside, ``t > −min a_i²`` inside (kept 1e-12 relative away from that pole,
     where ``F`` is infinite). ``a``: the semi-axes, ``P``'s shape or broadcastable to it."""
-    amin2 = np.minimum.reduce(a, axis=-1) ** 2
+    amin2 = np.minimum(np.minimum(a[..., 0], a[..., 1]), a[..., 2]) ** 2
     floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
-    out: Array = np.maximum(_max(a * np.abs(P) - a * a, axis=-1), floor)
+    out: Array = np.maximum(max3(a * np.abs(P) - a * a), floor)
     return out
 
 
@@ -122,7 +135,7 @@ def ellipsoid(
     """
     a = radii  # broadcast against P by every operation (the same numbers as a full array)
     a2 = a * a
-    inside = _add((P / a) ** 2, axis=-1) < 1.0
+    inside = sum3((P / a) ** 2) < 1.0
     t = ellipsoid_root_lower_bound(P, a, inside)
     ap2 = (a * P) ** 2
     bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
@@ -130,8 +143,8 @@ def ellipsoid(
     for _ in range(iterations):
         inv = 1.0 / (t[..., None] + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = _add(uu, axis=-1)  # h⁻²
-        slope = _add(uu * inv, axis=-1)  # h' · h⁻³
+        total = sum3(uu)  # h⁻²
+        slope = sum3(uu * inv)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
         if moving is bounds and len(bounds) == 1:  # one group: the whole call
             t = t + step

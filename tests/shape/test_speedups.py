@@ -9,6 +9,7 @@ import pytest
 
 from eos_svc.shape import Touches, fit_class, select_class
 from eos_svc.shape import fit as shape_fit
+from eos_svc.shape import primitives as shape_primitives
 from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound, norm
 from eos_svc.shape.selection import (
     CLASSES,
@@ -294,3 +295,39 @@ def test_fused_evaluations_are_the_residuals_and_the_jacobian(kind):
                 np.testing.assert_array_equal(evaluations.residuals(theta), plain)
                 np.testing.assert_array_equal(J, shape_fit._jacobian(theta, kind, r0, touches))
             assert len(evaluations.known) == 3
+
+
+def test_sum3_and_max3_are_numpys_reductions():
+    rng = np.random.default_rng(71)
+    # a wide dynamic range: the order of the additions shows in the last bits
+    v = rng.normal(size=(7, 40, 3)) * np.exp(rng.normal(scale=6.0, size=(7, 40, 3)))
+    np.testing.assert_array_equal(shape_primitives.sum3(v), np.sum(v, axis=-1))
+    np.testing.assert_array_equal(shape_primitives.max3(v), np.max(v, axis=-1))
+    v[0, 0, 1] = np.nan
+    assert np.isnan(shape_primitives.max3(v)[0, 0]) and np.isnan(np.max(v, axis=-1)[0, 0])
+
+
+def test_shared_class_starts_are_each_class_s_own():
+    # select_class computes the starts of every class from one ClassStarts: the pieces the
+    # classes share (scatter axes, the normal lines' centre, the axial frames) change nothing
+    touches = random_touches("capsule", 72)
+    shared = shape_fit.ClassStarts(touches)
+    for kind in reversed(KINDS):
+        for (t_shared, r_shared), (t_own, r_own) in zip(
+            shared.of(kind), shape_fit.ClassStarts(touches).of(kind), strict=True
+        ):
+            np.testing.assert_array_equal(t_shared, t_own)
+            np.testing.assert_array_equal(r_shared, r_own)
+    S = touches.surface_points
+    mid = 0.5 * (S.min(axis=0) + S.max(axis=0))
+    centre = shape_fit._normal_line_centre(S, touches.normals, mid)
+    np.testing.assert_array_equal(shared.of("sphere")[0][0][:3], centre)
+    for theta0, _ in shared.of("ellipsoid"):
+        np.testing.assert_array_equal(theta0[:3], centre)
+    V = shape_fit._normal_scatter_axes(touches.normals)
+    axes = shape_fit._distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]])
+    for kind in ("cylinder", "capsule"):
+        frames = [r0 for _, r0 in shared.of(kind)]
+        assert len(frames) == len(axes)
+        for r0, axis in zip(frames, axes, strict=True):
+            np.testing.assert_array_equal(r0, shape_fit.frame_with_z(axis))
