@@ -357,24 +357,54 @@ def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarr
     return out
 
 
-def _normal_clusters(normals: np.ndarray, angle: float = math.radians(15.0)) -> list[np.ndarray]:
-    """Mean directions of the sensed normals grouped greedily within ``angle``, largest first."""
-    left = np.arange(len(normals))
-    groups: list[tuple[int, np.ndarray]] = []
+def _normal_clusters(
+    normals: np.ndarray, angle: float = math.radians(15.0), most: int | None = None
+) -> list[np.ndarray]:
+    """Mean directions of the sensed normals grouped greedily within ``angle`` (the first
+    normal left and every normal left within ``angle`` of it, and so on), largest first;
+    ``most``: only that many of the largest."""
     cos = math.cos(angle)
-    while len(left):
-        near = normals[left] @ normals[left[0]] >= cos
-        mean = normals[left[near]].sum(axis=0)
-        groups.append((int(near.sum()), mean / np.linalg.norm(mean)))
-        left = left[~near]
-    groups.sort(key=lambda g: -g[0])
-    return [g[1] for g in groups]
+    members = _cluster_members(normals, cos)
+    members.sort(key=lambda m: -len(m))
+    out = []
+    for m in members[:most]:
+        mean = normals[m].sum(axis=0)
+        out.append(mean / np.linalg.norm(mean))
+    return out
+
+
+#: how far from a group's cosine bound every cosine must be for the Gram matrix to decide
+#: membership as each normal's own product would (both round within a few 1e-16)
+_CLUSTER_MARGIN = 1e-12
+
+
+def _cluster_members(normals: np.ndarray, cos: float) -> list[list[int]]:
+    """Indices of :func:`_normal_clusters`' groups, in the order they are formed: every
+    cosine from one Gram matrix, unless one lies within :data:`_CLUSTER_MARGIN` of the bound
+    (then each group's cosines as the plain loop computes them, group by group)."""
+    dots = normals @ normals.T
+    if np.any(np.abs(dots - cos) < _CLUSTER_MARGIN):
+        left_array = np.arange(len(normals))
+        plain: list[list[int]] = []
+        while len(left_array):
+            near_array = normals[left_array] @ normals[left_array[0]] >= cos
+            plain.append(left_array[near_array].tolist())
+            left_array = left_array[~near_array]
+        return plain
+    close = (dots >= cos).tolist()
+    left = list(range(len(normals)))
+    members: list[list[int]] = []
+    while left:
+        row = close[left[0]]
+        members.append([j for j in left if row[j]])
+        left = [j for j in left if not row[j]]
+    return members
 
 
 def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
     """Box orientations from pairs of roughly orthogonal groups of normals (the largest
     groups first, at most three frames)."""
-    clusters = _normal_clusters(normals)[:4]
+    clusters = _normal_clusters(normals, most=4)
     frames = []
     for i, x in enumerate(clusters):
         for c in clusters[i + 1 :]:

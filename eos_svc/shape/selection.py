@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
 from eos_svc.shape.fit import GOOD_FIT, ClassFit, ClassStarts, explains, extent_ratios, fit_class
 from eos_svc.shape.touches import Touches
@@ -276,4 +276,10 @@ def fit_probability(fit: ClassFit, m: int) -> float:
     looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
     even the best class misses them (an object none of the classes describes)."""
     dof = max(m - fit.n_params, 1)
-    return float(stats.chi2.sf(fit.chi2 / FIT_SLACK, dof))
+    return chi2_survival(fit.chi2 / FIT_SLACK, dof)
+
+
+def chi2_survival(x: float, dof: int) -> float:
+    """``scipy.stats.chi2.sf(x, dof)`` — the same function, ``scipy.special.chdtrc``, without
+    the distribution object's argument handling (≈ 30× its cost): 1 at and below 0."""
+    return 1.0 if x <= 0.0 else float(special.chdtrc(dof, x))

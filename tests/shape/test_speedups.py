@@ -331,3 +331,39 @@ def test_shared_class_starts_are_each_class_s_own():
         assert len(frames) == len(axes)
         for r0, axis in zip(frames, axes, strict=True):
             np.testing.assert_array_equal(r0, shape_fit.frame_with_z(axis))
+
+
+def test_chi2_survival_is_scipy_stats():
+    from scipy import stats
+
+    from eos_svc.shape.selection import chi2_survival
+
+    for dof in (1, 5, 97, 400):
+        for x in (0.0, 1e-9, 0.5, 3.0, float(dof), 2.0 * dof, 50.0 * dof, 1e6, math.inf):
+            assert chi2_survival(x, dof) == float(stats.chi2.sf(x, dof))
+
+
+def test_normal_clusters_at_the_bound_are_decided_as_the_plain_loop_does():
+    # a cosine within rounding of the group bound: membership is decided by each normal's
+    # own product (the plain loop), not by the Gram matrix
+    rng = np.random.default_rng(73)
+    normals = rng.normal(size=(20, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    angle = math.acos(float(normals[0] @ normals[1]))
+    cos = math.cos(angle)
+    assert abs(float((normals @ normals.T)[0, 1]) - cos) < shape_fit._CLUSTER_MARGIN
+    left, plain = np.arange(len(normals)), []
+    while len(left):
+        near = normals[left] @ normals[left[0]] >= cos
+        plain.append(left[near].tolist())
+        left = left[~near]
+    assert shape_fit._cluster_members(normals, cos) == plain
+    # away from the bound, the Gram matrix's groups are the plain loop's
+    for angle in (0.2, 0.3, 0.5):
+        cos = math.cos(angle)
+        left, plain = np.arange(len(normals)), []
+        while len(left):
+            near = normals[left] @ normals[left[0]] >= cos
+            plain.append(left[near].tolist())
+            left = left[~near]
+        assert shape_fit._cluster_members(normals, cos) == plain
