@@ -62,10 +62,26 @@ def rotation_vector(omega: np.ndarray) -> np.ndarray:
 def frame_with_z(axis: np.ndarray) -> np.ndarray:
     """A right-handed rotation whose third column is ``axis`` (unit)."""
     z = axis / np.linalg.norm(axis)
-    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    a = _X_AXIS if abs(z[0]) < 0.9 else _Y_AXIS
     x = a - (a @ z) * z
     x /= np.linalg.norm(x)
-    return np.column_stack([x, _cross(z[None], x[None])[0], z])
+    return _columns(x, _cross(z[None], x[None])[0], z)
+
+
+def _columns(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The 3×3 matrix of columns x, y, z: ``np.column_stack``'s result without its wrapper."""
+    out = np.empty((3, 3))
+    out[:, 0], out[:, 1], out[:, 2] = x, y, z
+    return out
+
+
+def _median(values: np.ndarray) -> float:
+    """``np.median`` of a 1-D array (the middle value, or the mean of the two middle values:
+    the same number) from a full sort — np.median's partitioning wrappers cost ~30× more on
+    a few dozen values."""
+    ordered = np.sort(values)
+    half = len(ordered) // 2
+    return float(ordered[half]) if len(ordered) % 2 else float((ordered[half - 1] + ordered[half]) / 2.0)
 
 
 @dataclass(frozen=True)
@@ -132,7 +148,7 @@ def batch_signed_distance(
 
 
 #: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
-_SKEW_AT, _SKEW_OF = [1, 2, 3, 5, 6, 7], [2, 1, 2, 0, 1, 0]
+_SKEW_AT, _SKEW_OF = np.array([1, 2, 3, 5, 6, 7]), np.array([2, 1, 2, 0, 1, 0])
 _SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
 _EYE = np.eye(3)
 
@@ -142,14 +158,14 @@ def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
     flat = np.zeros((len(omega), 9))
-    flat[:, _SKEW_AT] = k[:, _SKEW_OF] * _SKEW_SIGN
+    flat[:, _SKEW_AT] = k.take(_SKEW_OF, axis=1) * _SKEW_SIGN
     K = flat.reshape(-1, 3, 3)
     s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
     out: np.ndarray = _EYE + s * K + (1.0 - c) * (K @ K)
     return out
 
 
-_X_AXIS, _Y_AXIS = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
+_X_AXIS, _Y_AXIS, _ZERO3 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.zeros(3)
 
 
 def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
@@ -165,11 +181,12 @@ def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Row-wise u × v of (K, 3) arrays: ``np.cross``'s products, without its axis handling."""
-    out: np.ndarray = u[:, _NEXT] * v[:, _AFTER] - u[:, _AFTER] * v[:, _NEXT]
+    # take: fancy indexing's result at a third of its cost
+    out: np.ndarray = u.take(_NEXT, 1) * v.take(_AFTER, 1) - u.take(_AFTER, 1) * v.take(_NEXT, 1)
     return out
 
 
-_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
 #: the log-size parameters of each class, as a slice (:data:`SIZE_INDEX`)
 _SIZE_SLICE = {kind: slice(index[0], index[-1] + 1) for kind, index in SIZE_INDEX.items()}
 
@@ -247,22 +264,34 @@ def _whitened_residuals(
 ) -> np.ndarray:
     """:func:`batch_residuals` from the touches' :class:`FitData`; ``groups`` (first rows of
     groups of ``thetas``) as in :func:`batch_signed_distance`."""
-    centres, rotations, sizes = batch_geometry(kind, thetas, r0, groups)
+    return _residuals_and_geometry(thetas, kind, r0, data, groups)[0]
+
+
+def _residuals_and_geometry(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from)."""
+    geometry = batch_geometry(kind, thetas, r0, groups)
     n = data.count
-    d, g = batch_signed_distance(kind, data.points, centres, rotations, sizes, groups)
+    d, g = batch_signed_distance(kind, data.points, *geometry, groups)
     K = len(thetas)
     r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
     r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(K, -1)
     if not len(data.free_radii):
-        return np.concatenate([r_d, r_n], axis=1)
+        return np.concatenate([r_d, r_n], axis=1), geometry
     r_f = np.minimum(d[:, n:] - data.free_radii, 0.0) / data.sigma_distance
-    return np.concatenate([r_d, r_n, r_f], axis=1)
+    return np.concatenate([r_d, r_n, r_f], axis=1), geometry
 
 
 def geometry_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> Geometry:
     """The geometry of parameters ``theta`` about start orientation ``r0``."""
-    centres, rotations, sizes = batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0)
-    return Geometry(kind, centres[0].copy(), np.array(rotations[0]), tuple(float(v) for v in sizes[0]))
+    return _geometry_row(kind, batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0), 0)
+
+
+def _geometry_row(kind: str, geometry: tuple[np.ndarray, np.ndarray, np.ndarray], row: int) -> Geometry:
+    """Row ``row`` of :func:`batch_geometry`'s (centres, rotations, sizes) as a Geometry."""
+    centres, rotations, sizes = geometry
+    return Geometry(kind, centres[row].copy(), np.array(rotations[row]), tuple(float(v) for v in sizes[row]))
 
 
 def residuals(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
@@ -411,7 +440,7 @@ def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
             if abs(c @ x) < 0.3:
                 y = c - (c @ x) * x
                 y /= np.linalg.norm(y)
-                frames.append(np.column_stack([x, y, _cross(x[None], y[None])[0]]))
+                frames.append(_columns(x, y, _cross(x[None], y[None])[0]))
     return frames[:3]
 
 
@@ -463,7 +492,7 @@ class ClassStarts:
         for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
             r0 = frame_with_z(axis)
             local = (self.surface - self.mid) @ r0
-            radial = float(np.median(np.hypot(local[:, 0], local[:, 1])))
+            radial = _median(np.hypot(local[:, 0], local[:, 1]))
             out.append((r0, radial, float(np.max(np.abs(local[:, 2])))))
         return out
 
@@ -480,12 +509,12 @@ class ClassStarts:
             for r0 in frames:
                 c = mid if kind == "box" else self.line_centre
                 half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
-                out.append((np.array([*c, 0.0, 0.0, 0.0, *np.log(half)]), r0))
+                out.append((np.concatenate([c, _ZERO3, np.log(half)]), r0))
             return out
         for r0, median_radius, axial in self.axial_frames:
             radius = max(median_radius, MIN_HALF)
             half = max(axial - radius, MIN_HALF) if kind == "capsule" else max(axial, MIN_HALF)
-            out.append((np.array([*mid, 0.0, 0.0, math.log(radius), math.log(half)]), r0))
+            out.append((np.concatenate([mid, [0.0, 0.0, math.log(radius), math.log(half)]]), r0))
         return out
 
 
@@ -517,12 +546,12 @@ def _nearest_order(kind: str, touches: Touches, candidates: list[tuple[np.ndarra
     return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
-def _difference_points(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _difference_points(theta: np.ndarray, copies: int = 1) -> tuple[np.ndarray, np.ndarray]:
     """(the k + 1 parameter vectors of a forward-difference Jacobian at ``theta`` — each
-    parameter stepped, then ``theta`` itself —, the steps h (k,))."""
+    parameter stepped, then ``theta`` itself (``copies`` times) —, the steps h (k,))."""
     k = len(theta)
     h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-    thetas = np.repeat(theta[None], k + 1, axis=0)
+    thetas = np.repeat(theta[None], k + copies, axis=0)
     thetas[np.arange(k), np.arange(k)] += h
     return thetas, h
 
@@ -542,6 +571,10 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
     return _difference_quotients(batch_residuals(thetas, kind, r0, touches), h)
 
 
+#: (centres, rotations, sizes) of a batch of parameter vectors (:func:`batch_geometry`)
+_BatchGeometry = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
 class _Evaluations:
     """The residuals (:func:`residuals`) and their Jacobian (:func:`_jacobian`) of one fit
     — one class, one start orientation, one set of touches — both from one batched call per
@@ -552,20 +585,19 @@ class _Evaluations:
     evaluated twice in the call: once with the difference points, once on its own, see
     :func:`batch_signed_distance`'s ``groups``); every evaluated point is remembered."""
 
-    def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
-        self.kind, self.r0, self.data = kind, r0, FitData.of(touches)
-        self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+    def __init__(self, kind: str, r0: np.ndarray, touches: Touches, data: FitData | None = None) -> None:
+        self.kind, self.r0 = kind, r0
+        self.data = FitData.of(touches) if data is None else data
+        self.known: dict[bytes, tuple[np.ndarray, np.ndarray, _BatchGeometry]] = {}
 
-    def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
         theta = np.asarray(theta, dtype=float)
         key = theta.tobytes()
         if key not in self.known:
-            thetas, h = _difference_points(theta)
             k = len(theta)
-            R = _whitened_residuals(
-                np.concatenate([thetas, theta[None]]), self.kind, self.r0, self.data, np.array([0, k + 1])
-            )
-            self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h))
+            thetas, h = _difference_points(theta, copies=2)
+            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, np.array([0, k + 1]))
+            self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h), geometry)
         return self.known[key]
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
@@ -575,6 +607,10 @@ class _Evaluations:
     def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
         """The (m, k) forward-difference Jacobian at ``theta``."""
         return self._evaluate(theta)[1]
+
+    def geometry(self, theta: np.ndarray) -> Geometry:
+        """:func:`geometry_from` ``theta`` (the same bits: computed as its own group)."""
+        return _geometry_row(self.kind, self._evaluate(theta)[2], len(theta) + 1)
 
 
 def residual_count(touches: Touches) -> int:
@@ -646,11 +682,12 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
+    data = FitData.of(touches)
     candidates = (ClassStarts(touches) if class_starts is None else class_starts).of(kind)
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
-        evaluations = _Evaluations(kind, r0, touches)
+        evaluations = _Evaluations(kind, r0, touches, data)
         if m >= k:
             theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev, evaluations)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
@@ -682,4 +719,4 @@ def fit_class(
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
     dof = max(m - k, 1)
     cov = cov * max(1.0, chi2 / dof)
-    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0, index)
+    return ClassFit(kind, evaluations.geometry(theta), chi2, k, cov, theta, r0, index)

@@ -294,6 +294,10 @@ def test_fused_evaluations_are_the_residuals_and_the_jacobian(kind):
                 plain = shape_fit.residuals(theta, kind, r0, touches)
                 np.testing.assert_array_equal(evaluations.residuals(theta), plain)
                 np.testing.assert_array_equal(J, shape_fit._jacobian(theta, kind, r0, touches))
+                got, plain_geometry = evaluations.geometry(theta), shape_fit.geometry_from(kind, theta, r0)
+                np.testing.assert_array_equal(got.centre, plain_geometry.centre)
+                np.testing.assert_array_equal(got.rotation, plain_geometry.rotation)
+                assert got.sizes == plain_geometry.sizes and got.kind == kind
             assert len(evaluations.known) == 3
 
 
@@ -367,3 +371,12 @@ def test_normal_clusters_at_the_bound_are_decided_as_the_plain_loop_does():
             plain.append(left[near].tolist())
             left = left[~near]
         assert shape_fit._cluster_members(normals, cos) == plain
+
+
+def test_median_and_columns_are_numpys():
+    rng = np.random.default_rng(74)
+    for n in (1, 2, 5, 26, 27):
+        v = rng.normal(size=n) * np.exp(rng.normal(scale=4.0, size=n))
+        assert shape_fit._median(v) == float(np.median(v))
+    x, y, z = rng.normal(size=(3, 3))
+    np.testing.assert_array_equal(shape_fit._columns(x, y, z), np.column_stack([x, y, z]))
