@@ -23,8 +23,8 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 from scipy.optimize import least_squares, leastsq
@@ -62,10 +62,26 @@ def rotation_vector(omega: np.ndarray) -> np.ndarray:
 def frame_with_z(axis: np.ndarray) -> np.ndarray:
     """A right-handed rotation whose third column is ``axis`` (unit)."""
     z = axis / np.linalg.norm(axis)
-    a = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
+    a = _X_AXIS if abs(z[0]) < 0.9 else _Y_AXIS
     x = a - (a @ z) * z
     x /= np.linalg.norm(x)
-    return np.column_stack([x, _cross(z[None], x[None])[0], z])
+    return _columns(x, _cross(z[None], x[None])[0], z)
+
+
+def _columns(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """The 3×3 matrix of columns x, y, z: ``np.column_stack``'s result without its wrapper."""
+    out = np.empty((3, 3))
+    out[:, 0], out[:, 1], out[:, 2] = x, y, z
+    return out
+
+
+def _median(values: np.ndarray) -> float:
+    """``np.median`` of a 1-D array (the middle value, or the mean of the two middle values:
+    the same number) from a full sort — np.median's partitioning wrappers cost ~30× more on
+    a few dozen values."""
+    ordered = np.sort(values)
+    half = len(ordered) // 2
+    return float(ordered[half]) if len(ordered) % 2 else float((ordered[half - 1] + ordered[half]) / 2.0)
 
 
 @dataclass(frozen=True)
@@ -105,94 +121,177 @@ class Geometry:
 
 
 def batch_signed_distance(
-    kind: str, points: np.ndarray, centres: np.ndarray, rotations: np.ndarray, sizes: np.ndarray
+    kind: str,
+    points: np.ndarray,
+    centres: np.ndarray,
+    rotations: np.ndarray,
+    sizes: np.ndarray,
+    groups: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
-    (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3)."""
+    (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3).
+    ``groups``: first indices of groups of instances evaluated as if in separate calls (of
+    the distances, only the ellipsoid's iteration couples the instances of a call, see
+    :func:`~eos_svc.shape.primitives.ellipsoid`)."""
     local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
     elif kind == "ellipsoid":
-        d, g = primitives.ellipsoid(local, sizes[:, None, :])
+        d, g = primitives.ellipsoid(local, sizes[:, None, :], groups=groups)
     elif kind == "box":
         d, g = primitives.box(local, sizes[:, None, :])
     elif kind == "cylinder":
         d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
     else:
         d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, g @ np.swapaxes(rotations, 1, 2)
+    return d, g @ rotations.transpose(0, 2, 1)
+
+
+#: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
+_SKEW_AT, _SKEW_OF = np.array([1, 2, 3, 5, 6, 7]), np.array([2, 1, 2, 0, 1, 0])
+_SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
+_EYE = np.eye(3)
 
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
     theta = primitives.norm(omega)
     k = omega / np.maximum(theta, 1e-12)[:, None]
-    K = np.zeros((len(omega), 3, 3))
-    K[:, 0, 1], K[:, 0, 2], K[:, 1, 2] = -k[:, 2], k[:, 1], -k[:, 0]
-    K[:, 1, 0], K[:, 2, 0], K[:, 2, 1] = k[:, 2], -k[:, 1], k[:, 0]
+    flat = np.zeros((len(omega), 9))
+    flat[:, _SKEW_AT] = k.take(_SKEW_OF, axis=1) * _SKEW_SIGN
+    K = flat.reshape(-1, 3, 3)
     s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
-    return np.eye(3) + s * K + (1.0 - c) * (K @ K)
+    out: np.ndarray = _EYE + s * K + (1.0 - c) * (K @ K)
+    return out
+
+
+_X_AXIS, _Y_AXIS, _ZERO3 = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.zeros(3)
 
 
 def _batch_frames_with_z(axes: np.ndarray) -> np.ndarray:
     """(K, 3, 3) right-handed rotations whose third columns are the (K, 3) axes."""
     z = axes / primitives.norm(axes)[:, None]
-    a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]))
-    x = a - np.sum(a * z, axis=1, keepdims=True) * z
+    a = np.where((np.abs(z[:, 0]) < 0.9)[:, None], _X_AXIS, _Y_AXIS)
+    x = a - primitives.sum3(a * z)[:, None] * z
     x /= primitives.norm(x)[:, None]
-    return np.stack([x, _cross(z, x), z], axis=2)
+    out = np.empty((len(axes), 3, 3))
+    out[:, :, 0], out[:, :, 1], out[:, :, 2] = x, _cross(z, x), z
+    return out
 
 
 def _cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """Row-wise u × v of (K, 3) arrays: ``np.cross``'s products, without its axis handling."""
-    out: np.ndarray = u[:, _NEXT] * v[:, _AFTER] - u[:, _AFTER] * v[:, _NEXT]
+    # take: fancy indexing's result at a third of its cost
+    out: np.ndarray = u.take(_NEXT, 1) * v.take(_AFTER, 1) - u.take(_AFTER, 1) * v.take(_NEXT, 1)
     return out
 
 
-_NEXT, _AFTER = [1, 2, 0], [2, 0, 1]
+_NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
+#: the log-size parameters of each class, as a slice (:data:`SIZE_INDEX`)
+_SIZE_SLICE = {kind: slice(index[0], index[-1] + 1) for kind, index in SIZE_INDEX.items()}
 
 
 def batch_geometry(
-    kind: str, thetas: np.ndarray, r0: np.ndarray
+    kind: str, thetas: np.ndarray, r0: np.ndarray, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
-    about its own (K, 3, 3)."""
+    about its own (K, 3, 3). ``groups``: first indices of groups of parameter vectors
+    evaluated as if in separate calls (a cylinder's or capsule's axes are one matrix product
+    per call, whose rounding BLAS may choose by the number of rows)."""
     centres = thetas[:, :3]
-    sizes = np.exp(np.clip(thetas[:, list(SIZE_INDEX[kind])], *LOG_SIZE_RANGE))
+    # np.clip's arithmetic (the bound or the value itself) without its wrapper
+    sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
     K = len(thetas)
     if kind == "sphere":
-        rotations = np.broadcast_to(np.eye(3), (K, 3, 3))
+        rotations = np.broadcast_to(_EYE, (K, 3, 3))
     elif kind in ("ellipsoid", "box"):
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
-        tilt = np.column_stack([thetas[:, 3], thetas[:, 4], np.ones(K)])
-        axes = tilt @ r0.T if r0.ndim == 2 else np.einsum("kij,kj->ki", r0, tilt)
+        tilt = np.ones((K, 3))
+        tilt[:, :2] = thetas[:, 3:5]
+        if r0.ndim == 3:
+            axes = np.einsum("kij,kj->ki", r0, tilt)
+        elif groups is None:
+            axes = tilt @ r0.T
+        else:
+            ends = [*groups[1:], K]
+            axes = np.concatenate([tilt[lo:hi] @ r0.T for lo, hi in zip(groups, ends, strict=True)])
         rotations = _batch_frames_with_z(axes)
     return centres, rotations, sizes
+
+
+@dataclass(frozen=True)
+class FitData:
+    """What :func:`batch_residuals` needs of the touches, derived once per fit instead of per
+    evaluation: the contacts and free samples as one array of points (m), their radii (m),
+    the sensed normals and the noise model's constants."""
+
+    points: np.ndarray
+    count: int
+    radii: np.ndarray
+    normals: np.ndarray
+    free_radii: np.ndarray
+    gap_offset: float
+    sigma_distance: float
+    sigma_normal: float
+
+    @classmethod
+    def of(cls, touches: Touches) -> FitData:
+        """The fit data of ``touches``."""
+        # the contacts and the free samples in one evaluation of the class's distance
+        points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
+        return cls(
+            points[None],
+            touches.count,
+            touches.radii,
+            touches.normals,
+            touches.free_radii,
+            touches.gap_offset,
+            touches.sigma_distance,
+            touches.sigma_normal,
+        )
 
 
 def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors (about one start orientation ``r0``
     or each about its own, see :func:`batch_geometry`): tip-centre distances, normals,
     free-space hinges."""
-    centres, rotations, sizes = batch_geometry(kind, thetas, r0)
-    n = touches.count
-    # the contacts and the free samples in one evaluation of the class's distance
-    points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
-    d, g = batch_signed_distance(kind, points[None], centres, rotations, sizes)
+    return _whitened_residuals(thetas, kind, r0, FitData.of(touches))
+
+
+def _whitened_residuals(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> np.ndarray:
+    """:func:`batch_residuals` from the touches' :class:`FitData`; ``groups`` (first rows of
+    groups of ``thetas``) as in :func:`batch_signed_distance`."""
+    return _residuals_and_geometry(thetas, kind, r0, data, groups)[0]
+
+
+def _residuals_and_geometry(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from)."""
+    geometry = batch_geometry(kind, thetas, r0, groups)
+    n = data.count
+    d, g = batch_signed_distance(kind, data.points, *geometry, groups)
     K = len(thetas)
-    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / touches.sigma_distance
-    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(K, -1)
-    if not len(touches.free):
-        return np.concatenate([r_d, r_n], axis=1)
-    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / touches.sigma_distance
-    return np.concatenate([r_d, r_n, r_f], axis=1)
+    r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
+    r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(K, -1)
+    if not len(data.free_radii):
+        return np.concatenate([r_d, r_n], axis=1), geometry
+    r_f = np.minimum(d[:, n:] - data.free_radii, 0.0) / data.sigma_distance
+    return np.concatenate([r_d, r_n, r_f], axis=1), geometry
 
 
 def geometry_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> Geometry:
     """The geometry of parameters ``theta`` about start orientation ``r0``."""
-    centres, rotations, sizes = batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0)
-    return Geometry(kind, centres[0].copy(), np.array(rotations[0]), tuple(float(v) for v in sizes[0]))
+    return _geometry_row(kind, batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0), 0)
+
+
+def _geometry_row(kind: str, geometry: tuple[np.ndarray, np.ndarray, np.ndarray], row: int) -> Geometry:
+    """Row ``row`` of :func:`batch_geometry`'s (centres, rotations, sizes) as a Geometry."""
+    centres, rotations, sizes = geometry
+    return Geometry(kind, centres[row].copy(), np.array(rotations[row]), tuple(float(v) for v in sizes[row]))
 
 
 def residuals(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
@@ -287,31 +386,61 @@ def _normal_line_centre(points: np.ndarray, normals: np.ndarray, prior: np.ndarr
     return out
 
 
-def _normal_clusters(normals: np.ndarray, angle: float = math.radians(15.0)) -> list[np.ndarray]:
-    """Mean directions of the sensed normals grouped greedily within ``angle``, largest first."""
-    left = np.arange(len(normals))
-    groups: list[tuple[int, np.ndarray]] = []
+def _normal_clusters(
+    normals: np.ndarray, angle: float = math.radians(15.0), most: int | None = None
+) -> list[np.ndarray]:
+    """Mean directions of the sensed normals grouped greedily within ``angle`` (the first
+    normal left and every normal left within ``angle`` of it, and so on), largest first;
+    ``most``: only that many of the largest."""
     cos = math.cos(angle)
-    while len(left):
-        near = normals[left] @ normals[left[0]] >= cos
-        mean = normals[left[near]].sum(axis=0)
-        groups.append((int(near.sum()), mean / np.linalg.norm(mean)))
-        left = left[~near]
-    groups.sort(key=lambda g: -g[0])
-    return [g[1] for g in groups]
+    members = _cluster_members(normals, cos)
+    members.sort(key=lambda m: -len(m))
+    out = []
+    for m in members[:most]:
+        mean = normals[m].sum(axis=0)
+        out.append(mean / np.linalg.norm(mean))
+    return out
+
+
+#: how far from a group's cosine bound every cosine must be for the Gram matrix to decide
+#: membership as each normal's own product would (both round within a few 1e-16)
+_CLUSTER_MARGIN = 1e-12
+
+
+def _cluster_members(normals: np.ndarray, cos: float) -> list[list[int]]:
+    """Indices of :func:`_normal_clusters`' groups, in the order they are formed: every
+    cosine from one Gram matrix, unless one lies within :data:`_CLUSTER_MARGIN` of the bound
+    (then each group's cosines as the plain loop computes them, group by group)."""
+    dots = normals @ normals.T
+    if np.any(np.abs(dots - cos) < _CLUSTER_MARGIN):
+        left_array = np.arange(len(normals))
+        plain: list[list[int]] = []
+        while len(left_array):
+            near_array = normals[left_array] @ normals[left_array[0]] >= cos
+            plain.append(left_array[near_array].tolist())
+            left_array = left_array[~near_array]
+        return plain
+    close = (dots >= cos).tolist()
+    left = list(range(len(normals)))
+    members: list[list[int]] = []
+    while left:
+        row = close[left[0]]
+        members.append([j for j in left if row[j]])
+        left = [j for j in left if not row[j]]
+    return members
 
 
 def _face_frames(normals: np.ndarray) -> list[np.ndarray]:
     """Box orientations from pairs of roughly orthogonal groups of normals (the largest
     groups first, at most three frames)."""
-    clusters = _normal_clusters(normals)[:4]
+    clusters = _normal_clusters(normals, most=4)
     frames = []
     for i, x in enumerate(clusters):
         for c in clusters[i + 1 :]:
             if abs(c @ x) < 0.3:
                 y = c - (c @ x) * x
                 y /= np.linalg.norm(y)
-                frames.append(np.column_stack([x, y, _cross(x[None], y[None])[0]]))
+                frames.append(_columns(x, y, _cross(x[None], y[None])[0]))
     return frames[:3]
 
 
@@ -324,33 +453,79 @@ def _distinct(axes: list[np.ndarray], angle: float = math.radians(15.0)) -> list
     return out
 
 
-def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Start parameters and orientations ``(theta0, r0)`` of ``kind`` from the touches."""
-    S = touches.surface_points
-    lo, hi = S.min(axis=0), S.max(axis=0)
-    mid = 0.5 * (lo + hi)
-    out: list[tuple[np.ndarray, np.ndarray]] = []
-    if kind == "sphere":
-        c = _normal_line_centre(S, touches.normals, mid)
-        r = max(float(np.mean(np.linalg.norm(S - c, axis=1))), MIN_HALF)
-        return [(np.array([*c, math.log(r)]), np.eye(3))]
-    V = _normal_scatter_axes(touches.normals)
-    if kind in ("ellipsoid", "box"):
-        frames = [*_face_frames(touches.normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
-        for r0 in frames:
-            c = mid if kind == "box" else _normal_line_centre(S, touches.normals, mid)
-            half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
-            out.append((np.array([*c, 0.0, 0.0, 0.0, *np.log(half)]), r0))
+class ClassStarts:
+    """Every class's start parameters from one set of touches (:func:`starts`), each class's
+    computed once, on first use, and the pieces several classes share — the normals'
+    scatter axes, the normal lines' nearest point, the cylinder's and the capsule's frames —
+    once for all of them (:func:`~eos_svc.shape.selection.select_class` fits every class to
+    the same touches)."""
+
+    def __init__(self, touches: Touches) -> None:
+        self.touches = touches
+        S = touches.surface_points
+        lo, hi = S.min(axis=0), S.max(axis=0)
+        self.surface, self.mid = S, 0.5 * (lo + hi)
+        self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+
+    def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
+        if kind not in self._of:
+            self._of[kind] = self._starts(kind)
+        return list(self._of[kind])
+
+    @cached_property
+    def scatter_axes(self) -> np.ndarray:
+        """:func:`_normal_scatter_axes` of the normals."""
+        return _normal_scatter_axes(self.touches.normals)
+
+    @cached_property
+    def line_centre(self) -> np.ndarray:
+        """:func:`_normal_line_centre` of the contacts, toward the middle of their bounds."""
+        return _normal_line_centre(self.surface, self.touches.normals, self.mid)
+
+    @cached_property
+    def axial_frames(self) -> list[tuple[np.ndarray, float, float]]:
+        """(frame, median radial distance of the contacts, largest axial one) (m) about each
+        distinct candidate axis of a cylinder or a capsule, centred mid-bounds."""
+        V = self.scatter_axes
+        out = []
+        for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
+            r0 = frame_with_z(axis)
+            local = (self.surface - self.mid) @ r0
+            radial = _median(np.hypot(local[:, 0], local[:, 1]))
+            out.append((r0, radial, float(np.max(np.abs(local[:, 2])))))
         return out
-    for axis in _distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]]):
-        r0 = frame_with_z(axis)
-        c = mid
-        local = (S - c) @ r0
-        radius = max(float(np.median(np.hypot(local[:, 0], local[:, 1]))), MIN_HALF)
-        half = float(np.max(np.abs(local[:, 2])))
-        half = max(half - radius, MIN_HALF) if kind == "capsule" else max(half, MIN_HALF)
-        out.append((np.array([*c, 0.0, 0.0, math.log(radius), math.log(half)]), r0))
-    return out
+
+    def _starts(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
+        S, mid, normals = self.surface, self.mid, self.touches.normals
+        out: list[tuple[np.ndarray, np.ndarray]] = []
+        if kind == "sphere":
+            c = self.line_centre
+            r = max(float(np.mean(np.linalg.norm(S - c, axis=1))), MIN_HALF)
+            return [(np.array([*c, math.log(r)]), np.eye(3))]
+        V = self.scatter_axes
+        if kind in ("ellipsoid", "box"):
+            frames = [*_face_frames(normals), np.eye(3), V] if kind == "box" else [V, np.eye(3)]
+            for r0 in frames:
+                c = mid if kind == "box" else self.line_centre
+                half = np.maximum(np.max(np.abs((S - c) @ r0), axis=0), MIN_HALF)
+                out.append((np.concatenate([c, _ZERO3, np.log(half)]), r0))
+            return out
+        for r0, median_radius, axial in self.axial_frames:
+            radius = max(median_radius, MIN_HALF)
+            half = max(axial - radius, MIN_HALF) if kind == "capsule" else max(axial, MIN_HALF)
+            out.append((np.concatenate([mid, [0.0, 0.0, math.log(radius), math.log(half)]]), r0))
+        return out
+
+
+def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Start parameters and orientations ``(theta0, r0)`` of ``kind`` from the touches: the
+    sphere's centre nearest the normal lines, the mean distance its radius; the ellipsoid
+    about the normals' scatter axes and the world axes, centred there too; the box about
+    frames of orthogonal groups of normals, the world axes and the scatter axes, centred
+    mid-bounds; the cylinder and the capsule along each distinct scatter and world axis
+    (:class:`ClassStarts`, which shares the pieces between classes)."""
+    return ClassStarts(touches).of(kind)
 
 
 def ranked_starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:
@@ -371,17 +546,71 @@ def _nearest_order(kind: str, touches: Touches, candidates: list[tuple[np.ndarra
     return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
+def _difference_points(theta: np.ndarray, copies: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    """(the k + 1 parameter vectors of a forward-difference Jacobian at ``theta`` — each
+    parameter stepped, then ``theta`` itself (``copies`` times) —, the steps h (k,))."""
+    k = len(theta)
+    h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
+    thetas = np.repeat(theta[None], k + copies, axis=0)
+    thetas[np.arange(k), np.arange(k)] += h
+    return thetas, h
+
+
+def _difference_quotients(R: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """The (m, k) Jacobian from the residuals (k + 1, m) at :func:`_difference_points`."""
+    k = len(h)
+    out: np.ndarray = ((R[:k] - R[k]) / h[:, None]).T
+    return out
+
+
 def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Forward-difference Jacobian of :func:`residuals`, every column in one batched call
     (forward, as MINPACK's: the box and cylinder distances have kinks a central difference
     straddles)."""
-    k = len(theta)
-    h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-    thetas = np.repeat(theta[None], k + 1, axis=0)
-    thetas[np.arange(k), np.arange(k)] += h
-    R = batch_residuals(thetas, kind, r0, touches)
-    out: np.ndarray = ((R[:k] - R[k]) / h[:, None]).T
-    return out
+    thetas, h = _difference_points(theta)
+    return _difference_quotients(batch_residuals(thetas, kind, r0, touches), h)
+
+
+#: (centres, rotations, sizes) of a batch of parameter vectors (:func:`batch_geometry`)
+_BatchGeometry = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+class _Evaluations:
+    """The residuals (:func:`residuals`) and their Jacobian (:func:`_jacobian`) of one fit
+    — one class, one start orientation, one set of touches — both from one batched call per
+    parameter vector: MINPACK asks for the Jacobian at every point whose residuals it accepts,
+    so evaluating the k + 1 difference points with the point itself costs one call instead of
+    two (numpy's per-call overhead dominates these small arrays). The residuals and the
+    Jacobian are, to the bit, those of :func:`residuals` and :func:`_jacobian` (the point is
+    evaluated twice in the call: once with the difference points, once on its own, see
+    :func:`batch_signed_distance`'s ``groups``); every evaluated point is remembered."""
+
+    def __init__(self, kind: str, r0: np.ndarray, touches: Touches, data: FitData | None = None) -> None:
+        self.kind, self.r0 = kind, r0
+        self.data = FitData.of(touches) if data is None else data
+        self.known: dict[bytes, tuple[np.ndarray, np.ndarray, _BatchGeometry]] = {}
+
+    def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
+        theta = np.asarray(theta, dtype=float)
+        key = theta.tobytes()
+        if key not in self.known:
+            k = len(theta)
+            thetas, h = _difference_points(theta, copies=2)
+            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, np.array([0, k + 1]))
+            self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h), geometry)
+        return self.known[key]
+
+    def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them)."""
+        return self._evaluate(theta)[0]
+
+    def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
+        """The (m, k) forward-difference Jacobian at ``theta``."""
+        return self._evaluate(theta)[1]
+
+    def geometry(self, theta: np.ndarray) -> Geometry:
+        """:func:`geometry_from` ``theta`` (the same bits: computed as its own group)."""
+        return _geometry_row(self.kind, self._evaluate(theta)[2], len(theta) + 1)
 
 
 def residual_count(touches: Touches) -> int:
@@ -397,36 +626,25 @@ def explains(chi2: float, touches: Touches, kind: str) -> bool:
     return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
 
 
-class _LastValue:
-    """``fn(θ, *args)`` remembering its last argument and value: MINPACK's driver
-    (``scipy.optimize.leastsq``) evaluates the residuals and the Jacobian at the start once to
-    check their shapes, then again in its first iteration."""
-
-    def __init__(self, fn: Callable[..., np.ndarray]) -> None:
-        self.fn = fn
-        self.theta: np.ndarray | None = None
-        self.value: np.ndarray | None = None
-
-    def __call__(self, theta: np.ndarray, *args: object) -> np.ndarray:
-        if self.theta is None or self.value is None or not np.array_equal(theta, self.theta):
-            self.theta, self.value = np.array(theta, dtype=float), self.fn(theta, *args)
-        return self.value
-
-
 def levenberg_marquardt(
-    theta0: np.ndarray, kind: str, r0: np.ndarray, touches: Touches, max_nfev: int
+    theta0: np.ndarray,
+    kind: str,
+    r0: np.ndarray,
+    touches: Touches,
+    max_nfev: int,
+    evaluations: _Evaluations | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
     ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
     Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
     without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
-    needs that only for the best start)."""
-    args = (kind, r0, touches)
+    needs that only for the best start). ``evaluations``: the fit's :class:`_Evaluations`
+    (of ``kind``, ``r0``, ``touches``), to ask for the Jacobian at θ afterwards."""
+    ev = _Evaluations(kind, r0, touches) if evaluations is None else evaluations
     x, _, info, _, _ = leastsq(
-        _LastValue(residuals),
+        ev.residuals,
         np.asarray(theta0, dtype=float),
-        args=args,
-        Dfun=_LastValue(_jacobian),
+        Dfun=ev.jacobian,
         full_output=True,
         ftol=1e-8,
         xtol=1e-8,
@@ -443,6 +661,7 @@ def fit_class(
     hopeless: float = math.inf,
     max_starts: int | None = None,
     nearest_first: bool = False,
+    class_starts: ClassStarts | None = None,
 ) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts).
 
@@ -451,7 +670,8 @@ def fit_class(
     χ²): once a start ends above it, the remaining starts are skipped (their posterior would
     be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
     ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
-    not in :func:`starts`' order.
+    not in :func:`starts`' order. ``class_starts``: the touches' :class:`ClassStarts` (shared
+    by the fits of several classes to the same touches), else computed here.
 
     The fit from the first start alone (``max_starts=1``) *is* the fit with the same
     ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
@@ -462,12 +682,14 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
-    candidates = starts(kind, touches)
+    data = FitData.of(touches)
+    candidates = (ClassStarts(touches) if class_starts is None else class_starts).of(kind)
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
+        evaluations = _Evaluations(kind, r0, touches, data)
         if m >= k:
-            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev)
+            theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev, evaluations)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can
             res = least_squares(
                 residuals,
@@ -484,17 +706,17 @@ def fit_class(
             theta, fun = res.x, res.fun
         chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
-            best = (chi2, theta, r0, index)
+            best = (chi2, theta, r0, index, evaluations)
         if explains(chi2, touches, kind):
             break  # this start explains the touches to within the noise: no other start needed
         if chi2 > hopeless:
             break
     assert best is not None
-    chi2, theta, r0, index = best
-    J = _jacobian(theta, kind, r0, touches)
+    chi2, theta, r0, index, evaluations = best
+    J = evaluations.jacobian(theta)  # usually known: MINPACK evaluated θ
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k))
     dof = max(m - k, 1)
     cov = cov * max(1.0, chi2 / dof)
-    return ClassFit(kind, geometry_from(kind, theta, r0), chi2, k, cov, theta, r0, index)
+    return ClassFit(kind, evaluations.geometry(theta), chi2, k, cov, theta, r0, index)

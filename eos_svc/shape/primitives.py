@@ -17,21 +17,48 @@ Array = np.ndarray
 _TINY = 1e-15
 
 
+def sum3(v: Array) -> Array:
+    """Σ over a last axis of length 3, ``(v₀ + v₁) + v₂``: ``np.sum(v, axis=-1)``'s
+    arithmetic (the same order, the same bits) as two additions of strided views — numpy's
+    reduction over so short an axis costs several times more."""
+    out: Array = v[..., 0] + v[..., 1] + v[..., 2]
+    return out
+
+
+def max3(v: Array) -> Array:
+    """Largest entry over a last axis of length 3: ``np.max(v, axis=-1)`` (NaN propagated)."""
+    out: Array = np.maximum(np.maximum(v[..., 0], v[..., 1]), v[..., 2])
+    return out
+
+
 def norm(v: Array) -> Array:
-    """Euclidean norm over the last axis: ``np.linalg.norm(v, axis=-1)``'s arithmetic
-    without its argument handling (these arrays are small: the call dominates)."""
-    out: Array = np.sqrt(np.sum(v * v, axis=-1))
+    """Euclidean norm over the last axis (of length 3): ``np.linalg.norm(v, axis=-1)``'s
+    arithmetic without its argument handling (these arrays are small: the call dominates)."""
+    out: Array = np.sqrt(sum3(v * v))
+    return out
+
+
+# a reduction as a ufunc method: np.max's arithmetic without its wrapper
+_max = np.maximum.reduce
+#: the coordinate axes' indices, to compare with an argmax
+_AXES = np.arange(3)
+
+
+def _unit_from(v: Array, n: Array, fallback: tuple[float, float, float]) -> Array:
+    """``v / n`` (``n`` = :func:`norm` of ``v``, (...,)), or ``fallback`` where ``n`` ≈ 0."""
+    n = n[..., None]
+    out: Array = np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
     return out
 
 
 def _unit(v: Array, fallback: tuple[float, float, float]) -> Array:
-    n = norm(v)[..., None]
-    return np.where(n > 1e-12, v / np.maximum(n, 1e-12), np.asarray(fallback))
+    return _unit_from(v, norm(v), fallback)
 
 
 def sphere(P: Array, radius: Array) -> tuple[Array, Array]:
     """Sphere of ``radius``."""
-    return norm(P) - radius, _unit(P, (0.0, 0.0, 1.0))
+    n = norm(P)
+    return n - radius, _unit_from(P, n, (0.0, 0.0, 1.0))
 
 
 def box(P: Array, half: Array) -> tuple[Array, Array]:
@@ -39,12 +66,11 @@ def box(P: Array, half: Array) -> tuple[Array, Array]:
     q = np.abs(P) - half
     qp = np.maximum(q, 0.0)
     out = norm(qp)
-    d = out + np.minimum(q.max(axis=-1), 0.0)
+    d = out + np.minimum(max3(q), 0.0)
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
-    k = np.argmax(q, axis=-1)[..., None]
-    g_in = np.zeros_like(P)
-    np.put_along_axis(g_in, k, np.take_along_axis(sign, k, axis=-1), axis=-1)
+    # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
+    g_in = np.where(np.argmax(q, axis=-1)[..., None] == _AXES, sign, 0.0)
     return d, np.where((out > _TINY)[..., None], g_out, g_in)
 
 
@@ -52,12 +78,14 @@ def cylinder(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]
     """Cylinder of ``radius`` and half length ``half_length`` along z (flat caps)."""
     x, y, z = P[..., 0], P[..., 1], P[..., 2]
     rho = np.hypot(x, y)
-    zero = np.zeros_like(rho)
-    radial = np.stack([x, y, zero], axis=-1) / np.maximum(rho, _TINY)[..., None]
+    across = P.copy()
+    across[..., 2] = 0.0
+    radial = across / np.maximum(rho, _TINY)[..., None]
     radial = np.where((rho > _TINY)[..., None], radial, np.array([1.0, 0.0, 0.0]))
     dr = rho - radius
     dz = np.abs(z) - half_length
-    axial = np.stack([zero, zero, np.where(z >= 0.0, 1.0, -1.0)], axis=-1)
+    axial = np.zeros_like(P)
+    axial[..., 2] = np.where(z >= 0.0, 1.0, -1.0)
     a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
     out = np.hypot(a, b)
     d = out + np.minimum(np.maximum(dr, dz), 0.0)
@@ -71,21 +99,24 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     zc = np.clip(P[..., 2], -half_length, half_length)
     v = P.copy()
     v[..., 2] -= zc
-    return norm(v) - radius, _unit(v, (1.0, 0.0, 0.0))
+    n = norm(v)
+    return n - radius, _unit_from(v, n, (1.0, 0.0, 0.0))
 
 
 def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
     """A point left of the root of the ellipsoid's ``F`` (see :func:`ellipsoid`), near it:
     every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;
     and ``t ≥ 0`` outside, ``t > −min a_i²`` inside (kept 1e-12 relative away from that pole,
-    where ``F`` is infinite)."""
-    amin2 = np.min(a, axis=-1) ** 2
+    where ``F`` is infinite). ``a``: the semi-axes, ``P``'s shape or broadcastable to it."""
+    amin2 = np.minimum(np.minimum(a[..., 0], a[..., 1]), a[..., 2]) ** 2
     floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
-    out: Array = np.maximum(np.max(a * np.abs(P) - a * a, axis=-1), floor)
+    out: Array = np.maximum(max3(a * np.abs(P) - a * a), floor)
     return out
 
 
-def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Array]:
+def ellipsoid(
+    P: Array, radii: Array, iterations: int = 30, groups: Array | None = None
+) -> tuple[Array, Array]:
     """Ellipsoid of semi-axes ``radii`` (..., 1, 3) along x, y, z: the exact closest point.
 
     The closest point is ``s_i = a_i² p_i / (t + a_i²)`` with ``t`` the root of
@@ -93,29 +124,48 @@ def ellipsoid(P: Array, radii: Array, iterations: int = 30) -> tuple[Array, Arra
     ``h = (Σ (a_i p_i)² (t + a_i²)⁻²)^(−1/2)``, a power mean of exponent −2 of the affine
     ``t + a_i²`` — increasing and concave (linear for a sphere) — Newton's method from a point
     left of the root (:func:`ellipsoid_root_lower_bound`) stays left of it and rises
-    monotonically to it, in one step for a sphere, in a few for the ellipsoid.
+    monotonically to it, in one step for a sphere, in a few for the ellipsoid. Every root is
+    iterated until the largest relative step of the call is below 1e-12.
+
+    ``groups``: for ``P`` of shape (K, N, 3), the first row index of each of several
+    consecutive groups of rows (ascending, from 0): each group is then iterated until *its*
+    largest step is below that bound: each group's roots are, to the bit, those of a separate
+    call on its rows alone (several evaluations in one call, as :mod:`eos_svc.shape.fit`
+    batches them).
     """
-    a = np.broadcast_to(radii, P.shape)
+    a = radii  # broadcast against P by every operation (the same numbers as a full array)
     a2 = a * a
-    inside = np.sum((P / a) ** 2, axis=-1) < 1.0
+    inside = sum3((P / a) ** 2) < 1.0
     t = ellipsoid_root_lower_bound(P, a, inside)
     ap2 = (a * P) ** 2
+    bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
+    moving = bounds  # the groups still iterating, (first row, end)
     for _ in range(iterations):
         inv = 1.0 / (t[..., None] + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = uu.sum(axis=-1)  # h⁻²
-        slope = (uu * inv).sum(axis=-1)  # h' · h⁻³
+        total = sum3(uu)  # h⁻²
+        slope = sum3(uu * inv)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
-        t = t + step
-        if np.max(np.abs(step) / (1e-6 + np.abs(t))) < 1e-12:
+        if moving is bounds and len(bounds) == 1:  # one group: the whole call
+            t = t + step
+            if _max(np.abs(step) / (1e-6 + np.abs(t)), axis=None) < 1e-12:
+                break
+            continue
+        if moving is bounds:
+            t = t + step
+        else:
+            for lo, hi in moving:
+                t[lo:hi] += step[lo:hi]
+        relative = _max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1)
+        moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
+        if not moving:
             break
     S = a2 * P / (t[..., None] + a2)
     v = P - S
     dist = norm(v)
     sign = np.where(inside, -1.0, 1.0)
-    g = np.where(
-        (dist > 1e-12)[..., None],
-        sign[..., None] * v / np.maximum(dist, 1e-12)[..., None],
-        _unit(S / a2, (0.0, 0.0, 1.0)),
-    )
+    away = dist > 1e-12
+    g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+    if not away.all():  # on the surface: the normal there
+        g = np.where(away[..., None], g, _unit(S / a2, (0.0, 0.0, 1.0)))
     return sign * dist, g

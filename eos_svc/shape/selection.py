@@ -28,9 +28,9 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from scipy import stats
+from scipy import special
 
-from eos_svc.shape.fit import GOOD_FIT, ClassFit, explains, extent_ratios, fit_class, starts
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, ClassStarts, explains, extent_ratios, fit_class
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -205,14 +205,15 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     m = 3 * touches.count
     fits: dict[str, ClassFit] = {}
     screened: dict[str, ClassFit] = {}
-    fits[classes[0]] = fit_class(classes[0], touches)
+    shared = ClassStarts(touches)  # every class's starts, their common pieces computed once
+    fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if fits[classes[0]].chi2 > GOOD_FIT * m and len(classes) > 1:
         # the first class does not explain the touches: the others, each from its nearest
         # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
         # explains the touches the rest are shown hopeless against it in a few iterations
         # instead of being fitted in full before it. The order decides which fit shows a class
         # hopeless, not the postulate: its posterior is 0 either way.
-        screened = screen(touches, classes[1:])
+        screened = screen(touches, classes[1:], shared)
     rest = classes[1:]
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
@@ -220,13 +221,13 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
         # a few iterations show it, the full fit is kept for the competitive ones
         best = min(f.chi2 for f in fits.values())
         if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
-            fits[kind] = fit_class(kind, touches)
+            fits[kind] = fit_class(kind, touches, class_starts=shared)
             continue
-        quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind))
+        quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind), shared)
         if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
-        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS)
+        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, class_starts=shared)
     fits = {k: fits[k] for k in classes}
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
@@ -238,22 +239,36 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     return Postulate(kind, confidence, probs, fits, touches.count)
 
 
-def screen(touches: Touches, classes: tuple[str, ...]) -> dict[str, ClassFit]:
+def screen(
+    touches: Touches, classes: tuple[str, ...], class_starts: ClassStarts | None = None
+) -> dict[str, ClassFit]:
     """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.ranked_starts`)
-    for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²)."""
-    return {kind: fit_class(kind, touches, QUICK_NFEV, max_starts=1, nearest_first=True) for kind in classes}
+    for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²).
+    ``class_starts``: the touches' starts, if already at hand."""
+    shared = ClassStarts(touches) if class_starts is None else class_starts
+    return {
+        kind: fit_class(kind, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
+        for kind in classes
+    }
 
 
-def quick_fit(kind: str, touches: Touches, hopeless: float, screened: ClassFit | None = None) -> ClassFit:
+def quick_fit(
+    kind: str,
+    touches: Touches,
+    hopeless: float,
+    screened: ClassFit | None = None,
+    class_starts: ClassStarts | None = None,
+) -> ClassFit:
     """``fit_class(kind, touches, QUICK_NFEV, hopeless)``. A screening fit (:func:`screen`)
     from the class's first start *is* that fit when it is above ``hopeless``, explains the
     touches, or the class has one start (see :func:`~eos_svc.shape.fit.fit_class`): it is
-    reused then."""
+    reused then. ``class_starts``: the touches' starts, if already at hand."""
+    shared = ClassStarts(touches) if class_starts is None else class_starts
     if screened is None or screened.start != 0:
-        return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
-    if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(starts(kind, touches)) == 1:
+        return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
+    if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(shared.of(kind)) == 1:
         return screened
-    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless)
+    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
 
 
 def fit_probability(fit: ClassFit, m: int) -> float:
@@ -261,4 +276,10 @@ def fit_probability(fit: ClassFit, m: int) -> float:
     looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
     even the best class misses them (an object none of the classes describes)."""
     dof = max(m - fit.n_params, 1)
-    return float(stats.chi2.sf(fit.chi2 / FIT_SLACK, dof))
+    return chi2_survival(fit.chi2 / FIT_SLACK, dof)
+
+
+def chi2_survival(x: float, dof: int) -> float:
+    """``scipy.stats.chi2.sf(x, dof)`` — the same function, ``scipy.special.chdtrc``, without
+    the distribution object's argument handling (≈ 30× its cost): 1 at and below 0."""
+    return 1.0 if x <= 0.0 else float(special.chdtrc(dof, x))

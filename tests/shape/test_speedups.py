@@ -9,6 +9,7 @@ import pytest
 
 from eos_svc.shape import Touches, fit_class, select_class
 from eos_svc.shape import fit as shape_fit
+from eos_svc.shape import primitives as shape_primitives
 from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound, norm
 from eos_svc.shape.selection import (
     CLASSES,
@@ -255,3 +256,127 @@ def test_start_helpers_equal_their_loops():
     np.testing.assert_allclose(frame.T @ frame, np.eye(3), atol=1e-12)
     assert np.linalg.det(frame) == pytest.approx(1.0)
     assert frame[:, 2] @ axis == pytest.approx(np.linalg.norm(axis))
+
+
+@pytest.mark.parametrize("radii", [(0.03, 0.03, 0.03), (0.035, 0.03, 0.022), (0.05, 0.01, 0.004)])
+def test_grouped_ellipsoid_roots_are_those_of_separate_calls(radii):
+    # several evaluations in one call (the fit's residuals with their difference points): each
+    # group iterates as long as it would alone, so its roots are the same to the bit
+    rng = np.random.default_rng(61)
+    a = np.asarray(radii)
+    sizes = np.stack([a, a * 1.01, a * 0.97, a * 1.2, a])[:, None, :]  # (5, 1, 3)
+    P = rng.normal(scale=0.04, size=(5, 30, 3))
+    groups = np.array([0, 3, 4])
+    d, g = ellipsoid(P, sizes, groups=groups)
+    for lo, hi in zip(groups, [*groups[1:], len(P)], strict=True):
+        d_alone, g_alone = ellipsoid(P[lo:hi], sizes[lo:hi])
+        np.testing.assert_array_equal(d[lo:hi], d_alone)
+        np.testing.assert_array_equal(g[lo:hi], g_alone)
+    # and one group is the ungrouped call
+    d_one, g_one = ellipsoid(P, sizes, groups=np.array([0]))
+    d_all, g_all = ellipsoid(P, sizes)
+    np.testing.assert_array_equal(d_one, d_all)
+    np.testing.assert_array_equal(g_one, g_all)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fused_evaluations_are_the_residuals_and_the_jacobian(kind):
+    # _Evaluations computes the residuals and the difference Jacobian of a point in one call
+    # (several seeds: a cylinder's axes rounded as one product of all the rows would differ
+    # from the plain residuals' in a few of these evaluations)
+    for seed in range(14, 20):
+        touches = random_touches(kind, seed)
+        rng = np.random.default_rng(seed + 1)
+        for theta0, r0 in shape_fit.starts(kind, touches)[:2]:
+            evaluations = shape_fit._Evaluations(kind, r0, touches)
+            for theta in theta0 + rng.normal(scale=0.02, size=(3, len(theta0))):
+                J = evaluations.jacobian(theta)  # the Jacobian first, then the (remembered) residuals
+                plain = shape_fit.residuals(theta, kind, r0, touches)
+                np.testing.assert_array_equal(evaluations.residuals(theta), plain)
+                np.testing.assert_array_equal(J, shape_fit._jacobian(theta, kind, r0, touches))
+                got, plain_geometry = evaluations.geometry(theta), shape_fit.geometry_from(kind, theta, r0)
+                np.testing.assert_array_equal(got.centre, plain_geometry.centre)
+                np.testing.assert_array_equal(got.rotation, plain_geometry.rotation)
+                assert got.sizes == plain_geometry.sizes and got.kind == kind
+            assert len(evaluations.known) == 3
+
+
+def test_sum3_and_max3_are_numpys_reductions():
+    rng = np.random.default_rng(71)
+    # a wide dynamic range: the order of the additions shows in the last bits
+    v = rng.normal(size=(7, 40, 3)) * np.exp(rng.normal(scale=6.0, size=(7, 40, 3)))
+    np.testing.assert_array_equal(shape_primitives.sum3(v), np.sum(v, axis=-1))
+    np.testing.assert_array_equal(shape_primitives.max3(v), np.max(v, axis=-1))
+    v[0, 0, 1] = np.nan
+    assert np.isnan(shape_primitives.max3(v)[0, 0]) and np.isnan(np.max(v, axis=-1)[0, 0])
+
+
+def test_shared_class_starts_are_each_class_s_own():
+    # select_class computes the starts of every class from one ClassStarts: the pieces the
+    # classes share (scatter axes, the normal lines' centre, the axial frames) change nothing
+    touches = random_touches("capsule", 72)
+    shared = shape_fit.ClassStarts(touches)
+    for kind in reversed(KINDS):
+        for (t_shared, r_shared), (t_own, r_own) in zip(
+            shared.of(kind), shape_fit.ClassStarts(touches).of(kind), strict=True
+        ):
+            np.testing.assert_array_equal(t_shared, t_own)
+            np.testing.assert_array_equal(r_shared, r_own)
+    S = touches.surface_points
+    mid = 0.5 * (S.min(axis=0) + S.max(axis=0))
+    centre = shape_fit._normal_line_centre(S, touches.normals, mid)
+    np.testing.assert_array_equal(shared.of("sphere")[0][0][:3], centre)
+    for theta0, _ in shared.of("ellipsoid"):
+        np.testing.assert_array_equal(theta0[:3], centre)
+    V = shape_fit._normal_scatter_axes(touches.normals)
+    axes = shape_fit._distinct([V[:, 0], *np.eye(3), V[:, 1], V[:, 2]])
+    for kind in ("cylinder", "capsule"):
+        frames = [r0 for _, r0 in shared.of(kind)]
+        assert len(frames) == len(axes)
+        for r0, axis in zip(frames, axes, strict=True):
+            np.testing.assert_array_equal(r0, shape_fit.frame_with_z(axis))
+
+
+def test_chi2_survival_is_scipy_stats():
+    from scipy import stats
+
+    from eos_svc.shape.selection import chi2_survival
+
+    for dof in (1, 5, 97, 400):
+        for x in (0.0, 1e-9, 0.5, 3.0, float(dof), 2.0 * dof, 50.0 * dof, 1e6, math.inf):
+            assert chi2_survival(x, dof) == float(stats.chi2.sf(x, dof))
+
+
+def test_normal_clusters_at_the_bound_are_decided_as_the_plain_loop_does():
+    # a cosine within rounding of the group bound: membership is decided by each normal's
+    # own product (the plain loop), not by the Gram matrix
+    rng = np.random.default_rng(73)
+    normals = rng.normal(size=(20, 3))
+    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+    angle = math.acos(float(normals[0] @ normals[1]))
+    cos = math.cos(angle)
+    assert abs(float((normals @ normals.T)[0, 1]) - cos) < shape_fit._CLUSTER_MARGIN
+    left, plain = np.arange(len(normals)), []
+    while len(left):
+        near = normals[left] @ normals[left[0]] >= cos
+        plain.append(left[near].tolist())
+        left = left[~near]
+    assert shape_fit._cluster_members(normals, cos) == plain
+    # away from the bound, the Gram matrix's groups are the plain loop's
+    for angle in (0.2, 0.3, 0.5):
+        cos = math.cos(angle)
+        left, plain = np.arange(len(normals)), []
+        while len(left):
+            near = normals[left] @ normals[left[0]] >= cos
+            plain.append(left[near].tolist())
+            left = left[~near]
+        assert shape_fit._cluster_members(normals, cos) == plain
+
+
+def test_median_and_columns_are_numpys():
+    rng = np.random.default_rng(74)
+    for n in (1, 2, 5, 26, 27):
+        v = rng.normal(size=n) * np.exp(rng.normal(scale=4.0, size=n))
+        assert shape_fit._median(v) == float(np.median(v))
+    x, y, z = rng.normal(size=(3, 3))
+    np.testing.assert_array_equal(shape_fit._columns(x, y, z), np.column_stack([x, y, z]))
