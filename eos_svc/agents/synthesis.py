@@ -32,6 +32,7 @@ SI units throughout: metres, radians.
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -224,6 +225,49 @@ def landing_from(
     normal = out / length if length > 1e-9 else obj.surface_normal(tip)
     angle = float(sweep.angles[k - 1] + s * (sweep.angles[k] - sweep.angles[k - 1]))
     return Landing(k, angle, point, normal)
+
+
+class SweepLandings:
+    """:func:`landing_from` for every start sample of one sweep at one palm pose, each landing
+    computed once.
+
+    The landing from ``start`` depends on ``start`` only through the first touching sample
+    ``k`` at or after ``max(0, start − 1)`` (none, or that sample itself: no landing), so a
+    finger closing step by step toward the same ``k`` asks for the same landing again: it is
+    built once per ``k`` (by :func:`landing_from`, so the result is the plain one's).
+
+    Args:
+        obj: the object.
+        sweep: the finger's closing sweep.
+        pts: the sweep's fingertip centres at this pose (world, m; :func:`sweep_gaps`).
+        gaps: their gaps to ``obj`` (m; :func:`sweep_gaps`).
+    """
+
+    def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
+        self._args = (obj, sweep, pts, gaps)
+        self._touching = np.flatnonzero(gaps <= 0.0).tolist()  # the touching samples, increasing
+        self._by_sample: dict[int, Landing | None] = {}
+
+    def first_touch(self, start: int) -> int | None:
+        """The first touching sample a finger closing from ``start`` meets (None: none does, or
+        it already touches there — no landing)."""
+        s = max(0, start - 1)
+        touching = self._touching
+        i = bisect_left(touching, s)
+        if i == len(touching) or touching[i] == s:
+            return None
+        return int(touching[i])
+
+    def landing(self, start: int) -> Landing | None:
+        """``landing_from(obj, sweep, pts, gaps, start)``, from the memo when the same sample is
+        touched first."""
+        k = self.first_touch(start)
+        if k is None:
+            return None
+        memo = self._by_sample
+        if k not in memo:
+            memo[k] = landing_from(*self._args, start=k)
+        return memo[k]
 
 
 def landing(

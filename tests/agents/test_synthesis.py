@@ -16,10 +16,13 @@ from eos_svc.agents.postulate import make_object, read_postulate
 from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.synthesis import (
     GraspSynthesis,
+    SweepLandings,
     landing,
+    landing_from,
     rotation_from_rpy,
     rpy_from_rotation,
     signed_distances,
+    sweep_gaps,
 )
 from eos_svc.board import Board
 
@@ -94,6 +97,44 @@ def test_sphere_landing_matches_the_closed_form():
     assert np.linalg.norm(tip - np.asarray(HERE)) == pytest.approx(0.03 + hand.tip_radius(finger), abs=2e-5)
     assert np.linalg.norm(hit.point - np.asarray(HERE)) == pytest.approx(0.03, abs=1e-9)
     assert np.allclose(hit.normal, (hit.point - np.asarray(HERE)) / 0.03, atol=1e-3)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_sweep_landings_equal_landing_from_for_every_start(seed):
+    # the memo of landings per first touching sample vs the plain landing from each start: the
+    # same answers, bit for bit, on random gap profiles (touching runs anywhere, touching at
+    # the start, never touching) and on real sweeps past a sphere at random palm poses
+    rng = np.random.default_rng(seed)
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    hand = s.hand
+    for finger in hand.finger_names:
+        sweep = s.sweeps[finger]
+        n = len(sweep.angles)
+        profiles = []
+        for _ in range(6):
+            palm = np.asarray(HERE) - np.array([0.125, 0.0, 0.0]) + rng.uniform(-0.03, 0.03, 3)
+            profiles.append(sweep_gaps(s.obj, sweep, hand.tip_radius(finger), np.eye(3), palm))
+        for _ in range(6):
+            pts = rng.uniform(-0.1, 0.1, (n, 3)) + np.asarray(HERE)
+            gaps = rng.uniform(-0.01, 0.01, n) * (rng.uniform(size=n) < 0.3)  # zeros touch too
+            gaps[rng.uniform(size=n) < 0.5] = 0.01
+            profiles.append((pts, gaps))
+        profiles.append((profiles[-1][0], np.full(n, 0.01)))  # never touches
+        touched = 0
+        for pts, gaps in profiles:
+            memo = SweepLandings(s.obj, sweep, pts, gaps)
+            for start in [*range(n + 2), *rng.integers(0, n, 10).tolist()]:  # some again, out of order
+                plain = landing_from(s.obj, sweep, pts, gaps, start)
+                fast = memo.landing(start)
+                assert (fast is None) == (plain is None)
+                assert (memo.first_touch(start) is None) == (plain is None)
+                if plain is not None:
+                    touched += 1
+                    assert memo.first_touch(start) == plain.index
+                    assert fast.index == plain.index and fast.angle == plain.angle
+                    assert np.array_equal(fast.point, plain.point)
+                    assert np.array_equal(fast.normal, plain.normal)
+        assert touched > 0
 
 
 # --- candidates per primitive -------------------------------------------------------------------
