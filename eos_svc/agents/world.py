@@ -77,6 +77,7 @@ class GraspWorld:
                 self._tip_bound[f] = (self.hand.tip_frame_id(f), float(self.hand.tip_radius(f)))
         self._frame_views: dict[int, np.ndarray] = {}
         self._frame_views_of: HandState | None = None
+        self._palm_views_of: tuple[HandState, np.ndarray, np.ndarray] | None = None
         self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
         self._views_of: HandState | None = None
         # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
@@ -104,9 +105,18 @@ class GraspWorld:
 
     def grasp_centre_world(self) -> np.ndarray:
         """World position of the grasp centre between the fingers, m."""
-        palm = self.state.data.oMf[self.hand.palm_frame_id]  # the wrist may be turned
-        out: np.ndarray = palm.translation + palm.rotation @ self._grasp_centre
+        translation, rotation = self._palm_views()  # the wrist may be turned
+        out: np.ndarray = translation + rotation @ self._grasp_centre
         return out
+
+    def _palm_views(self) -> tuple[np.ndarray, np.ndarray]:
+        """Live views of the palm frame's world translation and rotation in the current state
+        (reading ``data.oMf[i]`` from Python costs µs; do not modify)."""
+        views = self._palm_views_of
+        if views is None or views[0] is not self.state:
+            palm = self.state.data.oMf[self.hand.palm_frame_id]
+            views = self._palm_views_of = (self.state, palm.translation, palm.rotation)
+        return views[1], views[2]
 
     def object_gap_to_grasp_centre(self) -> float:
         """Distance from the grasp centre to the object surface, m (negative inside; memoised)."""
