@@ -32,7 +32,7 @@ from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.synthesis import SweepLandings, sweep_gaps
+from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps, vector_norm
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics import SurfaceObject
@@ -60,6 +60,7 @@ class FingerAgent(GraspAgent):
         self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
         self._landings_memo: tuple[object, object, SweepLandings | None] = (None, None, None)
         self._miss_memo: dict[int, float] = {}
+        self._rotated: tuple[bytes, np.ndarray] = (b"", self._sweep.points)
         # the wrist's joint values, as a tuple, from the configuration list
         self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
 
@@ -93,8 +94,9 @@ class FingerAgent(GraspAgent):
             obj = self._postulated(target)
             landings = None
             if obj is not None:
-                palm = world.state.data.oMf[world.hand.palm_frame_id]
-                pts, gaps = sweep_gaps(obj, self._sweep, self._tip_radius, palm.rotation, palm.translation)
+                translation, rotation = world.palm_views()
+                rotated = self._rotated_sweep(rotation)
+                pts, gaps = rotated_sweep_gaps(obj, rotated, self._tip_radius, translation)
                 landings = SweepLandings(obj, self._sweep, pts, gaps)
             self._landings_memo = (pose, target, landings)
             self._miss_memo = {}
@@ -103,12 +105,21 @@ class FingerAgent(GraspAgent):
         k = landings.first_touch(start)
         if k is None:
             return None
-        if k not in self._miss_memo:
+        miss = self._miss_memo.get(k)
+        if miss is None:
             hit = landings.landing(start)
             assert hit is not None  # k is its first touching sample
             chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-            self._miss_memo[k] = float(np.linalg.norm(hit.point - chosen))
-        return self._miss_memo[k]
+            miss = self._miss_memo[k] = vector_norm(hit.point - chosen)
+        return miss
+
+    def _rotated_sweep(self, rotation: np.ndarray) -> np.ndarray:
+        """The sweep's points turned by the palm's ``rotation`` (``points @ rotation.T``), kept
+        while the palm keeps its rotation (the wrist approaches its grasp without turning)."""
+        key = rotation.tobytes()
+        if self._rotated[0] != key:
+            self._rotated = (key, self._sweep.points @ rotation.T)
+        return self._rotated[1]
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —

@@ -196,12 +196,26 @@ def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
     return float(t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a) if b != a else 0.0))
 
 
+def vector_norm(v: np.ndarray) -> float:
+    """Euclidean norm of a contiguous 1-D float64 array: ``float(np.linalg.norm(v))`` bit for
+    bit (numpy takes the square root of ``v.dot(v)``), without numpy's dispatch (µs per call)."""
+    return math.sqrt(v.dot(v))
+
+
 def sweep_gaps(
     obj: SurfaceObject, sweep: FingerSweep, tip_radius: float, rotation: np.ndarray, origin: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The sweep's fingertip centres in the world (N, 3), the palm at (``rotation``,
     ``origin``), and each one's gap to ``obj`` (signed distance less the tip radius, m)."""
-    pts = sweep.points @ rotation.T + origin
+    return rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
+
+
+def rotated_sweep_gaps(
+    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sweep_gaps` from the sweep's points already turned by the palm's rotation
+    (``sweep.points @ rotation.T``, which a caller moving the palm without turning it keeps)."""
+    pts = rotated + origin
     return pts, signed_distances(obj, pts) - tip_radius
 
 
@@ -213,7 +227,11 @@ def landing_from(
     hits = np.flatnonzero(gaps[start:] <= 0.0)
     if len(hits) == 0 or hits[0] == 0:
         return None
-    k = start + int(hits[0])
+    return _landing_at(obj, sweep, pts, gaps, start + int(hits[0]))
+
+
+def _landing_at(obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray, k: int) -> Landing:
+    """The landing between samples ``k`` − 1 (free) and ``k`` (touching)."""
     a, b = gaps[k - 1], gaps[k]
     s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
     tip = pts[k - 1] + s * (pts[k] - pts[k - 1])
@@ -221,7 +239,7 @@ def landing_from(
     # a sphere tip touching a convex object: the contact normal runs from the contact point to
     # the tip's centre (defined on edges and rims too, where the surface normal is not)
     out = tip - point
-    length = float(np.linalg.norm(out))
+    length = vector_norm(out)
     normal = out / length if length > 1e-9 else obj.surface_normal(tip)
     angle = float(sweep.angles[k - 1] + s * (sweep.angles[k] - sweep.angles[k - 1]))
     return Landing(k, angle, point, normal)
@@ -234,7 +252,7 @@ class SweepLandings:
     The landing from ``start`` depends on ``start`` only through the first touching sample
     ``k`` at or after ``max(0, start − 1)`` (none, or that sample itself: no landing), so a
     finger closing step by step toward the same ``k`` asks for the same landing again: it is
-    built once per ``k`` (by :func:`landing_from`, so the result is the plain one's).
+    built once per ``k`` (as :func:`landing_from` builds it: the result is the plain one's).
 
     Args:
         obj: the object.
@@ -246,7 +264,7 @@ class SweepLandings:
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
         self._args = (obj, sweep, pts, gaps)
         self._touching = np.flatnonzero(gaps <= 0.0).tolist()  # the touching samples, increasing
-        self._by_sample: dict[int, Landing | None] = {}
+        self._by_sample: dict[int, Landing] = {}
 
     def first_touch(self, start: int) -> int | None:
         """The first touching sample a finger closing from ``start`` meets (None: none does, or
@@ -265,9 +283,10 @@ class SweepLandings:
         if k is None:
             return None
         memo = self._by_sample
-        if k not in memo:
-            memo[k] = landing_from(*self._args, start=k)
-        return memo[k]
+        hit = memo.get(k)
+        if hit is None:
+            hit = memo[k] = _landing_at(*self._args, k)
+        return hit
 
 
 def landing(

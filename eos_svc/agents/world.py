@@ -105,13 +105,14 @@ class GraspWorld:
 
     def grasp_centre_world(self) -> np.ndarray:
         """World position of the grasp centre between the fingers, m."""
-        translation, rotation = self._palm_views()  # the wrist may be turned
+        translation, rotation = self.palm_views()  # the wrist may be turned
         out: np.ndarray = translation + rotation @ self._grasp_centre
         return out
 
-    def _palm_views(self) -> tuple[np.ndarray, np.ndarray]:
-        """Live views of the palm frame's world translation and rotation in the current state
-        (reading ``data.oMf[i]`` from Python costs µs; do not modify)."""
+    def palm_views(self) -> tuple[np.ndarray, np.ndarray]:
+        """Live views of the palm frame's world translation (m) and rotation in the current
+        state: they follow every move (reading ``data.oMf[i]`` from Python costs µs; do not
+        modify them, copy what must outlive a move)."""
         views = self._palm_views_of
         if views is None or views[0] is not self.state:
             palm = self.state.data.oMf[self.hand.palm_frame_id]

@@ -23,6 +23,7 @@ from eos_svc.agents.synthesis import (
     rpy_from_rotation,
     signed_distances,
     sweep_gaps,
+    vector_norm,
 )
 from eos_svc.board import Board
 
@@ -97,6 +98,15 @@ def test_sphere_landing_matches_the_closed_form():
     assert np.linalg.norm(tip - np.asarray(HERE)) == pytest.approx(0.03 + hand.tip_radius(finger), abs=2e-5)
     assert np.linalg.norm(hit.point - np.asarray(HERE)) == pytest.approx(0.03, abs=1e-9)
     assert np.allclose(hit.normal, (hit.point - np.asarray(HERE)) / 0.03, atol=1e-3)
+
+
+def test_vector_norm_is_numpys_bit_for_bit():
+    rng = np.random.default_rng(5)
+    for scale in (1e-9, 1e-3, 0.05, 1.0, 1e3):
+        for _ in range(300):
+            v = rng.normal(0.0, scale, rng.integers(1, 7)) - rng.normal(0.0, scale)  # a fresh array
+            assert vector_norm(v) == float(np.linalg.norm(v))
+    assert vector_norm(np.zeros(3)) == 0.0
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
