@@ -51,6 +51,7 @@ from eos_svc.kinematics import (
     Sphere,
     SurfaceObject,
 )
+from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, shape_bound
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4
@@ -197,8 +198,11 @@ def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
 
 
 def vector_norm(v: np.ndarray) -> float:
-    """Euclidean norm of a contiguous 1-D float64 array: ``float(np.linalg.norm(v))`` bit for
-    bit (numpy takes the square root of ``v.dot(v)``), without numpy's dispatch (µs per call)."""
+    """Euclidean norm of a 1-D float64 array: ``float(np.linalg.norm(v))`` bit for bit (numpy
+    takes the square root of ``v.dot(v)`` over a contiguous copy of a strided view), without
+    numpy's dispatch (µs per call)."""
+    if not v.flags.c_contiguous:
+        v = v.ravel(order="K")
     return math.sqrt(v.dot(v))
 
 
@@ -343,10 +347,18 @@ def rpy_from_rotation(R: np.ndarray) -> tuple[float, float, float]:
 
 def frame(approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
     """Palm rotation with x = ``approach`` and z = ``closing`` (orthonormalised), y = z × x."""
-    x = approach / np.linalg.norm(approach)
+    x = approach / vector_norm(approach)
     z = closing - (closing @ x) * x
-    z /= np.linalg.norm(z)
-    return np.column_stack([x, np.cross(z, x), z])
+    z /= vector_norm(z)
+    return np.column_stack([x, cross3(z, x), z])
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of two 3-vectors, bit for bit (the same products and differences),
+    in scalar arithmetic (numpy's broadcasting costs ~10 µs here)."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 # --- candidate frames per primitive ------------------------------------------------------
@@ -451,17 +463,21 @@ class GraspSynthesis:
         self.state = hand.state(hand.neutral())
         self.opposing = hand.description.opposing_finger
         widx = hand.wrist_q_index
-        self._rpy_lo, self._rpy_hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
+        # the wrist rotation's limits widened by 1e-9 rad (as floats, see wrist_rpy)
+        self._rpy_lo = (hand.lower[widx[3:6]] - 1e-9).tolist()
+        self._rpy_hi = (hand.upper[widx[3:6]] + 1e-9).tolist()
         self._xyz_lo, self._xyz_hi = hand.lower[widx[:3]], hand.upper[widx[:3]]
-        self._tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
-        # per collision geometry: the radius of a ball about its frame's origin that holds it
-        # (a cheap lower bound of its distance to the object, which skips the exact query)
-        self._balls = []
-        for go in hand.collision_model.geometryObjects:
-            geometry = go.geometry
-            geometry.computeLocalAABB()
-            self._balls.append(float(geometry.aabb_radius) + float(np.linalg.norm(geometry.aabb_center)))
-        self._obj_centre = np.asarray(obj.placement.translation, dtype=float)
+        tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+        geometries = hand.collision_model.geometryObjects
+        self._all_geometries = list(range(len(geometries)))
+        self._body_geometries = [g for g in self._all_geometries if g not in tips]
+        # per collision geometry, how to bound its gap to the object's bounding ball from below
+        # (eos_svc.kinematics.gap_bounds): a geometry whose bound reaches a threshold needs no
+        # exact query (see _clear)
+        self._bound_table = [shape_bound(go.geometry) for go in geometries]
+        oMg = self.state.geometry_data.oMg  # live views of the placements, current after update
+        self._placements = [(oMg[g].translation, oMg[g].rotation) for g in self._all_geometries]
+        self._obj_centre = tuple(float(v) for v in obj.placement.translation)
         self._obj_radius = 0.5 * float(obj.diameter)
         self.rejections: dict[str, int] = {}
 
@@ -471,11 +487,13 @@ class GraspSynthesis:
     def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
         """The wrist joint values for palm rotation R, or None outside their limits."""
         rpy = rpy_from_rotation(R)
-        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+        # np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9) (rtol 1e-5), in scalar arithmetic
+        back = rotation_from_rpy(*rpy).ravel().tolist()
+        if not all(abs(a - b) <= 1e-9 + 1e-5 * abs(b) for a, b in zip(back, R.ravel().tolist(), strict=True)):
             return None
-        a = np.asarray(rpy)
-        if np.any(a < self._rpy_lo - 1e-9) or np.any(a > self._rpy_hi + 1e-9):
-            return None
+        for value, lo, hi in zip(rpy, self._rpy_lo, self._rpy_hi, strict=True):
+            if value < lo or value > hi:
+                return None
         return rpy
 
     def depth_for(self, extent: float) -> float | None:
@@ -607,19 +625,17 @@ class GraspSynthesis:
 
     def _clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
         """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
-        asked) is at least ``threshold`` m from the postulated object. A geometry whose
-        bounding ball is that far from the object's bounding ball needs no exact query."""
-        self.state.update(q)
-        placements = self.state.geometry_data.oMg
-        for gid, ball in enumerate(self._balls):
-            if skip_tips and gid in self._tips:
-                continue
-            far = float(np.linalg.norm(placements[gid].translation - self._obj_centre))
-            if far - ball - self._obj_radius >= threshold:
-                continue
-            if self.scene.gap(self.state, gid) < threshold:
-                return False
-        return True
+        asked) is at least ``threshold`` m from the postulated object. A geometry whose lower
+        bound (:func:`~eos_svc.kinematics.gap_bounds.ball_gap_lower_bounds`) reaches the
+        threshold needs no exact query (its exact gap is at least the bound)."""
+        state = self.state
+        state.update(q)
+        state.geometry_data  # noqa: B018 -- brings the placements (and self._placements) up to date
+        geometries = self._body_geometries if skip_tips else self._all_geometries
+        bounds = ball_gap_lower_bounds(
+            self._bound_table, self._placements, geometries, self._obj_centre, self._obj_radius
+        )
+        return all(lower >= threshold or self.scene.gap(state, gid) >= threshold for lower, gid in bounds)
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
         """The collision-free pre-grasp wrist position (world, m) before ``c`` along its

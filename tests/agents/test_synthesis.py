@@ -17,6 +17,7 @@ from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.synthesis import (
     GraspSynthesis,
     SweepLandings,
+    cross3,
     landing,
     landing_from,
     rotation_from_rpy,
@@ -100,12 +101,58 @@ def test_sphere_landing_matches_the_closed_form():
     assert np.allclose(hit.normal, (hit.point - np.asarray(HERE)) / 0.03, atol=1e-3)
 
 
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("sphere", {"radius": 0.03}, HERE),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
+    ],
+)
+def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
+    # _clear skips the exact query of a geometry whose lower bound reaches the threshold: the
+    # answer must be the one from every geometry's exact gap, near and far from the object
+    s = synthesis(spec)
+    hand = s.hand
+    rng = np.random.default_rng(7)
+    widx = hand.wrist_q_index
+    tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+    answers = set()
+    for _ in range(80):
+        q = hand.neutral()
+        q[widx[:3]] = np.asarray(HERE) - np.array([0.12, 0.0, 0.0]) + rng.uniform(-0.05, 0.05, 3)
+        q[widx[3:6]] = rng.uniform(-0.6, 0.6, 3)
+        for f in hand.finger_names:
+            q[hand.finger_q_index(f)] = rng.uniform(0.0, 1.2)
+        q = np.clip(q, hand.lower, hand.upper)
+        for threshold in (0.0, 0.0025, 0.01):
+            for skip_tips in (False, True):
+                fast = s._clear(q, threshold, skip_tips)
+                state = hand.state(q)
+                exact = all(
+                    s.scene.gap(state, g) >= threshold
+                    for g in range(hand.collision_model.ngeoms)
+                    if not (skip_tips and g in tips)
+                )
+                assert fast == exact
+                answers.add(fast)
+    assert answers == {True, False}
+
+
+def test_cross3_is_numpys_cross_bit_for_bit():
+    rng = np.random.default_rng(6)
+    for _ in range(2000):
+        a, b = rng.normal(size=3) * rng.uniform(1e-6, 1e3), rng.normal(size=3)
+        assert np.array_equal(cross3(a, b), np.cross(a, b))
+
+
 def test_vector_norm_is_numpys_bit_for_bit():
     rng = np.random.default_rng(5)
     for scale in (1e-9, 1e-3, 0.05, 1.0, 1e3):
         for _ in range(300):
             v = rng.normal(0.0, scale, rng.integers(1, 7)) - rng.normal(0.0, scale)  # a fresh array
             assert vector_norm(v) == float(np.linalg.norm(v))
+            m = rng.normal(0.0, scale, (3, 3))
+            assert vector_norm(m[:, 1]) == float(np.linalg.norm(m[:, 1]))  # a strided view
     assert vector_norm(np.zeros(3)) == 0.0
 
 
