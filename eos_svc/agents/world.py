@@ -57,6 +57,7 @@ class GraspWorld:
         if not self.sweeps:
             self.sweeps = build_sweeps(self.hand, resolution=0.01)
         self._wrist_q = self.hand.wrist_q_index
+        self._wrist_xyz = self._wrist_q[:3]  # the wrist's x, y, z joints' q indices
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, Any] = {}
@@ -101,7 +102,7 @@ class GraspWorld:
 
     def wrist_position(self) -> np.ndarray:
         """World position of the wrist (= palm origin), m."""
-        return self.state.q[self._wrist_q[:3]]
+        return self.state.q[self._wrist_xyz]
 
     def grasp_centre_world(self) -> np.ndarray:
         """World position of the grasp centre between the fingers, m."""
@@ -296,10 +297,10 @@ class GraspWorld:
             if room < 1e-4:
                 # touching distance: go on only if the move leads away from the object
                 trial = min(1e-3, length - travelled)
-                q[self._wrist_q[:3]] = start + unit * (travelled + trial)
+                q[self._wrist_xyz] = start + unit * (travelled + trial)
                 self.set_q(q)
                 if self.exact_clearance() <= clearance:
-                    q[self._wrist_q[:3]] = start + unit * travelled
+                    q[self._wrist_xyz] = start + unit * travelled
                     self.set_q(q)
                     return travelled, True
                 step = trial
@@ -308,7 +309,7 @@ class GraspWorld:
             if stop_when_located:
                 step = min(step, max(self.object_gap_to_grasp_centre() - p.envelope_radius, 5e-4))
             travelled += step
-            q[self._wrist_q[:3]] = start + unit * travelled
+            q[self._wrist_xyz] = start + unit * travelled
             self.set_q(q)
             if travelled >= length - 1e-12:
                 return travelled, False
@@ -421,20 +422,20 @@ class GraspWorld:
         move = min(step, dist)
         q0 = self.state.q
         q = q0.copy()
-        q[self._wrist_q[:3]] = start + delta * (move / dist)
+        q[self._wrist_xyz] = start + delta * (move / dist)
         self.set_q(q)
         if self.hand_clear(0.5 * self.params.contact_tolerance):
             return dist - move, False
         lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
         for _ in range(30):
             mid = 0.5 * (lo + hi)
-            q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
+            q[self._wrist_xyz] = start + delta * (mid * move / dist)
             self.set_q(q)
             if self.hand_clear(0.5 * self.params.contact_tolerance):
                 lo = mid
             else:
                 hi = mid
-        q[self._wrist_q[:3]] = start + delta * (lo * move / dist)
+        q[self._wrist_xyz] = start + delta * (lo * move / dist)
         self.set_q(q)
         return dist - lo * move, True
 
