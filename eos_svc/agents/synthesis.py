@@ -145,6 +145,13 @@ class GraspCandidate:
 
 
 # --- the postulated object's signed distance, vectorised -------------------------------
+def row_norms(p: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(p, axis=1)`` of a real (N, k) array, bit for bit (numpy sums the
+    squares along each row and takes the square roots), without its dispatch."""
+    out: np.ndarray = np.sqrt(np.add.reduce(p * p, axis=1))
+    return out
+
+
 def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
     """Signed distance (m, negative inside) of each world point in ``points`` (N, 3) to
     ``obj``'s surface. Exact for every primitive but the ellipsoid, whose distance is the
@@ -153,12 +160,12 @@ def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
     M = obj.placement
     p = (np.asarray(points, dtype=float) - M.translation) @ M.rotation  # local coordinates
     if isinstance(obj, Sphere):
-        out: np.ndarray = np.linalg.norm(p, axis=1) - obj.radius
+        out: np.ndarray = row_norms(p) - obj.radius
         return out
     if isinstance(obj, Ellipsoid):
         r = np.asarray(obj.radii)
-        k0 = np.linalg.norm(p / r, axis=1)
-        k1 = np.maximum(np.linalg.norm(p / (r * r), axis=1), 1e-12)
+        k0 = row_norms(p / r)
+        k1 = np.maximum(row_norms(p / (r * r)), 1e-12)
         out = k0 * (k0 - 1.0) / k1
         return out
     if isinstance(obj, Cylinder):
@@ -173,7 +180,7 @@ def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
         return out
     if isinstance(obj, Box):
         q = np.abs(p) - 0.5 * np.asarray(obj.size)
-        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+        outside = row_norms(np.maximum(q, 0.0))
         out = outside + np.minimum(np.max(q, axis=1), 0.0)
         return out
     raise TypeError(f"obj: no signed distance for {type(obj).__name__}")
@@ -480,6 +487,9 @@ class GraspSynthesis:
         self._obj_centre = tuple(float(v) for v in obj.placement.translation)
         self._obj_radius = 0.5 * float(obj.diameter)
         self.rejections: dict[str, int] = {}
+        self._tip_radius = {f: hand.tip_radius(f) for f in hand.finger_names}
+        # per (finger, palm rotation's bytes): the finger's sweep turned by it (see _simulate)
+        self._rotated: dict[tuple[str, bytes], np.ndarray] = {}
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -598,8 +608,15 @@ class GraspSynthesis:
             self._reject("wrist position out of its limits")
             return None
         landings: dict[str, Landing] = {}
+        key = R.tobytes()
         for finger in self.hand.finger_names:
-            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
+            # landing(obj, sweep, r_f, R, wrist), the sweep turned by R once per orientation
+            sweep = self.sweeps[finger]
+            rotated = self._rotated.get((finger, key))
+            if rotated is None:
+                rotated = self._rotated[(finger, key)] = sweep.points @ R.T
+            pts, gaps = rotated_sweep_gaps(self.obj, rotated, self._tip_radius[finger], wrist)
+            hit = landing_from(self.obj, sweep, pts, gaps)
             if hit is None:
                 self._reject("a fingertip misses the object")
                 return None

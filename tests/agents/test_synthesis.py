@@ -21,6 +21,7 @@ from eos_svc.agents.synthesis import (
     landing,
     landing_from,
     rotation_from_rpy,
+    row_norms,
     rpy_from_rotation,
     signed_distances,
     sweep_gaps,
@@ -136,6 +137,14 @@ def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
                 assert fast == exact
                 answers.add(fast)
     assert answers == {True, False}
+
+
+def test_row_norms_are_numpys_bit_for_bit():
+    rng = np.random.default_rng(8)
+    for scale in (1e-6, 0.03, 10.0):
+        for k in (1, 2, 3, 5):
+            p = rng.normal(0.0, scale, (rng.integers(1, 300), k))
+            assert np.array_equal(row_norms(p), np.linalg.norm(p, axis=1))
 
 
 def test_cross3_is_numpys_cross_bit_for_bit():
