@@ -147,6 +147,33 @@ def test_row_norms_are_numpys_bit_for_bit():
             assert np.array_equal(row_norms(p), np.linalg.norm(p, axis=1))
 
 
+def test_wrist_angles_check_equals_the_numpy_form():
+    # wrist_rpy's scalar tolerance and limit tests against np.allclose / np.any on random
+    # rotations: representable, perturbed about the 1e-9 tolerance, beyond the joint limits
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    hand = s.hand
+    widx = hand.wrist_q_index
+    lo, hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
+
+    def plain(R):
+        rpy = rpy_from_rotation(R)
+        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+            return None
+        a = np.asarray(rpy)
+        if np.any(a < lo - 1e-9) or np.any(a > hi + 1e-9):
+            return None
+        return rpy
+
+    rng = np.random.default_rng(9)
+    answers = set()
+    for _ in range(3000):
+        R = rotation_from_rpy(*rng.uniform(-1.3, 1.3) * rng.uniform(0.5, 2.5, 3))
+        R = R + rng.choice([0.0, 1e-10, 1e-9, 2e-9, 1e-6]) * rng.normal(size=(3, 3))
+        assert s.wrist_rpy(R) == plain(R)
+        answers.add(plain(R) is None)
+    assert answers == {True, False}
+
+
 def test_cross3_is_numpys_cross_bit_for_bit():
     rng = np.random.default_rng(6)
     for _ in range(2000):
