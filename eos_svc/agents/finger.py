@@ -22,6 +22,7 @@ finger1 is chosen and does not know where to begin).
 from __future__ import annotations
 
 from bisect import bisect_left
+from operator import itemgetter
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.synthesis import landing_from, sweep_gaps
+from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps, vector_norm
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics import SurfaceObject
@@ -54,11 +55,14 @@ class FingerAgent(GraspAgent):
         self._tip_radius = world.hand.tip_radius(finger)
         self._sweep = world.sweeps[finger]
         self._sweep_angles = self._sweep.angles.tolist()
-        # (target entry, its postulated object) and (hand pose, target) -> landing distance
+        # (target entry, its postulated object); (wrist pose, target, the sweep's landings
+        # there); per first touching sample, the landing's distance to the chosen contact
         self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
-        self._gaps_memo: tuple[object, object, tuple[np.ndarray, np.ndarray] | None] = (None, None, None)
-        self._miss_memo: dict[int, float | None] = {}
-        self._wrist_q = [int(i) for i in world.hand.wrist_q_index]
+        self._landings_memo: tuple[object, object, SweepLandings | None] = (None, None, None)
+        self._miss_memo: dict[int, float] = {}
+        self._rotated: tuple[bytes, np.ndarray] = (b"", self._sweep.points)
+        # the wrist's joint values, as a tuple, from the configuration list
+        self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
@@ -77,33 +81,45 @@ class FingerAgent(GraspAgent):
         if it closes from where it is now; None when it would not land on it at all.
 
         Memoised: per target and wrist pose, the gaps of the whole sweep to the object (they
-        change only when the wrist moves), then per start sample the landing."""
+        change only when the wrist moves, :class:`~eos_svc.agents.synthesis.SweepLandings`),
+        then per first touching sample the landing's distance to the chosen contact."""
         target = board.get(keys.TARGET)
         if target is None or self.finger not in target.get("contacts", {}):
             return None
         world = self.world
         start = bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12)
-        q = world.q_list()
-        pose = tuple(q[i] for i in self._wrist_q)
-        memo_pose, memo_target, gaps = self._gaps_memo
+        pose = self._wrist_pose(world.q_list())
+        memo_pose, memo_target, landings = self._landings_memo
         if memo_pose != pose or memo_target is not target:
             obj = self._postulated(target)
-            gaps = None
+            landings = None
             if obj is not None:
-                palm = world.state.data.oMf[world.hand.palm_frame_id]
-                gaps = sweep_gaps(obj, self._sweep, self._tip_radius, palm.rotation, palm.translation)
-            self._gaps_memo = (pose, target, gaps)
+                translation, rotation = world.palm_views()
+                rotated = self._rotated_sweep(rotation)
+                pts, gaps = rotated_sweep_gaps(obj, rotated, self._tip_radius, translation)
+                landings = SweepLandings(obj, self._sweep, pts, gaps)
+            self._landings_memo = (pose, target, landings)
             self._miss_memo = {}
-        if start not in self._miss_memo:
-            miss = None
-            obj = self._postulated(target)
-            if gaps is not None and obj is not None:
-                hit = landing_from(obj, self._sweep, gaps[0], gaps[1], start)
-                if hit is not None:
-                    chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-                    miss = float(np.linalg.norm(hit.point - chosen))
-            self._miss_memo[start] = miss
-        return self._miss_memo[start]
+        if landings is None:
+            return None
+        k = landings.first_touch(start)
+        if k is None:
+            return None
+        miss = self._miss_memo.get(k)
+        if miss is None:
+            hit = landings.landing(start)
+            assert hit is not None  # k is its first touching sample
+            chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
+            miss = self._miss_memo[k] = vector_norm(hit.point - chosen)
+        return miss
+
+    def _rotated_sweep(self, rotation: np.ndarray) -> np.ndarray:
+        """The sweep's points turned by the palm's ``rotation`` (``points @ rotation.T``), kept
+        while the palm keeps its rotation (the wrist approaches its grasp without turning)."""
+        key = rotation.tobytes()
+        if self._rotated[0] != key:
+            self._rotated = (key, self._sweep.points @ rotation.T)
+        return self._rotated[1]
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —

@@ -32,6 +32,7 @@ SI units throughout: metres, radians.
 from __future__ import annotations
 
 import math
+from bisect import bisect_left
 from collections.abc import Iterator
 from dataclasses import dataclass
 
@@ -50,6 +51,7 @@ from eos_svc.kinematics import (
     Sphere,
     SurfaceObject,
 )
+from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, shape_bound
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4
@@ -143,6 +145,13 @@ class GraspCandidate:
 
 
 # --- the postulated object's signed distance, vectorised -------------------------------
+def row_norms(p: np.ndarray) -> np.ndarray:
+    """``np.linalg.norm(p, axis=1)`` of a real (N, k) array, bit for bit (numpy sums the
+    squares along each row and takes the square roots), without its dispatch."""
+    out: np.ndarray = np.sqrt(np.add.reduce(p * p, axis=1))
+    return out
+
+
 def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
     """Signed distance (m, negative inside) of each world point in ``points`` (N, 3) to
     ``obj``'s surface. Exact for every primitive but the ellipsoid, whose distance is the
@@ -151,12 +160,12 @@ def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
     M = obj.placement
     p = (np.asarray(points, dtype=float) - M.translation) @ M.rotation  # local coordinates
     if isinstance(obj, Sphere):
-        out: np.ndarray = np.linalg.norm(p, axis=1) - obj.radius
+        out: np.ndarray = row_norms(p) - obj.radius
         return out
     if isinstance(obj, Ellipsoid):
         r = np.asarray(obj.radii)
-        k0 = np.linalg.norm(p / r, axis=1)
-        k1 = np.maximum(np.linalg.norm(p / (r * r), axis=1), 1e-12)
+        k0 = row_norms(p / r)
+        k1 = np.maximum(row_norms(p / (r * r)), 1e-12)
         out = k0 * (k0 - 1.0) / k1
         return out
     if isinstance(obj, Cylinder):
@@ -171,7 +180,7 @@ def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
         return out
     if isinstance(obj, Box):
         q = np.abs(p) - 0.5 * np.asarray(obj.size)
-        outside = np.linalg.norm(np.maximum(q, 0.0), axis=1)
+        outside = row_norms(np.maximum(q, 0.0))
         out = outside + np.minimum(np.max(q, axis=1), 0.0)
         return out
     raise TypeError(f"obj: no signed distance for {type(obj).__name__}")
@@ -195,12 +204,29 @@ def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
     return float(t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a) if b != a else 0.0))
 
 
+def vector_norm(v: np.ndarray) -> float:
+    """Euclidean norm of a 1-D float64 array: ``float(np.linalg.norm(v))`` bit for bit (numpy
+    takes the square root of ``v.dot(v)`` over a contiguous copy of a strided view), without
+    numpy's dispatch (µs per call)."""
+    if not v.flags.c_contiguous:
+        v = v.ravel(order="K")
+    return math.sqrt(v.dot(v))
+
+
 def sweep_gaps(
     obj: SurfaceObject, sweep: FingerSweep, tip_radius: float, rotation: np.ndarray, origin: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The sweep's fingertip centres in the world (N, 3), the palm at (``rotation``,
     ``origin``), and each one's gap to ``obj`` (signed distance less the tip radius, m)."""
-    pts = sweep.points @ rotation.T + origin
+    return rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
+
+
+def rotated_sweep_gaps(
+    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`sweep_gaps` from the sweep's points already turned by the palm's rotation
+    (``sweep.points @ rotation.T``, which a caller moving the palm without turning it keeps)."""
+    pts = rotated + origin
     return pts, signed_distances(obj, pts) - tip_radius
 
 
@@ -212,7 +238,11 @@ def landing_from(
     hits = np.flatnonzero(gaps[start:] <= 0.0)
     if len(hits) == 0 or hits[0] == 0:
         return None
-    k = start + int(hits[0])
+    return _landing_at(obj, sweep, pts, gaps, start + int(hits[0]))
+
+
+def _landing_at(obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray, k: int) -> Landing:
+    """The landing between samples ``k`` − 1 (free) and ``k`` (touching)."""
     a, b = gaps[k - 1], gaps[k]
     s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
     tip = pts[k - 1] + s * (pts[k] - pts[k - 1])
@@ -220,10 +250,54 @@ def landing_from(
     # a sphere tip touching a convex object: the contact normal runs from the contact point to
     # the tip's centre (defined on edges and rims too, where the surface normal is not)
     out = tip - point
-    length = float(np.linalg.norm(out))
+    length = vector_norm(out)
     normal = out / length if length > 1e-9 else obj.surface_normal(tip)
     angle = float(sweep.angles[k - 1] + s * (sweep.angles[k] - sweep.angles[k - 1]))
     return Landing(k, angle, point, normal)
+
+
+class SweepLandings:
+    """:func:`landing_from` for every start sample of one sweep at one palm pose, each landing
+    computed once.
+
+    The landing from ``start`` depends on ``start`` only through the first touching sample
+    ``k`` at or after ``max(0, start − 1)`` (none, or that sample itself: no landing), so a
+    finger closing step by step toward the same ``k`` asks for the same landing again: it is
+    built once per ``k`` (as :func:`landing_from` builds it: the result is the plain one's).
+
+    Args:
+        obj: the object.
+        sweep: the finger's closing sweep.
+        pts: the sweep's fingertip centres at this pose (world, m; :func:`sweep_gaps`).
+        gaps: their gaps to ``obj`` (m; :func:`sweep_gaps`).
+    """
+
+    def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
+        self._args = (obj, sweep, pts, gaps)
+        self._touching = np.flatnonzero(gaps <= 0.0).tolist()  # the touching samples, increasing
+        self._by_sample: dict[int, Landing] = {}
+
+    def first_touch(self, start: int) -> int | None:
+        """The first touching sample a finger closing from ``start`` meets (None: none does, or
+        it already touches there — no landing)."""
+        s = max(0, start - 1)
+        touching = self._touching
+        i = bisect_left(touching, s)
+        if i == len(touching) or touching[i] == s:
+            return None
+        return int(touching[i])
+
+    def landing(self, start: int) -> Landing | None:
+        """``landing_from(obj, sweep, pts, gaps, start)``, from the memo when the same sample is
+        touched first."""
+        k = self.first_touch(start)
+        if k is None:
+            return None
+        memo = self._by_sample
+        hit = memo.get(k)
+        if hit is None:
+            hit = memo[k] = _landing_at(*self._args, k)
+        return hit
 
 
 def landing(
@@ -280,10 +354,18 @@ def rpy_from_rotation(R: np.ndarray) -> tuple[float, float, float]:
 
 def frame(approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
     """Palm rotation with x = ``approach`` and z = ``closing`` (orthonormalised), y = z × x."""
-    x = approach / np.linalg.norm(approach)
+    x = approach / vector_norm(approach)
     z = closing - (closing @ x) * x
-    z /= np.linalg.norm(z)
-    return np.column_stack([x, np.cross(z, x), z])
+    z /= vector_norm(z)
+    return np.column_stack([x, cross3(z, x), z])
+
+
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross(a, b)`` of two 3-vectors, bit for bit (the same products and differences),
+    in scalar arithmetic (numpy's broadcasting costs ~10 µs here)."""
+    a0, a1, a2 = a.tolist()
+    b0, b1, b2 = b.tolist()
+    return np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
 
 
 # --- candidate frames per primitive ------------------------------------------------------
@@ -388,19 +470,26 @@ class GraspSynthesis:
         self.state = hand.state(hand.neutral())
         self.opposing = hand.description.opposing_finger
         widx = hand.wrist_q_index
-        self._rpy_lo, self._rpy_hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
+        # the wrist rotation's limits widened by 1e-9 rad (as floats, see wrist_rpy)
+        self._rpy_lo = (hand.lower[widx[3:6]] - 1e-9).tolist()
+        self._rpy_hi = (hand.upper[widx[3:6]] + 1e-9).tolist()
         self._xyz_lo, self._xyz_hi = hand.lower[widx[:3]], hand.upper[widx[:3]]
-        self._tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
-        # per collision geometry: the radius of a ball about its frame's origin that holds it
-        # (a cheap lower bound of its distance to the object, which skips the exact query)
-        self._balls = []
-        for go in hand.collision_model.geometryObjects:
-            geometry = go.geometry
-            geometry.computeLocalAABB()
-            self._balls.append(float(geometry.aabb_radius) + float(np.linalg.norm(geometry.aabb_center)))
-        self._obj_centre = np.asarray(obj.placement.translation, dtype=float)
+        tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+        geometries = hand.collision_model.geometryObjects
+        self._all_geometries = list(range(len(geometries)))
+        self._body_geometries = [g for g in self._all_geometries if g not in tips]
+        # per collision geometry, how to bound its gap to the object's bounding ball from below
+        # (eos_svc.kinematics.gap_bounds): a geometry whose bound reaches a threshold needs no
+        # exact query (see _clear)
+        self._bound_table = [shape_bound(go.geometry) for go in geometries]
+        oMg = self.state.geometry_data.oMg  # live views of the placements, current after update
+        self._placements = [(oMg[g].translation, oMg[g].rotation) for g in self._all_geometries]
+        self._obj_centre = tuple(float(v) for v in obj.placement.translation)
         self._obj_radius = 0.5 * float(obj.diameter)
         self.rejections: dict[str, int] = {}
+        self._tip_radius = {f: hand.tip_radius(f) for f in hand.finger_names}
+        # per (finger, palm rotation's bytes): the finger's sweep turned by it (see _simulate)
+        self._rotated: dict[tuple[str, bytes], np.ndarray] = {}
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -408,11 +497,13 @@ class GraspSynthesis:
     def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
         """The wrist joint values for palm rotation R, or None outside their limits."""
         rpy = rpy_from_rotation(R)
-        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+        # np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9) (rtol 1e-5), in scalar arithmetic
+        back = rotation_from_rpy(*rpy).ravel().tolist()
+        if not all(abs(a - b) <= 1e-9 + 1e-5 * abs(b) for a, b in zip(back, R.ravel().tolist(), strict=True)):
             return None
-        a = np.asarray(rpy)
-        if np.any(a < self._rpy_lo - 1e-9) or np.any(a > self._rpy_hi + 1e-9):
-            return None
+        for value, lo, hi in zip(rpy, self._rpy_lo, self._rpy_hi, strict=True):
+            if value < lo or value > hi:
+                return None
         return rpy
 
     def depth_for(self, extent: float) -> float | None:
@@ -517,8 +608,15 @@ class GraspSynthesis:
             self._reject("wrist position out of its limits")
             return None
         landings: dict[str, Landing] = {}
+        key = R.tobytes()
         for finger in self.hand.finger_names:
-            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
+            # landing(obj, sweep, r_f, R, wrist), the sweep turned by R once per orientation
+            sweep = self.sweeps[finger]
+            rotated = self._rotated.get((finger, key))
+            if rotated is None:
+                rotated = self._rotated[(finger, key)] = sweep.points @ R.T
+            pts, gaps = rotated_sweep_gaps(self.obj, rotated, self._tip_radius[finger], wrist)
+            hit = landing_from(self.obj, sweep, pts, gaps)
             if hit is None:
                 self._reject("a fingertip misses the object")
                 return None
@@ -544,19 +642,17 @@ class GraspSynthesis:
 
     def _clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
         """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
-        asked) is at least ``threshold`` m from the postulated object. A geometry whose
-        bounding ball is that far from the object's bounding ball needs no exact query."""
-        self.state.update(q)
-        placements = self.state.geometry_data.oMg
-        for gid, ball in enumerate(self._balls):
-            if skip_tips and gid in self._tips:
-                continue
-            far = float(np.linalg.norm(placements[gid].translation - self._obj_centre))
-            if far - ball - self._obj_radius >= threshold:
-                continue
-            if self.scene.gap(self.state, gid) < threshold:
-                return False
-        return True
+        asked) is at least ``threshold`` m from the postulated object. A geometry whose lower
+        bound (:func:`~eos_svc.kinematics.gap_bounds.ball_gap_lower_bounds`) reaches the
+        threshold needs no exact query (its exact gap is at least the bound)."""
+        state = self.state
+        state.update(q)
+        state.geometry_data  # noqa: B018 -- brings the placements (and self._placements) up to date
+        geometries = self._body_geometries if skip_tips else self._all_geometries
+        bounds = ball_gap_lower_bounds(
+            self._bound_table, self._placements, geometries, self._obj_centre, self._obj_radius
+        )
+        return all(lower >= threshold or self.scene.gap(state, gid) >= threshold for lower, gid in bounds)
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
         """The collision-free pre-grasp wrist position (world, m) before ``c`` along its

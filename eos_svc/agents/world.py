@@ -57,6 +57,7 @@ class GraspWorld:
         if not self.sweeps:
             self.sweeps = build_sweeps(self.hand, resolution=0.01)
         self._wrist_q = self.hand.wrist_q_index
+        self._wrist_xyz = self._wrist_q[:3]  # the wrist's x, y, z joints' q indices
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, Any] = {}
@@ -77,6 +78,7 @@ class GraspWorld:
                 self._tip_bound[f] = (self.hand.tip_frame_id(f), float(self.hand.tip_radius(f)))
         self._frame_views: dict[int, np.ndarray] = {}
         self._frame_views_of: HandState | None = None
+        self._palm_views_of: tuple[HandState, np.ndarray, np.ndarray] | None = None
         self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
         self._views_of: HandState | None = None
         # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
@@ -100,13 +102,23 @@ class GraspWorld:
 
     def wrist_position(self) -> np.ndarray:
         """World position of the wrist (= palm origin), m."""
-        return self.state.q[self._wrist_q[:3]]
+        return self.state.q[self._wrist_xyz]
 
     def grasp_centre_world(self) -> np.ndarray:
         """World position of the grasp centre between the fingers, m."""
-        palm = self.state.data.oMf[self.hand.palm_frame_id]  # the wrist may be turned
-        out: np.ndarray = palm.translation + palm.rotation @ self._grasp_centre
+        translation, rotation = self.palm_views()  # the wrist may be turned
+        out: np.ndarray = translation + rotation @ self._grasp_centre
         return out
+
+    def palm_views(self) -> tuple[np.ndarray, np.ndarray]:
+        """Live views of the palm frame's world translation (m) and rotation in the current
+        state: they follow every move (reading ``data.oMf[i]`` from Python costs µs; do not
+        modify them, copy what must outlive a move)."""
+        views = self._palm_views_of
+        if views is None or views[0] is not self.state:
+            palm = self.state.data.oMf[self.hand.palm_frame_id]
+            views = self._palm_views_of = (self.state, palm.translation, palm.rotation)
+        return views[1], views[2]
 
     def object_gap_to_grasp_centre(self) -> float:
         """Distance from the grasp centre to the object surface, m (negative inside; memoised)."""
@@ -285,10 +297,10 @@ class GraspWorld:
             if room < 1e-4:
                 # touching distance: go on only if the move leads away from the object
                 trial = min(1e-3, length - travelled)
-                q[self._wrist_q[:3]] = start + unit * (travelled + trial)
+                q[self._wrist_xyz] = start + unit * (travelled + trial)
                 self.set_q(q)
                 if self.exact_clearance() <= clearance:
-                    q[self._wrist_q[:3]] = start + unit * travelled
+                    q[self._wrist_xyz] = start + unit * travelled
                     self.set_q(q)
                     return travelled, True
                 step = trial
@@ -297,7 +309,7 @@ class GraspWorld:
             if stop_when_located:
                 step = min(step, max(self.object_gap_to_grasp_centre() - p.envelope_radius, 5e-4))
             travelled += step
-            q[self._wrist_q[:3]] = start + unit * travelled
+            q[self._wrist_xyz] = start + unit * travelled
             self.set_q(q)
             if travelled >= length - 1e-12:
                 return travelled, False
@@ -410,20 +422,20 @@ class GraspWorld:
         move = min(step, dist)
         q0 = self.state.q
         q = q0.copy()
-        q[self._wrist_q[:3]] = start + delta * (move / dist)
+        q[self._wrist_xyz] = start + delta * (move / dist)
         self.set_q(q)
         if self.hand_clear(0.5 * self.params.contact_tolerance):
             return dist - move, False
         lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
         for _ in range(30):
             mid = 0.5 * (lo + hi)
-            q[self._wrist_q[:3]] = start + delta * (mid * move / dist)
+            q[self._wrist_xyz] = start + delta * (mid * move / dist)
             self.set_q(q)
             if self.hand_clear(0.5 * self.params.contact_tolerance):
                 lo = mid
             else:
                 hi = mid
-        q[self._wrist_q[:3]] = start + delta * (lo * move / dist)
+        q[self._wrist_xyz] = start + delta * (lo * move / dist)
         self.set_q(q)
         return dist - lo * move, True
 

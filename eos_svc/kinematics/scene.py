@@ -96,6 +96,9 @@ class Scene:
         self._tip_gmodel: pin.GeometryModel | None = None  # built by the first tip_contacts
         self._tip_model_tried = False
         self.set_object_placement(obj.placement)
+        # the hand's collision shapes by geometry id (reading them through the geometry model's
+        # vector from Python costs ~3 µs a query)
+        self._hand_shapes = [go.geometry for go in hand.collision_model.geometryObjects]
         # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere), and
         # a coal distance functor object–tip (cheaper per call than coal.distance; it holds
         # raw pointers to both shapes, which self._tips and self.object keep alive).
@@ -257,12 +260,7 @@ class Scene:
         res = self._res
         res.clear()
         coal.distance(
-            self.object.geometry,
-            self._tf_obj,
-            self.hand.collision_model.geometryObjects[gid].geometry,
-            state.geometry_data.oMg[gid],
-            self._req,
-            res,
+            self._obj_geom, self._tf_obj, self._hand_shapes[gid], state.geometry_data.oMg[gid], self._req, res
         )
         return float(res.min_distance)
 
@@ -271,7 +269,7 @@ class Scene:
         self._tf_point.setTranslation(np.asarray(point, dtype=float))
         res = self._res
         res.clear()
-        coal.distance(self.object.geometry, self._tf_obj, self._point, self._tf_point, self._req, res)
+        coal.distance(self._obj_geom, self._tf_obj, self._point, self._tf_point, self._req, res)
         return float(res.min_distance)
 
     def _geometry_distance(self, state: HandState, gid: int) -> Contact:

@@ -43,6 +43,34 @@ def test_columns_cover_the_box():
     assert coverage_spacing(params) == pytest.approx(math.sqrt(2) * params.envelope_radius)
 
 
+def vectorised_space_filling_order(counts, rng):
+    """The maximin order written with numpy arrays (the plain form space_filling_order's scalar
+    loop must agree with)."""
+    ny, nz = counts
+    points = np.array([(i, j) for i in range(ny) for j in range(nz)], dtype=float)
+    jitter = rng.uniform(0.0, 1e-3, len(points))
+    first = int(rng.integers(len(points)))
+    order = [first]
+    nearest = np.linalg.norm(points - points[first], axis=1)
+    nearest[first] = -1.0
+    for _ in range(len(points) - 1):
+        k = int(np.argmax(np.where(nearest >= 0.0, nearest + jitter, -1.0)))
+        order.append(k)
+        to_k = np.linalg.norm(points - points[k], axis=1)
+        nearest = np.where(nearest >= 0.0, np.minimum(nearest, to_k), -1.0)
+        nearest[k] = -1.0
+    return [(int(points[k][0]), int(points[k][1])) for k in order]
+
+
+@pytest.mark.parametrize("counts", [(6, 6), (1, 1), (1, 5), (4, 1), (3, 7), (9, 8)])
+def test_scalar_order_equals_the_vectorised_one(counts):
+    for seed in range(25):
+        fast = space_filling_order(counts, np.random.default_rng(seed))
+        plain = vectorised_space_filling_order(counts, np.random.default_rng(seed))
+        assert fast == plain
+        assert all(type(i) is int and type(j) is int for i, j in fast)
+
+
 def test_order_visits_every_column_once_and_follows_the_seed():
     counts = (6, 6)
     a = space_filling_order(counts, np.random.default_rng(3))

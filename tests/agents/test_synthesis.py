@@ -16,10 +16,16 @@ from eos_svc.agents.postulate import make_object, read_postulate
 from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.synthesis import (
     GraspSynthesis,
+    SweepLandings,
+    cross3,
     landing,
+    landing_from,
     rotation_from_rpy,
+    row_norms,
     rpy_from_rotation,
     signed_distances,
+    sweep_gaps,
+    vector_norm,
 )
 from eos_svc.board import Board
 
@@ -94,6 +100,134 @@ def test_sphere_landing_matches_the_closed_form():
     assert np.linalg.norm(tip - np.asarray(HERE)) == pytest.approx(0.03 + hand.tip_radius(finger), abs=2e-5)
     assert np.linalg.norm(hit.point - np.asarray(HERE)) == pytest.approx(0.03, abs=1e-9)
     assert np.allclose(hit.normal, (hit.point - np.asarray(HERE)) / 0.03, atol=1e-3)
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("sphere", {"radius": 0.03}, HERE),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
+    ],
+)
+def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
+    # _clear skips the exact query of a geometry whose lower bound reaches the threshold: the
+    # answer must be the one from every geometry's exact gap, near and far from the object
+    s = synthesis(spec)
+    hand = s.hand
+    rng = np.random.default_rng(7)
+    widx = hand.wrist_q_index
+    tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+    answers = set()
+    for _ in range(80):
+        q = hand.neutral()
+        q[widx[:3]] = np.asarray(HERE) - np.array([0.12, 0.0, 0.0]) + rng.uniform(-0.05, 0.05, 3)
+        q[widx[3:6]] = rng.uniform(-0.6, 0.6, 3)
+        for f in hand.finger_names:
+            q[hand.finger_q_index(f)] = rng.uniform(0.0, 1.2)
+        q = np.clip(q, hand.lower, hand.upper)
+        for threshold in (0.0, 0.0025, 0.01):
+            for skip_tips in (False, True):
+                fast = s._clear(q, threshold, skip_tips)
+                state = hand.state(q)
+                exact = all(
+                    s.scene.gap(state, g) >= threshold
+                    for g in range(hand.collision_model.ngeoms)
+                    if not (skip_tips and g in tips)
+                )
+                assert fast == exact
+                answers.add(fast)
+    assert answers == {True, False}
+
+
+def test_row_norms_are_numpys_bit_for_bit():
+    rng = np.random.default_rng(8)
+    for scale in (1e-6, 0.03, 10.0):
+        for k in (1, 2, 3, 5):
+            p = rng.normal(0.0, scale, (rng.integers(1, 300), k))
+            assert np.array_equal(row_norms(p), np.linalg.norm(p, axis=1))
+
+
+def test_wrist_angles_check_equals_the_numpy_form():
+    # wrist_rpy's scalar tolerance and limit tests against np.allclose / np.any on random
+    # rotations: representable, perturbed about the 1e-9 tolerance, beyond the joint limits
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    hand = s.hand
+    widx = hand.wrist_q_index
+    lo, hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
+
+    def plain(R):
+        rpy = rpy_from_rotation(R)
+        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+            return None
+        a = np.asarray(rpy)
+        if np.any(a < lo - 1e-9) or np.any(a > hi + 1e-9):
+            return None
+        return rpy
+
+    rng = np.random.default_rng(9)
+    answers = set()
+    for _ in range(3000):
+        R = rotation_from_rpy(*rng.uniform(-1.3, 1.3) * rng.uniform(0.5, 2.5, 3))
+        R = R + rng.choice([0.0, 1e-10, 1e-9, 2e-9, 1e-6]) * rng.normal(size=(3, 3))
+        assert s.wrist_rpy(R) == plain(R)
+        answers.add(plain(R) is None)
+    assert answers == {True, False}
+
+
+def test_cross3_is_numpys_cross_bit_for_bit():
+    rng = np.random.default_rng(6)
+    for _ in range(2000):
+        a, b = rng.normal(size=3) * rng.uniform(1e-6, 1e3), rng.normal(size=3)
+        assert np.array_equal(cross3(a, b), np.cross(a, b))
+
+
+def test_vector_norm_is_numpys_bit_for_bit():
+    rng = np.random.default_rng(5)
+    for scale in (1e-9, 1e-3, 0.05, 1.0, 1e3):
+        for _ in range(300):
+            v = rng.normal(0.0, scale, rng.integers(1, 7)) - rng.normal(0.0, scale)  # a fresh array
+            assert vector_norm(v) == float(np.linalg.norm(v))
+            m = rng.normal(0.0, scale, (3, 3))
+            assert vector_norm(m[:, 1]) == float(np.linalg.norm(m[:, 1]))  # a strided view
+    assert vector_norm(np.zeros(3)) == 0.0
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_sweep_landings_equal_landing_from_for_every_start(seed):
+    # the memo of landings per first touching sample vs the plain landing from each start: the
+    # same answers, bit for bit, on random gap profiles (touching runs anywhere, touching at
+    # the start, never touching) and on real sweeps past a sphere at random palm poses
+    rng = np.random.default_rng(seed)
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    hand = s.hand
+    for finger in hand.finger_names:
+        sweep = s.sweeps[finger]
+        n = len(sweep.angles)
+        profiles = []
+        for _ in range(6):
+            palm = np.asarray(HERE) - np.array([0.125, 0.0, 0.0]) + rng.uniform(-0.03, 0.03, 3)
+            profiles.append(sweep_gaps(s.obj, sweep, hand.tip_radius(finger), np.eye(3), palm))
+        for _ in range(6):
+            pts = rng.uniform(-0.1, 0.1, (n, 3)) + np.asarray(HERE)
+            gaps = rng.uniform(-0.01, 0.01, n) * (rng.uniform(size=n) < 0.3)  # zeros touch too
+            gaps[rng.uniform(size=n) < 0.5] = 0.01
+            profiles.append((pts, gaps))
+        profiles.append((profiles[-1][0], np.full(n, 0.01)))  # never touches
+        touched = 0
+        for pts, gaps in profiles:
+            memo = SweepLandings(s.obj, sweep, pts, gaps)
+            for start in [*range(n + 2), *rng.integers(0, n, 10).tolist()]:  # some again, out of order
+                plain = landing_from(s.obj, sweep, pts, gaps, start)
+                fast = memo.landing(start)
+                assert (fast is None) == (plain is None)
+                assert (memo.first_touch(start) is None) == (plain is None)
+                if plain is not None:
+                    touched += 1
+                    assert memo.first_touch(start) == plain.index
+                    assert fast.index == plain.index and fast.angle == plain.angle
+                    assert np.array_equal(fast.point, plain.point)
+                    assert np.array_equal(fast.normal, plain.normal)
+        assert touched > 0
 
 
 # --- candidates per primitive -------------------------------------------------------------------

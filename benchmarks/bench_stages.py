@@ -1,0 +1,164 @@
+"""Where a plan's time goes, stage by stage, against a baseline revision measured in the same run.
+
+    .venv/bin/python benchmarks/bench_stages.py --baseline main
+    .venv/bin/python benchmarks/bench_stages.py --baseline main --suite   # + the quick grasp suite
+
+For each request (the default plan; with ``--suite`` also every object of the quick grasp suite,
+seed 1) the plan's CPU time per part — the search stage, each information agent (ep1,
+post_shape, ep2, grasp_points), the grasping stage — and in total, for this tree and for the
+package at git revision ``--baseline`` (``git archive``d into a temporary folder). Each side
+lives in its own child process; they plan alternately, plan by plan (the machine is shared:
+its load changes within a run, and only ratios measured side by side mean much). The children
+time with the process's CPU clock (``time.process_time`` stands in for the controller's clock
+there), which another process's load disturbs far less than the wall clock. Reported per
+part: the median and the lower quartile of each side and their ratios, and the median of the
+plan-by-plan ratios (``paired``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tarfile
+import tempfile
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+CHILD = """
+import json, sys, time
+time.perf_counter = time.process_time  # CPU time: the controller's and the planner's clock
+time.monotonic = time.process_time
+from eos_svc.agents import PlanRequest, plan
+requests = [PlanRequest.from_dict(r) for r in json.loads(sys.argv[1])]
+for request in requests:
+    plan(request)  # warm-up
+print("ready", flush=True)
+for line in sys.stdin:  # one plan per line: the index of its request
+    t0 = time.process_time()
+    result = plan(requests[int(line)])
+    parts = {"total": time.process_time() - t0}
+    previous = 0.0
+    for record in result.trace:
+        key = record.chosen if record.stage == "information" else record.stage
+        parts[key] = parts.get(key, 0.0) + record.elapsed_s - previous
+        previous = record.elapsed_s
+    print(json.dumps(parts), flush=True)
+"""
+
+
+class Child:
+    """A fresh interpreter importing ``eos_svc`` from ``tree`` that plans one of ``requests`` per
+    :meth:`plan` call and answers its CPU seconds per part."""
+
+    def __init__(self, tree: str, requests: list[dict]) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, "-c", CHILD, json.dumps(requests)],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+            cwd=tree,
+            env={"PYTHONPATH": tree, "PATH": "/usr/bin:/bin"},
+        )
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
+        if self.stdout.readline().strip() != "ready":
+            raise RuntimeError(f"the child on {tree} failed to start")
+
+    def plan(self, index: int) -> dict[str, float]:
+        """CPU seconds per part of one plan of request ``index``."""
+        self.stdin.write(f"{index}\n")
+        self.stdin.flush()
+        line = self.stdout.readline()
+        if not line:
+            raise RuntimeError("a child died")
+        parts: dict[str, float] = json.loads(line)
+        return parts
+
+    def close(self) -> None:
+        """End the child."""
+        self.stdin.close()
+        self.proc.wait()
+
+
+def export(rev: str, folder: str) -> None:
+    """``eos_svc`` and ``urdf`` of git revision ``rev`` into ``folder``."""
+    archive = Path(folder) / "rev.tar"
+    subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"], check=True
+    )
+    with tarfile.open(archive) as tar:
+        tar.extractall(folder, filter="data")
+
+
+def quartile(values: list[float]) -> float:
+    """Lower quartile (the median when there are too few values)."""
+    return statistics.quantiles(values, n=4)[0] if len(values) >= 4 else statistics.median(values)
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description="per-stage plan time vs a baseline revision")
+    parser.add_argument("--baseline", default="main", help="git revision to compare with (main)")
+    parser.add_argument("--plans", type=int, default=20, help="plans per request and side (20)")
+    parser.add_argument("--suite", action="store_true", help="also the quick grasp suite's objects")
+    args = parser.parse_args(argv)
+    labels = ["default plan"]
+    requests: list[dict] = [{}]
+    if args.suite:
+        from eos_svc.experiments.grasp_suite import quick_suite
+
+        for obj in quick_suite():
+            labels.append(obj.label)
+            requests.append({"object": obj.spec.to_dict(), "seed": 1})
+    with tempfile.TemporaryDirectory(prefix="eos_stages_") as tmp:
+        export(args.baseline, tmp)
+        mine, base = Child(str(ROOT), requests), Child(tmp, requests)
+        samples: dict[str, list[list[dict[str, float]]]] = {
+            side: [[] for _ in requests] for side in ("this tree", args.baseline)
+        }
+        try:  # plan by plan, alternating which side goes first: both see the same load
+            for n in range(args.plans):
+                for i in range(len(requests)):
+                    pair = (mine, base) if n % 2 == 0 else (base, mine)
+                    first, second = pair[0].plan(i), pair[1].plan(i)
+                    ours_i, theirs_i = (first, second) if n % 2 == 0 else (second, first)
+                    samples["this tree"][i].append(ours_i)
+                    samples[args.baseline][i].append(theirs_i)
+        finally:
+            mine.close()
+            base.close()
+    ours, theirs = samples["this tree"], samples[args.baseline]
+    print(
+        f"CPU ms per part: this tree vs {args.baseline}, {args.plans} plans per request and side, "
+        "alternating plan by plan (median, lower quartile, ratio = this tree / baseline; paired: "
+        "the median of the plan-by-plan ratios)"
+    )
+    for label, mine, base in zip(labels, ours, theirs, strict=True):
+        print(f"\n{label}")
+        print(
+            f"  {'part':<13} {'median':>8} {'base':>8} {'ratio':>6}   {'q1':>8} {'base':>8} {'ratio':>6}"
+            f"   {'paired':>6}"
+        )
+        for part in base[0]:
+            a = [row.get(part, 0.0) * 1e3 for row in mine]
+            b = [row.get(part, 0.0) * 1e3 for row in base]
+            ma, mb, qa, qb = statistics.median(a), statistics.median(b), quartile(a), quartile(b)
+            paired = statistics.median(x / y for x, y in zip(a, b, strict=True) if y > 0.0)
+            print(
+                f"  {part:<13} {ma:8.2f} {mb:8.2f} {ma / mb:6.2f}   {qa:8.2f} {qb:8.2f} {qa / qb:6.2f}"
+                f"   {paired:6.2f}"
+            )
+    if args.suite:
+        mine_totals = [statistics.median([row["total"] for row in rows]) for rows in ours]
+        base_totals = [statistics.median([row["total"] for row in rows]) for rows in theirs]
+        m, b = statistics.median(mine_totals) * 1e3, statistics.median(base_totals) * 1e3
+        print(f"\nmedian over the requests of each one's median plan CPU time: {m:.1f} ms vs {b:.1f} ms")
+        print(f"  = {m / b:.2f}x")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
