@@ -372,20 +372,18 @@ def run_ep1(
             else:
                 rq.retarget(axis, sign * omega, project_axis=False)
             R_view = rq.tip_rotation  # live: the kinematics of the step's reading
-            step = rq.step
+            advance = rq.advance  # = step() without its records (the same roll and readings)
             for _ in range(n_steps):
-                st = step()
-                rd = st.reading
-                assert rd is not None
-                if rd.in_contact:
-                    P_buf[i] = rd.point_tip
+                gap, in_contact, px, py, pz, slip = advance()
+                if in_contact:
+                    P_buf[i] = (px, py, pz)
                     R_buf[i] = R_view
                     inc.append(True)
                     i += 1
                 else:
                     inc.append(False)
-                slips.append(st.slip_speed)
-                gaps.append(abs(st.contact.distance))
+                slips.append(slip)
+                gaps.append(abs(gap))
                 if path_every > 0:
                     taken += 1
                     if taken % path_every == 0:

@@ -120,16 +120,34 @@ def read_sphere_tip(
         rotation: the tip frame's world rotation (3×3) at the contact's configuration.
         n: the contact normal (object → tip) as three floats.
     """
+    d = contact.distance
+    if type(d) is not float:
+        d = float(d)
+    in_contact, px, py, pz = sphere_tip_point(sensor, d, rotation, n, r)
+    reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
+    _SR_FINGER(reading, contact.finger)
+    _SR_POINT(reading, np.array((px, py, pz)))
+    _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
+    _SR_IN(reading, in_contact)
+    _SR_DIST(reading, d)
+    return reading
+
+
+def sphere_tip_point(
+    sensor: TactileSensor, distance: float, rotation: np.ndarray, n: tuple[float, ...], r: float
+) -> tuple[bool, float, float, float]:
+    """:func:`read_sphere_tip`'s numbers without the :class:`TactileReading`: ``(in contact,
+    the sensed point in the tip frame as three floats, m)`` for a contact at signed distance
+    ``distance`` (m, a float) with normal ``n`` (object → tip, three floats) on a sphere tip of
+    radius ``r`` (m) whose frame has the world rotation ``rotation``. Draws the sensor's noise
+    (when in contact) as ``read`` does."""
     # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
     n0, n1, n2 = n
     px = -r * (n0 * r00 + n1 * r10 + n2 * r20)
     py = -r * (n0 * r01 + n1 * r11 + n2 * r21)
     pz = -r * (n0 * r02 + n1 * r12 + n2 * r22)
-    d = contact.distance
-    if type(d) is not float:
-        d = float(d)
-    in_contact = d <= sensor.contact_tolerance  # a bool (floats)
+    in_contact = distance <= sensor.contact_tolerance  # a bool (floats)
     if in_contact:
         if sensor.noise_std > 0.0:
             t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(px / r, py / r, pz / r)
@@ -143,10 +161,4 @@ def read_sphere_tip(
             pn = math.sqrt(px * px + py * py + pz * pz)
             if pn > 1e-12:
                 px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-    reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
-    _SR_FINGER(reading, contact.finger)
-    _SR_POINT(reading, np.array((px, py, pz)))
-    _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
-    _SR_IN(reading, in_contact)
-    _SR_DIST(reading, d)
-    return reading
+    return in_contact, px, py, pz
