@@ -191,7 +191,7 @@ def _log3(R: np.ndarray) -> np.ndarray:
 
 
 _ROLLERS = threading.local()
-_ROLLERS_KEEP = 8  # rollers kept per thread (one per scene and finger in use)
+_ROLLERS_KEEP = 8  # rollers kept per thread (one per hand, finger, dt and solver in use)
 
 
 def _roller(
@@ -204,25 +204,26 @@ def _roller(
     dt: float,
     solver: str,
 ) -> RollingQP:
-    """A :class:`RollingQP` for this scene, finger, dt and solver, re-targeted to ``state``,
-    ``axis`` and ``omega``: the same roller as a new one, without its set-up (Pinocchio data,
-    coal functor, arrays; ~0.5 ms). Cached per thread (a roller is not shared between
-    threads), a few per thread, most recently used last."""
+    """A :class:`RollingQP` for this hand, finger, dt and solver, moved to ``scene``
+    (:meth:`~.rolling.RollingQP.use_scene`) and re-targeted to ``state``, ``axis`` and
+    ``omega``: the same roller as a new one, without its set-up (Pinocchio data, arrays, QP;
+    ~0.4 ms — every plan has a scene of its own, the hand is shared). Cached per thread (a
+    roller is not shared between threads), a few per thread, most recently used last."""
     cache: dict[tuple[int, str, float, str], RollingQP] | None = getattr(_ROLLERS, "cache", None)
     if cache is None:
         cache = _ROLLERS.cache = {}
-    key = (id(scene), finger, float(dt), solver)
+    hand = state.hand
+    key = (id(hand), finger, float(dt), solver)
     rq = cache.pop(key, None)
-    if rq is not None and (
-        rq.scene is not scene or rq.hand is not state.hand or rq.object_geometry is not scene.object.geometry
-    ):
-        rq = None  # the object was replaced: build a new roller
+    if rq is not None and rq.hand is not hand:
+        rq = None  # another hand at a recycled id
     if rq is None:
         rq = RollingQP(
             state, finger, axis, omega, dt, solver, scene=scene, tactile=sensor, project_axis=False
         )
     else:
         rq.tactile = sensor
+        rq.use_scene(scene)
         rq.retarget(axis, omega, state=state, project_axis=False)
     cache[key] = rq
     while len(cache) > _ROLLERS_KEEP:

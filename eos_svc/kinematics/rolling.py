@@ -329,6 +329,18 @@ class RollingQP:
             raise KinematicsError("state", "belongs to another hand model")
         self._retarget(state, axis, omega, project_axis)
 
+    def use_scene(self, scene: Scene) -> None:
+        """Roll on ``scene``'s object from the next :meth:`retarget` on (same hand): a roller
+        re-used across scenes (EP1 keeps one per hand and finger, every plan has its own scene).
+        The contact probe is rebuilt when the object's shape differs; the object's placement is
+        read by :meth:`retarget`. Nothing else of a roll depends on the scene, so a moved roller
+        re-targeted rolls as a new one on ``scene`` (tested)."""
+        if scene.hand is not self.hand:
+            raise KinematicsError("scene", "belongs to another hand model than the roller's")
+        self.scene = scene
+        if self._probe.object_shape is not scene.object.geometry:
+            self._probe = SphereTipProbe(self.finger, self._r, scene.object.geometry)
+
     def _retarget(self, state: HandState, axis: object, omega: float, project_axis: bool) -> None:
         self.omega = float(omega)
         self._state = state

@@ -112,3 +112,39 @@ def test_advance_is_the_step_without_its_records(finger, noise, pitch):
     np.testing.assert_array_equal(np.array(lean[1]), np.array(plain[1]))
     assert lean[2] == plain[2]
     assert all(isinstance(x, float) for row in lean[0] for x in (row[0], *row[2:]))
+
+
+def test_a_roller_moved_to_another_scene_rolls_as_a_new_one():
+    """use_scene + retarget on a roller that rolled on a sphere gives, on a cylinder of another
+    scene (same hand), the roll of a roller built there: q and readings bit for bit."""
+    sphere = ep1_scene("sphere", 0.04)
+    cylinder = ep1_scene("cylinder", 0.03, hand=sphere.hand)
+    st_s = sphere.hand.state(place_hand_for_ep1(sphere, "finger1"))
+    st_c = cylinder.hand.state(place_hand_for_ep1(cylinder, "finger1"))
+    F = contact_frame(cylinder.contact(st_c, "finger1").normal)
+
+    def roll(rq: RollingQP) -> tuple[list, list]:
+        steps = rq.run(12)
+        return [s.reading.point_tip.tolist() for s in steps if s.reading is not None], rq.q.tolist()
+
+    fresh = RollingQP(st_c.copy(), "finger1", F[:, 1], 2.0, 0.01, scene=cylinder,
+                      tactile=TactileSensor(2e-4, rng=9), project_axis=False)
+    expected = roll(fresh)
+    moved = RollingQP(st_s.copy(), "finger1", F[:, 0], -2.0, 0.01, scene=sphere,
+                      tactile=TactileSensor(2e-4, rng=1), project_axis=False)
+    moved.run(10)
+    moved.tactile = TactileSensor(2e-4, rng=9)
+    moved.use_scene(cylinder)
+    moved.retarget(F[:, 1], 2.0, state=st_c.copy(), project_axis=False)
+    assert moved.object_geometry is cylinder.object.geometry
+    assert roll(moved) == expected
+
+
+def test_use_scene_refuses_another_hand():
+    from eos_svc.kinematics import KinematicsError, load_hand
+
+    sc, st, F = _setup()
+    rq = RollingQP(st, "finger1", F[:, 0], 2.0, 0.01, scene=sc)
+    other = ep1_scene("sphere", 0.04, hand=load_hand())
+    with pytest.raises(KinematicsError, match="scene"):
+        rq.use_scene(other)
