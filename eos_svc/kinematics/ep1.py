@@ -178,10 +178,17 @@ def _scratch_state(hand: HandModel, q: object) -> HandState:
     return st
 
 
+def _row_norms(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
+    """``np.linalg.norm(x, axis=1, keepdims=keepdims)`` of a real 2-D array: the same operations
+    (the square root of ``add.reduce(x * x)`` along the rows), without the wrapper's µs."""
+    out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1, keepdims=keepdims))
+    return out
+
+
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
     v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
+    s2 = _row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -231,12 +238,20 @@ def _roller(
     return rq
 
 
-def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float) -> np.ndarray:
-    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m."""
-    d = points / np.linalg.norm(points, axis=1, keepdims=True)
+def _log_chart(
+    points: np.ndarray,
+    b: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+    r: float,
+    directions: np.ndarray | None = None,
+) -> np.ndarray:
+    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m.
+    ``directions``: the points normalised (rows), when the caller has them."""
+    d = points / _row_norms(points, keepdims=True) if directions is None else directions
     cosang = d @ b
-    v = d - np.outer(cosang, b)
-    sin_ang = np.linalg.norm(v, axis=1)
+    v = d - cosang[:, None] * b  # np.outer(cosang, b): the same products
+    sin_ang = _row_norms(v)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
@@ -272,12 +287,15 @@ def _checked_ep1_arguments(
     return dirs
 
 
-def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) -> np.ndarray:
+def _chart_at_mean(
+    P: np.ndarray, ex_t: tuple[float, float, float], r: float, directions: np.ndarray | None = None
+) -> np.ndarray:
     """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with
     the frame's x (``ex_t``, tip frame) projected on the tangent plane at b as the chart's first
-    axis; scalar arithmetic on the 3-vectors."""
+    axis; scalar arithmetic on the 3-vectors. ``directions``: ``P``'s rows normalised, when the
+    caller has them (a row's normalisation does not depend on the other rows)."""
     ex_t0, ex_t1, ex_t2 = ex_t
-    b0, b1, b2 = P.mean(axis=0).tolist()
+    b0, b1, b2 = (np.add.reduce(P, axis=0) / len(P)).tolist()  # = P.mean(axis=0)
     nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
     b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
     d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
@@ -290,6 +308,7 @@ def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) ->
         np.array((e0, e1, e2)),
         np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
         r,
+        directions,
     )
 
 
@@ -392,6 +411,7 @@ def run_ep1(
             steps += n_steps
         P_all = P_buf[:i]
         R_all = R_buf[:i]
+        D_all = P_all / _row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
         set_in = sets[np.array(inc)]
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
@@ -400,7 +420,7 @@ def run_ep1(
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r))
+            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r, D_all[sel]))
             samples.append(est.add_sample(a_xy, s, K_f))
     assert rq is not None
     state.update(rq.q)
