@@ -181,7 +181,8 @@ def _scratch_state(hand: HandModel, q: object) -> HandState:
 def _row_norms(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
     """``np.linalg.norm(x, axis=1, keepdims=keepdims)`` of a real 2-D array: the same operations
     (the square root of ``add.reduce(x * x)`` along the rows), without the wrapper's µs."""
-    out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1, keepdims=keepdims))
+    squares: Any = np.add.reduce  # (numpy's stubs do not type keepdims as a bool)
+    out: np.ndarray = np.sqrt(squares(x * x, axis=1, keepdims=keepdims))
     return out
 
 

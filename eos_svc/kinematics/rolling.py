@@ -290,6 +290,7 @@ class RollingQP:
     def _set_up_step_buffers(self) -> None:
         """The step's scratch arrays and the q̇ views the kinematics and the integration use."""
         nx = self.nx
+        self._stale: bool = False  # the caller's state is behind the roller's q (see sync)
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
         self._qdot = np.zeros(self.hand.model.nv)
