@@ -365,8 +365,9 @@ class GraspWorld:
         contact_of = self.scene.contact
         # A lower bound of the other geometries' gap less half the tolerance (what ``other``
         # below is), m: at the start every geometry's gap is at least the hand's clearance
-        # (exact_clearance: their minimum, or a lower bound of it). See _probe_floor_after.
-        floor = _probe_floor_after(clearance - half_tol, 0.0)
+        # (exact_clearance at this very pose: the minimum of the same exact gaps, or the plain
+        # bound gap − hand_bound, ≥ 1 cm conservative). Then see _probe_floor_after.
+        floor = clearance - half_tol
         for _ in range(300):
             contact = contact_of(state, finger)  # = tip_distance's query (the pose is new)
             tip_gap = float(contact.distance)

@@ -630,7 +630,7 @@ class RollingQP:
             reading = read_sphere_tip(sensor, contact, self._R_view, n, self._r)
         else:
             reading = self._read(contact, n)
-        b0, b1, b2, b3, b4, b5 = self._build(contact, n)
+        b0, b1, b2, b3, b4, b5 = self._fill(contact.distance, n)  # = _build(contact, n)
         x, it = self._solve_and_integrate()
         # ---- residuals of the equalities at the returned solution (C x in numpy, − b in
         # floats, as np.subtract would)
