@@ -188,7 +188,10 @@ def _row_norms(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
 
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
-    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
+    v = np.empty((len(R), 3))  # the three differences, written in place (np.stack's copies spared)
+    np.subtract(R[:, 2, 1], R[:, 1, 2], out=v[:, 0])
+    np.subtract(R[:, 0, 2], R[:, 2, 0], out=v[:, 1])
+    np.subtract(R[:, 1, 0], R[:, 0, 1], out=v[:, 2])
     s2 = _row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
@@ -256,7 +259,10 @@ def _log_chart(
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
-    return np.column_stack([v @ ex, v @ ey])
+    out = np.empty((len(v), 2))  # = np.column_stack([v @ ex, v @ ey])
+    out[:, 0] = v @ ex
+    out[:, 1] = v @ ey
+    return out
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
