@@ -316,9 +316,11 @@ class GraspWorld:
         the contact tolerance and the other geometries' gap beyond half the contact tolerance
         (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
         above the face its tip touches), so only the tip can touch, and it never pushes the
-        object. The other geometries' exact gaps are queried only when their lower bound (the
-        clearance at the start, then the last exact value less the distance moved:
-        :func:`_probe_floor_after`) does not already fix the sub-step (the same steps).
+        object. The start's clearance is taken as the other geometries' exact minimum and the
+        tip's exact gap (the first sub-step's bound of the others, exact); after that the others'
+        exact gaps are queried only when their lower bound (the last exact value less the
+        distance moved: :func:`_probe_floor_after`) does not already fix the sub-step (the same
+        steps as querying them every sub-step).
 
         Returns:
             the outcome: touched (tip centre, sensed normal), missed or blocked (another part
@@ -341,6 +343,8 @@ class GraspWorld:
         xyz = wq[:3]
         lo, hi = hand.lower[xyz].tolist(), hand.upper[xyz].tolist()
         start = np.asarray(start, dtype=float)
+        tip_gid = hand.tip_geometry_id(finger)
+        others = [g for g in range(len(self._bounds)) if g != tip_gid]
         for back in (0.0, 0.02, 0.04, 0.06):
             wrist = start - back * d - offset
             wx, wy, wz = wrist.tolist()  # np.any(wrist < lo) or np.any(wrist > hi), in floats
@@ -348,14 +352,18 @@ class GraspWorld:
                 return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
             q[xyz] = wrist
             self.set_q(q)
-            clearance = self.exact_clearance()
+            # The hand's clearance as the other geometries' exact minimum and the tip's exact
+            # gap: their minimum is exact_clearance's exact value (the same gaps), and where
+            # exact_clearance takes its plain bound (gap − hand_bound > clearance + 5 mm) the
+            # exact minimum is above the threshold too — the same decision; the first sub-step
+            # below then has ``other`` without a query.
+            others_gap = self._min_gap(others, math.inf)
+            clearance = others_gap if tip_gid is None else min(self.scene.gap(state, tip_gid), others_gap)
             if clearance >= p.clearance:
                 travel += back
                 break
         else:
             return ProbeOutcome("blocked", finger, why="no clear start")
-        tip_gid = hand.tip_geometry_id(finger)
-        others = [g for g in range(len(self._bounds)) if g != tip_gid]
         tol = p.contact_tolerance
         half_tol = 0.5 * tol
         wrist0 = self.wrist_position().copy()
@@ -363,11 +371,9 @@ class GraspWorld:
         tip = state._tips[finger][3]  # live view of the tip centre (world)
         free = [tip.copy()]
         contact_of = self.scene.contact
-        # A lower bound of the other geometries' gap less half the tolerance (what ``other``
-        # below is), m: at the start every geometry's gap is at least the hand's clearance
-        # (exact_clearance at this very pose: the minimum of the same exact gaps, or the plain
-        # bound gap − hand_bound, ≥ 1 cm conservative). Then see _probe_floor_after.
-        floor = clearance - half_tol
+        # ``other`` at the start pose (exact), then a lower bound of it (_probe_floor_after)
+        floor = others_gap - half_tol
+        exact = True  # floor is the exact ``other`` of the current pose
         for _ in range(300):
             contact = contact_of(state, finger)  # = tip_distance's query (the pose is new)
             tip_gap = float(contact.distance)
@@ -387,7 +393,7 @@ class GraspWorld:
                 # is need, without their exact queries
                 step = need
             else:
-                other = self._min_gap(others, math.inf) - half_tol
+                other = floor if exact else self._min_gap(others, math.inf) - half_tol
                 if other < 1e-5:
                     return ProbeOutcome(
                         "blocked",
@@ -405,6 +411,7 @@ class GraspWorld:
             if travelled >= travel - 1e-12:
                 break
             floor = _probe_floor_after(floor, step)
+            exact = False
         return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
 
     def exact_clearance(self) -> float:

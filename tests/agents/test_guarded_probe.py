@@ -105,7 +105,9 @@ def random_probes(world, rng, n):
         direction = rng.normal(size=3)
         direction[2] += -2.0 if finger == world.probe.finger("top") else 2.0
         direction /= np.linalg.norm(direction)
-        start = centre - direction * rng.uniform(0.03, 0.08) + rng.uniform(-0.03, 0.03, size=3)
+        # every fourth from far away: exact_clearance's plain bound (gap − hand_bound) there
+        reach = rng.uniform(0.25, 0.3) if k % 4 == 3 else rng.uniform(0.03, 0.08)
+        start = centre - direction * reach + rng.uniform(-0.03, 0.03, size=3)
         yield finger, start, direction, float(rng.uniform(0.005, 0.12)), world.probe.angles[finger]
 
 
@@ -123,6 +125,15 @@ def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
         return min_gap(ids, best)
 
     plain_min_gap = plain_world._min_gap
+    plain_exact_clearance = plain_world.exact_clearance
+    far = []
+
+    def plain_clearance():
+        value = plain_exact_clearance()
+        far.append(value == plain_world.object_gap_to_grasp_centre() - plain_world.params.hand_bound)
+        return value
+
+    plain_world.exact_clearance = plain_clearance
 
     def plain_counted(ids, best):
         plain_queries.append(1)
@@ -138,6 +149,7 @@ def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
         np.testing.assert_array_equal(fast_world.state.q, plain_world.state.q)
         events.add(fast.event)
     assert {"touched", "missed"} <= events  # the probes exercise the paths that matter
+    assert any(far) and not all(far)  # starts where exact_clearance is exact, and where it is the plain bound
     # the shortcut was taken: fewer queries of the other geometries than the plain loop's
     assert len(fast_queries) < len(plain_queries)
 
