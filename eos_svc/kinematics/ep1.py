@@ -226,8 +226,8 @@ def _roller(
     hand = state.hand
     key = (id(hand), finger, float(dt), solver)
     rq = cache.pop(key, None)
-    if rq is not None and rq.hand is not hand:
-        rq = None  # another hand at a recycled id
+    if rq is not None and (rq.hand is not hand or scene.hand is not hand):
+        rq = None  # another hand at a recycled id (or a scene of another hand: a new roller, as ever)
     if rq is None:
         rq = RollingQP(
             state, finger, axis, omega, dt, solver, scene=scene, tactile=sensor, project_axis=False

@@ -324,13 +324,11 @@ class RollingQP:
         if not math.isfinite(omega):
             raise KinematicsError("omega", f"must be finite rad/s, got {omega!r}")
         if state is None:
-            # go on from the roller's own q: the caller's state is brought up to it by the next
-            # sync() (as the steps leave it), not here — the same q, one kinematics update less
-            stale = self._stale
-            self._retarget(self._state, axis, omega, project_axis, q=self._q)
-            self._stale = stale
-            return
-        if state.hand is not self.hand:
+            # the caller's state is brought up to the roller's q here, at every leg (a roll that
+            # fails later leaves it at the start of its leg, as it always did)
+            self.sync()
+            state = self._state
+        elif state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model")
         self._retarget(state, axis, omega, project_axis)
 
@@ -346,13 +344,11 @@ class RollingQP:
         if self._probe.object_shape is not scene.object.geometry:
             self._probe = SphereTipProbe(self.finger, self._r, scene.object.geometry)
 
-    def _retarget(
-        self, state: HandState, axis: object, omega: float, project_axis: bool, q: np.ndarray | None = None
-    ) -> None:
-        """Start a roll from ``state`` (or from ``q``, the roller's own configuration, when given)."""
+    def _retarget(self, state: HandState, axis: object, omega: float, project_axis: bool) -> None:
+        """Start a roll from ``state``."""
         self.omega = float(omega)
         self._state = state
-        self._q = state.q if q is None else q
+        self._q = state.q
         # active joints' q, kept in step with _q (a view of it when the joints are contiguous)
         self._qa = self._q[self._sel] if type(self._sel) is slice else self._q[self._cols].copy()
         self._qk = self._qa if self._reduced else self._q  # the q the kinematics take
