@@ -40,8 +40,12 @@ def guarded_probe_at(rev: str) -> Callable[..., Any]:
     show = ["git", "-C", str(ROOT), "show", f"{rev}:eos_svc/agents/world.py"]
     src = subprocess.run(show, capture_output=True, text=True, check=True).stdout
     tree = ast.parse(src)
-    cls = next(n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "GraspWorld")
-    fn = next(n for n in cls.body if isinstance(n, ast.FunctionDef) and n.name == "guarded_probe")
+    cls = next((n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "GraspWorld"), None)
+    fn = None if cls is None else next(
+        (n for n in cls.body if isinstance(n, ast.FunctionDef) and n.name == "guarded_probe"), None
+    )
+    if fn is None:
+        raise SystemExit(f"--baseline {rev}: that revision has no GraspWorld.guarded_probe (EP2 came later)")
     namespace = dict(vars(world_module))
     exec(textwrap.dedent(ast.get_source_segment(src, fn) or ""), namespace)  # the repository's own code
     probe: Callable[..., Any] = namespace["guarded_probe"]
