@@ -5,7 +5,8 @@ One step = kinematics (Pinocchio), contact (coal), tactile reading, QP, integrat
 Run: ``.venv/bin/python benchmarks/bench_rolling.py [--baseline 9a82297] [--steps N]``.
 
 Rows: ``as used`` — the default: the closed-form solve when the bounds are inactive, OSQP (set
-up once per thread, updated and warm-started) otherwise; ``osqp only`` — ``direct=False``,
+up once per thread, updated and warm-started) otherwise; ``advance()`` — the same step as EP1
+takes it, ``RollingQP.advance`` (no RollingStep, Contact or TactileReading); ``osqp only`` — ``direct=False``,
 every step through OSQP; each other installed qpsolvers backend through
 ``qpsolvers.solve_problem`` on the same live Problem (``direct=False``); ``solve_qp osqp
 (naive)`` — ``qpsolvers.solve_qp(..., solver="osqp")`` every step (OSQP set up from scratch,
@@ -97,8 +98,9 @@ class Stepper:
     """Back-and-forth rolls of finger1 on a 4 cm sphere; ``run(n)`` times ``n`` more steps."""
 
     def __init__(self, kin: ModuleType, solver: str = "osqp", naive: bool = False, direct: bool | None = None,
-                 leg: int = 50, bare: bool = False) -> None:
+                 leg: int = 50, bare: bool = False, lean: bool = False) -> None:
         self.kin, self.solver, self.naive, self.leg, self.bare = kin, solver, naive, leg, bare
+        self.lean = lean  # time RollingQP.advance (EP1's step without its records), not step
         params = inspect.signature(kin.rolling.RollingQP).parameters
         self.kw: dict[str, Any] = {} if direct is None or "direct" not in params else {"direct": direct}
         self.sc = kin.ep1.ep1_scene("sphere", 0.04)
@@ -137,6 +139,14 @@ class Stepper:
                 step()
                 times.append(pc() - t0)
                 self.k += 1
+                continue
+            if self.lean:
+                advance = self.rq.advance
+                t0 = pc()
+                slip = advance()[5]
+                times.append(pc() - t0)
+                self.k += 1
+                self.worst = max(self.worst, slip)
                 continue
             step = self.rq.step
             t0 = pc()
@@ -204,6 +214,7 @@ def main(argv: list[str] | None = None) -> int:
     base = load_kinematics(a.baseline) if a.baseline else None
     rows: list[tuple[str, Stepper, int]] = [
         ("as used (direct, else osqp)", Stepper(kin_now), a.steps),
+        ("advance(): EP1's step, no records", Stepper(kin_now, lean=True), a.steps),
         ("osqp only (direct=False)", Stepper(kin_now, direct=False), a.steps),
         *[
             (f"{s} (solve_problem)", Stepper(kin_now, s, direct=False), a.steps)

@@ -328,7 +328,11 @@ class GraspWorld:
         the contact tolerance and the other geometries' gap beyond half the contact tolerance
         (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
         above the face its tip touches), so only the tip can touch, and it never pushes the
-        object.
+        object. The start's clearance is taken as the other geometries' exact minimum and the
+        tip's exact gap (the first sub-step's bound of the others, exact); after that the others'
+        exact gaps are queried only when their lower bound (the last exact value less the
+        distance moved: :func:`_probe_floor_after`) does not already fix the sub-step (the same
+        steps as querying them every sub-step).
 
         Returns:
             the outcome: touched (tip centre, sensed normal), missed or blocked (another part
@@ -340,57 +344,86 @@ class GraspWorld:
         d = np.asarray(direction, dtype=float)
         d = d / np.linalg.norm(d)
         q = self.state.q
-        q[self._wrist_q[3:6]] = 0.0
+        wq = self._wrist_q
+        q[wq[3:6]] = 0.0
         for f in hand.finger_names:
             idx = self._finger_q[f]
             q[idx] = angle if f == finger else hand.lower[idx]
         self.set_q(q)
-        offset = self.state.tip_position(finger) - self.wrist_position()
-        lo, hi = hand.lower[self._wrist_q[:3]], hand.upper[self._wrist_q[:3]]
+        state = self.state
+        offset = state.tip_position(finger) - self.wrist_position()
+        xyz = wq[:3]
+        lo, hi = hand.lower[xyz].tolist(), hand.upper[xyz].tolist()
         start = np.asarray(start, dtype=float)
+        tip_gid = hand.tip_geometry_id(finger)
+        others = [g for g in range(len(self._bounds)) if g != tip_gid]
         for back in (0.0, 0.02, 0.04, 0.06):
             wrist = start - back * d - offset
-            if np.any(wrist < lo) or np.any(wrist > hi):
+            wx, wy, wz = wrist.tolist()  # np.any(wrist < lo) or np.any(wrist > hi), in floats
+            if wx < lo[0] or wy < lo[1] or wz < lo[2] or wx > hi[0] or wy > hi[1] or wz > hi[2]:
                 return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
-            q[self._wrist_q[:3]] = wrist
+            q[xyz] = wrist
             self.set_q(q)
-            if self.exact_clearance() >= p.clearance:
+            # The hand's clearance as the other geometries' exact minimum and the tip's exact
+            # gap: their minimum is exact_clearance's exact value (the same gaps), and where
+            # exact_clearance takes its plain bound (gap − hand_bound > clearance + 5 mm) the
+            # exact minimum is above the threshold too — the same decision; the first sub-step
+            # below then has ``other`` without a query.
+            others_gap = self._min_gap(others, math.inf)
+            clearance = others_gap if tip_gid is None else min(self.scene.gap(state, tip_gid), others_gap)
+            if clearance >= p.clearance:
                 travel += back
                 break
         else:
             return ProbeOutcome("blocked", finger, why="no clear start")
-        tip_gid = hand.tip_geometry_id(finger)
-        others = [g for g in range(len(self._bounds)) if g != tip_gid]
         tol = p.contact_tolerance
+        half_tol = 0.5 * tol
         wrist0 = self.wrist_position().copy()
         travelled = 0.0
-        free = [self.state.tip_position(finger).copy()]
+        tip = state._tips[finger][3]  # live view of the tip centre (world)
+        free = [tip.copy()]
+        contact_of = self.scene.contact
+        # ``other`` at the start pose (exact), then a lower bound of it (_probe_floor_after)
+        floor = others_gap - half_tol
+        exact = True  # floor is the exact ``other`` of the current pose
         for _ in range(300):
-            tip_gap = self.tip_distance(finger)
+            contact = contact_of(state, finger)  # = tip_distance's query (the pose is new)
+            tip_gap = float(contact.distance)
             if tip_gap <= tol:
-                contact = self.scene.contact(self.state, finger)
-                reading = self.sensor.read(self.state, contact)
-                M = self.state.data.oMf[hand.tip_frame_id(finger)]
+                reading = self.sensor.read(state, contact)
+                M = state.data.oMf[hand.tip_frame_id(finger)]
                 normal = -(M.rotation @ reading.normal_tip)
                 return ProbeOutcome(
                     "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
                 )
-            other = self._min_gap(others, math.inf) - 0.5 * tol
-            if other < 1e-5:
-                return ProbeOutcome(
-                    "blocked",
-                    finger,
-                    free=densify(np.array(free)),
-                    travelled=travelled,
-                    why="another part of the hand would touch first",
-                )
-            step = min(travel - travelled, tip_gap - 0.5 * tol, other)
+            room = travel - travelled
+            tip_room = tip_gap - half_tol
+            need = room if room <= tip_room else tip_room  # = min(room, tip_room)
+            if floor >= need and floor >= 1e-5:
+                # the other geometries can neither block nor limit this step (their gap, less
+                # half the tolerance, is ≥ floor ≥ need): the step min(room, tip_room, other)
+                # is need, without their exact queries
+                step = need
+            else:
+                other = floor if exact else self._min_gap(others, math.inf) - half_tol
+                if other < 1e-5:
+                    return ProbeOutcome(
+                        "blocked",
+                        finger,
+                        free=densify(np.array(free)),
+                        travelled=travelled,
+                        why="another part of the hand would touch first",
+                    )
+                step = min(room, tip_room, other)
+                floor = other
             travelled += step
-            q[self._wrist_q[:3]] = wrist0 + d * travelled
+            q[xyz] = wrist0 + d * travelled
             self.set_q(q)
-            free.append(self.state.tip_position(finger).copy())
+            free.append(tip.copy())
             if travelled >= travel - 1e-12:
                 break
+            floor = _probe_floor_after(floor, step)
+            exact = False
         return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
 
     def exact_clearance(self) -> float:
@@ -592,3 +625,19 @@ def _derived_for(
             _DERIVED.pop(next(iter(_DERIVED), -1), None)
     links, probe, bounds = entry[2]
     return links, probe, bounds
+
+
+#: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all
+#: (m): coal's distances are exact to ~1e-15 m for primitives and to its GJK tolerance (1e-8 m,
+#: relative) for curved shapes; the wrist's translation is exact to ~1e-16 m
+_PROBE_FLOOR_SLACK = (1e-6, 1e-7)
+
+
+def _probe_floor_after(floor: float, step: float) -> float:
+    """A lower bound of every hand geometry's gap to the object (m, less a constant) after a
+    pure wrist translation by ``step`` m from a pose where it was ``floor``: a translation
+    changes each distance by at most its length (less the slack of the distance queries'
+    accuracy, :data:`_PROBE_FLOOR_SLACK`). :meth:`GraspWorld.guarded_probe` skips the exact
+    queries of the other geometries while this bound alone fixes its step."""
+    per_metre, constant = _PROBE_FLOOR_SLACK
+    return floor - step * (1.0 + per_metre) - constant

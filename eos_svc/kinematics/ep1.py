@@ -178,10 +178,21 @@ def _scratch_state(hand: HandModel, q: object) -> HandState:
     return st
 
 
+def _row_norms(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
+    """``np.linalg.norm(x, axis=1, keepdims=keepdims)`` of a real 2-D array: the same operations
+    (the square root of ``add.reduce(x * x)`` along the rows), without the wrapper's µs."""
+    squares: Any = np.add.reduce  # (numpy's stubs do not type keepdims as a bool)
+    out: np.ndarray = np.sqrt(squares(x * x, axis=1, keepdims=keepdims))
+    return out
+
+
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
-    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
+    v = np.empty((len(R), 3))  # the three differences, written in place (np.stack's copies spared)
+    np.subtract(R[:, 2, 1], R[:, 1, 2], out=v[:, 0])
+    np.subtract(R[:, 0, 2], R[:, 2, 0], out=v[:, 1])
+    np.subtract(R[:, 1, 0], R[:, 0, 1], out=v[:, 2])
+    s2 = _row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -191,7 +202,7 @@ def _log3(R: np.ndarray) -> np.ndarray:
 
 
 _ROLLERS = threading.local()
-_ROLLERS_KEEP = 8  # rollers kept per thread (one per scene and finger in use)
+_ROLLERS_KEEP = 8  # rollers kept per thread (one per hand, finger, dt and solver in use)
 
 
 def _roller(
@@ -204,25 +215,26 @@ def _roller(
     dt: float,
     solver: str,
 ) -> RollingQP:
-    """A :class:`RollingQP` for this scene, finger, dt and solver, re-targeted to ``state``,
-    ``axis`` and ``omega``: the same roller as a new one, without its set-up (Pinocchio data,
-    coal functor, arrays; ~0.5 ms). Cached per thread (a roller is not shared between
-    threads), a few per thread, most recently used last."""
+    """A :class:`RollingQP` for this hand, finger, dt and solver, moved to ``scene``
+    (:meth:`~.rolling.RollingQP.use_scene`) and re-targeted to ``state``, ``axis`` and
+    ``omega``: the same roller as a new one, without its set-up (Pinocchio data, arrays, QP;
+    ~0.4 ms — every plan has a scene of its own, the hand is shared). Cached per thread (a
+    roller is not shared between threads), a few per thread, most recently used last."""
     cache: dict[tuple[int, str, float, str], RollingQP] | None = getattr(_ROLLERS, "cache", None)
     if cache is None:
         cache = _ROLLERS.cache = {}
-    key = (id(scene), finger, float(dt), solver)
+    hand = state.hand
+    key = (id(hand), finger, float(dt), solver)
     rq = cache.pop(key, None)
-    if rq is not None and (
-        rq.scene is not scene or rq.hand is not state.hand or rq.object_geometry is not scene.object.geometry
-    ):
-        rq = None  # the object was replaced: build a new roller
+    if rq is not None and (rq.hand is not hand or scene.hand is not hand):
+        rq = None  # another hand at a recycled id (or a scene of another hand: a new roller, as ever)
     if rq is None:
         rq = RollingQP(
             state, finger, axis, omega, dt, solver, scene=scene, tactile=sensor, project_axis=False
         )
     else:
         rq.tactile = sensor
+        rq.use_scene(scene)
         rq.retarget(axis, omega, state=state, project_axis=False)
     cache[key] = rq
     while len(cache) > _ROLLERS_KEEP:
@@ -230,16 +242,27 @@ def _roller(
     return rq
 
 
-def _log_chart(points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float) -> np.ndarray:
-    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m."""
-    d = points / np.linalg.norm(points, axis=1, keepdims=True)
+def _log_chart(
+    points: np.ndarray,
+    b: np.ndarray,
+    ex: np.ndarray,
+    ey: np.ndarray,
+    r: float,
+    directions: np.ndarray | None = None,
+) -> np.ndarray:
+    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m.
+    ``directions``: the points normalised (rows), when the caller has them."""
+    d = points / _row_norms(points, keepdims=True) if directions is None else directions
     cosang = d @ b
-    v = d - np.outer(cosang, b)
-    sin_ang = np.linalg.norm(v, axis=1)
+    v = d - cosang[:, None] * b  # np.outer(cosang, b): the same products
+    sin_ang = _row_norms(v)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
-    return np.column_stack([v @ ex, v @ ey])
+    out = np.empty((len(v), 2))  # = np.column_stack([v @ ex, v @ ey])
+    out[:, 0] = v @ ex
+    out[:, 1] = v @ ey
+    return out
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -271,12 +294,15 @@ def _checked_ep1_arguments(
     return dirs
 
 
-def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) -> np.ndarray:
+def _chart_at_mean(
+    P: np.ndarray, ex_t: tuple[float, float, float], r: float, directions: np.ndarray | None = None
+) -> np.ndarray:
     """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with
     the frame's x (``ex_t``, tip frame) projected on the tangent plane at b as the chart's first
-    axis; scalar arithmetic on the 3-vectors."""
+    axis; scalar arithmetic on the 3-vectors. ``directions``: ``P``'s rows normalised, when the
+    caller has them (a row's normalisation does not depend on the other rows)."""
     ex_t0, ex_t1, ex_t2 = ex_t
-    b0, b1, b2 = P.mean(axis=0).tolist()
+    b0, b1, b2 = (np.add.reduce(P, axis=0) / len(P)).tolist()  # = P.mean(axis=0)
     nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
     b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
     d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
@@ -289,6 +315,7 @@ def _chart_at_mean(P: np.ndarray, ex_t: tuple[float, float, float], r: float) ->
         np.array((e0, e1, e2)),
         np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
         r,
+        directions,
     )
 
 
@@ -372,20 +399,18 @@ def run_ep1(
             else:
                 rq.retarget(axis, sign * omega, project_axis=False)
             R_view = rq.tip_rotation  # live: the kinematics of the step's reading
-            step = rq.step
+            advance = rq.advance  # = step() without its records (the same roll and readings)
             for _ in range(n_steps):
-                st = step()
-                rd = st.reading
-                assert rd is not None
-                if rd.in_contact:
-                    P_buf[i] = rd.point_tip
+                gap, in_contact, px, py, pz, slip = advance()
+                if in_contact:
+                    P_buf[i] = (px, py, pz)
                     R_buf[i] = R_view
                     inc.append(True)
                     i += 1
                 else:
                     inc.append(False)
-                slips.append(st.slip_speed)
-                gaps.append(abs(st.contact.distance))
+                slips.append(slip)
+                gaps.append(abs(gap))
                 if path_every > 0:
                     taken += 1
                     if taken % path_every == 0:
@@ -393,6 +418,7 @@ def run_ep1(
             steps += n_steps
         P_all = P_buf[:i]
         R_all = R_buf[:i]
+        D_all = P_all / _row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
         set_in = sets[np.array(inc)]
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
@@ -401,7 +427,7 @@ def run_ep1(
             P = P_all[sel]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r))
+            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r, D_all[sel]))
             samples.append(est.add_sample(a_xy, s, K_f))
     assert rq is not None
     state.update(rq.q)

@@ -46,7 +46,7 @@ from .rolling_solvers import (
     solve_with_backend,
 )
 from .scene import Contact, Scene
-from .tactile import TactileReading, TactileSensor, read_sphere_tip
+from .tactile import TactileReading, TactileSensor, read_sphere_tip, sphere_tip_point
 from .tip_contact import SphereTipProbe
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
@@ -290,6 +290,7 @@ class RollingQP:
     def _set_up_step_buffers(self) -> None:
         """The step's scratch arrays and the q̇ views the kinematics and the integration use."""
         nx = self.nx
+        self._stale: bool = False  # the caller's state is behind the roller's q (see sync)
         self._tmp = np.zeros(nx)
         self._res6 = np.zeros(6)
         self._qdot = np.zeros(self.hand.model.nv)
@@ -323,13 +324,28 @@ class RollingQP:
         if not math.isfinite(omega):
             raise KinematicsError("omega", f"must be finite rad/s, got {omega!r}")
         if state is None:
+            # the caller's state is brought up to the roller's q here, at every leg (a roll that
+            # fails later leaves it at the start of its leg, as it always did)
             self.sync()
             state = self._state
         elif state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model")
         self._retarget(state, axis, omega, project_axis)
 
+    def use_scene(self, scene: Scene) -> None:
+        """Roll on ``scene``'s object from the next :meth:`retarget` on (same hand): a roller
+        re-used across scenes (EP1 keeps one per hand and finger, every plan has its own scene).
+        The contact probe is rebuilt when the object's shape differs; the object's placement is
+        read by :meth:`retarget`. Nothing else of a roll depends on the scene, so a moved roller
+        re-targeted rolls as a new one on ``scene`` (tested)."""
+        if scene.hand is not self.hand:
+            raise KinematicsError("scene", "belongs to another hand model than the roller's")
+        self.scene = scene
+        if self._probe.object_shape is not scene.object.geometry:
+            self._probe = SphereTipProbe(self.finger, self._r, scene.object.geometry)
+
     def _retarget(self, state: HandState, axis: object, omega: float, project_axis: bool) -> None:
+        """Start a roll from ``state``."""
         self.omega = float(omega)
         self._state = state
         self._q = state.q
@@ -404,6 +420,10 @@ class RollingQP:
     def _build(self, contact: Contact, n: tuple[float, ...] | None = None) -> tuple[float, ...]:
         """Fill C, b, lb, ub (views into the OSQP arrays) for the current q and contact
         (``n``: the contact normal as floats, when the caller has them); returns b as floats."""
+        return self._fill(contact.distance, tuple(contact.normal.tolist()) if n is None else n)
+
+    def _fill(self, distance: float, n: tuple[float, ...]) -> tuple[float, ...]:
+        """:meth:`_build` from the contact's signed distance (m) and normal (three floats)."""
         J = self._J  # from kinematics()
         jsel = self._jsel
         if jsel is None:
@@ -413,7 +433,7 @@ class RollingQP:
         else:
             Jb = self._Jb
             J.take(jsel, axis=1, out=Jb)
-        nx_, ny_, nz_ = contact.normal.tolist() if n is None else n
+        nx_, ny_, nz_ = n
         t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(nx_, ny_, nz_)  # t1 ⟂ n, t2 = n × t1
         # row(d) = dᵀ Jv − (d × r)ᵀ Jω, r = p_tip − c = −r_f n ⇒ −(d × r) = r_f (d × n);
         # t1 × n = −t2, t2 × n = t1. One slice assignment (item writes cost ~0.3 µs each).
@@ -426,7 +446,7 @@ class RollingQP:
         )  # fmt: skip
         _matmul(self._M, Jb, out=self._C)
         dt = self.dt
-        bn = -self.gap_gain * contact.distance / dt
+        bn = -self.gap_gain * distance / dt
         if self.second_order and self.steps > 0:
             # q̇ is constant over a step, so the tip moves with the acceleration J̇q̇ of the
             # last q̇: ask for the step's *average* velocities, v + ½ dt a, to meet the
@@ -606,7 +626,58 @@ class RollingQP:
             reading = read_sphere_tip(sensor, contact, self._R_view, n, self._r)
         else:
             reading = self._read(contact, n)
-        b0, b1, b2, b3, b4, b5 = self._build(contact, n)
+        b0, b1, b2, b3, b4, b5 = self._fill(contact.distance, n)  # = _build(contact, n)
+        x, it = self._solve_and_integrate()
+        # ---- residuals of the equalities at the returned solution (C x in numpy, − b in
+        # floats, as np.subtract would)
+        res6 = self._res6
+        _matmul(self._C, x, out=res6)
+        r0, r1, r2, r3, r4, r5 = res6.tolist()
+        r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
+        rs: RollingStep = _new(RollingStep)  # the frozen dataclass's __init__ costs ~2 µs: fill the slots
+        _S_CONTACT(rs, contact)
+        _S_READING(rs, reading)
+        _S_QDOT(rs, self._qdot.copy())
+        _S_SLIP(rs, math.sqrt(r0 * r0 + r1 * r1))
+        _S_NORMAL(rs, abs(r2))
+        _S_OMEGA(rs, math.sqrt(r3 * r3 + r4 * r4 + r5 * r5))
+        _S_ITER(rs, it)
+        return rs
+
+    def advance(self) -> tuple[float, bool, float, float, float, float]:
+        """One :meth:`step` (the same q̇, the same integration, the same reading and random
+        draws) returning only what EP1 keeps of it, as floats: ``(signed gap at the start of the
+        step m, in contact, the tactile point in the tip frame (three floats, m), no-slip
+        residual m/s)`` — without the step's records (its :class:`RollingStep`,
+        :class:`~.scene.Contact` and :class:`~.tactile.TactileReading` and their arrays). Needs
+        a sensor; with one other than a plain :class:`TactileSensor` (or ``fast_tactile``
+        off) it is :meth:`step` unpacked."""
+        sensor = self.tactile
+        if type(sensor) is not TactileSensor or not self.fast_tactile:
+            if sensor is None:
+                raise KinematicsError("tactile", "advance() needs a tactile sensor")
+            st = self.step()
+            rd = st.reading
+            assert rd is not None
+            px, py, pz = rd.point_tip.tolist()
+            return float(st.contact.distance), bool(rd.in_contact), px, py, pz, st.slip_speed
+        self.kinematics()
+        d, _, _, _, _, n = self._probe.measure_raw(self._c_view)
+        self._n = n
+        if type(d) is not float:
+            d = float(d)
+        in_contact, px, py, pz = sphere_tip_point(sensor, d, self._R_view, n, self._r)
+        b0, b1, _, _, _, _ = self._fill(d, n)
+        x, _ = self._solve_and_integrate()
+        res6 = self._res6
+        _matmul(self._C, x, out=res6)
+        r0, r1, _, _, _, _ = res6.tolist()
+        r0, r1 = r0 - b0, r1 - b1
+        return d, in_contact, px, py, pz, math.sqrt(r0 * r0 + r1 * r1)
+
+    def _solve_and_integrate(self) -> tuple[np.ndarray, int]:
+        """Solve the QP that ``_fill`` left (closed form when the bounds are inactive, else the
+        backend) and integrate ``q ← q + q̇ dt``; returns (q̇ of the active joints, iterations)."""
         sol = (
             _MIN_NORM(self._C, self._b_ext, self._wscale, self._Cw, self._lb_tol, self._ub_tol)
             if self.direct
@@ -625,20 +696,13 @@ class RollingQP:
             xs = x.tolist()
         else:
             x, xs = sol
-        # ---- residuals of the equalities at the returned solution (C x in numpy, − b in
-        # floats, as np.subtract would)
-        res6 = self._res6
-        _matmul(self._C, x, out=res6)
-        r0, r1, r2, r3, r4, r5 = res6.tolist()
-        r0, r1, r2, r3, r4, r5 = r0 - b0, r1 - b1, r2 - b2, r3 - b3, r4 - b4, r5 - b5
         # ---- integration q ← q + q̇ dt
         sel = self._sel
-        qdot = self._qdot
         if type(sel) is slice:
             # qdot[sel] = x from the floats, into the buffer (no numpy indexing)
             self._pack_nx(self._qdot_a_buf, 0, *xs)
         else:
-            qdot[sel] = x
+            self._qdot[sel] = x
             if self._qdot_r is not None:
                 self._qdot_r[:] = x
         tmp = self._tmp
@@ -649,15 +713,7 @@ class RollingQP:
             self._q[sel] = qa
         self._stale = True
         self.steps += 1
-        rs: RollingStep = _new(RollingStep)  # the frozen dataclass's __init__ costs ~2 µs: fill the slots
-        _S_CONTACT(rs, contact)
-        _S_READING(rs, reading)
-        _S_QDOT(rs, qdot.copy())
-        _S_SLIP(rs, math.sqrt(r0 * r0 + r1 * r1))
-        _S_NORMAL(rs, abs(r2))
-        _S_OMEGA(rs, math.sqrt(r3 * r3 + r4 * r4 + r5 * r5))
-        _S_ITER(rs, it)
-        return rs
+        return x, it
 
     def run(self, n: int) -> list[RollingStep]:
         """``n`` steps; returns their records."""

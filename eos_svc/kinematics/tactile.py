@@ -73,7 +73,55 @@ class TactileSensor:
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
 
     def read(self, state: HandState, contact: Contact) -> TactileReading:
-        """The reading of ``contact.finger``'s sensor for this contact (state at the same q)."""
+        """The reading of ``contact.finger``'s sensor for this contact (state at the same q).
+
+        The same numbers as :meth:`read_reference` (the plain numpy form; tested bit for bit):
+        the numpy products and norms that decide the round-off are kept (``Rᵀ (p − c)``, the
+        dot products of the norms), the element-wise arithmetic on the 3-vectors is done in
+        floats (numpy costs µs per operation on them)."""
+        hand = state.hand
+        finger = contact.finger
+        if finger not in hand.finger_names:
+            raise UnknownNameError(
+                "contact.finger", f"unknown finger {finger!r}; known: {hand.finger_names}"
+            )
+        r = hand.tip_radius(finger)
+        M = state.data.oMf[hand.tip_frame_id(finger)]
+        R = M.rotation
+        p = R.T @ (np.asarray(contact.point_tip, dtype=float) - M.translation)
+        norm = math.sqrt(p.dot(p))  # = np.linalg.norm(p): sqrt(p·p)
+        if norm < 1e-12:  # degenerate: fall back on the contact normal
+            p = R.T @ np.asarray(contact.normal, dtype=float)
+            norm = -1.0
+        s = r / norm
+        px, py, pz = p.tolist()
+        px, py, pz = px * s, py * s, pz * s  # p * (r / norm)
+        distance = contact.distance
+        in_contact = bool(distance <= self.contact_tolerance)
+        if in_contact:
+            if self.noise_std > 0.0:
+                t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(px / r, py / r, pz / r)  # tangent_basis(p / r)
+                g0, g1 = self.rng.normal(0.0, self.noise_std, size=2).tolist()
+                px, py, pz = px + g0 * t1x + g1 * t2x, py + g0 * t1y + g1 * t2y, pz + g0 * t1z + g1 * t2z
+                p = np.array((px, py, pz))
+                s = r / math.sqrt(p.dot(p))  # p *= r / np.linalg.norm(p)
+                px, py, pz = px * s, py * s, pz * s
+            if self.pitch is not None:  # the plain form (numpy's rounding)
+                p = np.round(np.array((px, py, pz)) / self.pitch) * self.pitch
+                pn = float(np.linalg.norm(p))
+                if pn > 1e-12:
+                    p *= r / pn
+                px, py, pz = p.tolist()
+        reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
+        _SR_FINGER(reading, finger)
+        _SR_POINT(reading, np.array((px, py, pz)))
+        _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
+        _SR_IN(reading, in_contact)
+        _SR_DIST(reading, float(distance))
+        return reading
+
+    def read_reference(self, state: HandState, contact: Contact) -> TactileReading:
+        """:meth:`read` in its plain numpy form (what the tests compare it with)."""
         hand = state.hand
         if contact.finger not in hand.finger_names:
             raise UnknownNameError(
@@ -120,16 +168,34 @@ def read_sphere_tip(
         rotation: the tip frame's world rotation (3×3) at the contact's configuration.
         n: the contact normal (object → tip) as three floats.
     """
+    d = contact.distance
+    if type(d) is not float:
+        d = float(d)
+    in_contact, px, py, pz = sphere_tip_point(sensor, d, rotation, n, r)
+    reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
+    _SR_FINGER(reading, contact.finger)
+    _SR_POINT(reading, np.array((px, py, pz)))
+    _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
+    _SR_IN(reading, in_contact)
+    _SR_DIST(reading, d)
+    return reading
+
+
+def sphere_tip_point(
+    sensor: TactileSensor, distance: float, rotation: np.ndarray, n: tuple[float, ...], r: float
+) -> tuple[bool, float, float, float]:
+    """:func:`read_sphere_tip`'s numbers without the :class:`TactileReading`: ``(in contact,
+    the sensed point in the tip frame as three floats, m)`` for a contact at signed distance
+    ``distance`` (m, a float) with normal ``n`` (object → tip, three floats) on a sphere tip of
+    radius ``r`` (m) whose frame has the world rotation ``rotation``. Draws the sensor's noise
+    (when in contact) as ``read`` does."""
     # p = Rᵀ (point_tip − c) = −r Rᵀ n on the sphere (point_tip = c − r n)
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
     n0, n1, n2 = n
     px = -r * (n0 * r00 + n1 * r10 + n2 * r20)
     py = -r * (n0 * r01 + n1 * r11 + n2 * r21)
     pz = -r * (n0 * r02 + n1 * r12 + n2 * r22)
-    d = contact.distance
-    if type(d) is not float:
-        d = float(d)
-    in_contact = d <= sensor.contact_tolerance  # a bool (floats)
+    in_contact = distance <= sensor.contact_tolerance  # a bool (floats)
     if in_contact:
         if sensor.noise_std > 0.0:
             t1x, t1y, t1z, t2x, t2y, t2z = tangent_pair(px / r, py / r, pz / r)
@@ -143,10 +209,4 @@ def read_sphere_tip(
             pn = math.sqrt(px * px + py * py + pz * pz)
             if pn > 1e-12:
                 px, py, pz = px * r / pn, py * r / pn, pz * r / pn
-    reading: TactileReading = _new(TactileReading)  # slots filled directly (see _slots)
-    _SR_FINGER(reading, contact.finger)
-    _SR_POINT(reading, np.array((px, py, pz)))
-    _SR_NORMAL(reading, np.array((px / r, py / r, pz / r)))
-    _SR_IN(reading, in_contact)
-    _SR_DIST(reading, d)
-    return reading
+    return in_contact, px, py, pz

@@ -59,6 +59,23 @@ class SphereTipProbe:
     def measure(self, centre: np.ndarray) -> tuple[Contact, tuple[float, float, float]]:
         """The contact with the tip sphere centred at ``centre`` (world, m), and its normal
         (object → tip) as floats."""
+        d, p_obj, cx, cy, cz, n = self.measure_raw(centre)
+        nx_, ny_, nz_ = n
+        r = self.radius
+        contact: Contact = _new(Contact)  # slots filled directly (see _slots)
+        _SC_FINGER(contact, self.finger)
+        _SC_DISTANCE(contact, d)
+        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
+        _SC_POINT_OBJECT(contact, p_obj)
+        _SC_NORMAL(contact, np.array(n))
+        return contact, n
+
+    def measure_raw(
+        self, centre: np.ndarray
+    ) -> tuple[float, np.ndarray, float, float, float, tuple[float, float, float]]:
+        """:meth:`measure`'s numbers without the :class:`Contact` (the rolling step of EP1 needs
+        only the gap and the normal): ``(signed distance m, object witness point (world, m),
+        the centre as three floats, the normal object → tip as three floats)``."""
         c = centre
         self.tf_tip.setTranslation(c)
         res = self.res
@@ -69,17 +86,10 @@ class SphereTipProbe:
         ox, oy, oz = p_obj.tolist()
         dx, dy, dz = cx - ox, cy - oy, cz - oz
         nn = math.sqrt(dx * dx + dy * dy + dz * dz)
-        r = self.radius
-        if nn > 1e-12 and d > -0.5 * r:  # tip centre outside the object
+        if nn > 1e-12 and d > -0.5 * self.radius:  # tip centre outside the object
             s = 1.0 / nn
-            nx_, ny_, nz_ = dx * s, dy * s, dz * s
+            n = (dx * s, dy * s, dz * s)
         else:
             nx_, ny_, nz_ = np.asarray(res.normal, dtype=float).tolist()
-        n = (nx_, ny_, nz_)
-        contact: Contact = _new(Contact)  # slots filled directly (see _slots)
-        _SC_FINGER(contact, self.finger)
-        _SC_DISTANCE(contact, d)
-        _SC_POINT_TIP(contact, np.array((cx - r * nx_, cy - r * ny_, cz - r * nz_)))
-        _SC_POINT_OBJECT(contact, p_obj)
-        _SC_NORMAL(contact, np.array(n))
-        return contact, n
+            n = (nx_, ny_, nz_)
+        return d, p_obj, cx, cy, cz, n
