@@ -14,6 +14,11 @@ prefix ``P`` (see :mod:`eos_svc.service.protocol`):
 
 and publishes every cycle of a plan on ``P/goal/<goal_id>/cycle`` and its
 status on ``P/goal/<goal_id>/status``, reliably (``CongestionControl.BLOCK``).
+A message is built and put only while some subscriber matches ``P/goal/*/*``
+(:class:`_GoalWatchers`, asked before every message): Zenoh would drop it
+unsent otherwise, so a plan nobody watches costs no encoding and no put; its
+cycles are numbered all the same (``cycles_published`` counts them), so a
+watcher that comes in the middle of a plan sees the numbers it missed as missing.
 
 Threads: the queryables' callbacks run in Zenoh's own thread and never block
 nor call Zenoh (see :func:`~eos_svc.service.session.direct_callback`): the plan
@@ -114,6 +119,31 @@ class _CycleSink:
         """Undeclare the publisher, if one was declared."""
         if self._publisher is not None:
             self._publisher.undeclare()
+
+
+class _GoalWatchers:
+    """Whether any subscriber matches ``P/goal/*/*`` (the cycles and status of any goal) now.
+
+    A publisher declared on that key and never used to put: its matching status is what Zenoh's
+    own routing tables say at the moment it is read (1-2 µs), the same tables that would route a
+    put, so asking before every message loses none that a put would have delivered: a client's
+    subscriber declared before it sends the plan query reaches the service before the query (in
+    order on the same link), so a goal watched from the start gets every message.
+    """
+
+    __slots__ = ("_publisher",)
+
+    def __init__(self, session: zenoh.Session, prefix: str) -> None:
+        self._publisher = session.declare_publisher(proto.goal_keys(prefix))
+
+    def __call__(self) -> bool:
+        """True when at least one subscriber matches some goal's messages."""
+        status = self._publisher.matching_status  # a MatchingStatus (the 1.x stubs say bool)
+        return bool(getattr(status, "matching", status))
+
+    def undeclare(self) -> None:
+        """Undeclare the publisher."""
+        self._publisher.undeclare()
 
 
 @dataclass
@@ -251,6 +281,8 @@ class PlanService:
                 proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
             )
         )
+        self._watched = _GoalWatchers(s, self.prefix)  # before the plan queryable: _run asks it
+        self._entities.append(self._watched)
         self._entities.append(
             s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
         )
@@ -510,7 +542,7 @@ class PlanService:
                 )
             head = self._head(goal_id)
             status_key = proto.status_key(self.prefix, goal_id)
-            running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
+            watched = self._watched
             if job.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
@@ -520,26 +552,26 @@ class PlanService:
                 }
             else:
                 publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
-                self.session.put(
-                    status_key,
-                    head.encode() + running[1:],  # with the request: a watcher can draw the object
-                    encoding=_JSON,
-                    congestion_control=_BLOCK,
-                )
+                if watched():  # with the request: a watcher can draw the object
+                    running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
+                    self.session.put(
+                        status_key, head.encode() + running[1:], encoding=_JSON, congestion_control=_BLOCK
+                    )
                 result = self._plan(job, publisher, head)
                 if self._stopping:
                     raise proto.RequestError(
                         proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
                     )
             encoded = _encode(result)  # once, spliced into the status message and the reply
-            status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
             head_b = head.encode()
-            self.session.put(
-                status_key,
-                head_b + b'"state":"done",' + status + b',"result":' + encoded + b"}",
-                encoding=_JSON,
-                congestion_control=_BLOCK,
-            )
+            if watched():
+                status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
+                self.session.put(
+                    status_key,
+                    head_b + b'"state":"done",' + status + b',"result":' + encoded + b"}",
+                    encoding=_JSON,
+                    congestion_control=_BLOCK,
+                )
             answered = True
             with self._lock:  # counted first: the client may read the stats as soon as it has the reply
                 self.stats.replied_ok += 1
@@ -589,10 +621,13 @@ class PlanService:
         head += '"seq":'
         put = publisher.put
         record_json = proto.cycle_record_json
+        watched = self._watched
 
         def on_cycle(record: CycleRecord) -> None:
             nonlocal seq
             seq += 1
+            if not watched():  # nobody would receive it: numbered, not built nor sent
+                return
             if type(record) is CycleRecord:
                 body = record_json(record)
             else:  # a planner of another kind: its records' own JSON form
