@@ -11,10 +11,11 @@
    The baseline is ``plan(request, keep_trace=False)`` in this process with no
    cycle callback: what a caller pays without the service. Everything the
    service adds counts as overhead: encoding, sending, decoding and validating
-   the request, the hand-off to a worker, the ``running`` and ``done`` status
-   messages, JSON-encoding and publishing every cycle (the service always
-   publishes; "no stream" only means the client does not subscribe), the result
-   to JSON, the reply and its parsing. Measured in the same loop: a bare
+   the request, the hand-off to a worker, asking Zenoh whether anyone watches
+   the goal (the ``running`` and ``done`` status messages and every cycle are
+   built and published only when some subscriber matches; with "no stream"
+   nobody subscribes, with "live stream" the client does), the result to JSON,
+   the reply and its parsing. Measured in the same loop: a bare
    Zenoh get→reply to a queryable in another process answering from its own
    thread, with a request and a reply of the same sizes as the plan's (the
    transport floor in the same conditions). Goal: the 1-cycle plan's
@@ -313,6 +314,7 @@ def probe_server(port: int, out: str) -> None:
     sys.setswitchinterval(0.001)  # as eos serve
     _timed(proto, "decode_envelope", "decode0", "decode1")
     _timed(srv, "_encode", "json0", "json1")
+    _timed(srv._GoalWatchers, "now", "watch0", "watch1")
 
     class Result:
         def __init__(self, r: Any) -> None:
@@ -390,7 +392,8 @@ _STEPS = [
     ("admission0", "admission1", "server: admission (check_plannable)"),
     ("admission1", "admitted", "server: job, queue"),
     ("admitted", "worker", "server: wake the worker thread"),
-    ("worker", "running0", "server: message heads"),
+    ("worker", "watch0", "server: message heads"),
+    ("watch0", "watch1", "server: anyone watching? (matching status)"),
     ("running0", "running1", "server: put status running"),
     ("plan0", "plan1", "plan in the server (incl. cycles)"),
     ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),
@@ -487,29 +490,8 @@ def breakdown(n: int) -> None:
             print(f"   {what:<50} {m(steps[(a, b)]):8.0f} µs")
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
-    parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
-    parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
-    parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.echo_server is not None:
-        echo_server(*args.echo_server)
-        return 0
-    if args.probe_server is not None:
-        probe_server(int(args.probe_server[0]), args.probe_server[1])
-        return 0
-    if args.breakdown:
-        breakdown(40 if args.quick else 120)
-        return 0
-    n_rt = 60 if args.quick else 150
-    n_tp = 24 if args.quick else 40
-    version = importlib.metadata.version("eclipse-zenoh")
-    print(
-        f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
-        f"load average {os.getloadavg()[0]:.2f} (other processes share these CPUs)"
-    )
+def overhead_part(n_rt: int) -> None:
+    """Part 1: the round-trip overhead of a plan request over the in-process plan."""
     bare = bare_zenoh_round_trip(500)
     print(f"bare Zenoh get->reply round trip, back to back (two sessions, one process): {bare:.3f} ms median")
 
@@ -568,9 +550,11 @@ def main() -> int:
         "(the transport floor here)"
     )
 
+
+def scale_out_part(n_tp: int, rounds: int) -> None:
+    """Part 2: plans per second with one and with two service processes."""
     seeds = [1, 2, 3, 4, 6, 7]  # plans of 50-120 cycles
     requests = [PlanRequest(seed=seeds[i % len(seeds)]) for i in range(n_tp)]
-    rounds = 2 if args.quick else 4
     print(
         f"\n2. scale-out: {n_tp} plans (seeds {seeds}) per batch, 4 client threads, no stream; two eos serve "
         f"processes (one worker each), {rounds} rounds of alternating batches: 'one' = every plan to inst-0, "
@@ -591,6 +575,36 @@ def main() -> int:
         + ", ".join(f"{t} {'met' if r >= 1.8 else 'NOT met'}" for t, r in ratios.items())
         + f" (load average now {os.getloadavg()[0]:.2f}: other processes share the 2 CPUs)"
     )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
+    parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
+    parser.add_argument("--only", choices=("overhead", "scale-out"), help="run one of the two parts")
+    parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
+    parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.echo_server is not None:
+        echo_server(*args.echo_server)
+        return 0
+    if args.probe_server is not None:
+        probe_server(int(args.probe_server[0]), args.probe_server[1])
+        return 0
+    if args.breakdown:
+        breakdown(40 if args.quick else 120)
+        return 0
+    n_rt = 60 if args.quick else 150
+    n_tp = 24 if args.quick else 40
+    version = importlib.metadata.version("eclipse-zenoh")
+    print(
+        f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
+        f"load average {os.getloadavg()[0]:.2f} (other processes share these CPUs)"
+    )
+    if args.only != "scale-out":
+        overhead_part(n_rt)
+    if args.only != "overhead":
+        scale_out_part(n_tp, rounds=2 if args.quick else 4)
     return 0
 
 

@@ -226,6 +226,8 @@ class EosClient:
 
     def _choose(self, exclude: set[str]) -> str | None:
         with self._lock:
+            if len(self._live) == 1 and not exclude:  # one instance: no choice to make
+                return next(iter(self._live))
             candidates = sorted(self._live - exclude)
             if not candidates:
                 return None
@@ -355,9 +357,9 @@ class EosClient:
             self._inflight[iid] = self._inflight.get(iid, 0) + 1
         sub = None
         token = zenoh.CancellationToken()
-        stream = _Stream(iid, events)
+        stream = _Stream(iid, events) if watch else None
         try:
-            if watch:
+            if stream is not None:
                 sub = self.session.declare_subscriber(
                     proto.goal_keys(self.prefix, goal_id),
                     direct_callback(
@@ -389,7 +391,7 @@ class EosClient:
         iid: str,
         goal_id: str,
         events: queue.SimpleQueue[tuple[str, Any]],
-        stream: _Stream,
+        stream: _Stream | None,
         on_cycle: CycleHandler | None,
         watch: bool,
         timeout: float,
@@ -413,7 +415,7 @@ class EosClient:
                 kind, item = events.get(timeout=limit - now)
             except queue.Empty:
                 break
-            if kind == "sample":  # with on_cycle: parsed here, in the thread that called plan()
+            if kind == "sample" and stream is not None:  # with on_cycle: parsed in the thread of plan()
                 msg = stream.accept(item.payload.to_bytes())
                 if msg is None:
                     continue
@@ -441,8 +443,11 @@ class EosClient:
         if reply is None:
             raise _LostError("no reply before the timeout" if not ended else "no reply")
         result = reply.get("result", {})
-        with stream.lock:  # copies: Zenoh's thread may still append until the subscriber is undeclared
-            cycles, gaps = list(stream.cycles), list(stream.gaps)
+        cycles: list[dict[str, Any]] = []
+        gaps: list[int] = []
+        if stream is not None:
+            with stream.lock:  # copies: Zenoh's thread may still append until the subscriber is undeclared
+                cycles, gaps = list(stream.cycles), list(stream.gaps)
         return PlanOutcome(
             goal_id=goal_id,
             instance=str(reply.get("instance", iid)),

@@ -421,11 +421,17 @@ def encode_request(
     goal_id: str, request: PlanRequest | Mapping[str, Any], cancel_token: str | None = None
 ) -> bytes:
     """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,] <PlanRequest
-    fields>}``. Without a ``cancel_token`` nobody can cancel the goal."""
-    body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
+    fields>}``. Without a ``cancel_token`` nobody can cancel the goal.
+
+    A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
+    their shortest round-trip form, e.g. ``1e-5`` as ``1e-5``); a mapping is sent as given,
+    through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
     envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
     if cancel_token is not None:
         envelope["cancel_token"] = cancel_token
+    if isinstance(request, PlanRequest):
+        return _msgspec_encode({**envelope, **request.to_dict()})  # no key of the body is the envelope's
+    body = dict(request)
     if not body or body.keys() & envelope.keys():  # the body's fields win, as in a merged dict
         return dumps({**envelope, **body})
     # the envelope spliced before the body's own JSON (no merged dict): the same bytes
