@@ -47,6 +47,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from dataclasses import dataclass
 from typing import Any
 
 import zenoh
@@ -203,12 +204,43 @@ def start_clients_of(router_port: int, n: int, workers: int) -> list[Server]:
     return servers
 
 
-def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instance: str | None) -> float:
-    """Plans per second for ``requests`` sent by ``threads`` client threads (to ``instance`` only,
-    or spread over every instance)."""
+@dataclass
+class Batch:
+    """One batch of plans: its rate and where the time went."""
+
+    rate: float  #: plans per second
+    wall_s: float  #: the batch's duration (s)
+    plan_s: list[float]  #: each plan's own duration in its service process (``wall_time_s``)
+    processes: int  #: service processes the batch used
+    cpu_s: dict[str, float]  #: CPU time used during the batch (s): "client", "services", "router"
+
+    @property
+    def busy(self) -> float:
+        """Fraction of the processes' time spent planning (1: never idle)."""
+        return sum(self.plan_s) / (self.wall_s * self.processes)
+
+
+def _cpu_s(pid: int) -> float:
+    """CPU time (user + system, s) a process has used so far (Linux ``/proc``)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _batch(
+    client: EosClient,
+    requests: list[PlanRequest],
+    threads: int,
+    instance: str | None,
+    pids: dict[str, list[int]],
+) -> Batch:
+    """``requests`` sent by ``threads`` client threads (to ``instance`` only, or spread over every
+    instance); ``pids``: the processes whose CPU time to count, by role."""
     todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
     for r in requests:
         todo.put(r)
+    plan_s: list[float] = []
+    used: set[str] = set()
 
     def work() -> None:
         while True:
@@ -216,23 +248,32 @@ def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instanc
                 r = todo.get_nowait()
             except queue.Empty:
                 return
-            client.plan(r, watch=False, instance=instance)
+            out = client.plan(r, watch=False, instance=instance)
+            plan_s.append(float(out.result["wall_time_s"]))
+            used.add(out.instance)
+
+    def cpu() -> dict[str, float]:
+        out = {role: sum(_cpu_s(p) for p in ps) for role, ps in pids.items()}
+        return out | {"client": time.process_time()}
 
     pool = [threading.Thread(target=work) for _ in range(threads)]
+    cpu0 = cpu()
     t0 = time.perf_counter()
     for t in pool:
         t.start()
     for t in pool:
         t.join()
-    return len(requests) / (time.perf_counter() - t0)
+    wall = time.perf_counter() - t0
+    cpu1 = cpu()
+    return Batch(len(requests) / wall, wall, plan_s, len(used), {k: cpu1[k] - cpu0[k] for k in cpu1})
 
 
 def scale_out(
     requests: list[PlanRequest], threads: int, rounds: int, via_router: bool = False
-) -> tuple[list[float], list[float]]:
+) -> tuple[list[Batch], list[Batch]]:
     """Plans/s with one and with two service processes, in alternating batches on the same two
     processes (one worker each): "one" sends every plan to inst-0 (inst-1 idles), "two" spreads
-    them. Peer to peer, or every session a Zenoh client of a router process. Returns the rates
+    them. Peer to peer, or every session a Zenoh client of a router process. Returns the batches
     of each round: (one, two)."""
     router = None
     if via_router:
@@ -242,15 +283,19 @@ def scale_out(
     else:
         servers = start_servers(2, planner="grasp", workers=1)
         config = make_config(connect=[loopback(s.port) for s in servers])
-    one, two = [], []
+    one: list[Batch] = []
+    two: list[Batch] = []
     try:
         client = EosClient.open(config)
         client.wait_for_instances(2, timeout=15)
         for r in requests[:4]:  # warm-up: first plans in both processes
             client.plan(r, watch=False)
+        pids = {"services": [s.proc.pid for s in servers]}
+        if router is not None:
+            pids["router"] = [router.pid]
         for _ in range(rounds):
-            one.append(_batch(client, requests, threads, servers[0].instance))
-            two.append(_batch(client, requests, threads, None))
+            one.append(_batch(client, requests, threads, servers[0].instance, pids))
+            two.append(_batch(client, requests, threads, None, pids))
         client.close()
     finally:
         stop_servers(servers)
@@ -563,13 +608,32 @@ def scale_out_part(n_tp: int, rounds: int) -> None:
     ratios = {}
     for topology, via_router in (("peer to peer", False), ("through a router", True)):
         one, two = scale_out(requests, threads=4, rounds=rounds, via_router=via_router)
-        per_round = [b / a for a, b in zip(one, two, strict=True)]
+        per_round = [b.rate / a.rate for a, b in zip(one, two, strict=True)]
         ratios[topology] = statistics.median(per_round)
+        med = statistics.median
         print(
-            f"   {topology:<17} one {statistics.median(one):6.2f} plans/s, two {statistics.median(two):6.2f} "
-            f"plans/s; two / one per round {', '.join(f'{r:.2f}' for r in per_round)} -> median "
-            f"{ratios[topology]:.2f}x"
+            f"   {topology:<17} one {med(b.rate for b in one):6.2f} plans/s, two "
+            f"{med(b.rate for b in two):6.2f} plans/s; two / one per round "
+            f"{', '.join(f'{r:.2f}' for r in per_round)} -> median {ratios[topology]:.2f}x"
         )
+        # two / one = 2 x (busy two / busy one) / (plan time two / plan time one)
+        slower = med(med(b.plan_s) for b in two) / med(med(b.plan_s) for b in one)
+        print(
+            f"   {'':<17} where it goes: a plan takes {slower:.2f}x as long with two processes busy "
+            f"(median plan {med(med(b.plan_s) for b in one) * 1e3:.0f} -> "
+            f"{med(med(b.plan_s) for b in two) * 1e3:.0f} ms); time spent planning: one "
+            f"{med(b.busy for b in one):.0%}, two {med(b.busy for b in two):.0%} of each process's "
+            "time (the rest: idle between plans, request/reply, batch tail)"
+        )
+        for label, batches in (("one", one), ("two", two)):
+            n = len(requests)
+            cpu = {k: med(b.cpu_s[k] for b in batches) / n * 1e3 for k in batches[0].cpu_s}
+            plan_ms = med(sum(b.plan_s) for b in batches) / n * 1e3
+            print(
+                f"   {'':<17} CPU per plan ({label}): service processes {cpu['services']:.0f} ms (planning "
+                f"{plan_ms:.0f} ms of wall time), client process {cpu['client']:.1f} ms"
+                + (f", router {cpu['router']:.1f} ms" if "router" in cpu else "")
+            )
     print(
         "   goal ≥ 1.8x from one to two processes: "
         + ", ".join(f"{t} {'met' if r >= 1.8 else 'NOT met'}" for t, r in ratios.items())
