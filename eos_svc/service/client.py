@@ -35,6 +35,9 @@ from eos_svc.errors import EosError
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 
+_JSON = zenoh.Encoding.APPLICATION_JSON
+_NO_CONSOLIDATION = zenoh.ConsolidationMode.NONE
+
 #: called with every cycle message ``{"schema", "goal_id", "instance", "seq", "record"}``
 CycleHandler = Callable[[dict[str, Any]], None]
 
@@ -158,6 +161,7 @@ class EosClient:
         self._turn = itertools.count()
         self._owns_session = False
         self._tokens: dict[str, str] = {}  # goal id -> cancel token, while the plan is in flight
+        self._plan_keys: dict[str, zenoh.KeyExpr] = {}
         self._live_changed = threading.Condition(self._lock)
         self._token_sub = session.liveliness().declare_subscriber(
             proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
@@ -223,6 +227,15 @@ class EosClient:
                     )
                 self._live_changed.wait(left)
             return sorted(self._live)
+
+    def _plan_key(self, iid: str) -> zenoh.KeyExpr:
+        """The plan key of an instance, parsed by Zenoh once (kept for the instances seen)."""
+        key = self._plan_keys.get(iid)
+        if key is None:
+            key = zenoh.KeyExpr(proto.plan_key(self.prefix, iid))
+            if len(self._plan_keys) < 1024:  # bounded: instance ids come from the network
+                self._plan_keys[iid] = key
+        return key
 
     def _choose(self, exclude: set[str]) -> str | None:
         with self._lock:
@@ -367,11 +380,11 @@ class EosClient:
                     ),
                 )
             self.session.get(
-                proto.plan_key(self.prefix, iid),
+                self._plan_key(iid),
                 direct_callback(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
                 payload=payload,
-                encoding=zenoh.Encoding.APPLICATION_JSON,
-                consolidation=zenoh.ConsolidationMode.NONE,
+                encoding=_JSON,
+                consolidation=_NO_CONSOLIDATION,
                 timeout=timeout,
                 cancellation_token=token,
             )
@@ -477,7 +490,7 @@ class EosClient:
             proto.cancel_key(self.prefix, goal_id),
             payload=proto.encode_cancel(cancel_token),
             target=zenoh.QueryTarget.ALL,
-            consolidation=zenoh.ConsolidationMode.NONE,
+            consolidation=_NO_CONSOLIDATION,
             timeout=timeout,
         ):
             if reply.ok is not None:
