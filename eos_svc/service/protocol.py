@@ -33,11 +33,12 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 
 from __future__ import annotations
 
+import base64
 import hmac
 import json
 import math
+import os
 import re
-import secrets
 from collections.abc import Mapping
 from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
@@ -412,9 +413,25 @@ def cycle_record_json(record: CycleRecord) -> str:
     )
 
 
+#: fresh cancel tokens, made :data:`_TOKEN_BATCH` at a time (one ``os.urandom`` call, as
+#: ``secrets.token_urlsafe`` makes each); emptied in a forked child, which must not reuse its
+#: parent's secrets
+_TOKENS: list[str] = []
+_TOKEN_BATCH = 64
+os.register_at_fork(after_in_child=_TOKENS.clear)
+
+
 def new_cancel_token() -> str:
-    """A fresh random cancel token (128 bits, URL-safe)."""
-    return secrets.token_urlsafe(16)
+    """A fresh random cancel token: 128 bits from the OS's CSPRNG, URL-safe base64 (22 characters),
+    each handed out once (``list.pop`` is atomic: threads may share the batch)."""
+    try:
+        return _TOKENS.pop()
+    except IndexError:
+        raw = os.urandom(16 * _TOKEN_BATCH)
+        _TOKENS.extend(
+            base64.urlsafe_b64encode(raw[i : i + 16]).rstrip(b"=").decode() for i in range(0, len(raw), 16)
+        )
+        return _TOKENS.pop()
 
 
 def encode_request(

@@ -166,7 +166,6 @@ class _Job:
     request: PlanRequest
     cancel_token: str | None = None  # the owner's secret: a cancel must carry it
     cancel: CancelToken = field(default_factory=CancelToken)
-    received: float = field(default_factory=time.monotonic)
 
 
 @dataclass
@@ -246,6 +245,9 @@ class PlanService:
         self._owns_session = False
         self._started = False
         self._planner_kwargs: dict[str, Any] = {}
+        # cancel tokens made ahead, after a reply (off the next request's path): a token holds a
+        # threading.Event, slow to build in a process that has been idle
+        self._spare_cancels: list[CancelToken] = [CancelToken() for _ in range(workers + 1)]
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -456,7 +458,7 @@ class PlanService:
                 self._admission(request)
             except ValidationError as exc:  # the planner could not plan it: refused here, named
                 return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        job = _Job(query, goal_id, request, env.cancel_token)
+        job = _Job(query, goal_id, request, env.cancel_token, self._fresh_cancel())
         refusal: proto.RequestError
         with self._lock:
             if goal_id in self._active:
@@ -516,6 +518,13 @@ class PlanService:
         finally:
             query.drop()
 
+    def _fresh_cancel(self) -> CancelToken:
+        """A new cancel token: one made ahead if any is left (``list.pop`` is atomic)."""
+        try:
+            return self._spare_cancels.pop()
+        except IndexError:
+            return CancelToken()
+
     def _work(self) -> None:
         while True:
             job = self._jobs.get()
@@ -528,6 +537,8 @@ class PlanService:
             finally:
                 with self._lock:
                     self._active.pop(job.goal_id, None)
+                if len(self._spare_cancels) <= self.workers:  # the next request's, made now
+                    self._spare_cancels.append(CancelToken())
 
     def _status(self, goal_id: str, state: str, **extra: Any) -> None:
         """Publish a status message on the goal: :meth:`_head`, then ``state`` and ``extra``."""
