@@ -572,7 +572,10 @@ def overhead_part(n_rt: int) -> None:
     print(
         "   in-process: plan(request, keep_trace=False), no cycle callback; overhead = service - in-process,"
     )
-    print("   i.e. everything the service adds, including JSON-encoding and publishing every cycle")
+    print(
+        "   i.e. everything the service adds; cycles and status are built and published only when "
+        "someone subscribes (live stream)"
+    )
     print(
         f"   {'case':<38} {'in-process':>11} {'service':>9} {'overhead':>9} {'cycles':>7} "
         f"{'bare get->reply':>16}"

@@ -441,7 +441,7 @@ def encode_request(
     fields>}``. Without a ``cancel_token`` nobody can cancel the goal.
 
     A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
-    their shortest round-trip form, e.g. ``1e-5`` as ``1e-5``); a mapping is sent as given,
+    their shortest round-trip digits, e.g. ``1e-05`` as ``0.00001``); a mapping is sent as given,
     through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
     envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
     if cancel_token is not None:
