@@ -1,6 +1,6 @@
 """Speed of the EOS Zenoh service on loopback (one command).
 
-    .venv/bin/python benchmarks/bench_service.py [--quick] [--breakdown]
+    .venv/bin/python benchmarks/bench_service.py [--quick] [--only overhead|scale-out] [--breakdown]
 
 1. Round-trip overhead of a plan request over the same plan called in-process,
    medians of interleaved runs (service: ``eos serve`` in another process, one
@@ -26,7 +26,11 @@
    first, the second idle; "two": spread over both), so both figures share the
    machine's conditions; median of the per-round ratios. Peer to peer and
    through a router (a Python Zenoh router process; instances and the client
-   are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes.
+   are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes. Where the
+   time goes: each plan's own duration in its process (``wall_time_s``) with
+   one and with two processes busy, the fraction of each process's time spent
+   planning, and the CPU time per plan of the service processes, the client and
+   the router (``/proc``): which of them saturates, if any.
 
 ``--breakdown`` times one request's path across both processes (timestamps on
 the monotonic clock, which both share) and prints the median of every step.
