@@ -159,13 +159,36 @@ class _GoalWatchers:
         self._publisher.undeclare()
 
 
+class _GoalCancel(CancelToken):
+    """A goal's :class:`~eos_svc.controller.CancelToken` without its ``threading.Event``: a flag
+    set once (an attribute store, atomic under the GIL), read by the controller before every
+    cycle. Nothing waits on it, so no Event is needed; building one costs ≈ 9 µs back to back and
+    ≈ 0.1 ms in a process that has idled, on every request's path."""
+
+    __slots__ = ("_set",)
+
+    def __init__(self) -> None:  # no super().__init__(): no Event
+        self._set = False
+        self.reason = "cancelled"
+
+    def cancel(self, reason: str = "cancelled") -> None:
+        """Ask the run to stop before its next cycle."""
+        self.reason = reason
+        self._set = True
+
+    @property
+    def cancelled(self) -> bool:
+        """Whether :meth:`cancel` was called."""
+        return self._set
+
+
 @dataclass
 class _Job:
     query: zenoh.Query
     goal_id: str
     request: PlanRequest
     cancel_token: str | None = None  # the owner's secret: a cancel must carry it
-    cancel: CancelToken = field(default_factory=CancelToken)
+    cancel: CancelToken = field(default_factory=_GoalCancel)
 
 
 @dataclass
@@ -245,9 +268,6 @@ class PlanService:
         self._owns_session = False
         self._started = False
         self._planner_kwargs: dict[str, Any] = {}
-        # cancel tokens made ahead, after a reply (off the next request's path): a token holds a
-        # threading.Event, slow to build in a process that has been idle
-        self._spare_cancels: list[CancelToken] = [CancelToken() for _ in range(workers + 1)]
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -458,7 +478,7 @@ class PlanService:
                 self._admission(request)
             except ValidationError as exc:  # the planner could not plan it: refused here, named
                 return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        job = _Job(query, goal_id, request, env.cancel_token, self._fresh_cancel())
+        job = _Job(query, goal_id, request, env.cancel_token, _GoalCancel())
         refusal: proto.RequestError
         with self._lock:
             if goal_id in self._active:
@@ -518,13 +538,6 @@ class PlanService:
         finally:
             query.drop()
 
-    def _fresh_cancel(self) -> CancelToken:
-        """A new cancel token: one made ahead if any is left (``list.pop`` is atomic)."""
-        try:
-            return self._spare_cancels.pop()
-        except IndexError:
-            return CancelToken()
-
     def _work(self) -> None:
         while True:
             job = self._jobs.get()
@@ -537,8 +550,6 @@ class PlanService:
             finally:
                 with self._lock:
                     self._active.pop(job.goal_id, None)
-                if len(self._spare_cancels) <= self.workers:  # the next request's, made now
-                    self._spare_cancels.append(CancelToken())
 
     def _status(self, goal_id: str, state: str, **extra: Any) -> None:
         """Publish a status message on the goal: :meth:`_head`, then ``state`` and ``extra``."""
