@@ -1,6 +1,6 @@
 """Speed of the EOS Zenoh service on loopback (one command).
 
-    .venv/bin/python benchmarks/bench_service.py [--quick] [--breakdown]
+    .venv/bin/python benchmarks/bench_service.py [--quick] [--only overhead|scale-out] [--breakdown]
 
 1. Round-trip overhead of a plan request over the same plan called in-process,
    medians of interleaved runs (service: ``eos serve`` in another process, one
@@ -11,10 +11,11 @@
    The baseline is ``plan(request, keep_trace=False)`` in this process with no
    cycle callback: what a caller pays without the service. Everything the
    service adds counts as overhead: encoding, sending, decoding and validating
-   the request, the hand-off to a worker, the ``running`` and ``done`` status
-   messages, JSON-encoding and publishing every cycle (the service always
-   publishes; "no stream" only means the client does not subscribe), the result
-   to JSON, the reply and its parsing. Measured in the same loop: a bare
+   the request, the hand-off to a worker, asking Zenoh whether anyone watches
+   the goal (the ``running`` and ``done`` status messages and every cycle are
+   built and published only when some subscriber matches; with "no stream"
+   nobody subscribes, with "live stream" the client does), the result to JSON,
+   the reply and its parsing. Measured in the same loop: a bare
    Zenoh get→reply to a queryable in another process answering from its own
    thread, with a request and a reply of the same sizes as the plan's (the
    transport floor in the same conditions). Goal: the 1-cycle plan's
@@ -25,7 +26,11 @@
    first, the second idle; "two": spread over both), so both figures share the
    machine's conditions; median of the per-round ratios. Peer to peer and
    through a router (a Python Zenoh router process; instances and the client
-   are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes.
+   are Zenoh clients of it). Goal: ≥ 1.8× from one to two processes. Where the
+   time goes: each plan's own duration in its process (``wall_time_s``) with
+   one and with two processes busy, the fraction of each process's time spent
+   planning, and the CPU time per plan of the service processes, the client and
+   the router (``/proc``): which of them saturates, if any.
 
 ``--breakdown`` times one request's path across both processes (timestamps on
 the monotonic clock, which both share) and prints the median of every step.
@@ -46,6 +51,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from dataclasses import dataclass
 from typing import Any
 
 import zenoh
@@ -202,12 +208,43 @@ def start_clients_of(router_port: int, n: int, workers: int) -> list[Server]:
     return servers
 
 
-def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instance: str | None) -> float:
-    """Plans per second for ``requests`` sent by ``threads`` client threads (to ``instance`` only,
-    or spread over every instance)."""
+@dataclass
+class Batch:
+    """One batch of plans: its rate and where the time went."""
+
+    rate: float  #: plans per second
+    wall_s: float  #: the batch's duration (s)
+    plan_s: list[float]  #: each plan's own duration in its service process (``wall_time_s``)
+    processes: int  #: service processes the batch used
+    cpu_s: dict[str, float]  #: CPU time used during the batch (s): "client", "services", "router"
+
+    @property
+    def busy(self) -> float:
+        """Fraction of the processes' time spent planning (1: never idle)."""
+        return sum(self.plan_s) / (self.wall_s * self.processes)
+
+
+def _cpu_s(pid: int) -> float:
+    """CPU time (user + system, s) a process has used so far (Linux ``/proc``)."""
+    with open(f"/proc/{pid}/stat") as f:
+        fields = f.read().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
+def _batch(
+    client: EosClient,
+    requests: list[PlanRequest],
+    threads: int,
+    instance: str | None,
+    pids: dict[str, list[int]],
+) -> Batch:
+    """``requests`` sent by ``threads`` client threads (to ``instance`` only, or spread over every
+    instance); ``pids``: the processes whose CPU time to count, by role."""
     todo: queue.SimpleQueue[PlanRequest] = queue.SimpleQueue()
     for r in requests:
         todo.put(r)
+    plan_s: list[float] = []
+    used: set[str] = set()
 
     def work() -> None:
         while True:
@@ -215,23 +252,32 @@ def _batch(client: EosClient, requests: list[PlanRequest], threads: int, instanc
                 r = todo.get_nowait()
             except queue.Empty:
                 return
-            client.plan(r, watch=False, instance=instance)
+            out = client.plan(r, watch=False, instance=instance)
+            plan_s.append(float(out.result["wall_time_s"]))
+            used.add(out.instance)
+
+    def cpu() -> dict[str, float]:
+        out = {role: sum(_cpu_s(p) for p in ps) for role, ps in pids.items()}
+        return out | {"client": time.process_time()}
 
     pool = [threading.Thread(target=work) for _ in range(threads)]
+    cpu0 = cpu()
     t0 = time.perf_counter()
     for t in pool:
         t.start()
     for t in pool:
         t.join()
-    return len(requests) / (time.perf_counter() - t0)
+    wall = time.perf_counter() - t0
+    cpu1 = cpu()
+    return Batch(len(requests) / wall, wall, plan_s, len(used), {k: cpu1[k] - cpu0[k] for k in cpu1})
 
 
 def scale_out(
     requests: list[PlanRequest], threads: int, rounds: int, via_router: bool = False
-) -> tuple[list[float], list[float]]:
+) -> tuple[list[Batch], list[Batch]]:
     """Plans/s with one and with two service processes, in alternating batches on the same two
     processes (one worker each): "one" sends every plan to inst-0 (inst-1 idles), "two" spreads
-    them. Peer to peer, or every session a Zenoh client of a router process. Returns the rates
+    them. Peer to peer, or every session a Zenoh client of a router process. Returns the batches
     of each round: (one, two)."""
     router = None
     if via_router:
@@ -241,15 +287,19 @@ def scale_out(
     else:
         servers = start_servers(2, planner="grasp", workers=1)
         config = make_config(connect=[loopback(s.port) for s in servers])
-    one, two = [], []
+    one: list[Batch] = []
+    two: list[Batch] = []
     try:
         client = EosClient.open(config)
         client.wait_for_instances(2, timeout=15)
         for r in requests[:4]:  # warm-up: first plans in both processes
             client.plan(r, watch=False)
+        pids = {"services": [s.proc.pid for s in servers]}
+        if router is not None:
+            pids["router"] = [router.pid]
         for _ in range(rounds):
-            one.append(_batch(client, requests, threads, servers[0].instance))
-            two.append(_batch(client, requests, threads, None))
+            one.append(_batch(client, requests, threads, servers[0].instance, pids))
+            two.append(_batch(client, requests, threads, None, pids))
         client.close()
     finally:
         stop_servers(servers)
@@ -313,6 +363,7 @@ def probe_server(port: int, out: str) -> None:
     sys.setswitchinterval(0.001)  # as eos serve
     _timed(proto, "decode_envelope", "decode0", "decode1")
     _timed(srv, "_encode", "json0", "json1")
+    _timed(srv._GoalWatchers, "now", "watch0", "watch1")
 
     class Result:
         def __init__(self, r: Any) -> None:
@@ -390,7 +441,8 @@ _STEPS = [
     ("admission0", "admission1", "server: admission (check_plannable)"),
     ("admission1", "admitted", "server: job, queue"),
     ("admitted", "worker", "server: wake the worker thread"),
-    ("worker", "running0", "server: message heads"),
+    ("worker", "watch0", "server: message heads"),
+    ("watch0", "watch1", "server: anyone watching? (matching status)"),
     ("running0", "running1", "server: put status running"),
     ("plan0", "plan1", "plan in the server (incl. cycles)"),
     ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),
@@ -487,29 +539,8 @@ def breakdown(n: int) -> None:
             print(f"   {what:<50} {m(steps[(a, b)]):8.0f} µs")
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
-    parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
-    parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
-    parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
-    args = parser.parse_args()
-    if args.echo_server is not None:
-        echo_server(*args.echo_server)
-        return 0
-    if args.probe_server is not None:
-        probe_server(int(args.probe_server[0]), args.probe_server[1])
-        return 0
-    if args.breakdown:
-        breakdown(40 if args.quick else 120)
-        return 0
-    n_rt = 60 if args.quick else 150
-    n_tp = 24 if args.quick else 40
-    version = importlib.metadata.version("eclipse-zenoh")
-    print(
-        f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
-        f"load average {os.getloadavg()[0]:.2f} (other processes share these CPUs)"
-    )
+def overhead_part(n_rt: int) -> None:
+    """Part 1: the round-trip overhead of a plan request over the in-process plan."""
     bare = bare_zenoh_round_trip(500)
     print(f"bare Zenoh get->reply round trip, back to back (two sessions, one process): {bare:.3f} ms median")
 
@@ -545,7 +576,10 @@ def main() -> int:
     print(
         "   in-process: plan(request, keep_trace=False), no cycle callback; overhead = service - in-process,"
     )
-    print("   i.e. everything the service adds, including JSON-encoding and publishing every cycle")
+    print(
+        "   i.e. everything the service adds; cycles and status are built and published only when "
+        "someone subscribes (live stream)"
+    )
     print(
         f"   {'case':<38} {'in-process':>11} {'service':>9} {'overhead':>9} {'cycles':>7} "
         f"{'bare get->reply':>16}"
@@ -568,9 +602,11 @@ def main() -> int:
         "(the transport floor here)"
     )
 
+
+def scale_out_part(n_tp: int, rounds: int) -> None:
+    """Part 2: plans per second with one and with two service processes."""
     seeds = [1, 2, 3, 4, 6, 7]  # plans of 50-120 cycles
     requests = [PlanRequest(seed=seeds[i % len(seeds)]) for i in range(n_tp)]
-    rounds = 2 if args.quick else 4
     print(
         f"\n2. scale-out: {n_tp} plans (seeds {seeds}) per batch, 4 client threads, no stream; two eos serve "
         f"processes (one worker each), {rounds} rounds of alternating batches: 'one' = every plan to inst-0, "
@@ -579,18 +615,67 @@ def main() -> int:
     ratios = {}
     for topology, via_router in (("peer to peer", False), ("through a router", True)):
         one, two = scale_out(requests, threads=4, rounds=rounds, via_router=via_router)
-        per_round = [b / a for a, b in zip(one, two, strict=True)]
+        per_round = [b.rate / a.rate for a, b in zip(one, two, strict=True)]
         ratios[topology] = statistics.median(per_round)
+        med = statistics.median
         print(
-            f"   {topology:<17} one {statistics.median(one):6.2f} plans/s, two {statistics.median(two):6.2f} "
-            f"plans/s; two / one per round {', '.join(f'{r:.2f}' for r in per_round)} -> median "
-            f"{ratios[topology]:.2f}x"
+            f"   {topology:<17} one {med(b.rate for b in one):6.2f} plans/s, two "
+            f"{med(b.rate for b in two):6.2f} plans/s; two / one per round "
+            f"{', '.join(f'{r:.2f}' for r in per_round)} -> median {ratios[topology]:.2f}x"
         )
+        # two / one = 2 x (busy two / busy one) / (plan time two / plan time one)
+        slower = med(med(b.plan_s) for b in two) / med(med(b.plan_s) for b in one)
+        print(
+            f"   {'':<17} where it goes: a plan takes {slower:.2f}x as long with two processes busy "
+            f"(median plan {med(med(b.plan_s) for b in one) * 1e3:.0f} -> "
+            f"{med(med(b.plan_s) for b in two) * 1e3:.0f} ms); time spent planning: one "
+            f"{med(b.busy for b in one):.0%}, two {med(b.busy for b in two):.0%} of each process's "
+            "time (the rest: idle between plans, request/reply, batch tail)"
+        )
+        for label, batches in (("one", one), ("two", two)):
+            n = len(requests)
+            cpu = {k: med(b.cpu_s[k] for b in batches) / n * 1e3 for k in batches[0].cpu_s}
+            plan_ms = med(sum(b.plan_s) for b in batches) / n * 1e3
+            print(
+                f"   {'':<17} CPU per plan ({label}): service processes {cpu['services']:.0f} ms (planning "
+                f"{plan_ms:.0f} ms of wall time), client process {cpu['client']:.1f} ms"
+                + (f", router {cpu['router']:.1f} ms" if "router" in cpu else "")
+            )
     print(
         "   goal ≥ 1.8x from one to two processes: "
         + ", ".join(f"{t} {'met' if r >= 1.8 else 'NOT met'}" for t, r in ratios.items())
         + f" (load average now {os.getloadavg()[0]:.2f}: other processes share the 2 CPUs)"
     )
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repetitions")
+    parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
+    parser.add_argument("--only", choices=("overhead", "scale-out"), help="run one of the two parts")
+    parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
+    parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.echo_server is not None:
+        echo_server(*args.echo_server)
+        return 0
+    if args.probe_server is not None:
+        probe_server(int(args.probe_server[0]), args.probe_server[1])
+        return 0
+    if args.breakdown:
+        breakdown(40 if args.quick else 120)
+        return 0
+    n_rt = 60 if args.quick else 150
+    n_tp = 24 if args.quick else 40
+    version = importlib.metadata.version("eclipse-zenoh")
+    print(
+        f"bench_service: {os.cpu_count()} CPU(s), Python {sys.version.split()[0]}, eclipse-zenoh {version}, "
+        f"load average {os.getloadavg()[0]:.2f} (other processes share these CPUs)"
+    )
+    if args.only != "scale-out":
+        overhead_part(n_rt)
+    if args.only != "overhead":
+        scale_out_part(n_tp, rounds=2 if args.quick else 4)
     return 0
 
 

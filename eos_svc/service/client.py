@@ -35,6 +35,9 @@ from eos_svc.errors import EosError
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 
+_JSON = zenoh.Encoding.APPLICATION_JSON
+_NO_CONSOLIDATION = zenoh.ConsolidationMode.NONE
+
 #: called with every cycle message ``{"schema", "goal_id", "instance", "seq", "record"}``
 CycleHandler = Callable[[dict[str, Any]], None]
 
@@ -158,6 +161,7 @@ class EosClient:
         self._turn = itertools.count()
         self._owns_session = False
         self._tokens: dict[str, str] = {}  # goal id -> cancel token, while the plan is in flight
+        self._plan_keys: dict[str, zenoh.KeyExpr] = {}
         self._live_changed = threading.Condition(self._lock)
         self._token_sub = session.liveliness().declare_subscriber(
             proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
@@ -224,8 +228,19 @@ class EosClient:
                 self._live_changed.wait(left)
             return sorted(self._live)
 
+    def _plan_key(self, iid: str) -> zenoh.KeyExpr:
+        """The plan key of an instance, parsed by Zenoh once (kept for the instances seen)."""
+        key = self._plan_keys.get(iid)
+        if key is None:
+            key = zenoh.KeyExpr(proto.plan_key(self.prefix, iid))
+            if len(self._plan_keys) < 1024:  # bounded: instance ids come from the network
+                self._plan_keys[iid] = key
+        return key
+
     def _choose(self, exclude: set[str]) -> str | None:
         with self._lock:
+            if len(self._live) == 1 and not exclude:  # one instance: no choice to make
+                return next(iter(self._live))
             candidates = sorted(self._live - exclude)
             if not candidates:
                 return None
@@ -355,9 +370,9 @@ class EosClient:
             self._inflight[iid] = self._inflight.get(iid, 0) + 1
         sub = None
         token = zenoh.CancellationToken()
-        stream = _Stream(iid, events)
+        stream = _Stream(iid, events) if watch else None
         try:
-            if watch:
+            if stream is not None:
                 sub = self.session.declare_subscriber(
                     proto.goal_keys(self.prefix, goal_id),
                     direct_callback(
@@ -365,11 +380,11 @@ class EosClient:
                     ),
                 )
             self.session.get(
-                proto.plan_key(self.prefix, iid),
+                self._plan_key(iid),
                 direct_callback(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
                 payload=payload,
-                encoding=zenoh.Encoding.APPLICATION_JSON,
-                consolidation=zenoh.ConsolidationMode.NONE,
+                encoding=_JSON,
+                consolidation=_NO_CONSOLIDATION,
                 timeout=timeout,
                 cancellation_token=token,
             )
@@ -389,7 +404,7 @@ class EosClient:
         iid: str,
         goal_id: str,
         events: queue.SimpleQueue[tuple[str, Any]],
-        stream: _Stream,
+        stream: _Stream | None,
         on_cycle: CycleHandler | None,
         watch: bool,
         timeout: float,
@@ -413,7 +428,7 @@ class EosClient:
                 kind, item = events.get(timeout=limit - now)
             except queue.Empty:
                 break
-            if kind == "sample":  # with on_cycle: parsed here, in the thread that called plan()
+            if kind == "sample" and stream is not None:  # with on_cycle: parsed in the thread of plan()
                 msg = stream.accept(item.payload.to_bytes())
                 if msg is None:
                     continue
@@ -441,8 +456,11 @@ class EosClient:
         if reply is None:
             raise _LostError("no reply before the timeout" if not ended else "no reply")
         result = reply.get("result", {})
-        with stream.lock:  # copies: Zenoh's thread may still append until the subscriber is undeclared
-            cycles, gaps = list(stream.cycles), list(stream.gaps)
+        cycles: list[dict[str, Any]] = []
+        gaps: list[int] = []
+        if stream is not None:
+            with stream.lock:  # copies: Zenoh's thread may still append until the subscriber is undeclared
+                cycles, gaps = list(stream.cycles), list(stream.gaps)
         return PlanOutcome(
             goal_id=goal_id,
             instance=str(reply.get("instance", iid)),
@@ -472,7 +490,7 @@ class EosClient:
             proto.cancel_key(self.prefix, goal_id),
             payload=proto.encode_cancel(cancel_token),
             target=zenoh.QueryTarget.ALL,
-            consolidation=zenoh.ConsolidationMode.NONE,
+            consolidation=_NO_CONSOLIDATION,
             timeout=timeout,
         ):
             if reply.ok is not None:

@@ -33,11 +33,12 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 
 from __future__ import annotations
 
+import base64
 import hmac
 import json
 import math
+import os
 import re
-import secrets
 from collections.abc import Mapping
 from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
@@ -412,20 +413,42 @@ def cycle_record_json(record: CycleRecord) -> str:
     )
 
 
+#: fresh cancel tokens, made :data:`_TOKEN_BATCH` at a time (one ``os.urandom`` call, as
+#: ``secrets.token_urlsafe`` makes each); emptied in a forked child, which must not reuse its
+#: parent's secrets
+_TOKENS: list[str] = []
+_TOKEN_BATCH = 64
+os.register_at_fork(after_in_child=_TOKENS.clear)
+
+
 def new_cancel_token() -> str:
-    """A fresh random cancel token (128 bits, URL-safe)."""
-    return secrets.token_urlsafe(16)
+    """A fresh random cancel token: 128 bits from the OS's CSPRNG, URL-safe base64 (22 characters),
+    each handed out once (``list.pop`` is atomic: threads may share the batch)."""
+    try:
+        return _TOKENS.pop()
+    except IndexError:
+        raw = os.urandom(16 * _TOKEN_BATCH)
+        _TOKENS.extend(
+            base64.urlsafe_b64encode(raw[i : i + 16]).rstrip(b"=").decode() for i in range(0, len(raw), 16)
+        )
+        return _TOKENS.pop()
 
 
 def encode_request(
     goal_id: str, request: PlanRequest | Mapping[str, Any], cancel_token: str | None = None
 ) -> bytes:
     """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,] <PlanRequest
-    fields>}``. Without a ``cancel_token`` nobody can cancel the goal."""
-    body = request.to_dict() if isinstance(request, PlanRequest) else dict(request)
+    fields>}``. Without a ``cancel_token`` nobody can cancel the goal.
+
+    A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
+    their shortest round-trip digits, e.g. ``1e-05`` as ``0.00001``); a mapping is sent as given,
+    through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
     envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
     if cancel_token is not None:
         envelope["cancel_token"] = cancel_token
+    if isinstance(request, PlanRequest):
+        return _msgspec_encode({**envelope, **request.to_dict()})  # no key of the body is the envelope's
+    body = dict(request)
     if not body or body.keys() & envelope.keys():  # the body's fields win, as in a merged dict
         return dumps({**envelope, **body})
     # the envelope spliced before the body's own JSON (no merged dict): the same bytes

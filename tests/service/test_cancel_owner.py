@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import os
 import threading
 from typing import Any
 
@@ -93,3 +94,19 @@ def test_a_malformed_cancel_token_in_a_request_is_named():
     with pytest.raises(proto.RequestError) as info:
         proto.decode_request(proto.encode_request("g1", PlanRequest(), "short"))
     assert (info.value.code, info.value.field) == (proto.E_INVALID, "cancel_token")
+
+
+def test_cancel_tokens_are_unique_and_not_shared_with_a_forked_child():
+    tokens = {proto.new_cancel_token() for _ in range(500)}  # several batches
+    assert len(tokens) == 500 and all(proto.TOKEN_PATTERN.fullmatch(t) for t in tokens)
+    read_end, write_end = os.pipe()
+    pid = os.fork()  # the parent holds a batch of unused tokens now
+    if pid == 0:  # pragma: no cover - the child
+        os.write(write_end, proto.new_cancel_token().encode())
+        os._exit(0)
+    os.waitpid(pid, 0)
+    child_token = os.read(read_end, 64).decode()
+    os.close(read_end)
+    os.close(write_end)
+    parent_tokens = {proto.new_cancel_token() for _ in range(64)}  # at least the rest of the batch
+    assert proto.TOKEN_PATTERN.fullmatch(child_token) and child_token not in parent_tokens | tokens

@@ -200,7 +200,38 @@ def test_loads_strict_reads_what_json_loads_reads(payload):
 )
 def test_encode_request_is_the_merged_envelope(body):
     merged = body.to_dict() if isinstance(body, PlanRequest) else dict(body)
-    assert proto.encode_request("g-1", body) == proto.dumps({"schema": 1, "goal_id": "g-1", **merged})
+    encoded = proto.encode_request("g-1", body)
+    if isinstance(body, PlanRequest):  # msgspec's float text: the same values, read back exactly
+        assert proto.loads_strict(encoded) == {"schema": 1, "goal_id": "g-1", **merged}
+        assert proto.decode_request(encoded) == ("g-1", body)
+    else:
+        assert encoded == proto.dumps({"schema": 1, "goal_id": "g-1", **merged})
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_encoded_plan_requests_read_back_exactly(seed):
+    """Random requests (tiny and huge floats, -0.0): what the client writes, the service reads as sent."""
+    import random
+
+    rng = random.Random(seed)
+    for _ in range(300):
+        a = rng.random()
+        req = PlanRequest.from_dict(
+            {
+                "object": {
+                    "shape": "box",
+                    "size": [rng.uniform(1e-9, 0.1) for _ in range(3)],
+                    "position": [rng.uniform(-1, 1) * 10 ** rng.randint(-300, 1) for _ in range(3)],
+                    "rpy": [rng.uniform(-3, 3), 0.0, -0.0],
+                },
+                "weights": {"default": a, "opportunistic": 1.0 - a},
+                "seed": rng.randint(0, 2**63 - 1),
+                "tactile_noise": rng.uniform(0, 0.01),
+                "deadline_s": rng.choice([None, 1e-9, 3.0]),
+            }
+        )
+        payload = proto.encode_request("g-2", req, proto.new_cancel_token())
+        assert proto.decode_request(payload) == ("g-2", req)
 
 
 def test_cycle_record_json_from_concurrent_workers_with_different_weights():
