@@ -466,6 +466,24 @@ class ClassStarts:
         lo, hi = S.min(axis=0), S.max(axis=0)
         self.surface, self.mid = S, 0.5 * (lo + hi)
         self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+        self._evaluations: dict[tuple[str, int], _Evaluations] = {}
+
+    @cached_property
+    def fit_data(self) -> FitData:
+        """The touches' :class:`FitData`, shared by every fit."""
+        return FitData.of(self.touches)
+
+    def evaluations(self, kind: str, index: int) -> _Evaluations:
+        """The :class:`_Evaluations` of ``kind`` about its start ``index``'s orientation, one
+        per select: a fit of the class from that start again (a screening, a quick fit, the
+        full fit: MINPACK from the same start takes the same first steps) finds the points
+        already evaluated (the same bits: each point's residuals and Jacobian depend on it
+        alone)."""
+        key = (kind, index)
+        if key not in self._evaluations:
+            r0 = self.of(kind)[index][1]
+            self._evaluations[key] = _Evaluations(kind, r0, self.touches, self.fit_data)
+        return self._evaluations[key]
 
     def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
         """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
@@ -601,8 +619,11 @@ class _Evaluations:
         return self.known[key]
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
-        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them)."""
-        return self._evaluate(theta)[0]
+        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them):
+        a copy, the remembered ones stay as evaluated (scipy's ``leastsq`` keeps the array of
+        the first call as MINPACK's working residuals and overwrites it)."""
+        out: np.ndarray = self._evaluate(theta)[0].copy()
+        return out
 
     def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
         """The (m, k) forward-difference Jacobian at ``theta``."""
@@ -671,7 +692,8 @@ def fit_class(
     be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
     ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
     not in :func:`starts`' order. ``class_starts``: the touches' :class:`ClassStarts` (shared
-    by the fits of several classes to the same touches), else computed here.
+    by the fits of several classes to the same touches, with the points each start's fits
+    evaluated), else computed here.
 
     The fit from the first start alone (``max_starts=1``) *is* the fit with the same
     ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
@@ -682,12 +704,12 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
-    data = FitData.of(touches)
-    candidates = (ClassStarts(touches) if class_starts is None else class_starts).of(kind)
+    shared = ClassStarts(touches) if class_starts is None else class_starts
+    candidates = shared.of(kind)
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
-        evaluations = _Evaluations(kind, r0, touches, data)
+        evaluations = shared.evaluations(kind, index)
         if m >= k:
             theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev, evaluations)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can

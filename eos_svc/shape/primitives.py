@@ -132,19 +132,43 @@ def ellipsoid(
     largest step is below that bound: each group's roots are, to the bit, those of a separate
     call on its rows alone (several evaluations in one call, as :mod:`eos_svc.shape.fit`
     batches them).
+
+    The arithmetic runs on the coordinates as three contiguous planes
+    (:func:`_ellipsoid_planes`): every operation is the same elementwise one on the same
+    numbers (the same bits as on (..., 3) rows), without numpy's strided and broadcast loops.
     """
-    a = radii  # broadcast against P by every operation (the same numbers as a full array)
+    planes = np.moveaxis(P, -1, 0).copy()
+    a = np.moveaxis(np.broadcast_to(radii, P.shape), -1, 0).copy()
+    d, g = _ellipsoid_planes(planes, a, iterations, groups)
+    return d, np.moveaxis(g, 0, -1).copy()
+
+
+def _sum_planes(v: Array) -> Array:
+    """``(v₀ + v₁) + v₂`` over the first axis (of length 3): :func:`sum3`'s order."""
+    out: Array = v[0] + v[1] + v[2]
+    return out
+
+
+def _ellipsoid_planes(
+    P: Array, a: Array, iterations: int, groups: Array | None
+) -> tuple[Array, Array]:
+    """:func:`ellipsoid` on coordinate planes: ``P`` and the semi-axes ``a`` both (3, ...)
+    contiguous; returns the distance (...) and the gradient as planes (3, ...)."""
     a2 = a * a
-    inside = sum3((P / a) ** 2) < 1.0
-    t = ellipsoid_root_lower_bound(P, a, inside)
+    inside = _sum_planes((P / a) ** 2) < 1.0
+    # ellipsoid_root_lower_bound's arithmetic, on planes
+    amin2 = np.minimum(np.minimum(a[0], a[1]), a[2]) ** 2
+    floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
+    low = a * np.abs(P) - a2
+    t = np.maximum(np.maximum(np.maximum(low[0], low[1]), low[2]), floor)
     ap2 = (a * P) ** 2
-    bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
+    bounds = [(0, len(t))] if groups is None else list(zip(groups, [*groups[1:], len(t)], strict=True))
     moving = bounds  # the groups still iterating, (first row, end)
     for _ in range(iterations):
-        inv = 1.0 / (t[..., None] + a2)
+        inv = 1.0 / (t + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = sum3(uu)  # h⁻²
-        slope = sum3(uu * inv)  # h' · h⁻³
+        total = _sum_planes(uu)  # h⁻²
+        slope = _sum_planes(uu * inv)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
         if moving is bounds and len(bounds) == 1:  # one group: the whole call
             t = t + step
@@ -160,12 +184,14 @@ def ellipsoid(
         moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
         if not moving:
             break
-    S = a2 * P / (t[..., None] + a2)
+    S = a2 * P / (t + a2)
     v = P - S
-    dist = norm(v)
+    dist = np.sqrt(_sum_planes(v * v))
     sign = np.where(inside, -1.0, 1.0)
     away = dist > 1e-12
-    g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+    g = sign * v / np.maximum(dist, 1e-12)
     if not away.all():  # on the surface: the normal there
-        g = np.where(away[..., None], g, _unit(S / a2, (0.0, 0.0, 1.0)))
+        n = S / a2
+        unit = np.moveaxis(_unit(np.moveaxis(n, 0, -1), (0.0, 0.0, 1.0)), -1, 0)
+        g = np.where(away, g, unit)
     return sign * dist, g
