@@ -136,8 +136,10 @@ def batch_signed_distance(
     local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
-    elif kind == "ellipsoid":
-        d, g = primitives.ellipsoid(local, sizes[:, None, :], groups=groups)
+    elif kind == "ellipsoid":  # on coordinate planes (3, K, N) (primitives.ellipsoid_planes)
+        planes, radii = local.transpose(2, 0, 1).copy(), sizes.T[:, :, None].repeat(local.shape[1], 2)
+        d, g_planes = primitives.ellipsoid_planes(planes, radii, groups=groups)
+        g = g_planes.transpose(1, 2, 0).copy()
     elif kind == "box":
         d, g = primitives.box(local, sizes[:, None, :])
     elif kind == "cylinder":

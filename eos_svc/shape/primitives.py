@@ -40,6 +40,8 @@ def norm(v: Array) -> Array:
 
 # a reduction as a ufunc method: np.max's arithmetic without its wrapper
 _max = np.maximum.reduce
+# the largest of each of several consecutive slices (their first indices): reduceat
+_max_at = np.maximum.reduceat
 #: the coordinate axes' indices, to compare with an argmax
 _AXES = np.arange(3)
 
@@ -134,13 +136,14 @@ def ellipsoid(
     batches them).
 
     The arithmetic runs on the coordinates as three contiguous planes
-    (:func:`_ellipsoid_planes`): every operation is the same elementwise one on the same
+    (:func:`ellipsoid_planes`): every operation is the same elementwise one on the same
     numbers (the same bits as on (..., 3) rows), without numpy's strided and broadcast loops.
     """
-    planes = np.moveaxis(P, -1, 0).copy()
-    a = np.moveaxis(np.broadcast_to(radii, P.shape), -1, 0).copy()
-    d, g = _ellipsoid_planes(planes, a, iterations, groups)
-    return d, np.moveaxis(g, 0, -1).copy()
+    last = P.ndim - 1
+    planes = P.transpose(last, *range(last)).copy()
+    a = radii if np.shape(radii) == P.shape else np.broadcast_to(radii, P.shape)
+    d, g = ellipsoid_planes(planes, a.transpose(last, *range(last)).copy(), iterations, groups)
+    return d, g.transpose(*range(1, P.ndim), 0).copy()
 
 
 def _sum_planes(v: Array) -> Array:
@@ -149,11 +152,11 @@ def _sum_planes(v: Array) -> Array:
     return out
 
 
-def _ellipsoid_planes(
-    P: Array, a: Array, iterations: int, groups: Array | None
+def ellipsoid_planes(
+    P: Array, a: Array, iterations: int = 30, groups: Array | None = None
 ) -> tuple[Array, Array]:
     """:func:`ellipsoid` on coordinate planes: ``P`` and the semi-axes ``a`` both (3, ...)
-    contiguous; returns the distance (...) and the gradient as planes (3, ...)."""
+    contiguous (m); returns the distance (...) (m) and the gradient as planes (3, ...)."""
     a2 = a * a
     inside = _sum_planes((P / a) ** 2) < 1.0
     # ellipsoid_root_lower_bound's arithmetic, on planes
@@ -163,6 +166,8 @@ def _ellipsoid_planes(
     t = np.maximum(np.maximum(np.maximum(low[0], low[1]), low[2]), floor)
     ap2 = (a * P) ** 2
     bounds = [(0, len(t))] if groups is None else list(zip(groups, [*groups[1:], len(t)], strict=True))
+    starts = np.array([lo for lo, _ in bounds])
+    index = {lo: i for i, (lo, _) in enumerate(bounds)}
     moving = bounds  # the groups still iterating, (first row, end)
     for _ in range(iterations):
         inv = 1.0 / (t + a2)
@@ -180,8 +185,12 @@ def _ellipsoid_planes(
         else:
             for lo, hi in moving:
                 t[lo:hi] += step[lo:hi]
-        relative = _max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1)
-        moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
+        # each group's largest relative step, one reduction per group in one call
+        largest = _max_at(_max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1), starts)
+        if moving is bounds:
+            moving = [bound for bound, m in zip(bounds, largest.tolist(), strict=True) if not m < 1e-12]
+        else:
+            moving = [(lo, hi) for lo, hi in moving if not largest[index[lo]] < 1e-12]
         if not moving:
             break
     S = a2 * P / (t + a2)

@@ -473,3 +473,18 @@ def test_fits_sharing_evaluations_are_the_fits_alone(kind):
                 theta = np.frombuffer(key).copy()
                 np.testing.assert_array_equal(r, shape_fit.residuals(theta, k, evaluations.r0, touches))
                 np.testing.assert_array_equal(J, shape_fit._jacobian(theta, k, evaluations.r0, touches))
+
+
+def test_batched_ellipsoid_distance_is_the_kernel_on_rows():
+    # batch_signed_distance hands the ellipsoid its local points and semi-axes as planes
+    rng = np.random.default_rng(83)
+    for K, groups in ((1, None), (11, np.array([0, 10])), (7, np.array([0, 2, 5]))):
+        centres = rng.normal(scale=0.01, size=(K, 3))
+        rotations = np.array([shape_fit.rotation_vector(w) for w in rng.normal(size=(K, 3))])
+        sizes = rng.uniform(0.01, 0.05, size=(K, 3))
+        points = rng.normal(scale=0.04, size=(1, 29, 3))
+        d, g = shape_fit.batch_signed_distance("ellipsoid", points, centres, rotations, sizes, groups)
+        local = (points - centres[:, None, :]) @ rotations
+        d_rows, g_rows = _ellipsoid_rows(local, sizes[:, None, :], groups)
+        np.testing.assert_array_equal(d, d_rows)
+        np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
