@@ -193,6 +193,20 @@ _NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
 _SIZE_SLICE = {kind: slice(index[0], index[-1] + 1) for kind, index in SIZE_INDEX.items()}
 
 
+_IDENTITIES: dict[int, np.ndarray] = {}
+
+
+def _identities(count: int) -> np.ndarray:
+    """``count`` 3×3 identities (count, 3, 3), contiguous and read-only, made once per count
+    (``np.broadcast_to``'s view costs more than the product with it; a product with an
+    identity is exact whichever order BLAS sums it in: the same bits)."""
+    if count not in _IDENTITIES:
+        stack = np.repeat(_EYE[None], count, axis=0)
+        stack.flags.writeable = False
+        _IDENTITIES[count] = stack
+    return _IDENTITIES[count]
+
+
 def batch_geometry(
     kind: str, thetas: np.ndarray, r0: np.ndarray, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -205,7 +219,7 @@ def batch_geometry(
     sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
     K = len(thetas)
     if kind == "sphere":
-        rotations = np.broadcast_to(_EYE, (K, 3, 3))
+        rotations = _identities(K)
     elif kind in ("ellipsoid", "box"):
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
@@ -572,7 +586,9 @@ def _difference_points(theta: np.ndarray, copies: int = 1) -> tuple[np.ndarray, 
     k = len(theta)
     h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
     thetas = np.repeat(theta[None], k + copies, axis=0)
-    thetas[np.arange(k), np.arange(k)] += h
+    # the first k rows' diagonal as a strided view of the flat array: one in-place addition
+    diagonal = thetas.reshape(-1)[: k * (k + 1) : k + 1]
+    diagonal += h
     return thetas, h
 
 
@@ -609,6 +625,8 @@ class _Evaluations:
         self.kind, self.r0 = kind, r0
         self.data = FitData.of(touches) if data is None else data
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray, _BatchGeometry]] = {}
+        #: the two groups of an evaluation's rows: the k + 1 difference points, the point alone
+        self.groups = np.array([0, N_PARAMS[kind] + 1])
 
     def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
         theta = np.asarray(theta, dtype=float)
@@ -616,7 +634,7 @@ class _Evaluations:
         if key not in self.known:
             k = len(theta)
             thetas, h = _difference_points(theta, copies=2)
-            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, np.array([0, k + 1]))
+            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, self.groups)
             self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h), geometry)
         return self.known[key]
 

@@ -488,3 +488,26 @@ def test_batched_ellipsoid_distance_is_the_kernel_on_rows():
         d_rows, g_rows = _ellipsoid_rows(local, sizes[:, None, :], groups)
         np.testing.assert_array_equal(d, d_rows)
         np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
+
+
+def test_difference_points_and_identities_are_the_plain_ones():
+    # the difference points' diagonal stepped through a strided view, as fancy indexing does
+    rng = np.random.default_rng(85)
+    for k in (4, 7, 9):
+        theta = rng.normal(scale=3.0, size=k)
+        for copies in (1, 2):
+            thetas, h = shape_fit._difference_points(theta, copies)
+            plain = np.repeat(theta[None], k + copies, axis=0)
+            plain[np.arange(k), np.arange(k)] += h
+            np.testing.assert_array_equal(thetas, plain)
+    # the sphere's rotations: contiguous identities, the products with them the broadcast view's
+    K = 6
+    rotations = shape_fit._identities(K)
+    np.testing.assert_array_equal(rotations, np.broadcast_to(np.eye(3), (K, 3, 3)))
+    assert shape_fit._identities(K) is rotations and not rotations.flags.writeable
+    local = rng.normal(size=(K, 30, 3))
+    local[0, :3] = [[-0.0, 0.0, 1.0], [0.0, -0.0, -0.0], [-0.0, -0.0, -0.0]]  # signed zeros
+    for got, plain in ((local @ rotations, local @ np.broadcast_to(np.eye(3), (K, 3, 3))),
+                       (local @ rotations.transpose(0, 2, 1), local @ np.broadcast_to(np.eye(3), (K, 3, 3)))):
+        np.testing.assert_array_equal(got, plain)
+        assert np.array_equal(np.signbit(got), np.signbit(plain))
