@@ -44,6 +44,7 @@ _max = np.maximum.reduce
 _max_at = np.maximum.reduceat
 #: the coordinate axes' indices, to compare with an argmax
 _AXES = np.arange(3)
+_X_UNIT = np.array([1.0, 0.0, 0.0])
 
 
 def _unit_from(v: Array, n: Array, fallback: tuple[float, float, float]) -> Array:
@@ -72,7 +73,7 @@ def box(P: Array, half: Array) -> tuple[Array, Array]:
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
     # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
-    g_in = np.where(np.argmax(q, axis=-1)[..., None] == _AXES, sign, 0.0)
+    g_in = np.where(q.argmax(axis=-1)[..., None] == _AXES, sign, 0.0)  # the method: no wrapper
     return d, np.where((out > _TINY)[..., None], g_out, g_in)
 
 
@@ -83,10 +84,10 @@ def cylinder(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]
     across = P.copy()
     across[..., 2] = 0.0
     radial = across / np.maximum(rho, _TINY)[..., None]
-    radial = np.where((rho > _TINY)[..., None], radial, np.array([1.0, 0.0, 0.0]))
+    radial = np.where((rho > _TINY)[..., None], radial, _X_UNIT)
     dr = rho - radius
     dz = np.abs(z) - half_length
-    axial = np.zeros_like(P)
+    axial = np.zeros(P.shape, P.dtype)
     axial[..., 2] = np.where(z >= 0.0, 1.0, -1.0)
     a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
     out = np.hypot(a, b)
