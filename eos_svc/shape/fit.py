@@ -136,8 +136,10 @@ def batch_signed_distance(
     local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
-    elif kind == "ellipsoid":
-        d, g = primitives.ellipsoid(local, sizes[:, None, :], groups=groups)
+    elif kind == "ellipsoid":  # on coordinate planes (3, K, N) (primitives.ellipsoid_planes)
+        planes, radii = local.transpose(2, 0, 1).copy(), sizes.T[:, :, None].repeat(local.shape[1], 2)
+        d, g_planes = primitives.ellipsoid_planes(planes, radii, groups=groups)
+        g = g_planes.transpose(1, 2, 0).copy()
     elif kind == "box":
         d, g = primitives.box(local, sizes[:, None, :])
     elif kind == "cylinder":
@@ -191,6 +193,20 @@ _NEXT, _AFTER = np.array([1, 2, 0]), np.array([2, 0, 1])
 _SIZE_SLICE = {kind: slice(index[0], index[-1] + 1) for kind, index in SIZE_INDEX.items()}
 
 
+_IDENTITIES: dict[int, np.ndarray] = {}
+
+
+def _identities(count: int) -> np.ndarray:
+    """``count`` 3×3 identities (count, 3, 3), contiguous and read-only, made once per count
+    (``np.broadcast_to``'s view costs more than the product with it; a product with an
+    identity is exact whichever order BLAS sums it in: the same bits)."""
+    if count not in _IDENTITIES:
+        stack = np.repeat(_EYE[None], count, axis=0)
+        stack.flags.writeable = False
+        _IDENTITIES[count] = stack
+    return _IDENTITIES[count]
+
+
 def batch_geometry(
     kind: str, thetas: np.ndarray, r0: np.ndarray, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -203,7 +219,7 @@ def batch_geometry(
     sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
     K = len(thetas)
     if kind == "sphere":
-        rotations = np.broadcast_to(_EYE, (K, 3, 3))
+        rotations = _identities(K)
     elif kind in ("ellipsoid", "box"):
         rotations = r0 @ _batch_rotation_vectors(thetas[:, 3:6])
     else:
@@ -466,6 +482,24 @@ class ClassStarts:
         lo, hi = S.min(axis=0), S.max(axis=0)
         self.surface, self.mid = S, 0.5 * (lo + hi)
         self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
+        self._evaluations: dict[tuple[str, int], _Evaluations] = {}
+
+    @cached_property
+    def fit_data(self) -> FitData:
+        """The touches' :class:`FitData`, shared by every fit."""
+        return FitData.of(self.touches)
+
+    def evaluations(self, kind: str, index: int) -> _Evaluations:
+        """The :class:`_Evaluations` of ``kind`` about its start ``index``'s orientation, one
+        per select: a fit of the class from that start again (a screening, a quick fit, the
+        full fit: MINPACK from the same start takes the same first steps) finds the points
+        already evaluated (the same bits: each point's residuals and Jacobian depend on it
+        alone)."""
+        key = (kind, index)
+        if key not in self._evaluations:
+            r0 = self.of(kind)[index][1]
+            self._evaluations[key] = _Evaluations(kind, r0, self.touches, self.fit_data)
+        return self._evaluations[key]
 
     def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
         """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
@@ -552,7 +586,9 @@ def _difference_points(theta: np.ndarray, copies: int = 1) -> tuple[np.ndarray, 
     k = len(theta)
     h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
     thetas = np.repeat(theta[None], k + copies, axis=0)
-    thetas[np.arange(k), np.arange(k)] += h
+    # the first k rows' diagonal as a strided view of the flat array: one in-place addition
+    diagonal = thetas.reshape(-1)[: k * (k + 1) : k + 1]
+    diagonal += h
     return thetas, h
 
 
@@ -589,6 +625,8 @@ class _Evaluations:
         self.kind, self.r0 = kind, r0
         self.data = FitData.of(touches) if data is None else data
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray, _BatchGeometry]] = {}
+        #: the two groups of an evaluation's rows: the k + 1 difference points, the point alone
+        self.groups = np.array([0, N_PARAMS[kind] + 1])
 
     def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
         theta = np.asarray(theta, dtype=float)
@@ -596,13 +634,16 @@ class _Evaluations:
         if key not in self.known:
             k = len(theta)
             thetas, h = _difference_points(theta, copies=2)
-            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, np.array([0, k + 1]))
+            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, self.groups)
             self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h), geometry)
         return self.known[key]
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
-        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them)."""
-        return self._evaluate(theta)[0]
+        """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them):
+        a copy, the remembered ones stay as evaluated (scipy's ``leastsq`` keeps the array of
+        the first call as MINPACK's working residuals and overwrites it)."""
+        out: np.ndarray = self._evaluate(theta)[0].copy()
+        return out
 
     def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
         """The (m, k) forward-difference Jacobian at ``theta``."""
@@ -671,7 +712,8 @@ def fit_class(
     be 0 whatever they reach). ``max_starts``: try at most that many starts (all by default).
     ``nearest_first``: try the starts from the nearest to the touches (:func:`ranked_starts`),
     not in :func:`starts`' order. ``class_starts``: the touches' :class:`ClassStarts` (shared
-    by the fits of several classes to the same touches), else computed here.
+    by the fits of several classes to the same touches, with the points each start's fits
+    evaluated), else computed here.
 
     The fit from the first start alone (``max_starts=1``) *is* the fit with the same
     ``max_nfev`` and any ``hopeless`` bound when its χ² is above that bound, when it
@@ -682,12 +724,12 @@ def fit_class(
     k = N_PARAMS[kind]
     best = None
     m = residual_count(touches)
-    data = FitData.of(touches)
-    candidates = (ClassStarts(touches) if class_starts is None else class_starts).of(kind)
+    shared = ClassStarts(touches) if class_starts is None else class_starts
+    candidates = shared.of(kind)
     order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
-        evaluations = _Evaluations(kind, r0, touches, data)
+        evaluations = shared.evaluations(kind, index)
         if m >= k:
             theta, fun = levenberg_marquardt(theta0, kind, r0, touches, max_nfev, evaluations)
         else:  # fewer residuals than parameters: MINPACK cannot, the trust region can

@@ -40,8 +40,11 @@ def norm(v: Array) -> Array:
 
 # a reduction as a ufunc method: np.max's arithmetic without its wrapper
 _max = np.maximum.reduce
+# the largest of each of several consecutive slices (their first indices): reduceat
+_max_at = np.maximum.reduceat
 #: the coordinate axes' indices, to compare with an argmax
 _AXES = np.arange(3)
+_X_UNIT = np.array([1.0, 0.0, 0.0])
 
 
 def _unit_from(v: Array, n: Array, fallback: tuple[float, float, float]) -> Array:
@@ -70,7 +73,7 @@ def box(P: Array, half: Array) -> tuple[Array, Array]:
     sign = np.where(P >= 0.0, 1.0, -1.0)
     g_out = sign * qp / np.maximum(out, _TINY)[..., None]
     # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
-    g_in = np.where(np.argmax(q, axis=-1)[..., None] == _AXES, sign, 0.0)
+    g_in = np.where(q.argmax(axis=-1)[..., None] == _AXES, sign, 0.0)  # the method: no wrapper
     return d, np.where((out > _TINY)[..., None], g_out, g_in)
 
 
@@ -81,10 +84,10 @@ def cylinder(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]
     across = P.copy()
     across[..., 2] = 0.0
     radial = across / np.maximum(rho, _TINY)[..., None]
-    radial = np.where((rho > _TINY)[..., None], radial, np.array([1.0, 0.0, 0.0]))
+    radial = np.where((rho > _TINY)[..., None], radial, _X_UNIT)
     dr = rho - radius
     dz = np.abs(z) - half_length
-    axial = np.zeros_like(P)
+    axial = np.zeros(P.shape, P.dtype)
     axial[..., 2] = np.where(z >= 0.0, 1.0, -1.0)
     a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
     out = np.hypot(a, b)
@@ -132,19 +135,46 @@ def ellipsoid(
     largest step is below that bound: each group's roots are, to the bit, those of a separate
     call on its rows alone (several evaluations in one call, as :mod:`eos_svc.shape.fit`
     batches them).
+
+    The arithmetic runs on the coordinates as three contiguous planes
+    (:func:`ellipsoid_planes`): every operation is the same elementwise one on the same
+    numbers (the same bits as on (..., 3) rows), without numpy's strided and broadcast loops.
     """
-    a = radii  # broadcast against P by every operation (the same numbers as a full array)
+    last = P.ndim - 1
+    planes = P.transpose(last, *range(last)).copy()
+    a = radii if np.shape(radii) == P.shape else np.broadcast_to(radii, P.shape)
+    d, g = ellipsoid_planes(planes, a.transpose(last, *range(last)).copy(), iterations, groups)
+    return d, g.transpose(*range(1, P.ndim), 0).copy()
+
+
+def _sum_planes(v: Array) -> Array:
+    """``(v₀ + v₁) + v₂`` over the first axis (of length 3): :func:`sum3`'s order."""
+    out: Array = v[0] + v[1] + v[2]
+    return out
+
+
+def ellipsoid_planes(
+    P: Array, a: Array, iterations: int = 30, groups: Array | None = None
+) -> tuple[Array, Array]:
+    """:func:`ellipsoid` on coordinate planes: ``P`` and the semi-axes ``a`` both (3, ...)
+    contiguous (m); returns the distance (...) (m) and the gradient as planes (3, ...)."""
     a2 = a * a
-    inside = sum3((P / a) ** 2) < 1.0
-    t = ellipsoid_root_lower_bound(P, a, inside)
+    inside = _sum_planes((P / a) ** 2) < 1.0
+    # ellipsoid_root_lower_bound's arithmetic, on planes
+    amin2 = np.minimum(np.minimum(a[0], a[1]), a[2]) ** 2
+    floor = np.where(inside, -amin2 * (1.0 - 1e-12), 0.0)
+    low = a * np.abs(P) - a2
+    t = np.maximum(np.maximum(np.maximum(low[0], low[1]), low[2]), floor)
     ap2 = (a * P) ** 2
-    bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
+    bounds = [(0, len(t))] if groups is None else list(zip(groups, [*groups[1:], len(t)], strict=True))
+    starts = np.array([lo for lo, _ in bounds])
+    index = {lo: i for i, (lo, _) in enumerate(bounds)}
     moving = bounds  # the groups still iterating, (first row, end)
     for _ in range(iterations):
-        inv = 1.0 / (t[..., None] + a2)
+        inv = 1.0 / (t + a2)
         uu = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = sum3(uu)  # h⁻²
-        slope = sum3(uu * inv)  # h' · h⁻³
+        total = _sum_planes(uu)  # h⁻²
+        slope = _sum_planes(uu * inv)  # h' · h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
         if moving is bounds and len(bounds) == 1:  # one group: the whole call
             t = t + step
@@ -156,16 +186,22 @@ def ellipsoid(
         else:
             for lo, hi in moving:
                 t[lo:hi] += step[lo:hi]
-        relative = _max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1)
-        moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
+        # each group's largest relative step, one reduction per group in one call
+        largest = _max_at(_max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1), starts)
+        if moving is bounds:
+            moving = [bound for bound, m in zip(bounds, largest.tolist(), strict=True) if not m < 1e-12]
+        else:
+            moving = [(lo, hi) for lo, hi in moving if not largest[index[lo]] < 1e-12]
         if not moving:
             break
-    S = a2 * P / (t[..., None] + a2)
+    S = a2 * P / (t + a2)
     v = P - S
-    dist = norm(v)
+    dist = np.sqrt(_sum_planes(v * v))
     sign = np.where(inside, -1.0, 1.0)
     away = dist > 1e-12
-    g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+    g = sign * v / np.maximum(dist, 1e-12)
     if not away.all():  # on the surface: the normal there
-        g = np.where(away[..., None], g, _unit(S / a2, (0.0, 0.0, 1.0)))
+        n = S / a2
+        unit = np.moveaxis(_unit(np.moveaxis(n, 0, -1), (0.0, 0.0, 1.0)), -1, 0)
+        g = np.where(away, g, unit)
     return sign * dist, g

@@ -380,3 +380,134 @@ def test_median_and_columns_are_numpys():
         assert shape_fit._median(v) == float(np.median(v))
     x, y, z = rng.normal(size=(3, 3))
     np.testing.assert_array_equal(shape_fit._columns(x, y, z), np.column_stack([x, y, z]))
+
+
+def _ellipsoid_rows(P: np.ndarray, radii: np.ndarray, groups: np.ndarray | None = None):
+    """The ellipsoid kernel on (..., 3) rows, broadcast semi-axes: the arithmetic
+    :func:`~eos_svc.shape.primitives.ellipsoid` runs on coordinate planes."""
+    sum3, _max = shape_primitives.sum3, np.maximum.reduce
+    a = radii
+    a2 = a * a
+    inside = sum3((P / a) ** 2) < 1.0
+    t = ellipsoid_root_lower_bound(P, a, inside)
+    ap2 = (a * P) ** 2
+    bounds = [(0, len(P))] if groups is None else list(zip(groups, [*groups[1:], len(P)], strict=True))
+    moving = bounds
+    for _ in range(30):
+        inv = 1.0 / (t[..., None] + a2)
+        uu = ap2 * inv * inv
+        total, slope = sum3(uu), sum3(uu * inv)
+        step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)
+        if moving is bounds and len(bounds) == 1:
+            t = t + step
+            if _max(np.abs(step) / (1e-6 + np.abs(t)), axis=None) < 1e-12:
+                break
+            continue
+        if moving is bounds:
+            t = t + step
+        else:
+            for lo, hi in moving:
+                t[lo:hi] += step[lo:hi]
+        relative = _max(np.abs(step) / (1e-6 + np.abs(t)), axis=-1)
+        moving = [(lo, hi) for lo, hi in moving if not _max(relative[lo:hi], axis=None) < 1e-12]
+        if not moving:
+            break
+    S = a2 * P / (t[..., None] + a2)
+    v = P - S
+    dist = norm(v)
+    sign = np.where(inside, -1.0, 1.0)
+    away = dist > 1e-12
+    g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+    if not away.all():
+        g = np.where(away[..., None], g, shape_primitives._unit(S / a2, (0.0, 0.0, 1.0)))
+    return sign * dist, g
+
+
+def test_ellipsoid_on_planes_is_the_kernel_on_rows():
+    # the kernel runs on three contiguous coordinate planes: the same operations on the same
+    # numbers as on (..., 3) rows with broadcast semi-axes, so the same bits — on batches with
+    # groups, single point sets, points on the surface and at the centre
+    rng = np.random.default_rng(81)
+    for trial in range(60):
+        K, n = int(rng.integers(1, 12)), int(rng.integers(1, 35))
+        P = rng.normal(scale=0.04, size=(K, n, 3))
+        a = rng.uniform(0.004, 0.05, size=(K, 1, 3))
+        if trial % 3 == 0:
+            P[0, 0] = 0.0  # the centre
+            P[-1, -1] = [a[-1, 0, 0], 0.0, 0.0]  # a vertex, on the surface
+        groups = None if trial % 2 else np.array(sorted({0, *rng.integers(1, K + 1, size=2).tolist()} - {K}))
+        d, g = ellipsoid(P, a, groups=groups)
+        d_rows, g_rows = _ellipsoid_rows(P, a, groups)
+        np.testing.assert_array_equal(d, d_rows)
+        np.testing.assert_array_equal(g, g_rows)
+        assert g.flags.c_contiguous
+    P = rng.normal(scale=0.04, size=(500, 3))
+    a = np.broadcast_to(np.array([0.035, 0.02, 0.01]), P.shape)
+    for got, plain in zip(ellipsoid(P, a), _ellipsoid_rows(P, a), strict=True):
+        np.testing.assert_array_equal(got, plain)
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_fits_sharing_evaluations_are_the_fits_alone(kind):
+    # select_class's fits of a class (screening, quick fit, full fit) share one ClassStarts
+    # and with it each start's evaluated points: every fit is, to the bit, the fit alone
+    for seed in (21, 22):
+        touches = random_touches("box" if kind != "box" else "cylinder", seed)
+        shared = shape_fit.ClassStarts(touches)
+        calls = [
+            {"max_nfev": QUICK_NFEV, "max_starts": 1, "nearest_first": True},
+            {"max_nfev": QUICK_NFEV},
+            {},
+            {"max_nfev": QUICK_NFEV},  # again, every point known
+        ]
+        for kwargs in calls:
+            got = fit_class(kind, touches, class_starts=shared, **kwargs)
+            alone = fit_class(kind, touches, **kwargs)
+            assert got.chi2 == alone.chi2 and got.start == alone.start
+            np.testing.assert_array_equal(got.theta, alone.theta)
+            np.testing.assert_array_equal(got.covariance, alone.covariance)
+            np.testing.assert_array_equal(got.geometry.rotation, alone.geometry.rotation)
+        # MINPACK writes into the residuals its driver got first: the remembered ones stay
+        for (k, _), evaluations in shared._evaluations.items():
+            for key, (r, J, _) in evaluations.known.items():
+                theta = np.frombuffer(key).copy()
+                np.testing.assert_array_equal(r, shape_fit.residuals(theta, k, evaluations.r0, touches))
+                np.testing.assert_array_equal(J, shape_fit._jacobian(theta, k, evaluations.r0, touches))
+
+
+def test_batched_ellipsoid_distance_is_the_kernel_on_rows():
+    # batch_signed_distance hands the ellipsoid its local points and semi-axes as planes
+    rng = np.random.default_rng(83)
+    for K, groups in ((1, None), (11, np.array([0, 10])), (7, np.array([0, 2, 5]))):
+        centres = rng.normal(scale=0.01, size=(K, 3))
+        rotations = np.array([shape_fit.rotation_vector(w) for w in rng.normal(size=(K, 3))])
+        sizes = rng.uniform(0.01, 0.05, size=(K, 3))
+        points = rng.normal(scale=0.04, size=(1, 29, 3))
+        d, g = shape_fit.batch_signed_distance("ellipsoid", points, centres, rotations, sizes, groups)
+        local = (points - centres[:, None, :]) @ rotations
+        d_rows, g_rows = _ellipsoid_rows(local, sizes[:, None, :], groups)
+        np.testing.assert_array_equal(d, d_rows)
+        np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
+
+
+def test_difference_points_and_identities_are_the_plain_ones():
+    # the difference points' diagonal stepped through a strided view, as fancy indexing does
+    rng = np.random.default_rng(85)
+    for k in (4, 7, 9):
+        theta = rng.normal(scale=3.0, size=k)
+        for copies in (1, 2):
+            thetas, h = shape_fit._difference_points(theta, copies)
+            plain = np.repeat(theta[None], k + copies, axis=0)
+            plain[np.arange(k), np.arange(k)] += h
+            np.testing.assert_array_equal(thetas, plain)
+    # the sphere's rotations: contiguous identities, the products with them the broadcast view's
+    K = 6
+    rotations = shape_fit._identities(K)
+    np.testing.assert_array_equal(rotations, np.broadcast_to(np.eye(3), (K, 3, 3)))
+    assert shape_fit._identities(K) is rotations and not rotations.flags.writeable
+    local = rng.normal(size=(K, 30, 3))
+    local[0, :3] = [[-0.0, 0.0, 1.0], [0.0, -0.0, -0.0], [-0.0, -0.0, -0.0]]  # signed zeros
+    for got, plain in ((local @ rotations, local @ np.broadcast_to(np.eye(3), (K, 3, 3))),
+                       (local @ rotations.transpose(0, 2, 1), local @ np.broadcast_to(np.eye(3), (K, 3, 3)))):
+        np.testing.assert_array_equal(got, plain)
+        assert np.array_equal(np.signbit(got), np.signbit(plain))
