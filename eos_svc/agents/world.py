@@ -342,7 +342,7 @@ class GraspWorld:
         p = self.params
         hand = self.hand
         d = np.asarray(direction, dtype=float)
-        d = d / np.linalg.norm(d)
+        d = d / math.sqrt(d.dot(d))  # = d / np.linalg.norm(d) (sqrt of the dot product)
         q = self.state.q
         wq = self._wrist_q
         q[wq[3:6]] = 0.0
@@ -378,7 +378,11 @@ class GraspWorld:
             return ProbeOutcome("blocked", finger, why="no clear start")
         tol = p.contact_tolerance
         half_tol = 0.5 * tol
-        wrist0 = self.wrist_position().copy()
+        # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
+        # in floats (the same products and sums numpy's would be), written item by item
+        w0, w1, w2 = q[xyz].tolist()
+        d0, d1, d2 = d.tolist()
+        i0, i1, i2 = xyz.tolist()
         travelled = 0.0
         tip = state._tips[finger][3]  # live view of the tip centre (world)
         free = [tip.copy()]
@@ -417,7 +421,7 @@ class GraspWorld:
                 step = min(room, tip_room, other)
                 floor = other
             travelled += step
-            q[xyz] = wrist0 + d * travelled
+            q[i0], q[i1], q[i2] = w0 + d0 * travelled, w1 + d1 * travelled, w2 + d2 * travelled
             self.set_q(q)
             free.append(tip.copy())
             if travelled >= travel - 1e-12:
