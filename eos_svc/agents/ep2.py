@@ -157,8 +157,9 @@ class EP2Agent(GraspAgent):
         return {
             "face": face,
             "finger": finger,
-            "centre": np.round(centre, 7).tolist(),
-            "normal": np.round(normal, 6).tolist(),
+            # ndarray.round: np.round's operation without its dispatch wrapper
+            "centre": np.asarray(centre).round(7).tolist(),
+            "normal": np.asarray(normal).round(6).tolist(),
             "radius": self.world.hand.tip_radius(finger),
         }
 
@@ -246,7 +247,7 @@ class EP2Agent(GraspAgent):
             else:
                 if outcome.free is not None:
                     r = world.hand.tip_radius(probe.finger)
-                    free.extend([*np.round(p, 7).tolist(), r] for p in outcome.free)
+                    free.extend([*row, r] for row in np.asarray(outcome.free).round(7).tolist())
                 missed += outcome.event == "missed"
                 blocked += outcome.event == "blocked"
         # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
@@ -269,7 +270,7 @@ class EP2Agent(GraspAgent):
                     touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
                 r = world.hand.tip_radius(world.probe.finger("top"))
-                free.extend([*np.round(p, 7).tolist(), r] for p in beyond)
+                free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)
         self.rounds += 1
         board.set(keys.EP2_TOUCHES, touches)
         board.set(keys.EP2_FREE, free)

@@ -32,6 +32,7 @@ import coal
 import numpy as np
 
 from eos_svc.agents.coverage import column_counts, space_filling_order, wrist_columns
+from eos_svc.agents.probe_pose import probe_pose
 from eos_svc.agents.probing import ProbeChoice, ProbeOutcome, densify
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
 from eos_svc.agents.world_parameters import WorldParameters
@@ -342,21 +343,18 @@ class GraspWorld:
         p = self.params
         hand = self.hand
         d = np.asarray(direction, dtype=float)
-        d = d / np.linalg.norm(d)
+        d = d / math.sqrt(d.dot(d))  # = d / np.linalg.norm(d) (sqrt of the dot product)
+        pose = probe_pose(hand, finger, angle)  # wrist rotation 0, the fingers set (kept per angle)
         q = self.state.q
-        wq = self._wrist_q
-        q[wq[3:6]] = 0.0
-        for f in hand.finger_names:
-            idx = self._finger_q[f]
-            q[idx] = angle if f == finger else hand.lower[idx]
+        pose.apply(q)
         self.set_q(q)
         state = self.state
         offset = state.tip_position(finger) - self.wrist_position()
-        xyz = wq[:3]
-        lo, hi = hand.lower[xyz].tolist(), hand.upper[xyz].tolist()
+        xyz = self._wrist_xyz
+        lo, hi = pose.wrist_lo, pose.wrist_hi
         start = np.asarray(start, dtype=float)
         tip_gid = hand.tip_geometry_id(finger)
-        others = [g for g in range(len(self._bounds)) if g != tip_gid]
+        others = pose.others
         for back in (0.0, 0.02, 0.04, 0.06):
             wrist = start - back * d - offset
             wx, wy, wz = wrist.tolist()  # np.any(wrist < lo) or np.any(wrist > hi), in floats
@@ -378,7 +376,11 @@ class GraspWorld:
             return ProbeOutcome("blocked", finger, why="no clear start")
         tol = p.contact_tolerance
         half_tol = 0.5 * tol
-        wrist0 = self.wrist_position().copy()
+        # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
+        # in floats (the same products and sums numpy's would be), written item by item
+        w0, w1, w2 = q[xyz].tolist()
+        d0, d1, d2 = d.tolist()
+        i0, i1, i2 = pose.wrist_xyz
         travelled = 0.0
         tip = state._tips[finger][3]  # live view of the tip centre (world)
         free = [tip.copy()]
@@ -417,7 +419,7 @@ class GraspWorld:
                 step = min(room, tip_room, other)
                 floor = other
             travelled += step
-            q[xyz] = wrist0 + d * travelled
+            q[i0], q[i1], q[i2] = w0 + d0 * travelled, w1 + d1 * travelled, w2 + d2 * travelled
             self.set_q(q)
             free.append(tip.copy())
             if travelled >= travel - 1e-12:

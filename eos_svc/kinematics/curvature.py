@@ -342,9 +342,12 @@ class CurvatureEstimator:
         A3[:, 1, 1:] = U
         A = A3.reshape(2 * m, 3)
         Ku = K[:, :, 0] * U[:, :1] + K[:, :, 1] * U[:, 1:]  # K_f u, as in rows()
-        b = (np.stack([-W[:, 1], W[:, 0]], axis=1) - Ku).reshape(2 * m)
+        zw = np.empty((m, 2))  # = np.stack([-W[:, 1], W[:, 0]], axis=1), without its copies
+        np.negative(W[:, 1], out=zw[:, 0])
+        zw[:, 1] = W[:, 0]
+        b = (zw - Ku).reshape(2 * m)
         AtA = A.T @ A
-        scale = float(np.trace(AtA))
+        scale = float(AtA.trace())  # = np.trace(AtA), without the wrapper
         # 2-norm condition number of the symmetric AtA from its eigenvalues (np.linalg.cond would
         # take an SVD through a heavier wrapper)
         ev = np.abs(_eigvalsh(AtA))
@@ -361,18 +364,20 @@ class CurvatureEstimator:
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
         cov = s2 * _inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
-        form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
+        # the scalars as floats (numpy's scalar arithmetic costs µs per operation; the same
+        # IEEE operations in the same order give the same numbers)
+        t0, t1, t2 = theta.tolist()
+        form = np.array([[t0, t1], [t1, t2]])
         evals, evecs = _eigh(form)
-        order = [1, 0]  # k1 >= k2
-        ks = (float(evals[order[0]]), float(evals[order[1]]))
-        dirs = evecs[:, order]
+        e0, e1 = evals.tolist()
+        ks = (e1, e0)  # k1 >= k2 (eigh's eigenvalues ascend)
+        dirs = evecs[:, ::-1].copy()  # = evecs[:, [1, 0]]
         sig = []
-        for j in range(2):
-            vx, vy = dirs[:, j]
+        for vx, vy in dirs.T.tolist():  # the columns
             g = np.array([vx * vx, 2 * vx * vy, vy * vy])
             sig.append(math.sqrt(max(float(g @ cov @ g), 0.0)) if dof > 0 else math.inf)
         gH = np.array([0.5, 0.0, 0.5])
-        H = 0.5 * (theta[0] + theta[2])
+        H = 0.5 * (t0 + t2)
         sH = math.sqrt(max(float(gH @ cov @ gH), 0.0)) if dof > 0 else math.inf
         kf = self.flat_curvature
         flat = tuple(abs(k) <= max(kf, 2.0 * s) for k, s in zip(ks, sig, strict=True))

@@ -371,9 +371,8 @@ def run_ep1(
     slips: list[float] = []
     gaps: list[float] = [abs(ct0.distance)]
     n_dir = sum(n for _, n, _ in legs)  # steps of one direction
-    sets = np.concatenate([np.full(n, k) for _, n, k in legs])  # 0: outward half-legs, 1: sweep
-    # per step of a direction: tactile point and tip rotation, kept where in contact
-    P_buf = np.empty((n_dir, 3))
+    # per step of a direction in contact: tactile point, tip rotation and set (0: the outward
+    # half-legs, 1: the sweep back)
     R_buf = np.empty((n_dir, 3, 3))
     (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R0.tolist()
     fx0, fx1, fx2 = F[:, 0].tolist()
@@ -389,9 +388,10 @@ def run_ep1(
         a_xy = np.array([math.cos(phi), math.sin(phi)])
         axis = F[:, :2] @ a_xy
         a_tip = R0.T @ axis
-        inc: list[bool] = []
+        points: list[tuple[float, float, float]] = []  # one array of them per direction
+        set_of: list[int] = []
         i = 0
-        for sign, n_steps, _ in legs:
+        for sign, n_steps, k_set in legs:
             # the axis stays the one tangent at the start (fixed for the whole direction);
             # one roller for the whole run, re-targeted for every leg
             if rq is None:
@@ -403,12 +403,10 @@ def run_ep1(
             for _ in range(n_steps):
                 gap, in_contact, px, py, pz, slip = advance()
                 if in_contact:
-                    P_buf[i] = (px, py, pz)
+                    points.append((px, py, pz))
                     R_buf[i] = R_view
-                    inc.append(True)
+                    set_of.append(k_set)
                     i += 1
-                else:
-                    inc.append(False)
                 slips.append(slip)
                 gaps.append(abs(gap))
                 if path_every > 0:
@@ -416,10 +414,10 @@ def run_ep1(
                     if taken % path_every == 0:
                         path.append(rq.q)
             steps += n_steps
-        P_all = P_buf[:i]
+        P_all = np.array(points).reshape(i, 3)  # (0, 3) when nothing was in contact
         R_all = R_buf[:i]
         D_all = P_all / _row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
-        set_in = sets[np.array(inc)]
+        set_in = np.array(set_of, dtype=int)
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
         for k in (0, 1):

@@ -361,10 +361,9 @@ class RollingQP:
         self._osqp = None  # re-upload the whole problem on the first solve
         M = self.scene.object.placement
         self._probe.place_object(M)
-        # Axis: tangent at the current contact.
+        # Axis: tangent at the current contact (its normal; contact()'s record is not needed).
         self.kinematics_only()
-        self.contact()
-        n0, n1, n2 = self._n
+        n0, n1, n2 = self._n = self._probe.measure_raw(self._c_view)[5]
         # unit_vector, then the projection, in scalars (numpy on 3-vectors costs µs per call)
         a0, a1, a2 = unit_vector("axis", axis).tolist()
         if project_axis:

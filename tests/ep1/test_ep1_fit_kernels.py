@@ -72,3 +72,60 @@ def test_kernels_equal_the_plain_forms(n):
         sel = np.arange(len(both)) >= len(extra)
         directions = (both / _row_norms(both, keepdims=True))[sel]
         assert _chart_at_mean(both[sel], ex, r, directions).tolist() == expected
+
+
+def plain_estimate(samples, kf):
+    """CurvatureEstimator.estimate's numbers in their plain numpy form (numpy scalars, stack,
+    trace, fancy column order): (form, cov, ks, dirs, sig, H, sH, rel)."""
+    from eos_svc.kinematics.curvature import _eigh, _inv, _solve
+
+    m = len(samples)
+    U = np.array([s.contact_velocity for s in samples])
+    W = np.array([s.omega_xy for s in samples])
+    K = np.array([s.K_f for s in samples])
+    A3 = np.zeros((m, 2, 3))
+    A3[:, 0, :2] = U
+    A3[:, 1, 1:] = U
+    A = A3.reshape(2 * m, 3)
+    Ku = K[:, :, 0] * U[:, :1] + K[:, :, 1] * U[:, 1:]
+    b = (np.stack([-W[:, 1], W[:, 0]], axis=1) - Ku).reshape(2 * m)
+    AtA = A.T @ A
+    assert float(np.trace(AtA)) > 0
+    theta = _solve(AtA, A.T @ b)
+    r = b - A @ theta
+    cov = float(r @ r) / (2 * m - 3) * _inv(AtA)
+    form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
+    evals, evecs = _eigh(form)
+    order = [1, 0]
+    ks = (float(evals[order[0]]), float(evals[order[1]]))
+    dirs = evecs[:, order]
+    sig = []
+    for j in range(2):
+        vx, vy = dirs[:, j]
+        g = np.array([vx * vx, 2 * vx * vy, vy * vy])
+        sig.append(math.sqrt(max(float(g @ cov @ g), 0.0)))
+    gH = np.array([0.5, 0.0, 0.5])
+    H = 0.5 * (theta[0] + theta[2])
+    sH = math.sqrt(max(float(gH @ cov @ gH), 0.0))
+    return form, cov, ks, dirs, sig, float(H), sH, sH / max(abs(H), kf)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_estimate_equals_the_plain_form(seed: int) -> None:
+    from eos_svc.kinematics.curvature import CurvatureEstimator
+
+    rng = np.random.default_rng(seed)
+    est = CurvatureEstimator()
+    k = rng.normal(size=(2, 2)) * 30.0
+    k = k + k.T
+    for _ in range(int(rng.integers(2, 13))):
+        phi = rng.uniform(0.0, math.pi)
+        w = np.array([math.cos(phi), math.sin(phi)])
+        u = np.linalg.solve(k + np.eye(2) / 0.01, np.array([-w[1], w[0]])) + rng.normal(size=2) * 1e-4
+        est.add_sample(w, u, np.eye(2) / 0.01)
+    got = est.estimate()
+    form, cov, ks, dirs, sig, H, sH, rel = plain_estimate(est.samples, est.flat_curvature)
+    assert got.form.tobytes() == form.tobytes() and got.covariance.tobytes() == cov.tobytes()
+    assert got.principal_curvatures == ks and got.principal_directions.tobytes() == dirs.tobytes()
+    assert got.sigma_curvatures == tuple(sig)
+    assert (got.mean_curvature, got.sigma_mean_curvature, got.relative_error) == (H, sH, rel)

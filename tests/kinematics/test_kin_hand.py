@@ -83,6 +83,40 @@ def test_tip_jacobians_match_finite_differences(
             np.testing.assert_allclose(Jw, _fd_angular_jacobian(hand, q, f), atol=1e-7)
 
 
+@pytest.mark.parametrize("hand_name", ["hand", "allegro"])
+def test_lazy_jacobians_equal_eager(hand_name: str, request: pytest.FixtureRequest, random_q: RandQ) -> None:
+    """HandState.update computes the joint Jacobians only when a Jacobian is asked for
+    (joint_jacobians): placements and Jacobians equal, to the bit, those of the eager
+    computeJointJacobians(model, data, q) + updateFramePlacements at the same q — also after
+    updates whose Jacobians were never asked for."""
+    hand: HandModel = request.getfixturevalue(hand_name)
+    rng = np.random.default_rng(11)
+    st = hand.state()
+    eager = hand.model.createData()
+    for k in range(30):
+        q = random_q(hand, rng)
+        st.update(q)
+        if k % 3 == 1:
+            continue  # no Jacobian asked at this q: the next update must not depend on it
+        pin.computeJointJacobians(hand.model, eager, q)
+        pin.updateFramePlacements(hand.model, eager)
+        for f in hand.finger_names:
+            fid = hand.tip_frame_id(f)
+            assert np.array_equal(st.data.oMf[fid].homogeneous, eager.oMf[fid].homogeneous)
+            J = pin.getFrameJacobian(hand.model, eager, fid, pin.LOCAL_WORLD_ALIGNED)
+            got = st.tip_angular_jacobian(f) if k % 2 else st.tip_jacobian(f)
+            assert np.array_equal(got, J[3:] if k % 2 else J)
+            p = st.tip_position(f) + rng.normal(size=3) * 0.01
+            jid = int(hand.model.frames[fid].parentJoint)
+            Jp = pin.getFrameJacobian(
+                hand.model, eager, jid, pin.SE3(np.eye(3), eager.oMi[jid].actInv(p)), pin.LOCAL_WORLD_ALIGNED
+            )
+            assert np.array_equal(st.tip_point_jacobian(f, p), Jp[:3])
+        assert np.array_equal(st.data.J, eager.J)
+        for i in range(1, hand.model.njoints):
+            assert np.array_equal(st.data.oMi[i].homogeneous, eager.oMi[i].homogeneous)
+
+
 def test_state_consistency(hand: HandModel, random_q: RandQ) -> None:
     rng = np.random.default_rng(1)
     q = random_q(hand, rng)

@@ -1,0 +1,46 @@
+"""probe_pose: a guarded probe's configuration set in one indexed write equals the plain
+joint-by-joint assignments (wrist rotation 0, the probing finger at its angle, the others
+open), to the bit, on hand3x3 and the Allegro hand; and the limits and other geometries it keeps."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eos_svc.agents.planner import default_hand
+from eos_svc.agents.probe_pose import probe_pose
+from eos_svc.kinematics import HandModel, UnknownNameError, allegro_hand
+
+
+def _plain(hand: HandModel, q: np.ndarray, finger: str, angle: float) -> np.ndarray:
+    """What guarded_probe did joint by joint."""
+    out = q.copy()
+    wq = hand.wrist_q_index
+    out[wq[3:6]] = 0.0
+    for f in hand.finger_names:
+        idx = hand.finger_q_index(f)
+        out[idx] = angle if f == finger else hand.lower[idx]
+    return out
+
+
+@pytest.mark.parametrize("which", ["hand3x3", "allegro"])
+def test_probe_pose_equals_the_plain_assignments(which: str) -> None:
+    hand = default_hand() if which == "hand3x3" else allegro_hand()
+    rng = np.random.default_rng(3)
+    for _ in range(20):
+        q = hand.lower + (hand.upper - hand.lower) * rng.random(hand.nq)
+        finger = hand.finger_names[int(rng.integers(len(hand.finger_names)))]
+        angle = float(rng.uniform(-0.3, 0.8))
+        got = q.copy()
+        pose = probe_pose(hand, finger, angle)
+        pose.apply(got)
+        assert got.tobytes() == _plain(hand, q, finger, angle).tobytes()
+        assert probe_pose(hand, finger, angle) is pose  # kept
+        xyz = hand.wrist_q_index[:3]
+        assert pose.wrist_xyz == xyz.tolist()
+        assert pose.wrist_lo == hand.lower[xyz].tolist() and pose.wrist_hi == hand.upper[xyz].tolist()
+        tip = hand.tip_geometry_id(finger)
+        n = len(hand.collision_model.geometryObjects)
+        assert pose.others == [g for g in range(n) if g != tip]
+    with pytest.raises(UnknownNameError):
+        probe_pose(hand, "thumb9", 0.0)
