@@ -68,6 +68,9 @@ class GraspWorld:
         # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
         self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
         self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
+        # a wrist translation moves the palm origin to the wrist's x, y, z bit for bit (see
+        # _deferred_wrist_move)
+        self._palm_at_wrist_xyz = palm_origin_is_wrist_xyz(self.hand)
         # per finger with a sphere tip (the scene measures it from the tip frame): its frame
         # and radius, for a lower bound of the tip's distance (see _closing_clear)
         self._tip_bound: dict[str, tuple[int, float]] = {}
@@ -288,6 +291,8 @@ class GraspWorld:
             return 0.0, False
         unit = delta / length
         q = self.state.q
+        if self._palm_at_wrist_xyz:
+            return self._deferred_wrist_move(q, start, unit, length, stop_when_located)
         travelled = 0.0
         for _ in range(500):
             if stop_when_located and self.located():
@@ -313,6 +318,66 @@ class GraspWorld:
             self.set_q(q)
             if travelled >= length - 1e-12:
                 return travelled, False
+        return travelled, True
+
+    def _deferred_wrist_move(
+        self, q: np.ndarray, start: np.ndarray, unit: np.ndarray, length: float, stop_when_located: bool
+    ) -> tuple[float, bool]:
+        """:meth:`guarded_wrist_move`'s loop (the same steps, the same result bit for bit) that
+        moves the hand model only where a sub-step needs more than the grasp centre's gap.
+
+        Far from the object a sub-step is fixed by the grasp centre's gap alone, and for a hand
+        whose palm origin is the wrist's x, y, z joint values bit for bit
+        (:func:`palm_origin_is_wrist_xyz`) that gap needs no forward kinematics: the grasp
+        centre is ``wrist + R @ grasp_centre``, the palm's rotation ``R`` unchanged by a
+        translation — exactly what :meth:`grasp_centre_world` computes after a move. The hand
+        model is updated (:meth:`set_q`) only for an exact clearance, near touching and at the
+        end, where it is left as the plain loop leaves it.
+        """
+        p = self.params
+        wrist_xyz = self._wrist_xyz
+        offset = self.palm_views()[1] @ self._grasp_centre  # the grasp centre from the palm origin
+        far = p.clearance + 5e-3  # exact_clearance's threshold beyond the hand bound
+        travelled = 0.0
+        pending: np.ndarray | None = None  # the wrist position the hand model is not at yet
+        gap = 0.0
+        for _ in range(500):
+            if pending is not None:
+                gap = self.scene.point_gap(pending + offset)
+                if (stop_when_located and gap <= p.envelope_radius) or gap - p.hand_bound <= far:
+                    self.set_q(q)  # the hand model at q: the plain loop from here
+                    pending = None
+            if pending is None:
+                if stop_when_located and self.located():
+                    return travelled, False
+                gap = self.object_gap_to_grasp_centre()
+                clearance = self.exact_clearance()
+            else:  # far and not located (checked above)
+                clearance = gap - p.hand_bound
+            room = clearance - p.clearance
+            if room < 1e-4:
+                # touching distance: go on only if the move leads away from the object
+                trial = min(1e-3, length - travelled)
+                q[wrist_xyz] = start + unit * (travelled + trial)
+                self.set_q(q)
+                if self.exact_clearance() <= clearance:
+                    q[wrist_xyz] = start + unit * travelled
+                    self.set_q(q)
+                    return travelled, True
+                step = trial
+                gap = self.object_gap_to_grasp_centre()
+            else:
+                step = min(length - travelled, room)
+            if stop_when_located:
+                step = min(step, max(gap - p.envelope_radius, 5e-4))
+            travelled += step
+            pending = start + unit * travelled
+            q[wrist_xyz] = pending
+            if travelled >= length - 1e-12:
+                self.set_q(q)
+                return travelled, False
+        if pending is not None:
+            self.set_q(q)
         return travelled, True
 
     def guarded_probe(
@@ -625,6 +690,30 @@ def _derived_for(
             _DERIVED.pop(next(iter(_DERIVED), -1), None)
     links, probe, bounds = entry[2]
     return links, probe, bounds
+
+
+def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
+    """Whether the palm frame's world origin is the wrist's x, y, z joint values bit for bit in
+    every configuration: the model's first six joints are the wrist (prismatic along x, y, z,
+    then revolute about x, y, z, each the previous one's child, at identity placements) and the
+    palm frame sits on the sixth at the identity. Pinocchio then composes every translation
+    from exact products by 1 and 0 (a sum with a zero can only turn −0.0 into 0.0)."""
+    model = hand.model
+    wrist = [int(i) for i in hand.wrist_q_index]
+    kinds = ("PX", "PY", "PZ", "RX", "RY", "RZ")
+    if model.njoints < 7 or len(wrist) != 6:
+        return False
+    for j, kind in enumerate(kinds, start=1):
+        joint = model.joints[j]
+        if (
+            joint.shortname() != f"JointModel{kind}"
+            or joint.idx_q != wrist[j - 1]
+            or model.parents[j] != j - 1
+            or not model.jointPlacements[j].isIdentity()
+        ):
+            return False
+    palm = model.frames[hand.palm_frame_id]
+    return bool(palm.parentJoint == 6 and palm.placement.isIdentity())
 
 
 #: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all
