@@ -518,6 +518,8 @@ class GraspWorld:
         if dist < 1e-9:
             return 0.0, False
         move = min(step, dist)
+        if self._palm_at_wrist_xyz:
+            return self._deferred_step_toward(start, delta, dist, move)
         q0 = self.state.q
         q = q0.copy()
         q[self._wrist_xyz] = start + delta * (move / dist)
@@ -536,6 +538,65 @@ class GraspWorld:
         q[self._wrist_xyz] = start + delta * (lo * move / dist)
         self.set_q(q)
         return dist - lo * move, True
+
+    def _deferred_step_toward(
+        self, start: np.ndarray, delta: np.ndarray, dist: float, move: float
+    ) -> tuple[float, bool]:
+        """:meth:`step_wrist_toward`'s step and bisection (the same poses tried, the same result
+        bit for bit) that moves the hand model only to the poses where
+        :meth:`_clear_after_translation` cannot tell whether the hand is clear, and at the end."""
+        threshold = 0.5 * self.params.contact_tolerance
+        wrist_xyz = self._wrist_xyz
+        q = self.state.q
+
+        def clear_at(xyz: np.ndarray) -> bool:
+            verdict = self._clear_after_translation(xyz, threshold)
+            if verdict is None:
+                q[wrist_xyz] = xyz
+                self.set_q(q)
+                verdict = self.hand_clear(threshold)
+            return verdict
+
+        xyz = start + delta * (move / dist)
+        if clear_at(xyz):
+            q[wrist_xyz] = xyz
+            self.set_q(q)
+            return dist - move, False
+        lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            if clear_at(start + delta * (mid * move / dist)):
+                lo = mid
+            else:
+                hi = mid
+        q[wrist_xyz] = start + delta * (lo * move / dist)
+        self.set_q(q)
+        return dist - lo * move, True
+
+    def _clear_after_translation(self, xyz: np.ndarray, threshold: float) -> bool | None:
+        """:meth:`hand_clear` ``(threshold)`` with the wrist translated to ``xyz`` (world, m)
+        from the current pose, when it is decided without moving the hand model; else None.
+
+        For a hand whose palm origin is the wrist's x, y, z (:func:`palm_origin_is_wrist_xyz`)
+        the grasp centre's gap there is the one :meth:`hand_clear` would read, bit for bit.
+        Where the hand is near the object, the geometries' lower bounds at ``xyz`` are those of
+        the current placements against the object's bounding ball shifted back by the
+        translation (a translation moves every geometry by it, up to round-off:
+        :data:`TRANSLATED_BOUND_SLACK` covers that); bounds reaching ``threshold`` prove the
+        hand clear (True), as in :meth:`hand_clear`. Otherwise it takes the exact queries at
+        ``xyz`` (None).
+        """
+        p = self.params
+        translation, rotation = self.palm_views()
+        gap = self.scene.point_gap(xyz + rotation @ self._grasp_centre)
+        if gap > p.hand_bound + p.clearance:  # hand_clear's far case: the gap decides
+            return bool(gap - p.hand_bound >= threshold)
+        dx, dy, dz = (xyz - translation).tolist()  # the translation from the current pose
+        ox, oy, oz = self._obj_centre
+        bounds = self._lower_bounds(range(len(self._bounds)), (ox - dx, oy - dy, oz - dz))
+        if min(bounds)[0] - TRANSLATED_BOUND_SLACK >= threshold:
+            return True
+        return None
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
         """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
@@ -653,9 +714,11 @@ class GraspWorld:
                 best = gap
         return best
 
-    def _lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
-        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
-        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
+    def _lower_bounds(
+        self, geometry_ids: Iterable[int], centre: tuple[float, float, float] | None = None
+    ) -> list[tuple[float, int]]:
+        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m), to the
+        object's bounding ball (about ``centre`` instead of the object's, when given)."""
         state = self.state
         state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
         views = self._bound_views
@@ -664,7 +727,8 @@ class GraspWorld:
             oMg = state.geometry_data.oMg
             views = self._bound_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
             self._views_of = state
-        return ball_gap_lower_bounds(self._bounds, views, geometry_ids, self._obj_centre, self._obj_radius)
+        about = self._obj_centre if centre is None else centre
+        return ball_gap_lower_bounds(self._bounds, views, geometry_ids, about, self._obj_radius)
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
@@ -714,6 +778,12 @@ def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
             return False
     palm = model.frames[hand.palm_frame_id]
     return bool(palm.parentJoint == 6 and palm.placement.isIdentity())
+
+
+#: what the lower bounds of a translated hand (see GraspWorld._clear_after_translation) give up
+#: for computing the placements as the current ones moved by the translation (m): their
+#: round-off, ~1e-16 m on hand-sized coordinates
+TRANSLATED_BOUND_SLACK = 1e-12
 
 
 #: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all

@@ -69,3 +69,58 @@ def test_deferred_move_is_the_plain_move(spec, hand_name):
     # blocked and unblocked moves, located or not, were compared
     assert {blocked for blocked, _ in outcomes} == {True, False}
     assert {located for _, located in outcomes} == {True, False}
+
+
+def _step(world, q0, target, step, deferred):
+    world.set_q(q0)
+    world._palm_at_wrist_xyz = deferred
+    left, blocked = world.step_wrist_toward(target, step)
+    return left, blocked, world.state.q.tolist()
+
+
+@pytest.mark.parametrize("spec", OBJECTS, ids=lambda s: s.shape)
+@pytest.mark.parametrize("hand_name", ["hand3x3", "allegro"])
+def test_deferred_step_toward_is_the_plain_step(spec, hand_name):
+    hand = allegro_hand() if hand_name == "allegro" else None
+    world = build_world(PlanRequest(obj=spec), hand, check=False)
+    h = world.hand
+    wrist = h.wrist_q_index
+    rng = np.random.default_rng(5)
+    start = world.state.q
+    blocked_seen = set()
+    for i in range(60):
+        q0 = start.copy()
+        q0[wrist[:3]] += rng.uniform([-0.06, -0.04, -0.04], [0.04, 0.04, 0.04])
+        if i % 2:
+            q0[wrist[3:6]] = rng.uniform(h.lower[wrist[3:6]], h.upper[wrist[3:6]]) * 0.3
+        world.set_q(q0)
+        if not world.hand_clear(0.5 * world.params.contact_tolerance):
+            continue  # the stage starts each step from a clear pose
+        target = q0[wrist[:3]] + rng.uniform([0.0, -0.05, -0.05], [0.12, 0.05, 0.05])
+        step = float(rng.choice([0.005, 0.02, 0.08]))
+        plain = _step(world, q0, target, step, False)
+        assert _step(world, q0, target, step, True) == plain
+        blocked_seen.add(plain[1])
+    assert blocked_seen == {True, False}
+
+
+@pytest.mark.parametrize("spec", OBJECTS, ids=lambda s: s.shape)
+def test_clear_after_translation_agrees_with_hand_clear(spec):
+    world = build_world(PlanRequest(obj=spec), None, check=False)
+    wrist = world.hand.wrist_q_index
+    rng = np.random.default_rng(9)
+    start = world.state.q
+    decided = 0
+    for _ in range(200):
+        q0 = start.copy()
+        q0[wrist[:3]] += rng.uniform([-0.05, -0.03, -0.03], [0.06, 0.03, 0.03])
+        q1 = q0.copy()
+        q1[wrist[:3]] += rng.uniform(-0.02, 0.02, 3)
+        threshold = float(rng.choice([0.0, 5e-4, 2e-3]))
+        world.set_q(q0)
+        verdict = world._clear_after_translation(q1[wrist[:3]], threshold)
+        world.set_q(q1)
+        if verdict is not None:
+            decided += 1
+            assert verdict == world.hand_clear(threshold) == (world.hand_clearance() >= threshold)
+    assert decided > 50
