@@ -66,11 +66,10 @@ class GraspWorld:
         # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
         # (the object taken as its bounding ball): a min over geometries skips the exact
         # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
-        self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
+        # Also whether a wrist translation moves the palm origin to the wrist's x, y, z bit for
+        # bit (see _deferred_wrist_move).
+        self._links, self.probe, self._bounds, self._palm_at_wrist_xyz = _derived_for(self.hand, self.sweeps)
         self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
-        # a wrist translation moves the palm origin to the wrist's x, y, z bit for bit (see
-        # _deferred_wrist_move)
-        self._palm_at_wrist_xyz = palm_origin_is_wrist_xyz(self.hand)
         # per finger with a sphere tip (the scene measures it from the tip frame): its frame
         # and radius, for a lower bound of the tip's distance (see _closing_clear)
         self._tip_bound: dict[str, tuple[int, float]] = {}
@@ -738,22 +737,23 @@ _DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] =
 
 def _derived_for(
     hand: HandModel, sweeps: dict[str, FingerSweep]
-) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]]]:
-    """The finger link geometries, the probe choice and the geometries' distance bounds of
-    ``hand`` (with ``sweeps``), computed once per hand and sweeps (they never change; every
-    plan's world shares them read-only)."""
+) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]], bool]:
+    """The finger link geometries, the probe choice, the geometries' distance bounds of
+    ``hand`` (with ``sweeps``) and :func:`palm_origin_is_wrist_xyz`, computed once per hand and
+    sweeps (they never change; every plan's world shares them read-only)."""
     entry = _DERIVED.get(id(hand))
     if entry is None or entry[0] is not hand or entry[1] is not sweeps:
         derived = (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
             [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
+            palm_origin_is_wrist_xyz(hand),
         )
         entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
         while len(_DERIVED) > 8:  # pop with a default: another thread may evict it first
             _DERIVED.pop(next(iter(_DERIVED), -1), None)
-    links, probe, bounds = entry[2]
-    return links, probe, bounds
+    links, probe, bounds, palm_at_wrist_xyz = entry[2]
+    return links, probe, bounds, palm_at_wrist_xyz
 
 
 def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
