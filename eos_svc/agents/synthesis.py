@@ -287,6 +287,29 @@ class SweepLandings:
             return None
         return int(touching[i])
 
+    def miss_lower_bound(self, start: int, tip_radius: float, point: np.ndarray) -> float:
+        """A lower bound (m) of the distance from the landing from ``start`` to ``point`` (world)
+        without the object's closest point: −inf when there is no landing or the object is an
+        ellipsoid (whose gaps are estimates, see :func:`signed_distances`).
+
+        The landing's contact is the closest surface point to the touching tip centre
+        (:func:`_landing_at`), ``|sd(tip)|`` from it; the signed distance is 1-Lipschitz and
+        exact at the bracketing samples (their gap + ``tip_radius``), so
+        ``|sd(tip)| ≤ max(|gap(k−1) + r + seg|, |gap(k) + r − seg|)``, ``seg`` the samples'
+        spacing, and the contact is at least ``|tip − point|`` less that from ``point``
+        (less 1e-9 m for round-off)."""
+        k = self.first_touch(start)
+        obj, _, pts, gaps = self._args
+        if k is None or isinstance(obj, Ellipsoid):
+            return -math.inf
+        a, b = float(gaps[k - 1]), float(gaps[k])
+        s = a / (a - b) if a != b else 1.0
+        p0, p1 = pts[k - 1], pts[k]
+        tip = p0 + s * (p1 - p0)
+        seg = vector_norm(p1 - p0)
+        reach = max(abs(a + tip_radius + seg), abs(b + tip_radius - seg))
+        return vector_norm(tip - point) - reach - 1e-9
+
     def landing(self, start: int) -> Landing | None:
         """``landing_from(obj, sweep, pts, gaps, start)``, from the memo when the same sample is
         touched first."""

@@ -67,7 +67,9 @@ class GraspWorld:
         # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
         # (the object taken as its bounding ball): a min over geometries skips the exact
         # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
-        self._links, self.probe, self._bounds = _derived_for(self.hand, self.sweeps)
+        # Also whether a wrist translation moves the palm origin to the wrist's x, y, z bit for
+        # bit (see _deferred_wrist_move).
+        self._links, self.probe, self._bounds, self._palm_at_wrist_xyz = _derived_for(self.hand, self.sweeps)
         self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
         # per finger with a sphere tip (the scene measures it from the tip frame): its frame
         # and radius, for a lower bound of the tip's distance (see _closing_clear)
@@ -289,6 +291,8 @@ class GraspWorld:
             return 0.0, False
         unit = delta / length
         q = self.state.q
+        if self._palm_at_wrist_xyz:
+            return self._deferred_wrist_move(q, start, unit, length, stop_when_located)
         travelled = 0.0
         for _ in range(500):
             if stop_when_located and self.located():
@@ -314,6 +318,66 @@ class GraspWorld:
             self.set_q(q)
             if travelled >= length - 1e-12:
                 return travelled, False
+        return travelled, True
+
+    def _deferred_wrist_move(
+        self, q: np.ndarray, start: np.ndarray, unit: np.ndarray, length: float, stop_when_located: bool
+    ) -> tuple[float, bool]:
+        """:meth:`guarded_wrist_move`'s loop (the same steps, the same result bit for bit) that
+        moves the hand model only where a sub-step needs more than the grasp centre's gap.
+
+        Far from the object a sub-step is fixed by the grasp centre's gap alone, and for a hand
+        whose palm origin is the wrist's x, y, z joint values bit for bit
+        (:func:`palm_origin_is_wrist_xyz`) that gap needs no forward kinematics: the grasp
+        centre is ``wrist + R @ grasp_centre``, the palm's rotation ``R`` unchanged by a
+        translation — exactly what :meth:`grasp_centre_world` computes after a move. The hand
+        model is updated (:meth:`set_q`) only for an exact clearance, near touching and at the
+        end, where it is left as the plain loop leaves it.
+        """
+        p = self.params
+        wrist_xyz = self._wrist_xyz
+        offset = self.palm_views()[1] @ self._grasp_centre  # the grasp centre from the palm origin
+        far = p.clearance + 5e-3  # exact_clearance's threshold beyond the hand bound
+        travelled = 0.0
+        pending: np.ndarray | None = None  # the wrist position the hand model is not at yet
+        gap = 0.0
+        for _ in range(500):
+            if pending is not None:
+                gap = self.scene.point_gap(pending + offset)
+                if (stop_when_located and gap <= p.envelope_radius) or gap - p.hand_bound <= far:
+                    self.set_q(q)  # the hand model at q: the plain loop from here
+                    pending = None
+            if pending is None:
+                if stop_when_located and self.located():
+                    return travelled, False
+                gap = self.object_gap_to_grasp_centre()
+                clearance = self.exact_clearance()
+            else:  # far and not located (checked above)
+                clearance = gap - p.hand_bound
+            room = clearance - p.clearance
+            if room < 1e-4:
+                # touching distance: go on only if the move leads away from the object
+                trial = min(1e-3, length - travelled)
+                q[wrist_xyz] = start + unit * (travelled + trial)
+                self.set_q(q)
+                if self.exact_clearance() <= clearance:
+                    q[wrist_xyz] = start + unit * travelled
+                    self.set_q(q)
+                    return travelled, True
+                step = trial
+                gap = self.object_gap_to_grasp_centre()
+            else:
+                step = min(length - travelled, room)
+            if stop_when_located:
+                step = min(step, max(gap - p.envelope_radius, 5e-4))
+            travelled += step
+            pending = start + unit * travelled
+            q[wrist_xyz] = pending
+            if travelled >= length - 1e-12:
+                self.set_q(q)
+                return travelled, False
+        if pending is not None:
+            self.set_q(q)
         return travelled, True
 
     def guarded_probe(
@@ -455,6 +519,8 @@ class GraspWorld:
         if dist < 1e-9:
             return 0.0, False
         move = min(step, dist)
+        if self._palm_at_wrist_xyz:
+            return self._deferred_step_toward(start, delta, dist, move)
         q0 = self.state.q
         q = q0.copy()
         q[self._wrist_xyz] = start + delta * (move / dist)
@@ -473,6 +539,65 @@ class GraspWorld:
         q[self._wrist_xyz] = start + delta * (lo * move / dist)
         self.set_q(q)
         return dist - lo * move, True
+
+    def _deferred_step_toward(
+        self, start: np.ndarray, delta: np.ndarray, dist: float, move: float
+    ) -> tuple[float, bool]:
+        """:meth:`step_wrist_toward`'s step and bisection (the same poses tried, the same result
+        bit for bit) that moves the hand model only to the poses where
+        :meth:`_clear_after_translation` cannot tell whether the hand is clear, and at the end."""
+        threshold = 0.5 * self.params.contact_tolerance
+        wrist_xyz = self._wrist_xyz
+        q = self.state.q
+
+        def clear_at(xyz: np.ndarray) -> bool:
+            verdict = self._clear_after_translation(xyz, threshold)
+            if verdict is None:
+                q[wrist_xyz] = xyz
+                self.set_q(q)
+                verdict = self.hand_clear(threshold)
+            return verdict
+
+        xyz = start + delta * (move / dist)
+        if clear_at(xyz):
+            q[wrist_xyz] = xyz
+            self.set_q(q)
+            return dist - move, False
+        lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
+        for _ in range(30):
+            mid = 0.5 * (lo + hi)
+            if clear_at(start + delta * (mid * move / dist)):
+                lo = mid
+            else:
+                hi = mid
+        q[wrist_xyz] = start + delta * (lo * move / dist)
+        self.set_q(q)
+        return dist - lo * move, True
+
+    def _clear_after_translation(self, xyz: np.ndarray, threshold: float) -> bool | None:
+        """:meth:`hand_clear` ``(threshold)`` with the wrist translated to ``xyz`` (world, m)
+        from the current pose, when it is decided without moving the hand model; else None.
+
+        For a hand whose palm origin is the wrist's x, y, z (:func:`palm_origin_is_wrist_xyz`)
+        the grasp centre's gap there is the one :meth:`hand_clear` would read, bit for bit.
+        Where the hand is near the object, the geometries' lower bounds at ``xyz`` are those of
+        the current placements against the object's bounding ball shifted back by the
+        translation (a translation moves every geometry by it, up to round-off:
+        :data:`TRANSLATED_BOUND_SLACK` covers that); bounds reaching ``threshold`` prove the
+        hand clear (True), as in :meth:`hand_clear`. Otherwise it takes the exact queries at
+        ``xyz`` (None).
+        """
+        p = self.params
+        translation, rotation = self.palm_views()
+        gap = self.scene.point_gap(xyz + rotation @ self._grasp_centre)
+        if gap > p.hand_bound + p.clearance:  # hand_clear's far case: the gap decides
+            return bool(gap - p.hand_bound >= threshold)
+        dx, dy, dz = (xyz - translation).tolist()  # the translation from the current pose
+        ox, oy, oz = self._obj_centre
+        bounds = self._lower_bounds(range(len(self._bounds)), (ox - dx, oy - dy, oz - dz))
+        if min(bounds)[0] - TRANSLATED_BOUND_SLACK >= threshold:
+            return True
+        return None
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
         """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
@@ -590,9 +715,11 @@ class GraspWorld:
                 best = gap
         return best
 
-    def _lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
-        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
-        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m)."""
+    def _lower_bounds(
+        self, geometry_ids: Iterable[int], centre: tuple[float, float, float] | None = None
+    ) -> list[tuple[float, int]]:
+        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` (m), to the
+        object's bounding ball (about ``centre`` instead of the object's, when given)."""
         state = self.state
         state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
         views = self._bound_views
@@ -601,7 +728,8 @@ class GraspWorld:
             oMg = state.geometry_data.oMg
             views = self._bound_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
             self._views_of = state
-        return ball_gap_lower_bounds(self._bounds, views, geometry_ids, self._obj_centre, self._obj_radius)
+        about = self._obj_centre if centre is None else centre
+        return ball_gap_lower_bounds(self._bounds, views, geometry_ids, about, self._obj_radius)
 
 
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
@@ -611,22 +739,53 @@ _DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] =
 
 def _derived_for(
     hand: HandModel, sweeps: dict[str, FingerSweep]
-) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]]]:
-    """The finger link geometries, the probe choice and the geometries' distance bounds of
-    ``hand`` (with ``sweeps``), computed once per hand and sweeps (they never change; every
-    plan's world shares them read-only)."""
+) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]], bool]:
+    """The finger link geometries, the probe choice, the geometries' distance bounds of
+    ``hand`` (with ``sweeps``) and :func:`palm_origin_is_wrist_xyz`, computed once per hand and
+    sweeps (they never change; every plan's world shares them read-only)."""
     entry = _DERIVED.get(id(hand))
     if entry is None or entry[0] is not hand or entry[1] is not sweeps:
         derived = (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
             [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
+            palm_origin_is_wrist_xyz(hand),
         )
         entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
         while len(_DERIVED) > 8:  # pop with a default: another thread may evict it first
             _DERIVED.pop(next(iter(_DERIVED), -1), None)
-    links, probe, bounds = entry[2]
-    return links, probe, bounds
+    links, probe, bounds, palm_at_wrist_xyz = entry[2]
+    return links, probe, bounds, palm_at_wrist_xyz
+
+
+def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
+    """Whether the palm frame's world origin is the wrist's x, y, z joint values bit for bit in
+    every configuration: the model's first six joints are the wrist (prismatic along x, y, z,
+    then revolute about x, y, z, each the previous one's child, at identity placements) and the
+    palm frame sits on the sixth at the identity. Pinocchio then composes every translation
+    from exact products by 1 and 0 (a sum with a zero can only turn −0.0 into 0.0)."""
+    model = hand.model
+    wrist = [int(i) for i in hand.wrist_q_index]
+    kinds = ("PX", "PY", "PZ", "RX", "RY", "RZ")
+    if model.njoints < 7 or len(wrist) != 6:
+        return False
+    for j, kind in enumerate(kinds, start=1):
+        joint = model.joints[j]
+        if (
+            joint.shortname() != f"JointModel{kind}"
+            or joint.idx_q != wrist[j - 1]
+            or model.parents[j] != j - 1
+            or not model.jointPlacements[j].isIdentity()
+        ):
+            return False
+    palm = model.frames[hand.palm_frame_id]
+    return bool(palm.parentJoint == 6 and palm.placement.isIdentity())
+
+
+#: what the lower bounds of a translated hand (see GraspWorld._clear_after_translation) give up
+#: for computing the placements as the current ones moved by the translation (m): their
+#: round-off, ~1e-16 m on hand-sized coordinates
+TRANSLATED_BOUND_SLACK = 1e-12
 
 
 #: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all
