@@ -200,7 +200,10 @@ class ServiceStats:
     replied_err: int = 0
     busy: int = 0
     cancelled: int = 0
+    #: cycles numbered for publication (sent or, with nobody watching, skipped)
     cycles_published: int = 0
+    #: cycles actually put on the wire (someone was watching)
+    cycles_sent: int = 0
 
     def to_dict(self) -> dict[str, int]:
         """JSON form."""
@@ -578,7 +581,14 @@ class PlanService:
             head = self._head(goal_id)
             status_key = proto.status_key(self.prefix, goal_id)
             watchers = self._watched
-            watched = watchers.now()  # exact, before the first message
+            try:
+                watched = watchers.now()  # exact, before the first message
+            except Exception:
+                if self._stopping:  # stop() undeclared the watcher publisher meanwhile
+                    raise proto.RequestError(
+                        proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
+                    ) from None
+                raise
             if job.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
@@ -646,7 +656,8 @@ class PlanService:
                     log.debug("undeclare failed", exc_info=True)
 
     def _done_refused(self, goal_id: str) -> None:
-        """Close a goal whose ``running`` was published but the planner refused: ``done``, no cycle."""
+        """Close a goal the planner refused after admission: ``done`` with status ``refused``, no
+        cycle (published whether or not anyone watches: a rare path, kept simple)."""
         try:
             self._status(goal_id, proto.STATE_DONE, status="refused", cycles=0, result=None)
         except Exception:
@@ -656,13 +667,14 @@ class PlanService:
         """Run the planner, publishing every cycle while watched (from the start, or since a
         watcher came: :attr:`_GoalWatchers.any`); the result's JSON form."""
         seq = 0
+        sent = 0
         head += '"seq":'
         put = publisher.put
         record_json = proto.cycle_record_json
         watchers = self._watched
 
         def on_cycle(record: CycleRecord) -> None:
-            nonlocal seq
+            nonlocal seq, sent
             seq += 1
             if not (watched or watchers.any):  # nobody would receive it: numbered, not built nor sent
                 return
@@ -671,6 +683,7 @@ class PlanService:
             else:  # a planner of another kind: its records' own JSON form
                 body = _encode(record.to_dict() if hasattr(record, "to_dict") else record).decode()
             put((head + str(seq) + ',"record":' + body + "}").encode())
+            sent += 1
 
         try:
             assert self._planner is not None
@@ -679,6 +692,7 @@ class PlanService:
         finally:
             with self._lock:
                 self.stats.cycles_published += seq
+                self.stats.cycles_sent += sent
         if not isinstance(result, dict):
             raise ContractError("planner", f"its result is a {type(result).__name__}, not a mapping")
         if result.get("cycles") is not None and result.get("cycles") != seq:
