@@ -60,7 +60,7 @@ class FingerAgent(GraspAgent):
         self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
         self._landings_memo: tuple[object, object, SweepLandings | None] = (None, None, None)
         self._miss_memo: dict[int, float] = {}
-        self._far_samples: set[int] = set()  # first touching samples whose miss's bound exceeds the tolerance
+        self._far_samples: set[tuple[int, float]] = set()  # (first touching sample, tolerance) past the bound
         self._rotated: tuple[bytes, np.ndarray] = (b"", self._sweep.points)
         # the wrist's joint values, as a tuple, from the configuration list
         self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
@@ -133,13 +133,13 @@ class FingerAgent(GraspAgent):
             return False
         landings, start, target = found
         k = landings.first_touch(start)
-        if k is None or k in self._far_samples:
+        if k is None or (k, tolerance) in self._far_samples:
             return False
         miss = self._miss_memo.get(k)
         if miss is None:
             chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
             if landings.miss_lower_bound(start, self._tip_radius, chosen) > tolerance:
-                self._far_samples.add(k)
+                self._far_samples.add((k, tolerance))
                 return False
             miss = self.landing_miss(board)
             assert miss is not None  # k is its first touching sample

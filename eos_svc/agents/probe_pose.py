@@ -6,6 +6,7 @@ with two fingers).
 
 from __future__ import annotations
 
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -50,9 +51,11 @@ def _build(hand: HandModel, finger: str, angle: float) -> ProbePose:
     xyz = wq[:3]
     tip_gid = hand.tip_geometry_id(finger)
     n_geoms = len(hand.collision_model.geometryObjects)
+    indices, values = np.concatenate(parts_i), np.concatenate(parts_v)
+    indices.flags.writeable = values.flags.writeable = False  # shared by every plan's probes
     return ProbePose(
-        indices=np.concatenate(parts_i),
-        values=np.concatenate(parts_v),
+        indices=indices,
+        values=values,
         wrist_xyz=[int(i) for i in xyz],
         wrist_lo=hand.lower[xyz].tolist(),
         wrist_hi=hand.upper[xyz].tolist(),
@@ -63,6 +66,7 @@ def _build(hand: HandModel, finger: str, angle: float) -> ProbePose:
 #: per (hand id, finger, angle): the hand (so its id cannot be reused) and its probe pose
 _POSES: dict[tuple[int, str, float], tuple[HandModel, ProbePose]] = {}
 _POSES_KEEP = 32
+_POSES_LOCK = threading.Lock()
 
 
 def probe_pose(hand: HandModel, finger: str, angle: float) -> ProbePose:
@@ -71,7 +75,9 @@ def probe_pose(hand: HandModel, finger: str, angle: float) -> ProbePose:
     key = (id(hand), finger, float(angle))
     entry = _POSES.get(key)
     if entry is None or entry[0] is not hand:
-        entry = _POSES[key] = (hand, _build(hand, finger, float(angle)))
-        while len(_POSES) > _POSES_KEEP:  # pop with a default: another thread may evict it first
-            _POSES.pop(next(iter(_POSES), key), None)
+        built = (hand, _build(hand, finger, float(angle)))
+        with _POSES_LOCK:  # plans run in several threads (the service's workers)
+            entry = _POSES[key] = built
+            while len(_POSES) > _POSES_KEEP:
+                _POSES.pop(next(iter(_POSES)))
     return entry[1]

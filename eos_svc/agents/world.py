@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import contextlib
 import math
+import threading
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -446,7 +447,7 @@ class GraspWorld:
         d0, d1, d2 = d.tolist()
         i0, i1, i2 = pose.wrist_xyz
         travelled = 0.0
-        tip = state._tips[finger][3]  # live view of the tip centre (world)
+        tip = state.tip_centre_view(finger)  # live view of the tip centre (world)
         free = [tip.copy()]
         contact_of = self.scene.contact
         # ``other`` at the start pose (exact), then a lower bound of it (_probe_floor_after)
@@ -735,6 +736,7 @@ class GraspWorld:
 #: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
 #: derives from them alone (see _derived_for)
 _DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] = {}
+_DERIVED_LOCK = threading.Lock()
 
 
 def _derived_for(
@@ -751,9 +753,10 @@ def _derived_for(
             [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
             palm_origin_is_wrist_xyz(hand),
         )
-        entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
-        while len(_DERIVED) > 8:  # pop with a default: another thread may evict it first
-            _DERIVED.pop(next(iter(_DERIVED), -1), None)
+        with _DERIVED_LOCK:  # plans run in several threads (the service's workers)
+            entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
+            while len(_DERIVED) > 8:
+                _DERIVED.pop(next(iter(_DERIVED)))
     links, probe, bounds, palm_at_wrist_xyz = entry[2]
     return links, probe, bounds, palm_at_wrist_xyz
 
@@ -763,7 +766,8 @@ def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
     every configuration: the model's first six joints are the wrist (prismatic along x, y, z,
     then revolute about x, y, z, each the previous one's child, at identity placements) and the
     palm frame sits on the sixth at the identity. Pinocchio then composes every translation
-    from exact products by 1 and 0 (a sum with a zero can only turn −0.0 into 0.0)."""
+    from exact products by 1 and 0 (a sum with a zero can only turn −0.0 into 0.0). Also
+    requires every collision geometry to move with the wrist's translation."""
     model = hand.model
     wrist = [int(i) for i in hand.wrist_q_index]
     kinds = ("PX", "PY", "PZ", "RX", "RY", "RZ")
@@ -779,7 +783,10 @@ def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:
         ):
             return False
     palm = model.frames[hand.palm_frame_id]
-    return bool(palm.parentJoint == 6 and palm.placement.isIdentity())
+    # every collision geometry moves with the wrist's translation (hangs below its x, y, z
+    # joints): what the translated bounds of the deferred moves assume of the whole hand
+    moves_with_wrist = all(go.parentJoint >= 3 for go in hand.collision_model.geometryObjects)
+    return bool(palm.parentJoint == 6 and palm.placement.isIdentity() and moves_with_wrist)
 
 
 #: what the lower bounds of a translated hand (see GraspWorld._clear_after_translation) give up

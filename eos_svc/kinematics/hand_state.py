@@ -124,6 +124,13 @@ class HandState:
         out: np.ndarray = self.data.oMf[self.hand.tip_frame_id(finger)].translation.copy()
         return out
 
+    def tip_centre_view(self, finger: str) -> np.ndarray:
+        """World position of the fingertip sphere centre, m, as a live read-only view that
+        follows every :meth:`update` (no copy: for loops that read it after each move)."""
+        view: np.ndarray = self._tip(finger)[3].view()
+        view.flags.writeable = False
+        return view
+
     def palm_placement(self) -> pin.SE3:
         """World placement of the palm frame, a copy."""
         return pin.SE3(self.data.oMf[self.hand.palm_frame_id])
