@@ -137,17 +137,19 @@ def batch_signed_distance(
     local = (points - centres[:, None, :]) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
-    elif kind == "ellipsoid":  # on coordinate planes (3, K, N) (primitives.ellipsoid_planes)
-        planes, radii = local.transpose(2, 0, 1).copy(), sizes.T[:, :, None].repeat(local.shape[1], 2)
+        return d, g @ rotations.transpose(0, 2, 1)
+    # the other kernels on coordinate planes (3, K, N) (primitives.*_planes: the rows' bits)
+    planes = local.transpose(2, 0, 1).copy()
+    if kind == "ellipsoid":
+        radii = sizes.T[:, :, None].repeat(local.shape[1], 2)
         d, g_planes = primitives.ellipsoid_planes(planes, radii, groups=groups)
-        g = g_planes.transpose(1, 2, 0).copy()
     elif kind == "box":
-        d, g = primitives.box(local, sizes[:, None, :])
+        d, g_planes = primitives.box_planes(planes, sizes.T[:, :, None])
     elif kind == "cylinder":
-        d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
+        d, g_planes = primitives.cylinder_planes(planes, sizes[:, :1], sizes[:, 1:2])
     else:
-        d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, g @ rotations.transpose(0, 2, 1)
+        d, g_planes = primitives.capsule_planes(planes, sizes[:, :1], sizes[:, 1:2])
+    return d, g_planes.transpose(1, 2, 0).copy() @ rotations.transpose(0, 2, 1)
 
 
 #: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs

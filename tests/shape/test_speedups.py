@@ -537,3 +537,54 @@ def test_minpack_lmder_is_leastsq(kind):
             np.testing.assert_array_equal(x, plain[0])
             np.testing.assert_array_equal(fvec, plain[2]["fvec"])
             assert not np.shares_memory(x, theta0)
+
+
+@pytest.mark.parametrize("kind", ["box", "cylinder", "capsule"])
+def test_kernels_on_planes_are_the_kernels_on_rows(kind):
+    # box_planes, cylinder_planes, capsule_planes: the row kernels' elementwise operations on
+    # the same numbers, so the same bits — at random points, on the axis, at the centre, on
+    # faces, edges and caps, at ties between faces
+    rng = np.random.default_rng(91)
+    for trial in range(40):
+        K, n = int(rng.integers(1, 12)), int(rng.integers(1, 35))
+        P = rng.normal(scale=0.04, size=(K, n, 3))
+        s = rng.uniform(0.004, 0.05, size=(K, 3))
+        if trial % 2 == 0:
+            P[0, 0] = 0.0  # the centre (a tie between all faces, on the axis)
+            P[-1, -1] = [0.0, 0.0, 0.07]  # on the axis, outside
+            P[0, -1] = [s[0, 0], 0.0, 0.0]  # on a face or the mantle
+            P[-1, 0] = [-s[-1, 0], s[-1, 1], -s[-1, 1]]  # on an edge or beyond a cap
+            P[K // 2, n // 2] = [0.5 * s[K // 2, 0], 0.0, 0.5 * s[K // 2, 0]]  # a tie inside
+        planes = P.transpose(2, 0, 1).copy()
+        if kind == "box":
+            rows = shape_primitives.box(P, s[:, None, :])
+            got = shape_primitives.box_planes(planes, s.T[:, :, None])
+        elif kind == "cylinder":
+            rows = shape_primitives.cylinder(P, s[:, :1], s[:, 1:2])
+            got = shape_primitives.cylinder_planes(planes, s[:, :1], s[:, 1:2])
+        else:
+            rows = shape_primitives.capsule(P, s[:, :1], s[:, 1:2])
+            got = shape_primitives.capsule_planes(planes, s[:, :1], s[:, 1:2])
+        np.testing.assert_array_equal(got[0], rows[0])
+        np.testing.assert_array_equal(got[1].transpose(1, 2, 0), rows[1])
+        # the signs of zeros too (a zero gradient component enters the normal residuals)
+        np.testing.assert_array_equal(np.signbit(got[1].transpose(1, 2, 0)), np.signbit(rows[1]))
+
+
+@pytest.mark.parametrize("kind", ["box", "cylinder", "capsule"])
+def test_batched_distance_is_the_row_kernel(kind):
+    # batch_signed_distance runs these kernels on planes: the rows' distances and gradients
+    rng = np.random.default_rng(93)
+    kernel = {"box": shape_primitives.box, "cylinder": shape_primitives.cylinder,
+              "capsule": shape_primitives.capsule}[kind]
+    for K in (1, 7, 11):
+        centres = rng.normal(scale=0.01, size=(K, 3))
+        rotations = np.array([shape_fit.rotation_vector(w) for w in rng.normal(size=(K, 3))])
+        sizes = rng.uniform(0.01, 0.05, size=(K, 3 if kind == "box" else 2))
+        points = rng.normal(scale=0.04, size=(1, 29, 3))
+        d, g = shape_fit.batch_signed_distance(kind, points, centres, rotations, sizes)
+        local = (points - centres[:, None, :]) @ rotations
+        args = (sizes[:, None, :],) if kind == "box" else (sizes[:, :1], sizes[:, 1:2])
+        d_rows, g_rows = kernel(local, *args)
+        np.testing.assert_array_equal(d, d_rows)
+        np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
