@@ -216,7 +216,8 @@ def batch_geometry(
     """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
     about its own (K, 3, 3). ``groups``: first indices of groups of parameter vectors
     evaluated as if in separate calls (a cylinder's or capsule's axes are one matrix product
-    per call, whose rounding BLAS may choose by the number of rows)."""
+    per call, whose rounding BLAS may choose by the number of rows; with an ``r0`` per row,
+    every row of a group is about its first row's)."""
     centres = thetas[:, :3]
     # np.clip's arithmetic (the bound or the value itself) without its wrapper
     sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
@@ -228,7 +229,10 @@ def batch_geometry(
     else:
         tilt = np.ones((K, 3))
         tilt[:, :2] = thetas[:, 3:5]
-        if r0.ndim == 3:
+        if r0.ndim == 3 and groups is not None:  # each group about its first row's r0
+            ends = [*groups[1:], K]
+            axes = np.concatenate([tilt[lo:hi] @ r0[lo].T for lo, hi in zip(groups, ends, strict=True)])
+        elif r0.ndim == 3:
             axes = np.einsum("kij,kj->ki", r0, tilt)
         elif groups is None:
             axes = tilt @ r0.T
@@ -504,6 +508,44 @@ class ClassStarts:
             self._evaluations[key] = _Evaluations(kind, r0, self.touches, self.fit_data)
         return self._evaluations[key]
 
+    def nearest_order(self, kind: str) -> list[int]:
+        """:func:`_nearest_order` of ``kind``'s starts, from :meth:`evaluate_starts` (each
+        start's residuals as its own fit evaluates them)."""
+        candidates = self.of(kind)
+        if len(candidates) < 2:
+            return list(range(len(candidates)))
+        self.evaluate_starts(kind)
+        at_start = np.array([self.evaluations(kind, i).known[theta0.tobytes()][0] for i, (theta0, _) in
+                             enumerate(candidates)])
+        chi2 = np.sum(at_start**2, axis=1)
+        return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
+
+    def evaluate_starts(self, kind: str) -> None:
+        """Every start of ``kind`` evaluated at its own parameters — residuals and difference
+        Jacobian, as its :class:`_Evaluations` evaluates a point — in ONE batched call, each
+        start's rows as their own groups about their own orientation (the same bits as the
+        evaluations one by one; the fits from these starts then find their first point
+        known)."""
+        candidates = self.of(kind)
+        todo = [i for i, (theta0, _) in enumerate(candidates)
+                if theta0.tobytes() not in self.evaluations(kind, i).known]
+        if not todo:
+            return
+        k = N_PARAMS[kind]
+        rows = k + 2  # the k + 1 difference points (a group), the point alone (a group)
+        blocks = [_difference_points(candidates[i][0], copies=2) for i in todo]
+        thetas = np.concatenate([b[0] for b in blocks])
+        r0s = np.repeat(np.array([candidates[i][1] for i in todo]), rows, axis=0)
+        firsts = np.arange(len(todo)) * rows
+        groups = np.stack([firsts, firsts + k + 1], axis=1).reshape(-1)
+        R, geometry = _residuals_and_geometry(thetas, kind, r0s, self.fit_data, groups)
+        for j, (i, (_, h)) in enumerate(zip(todo, blocks, strict=True)):
+            lo = j * rows
+            block = (geometry[0][lo : lo + rows], geometry[1][lo : lo + rows], geometry[2][lo : lo + rows])
+            self.evaluations(kind, i).known[candidates[i][0].tobytes()] = (
+                R[lo + k + 1], _difference_quotients(R[lo : lo + k + 1], h), block,
+            )
+
     def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
         """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
         if kind not in self._of:
@@ -740,7 +782,7 @@ def fit_class(
     m = residual_count(touches)
     shared = ClassStarts(touches) if class_starts is None else class_starts
     candidates = shared.of(kind)
-    order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
+    order = shared.nearest_order(kind) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
         evaluations = shared.evaluations(kind, index)

@@ -588,3 +588,25 @@ def test_batched_distance_is_the_row_kernel(kind):
         d_rows, g_rows = kernel(local, *args)
         np.testing.assert_array_equal(d, d_rows)
         np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_starts_evaluated_in_one_call_are_each_evaluated_alone(kind):
+    # ClassStarts.evaluate_starts: every start's residuals, Jacobian and geometry at its own
+    # parameters in one batched call — to the bit what its _Evaluations computes alone; the
+    # nearest order from them is _nearest_order's
+    for seed in (41, 42, 43):
+        touches = random_touches("cylinder" if kind == "box" else "box", seed)
+        shared = shape_fit.ClassStarts(touches)
+        shared.evaluate_starts(kind)
+        candidates = shared.of(kind)
+        for i, (theta0, r0) in enumerate(candidates):
+            batched = shared.evaluations(kind, i)
+            alone = shape_fit._Evaluations(kind, r0, touches)
+            np.testing.assert_array_equal(batched.residuals(theta0), alone.residuals(theta0))
+            np.testing.assert_array_equal(batched.jacobian(theta0), alone.jacobian(theta0))
+            g_batched, g_alone = batched.geometry(theta0), alone.geometry(theta0)
+            np.testing.assert_array_equal(g_batched.rotation, g_alone.rotation)
+            np.testing.assert_array_equal(g_batched.centre, g_alone.centre)
+            assert g_batched.sizes == g_alone.sizes
+        assert shared.nearest_order(kind) == shape_fit._nearest_order(kind, touches, candidates)
