@@ -128,13 +128,15 @@ def batch_signed_distance(
     rotations: np.ndarray,
     sizes: np.ndarray,
     groups: np.ndarray | None = None,
+    point_planes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
     (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3).
     ``groups``: first indices of groups of instances evaluated as if in separate calls (of
     the distances, only the ellipsoid's iteration couples the instances of a call, see
-    :func:`~eos_svc.shape.primitives.ellipsoid`)."""
-    local = (points - centres[:, None, :]) @ rotations
+    :func:`~eos_svc.shape.primitives.ellipsoid`). ``point_planes``: the points as contiguous
+    coordinate planes (3, 1 or K, N), if at hand (:func:`offsets_from`)."""
+    local = offsets_from(points, centres, point_planes) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
         return d, g @ rotations.transpose(0, 2, 1)
@@ -150,6 +152,19 @@ def batch_signed_distance(
     else:
         d, g_planes = primitives.capsule_planes(planes, sizes[:, :1], sizes[:, 1:2])
     return d, g_planes.transpose(1, 2, 0).copy() @ rotations.transpose(0, 2, 1)
+
+
+def offsets_from(
+    points: np.ndarray, centres: np.ndarray, point_planes: np.ndarray | None = None
+) -> np.ndarray:
+    """``points − centres[:, None, :]`` (K, N, 3), C-contiguous (m): from the points' contiguous
+    coordinate planes (3, 1 or K, N) when given — the same subtractions (the same bits), but
+    in contiguous loops instead of numpy's broadcast over a last axis of 3 (several times
+    slower on these arrays) — then laid out as rows again for the matrix product."""
+    if point_planes is None:
+        out: np.ndarray = points - centres[:, None, :]
+        return out
+    return (point_planes - centres.T[:, :, None]).transpose(1, 2, 0).copy()
 
 
 #: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
@@ -246,10 +261,12 @@ def batch_geometry(
 @dataclass(frozen=True)
 class FitData:
     """What :func:`batch_residuals` needs of the touches, derived once per fit instead of per
-    evaluation: the contacts and free samples as one array of points (m), their radii (m),
-    the sensed normals and the noise model's constants."""
+    evaluation: the contacts and free samples as one array of points (m) — also as contiguous
+    coordinate planes (3, 1, N) —, their radii (m), the sensed normals and the noise model's
+    constants."""
 
     points: np.ndarray
+    point_planes: np.ndarray
     count: int
     radii: np.ndarray
     normals: np.ndarray
@@ -265,6 +282,7 @@ class FitData:
         points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
         return cls(
             points[None],
+            np.ascontiguousarray(points.T[:, None, :]),
             touches.count,
             touches.radii,
             touches.normals,
@@ -296,7 +314,7 @@ def _residuals_and_geometry(
     """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from)."""
     geometry = batch_geometry(kind, thetas, r0, groups)
     n = data.count
-    d, g = batch_signed_distance(kind, data.points, *geometry, groups)
+    d, g = batch_signed_distance(kind, data.points, *geometry, groups, data.point_planes)
     K = len(thetas)
     r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
     r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(K, -1)

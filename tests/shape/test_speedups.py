@@ -610,3 +610,16 @@ def test_starts_evaluated_in_one_call_are_each_evaluated_alone(kind):
             np.testing.assert_array_equal(g_batched.centre, g_alone.centre)
             assert g_batched.sizes == g_alone.sizes
         assert shared.nearest_order(kind) == shape_fit._nearest_order(kind, touches, candidates)
+
+
+def test_offsets_from_point_planes_are_the_broadcast_difference():
+    # offsets_from: the same subtractions on contiguous planes, laid out as C-contiguous rows
+    rng = np.random.default_rng(95)
+    for K, n, shared in ((1, 5, True), (11, 43, True), (7, 29, False)):
+        points = rng.normal(scale=0.05, size=(1 if shared else K, n, 3))
+        centres = rng.normal(scale=0.05, size=(K, 3))
+        planes = np.ascontiguousarray(points.transpose(2, 0, 1))
+        got = shape_fit.offsets_from(points, centres, planes)
+        np.testing.assert_array_equal(got, points - centres[:, None, :])
+        np.testing.assert_array_equal(shape_fit.offsets_from(points, centres), points - centres[:, None, :])
+        assert got.flags.c_contiguous and got.shape == (K, n, 3)
