@@ -23,11 +23,12 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import least_squares, leastsq
+from scipy.optimize import _minpack, least_squares
 
 from eos_svc.shape import primitives
 from eos_svc.shape.touches import Touches
@@ -127,26 +128,43 @@ def batch_signed_distance(
     rotations: np.ndarray,
     sizes: np.ndarray,
     groups: np.ndarray | None = None,
+    point_planes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Signed distance (K, N) and world gradient (K, N, 3) of K instances of ``kind``
     (centres (K, 3), rotations (K, 3, 3), sizes (K, s)) at world points (1 or K, N, 3).
     ``groups``: first indices of groups of instances evaluated as if in separate calls (of
     the distances, only the ellipsoid's iteration couples the instances of a call, see
-    :func:`~eos_svc.shape.primitives.ellipsoid`)."""
-    local = (points - centres[:, None, :]) @ rotations
+    :func:`~eos_svc.shape.primitives.ellipsoid`). ``point_planes``: the points as contiguous
+    coordinate planes (3, 1 or K, N), if at hand (:func:`offsets_from`)."""
+    local = offsets_from(points, centres, point_planes) @ rotations
     if kind == "sphere":
         d, g = primitives.sphere(local, sizes[:, :1])
-    elif kind == "ellipsoid":  # on coordinate planes (3, K, N) (primitives.ellipsoid_planes)
-        planes, radii = local.transpose(2, 0, 1).copy(), sizes.T[:, :, None].repeat(local.shape[1], 2)
+        return d, g @ rotations.transpose(0, 2, 1)
+    # the other kernels on coordinate planes (3, K, N) (primitives.*_planes: the rows' bits)
+    planes = local.transpose(2, 0, 1).copy()
+    if kind == "ellipsoid":
+        radii = sizes.T[:, :, None].repeat(local.shape[1], 2)
         d, g_planes = primitives.ellipsoid_planes(planes, radii, groups=groups)
-        g = g_planes.transpose(1, 2, 0).copy()
     elif kind == "box":
-        d, g = primitives.box(local, sizes[:, None, :])
+        d, g_planes = primitives.box_planes(planes, sizes.T[:, :, None])
     elif kind == "cylinder":
-        d, g = primitives.cylinder(local, sizes[:, :1], sizes[:, 1:2])
+        d, g_planes = primitives.cylinder_planes(planes, sizes[:, :1], sizes[:, 1:2])
     else:
-        d, g = primitives.capsule(local, sizes[:, :1], sizes[:, 1:2])
-    return d, g @ rotations.transpose(0, 2, 1)
+        d, g_planes = primitives.capsule_planes(planes, sizes[:, :1], sizes[:, 1:2])
+    return d, g_planes.transpose(1, 2, 0).copy() @ rotations.transpose(0, 2, 1)
+
+
+def offsets_from(
+    points: np.ndarray, centres: np.ndarray, point_planes: np.ndarray | None = None
+) -> np.ndarray:
+    """``points − centres[:, None, :]`` (K, N, 3), C-contiguous (m): from the points' contiguous
+    coordinate planes (3, 1 or K, N) when given — the same subtractions (the same bits), but
+    in contiguous loops instead of numpy's broadcast over a last axis of 3 (several times
+    slower on these arrays) — then laid out as rows again for the matrix product."""
+    if point_planes is None:
+        out: np.ndarray = points - centres[:, None, :]
+        return out
+    return (point_planes - centres.T[:, :, None]).transpose(1, 2, 0).copy()
 
 
 #: where the entries of a unit rotation axis k go in [k]×, flattened row by row, with their signs
@@ -213,7 +231,8 @@ def batch_geometry(
     """(centres, rotations, sizes) of K parameter vectors (K, k) about ``r0`` (3, 3), or each
     about its own (K, 3, 3). ``groups``: first indices of groups of parameter vectors
     evaluated as if in separate calls (a cylinder's or capsule's axes are one matrix product
-    per call, whose rounding BLAS may choose by the number of rows)."""
+    per call, whose rounding BLAS may choose by the number of rows; with an ``r0`` per row,
+    every row of a group is about its first row's)."""
     centres = thetas[:, :3]
     # np.clip's arithmetic (the bound or the value itself) without its wrapper
     sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
@@ -225,7 +244,10 @@ def batch_geometry(
     else:
         tilt = np.ones((K, 3))
         tilt[:, :2] = thetas[:, 3:5]
-        if r0.ndim == 3:
+        if r0.ndim == 3 and groups is not None:  # each group about its first row's r0
+            ends = [*groups[1:], K]
+            axes = np.concatenate([tilt[lo:hi] @ r0[lo].T for lo, hi in zip(groups, ends, strict=True)])
+        elif r0.ndim == 3:
             axes = np.einsum("kij,kj->ki", r0, tilt)
         elif groups is None:
             axes = tilt @ r0.T
@@ -239,10 +261,12 @@ def batch_geometry(
 @dataclass(frozen=True)
 class FitData:
     """What :func:`batch_residuals` needs of the touches, derived once per fit instead of per
-    evaluation: the contacts and free samples as one array of points (m), their radii (m),
-    the sensed normals and the noise model's constants."""
+    evaluation: the contacts and free samples as one array of points (m) — also as contiguous
+    coordinate planes (3, 1, N) —, their radii (m), the sensed normals and the noise model's
+    constants."""
 
     points: np.ndarray
+    point_planes: np.ndarray
     count: int
     radii: np.ndarray
     normals: np.ndarray
@@ -258,6 +282,7 @@ class FitData:
         points = np.concatenate([touches.centres, touches.free]) if len(touches.free) else touches.centres
         return cls(
             points[None],
+            np.ascontiguousarray(points.T[:, None, :]),
             touches.count,
             touches.radii,
             touches.normals,
@@ -289,7 +314,7 @@ def _residuals_and_geometry(
     """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from)."""
     geometry = batch_geometry(kind, thetas, r0, groups)
     n = data.count
-    d, g = batch_signed_distance(kind, data.points, *geometry, groups)
+    d, g = batch_signed_distance(kind, data.points, *geometry, groups, data.point_planes)
     K = len(thetas)
     r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
     r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(K, -1)
@@ -501,6 +526,44 @@ class ClassStarts:
             self._evaluations[key] = _Evaluations(kind, r0, self.touches, self.fit_data)
         return self._evaluations[key]
 
+    def nearest_order(self, kind: str) -> list[int]:
+        """:func:`_nearest_order` of ``kind``'s starts, from :meth:`evaluate_starts` (each
+        start's residuals as its own fit evaluates them)."""
+        candidates = self.of(kind)
+        if len(candidates) < 2:
+            return list(range(len(candidates)))
+        self.evaluate_starts(kind)
+        at_start = np.array([self.evaluations(kind, i).known[theta0.tobytes()][0] for i, (theta0, _) in
+                             enumerate(candidates)])
+        chi2 = np.sum(at_start**2, axis=1)
+        return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
+
+    def evaluate_starts(self, kind: str) -> None:
+        """Every start of ``kind`` evaluated at its own parameters — residuals and difference
+        Jacobian, as its :class:`_Evaluations` evaluates a point — in ONE batched call, each
+        start's rows as their own groups about their own orientation (the same bits as the
+        evaluations one by one; the fits from these starts then find their first point
+        known)."""
+        candidates = self.of(kind)
+        todo = [i for i, (theta0, _) in enumerate(candidates)
+                if theta0.tobytes() not in self.evaluations(kind, i).known]
+        if not todo:
+            return
+        k = N_PARAMS[kind]
+        rows = k + 2  # the k + 1 difference points (a group), the point alone (a group)
+        blocks = [_difference_points(candidates[i][0], copies=2) for i in todo]
+        thetas = np.concatenate([b[0] for b in blocks])
+        r0s = np.repeat(np.array([candidates[i][1] for i in todo]), rows, axis=0)
+        firsts = np.arange(len(todo)) * rows
+        groups = np.stack([firsts, firsts + k + 1], axis=1).reshape(-1)
+        R, geometry = _residuals_and_geometry(thetas, kind, r0s, self.fit_data, groups)
+        for j, (i, (_, h)) in enumerate(zip(todo, blocks, strict=True)):
+            lo = j * rows
+            block = (geometry[0][lo : lo + rows], geometry[1][lo : lo + rows], geometry[2][lo : lo + rows])
+            self.evaluations(kind, i).known[candidates[i][0].tobytes()] = (
+                R[lo + k + 1], _difference_quotients(R[lo : lo + k + 1], h), block,
+            )
+
     def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
         """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
         if kind not in self._of:
@@ -640,7 +703,7 @@ class _Evaluations:
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
         """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them):
-        a copy, the remembered ones stay as evaluated (scipy's ``leastsq`` keeps the array of
+        a copy, the remembered ones stay as evaluated (scipy's MINPACK driver keeps the array of
         the first call as MINPACK's working residuals and overwrites it)."""
         out: np.ndarray = self._evaluate(theta)[0].copy()
         return out
@@ -677,20 +740,31 @@ def levenberg_marquardt(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
     ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
-    Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
+    Jacobian's own scaling: the same iterates), called directly (:func:`minpack_lmder`)
     without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
     needs that only for the best start). ``evaluations``: the fit's :class:`_Evaluations`
     (of ``kind``, ``r0``, ``touches``), to ask for the Jacobian at θ afterwards."""
     ev = _Evaluations(kind, r0, touches) if evaluations is None else evaluations
-    x, _, info, _, _ = leastsq(
-        ev.residuals,
-        np.asarray(theta0, dtype=float),
-        Dfun=ev.jacobian,
-        full_output=True,
-        ftol=1e-8,
-        xtol=1e-8,
-        gtol=1e-8,
-        maxfev=max_nfev,
+    return minpack_lmder(ev.residuals, ev.jacobian, theta0, max_nfev)
+
+
+def minpack_lmder(
+    residuals_of: Callable[[np.ndarray], np.ndarray],
+    jacobian_of: Callable[[np.ndarray], np.ndarray],
+    theta0: np.ndarray,
+    max_nfev: int,
+    tolerance: float = 1e-8,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(θ, residuals at θ) of MINPACK's ``lmder`` from ``theta0`` (ftol = xtol = gtol =
+    ``tolerance``, step bound factor 100, the Jacobian's own scaling, at most ``max_nfev``
+    residual evaluations): ``scipy.optimize.leastsq(residuals_of, theta0, Dfun=jacobian_of,
+    full_output=True, ...)``'s ``x`` and ``fvec`` — the same compiled call with the same
+    arguments — without its wrapper: leastsq first calls both functions once more to check
+    their shapes and, after the run, inverts the triangular factor for a covariance this fit
+    does not use. ``jacobian_of`` returns (m, k) (rows per residual); m ≥ k."""
+    x0 = np.array(theta0, dtype=float).reshape(-1)  # a copy, as leastsq's flatten()
+    x, info, _ = _minpack._lmder(
+        residuals_of, jacobian_of, x0, (), 1, 0, tolerance, tolerance, tolerance, max_nfev, 100, None
     )
     return x, info["fvec"]
 
@@ -726,7 +800,7 @@ def fit_class(
     m = residual_count(touches)
     shared = ClassStarts(touches) if class_starts is None else class_starts
     candidates = shared.of(kind)
-    order = _nearest_order(kind, touches, candidates) if nearest_first else range(len(candidates))
+    order = shared.nearest_order(kind) if nearest_first else range(len(candidates))
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
         evaluations = shared.evaluations(kind, index)

@@ -106,6 +106,67 @@ def capsule(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
     return n - radius, _unit_from(v, n, (1.0, 0.0, 0.0))
 
 
+#: the fallback directions as planes (3, 1, 1): the cylinder's radial x, the capsule's x
+_X_PLANES = np.array([1.0, 0.0, 0.0])[:, None, None]
+#: the cylinder's radial fallback's first two coordinates as planes (2, 1, 1)
+_XY_FALLBACK = _X_PLANES[:2]
+#: the coordinate axes' indices as planes (3, 1, 1), to compare with an argmax over planes
+_AXES_PLANES = _AXES[:, None, None]
+
+
+def box_planes(P: Array, half: Array) -> tuple[Array, Array]:
+    """:func:`box` on coordinate planes: ``P`` (3, ...) contiguous, ``half`` (3, ...) or
+    broadcastable to it (m); returns the distance (...) and the gradient as planes (3, ...).
+    Every operation is :func:`box`'s elementwise one on the same numbers (the same bits),
+    each point's scalars broadcast along the leading axis only (contiguous loops)."""
+    q = np.abs(P) - half
+    qp = np.maximum(q, 0.0)
+    out = np.sqrt(_sum_planes(qp * qp))
+    d = out + np.minimum(np.maximum(np.maximum(q[0], q[1]), q[2]), 0.0)
+    sign = np.where(P >= 0.0, 1.0, -1.0)
+    g_out = sign * qp / np.maximum(out, _TINY)
+    # inside: the sign of the axis nearest its face (the first of equals), 0 on the others
+    g_in = np.where(q.argmax(axis=0) == _AXES_PLANES, sign, 0.0)
+    return d, np.where(out > _TINY, g_out, g_in)
+
+
+def cylinder_planes(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
+    """:func:`cylinder` on coordinate planes: ``P`` (3, ...) contiguous, ``radius`` and
+    ``half_length`` broadcastable to (...) (m); returns the distance (...) and the gradient as
+    planes (3, ...). The same elementwise operations on the same numbers as :func:`cylinder`
+    (the radial direction's and the axial one's zero components included: ``a·0 + b·n``)."""
+    x, y, z = P
+    rho = np.hypot(x, y)
+    far = rho > _TINY
+    radial = np.where(far, P[:2] / np.maximum(rho, _TINY), _XY_FALLBACK)  # its z is 0
+    dr = rho - radius
+    dz = np.abs(z) - half_length
+    axial = np.where(z >= 0.0, 1.0, -1.0)  # the axial direction's z; its x and y are 0
+    a, b = np.maximum(dr, 0.0), np.maximum(dz, 0.0)
+    out = np.hypot(a, b)
+    d = out + np.minimum(np.maximum(dr, dz), 0.0)
+    scale = np.maximum(out, _TINY)
+    g = np.empty(P.shape)
+    g[:2] = (a * radial + b * 0.0) / scale
+    g[2] = (a * 0.0 + b * axial) / scale
+    side = dr > dz
+    outside = out > _TINY
+    g[:2] = np.where(outside, g[:2], np.where(side, radial, 0.0))
+    g[2] = np.where(outside, g[2], np.where(side, 0.0, axial))
+    return d, g
+
+
+def capsule_planes(P: Array, radius: Array, half_length: Array) -> tuple[Array, Array]:
+    """:func:`capsule` on coordinate planes: ``P`` (3, ...) contiguous, ``radius`` and
+    ``half_length`` broadcastable to (...) (m); returns the distance (...) and the gradient as
+    planes (3, ...), :func:`capsule`'s elementwise operations on the same numbers."""
+    v = P.copy()
+    v[2] -= np.clip(P[2], -half_length, half_length)
+    n = np.sqrt(_sum_planes(v * v))
+    g = np.where(n > 1e-12, v / np.maximum(n, 1e-12), _X_PLANES)
+    return n - radius, g
+
+
 def ellipsoid_root_lower_bound(P: Array, a: Array, inside: Array) -> Array:
     """A point left of the root of the ellipsoid's ``F`` (see :func:`ellipsoid`), near it:
     every term of ``F`` is at most 1 at the root, so ``t ≥ a_i |p_i| − a_i²`` for each axis;

@@ -511,3 +511,115 @@ def test_difference_points_and_identities_are_the_plain_ones():
                        (local @ rotations.transpose(0, 2, 1), local @ np.broadcast_to(np.eye(3), (K, 3, 3)))):
         np.testing.assert_array_equal(got, plain)
         assert np.array_equal(np.signbit(got), np.signbit(plain))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_minpack_lmder_is_leastsq(kind):
+    # the direct MINPACK call: leastsq's x and fvec to the bit, from several starts and budgets
+    from scipy.optimize import leastsq
+
+    touches = random_touches(kind if kind != "sphere" else "capsule", 31)
+    for theta0, r0 in shape_fit.starts(kind, touches)[:3]:
+        for max_nfev in (1, QUICK_NFEV, 20):
+            direct = shape_fit._Evaluations(kind, r0, touches)
+            x, fvec = shape_fit.minpack_lmder(direct.residuals, direct.jacobian, theta0, max_nfev)
+            wrapped = shape_fit._Evaluations(kind, r0, touches)
+            plain = leastsq(
+                wrapped.residuals,
+                theta0,
+                Dfun=wrapped.jacobian,
+                full_output=True,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+                maxfev=max_nfev,
+            )
+            np.testing.assert_array_equal(x, plain[0])
+            np.testing.assert_array_equal(fvec, plain[2]["fvec"])
+            assert not np.shares_memory(x, theta0)
+
+
+@pytest.mark.parametrize("kind", ["box", "cylinder", "capsule"])
+def test_kernels_on_planes_are_the_kernels_on_rows(kind):
+    # box_planes, cylinder_planes, capsule_planes: the row kernels' elementwise operations on
+    # the same numbers, so the same bits — at random points, on the axis, at the centre, on
+    # faces, edges and caps, at ties between faces
+    rng = np.random.default_rng(91)
+    for trial in range(40):
+        K, n = int(rng.integers(1, 12)), int(rng.integers(1, 35))
+        P = rng.normal(scale=0.04, size=(K, n, 3))
+        s = rng.uniform(0.004, 0.05, size=(K, 3))
+        if trial % 2 == 0:
+            P[0, 0] = 0.0  # the centre (a tie between all faces, on the axis)
+            P[-1, -1] = [0.0, 0.0, 0.07]  # on the axis, outside
+            P[0, -1] = [s[0, 0], 0.0, 0.0]  # on a face or the mantle
+            P[-1, 0] = [-s[-1, 0], s[-1, 1], -s[-1, 1]]  # on an edge or beyond a cap
+            P[K // 2, n // 2] = [0.5 * s[K // 2, 0], 0.0, 0.5 * s[K // 2, 0]]  # a tie inside
+        planes = P.transpose(2, 0, 1).copy()
+        if kind == "box":
+            rows = shape_primitives.box(P, s[:, None, :])
+            got = shape_primitives.box_planes(planes, s.T[:, :, None])
+        elif kind == "cylinder":
+            rows = shape_primitives.cylinder(P, s[:, :1], s[:, 1:2])
+            got = shape_primitives.cylinder_planes(planes, s[:, :1], s[:, 1:2])
+        else:
+            rows = shape_primitives.capsule(P, s[:, :1], s[:, 1:2])
+            got = shape_primitives.capsule_planes(planes, s[:, :1], s[:, 1:2])
+        np.testing.assert_array_equal(got[0], rows[0])
+        np.testing.assert_array_equal(got[1].transpose(1, 2, 0), rows[1])
+        # the signs of zeros too (a zero gradient component enters the normal residuals)
+        np.testing.assert_array_equal(np.signbit(got[1].transpose(1, 2, 0)), np.signbit(rows[1]))
+
+
+@pytest.mark.parametrize("kind", ["box", "cylinder", "capsule"])
+def test_batched_distance_is_the_row_kernel(kind):
+    # batch_signed_distance runs these kernels on planes: the rows' distances and gradients
+    rng = np.random.default_rng(93)
+    kernel = {"box": shape_primitives.box, "cylinder": shape_primitives.cylinder,
+              "capsule": shape_primitives.capsule}[kind]
+    for K in (1, 7, 11):
+        centres = rng.normal(scale=0.01, size=(K, 3))
+        rotations = np.array([shape_fit.rotation_vector(w) for w in rng.normal(size=(K, 3))])
+        sizes = rng.uniform(0.01, 0.05, size=(K, 3 if kind == "box" else 2))
+        points = rng.normal(scale=0.04, size=(1, 29, 3))
+        d, g = shape_fit.batch_signed_distance(kind, points, centres, rotations, sizes)
+        local = (points - centres[:, None, :]) @ rotations
+        args = (sizes[:, None, :],) if kind == "box" else (sizes[:, :1], sizes[:, 1:2])
+        d_rows, g_rows = kernel(local, *args)
+        np.testing.assert_array_equal(d, d_rows)
+        np.testing.assert_array_equal(g, g_rows @ rotations.transpose(0, 2, 1))
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_starts_evaluated_in_one_call_are_each_evaluated_alone(kind):
+    # ClassStarts.evaluate_starts: every start's residuals, Jacobian and geometry at its own
+    # parameters in one batched call — to the bit what its _Evaluations computes alone; the
+    # nearest order from them is _nearest_order's
+    for seed in (41, 42, 43):
+        touches = random_touches("cylinder" if kind == "box" else "box", seed)
+        shared = shape_fit.ClassStarts(touches)
+        shared.evaluate_starts(kind)
+        candidates = shared.of(kind)
+        for i, (theta0, r0) in enumerate(candidates):
+            batched = shared.evaluations(kind, i)
+            alone = shape_fit._Evaluations(kind, r0, touches)
+            np.testing.assert_array_equal(batched.residuals(theta0), alone.residuals(theta0))
+            np.testing.assert_array_equal(batched.jacobian(theta0), alone.jacobian(theta0))
+            g_batched, g_alone = batched.geometry(theta0), alone.geometry(theta0)
+            np.testing.assert_array_equal(g_batched.rotation, g_alone.rotation)
+            np.testing.assert_array_equal(g_batched.centre, g_alone.centre)
+            assert g_batched.sizes == g_alone.sizes
+        assert shared.nearest_order(kind) == shape_fit._nearest_order(kind, touches, candidates)
+
+
+def test_offsets_from_point_planes_are_the_broadcast_difference():
+    # offsets_from: the same subtractions on contiguous planes, laid out as C-contiguous rows
+    rng = np.random.default_rng(95)
+    for K, n, shared in ((1, 5, True), (11, 43, True), (7, 29, False)):
+        points = rng.normal(scale=0.05, size=(1 if shared else K, n, 3))
+        centres = rng.normal(scale=0.05, size=(K, 3))
+        planes = np.ascontiguousarray(points.transpose(2, 0, 1))
+        got = shape_fit.offsets_from(points, centres, planes)
+        np.testing.assert_array_equal(got, points - centres[:, None, :])
+        np.testing.assert_array_equal(shape_fit.offsets_from(points, centres), points - centres[:, None, :])
+        assert got.flags.c_contiguous and got.shape == (K, n, 3)
