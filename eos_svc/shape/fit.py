@@ -23,12 +23,11 @@ covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds 1).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
 
 import numpy as np
-from scipy.optimize import _minpack, least_squares
+from scipy.optimize import least_squares, leastsq
 
 from eos_svc.shape import primitives
 from eos_svc.shape.touches import Touches
@@ -703,7 +702,7 @@ class _Evaluations:
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
         """The whitened residuals at ``theta`` (``args``: ignored, MINPACK's driver passes them):
-        a copy, the remembered ones stay as evaluated (scipy's MINPACK driver keeps the array of
+        a copy, the remembered ones stay as evaluated (scipy's ``leastsq`` keeps the array of
         the first call as MINPACK's working residuals and overwrites it)."""
         out: np.ndarray = self._evaluate(theta)[0].copy()
         return out
@@ -740,31 +739,20 @@ def levenberg_marquardt(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(θ, whitened residuals at θ) after MINPACK's ``lmder`` from ``theta0`` — what
     ``least_squares(method="lm", x_scale="jac")`` runs (same tolerances, factor 100, the
-    Jacobian's own scaling: the same iterates), called directly (:func:`minpack_lmder`)
+    Jacobian's own scaling: the same iterates), called through ``scipy.optimize.leastsq``
     without ``least_squares``' per-evaluation wrappers and its Jacobian at the end (the fit
     needs that only for the best start). ``evaluations``: the fit's :class:`_Evaluations`
     (of ``kind``, ``r0``, ``touches``), to ask for the Jacobian at θ afterwards."""
     ev = _Evaluations(kind, r0, touches) if evaluations is None else evaluations
-    return minpack_lmder(ev.residuals, ev.jacobian, theta0, max_nfev)
-
-
-def minpack_lmder(
-    residuals_of: Callable[[np.ndarray], np.ndarray],
-    jacobian_of: Callable[[np.ndarray], np.ndarray],
-    theta0: np.ndarray,
-    max_nfev: int,
-    tolerance: float = 1e-8,
-) -> tuple[np.ndarray, np.ndarray]:
-    """(θ, residuals at θ) of MINPACK's ``lmder`` from ``theta0`` (ftol = xtol = gtol =
-    ``tolerance``, step bound factor 100, the Jacobian's own scaling, at most ``max_nfev``
-    residual evaluations): ``scipy.optimize.leastsq(residuals_of, theta0, Dfun=jacobian_of,
-    full_output=True, ...)``'s ``x`` and ``fvec`` — the same compiled call with the same
-    arguments — without its wrapper: leastsq first calls both functions once more to check
-    their shapes and, after the run, inverts the triangular factor for a covariance this fit
-    does not use. ``jacobian_of`` returns (m, k) (rows per residual); m ≥ k."""
-    x0 = np.array(theta0, dtype=float).reshape(-1)  # a copy, as leastsq's flatten()
-    x, info, _ = _minpack._lmder(
-        residuals_of, jacobian_of, x0, (), 1, 0, tolerance, tolerance, tolerance, max_nfev, 100, None
+    x, _, info, _, _ = leastsq(
+        ev.residuals,
+        np.asarray(theta0, dtype=float),
+        Dfun=ev.jacobian,
+        full_output=True,
+        ftol=1e-8,
+        xtol=1e-8,
+        gtol=1e-8,
+        maxfev=max_nfev,
     )
     return x, info["fvec"]
 

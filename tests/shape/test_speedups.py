@@ -513,32 +513,6 @@ def test_difference_points_and_identities_are_the_plain_ones():
         assert np.array_equal(np.signbit(got), np.signbit(plain))
 
 
-@pytest.mark.parametrize("kind", KINDS)
-def test_minpack_lmder_is_leastsq(kind):
-    # the direct MINPACK call: leastsq's x and fvec to the bit, from several starts and budgets
-    from scipy.optimize import leastsq
-
-    touches = random_touches(kind if kind != "sphere" else "capsule", 31)
-    for theta0, r0 in shape_fit.starts(kind, touches)[:3]:
-        for max_nfev in (1, QUICK_NFEV, 20):
-            direct = shape_fit._Evaluations(kind, r0, touches)
-            x, fvec = shape_fit.minpack_lmder(direct.residuals, direct.jacobian, theta0, max_nfev)
-            wrapped = shape_fit._Evaluations(kind, r0, touches)
-            plain = leastsq(
-                wrapped.residuals,
-                theta0,
-                Dfun=wrapped.jacobian,
-                full_output=True,
-                ftol=1e-8,
-                xtol=1e-8,
-                gtol=1e-8,
-                maxfev=max_nfev,
-            )
-            np.testing.assert_array_equal(x, plain[0])
-            np.testing.assert_array_equal(fvec, plain[2]["fvec"])
-            assert not np.shares_memory(x, theta0)
-
-
 @pytest.mark.parametrize("kind", ["box", "cylinder", "capsule"])
 def test_kernels_on_planes_are_the_kernels_on_rows(kind):
     # box_planes, cylinder_planes, capsule_planes: the row kernels' elementwise operations on
