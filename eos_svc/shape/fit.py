@@ -708,8 +708,10 @@ class _Evaluations:
         return out
 
     def jacobian(self, theta: np.ndarray, *args: object) -> np.ndarray:
-        """The (m, k) forward-difference Jacobian at ``theta``."""
-        return self._evaluate(theta)[1]
+        """The (m, k) forward-difference Jacobian at ``theta``: a copy, like :meth:`residuals`,
+        so the remembered one stays as evaluated whatever the caller does with it."""
+        out: np.ndarray = self._evaluate(theta)[1].copy()
+        return out
 
     def geometry(self, theta: np.ndarray) -> Geometry:
         """:func:`geometry_from` ``theta`` (the same bits: computed as its own group)."""
