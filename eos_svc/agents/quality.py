@@ -174,13 +174,15 @@ def primitive_wrenches(
     m = 1 if mu == 0.0 else (2 if dim == 2 else int(edges))
     forces = np.empty((len(p), m, dim))
     if dim == 3:
+        # the cone's edge directions, the same for every contact (computed once)
+        theta = 2.0 * np.pi * np.arange(m) / m
+        cos_t, sin_t = np.cos(theta)[:, None], np.sin(theta)[:, None]
         for i, ni in enumerate(n):
             if m == 1:
                 forces[i, 0] = -ni
                 continue
             t1, t2 = tangent_basis(ni)
-            theta = 2.0 * np.pi * np.arange(m) / m
-            forces[i] = -ni + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
+            forces[i] = -ni + mu * (cos_t * t1 + sin_t * t2)
         torques = np.cross(r[:, None, :], forces) / scale
     else:
         t = np.stack([-n[:, 1], n[:, 0]], axis=1)
