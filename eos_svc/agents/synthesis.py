@@ -644,7 +644,7 @@ class GraspSynthesis:
         extent: float,
     ) -> GraspCandidate | None:
         wrist = centre - R[:, 0] * depth
-        if np.any(wrist < self._xyz_lo) or np.any(wrist > self._xyz_hi):
+        if (wrist < self._xyz_lo).any() or (wrist > self._xyz_hi).any():
             self._reject("wrist position out of its limits")
             return None
         landings: dict[str, Landing] = {}

@@ -261,3 +261,17 @@ def test_primitive_wrenches_equal_the_per_contact_loop_bit_for_bit():
         plain = np.concatenate([forces, torques], axis=2).reshape(k * m, 6)
         assert (scale, edges) == (0.04, m)
         assert np.array_equal(w, plain)
+
+
+def test_cross_rows_and_rank_equal_numpys_bit_for_bit():
+    from eos_svc.agents.quality import cross_rows
+
+    rng = np.random.default_rng(6)
+    for k, m in ((1, 4), (3, 4), (4, 8)):
+        r = rng.normal(size=(k, 3)) * 0.05
+        f = rng.normal(size=(k, m, 3))
+        assert np.array_equal(cross_rows(r, f), np.cross(r[:, None, :], f))
+    for rank in (2, 5, 6):  # epsilon_of_wrenches' rank is np.linalg.matrix_rank's
+        w = rng.normal(size=(12, rank)) @ rng.normal(size=(rank, 6))
+        size = float(np.max(np.abs(w)))
+        assert epsilon_of_wrenches(w)[1] == np.linalg.matrix_rank(w, tol=1e-9 * max(size, 1.0)) == rank
