@@ -174,14 +174,16 @@ def primitive_wrenches(
     m = 1 if mu == 0.0 else (2 if dim == 2 else int(edges))
     forces = np.empty((len(p), m, dim))
     if dim == 3:
+        # the cone's edge directions, the same for every contact (computed once)
+        theta = 2.0 * np.pi * np.arange(m) / m
+        cos_t, sin_t = np.cos(theta)[:, None], np.sin(theta)[:, None]
         for i, ni in enumerate(n):
             if m == 1:
                 forces[i, 0] = -ni
                 continue
             t1, t2 = tangent_basis(ni)
-            theta = 2.0 * np.pi * np.arange(m) / m
-            forces[i] = -ni + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
-        torques = np.cross(r[:, None, :], forces) / scale
+            forces[i] = -ni + mu * (cos_t * t1 + sin_t * t2)
+        torques = cross_rows(r, forces) / scale
     else:
         t = np.stack([-n[:, 1], n[:, 0]], axis=1)
         signs = np.array([1.0]) if m == 1 else np.array([1.0, -1.0])
@@ -189,6 +191,17 @@ def primitive_wrenches(
         torques = (r[:, None, 0] * forces[..., 1] - r[:, None, 1] * forces[..., 0])[..., None] / scale
     wrenches = np.concatenate([forces, torques], axis=2).reshape(len(p) * m, 6 if dim == 3 else 3)
     return wrenches, scale, m
+
+
+def cross_rows(r: np.ndarray, forces: np.ndarray) -> np.ndarray:
+    """``np.cross(r[:, None, :], forces)`` of (k, 3) lever arms and (k, m, 3) forces, bit for
+    bit (numpy forms each component as the same two products and their difference), without
+    its axis shuffling (a tenth of a millisecond per grasp)."""
+    a = r[:, None, :]
+    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
+    b0, b1, b2 = forces[..., 0], forces[..., 1], forces[..., 2]
+    out: np.ndarray = np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
+    return out
 
 
 def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
@@ -202,7 +215,9 @@ def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
         return 0.0, 0
     dim = w.shape[1]
     size = float(np.max(np.abs(w)))
-    rank = int(np.linalg.matrix_rank(w, tol=1e-9 * max(size, 1.0))) if size > 0 else 0
+    # np.linalg.matrix_rank(w, tol) without its dispatch: singular values above tol
+    tol = 1e-9 * max(size, 1.0)
+    rank = int(np.count_nonzero(np.linalg.svd(w, compute_uv=False) > tol)) if size > 0 else 0
     if rank < dim or len(w) <= dim:
         return 0.0, rank
     try:

@@ -513,6 +513,13 @@ class GraspSynthesis:
         self._tip_radius = {f: hand.tip_radius(f) for f in hand.finger_names}
         # per (finger, palm rotation's bytes): the finger's sweep turned by it (see _simulate)
         self._rotated: dict[tuple[str, bytes], np.ndarray] = {}
+        # per closing direction's bytes: the object's half-extent along it (see half_extent_along)
+        self._extents: dict[bytes, float] = {}
+        # what _configuration needs of the hand, read once
+        self._neutral = hand.neutral()
+        self._wrist_xyz, self._wrist_rot = widx[:3], widx[3:6]
+        self._finger_q = [(f, hand.finger_q_index(f), float(sweeps[f].angles[0])) for f in hand.finger_names]
+        self._q_lower, self._q_upper = hand.lower, hand.upper
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -528,6 +535,16 @@ class GraspSynthesis:
             if value < lo or value > hi:
                 return None
         return rpy
+
+    def half_extent_along(self, direction: np.ndarray) -> float:
+        """:func:`half_extent` of the postulated object along the unit ``direction`` (m),
+        computed once per direction (bit for bit the same vector): the candidate frames share
+        their closing axis across several approaches."""
+        key = direction.tobytes()
+        hit = self._extents.get(key)
+        if hit is None:
+            hit = self._extents[key] = half_extent(self.obj, direction)
+        return hit
 
     def depth_for(self, extent: float) -> float | None:
         """Depth that puts the opposing fingertip straight under the centre when it touches:
@@ -556,7 +573,7 @@ class GraspSynthesis:
             if rpy is None:
                 self._reject("wrist rotation out of its limits")
                 continue
-            extent = half_extent(obj, R[:, 2])
+            extent = self.half_extent_along(R[:, 2])
             if 2.0 * extent / h >= MAX_D_OVER_H:
                 self._reject("larger than the hand height across the grip")
                 continue
@@ -627,7 +644,7 @@ class GraspSynthesis:
         extent: float,
     ) -> GraspCandidate | None:
         wrist = centre - R[:, 0] * depth
-        if np.any(wrist < self._xyz_lo) or np.any(wrist > self._xyz_hi):
+        if (wrist < self._xyz_lo).any() or (wrist > self._xyz_hi).any():
             self._reject("wrist position out of its limits")
             return None
         landings: dict[str, Landing] = {}
@@ -653,15 +670,13 @@ class GraspSynthesis:
         self, c: GraspCandidate, wrist: np.ndarray, angles: dict[str, float] | None
     ) -> np.ndarray:
         """The hand at ``wrist`` turned as ``c``, each finger at ``angles`` (open when None)."""
-        hand = self.hand
-        q = hand.neutral()
-        widx = hand.wrist_q_index
-        q[widx[:3]] = wrist
-        q[widx[3:6]] = c.wrist_rpy
-        for finger in hand.finger_names:
-            idx = hand.finger_q_index(finger)
-            q[idx] = self.sweeps[finger].angles[0] if angles is None else angles[finger]
-        return np.clip(q, hand.lower, hand.upper)
+        q = self._neutral.copy()
+        q[self._wrist_xyz] = wrist
+        q[self._wrist_rot] = c.wrist_rpy
+        for finger, idx, open_angle in self._finger_q:
+            q[idx] = open_angle if angles is None else angles[finger]
+        out: np.ndarray = np.clip(q, self._q_lower, self._q_upper)
+        return out
 
     def _clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
         """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when

@@ -17,7 +17,9 @@ from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.synthesis import (
     GraspSynthesis,
     SweepLandings,
+    candidate_frames,
     cross3,
+    half_extent,
     landing,
     landing_from,
     rotation_from_rpy,
@@ -137,6 +139,43 @@ def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
                 assert fast == exact
                 answers.add(fast)
     assert answers == {True, False}
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("box", {"size": (0.05, 0.05, 0.05)}, HERE, (0.0, 0.0, 0.52)),
+        ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, HERE, (1.0, 0.2, -0.5)),
+        ObjectSpec("ellipsoid", {"radii": (0.02, 0.04, 0.03)}, HERE, (0.3, -0.2, 0.1)),
+    ],
+)
+def test_memoised_extent_and_configuration_equal_the_plain_ones(spec):
+    # half_extent_along memoises half_extent per direction; _configuration reads the hand's
+    # indices once: both must give the plain computation's values bit for bit
+    s = synthesis(spec)
+    hand = s.hand
+    rng = np.random.default_rng(11)
+    for _ in range(3):
+        for _, R in candidate_frames(s.obj):
+            d = R[:, 2]
+            assert s.half_extent_along(d) == half_extent(s.obj, d)
+            assert s.half_extent_along(d.copy()) == half_extent(s.obj, d)
+    centre = np.asarray(HERE)
+    unrotated = (np.eye(3), (0.0, 0.0, 0.0))
+    simulated = (s._simulate("t", *unrotated, centre, 0.08 + k * 0.004, 0.03) for k in range(6))
+    cands = [c for c in simulated if c is not None]
+    assert cands, "no landing to build configurations from"
+    for c in cands:
+        for angles in (None, {f: float(rng.uniform(-0.2, 1.6)) for f in hand.finger_names}):
+            wrist = c.wrist + rng.uniform(-0.02, 0.02, 3)
+            q = hand.neutral()
+            widx = hand.wrist_q_index
+            q[widx[:3]] = wrist
+            q[widx[3:6]] = c.wrist_rpy
+            for f in hand.finger_names:
+                q[hand.finger_q_index(f)] = s.sweeps[f].angles[0] if angles is None else angles[f]
+            plain = np.clip(q, hand.lower, hand.upper)
+            assert np.array_equal(s._configuration(c, wrist, angles), plain)
 
 
 def test_row_norms_are_numpys_bit_for_bit():
