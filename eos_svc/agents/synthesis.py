@@ -51,7 +51,7 @@ from eos_svc.kinematics import (
     Sphere,
     SurfaceObject,
 )
-from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, shape_bound
+from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4
@@ -504,7 +504,7 @@ class GraspSynthesis:
         # per collision geometry, how to bound its gap to the object's bounding ball from below
         # (eos_svc.kinematics.gap_bounds): a geometry whose bound reaches a threshold needs no
         # exact query (see _clear)
-        self._bound_table = [shape_bound(go.geometry) for go in geometries]
+        self._bound_table = hand_bound_table(hand)
         oMg = self.state.geometry_data.oMg  # live views of the placements, current after update
         self._placements = [(oMg[g].translation, oMg[g].rotation) for g in self._all_geometries]
         self._obj_centre = tuple(float(v) for v in obj.placement.translation)

@@ -39,7 +39,7 @@ from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometr
 from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
-from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, shape_bound
+from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table
 
 
 @dataclass
@@ -750,7 +750,7 @@ def _derived_for(
         derived = (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
-            [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects],
+            hand_bound_table(hand),
             palm_origin_is_wrist_xyz(hand),
         )
         with _DERIVED_LOCK:  # plans run in several threads (the service's workers)

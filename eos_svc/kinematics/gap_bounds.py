@@ -7,6 +7,7 @@ A guarded motion asks coal for an exact gap only where a bound cannot decide (se
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Iterable, Sequence
 from typing import Any
 
@@ -40,6 +41,29 @@ def shape_bound(geometry: Any) -> tuple[int, Any, Any, float]:
         return SPHERE, float(geometry.radius), None, ball
     c = tuple(float(x) for x in geometry.aabb_center)
     return SPHERE, ball, (None if c == (0.0, 0.0, 0.0) else c), ball
+
+
+#: per hand (by id, the hand kept so the id cannot be reused): its geometries' bound table
+_HAND_TABLES: dict[int, tuple[Any, list[tuple[int, Any, Any, float]]]] = {}
+_HAND_TABLES_LOCK = threading.Lock()
+
+
+def hand_bound_table(hand: Any) -> list[tuple[int, Any, Any, float]]:
+    """:func:`shape_bound` of every collision geometry of ``hand`` (a
+    :class:`~eos_svc.kinematics.HandModel`), in geometry-id order: computed once per hand under
+    a lock (``computeLocalAABB`` writes into the hand's shared coal geometries; plans run in
+    several threads) and shared read-only afterwards."""
+    entry = _HAND_TABLES.get(id(hand))
+    if entry is not None and entry[0] is hand:
+        return entry[1]
+    with _HAND_TABLES_LOCK:
+        entry = _HAND_TABLES.get(id(hand))
+        if entry is None or entry[0] is not hand:
+            table = [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
+            entry = _HAND_TABLES[id(hand)] = (hand, table)
+            while len(_HAND_TABLES) > 8:
+                _HAND_TABLES.pop(next(iter(_HAND_TABLES)))
+    return entry[1]
 
 
 def ball_gap_lower_bounds(

@@ -6,7 +6,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, shape_bound
+from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table, shape_bound
 
 
 def _exact_gap(geometry, placement: pin.SE3, centre: np.ndarray, radius: float) -> float:
@@ -45,3 +45,14 @@ def test_bounds_never_exceed_the_exact_gap_and_are_tight_for_a_sphere():
                 assert abs(lower - exact) < 1e-6
             near += exact < 0.02
     assert near > 50  # many poses close to contact, where a loose bound would show
+
+
+def test_hand_bound_table_is_shape_bound_of_every_geometry_once_per_hand():
+    # the per-hand table (shared by every plan's world and grasp synthesis) is the plain list
+    from eos_svc.agents.planner import default_hand
+    from eos_svc.kinematics import allegro_hand
+
+    for hand in (default_hand(), allegro_hand()):
+        table = hand_bound_table(hand)
+        assert table == [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
+        assert hand_bound_table(hand) is table  # computed once, then shared
