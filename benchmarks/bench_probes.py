@@ -1,7 +1,7 @@
 """EP2's guarded probes: the default plan's probes replayed with today's ``guarded_probe`` and
 with the one of an earlier git revision, interleaved in the same run.
 
-    .venv/bin/python benchmarks/bench_probes.py [--baseline main] [--rounds 40]
+    .venv/bin/python benchmarks/bench_probes.py [--baseline ddccb46] [--rounds 40]
 
 The default plan (``PlanRequest()``) is planned once and every ``GraspWorld.guarded_probe`` call
 it makes is recorded (world and arguments; a probe sets the whole configuration it moves from, so
@@ -82,7 +82,9 @@ def _bits(out: Any) -> tuple[Any, ...]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--baseline", default="main", help="git revision whose guarded_probe to compare with")
+    parser.add_argument(
+        "--baseline", default="ddccb46", help="git revision whose guarded_probe to compare with (ddccb46)"
+    )
     parser.add_argument("--rounds", type=int, default=40, help="interleaved rounds (each replays all probes)")
     args = parser.parse_args(argv)
     calls, q0 = recorded_probes()

@@ -1,7 +1,7 @@
 """Where a plan's time goes, stage by stage, against a baseline revision measured in the same run.
 
-    .venv/bin/python benchmarks/bench_stages.py --baseline main
-    .venv/bin/python benchmarks/bench_stages.py --baseline main --suite   # + the quick grasp suite
+    .venv/bin/python benchmarks/bench_stages.py --baseline ddccb46
+    .venv/bin/python benchmarks/bench_stages.py --baseline ddccb46 --suite   # + the quick grasp suite
 
 For each request (the default plan; with ``--suite`` also every object of the quick grasp suite,
 seed 1) the plan's CPU time per part — the search stage, each information agent (ep1,
@@ -101,7 +101,9 @@ def quartile(values: list[float]) -> float:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="per-stage plan time vs a baseline revision")
-    parser.add_argument("--baseline", default="main", help="git revision to compare with (main)")
+    parser.add_argument(
+        "--baseline", default="ddccb46", help="git revision to compare with (ddccb46, before the speed-ups)"
+    )
     parser.add_argument("--plans", type=int, default=20, help="plans per request and side (20)")
     parser.add_argument("--suite", action="store_true", help="also the quick grasp suite's objects")
     args = parser.parse_args(argv)
