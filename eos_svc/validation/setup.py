@@ -53,7 +53,9 @@ def _q_final(value: Any, joints: int) -> tuple[float, ...]:
         raise ValidationError("q_final", f"must be a list of {joints} numbers, got {type(value).__name__}")
     if len(value) != joints:
         raise ValidationError(
-            "q_final", f"must have {joints} joint values (wrist then fingers), got {len(value)}"
+            "q_final",
+            f"must have {joints} joint values (wrist then fingers), got {len(value)}: the validation "
+            "models hand3x3 only — is this another hand's plan (e.g. --hand allegro)?",
         )
     out = []
     for i, v in enumerate(value):

@@ -169,3 +169,16 @@ def test_cli_exit_1_when_dropped_and_2_on_bad_files(tmp_path, good_plan, capsys)
         assert message in err and "Traceback" not in err
     code, _, err = eos(capsys, "plan", "--hand", "allegro", "--validate")
     assert code == 2 and "--validate" in err
+
+
+def test_another_hands_result_is_refused_saying_the_validation_is_for_hand3x3():
+    # a real Allegro plan's JSON result: its q_final has the Allegro's joints, and the refusal
+    # says why (the Drake model is hand3x3's), not only the count
+    from eos_svc.agents import PlanRequest, plan
+    from eos_svc.kinematics import allegro_hand
+
+    data = plan(PlanRequest(), hand=allegro_hand()).to_dict()
+    with pytest.raises(ValidationError) as info:
+        validate_grasp(data)
+    assert info.value.field == "q_final"
+    assert "hand3x3 only" in info.value.reason and "allegro" in info.value.reason
