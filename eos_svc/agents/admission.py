@@ -34,12 +34,13 @@ from eos_svc.agents.sweeps import forward_reach
 from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
+from eos_svc.kinematics.hand_cache import PerHandCache
 
 #: joint samples per finger joint when measuring the hand's span (a grid over the joint range)
 SPAN_SAMPLES = 7
 
-#: per hand (by id, with the hand kept so the id cannot be reused): its span and neutral geometry
-_PER_HAND: dict[int, tuple[HandModel, float, list[_Geometry], float]] = {}
+#: per hand: its span, neutral geometry and forward reach (see _hand_data)
+_PER_HAND: PerHandCache[tuple[HandModel, float, list[_Geometry], float]] = PerHandCache(keep=8)
 
 
 class _Geometry:
@@ -71,13 +72,14 @@ def hand_span(hand: HandModel) -> float:
 def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], float]:
     """(hand, span, its collision geometries at the start configuration, its forward reach),
     built once per hand."""
-    entry = _PER_HAND.get(id(hand))
-    if entry is None or entry[0] is not hand:
-        from eos_svc.agents import planner  # planner imports this module: resolve at call time
+    return _PER_HAND.get((hand,), lambda: _build_hand_data(hand))
 
-        reach = forward_reach(hand, planner.finger_sweeps(hand))
-        entry = _PER_HAND[id(hand)] = (hand, _measure_span(hand), _neutral_placements(hand), reach)
-    return entry
+
+def _build_hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], float]:
+    from eos_svc.agents import planner  # planner imports this module: resolve at call time
+
+    reach = forward_reach(hand, planner.finger_sweeps(hand))
+    return hand, _measure_span(hand), _neutral_placements(hand), reach
 
 
 def _measure_span(hand: HandModel) -> float:

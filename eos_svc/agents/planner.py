@@ -69,6 +69,7 @@ from eos_svc.kinematics import (
     load_hand,
 )
 from eos_svc.kinematics.curvature import CurvatureEstimator
+from eos_svc.kinematics.hand_cache import PerHandCache
 from eos_svc.records import CycleRecord
 
 CycleCallback = Callable[[CycleRecord], None]
@@ -111,15 +112,12 @@ def default_hand(urdf: str = str(HAND3X3_URDF)) -> HandModel:
     return load_hand(Path(urdf))
 
 
-#: per hand (by id, with the hand kept so the id cannot be reused): its sweeps and parameters
-_PER_HAND: dict[int, tuple[HandModel, dict[str, FingerSweep], WorldParameters]] = {}
+#: per hand: its sweeps and parameters
+_PER_HAND: PerHandCache[tuple[HandModel, dict[str, FingerSweep], WorldParameters]] = PerHandCache(keep=8)
 
 
 def _derived(hand: HandModel) -> tuple[HandModel, dict[str, FingerSweep], WorldParameters]:
-    entry = _PER_HAND.get(id(hand))
-    if entry is None or entry[0] is not hand:
-        entry = _PER_HAND[id(hand)] = (hand, build_sweeps(hand), WorldParameters.for_hand(hand))
-    return entry
+    return _PER_HAND.get((hand,), lambda: (hand, build_sweeps(hand), WorldParameters.for_hand(hand)))
 
 
 def finger_sweeps(hand: HandModel) -> dict[str, FingerSweep]:

@@ -6,12 +6,12 @@ with two fingers).
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass
 
 import numpy as np
 
 from eos_svc.kinematics import HandModel
+from eos_svc.kinematics.hand_cache import PerHandCache
 
 
 @dataclass(frozen=True)
@@ -63,21 +63,12 @@ def _build(hand: HandModel, finger: str, angle: float) -> ProbePose:
     )
 
 
-#: per (hand id, finger, angle): the hand (so its id cannot be reused) and its probe pose
-_POSES: dict[tuple[int, str, float], tuple[HandModel, ProbePose]] = {}
-_POSES_KEEP = 32
-_POSES_LOCK = threading.Lock()
+#: per (hand, finger, angle): its probe pose
+_POSES: PerHandCache[ProbePose] = PerHandCache(keep=32)
 
 
 def probe_pose(hand: HandModel, finger: str, angle: float) -> ProbePose:
     """The :class:`ProbePose` of ``finger`` at ``angle`` rad on ``hand``, computed once and kept
     (a few hands, fingers and angles)."""
-    key = (id(hand), finger, float(angle))
-    entry = _POSES.get(key)
-    if entry is None or entry[0] is not hand:
-        built = (hand, _build(hand, finger, float(angle)))
-        with _POSES_LOCK:  # plans run in several threads (the service's workers)
-            entry = _POSES[key] = built
-            while len(_POSES) > _POSES_KEEP:
-                _POSES.pop(next(iter(_POSES)))
-    return entry[1]
+    a = float(angle)
+    return _POSES.get((hand,), lambda: _build(hand, finger, a), finger, a)

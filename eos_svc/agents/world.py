@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import contextlib
 import math
-import threading
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
 from typing import Any
@@ -40,6 +39,7 @@ from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table
+from eos_svc.kinematics.hand_cache import PerHandCache
 
 
 @dataclass
@@ -733,10 +733,8 @@ class GraspWorld:
         return ball_gap_lower_bounds(self._bounds, views, geometry_ids, about, self._obj_radius)
 
 
-#: per hand (by id, the hand and its sweeps kept so the ids cannot be reused): what a world
-#: derives from them alone (see _derived_for)
-_DERIVED: dict[int, tuple[HandModel, dict[str, FingerSweep], tuple[Any, ...]]] = {}
-_DERIVED_LOCK = threading.Lock()
+#: per hand and sweeps: what a world derives from them alone (see _derived_for)
+_DERIVED: PerHandCache[tuple[Any, ...]] = PerHandCache(keep=8)
 
 
 def _derived_for(
@@ -745,19 +743,15 @@ def _derived_for(
     """The finger link geometries, the probe choice, the geometries' distance bounds of
     ``hand`` (with ``sweeps``) and :func:`palm_origin_is_wrist_xyz`, computed once per hand and
     sweeps (they never change; every plan's world shares them read-only)."""
-    entry = _DERIVED.get(id(hand))
-    if entry is None or entry[0] is not hand or entry[1] is not sweeps:
-        derived = (
+    links, probe, bounds, palm_at_wrist_xyz = _DERIVED.get(
+        (hand, sweeps),
+        lambda: (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
             hand_bound_table(hand),
             palm_origin_is_wrist_xyz(hand),
-        )
-        with _DERIVED_LOCK:  # plans run in several threads (the service's workers)
-            entry = _DERIVED[id(hand)] = (hand, sweeps, derived)
-            while len(_DERIVED) > 8:
-                _DERIVED.pop(next(iter(_DERIVED)))
-    links, probe, bounds, palm_at_wrist_xyz = entry[2]
+        ),
+    )
     return links, probe, bounds, palm_at_wrist_xyz
 
 

@@ -7,12 +7,13 @@ A guarded motion asks coal for an exact gap only where a bound cannot decide (se
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Iterable, Sequence
 from typing import Any
 
 import coal
 import numpy as np
+
+from eos_svc.kinematics.hand_cache import PerHandCache
 
 #: kinds of lower bound of a hand geometry (see shape_bound)
 SPHERE, BOX, SEGMENT = 0, 1, 2
@@ -43,27 +44,18 @@ def shape_bound(geometry: Any) -> tuple[int, Any, Any, float]:
     return SPHERE, ball, (None if c == (0.0, 0.0, 0.0) else c), ball
 
 
-#: per hand (by id, the hand kept so the id cannot be reused): its geometries' bound table
-_HAND_TABLES: dict[int, tuple[Any, list[tuple[int, Any, Any, float]]]] = {}
-_HAND_TABLES_LOCK = threading.Lock()
+#: per hand: its geometries' bound table
+_HAND_TABLES: PerHandCache[list[tuple[int, Any, Any, float]]] = PerHandCache(keep=8)
 
 
 def hand_bound_table(hand: Any) -> list[tuple[int, Any, Any, float]]:
     """:func:`shape_bound` of every collision geometry of ``hand`` (a
-    :class:`~eos_svc.kinematics.HandModel`), in geometry-id order: computed once per hand under
-    a lock (``computeLocalAABB`` writes into the hand's shared coal geometries; plans run in
-    several threads) and shared read-only afterwards."""
-    entry = _HAND_TABLES.get(id(hand))
-    if entry is not None and entry[0] is hand:
-        return entry[1]
-    with _HAND_TABLES_LOCK:
-        entry = _HAND_TABLES.get(id(hand))
-        if entry is None or entry[0] is not hand:
-            table = [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
-            entry = _HAND_TABLES[id(hand)] = (hand, table)
-            while len(_HAND_TABLES) > 8:
-                _HAND_TABLES.pop(next(iter(_HAND_TABLES)))
-    return entry[1]
+    :class:`~eos_svc.kinematics.HandModel`), in geometry-id order: computed once per hand (under
+    the cache's lock: ``computeLocalAABB`` writes into the hand's shared coal geometries; plans
+    run in several threads) and shared read-only afterwards."""
+    return _HAND_TABLES.get(
+        (hand,), lambda: [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
+    )
 
 
 def ball_gap_lower_bounds(
