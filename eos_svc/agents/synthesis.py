@@ -52,6 +52,7 @@ from eos_svc.kinematics import (
     SurfaceObject,
 )
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table
+from eos_svc.kinematics.norms import row_norms, vector_norm
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4
@@ -145,13 +146,6 @@ class GraspCandidate:
 
 
 # --- the postulated object's signed distance, vectorised -------------------------------
-def row_norms(p: np.ndarray) -> np.ndarray:
-    """``np.linalg.norm(p, axis=1)`` of a real (N, k) array, bit for bit (numpy sums the
-    squares along each row and takes the square roots), without its dispatch."""
-    out: np.ndarray = np.sqrt(np.add.reduce(p * p, axis=1))
-    return out
-
-
 def signed_distances(obj: SurfaceObject, points: np.ndarray) -> np.ndarray:
     """Signed distance (m, negative inside) of each world point in ``points`` (N, 3) to
     ``obj``'s surface. Exact for every primitive but the ellipsoid, whose distance is the
@@ -202,15 +196,6 @@ def half_extent(obj: SurfaceObject, direction: np.ndarray) -> float:
     # linear interpolation of the zero crossing between samples k-1 and k
     a, b = sd[k - 1], sd[k]
     return float(t[k - 1] + (t[k] - t[k - 1]) * (-a / (b - a) if b != a else 0.0))
-
-
-def vector_norm(v: np.ndarray) -> float:
-    """Euclidean norm of a 1-D float64 array: ``float(np.linalg.norm(v))`` bit for bit (numpy
-    takes the square root of ``v.dot(v)`` over a contiguous copy of a strided view), without
-    numpy's dispatch (µs per call)."""
-    if not v.flags.c_contiguous:
-        v = v.ravel(order="K")
-    return math.sqrt(v.dot(v))
 
 
 def sweep_gaps(

@@ -36,6 +36,7 @@ import pinocchio as pin
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
 from .geometry import tangent_pair
 from .hand import HandModel, HandState, KinematicsError
+from .norms import row_norms
 from .objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
 from .scene import Scene
@@ -178,21 +179,13 @@ def _scratch_state(hand: HandModel, q: object) -> HandState:
     return st
 
 
-def _row_norms(x: np.ndarray, keepdims: bool = False) -> np.ndarray:
-    """``np.linalg.norm(x, axis=1, keepdims=keepdims)`` of a real 2-D array: the same operations
-    (the square root of ``add.reduce(x * x)`` along the rows), without the wrapper's µs."""
-    squares: Any = np.add.reduce  # (numpy's stubs do not type keepdims as a bool)
-    out: np.ndarray = np.sqrt(squares(x * x, axis=1, keepdims=keepdims))
-    return out
-
-
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
     v = np.empty((len(R), 3))  # the three differences, written in place (np.stack's copies spared)
     np.subtract(R[:, 2, 1], R[:, 1, 2], out=v[:, 0])
     np.subtract(R[:, 0, 2], R[:, 2, 0], out=v[:, 1])
     np.subtract(R[:, 1, 0], R[:, 0, 1], out=v[:, 2])
-    s2 = _row_norms(v)  # 2 sin θ
+    s2 = row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -252,10 +245,10 @@ def _log_chart(
 ) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m.
     ``directions``: the points normalised (rows), when the caller has them."""
-    d = points / _row_norms(points, keepdims=True) if directions is None else directions
+    d = points / row_norms(points, keepdims=True) if directions is None else directions
     cosang = d @ b
     v = d - cosang[:, None] * b  # np.outer(cosang, b): the same products
-    sin_ang = _row_norms(v)
+    sin_ang = row_norms(v)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
@@ -416,7 +409,7 @@ def run_ep1(
             steps += n_steps
         P_all = np.array(points).reshape(i, 3)  # (0, 3) when nothing was in contact
         R_all = R_buf[:i]
-        D_all = P_all / _row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
+        D_all = P_all / row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
         set_in = np.array(set_of, dtype=int)
         # realized net roll angle of the tip about a (not the commanded ω·t)
         th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip

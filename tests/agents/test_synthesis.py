@@ -23,13 +23,12 @@ from eos_svc.agents.synthesis import (
     landing,
     landing_from,
     rotation_from_rpy,
-    row_norms,
     rpy_from_rotation,
     signed_distances,
     sweep_gaps,
-    vector_norm,
 )
 from eos_svc.board import Board
+from eos_svc.kinematics.norms import row_norms, vector_norm
 
 HERE = (0.21, 0.02, -0.015)
 
