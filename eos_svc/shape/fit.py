@@ -29,7 +29,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import least_squares, leastsq
 
-from eos_svc.shape import primitives
+from eos_svc.shape import compiled, primitives
 from eos_svc.shape.touches import Touches
 
 #: number of parameters of each class
@@ -310,7 +310,29 @@ def _whitened_residuals(
 def _residuals_and_geometry(
     thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from)."""
+    """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from): the
+    compiled kernel (:func:`_residuals_and_geometry_compiled`)."""
+    return _residuals_and_geometry_compiled(thetas, kind, r0, data, groups)
+
+
+def _residuals_and_geometry_compiled(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """:func:`_residuals_and_geometry_numpy` as one call of the compiled kernel
+    (:func:`eos_svc.shape.compiled.residuals_and_geometry`), the same operations in the same
+    order on every number (the same bits; ``groups`` keeps its meaning: it couples only the
+    ellipsoid's Newton stop and picks the axis products, every other row is independent)."""
+    return compiled.residuals_and_geometry(
+        kind, thetas, r0, groups, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
+        data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
+    )
+
+
+def _residuals_and_geometry_numpy(
+    thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """The reference in numpy: :func:`batch_geometry`, :func:`batch_signed_distance` and the
+    whitening, array by array (the compiled kernel is tested against it)."""
     geometry = batch_geometry(kind, thetas, r0, groups)
     n = data.count
     d, g = batch_signed_distance(kind, data.points, *geometry, groups, data.point_planes)
