@@ -446,6 +446,90 @@ def residuals_and_geometry(
     return R, (centres, rotations, sizes)
 
 
+@numba.njit(cache=True)
+def _difference_kernel(
+    kind: int,
+    theta: np.ndarray,
+    r0s: np.ndarray,
+    per_row: bool,
+    step: float,
+    log_lo: float,
+    log_hi: float,
+    points: np.ndarray,
+    count: int,
+    radii: np.ndarray,
+    normals: np.ndarray,
+    free_radii: np.ndarray,
+    gap_offset: float,
+    sigma_distance: float,
+    sigma_normal: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """(residuals at θ (m,), difference quotients (k, m), centres, rotations, sizes of the
+    k + 2 rows): see :func:`difference_evaluation`."""
+    k = theta.shape[0]
+    h = np.empty(k)
+    thetas = np.empty((k + 2, k))
+    for row in range(k + 2):
+        for j in range(k):
+            thetas[row, j] = theta[j]
+    for j in range(k):
+        h[j] = step * _maximum(1.0, abs(theta[j]))
+        thetas[j, j] += h[j]
+    groups = np.array([0, k + 1], dtype=np.int64)
+    R, centres, rotations, sizes = _kernel(
+        kind, thetas, r0s, per_row, True, groups, log_lo, log_hi, points, count, radii, normals,
+        free_radii, gap_offset, sigma_distance, sigma_normal,
+    )
+    m = R.shape[1]
+    quotients = np.empty((k, m))
+    for j in range(k):
+        for i in range(m):
+            quotients[j, i] = (R[j, i] - R[k, i]) / h[j]
+    return R[k + 1].copy(), quotients, centres, rotations, sizes
+
+
+def difference_evaluation(
+    kind: str,
+    theta: np.ndarray,
+    r0: np.ndarray,
+    step: float,
+    log_size_range: tuple[float, float],
+    points: np.ndarray,
+    count: int,
+    radii: np.ndarray,
+    normals: np.ndarray,
+    free_radii: np.ndarray,
+    gap_offset: float,
+    sigma_distance: float,
+    sigma_normal: float,
+) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
+    """(whitened residuals at ``theta`` (m,), forward-difference Jacobian (m, k), the geometry
+    (centres, rotations, sizes) of the k + 2 rows evaluated) in one call: the k + 1 difference
+    points ``θ + h_j e_j`` (``h_j = step · max(1, |θ_j|)``) and θ as one group of rows, θ again
+    as a group of its own (whose residuals and geometry are θ's, as a call on it alone
+    computes them), then the quotients ``(r(θ + h_j e_j) − r(θ)) / h_j``; the other arguments
+    as :func:`residuals_and_geometry`'s."""
+    per_row = r0.ndim == 3
+    r, quotients, centres, rotations, sizes = _difference_kernel(
+        KIND_CODE[kind],
+        np.ascontiguousarray(theta, dtype=np.float64),
+        np.ascontiguousarray(r0 if per_row else r0[None], dtype=np.float64),
+        per_row,
+        float(step),
+        float(log_size_range[0]),
+        float(log_size_range[1]),
+        points,
+        int(count),
+        radii,
+        normals,
+        free_radii,
+        float(gap_offset),
+        float(sigma_distance),
+        float(sigma_normal),
+    )
+    return r, quotients.T, (centres, rotations, sizes)
+
+
 def blas_products_agree() -> bool:
     """Whether numpy's matrix product of a few rows here is the kernel's
     ``fma(a₂, b₂, fma(a₁, b₁, a₀·b₀))`` (OpenBLAS on an FMA machine): then the kernel's bits
@@ -480,4 +564,8 @@ def warm_up() -> None:
                     kind, thetas, r0, groups, (math.log(1e-4), 0.0), points, 2, radii, normals,
                     free_radii, 0.0, 0.001, 0.1,
                 )
+            difference_evaluation(
+                kind, thetas[0], r0[0] if r0.ndim == 3 else r0, 1e-8, (math.log(1e-4), 0.0), points, 2,
+                radii, normals, free_radii, 0.0, 0.001, 0.1,
+            )
     _products(points, np.eye(3))

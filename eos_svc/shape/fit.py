@@ -695,6 +695,31 @@ def _jacobian(theta: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) ->
 _BatchGeometry = tuple[np.ndarray, np.ndarray, np.ndarray]
 
 
+def _difference_evaluation(
+    theta: np.ndarray, kind: str, r0: np.ndarray, data: FitData
+) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
+    """(residuals at ``theta``, their forward-difference Jacobian, the geometry of the k + 2
+    rows evaluated — θ's own is the last) in one call of the compiled kernel
+    (:func:`eos_svc.shape.compiled.difference_evaluation`): the same bits as
+    :func:`_difference_evaluation_numpy`."""
+    return compiled.difference_evaluation(
+        kind, theta, r0, JACOBIAN_STEP, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
+        data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
+    )
+
+
+def _difference_evaluation_numpy(
+    theta: np.ndarray, kind: str, r0: np.ndarray, data: FitData
+) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
+    """:func:`_difference_evaluation` from :func:`_difference_points` and
+    :func:`_residuals_and_geometry_numpy`: the k + 1 difference points as one group, θ alone
+    as another (see :class:`_Evaluations`)."""
+    k = len(theta)
+    thetas, h = _difference_points(theta, copies=2)
+    R, geometry = _residuals_and_geometry_numpy(thetas, kind, r0, data, np.array([0, k + 1]))
+    return R[k + 1], _difference_quotients(R[: k + 1], h), geometry
+
+
 class _Evaluations:
     """The residuals (:func:`residuals`) and their Jacobian (:func:`_jacobian`) of one fit
     — one class, one start orientation, one set of touches — both from one batched call per
@@ -703,23 +728,19 @@ class _Evaluations:
     two (numpy's per-call overhead dominates these small arrays). The residuals and the
     Jacobian are, to the bit, those of :func:`residuals` and :func:`_jacobian` (the point is
     evaluated twice in the call: once with the difference points, once on its own, see
-    :func:`batch_signed_distance`'s ``groups``); every evaluated point is remembered."""
+    :func:`batch_signed_distance`'s ``groups``); every evaluated point is remembered. One
+    call of the compiled kernel evaluates a point (:func:`_difference_evaluation`)."""
 
     def __init__(self, kind: str, r0: np.ndarray, touches: Touches, data: FitData | None = None) -> None:
         self.kind, self.r0 = kind, r0
         self.data = FitData.of(touches) if data is None else data
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray, _BatchGeometry]] = {}
-        #: the two groups of an evaluation's rows: the k + 1 difference points, the point alone
-        self.groups = np.array([0, N_PARAMS[kind] + 1])
 
     def _evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
         theta = np.asarray(theta, dtype=float)
         key = theta.tobytes()
         if key not in self.known:
-            k = len(theta)
-            thetas, h = _difference_points(theta, copies=2)
-            R, geometry = _residuals_and_geometry(thetas, self.kind, self.r0, self.data, self.groups)
-            self.known[key] = (R[k + 1], _difference_quotients(R[: k + 1], h), geometry)
+            self.known[key] = _difference_evaluation(theta, self.kind, self.r0, self.data)
         return self.known[key]
 
     def residuals(self, theta: np.ndarray, *args: object) -> np.ndarray:
