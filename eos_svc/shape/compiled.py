@@ -16,7 +16,8 @@ Three things the reference does implicitly are spelled out:
   transposed matrix (``gemv``) as ``fma(a₂, b₂, fma(a₀, b₀, a₁·b₁))``; a single row times a
   matrix as ``(a₀b₀ + a₁b₁) + a₂b₂`` (numpy's own loop). ``np.einsum("kij,kj->ki")`` sums
   ``(a₀b₀ + a₂b₂) + a₁b₁``. :func:`blas_products_agree` checks the first of these on the BLAS
-  at hand; on another BLAS the kernel still agrees to a few ulps.
+  at hand; another BLAS rounds these products otherwise (a few ulps: the kernel is then as
+  accurate as the reference, not its bits).
 * **The ellipsoid's Newton iteration** stops per *group* of rows — the whole call, or each of
   the reference's ``groups`` — when the group's largest relative step is below 1e-12 (at most
   30 iterations), as :func:`~eos_svc.shape.primitives.ellipsoid_planes` does; the other
