@@ -561,29 +561,17 @@ class ClassStarts:
 
     def evaluate_starts(self, kind: str) -> None:
         """Every start of ``kind`` evaluated at its own parameters — residuals and difference
-        Jacobian, as its :class:`_Evaluations` evaluates a point — in ONE batched call, each
-        start's rows as their own groups about their own orientation (the same bits as the
-        evaluations one by one; the fits from these starts then find their first point
-        known)."""
+        Jacobian, as its :class:`_Evaluations` evaluates a point (one compiled call each:
+        :func:`_difference_evaluation`) — so the fits from these starts find their first point
+        known. :func:`_evaluate_starts_numpy` is the reference: all the starts in one batched
+        numpy call, each start's rows as their own groups about their own orientation (the
+        same bits)."""
         candidates = self.of(kind)
-        todo = [i for i, (theta0, _) in enumerate(candidates)
-                if theta0.tobytes() not in self.evaluations(kind, i).known]
-        if not todo:
-            return
-        k = N_PARAMS[kind]
-        rows = k + 2  # the k + 1 difference points (a group), the point alone (a group)
-        blocks = [_difference_points(candidates[i][0], copies=2) for i in todo]
-        thetas = np.concatenate([b[0] for b in blocks])
-        r0s = np.repeat(np.array([candidates[i][1] for i in todo]), rows, axis=0)
-        firsts = np.arange(len(todo)) * rows
-        groups = np.stack([firsts, firsts + k + 1], axis=1).reshape(-1)
-        R, geometry = _residuals_and_geometry(thetas, kind, r0s, self.fit_data, groups)
-        for j, (i, (_, h)) in enumerate(zip(todo, blocks, strict=True)):
-            lo = j * rows
-            block = (geometry[0][lo : lo + rows], geometry[1][lo : lo + rows], geometry[2][lo : lo + rows])
-            self.evaluations(kind, i).known[candidates[i][0].tobytes()] = (
-                R[lo + k + 1], _difference_quotients(R[lo : lo + k + 1], h), block,
-            )
+        for i, (theta0, r0) in enumerate(candidates):
+            known = self.evaluations(kind, i).known
+            key = theta0.tobytes()
+            if key not in known:
+                known[key] = _difference_evaluation(theta0, kind, r0, self.fit_data)
 
     def of(self, kind: str) -> list[tuple[np.ndarray, np.ndarray]]:
         """Start parameters and orientations ``(theta0, r0)`` of ``kind``."""
@@ -634,6 +622,31 @@ class ClassStarts:
             half = max(axial - radius, MIN_HALF) if kind == "capsule" else max(axial, MIN_HALF)
             out.append((np.concatenate([mid, [0.0, 0.0, math.log(radius), math.log(half)]]), r0))
         return out
+
+
+def _evaluate_starts_numpy(shared: ClassStarts, kind: str) -> None:
+    """:meth:`ClassStarts.evaluate_starts` in one batched numpy call: every start's k + 1
+    difference points and the start alone as groups of their own, each about its start's
+    orientation (:func:`_residuals_and_geometry_numpy`)."""
+    candidates = shared.of(kind)
+    todo = [i for i, (theta0, _) in enumerate(candidates)
+            if theta0.tobytes() not in shared.evaluations(kind, i).known]
+    if not todo:
+        return
+    k = N_PARAMS[kind]
+    rows = k + 2  # the k + 1 difference points (a group), the point alone (a group)
+    blocks = [_difference_points(candidates[i][0], copies=2) for i in todo]
+    thetas = np.concatenate([b[0] for b in blocks])
+    r0s = np.repeat(np.array([candidates[i][1] for i in todo]), rows, axis=0)
+    firsts = np.arange(len(todo)) * rows
+    groups = np.stack([firsts, firsts + k + 1], axis=1).reshape(-1)
+    R, geometry = _residuals_and_geometry_numpy(thetas, kind, r0s, shared.fit_data, groups)
+    for j, (i, (_, h)) in enumerate(zip(todo, blocks, strict=True)):
+        lo = j * rows
+        block = (geometry[0][lo : lo + rows], geometry[1][lo : lo + rows], geometry[2][lo : lo + rows])
+        shared.evaluations(kind, i).known[candidates[i][0].tobytes()] = (
+            R[lo + k + 1], _difference_quotients(R[lo : lo + k + 1], h), block,
+        )
 
 
 def starts(kind: str, touches: Touches) -> list[tuple[np.ndarray, np.ndarray]]:

@@ -567,15 +567,23 @@ def test_batched_distance_is_the_row_kernel(kind):
 @pytest.mark.parametrize("kind", KINDS)
 def test_starts_evaluated_in_one_call_are_each_evaluated_alone(kind):
     # ClassStarts.evaluate_starts: every start's residuals, Jacobian and geometry at its own
-    # parameters in one batched call — to the bit what its _Evaluations computes alone; the
-    # nearest order from them is _nearest_order's
+    # parameters (compiled, one call each; the numpy reference: all in one batched call) —
+    # to the bit what its _Evaluations computes alone; the nearest order from them is
+    # _nearest_order's
     for seed in (41, 42, 43):
         touches = random_touches("cylinder" if kind == "box" else "box", seed)
         shared = shape_fit.ClassStarts(touches)
         shared.evaluate_starts(kind)
+        reference = shape_fit.ClassStarts(touches)
+        shape_fit._evaluate_starts_numpy(reference, kind)
         candidates = shared.of(kind)
         for i, (theta0, r0) in enumerate(candidates):
             batched = shared.evaluations(kind, i)
+            numpy_batched = reference.evaluations(kind, i)
+            np.testing.assert_array_equal(batched.residuals(theta0), numpy_batched.residuals(theta0))
+            np.testing.assert_array_equal(batched.jacobian(theta0), numpy_batched.jacobian(theta0))
+            rotations = batched.geometry(theta0).rotation, numpy_batched.geometry(theta0).rotation
+            np.testing.assert_array_equal(*rotations)
             alone = shape_fit._Evaluations(kind, r0, touches)
             np.testing.assert_array_equal(batched.residuals(theta0), alone.residuals(theta0))
             np.testing.assert_array_equal(batched.jacobian(theta0), alone.jacobian(theta0))
