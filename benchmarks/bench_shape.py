@@ -9,7 +9,9 @@ is at git revision ``--baseline`` (default ``ddccb46``, before the fit's evaluat
 and its kernels thinned), imported in the same process under a private name and timed in
 alternating rounds (the machine's load changes within a run): the median of each and the
 median of the per-round ratios. The two postulates are compared first: class, confidence,
-posteriors and every class's χ², bit for bit.
+posteriors and every class's χ², bit for bit. This tree's compiled kernels
+(``eos_svc.shape.compiled``) are warmed up first — compiled, or loaded from numba's on-disk
+cache — and the time that took is printed; nothing compiles inside the timed rounds.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ import numpy as np
 import eos_svc.agents.post_shape as post_shape
 from eos_svc import shape
 from eos_svc.agents import PlanRequest, plan
+from eos_svc.shape import compiled
 
 ROOT = Path(__file__).resolve().parents[1]
 ACROSS = [1.5707963267948966, 0.0, 0.0]  # a cylinder or capsule lying across the approach
@@ -103,6 +106,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--all", action="store_true", help="also the other classes' plans")
     parser.add_argument("--rounds", type=int, default=40, help="alternating rounds per plan (40)")
     args = parser.parse_args(argv)
+    t0 = time.perf_counter()
+    compiled.warm_up()
+    print(f"compiled kernels: warm_up {time.perf_counter() - t0:.2f} s (compiled, or loaded from the cache)")
     old = load_shape(args.baseline)
     print(f"select_class: this tree against {args.baseline}, {args.rounds} alternating rounds each")
     print(f"{'plan':18s} {'contacts':>8s} {args.baseline:>10s} {'this tree':>10s} {'ratio':>7s}  postulate")
