@@ -29,7 +29,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import least_squares, leastsq
 
-from eos_svc.shape import compiled, primitives
+from eos_svc.shape import primitives
 from eos_svc.shape.touches import Touches
 
 #: number of parameters of each class
@@ -322,6 +322,8 @@ def _residuals_and_geometry_compiled(
     (:func:`eos_svc.shape.compiled.residuals_and_geometry`), the same operations in the same
     order on every number (the same bits; ``groups`` keeps its meaning: it couples only the
     ellipsoid's Newton stop and picks the axis products, every other row is independent)."""
+    from eos_svc.shape import compiled  # numba on first use: importing the package stays light
+
     return compiled.residuals_and_geometry(
         kind, thetas, r0, groups, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
         data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
@@ -715,6 +717,8 @@ def _difference_evaluation(
     rows evaluated — θ's own is the last) in one call of the compiled kernel
     (:func:`eos_svc.shape.compiled.difference_evaluation`): the same bits as
     :func:`_difference_evaluation_numpy`."""
+    from eos_svc.shape import compiled  # numba on first use: importing the package stays light
+
     return compiled.difference_evaluation(
         kind, theta, r0, JACOBIAN_STEP, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
         data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
