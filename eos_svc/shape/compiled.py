@@ -477,8 +477,9 @@ def _difference_kernel(
         h[j] = step * _maximum(1.0, abs(theta[j]))
         thetas[j, j] += h[j]
     groups = np.array([0, k + 1], dtype=np.int64)
+    grouped = groups.shape[0] > 0  # True, as a plain bool: _kernel's one compiled signature
     R, centres, rotations, sizes = _kernel(
-        kind, thetas, r0s, per_row, True, groups, log_lo, log_hi, points, count, radii, normals,
+        kind, thetas, r0s, per_row, grouped, groups, log_lo, log_hi, points, count, radii, normals,
         free_radii, gap_offset, sigma_distance, sigma_normal,
     )
     m = R.shape[1]
