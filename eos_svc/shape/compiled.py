@@ -26,8 +26,10 @@ Three things the reference does implicitly are spelled out:
 * **numpy's ``maximum``/``minimum``** return their first argument on ties (and NaN): so do
   :func:`_maximum` and :func:`_minimum`.
 
-Every kernel is compiled on first use and cached on disk (``cache=True``, in ``__pycache__``);
-:func:`warm_up` compiles or loads them all, so a service's first request does not pay that.
+The kernels use numpy's error model (a division by zero gives ±inf or NaN, as in the
+reference, not Python's exception). Every kernel is compiled on first use and cached on disk
+(``cache=True``, in ``__pycache__``); :func:`warm_up` compiles or loads them all, so a
+service's first request does not pay that.
 """
 
 from __future__ import annotations
@@ -73,25 +75,25 @@ def _fma_intrinsic(typingctx: Any, a: Any, b: Any, c: Any) -> tuple[Any, Callabl
 _fma = cast(Callable[[float, float, float], float], _fma_intrinsic)
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _maximum(a: float, b: float) -> float:
     """``np.maximum(a, b)``: ``a`` when ``a ≥ b`` or ``a`` is NaN, else ``b``."""
     return a if (a >= b or a != a) else b
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _minimum(a: float, b: float) -> float:
     """``np.minimum(a, b)``: ``a`` when ``a ≤ b`` or ``a`` is NaN, else ``b``."""
     return a if (a <= b or a != a) else b
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True, error_model="numpy", inline="always")
 def _dot3(a0: float, a1: float, a2: float, b0: float, b1: float, b2: float) -> float:
     """A length-3 product as OpenBLAS's gemm sums it: ``fma(a₂, b₂, fma(a₁, b₁, a₀·b₀))``."""
     return _fma(a2, b2, _fma(a1, b1, a0 * b0))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _axis_about(mode: int, t3: float, t4: float, r0: np.ndarray, out: np.ndarray) -> None:
     """``r0 · (t3, t4, 1)`` into ``out`` (3,), summed as the reference's product ``mode``."""
     for i in range(3):
@@ -104,7 +106,7 @@ def _axis_about(mode: int, t3: float, t4: float, r0: np.ndarray, out: np.ndarray
             out[i] = (t3 * a + 1.0 * c) + t4 * b
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _geometry(
     kind: int,
     thetas: np.ndarray,
@@ -186,7 +188,7 @@ def _geometry(
     return centres, rotations, sizes
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _local_points(
     kind: int, points: np.ndarray, centres: np.ndarray, rotations: np.ndarray
 ) -> np.ndarray:
@@ -210,7 +212,7 @@ def _local_points(
     return local
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _ellipsoid(
     local: np.ndarray, sizes: np.ndarray, groups: np.ndarray, d: np.ndarray, g: np.ndarray
 ) -> None:
@@ -278,7 +280,7 @@ def _ellipsoid(
             d[row, i] = sign * dist
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _point_distance(kind: int, p0: float, p1: float, p2: float, size: np.ndarray, g: np.ndarray) -> float:
     """The signed distance (m) of the local point ``p`` to the sphere, box, cylinder or
     capsule of ``size``, its local gradient into ``g`` (3,): the elementwise operations of
@@ -348,7 +350,7 @@ def _point_distance(kind: int, p0: float, p1: float, p2: float, size: np.ndarray
     return n - radius
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _kernel(
     kind: int,
     thetas: np.ndarray,
@@ -447,7 +449,7 @@ def residuals_and_geometry(
     return R, (centres, rotations, sizes)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _difference_kernel(
     kind: int,
     theta: np.ndarray,
@@ -541,7 +543,7 @@ def blas_products_agree() -> bool:
     return bool(np.array_equal(a @ b, _products(a, b)))
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy")
 def _products(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """``a @ b`` (M, 3) @ (3, 3) summed as :func:`_dot3`."""
     out = np.empty((a.shape[0], 3))

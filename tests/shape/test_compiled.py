@@ -234,3 +234,20 @@ def test_warm_up_compiles_what_the_fit_calls():
         fit.fit_class(kind, touches, max_nfev=3, nearest_first=True)
         fit.batch_residuals(theta[None], kind, np.eye(3), touches)
     assert [list(kernel.signatures) for kernel in kernels] == before
+
+
+@pytest.mark.parametrize("kind", KINDS)
+def test_a_division_by_zero_gives_what_numpy_gives(kind):
+    """numpy's error model: a zero σ (no Touches allows one) gives ±inf and NaN residuals where
+    the reference gives them, not an exception."""
+    import dataclasses
+
+    rng = np.random.default_rng(13)
+    theta = random_theta(kind, rng)
+    data = dataclasses.replace(fit_data(kind, rng, theta, np.eye(3)), sigma_distance=0.0, sigma_normal=0.0)
+    thetas, _ = fit._difference_points(theta, copies=2)
+    R, _ = fit._residuals_and_geometry_compiled(thetas, kind, np.eye(3), data, None)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        R_ref, _ = fit._residuals_and_geometry_numpy(thetas, kind, np.eye(3), data, None)
+    assert not np.isfinite(R).all()
+    np.testing.assert_array_equal(R, R_ref)  # NaN where NaN, ±inf where ±inf
