@@ -28,8 +28,8 @@ Three things the reference does implicitly are spelled out:
 
 The kernels use numpy's error model (a division by zero gives ±inf or NaN, as in the
 reference, not Python's exception). Every kernel is compiled on first use and cached on disk
-(``cache=True``, in ``__pycache__``); :func:`warm_up` compiles or loads them all, so a
-service's first request does not pay that.
+(``cache=True``, in ``__pycache__``); :func:`warm_up` compiles or loads them all, and only then
+does the fit use them (:mod:`eos_svc.shape.kernels`: until then it runs its numpy reference).
 """
 
 from __future__ import annotations
@@ -43,6 +43,8 @@ import numpy as np
 from llvmlite import ir
 from numba.core import cgutils, types
 from numba.extending import intrinsic
+
+from eos_svc.shape import kernels
 
 #: the classes' codes in the kernel, and each one's first log-size parameter and size count
 KIND_CODE = {"sphere": 0, "ellipsoid": 1, "box": 2, "cylinder": 3, "capsule": 4}
@@ -573,3 +575,4 @@ def warm_up() -> None:
                 radii, normals, free_radii, 0.0, 0.001, 0.1,
             )
     _products(points, np.eye(3))
+    kernels.mark_ready()

@@ -29,7 +29,7 @@ from functools import cached_property
 import numpy as np
 from scipy.optimize import least_squares, leastsq
 
-from eos_svc.shape import primitives
+from eos_svc.shape import kernels, primitives
 from eos_svc.shape.touches import Touches
 
 #: number of parameters of each class
@@ -311,8 +311,11 @@ def _residuals_and_geometry(
     thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData, groups: np.ndarray | None = None
 ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(:func:`_whitened_residuals`, the :func:`batch_geometry` they were computed from): the
-    compiled kernel (:func:`_residuals_and_geometry_compiled`)."""
-    return _residuals_and_geometry_compiled(thetas, kind, r0, data, groups)
+    compiled kernel (:func:`_residuals_and_geometry_compiled`) once it is ready in this
+    process, the numpy reference (the same bits) until then (:mod:`eos_svc.shape.kernels`)."""
+    if kernels.ready():
+        return _residuals_and_geometry_compiled(thetas, kind, r0, data, groups)
+    return _residuals_and_geometry_numpy(thetas, kind, r0, data, groups)
 
 
 def _residuals_and_geometry_compiled(
@@ -714,9 +717,19 @@ def _difference_evaluation(
     theta: np.ndarray, kind: str, r0: np.ndarray, data: FitData
 ) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
     """(residuals at ``theta``, their forward-difference Jacobian, the geometry of the k + 2
-    rows evaluated — θ's own is the last) in one call of the compiled kernel
-    (:func:`eos_svc.shape.compiled.difference_evaluation`): the same bits as
-    :func:`_difference_evaluation_numpy`."""
+    rows evaluated — θ's own is the last): :func:`_difference_evaluation_compiled` once the
+    kernels are ready in this process, :func:`_difference_evaluation_numpy` (the same bits)
+    until then."""
+    if kernels.ready():
+        return _difference_evaluation_compiled(theta, kind, r0, data)
+    return _difference_evaluation_numpy(theta, kind, r0, data)
+
+
+def _difference_evaluation_compiled(
+    theta: np.ndarray, kind: str, r0: np.ndarray, data: FitData
+) -> tuple[np.ndarray, np.ndarray, _BatchGeometry]:
+    """:func:`_difference_evaluation` in one call of the compiled kernel
+    (:func:`eos_svc.shape.compiled.difference_evaluation`)."""
     from eos_svc.shape import compiled  # numba on first use: importing the package stays light
 
     return compiled.difference_evaluation(

@@ -9,13 +9,18 @@ comparisons are then skipped, and select_class is compared on its class and conf
 
 from __future__ import annotations
 
+import json
 import math
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.shape import Touches, compiled, fit, selection
+from eos_svc.shape import Touches, compiled, fit, kernels, selection
 
 #: bit for bit when numpy's products are the kernel's
 EXACT = compiled.blas_products_agree()
@@ -147,7 +152,7 @@ def test_compiled_difference_evaluation_is_the_numpy_one(kind):
     for r0 in (np.eye(3), random_rotation(rng)):
         theta = random_theta(kind, rng)
         data = fit_data(kind, rng, theta, r0)
-        r, J, geometry = fit._difference_evaluation(theta, kind, r0, data)
+        r, J, geometry = fit._difference_evaluation_compiled(theta, kind, r0, data)
         r_ref, J_ref, geometry_ref = fit._difference_evaluation_numpy(theta, kind, r0, data)
         assert J.shape == (4 * data.count + len(data.free_radii), len(theta))
         assert_same(r, r_ref)
@@ -196,6 +201,10 @@ def plan_touches(request: dict) -> list[Touches]:
     return seen
 
 
+def _not_called(*args, **kwargs):
+    raise AssertionError("the numpy reference ran")
+
+
 def postulate_fingerprint(post: selection.Postulate) -> tuple:
     return (post.kind, post.confidence, post.object(), sorted(post.probabilities.items()),
             sorted((k, f.chi2, f.start, f.theta.tobytes()) for k, f in post.fits.items()))
@@ -207,9 +216,12 @@ def test_select_class_postulates_the_same_compiled_or_numpy(request_json, monkey
     reference: the same class, confidence, object, posteriors and fits."""
     touches = plan_touches(request_json)
     assert touches, "the plan fitted no touches"
-    compiled_posts = [selection.select_class(t) for t in touches]
-    monkeypatch.setattr(fit, "_residuals_and_geometry", fit._residuals_and_geometry_numpy)
-    monkeypatch.setattr(fit, "_difference_evaluation", fit._difference_evaluation_numpy)
+    kernels.load()
+    with monkeypatch.context() as patch:  # the compiled kernels only: the numpy path would raise
+        for name in ("_residuals_and_geometry_numpy", "_difference_evaluation_numpy"):
+            patch.setattr(fit, name, _not_called)
+        compiled_posts = [selection.select_class(t) for t in touches]
+    monkeypatch.setattr(kernels, "ready", lambda: False)  # the numpy reference only
     numpy_posts = [selection.select_class(t) for t in touches]
     for a, b in zip(compiled_posts, numpy_posts, strict=True):
         if EXACT:
@@ -251,3 +263,38 @@ def test_a_division_by_zero_gives_what_numpy_gives(kind):
         R_ref, _ = fit._residuals_and_geometry_numpy(thetas, kind, np.eye(3), data, None)
     assert not np.isfinite(R).all()
     np.testing.assert_array_equal(R, R_ref)  # NaN where NaN, ±inf where ±inf
+
+
+LATE_LOAD = """
+import json
+import numpy as np
+from eos_svc.shape import Touches, kernels, select_class
+rng = np.random.default_rng(3)
+u = rng.normal(size=(24, 3))
+u /= np.linalg.norm(u, axis=1, keepdims=True)
+touches = Touches(0.05 * u, u, 0.01)  # a 4 cm sphere felt by 1 cm tips
+first = select_class(touches)  # the numpy reference
+one_fit = {"loader": kernels._loader is not None, "numba": "numba" in __import__("sys").modules}
+while kernels._loader is None:  # fitting on: past LOAD_AFTER evaluations the load starts
+    select_class(touches)
+kernels._loader.join()
+second = select_class(touches)  # compiled
+print(json.dumps({"one_fit": one_fit, "ready": kernels.ready(), "error": repr(kernels.error),
+                  "same": [first.kind, first.confidence] == [second.kind, second.confidence],
+                  "kind": second.kind}))
+"""
+
+
+def test_a_fresh_process_fits_in_numpy_then_loads_the_kernels_behind():
+    """In a fresh interpreter a fit does not wait for the kernels, nor import numba: it runs the
+    numpy reference; a process that keeps fitting loads them in a background thread, and its
+    fits then run compiled, with the same postulate."""
+    compiled.warm_up()  # the on-disk cache exists (a first compilation would only take longer)
+    root = Path(__file__).resolve().parents[2]
+    out = subprocess.run(
+        [sys.executable, "-c", LATE_LOAD], capture_output=True, text=True, check=True,
+        env={**os.environ, "PYTHONPATH": str(root)}, cwd=root, timeout=300,
+    ).stdout
+    seen = json.loads(out)
+    assert seen == {"one_fit": {"loader": False, "numba": False}, "ready": True, "error": "None",
+                    "same": True, "kind": "sphere"}
