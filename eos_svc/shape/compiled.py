@@ -5,8 +5,10 @@
 parameter vector (:func:`~eos_svc.shape.fit.batch_geometry`), the signed distance and gradient
 of its primitive (:mod:`eos_svc.shape.primitives`) at the contacts and the free samples, the
 whitened residuals — as scalar loops, operation for operation in the reference's order, so
-that the bits agree. numpy's per-call overhead on these small arrays (a few hundred numbers,
-some sixty calls) is what the reference spends its time on; here one call does it all.
+that the bits agree; :func:`difference_evaluation` does the same for a point of the fit and
+its k forward-difference neighbours, with the Jacobian's quotients, in one call. numpy's
+per-call overhead on these small arrays (a few hundred numbers, some sixty calls) is what the
+reference spends its time on; here one call does it all.
 
 Three things the reference does implicitly are spelled out:
 
