@@ -570,7 +570,10 @@ class ClassStarts:
         :func:`_difference_evaluation`) — so the fits from these starts find their first point
         known. :func:`_evaluate_starts_numpy` is the reference: all the starts in one batched
         numpy call, each start's rows as their own groups about their own orientation (the
-        same bits)."""
+        same bits), and what runs until the kernels are ready."""
+        if not kernels.ready():
+            _evaluate_starts_numpy(self, kind)
+            return
         candidates = self.of(kind)
         for i, (theta0, r0) in enumerate(candidates):
             known = self.evaluations(kind, i).known

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from eos_svc.shape import Touches, fit_class, select_class
+from eos_svc.shape import Touches, fit_class, kernels, select_class
 from eos_svc.shape import fit as shape_fit
 from eos_svc.shape import primitives as shape_primitives
 from eos_svc.shape.primitives import ellipsoid, ellipsoid_root_lower_bound, norm
@@ -570,6 +570,7 @@ def test_starts_evaluated_in_one_call_are_each_evaluated_alone(kind):
     # parameters (compiled, one call each; the numpy reference: all in one batched call) —
     # to the bit what its _Evaluations computes alone; the nearest order from them is
     # _nearest_order's
+    kernels.load()  # evaluate_starts compiled (until the kernels are ready it runs the numpy batch)
     for seed in (41, 42, 43):
         touches = random_touches("cylinder" if kind == "box" else "box", seed)
         shared = shape_fit.ClassStarts(touches)
