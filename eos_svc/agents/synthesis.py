@@ -446,6 +446,11 @@ def candidate_frames(obj: SurfaceObject, vertical_only: bool = False) -> Iterato
                 yield words, frame(x, sign * g)
 
 
+def palm_turn(R: np.ndarray) -> float:
+    """Rotation angle of palm orientation ``R`` from the unrotated hand (rad)."""
+    return math.acos(max(-1.0, min(1.0, 0.5 * (float(np.trace(R)) - 1.0))))
+
+
 # --- the synthesis -----------------------------------------------------------------------
 class GraspSynthesis:
     """Candidate grasps of one hand on one postulated object, checked and scored.
@@ -543,47 +548,76 @@ class GraspSynthesis:
     def candidates(self) -> list[GraspCandidate]:
         """The best candidates, best first.
 
-        Every candidate orientation is simulated (landings, angle about the centre); of
-        those about the centre, the ``SCORED`` least-rotated that are collision-free are
-        scored by ε; the best ε wins, and candidates within ``EPSILON_TIE`` (relative) of it
-        count as equal, the least wrist rotation first. When none about the centre is
-        collision-free, the collision-free one closest to it is returned alone (the best the
-        hand can do; its ``about_centre`` is False)."""
+        Candidate orientations are simulated (landings, angle about the centre) from the least
+        wrist rotation up, a group of equal rotations at a time; of those about the centre,
+        the ``SCORED`` least-rotated that are collision-free are scored by ε; the best ε wins,
+        and candidates within ``EPSILON_TIE`` (relative) of it count as equal, the least wrist
+        rotation first. When none about the centre is collision-free, the collision-free one
+        closest to it is returned alone (the best the hand can do; its ``about_centre`` is
+        False). The orientations rotated more than the last one scored are never simulated:
+        the choice is that of :meth:`candidates_eager`, which simulates them all first."""
+        return self._choose(self._turn_groups())
+
+    def candidates_eager(self) -> list[GraspCandidate]:
+        """:meth:`candidates` with every orientation simulated before any is checked and
+        scored (the plain version :meth:`candidates` is tested against)."""
+        every = [frame for group in self._turn_groups() for frame in group]
+        every.sort(key=lambda f: f[0])  # candidate_frames' order: one group, sorted by turn below
+        return self._choose([every])
+
+    def _turn_groups(self) -> list[list[tuple[int, str, np.ndarray]]]:
+        """The candidate frames ``(index, label, R)`` in groups of equal wrist rotation
+        (:func:`palm_turn` rounded to 1e-6 rad), the least-rotated group first, each group in
+        :func:`candidate_frames`' order."""
+        groups: dict[float, list[tuple[int, str, np.ndarray]]] = {}
+        for index, (label, R) in enumerate(candidate_frames(self.obj, self.vertical_only)):
+            groups.setdefault(round(palm_turn(R), 6), []).append((index, label, R))
+        return [groups[turn] for turn in sorted(groups)]
+
+    def _simulated(self, label: str, R: np.ndarray) -> GraspCandidate | None:
+        """The candidate of one orientation at its best depth (None when it is rejected)."""
+        rpy = self.wrist_rpy(R)
+        if rpy is None:
+            self._reject("wrist rotation out of its limits")
+            return None
+        extent = self.half_extent_along(R[:, 2])
+        if 2.0 * extent / self.hand.hand_height >= MAX_D_OVER_H:
+            self._reject("larger than the hand height across the grip")
+            return None
+        base = self.depth_for(extent)
+        if base is None:
+            self._reject("too small for the opposing finger's sweep")
+            return None
+        centre = np.asarray(self.obj.placement.translation, dtype=float)
+        return self._best_depth(label, R, rpy, centre, base, extent)
+
+    def _choose(self, groups: list[list[tuple[int, str, np.ndarray]]]) -> list[GraspCandidate]:
+        """The choice of :meth:`candidates`, simulating ``groups`` of frames in turn until
+        enough collision-free candidates about the centre are scored."""
         obj = self.obj
-        centre = np.asarray(obj.placement.translation, dtype=float)
-        h = self.hand.hand_height
-        simulated: list[GraspCandidate] = []
-        for label, R in candidate_frames(obj, self.vertical_only):
-            rpy = self.wrist_rpy(R)
-            if rpy is None:
-                self._reject("wrist rotation out of its limits")
-                continue
-            extent = self.half_extent_along(R[:, 2])
-            if 2.0 * extent / h >= MAX_D_OVER_H:
-                self._reject("larger than the hand height across the grip")
-                continue
-            base = self.depth_for(extent)
-            if base is None:
-                self._reject("too small for the opposing finger's sweep")
-                continue
-            best = self._best_depth(label, R, rpy, centre, base, extent)
-            if best is not None:
-                simulated.append(best)
-        about = [c for c in simulated if c.about_centre]
-        about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
         # a sphere's grasps about its diameters are all alike (ε too, by symmetry): the first,
         # least-rotated one that is collision-free is the choice
         wanted = 1 if isinstance(obj, Sphere) else SCORED
+        simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
-        for cand in about:
-            if self._collision_free(cand):
-                kept.append(self._score(cand))
-                if len(kept) == wanted:
-                    break
+        about_count = 0
+        for group in groups:
+            fresh = [c for _, label, R in group if (c := self._simulated(label, R)) is not None]
+            simulated.extend(fresh)
+            about = [c for c in fresh if c.about_centre]
+            about_count += len(about)
+            about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+            for cand in about:
+                if self._collision_free(cand):
+                    kept.append(self._score(cand))
+                    if len(kept) == wanted:
+                        break
+            if len(kept) == wanted:
+                break
         if not kept:
             # no grasp about the centre is reachable: the one closest to it, the best the hand
             # can do (the end agent will judge it)
-            if len(about) < len(simulated):
+            if about_count < len(simulated):
                 self._reject("contacts not about the centre")
             rest = sorted((c for c in simulated if not c.about_centre), key=lambda c: (-c.angle_deg, c.turn))
             for cand in rest:
@@ -648,8 +682,7 @@ class GraspSynthesis:
             landings[finger] = hit
         others = [landings[f].point for f in landings if f != self.opposing]
         angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
-        turn = math.acos(max(-1.0, min(1.0, 0.5 * (float(np.trace(R)) - 1.0))))
-        return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=turn)
+        return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
 
     def _configuration(
         self, c: GraspCandidate, wrist: np.ndarray, angles: dict[str, float] | None
