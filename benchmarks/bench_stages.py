@@ -32,6 +32,11 @@ CHILD = """
 import json, sys, time
 time.perf_counter = time.process_time  # CPU time: the controller's and the planner's clock
 time.monotonic = time.process_time
+try:  # the fit's compiled kernels, as a long-lived process has them (where the tree has them)
+    from eos_svc.shape import kernels
+    kernels.load()
+except ImportError:
+    pass
 from eos_svc.agents import PlanRequest, plan
 requests = [PlanRequest.from_dict(r) for r in json.loads(sys.argv[1])]
 for request in requests:
