@@ -49,6 +49,7 @@ import msgspec
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.service.request_wire import decode_fast
 
 #: version of the message schemas (the ``"schema"`` field of every message)
 SCHEMA_VERSION = 1
@@ -525,12 +526,25 @@ def decode_request(
 def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES) -> Envelope:
     """Decode and validate a plan request with its envelope (goal id, cancel token).
 
+    A request in the form the clients send (every field present and valid) takes one typed
+    msgspec decode (:func:`~eos_svc.service.request_wire.decode_fast`); anything else, the strict
+    stdlib parser and the field-by-field checks, which name the field and the reason.
+
     Raises:
         RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
     """
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
     raw = payload if isinstance(payload, bytes) else bytes(payload)
+    fast = decode_fast(raw, ID_PATTERN, TOKEN_PATTERN)  # the clients' form, in one typed decode
+    if fast is not None:
+        return Envelope(*fast)
+    return decode_checked(raw)
+
+
+def decode_checked(raw: bytes) -> Envelope:
+    """The full path of :func:`decode_envelope` (any size): the strict stdlib parser, then every
+    field checked in turn; raises a :class:`RequestError` naming the field and the reason."""
     try:
         data = _DECODER.decode(_text(raw))
     except DuplicateKeyError as exc:
