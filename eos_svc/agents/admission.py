@@ -219,20 +219,45 @@ def check_plannable(
             hand at its start configuration; the size field when it is wider than the hand's
             span in every direction.
     """
-    from eos_svc.agents import planner  # planner imports this module: resolve at call time
+    PlannableCheck(hand, params)(request)
 
-    hand = hand or planner.default_hand()
-    params = params or planner.parameters_for(hand)
-    spec = request.obj
-    verdicts = _VERDICTS.get((hand, params), _Verdicts)
-    key = _object_key(spec)
-    verdict = verdicts.get(key)
-    if verdict is None:
-        verdict = plannable_verdict(spec, hand, params)
-        verdicts.put(key, verdict)
-    if verdict:
-        field, reason = verdict
-        raise ValidationError(field, reason)
+
+class PlannableCheck:
+    """:func:`check_plannable` with the hand and its parameters resolved once: call it with a
+    request. What the service runs at admission (:func:`default_check`): a kept verdict costs a
+    key and a dictionary lookup.
+
+    Args:
+        hand: the hand (default: hand3x3, cached).
+        params: world constants (default: ``WorldParameters.for_hand(hand)``).
+    """
+
+    __slots__ = ("_verdicts", "hand", "params")
+
+    def __init__(self, hand: HandModel | None = None, params: WorldParameters | None = None) -> None:
+        from eos_svc.agents import planner  # planner imports this module: resolve at call time
+
+        self.hand = hand or planner.default_hand()
+        self.params = params or planner.parameters_for(self.hand)
+        self._verdicts = _VERDICTS.get((self.hand, self.params), _Verdicts)
+
+    def __call__(self, request: PlanRequest) -> None:
+        """Raise :class:`ValidationError` if the planner cannot plan ``request``."""
+        spec = request.obj
+        key = _object_key(spec)
+        verdict = self._verdicts.get(key)
+        if verdict is None:
+            verdict = plannable_verdict(spec, self.hand, self.params)
+            self._verdicts.put(key, verdict)
+        if verdict:
+            field, reason = verdict
+            raise ValidationError(field, reason)
+
+
+@functools.cache
+def default_check() -> PlannableCheck:
+    """The admission check of the default hand (hand3x3) and its parameters, one per process."""
+    return PlannableCheck()
 
 
 def plannable_verdict(spec: ObjectSpec, hand: HandModel, params: WorldParameters) -> tuple[str, ...]:

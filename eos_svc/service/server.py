@@ -71,10 +71,11 @@ def default_planner() -> Planner:
 
 
 def default_admission() -> Admission:
-    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable`)."""
-    from eos_svc.agents.admission import check_plannable  # lazy: Pinocchio and coal load here
+    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable` on
+    the default hand, resolved once: :func:`~eos_svc.agents.admission.default_check`)."""
+    from eos_svc.agents.admission import default_check  # lazy: Pinocchio and coal load here
 
-    return check_plannable
+    return default_check()
 
 
 def _is_grasp_planner(planner: Planner | None) -> bool:

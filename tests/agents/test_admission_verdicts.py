@@ -8,7 +8,13 @@ import random
 import pytest
 
 from eos_svc.agents import admission
-from eos_svc.agents.admission import VERDICTS_KEPT, check_plannable, plannable_verdict
+from eos_svc.agents.admission import (
+    VERDICTS_KEPT,
+    PlannableCheck,
+    check_plannable,
+    default_check,
+    plannable_verdict,
+)
 from eos_svc.agents.planner import default_hand, parameters_for
 from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.errors import ValidationError
@@ -20,6 +26,14 @@ PARAMS = parameters_for(HAND)
 def verdict_of(request: PlanRequest, **kw: object) -> tuple[str, ...]:
     try:
         check_plannable(request, **kw)  # type: ignore[arg-type]
+    except ValidationError as exc:
+        return exc.field, exc.reason
+    return ()
+
+
+def verdict_of_check(check: PlannableCheck, spec: ObjectSpec) -> tuple[str, ...]:
+    try:
+        check(PlanRequest(obj=spec))
     except ValidationError as exc:
         return exc.field, exc.reason
     return ()
@@ -47,6 +61,8 @@ def test_kept_verdicts_equal_fresh_ones(seed: int) -> None:
         first = verdict_of(PlanRequest(obj=spec))
         again = verdict_of(PlanRequest(obj=spec, seed=rng.randrange(1000)))  # another seed: kept
         assert first == fresh == again, spec
+        assert verdict_of_check(default_check(), spec) == fresh
+        assert verdict_of_check(PlannableCheck(HAND, PARAMS), spec) == fresh
         kinds.add(fresh[0] if fresh else "plannable")
     assert "plannable" in kinds and len(kinds) >= 2  # both answers were exercised
 
