@@ -157,11 +157,7 @@ class ObjectSpec:
         within the bounds. For a decoder that enforced those constraints itself (the service's
         typed wire decoder, :mod:`eos_svc.service.request_wire`); anyone else: the constructor."""
         spec = object.__new__(cls)
-        setattr_ = object.__setattr__
-        setattr_(spec, "shape", shape)
-        setattr_(spec, "size", size)
-        setattr_(spec, "position", position)
-        setattr_(spec, "rpy", rpy)
+        spec.__dict__.update(shape=shape, size=size, position=position, rpy=rpy)  # frozen: no setattr
         return spec
 
     @property
@@ -269,14 +265,15 @@ class PlanRequest:
         ``seed`` and ``max_cycles``, floats otherwise, all within their bounds), without checking
         them again; see :meth:`ObjectSpec.from_checked`."""
         request = object.__new__(cls)
-        setattr_ = object.__setattr__
-        setattr_(request, "obj", obj)
-        setattr_(request, "weights", weights)
-        setattr_(request, "seed", seed)
-        setattr_(request, "tactile_noise", tactile_noise)
-        setattr_(request, "max_cycles", max_cycles)
-        setattr_(request, "deadline_s", deadline_s)
-        setattr_(request, "friction", friction)
+        request.__dict__.update(
+            obj=obj,
+            weights=weights,
+            seed=seed,
+            tactile_noise=tactile_noise,
+            max_cycles=max_cycles,
+            deadline_s=deadline_s,
+            friction=friction,
+        )
         return request
 
     @classmethod

@@ -40,9 +40,8 @@ import math
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
-from typing import Any
+from typing import Any, NamedTuple
 
 import msgspec
 
@@ -235,6 +234,7 @@ _DECODER = json.JSONDecoder(
 #: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
 _ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
 _BOM = b"\xef\xbb\xbf"
+_tuple_new = tuple.__new__
 _msgspec_decode = msgspec.json.Decoder().decode
 _msgspec_encode = msgspec.json.Encoder().encode
 
@@ -506,8 +506,7 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
             )
 
 
-@dataclass(frozen=True)
-class Envelope:
+class Envelope(NamedTuple):
     """A decoded plan request: its goal id, the request, and the owner's cancel token (or ``None``)."""
 
     goal_id: str
@@ -538,7 +537,7 @@ def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MA
     raw = payload if isinstance(payload, bytes) else bytes(payload)
     fast = decode_fast(raw, ID_PATTERN, TOKEN_PATTERN)  # the clients' form, in one typed decode
     if fast is not None:
-        return Envelope(*fast)
+        return _tuple_new(Envelope, fast)  # a NamedTuple made in C
     return decode_checked(raw)
 
 

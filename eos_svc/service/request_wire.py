@@ -26,6 +26,7 @@ Strict UTF-8, no NaN/Infinity, no trailing data: msgspec refuses those itself.
 from __future__ import annotations
 
 import re
+import struct
 from typing import Annotated, Literal
 
 import msgspec
@@ -99,18 +100,26 @@ class _Request(msgspec.Struct, forbid_unknown_fields=True):
 
 
 _decode = msgspec.json.Decoder(_Request).decode
-#: the object's size fields, in ObjectSpec's order, per shape struct
-_SIZE_FIELDS: dict[type, tuple[str, ...]] = {
-    _Sphere: ("radius",),
-    _Ellipsoid: ("radii",),
-    _Cylinder: ("radius", "length"),
-    _Box: ("size",),
-    _Capsule: ("radius", "length"),
+#: per shape struct: the shape's name and its size fields, in ObjectSpec's order
+_SHAPES: dict[type, tuple[str, tuple[str, ...]]] = {
+    struct_type: (struct_type.__struct_config__.tag, sizes)  # type: ignore[misc]
+    for struct_type, sizes in (
+        (_Sphere, ("radius",)),
+        (_Ellipsoid, ("radii",)),
+        (_Cylinder, ("radius", "length")),
+        (_Box, ("size",)),
+        (_Capsule, ("radius", "length")),
+    )
 }
 #: keys of a request besides the object's size fields and the cancel token: 9 at the top level
 #: (schema, goal_id, object, weights, seed, tactile_noise, max_cycles, deadline_s, friction),
 #: the object's shape, position, rpy and the 3 weights
 _FIXED_KEYS = 15
+#: Weights already built, by their three values' bytes (-0.0 and 0.0 apart): a Weights is
+#: immutable, and most requests carry one of a few (the default's); at most _WEIGHTS_KEPT kept
+_WEIGHTS: dict[bytes, Weights] = {}
+_WEIGHTS_KEPT = 64
+_pack3 = struct.Struct("3d").pack
 #: an ``rpy`` angle this large may be an integer literal of 20 digits or more (see the module doc)
 _HUGE = 1e19
 
@@ -126,7 +135,7 @@ def decode_fast(
     except (msgspec.DecodeError, RecursionError):  # msgspec.ValidationError is a DecodeError
         return None
     obj = msg.object
-    sizes = _SIZE_FIELDS[type(obj)]
+    shape, sizes = _SHAPES[type(obj)]
     token = msg.cancel_token
     keys = _FIXED_KEYS + len(sizes) + (token is not msgspec.UNSET)
     if raw.count(b":") != keys:  # a key given twice (or a colon in a string: either way)
@@ -141,16 +150,19 @@ def decode_fast(
     elif token is not None and not token_pattern.fullmatch(token):
         return None
     w = msg.weights
-    try:
-        weights = Weights(w.default, w.opportunistic, w.learned)  # checks itself: ranges, sum
-    except ValidationError:
-        return None
-    spec = ObjectSpec.from_checked(
-        obj.__struct_config__.tag,  # type: ignore[arg-type]
-        {name: getattr(obj, name) for name in sizes},
-        obj.position,
-        obj.rpy,
-    )
+    key = _pack3(w.default, w.opportunistic, w.learned)
+    weights = _WEIGHTS.get(key)
+    if weights is None:
+        try:
+            weights = Weights(w.default, w.opportunistic, w.learned)  # checks itself: ranges, sum
+        except ValidationError:
+            return None
+        if len(_WEIGHTS) < _WEIGHTS_KEPT:
+            _WEIGHTS[key] = weights
+    size = {sizes[0]: getattr(obj, sizes[0])}
+    if len(sizes) == 2:
+        size[sizes[1]] = getattr(obj, sizes[1])
+    spec = ObjectSpec.from_checked(shape, size, obj.position, obj.rpy)
     request = PlanRequest.from_checked(
         spec, weights, msg.seed, msg.tactile_noise, msg.max_cycles, msg.deadline_s, msg.friction
     )
