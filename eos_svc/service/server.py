@@ -460,31 +460,20 @@ class PlanService:
 
     def _admit(self, query: zenoh.Query) -> proto.RequestError | None:
         """Queue the plan for a worker, or return why not."""
-        with self._lock:
-            self.stats.received += 1
-        payload = query.payload
-        if self._stopping:
-            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
-        size = 0 if payload is None else len(payload)
-        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
-            return proto.RequestError(
-                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
-            )
         try:
-            env = proto.decode_envelope(
-                b"" if payload is None else payload.to_bytes(), self.max_request_bytes
-            )
-        except proto.RequestError as err:
-            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
-        goal_id, request = env.goal_id, env.request
-        if self._admission is not None:
-            try:
-                self._admission(request)
-            except ValidationError as exc:  # the planner could not plan it: refused here, named
-                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        job = _Job(query, goal_id, request, env.cancel_token, _GoalCancel())
+            job = self._decode(query)
+        except Exception:  # a bug: counted all the same, answered by _on_plan
+            with self._lock:
+                self.stats.received += 1
+            raise
+        if not isinstance(job, _Job):
+            with self._lock:
+                self.stats.received += 1
+            return job
+        goal_id = job.goal_id
         refusal: proto.RequestError
-        with self._lock:
+        with self._lock:  # one lock for the count and the admission
+            self.stats.received += 1
             if goal_id in self._active:
                 refusal = proto.RequestError(
                     proto.E_DUPLICATE, "goal_id", f"goal {goal_id!r} is already queued or running", goal_id
@@ -502,6 +491,29 @@ class PlanService:
                     goal_id,
                 )
         return refusal
+
+    def _decode(self, query: zenoh.Query) -> _Job | proto.RequestError:
+        """The job of a plan query (decoded, validated, admitted by the planner), or why not."""
+        payload = query.payload
+        if self._stopping:
+            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
+        size = 0 if payload is None else len(payload)
+        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
+            return proto.RequestError(
+                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
+            )
+        try:
+            goal_id, request, token = proto.decode_envelope(
+                b"" if payload is None else payload.to_bytes(), self.max_request_bytes
+            )
+        except proto.RequestError as err:
+            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
+        if self._admission is not None:
+            try:
+                self._admission(request)
+            except ValidationError as exc:  # the planner could not plan it: refused here, named
+                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
+        return _Job(query, goal_id, request, token, _GoalCancel())
 
     def _cancel(self, query: zenoh.Query) -> None:
         """Cancel a goal of this instance if the query carries the goal's cancel token.
