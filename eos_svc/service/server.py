@@ -95,11 +95,13 @@ class _CycleSink:
     when a second comes (declaring one costs more than a put, and a 1-cycle plan needs none).
     Same key, encoding and congestion control either way, so the cycles stay in order."""
 
-    __slots__ = ("_key", "_publisher", "_sent", "_session")
+    __slots__ = ("_goal_id", "_key", "_prefix", "_publisher", "_sent", "_session")
 
-    def __init__(self, session: zenoh.Session, key: str) -> None:
+    def __init__(self, session: zenoh.Session, prefix: str, goal_id: str) -> None:
         self._session = session
-        self._key = key
+        self._prefix = prefix
+        self._goal_id = goal_id
+        self._key = ""  # the goal's cycle key, written when the first cycle is put
         self._publisher: Any = None
         self._sent = False
 
@@ -108,6 +110,7 @@ class _CycleSink:
         if self._publisher is not None:
             self._publisher.put(body)
         elif not self._sent:
+            self._key = proto.cycle_key(self._prefix, self._goal_id)
             self._session.put(self._key, body, encoding=_JSON, congestion_control=_BLOCK)
             self._sent = True
         else:
@@ -592,7 +595,6 @@ class PlanService:
                     proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
                 )
             head = self._head(goal_id)
-            status_key = proto.status_key(self.prefix, goal_id)
             watchers = self._watched
             try:
                 watched = watchers.now()  # exact, before the first message
@@ -610,11 +612,14 @@ class PlanService:
                     "seed": job.request.seed,
                 }
             else:
-                publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
+                publisher = _CycleSink(self.session, self.prefix, goal_id)
                 if watched:  # with the request: a watcher can draw the object
                     running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
                     self.session.put(
-                        status_key, head.encode() + running[1:], encoding=_JSON, congestion_control=_BLOCK
+                        proto.status_key(self.prefix, goal_id),
+                        head.encode() + running[1:],
+                        encoding=_JSON,
+                        congestion_control=_BLOCK,
                     )
                 result = self._plan(job, publisher, head, watched)
                 if self._stopping:
@@ -626,7 +631,7 @@ class PlanService:
             if watched or watchers.any:
                 status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
                 self.session.put(
-                    status_key,
+                    proto.status_key(self.prefix, goal_id),
                     head_b + b'"state":"done",' + status + b',"result":' + encoded + b"}",
                     encoding=_JSON,
                     congestion_control=_BLOCK,
