@@ -132,8 +132,8 @@ def decode_fast(
     a cancel token must fully match."""
     try:
         msg = _decode(raw)
-    except (msgspec.DecodeError, RecursionError):  # msgspec.ValidationError is a DecodeError
-        return None
+    except (msgspec.DecodeError, RecursionError, ValueError, TypeError):  # ValidationError: a DecodeError
+        return None  # whatever msgspec refuses, the full path names
     obj = msg.object
     shape, sizes = _SHAPES[type(obj)]
     token = msg.cancel_token

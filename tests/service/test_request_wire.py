@@ -48,6 +48,7 @@ def agrees(raw: bytes) -> bool:
     want = full(raw)
     assert not isinstance(want, proto.RequestError), (raw, want)
     assert got == want, raw
+    assert repr(got) == repr(want), raw  # bit for bit: -0.0 and 0.0 apart
     g, w = got[1], want[1]
     for a, b in ((g, w), (g.obj, w.obj)):
         for name in a.__dataclass_fields__:
@@ -210,3 +211,13 @@ def test_missing_fields_take_their_defaults_on_the_full_path() -> None:
     raw = json.dumps({"schema": 1, "goal_id": "g", "seed": 7}).encode()
     assert fast(raw) is None
     assert proto.decode_envelope(raw).request == PlanRequest(seed=7)
+
+
+@pytest.mark.parametrize("literal", [b"-0", b"-0.0", b"0", b"-0e0", b"-0E-5", b"1E-3", b"2", b"1.5e-2"])
+def test_number_literals_decode_bit_for_bit(literal: bytes) -> None:
+    for old in (b'"position":[0.21', b'"friction":0.5', b'"rpy":[0.0', b'"tactile_noise":0.0002'):
+        raw = PLAIN.replace(old, old.split(b":")[0] + b":" + (b"[" if b"[" in old else b"") + literal)
+        if b"tactile_noise" in old and literal in (b"2", b"1.5e-2"):
+            assert fast(raw) is None  # out of range: the full path refuses it
+            continue
+        assert agrees(raw), raw
