@@ -367,10 +367,7 @@ class EosClient:
         timeout: float,
     ) -> PlanOutcome:
         events: queue.SimpleQueue[Any] = queue.SimpleQueue()
-        wid = next(self._waiter_ids)
-        with self._lock:
-            self._waiters[wid] = (iid, events)
-            self._inflight[iid] = self._inflight.get(iid, 0) + 1
+        wid = -1
         sub = None
         token = zenoh.CancellationToken()
         stream = _Stream(iid, events) if watch else None
@@ -392,6 +389,12 @@ class EosClient:
                 timeout=timeout,
                 cancellation_token=token,
             )
+            # registered while the query travels (off its path): a token withdrawn before this
+            # goes unseen here, but the query then ends without a reply — lost all the same
+            wid = next(self._waiter_ids)
+            with self._lock:
+                self._waiters[wid] = (iid, events)
+                self._inflight[iid] = self._inflight.get(iid, 0) + 1
             return self._collect(iid, goal_id, events, stream, on_cycle, watch, timeout)
         except _LostError:
             token.cancel()
@@ -399,9 +402,10 @@ class EosClient:
         finally:
             if sub is not None:
                 sub.undeclare()
-            with self._lock:
-                self._waiters.pop(wid, None)
-                self._inflight[iid] -= 1
+            if wid >= 0:
+                with self._lock:
+                    self._waiters.pop(wid, None)
+                    self._inflight[iid] -= 1
 
     def _collect(
         self,
