@@ -23,6 +23,10 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import struct
+import threading
+from collections import OrderedDict
+from collections.abc import Hashable
 
 import coal
 import numpy as np
@@ -148,10 +152,62 @@ def _distance(
     return res
 
 
+#: verdicts kept per (hand, world parameters) pair (most recently used kept)
+VERDICTS_KEPT = 256
+
+
+class _Verdicts:
+    """The last :data:`VERDICTS_KEPT` verdicts of one (hand, parameters) pair, by object: ``()``
+    (plannable) or the refusal's ``(field, reason)``. Thread-safe; least recently used dropped
+    first."""
+
+    __slots__ = ("_entries", "_lock")
+
+    def __init__(self) -> None:
+        self._entries: OrderedDict[Hashable, tuple[str, ...]] = OrderedDict()
+        self._lock = threading.Lock()
+
+    def get(self, key: Hashable) -> tuple[str, ...] | None:
+        """The verdict kept for ``key``, or ``None`` when there is none."""
+        with self._lock:
+            try:
+                self._entries.move_to_end(key)
+            except KeyError:
+                return None
+            return self._entries[key]
+
+    def put(self, key: Hashable, verdict: tuple[str, ...]) -> None:
+        with self._lock:
+            self._entries[key] = verdict
+            while len(self._entries) > VERDICTS_KEPT:
+                self._entries.popitem(last=False)
+
+    def __len__(self) -> int:
+        return len(self._entries)
+
+
+#: per (hand, parameters) pair (owners compared by identity): its verdicts
+_VERDICTS: PerHandCache[_Verdicts] = PerHandCache(keep=8)
+
+
+_pack_pose = struct.Struct("6d").pack
+
+
+def _object_key(spec: ObjectSpec) -> Hashable:
+    """Everything of an object the verdict depends on (shape, size, pose), hashable; the pose as
+    its 48 bytes, so that -0.0 and 0.0 (equal floats, written differently in a reason) differ."""
+    return (spec.shape, tuple(spec.size.items()), _pack_pose(*spec.position, *spec.rpy))
+
+
 def check_plannable(
     request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
 ) -> None:
     """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
+
+    The verdict depends only on the object, the hand and the parameters: the last
+    :data:`VERDICTS_KEPT` of each (hand, parameters) pair are kept, so an object asked for again
+    (the same object, another seed) is answered without the geometric queries, bit for bit as
+    they answer.
 
     Args:
         request: a validated plan request.
@@ -163,11 +219,59 @@ def check_plannable(
             hand at its start configuration; the size field when it is wider than the hand's
             span in every direction.
     """
-    from eos_svc.agents import planner  # planner imports this module: resolve at call time
+    PlannableCheck(hand, params)(request)
 
-    hand = hand or planner.default_hand()
-    params = params or planner.parameters_for(hand)
-    spec = request.obj
+
+class PlannableCheck:
+    """:func:`check_plannable` with the hand and its parameters resolved once: call it with a
+    request. What the service runs at admission (:func:`default_check`): a kept verdict costs a
+    key and a dictionary lookup.
+
+    Args:
+        hand: the hand (default: hand3x3, cached).
+        params: world constants (default: ``WorldParameters.for_hand(hand)``).
+    """
+
+    __slots__ = ("_verdicts", "hand", "params")
+
+    def __init__(self, hand: HandModel | None = None, params: WorldParameters | None = None) -> None:
+        from eos_svc.agents import planner  # planner imports this module: resolve at call time
+
+        self.hand = hand or planner.default_hand()
+        self.params = params or planner.parameters_for(self.hand)
+        self._verdicts = _VERDICTS.get((self.hand, self.params), _Verdicts)
+
+    def __call__(self, request: PlanRequest) -> None:
+        """Raise :class:`ValidationError` if the planner cannot plan ``request``."""
+        spec = request.obj
+        key = _object_key(spec)
+        verdict = self._verdicts.get(key)
+        if verdict is None:
+            verdict = plannable_verdict(spec, self.hand, self.params)
+            self._verdicts.put(key, verdict)
+        if verdict:
+            field, reason = verdict
+            raise ValidationError(field, reason)
+
+
+@functools.cache
+def default_check() -> PlannableCheck:
+    """The admission check of the default hand (hand3x3) and its parameters, one per process."""
+    return PlannableCheck()
+
+
+def plannable_verdict(spec: ObjectSpec, hand: HandModel, params: WorldParameters) -> tuple[str, ...]:
+    """The admission verdict on ``spec`` computed afresh (no kept verdicts): ``()`` when the
+    planner can plan it, else the refusal's ``(field, reason)`` (see :func:`check_plannable`)."""
+    try:
+        _check_object(spec, hand, params)
+    except ValidationError as exc:
+        return exc.field, exc.reason
+    return ()
+
+
+def _check_object(spec: ObjectSpec, hand: HandModel, params: WorldParameters) -> None:
+    """The three tests of the module doc; raises the refusal."""
     _, span, geometries, reach_ahead = _hand_data(hand)
 
     width, size_field = smallest_width(spec)

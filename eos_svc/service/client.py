@@ -19,6 +19,7 @@ in the thread that called :meth:`EosClient.plan`.
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import queue
 import secrets
@@ -86,6 +87,10 @@ class PlanOutcome:
         )
 
 
+#: put in an attempt's queue when its query ends (every reply came, or the timeout passed)
+_END = object()
+
+
 class _LostError(EosError):
     """The instance answering an attempt was lost (liveliness token gone); try another."""
 
@@ -95,7 +100,7 @@ class _Stream:
 
     __slots__ = ("cycles", "events", "gaps", "iid", "lock")
 
-    def __init__(self, iid: str, events: queue.SimpleQueue[tuple[str, Any]]) -> None:
+    def __init__(self, iid: str, events: queue.SimpleQueue[Any]) -> None:
         self.iid = iid
         self.events = events
         self.cycles: list[dict[str, Any]] = []
@@ -153,7 +158,7 @@ class EosClient:
         self._lock = threading.Lock()
         self._live: set[str] = set()
         self._inflight: dict[str, int] = {}
-        self._waiters: dict[int, tuple[str, queue.SimpleQueue[tuple[str, Any]]]] = {}
+        self._waiters: dict[int, tuple[str, queue.SimpleQueue[Any]]] = {}
         self._waiter_ids = itertools.count()
         # default goal ids: a random prefix per client and a counter (no random bytes per plan)
         self._goal_prefix = f"g-{secrets.token_hex(6)}-"
@@ -293,13 +298,11 @@ class EosClient:
                 proto.E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -"
             )
         payload = proto.encode_request(goal_id, req, cancel_token)
-        with self._lock:
-            self._tokens[goal_id] = cancel_token
+        self._tokens[goal_id] = cancel_token  # one dict store or pop: atomic, no lock needed
         try:
             return self._plan(goal_id, req, payload, on_cycle, instance, watch, timeout, max_attempts)
         finally:
-            with self._lock:
-                self._tokens.pop(goal_id, None)
+            self._tokens.pop(goal_id, None)
 
     def _plan(
         self,
@@ -363,11 +366,8 @@ class EosClient:
         watch: bool,
         timeout: float,
     ) -> PlanOutcome:
-        events: queue.SimpleQueue[tuple[str, Any]] = queue.SimpleQueue()
-        wid = next(self._waiter_ids)
-        with self._lock:
-            self._waiters[wid] = (iid, events)
-            self._inflight[iid] = self._inflight.get(iid, 0) + 1
+        events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        wid = -1
         sub = None
         token = zenoh.CancellationToken()
         stream = _Stream(iid, events) if watch else None
@@ -381,13 +381,20 @@ class EosClient:
                 )
             self.session.get(
                 self._plan_key(iid),
-                direct_callback(lambda r: events.put(("reply", r)), lambda: events.put(("end", None))),
+                # the reply itself goes in the queue (no Python frame between Zenoh and the queue)
+                direct_callback(events.put, functools.partial(events.put, _END)),
                 payload=payload,
                 encoding=_JSON,
                 consolidation=_NO_CONSOLIDATION,
                 timeout=timeout,
                 cancellation_token=token,
             )
+            # registered while the query travels (off its path): a token withdrawn before this
+            # goes unseen here, but the query then ends without a reply — lost all the same
+            wid = next(self._waiter_ids)
+            with self._lock:
+                self._waiters[wid] = (iid, events)
+                self._inflight[iid] = self._inflight.get(iid, 0) + 1
             return self._collect(iid, goal_id, events, stream, on_cycle, watch, timeout)
         except _LostError:
             token.cancel()
@@ -395,15 +402,16 @@ class EosClient:
         finally:
             if sub is not None:
                 sub.undeclare()
-            with self._lock:
-                self._waiters.pop(wid, None)
-                self._inflight[iid] -= 1
+            if wid >= 0:
+                with self._lock:
+                    self._waiters.pop(wid, None)
+                    self._inflight[iid] -= 1
 
     def _collect(
         self,
         iid: str,
         goal_id: str,
-        events: queue.SimpleQueue[tuple[str, Any]],
+        events: queue.SimpleQueue[Any],
         stream: _Stream | None,
         on_cycle: CycleHandler | None,
         watch: bool,
@@ -425,9 +433,15 @@ class EosClient:
             if now >= limit:
                 break
             try:
-                kind, item = events.get(timeout=limit - now)
+                event = events.get(timeout=limit - now)
             except queue.Empty:
                 break
+            if type(event) is tuple:
+                kind, item = event
+            elif event is _END:
+                kind, item = "end", None
+            else:  # a zenoh.Reply
+                kind, item = "reply", event
             if kind == "sample" and stream is not None:  # with on_cycle: parsed in the thread of plan()
                 msg = stream.accept(item.payload.to_bytes())
                 if msg is None:

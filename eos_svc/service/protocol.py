@@ -40,15 +40,15 @@ import math
 import os
 import re
 from collections.abc import Mapping
-from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
-from typing import Any
+from typing import Any, NamedTuple
 
 import msgspec
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.service.request_wire import decode_fast
 
 #: version of the message schemas (the ``"schema"`` field of every message)
 SCHEMA_VERSION = 1
@@ -234,6 +234,7 @@ _DECODER = json.JSONDecoder(
 #: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
 _ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
 _BOM = b"\xef\xbb\xbf"
+_tuple_new = tuple.__new__
 _msgspec_decode = msgspec.json.Decoder().decode
 _msgspec_encode = msgspec.json.Encoder().encode
 
@@ -505,8 +506,7 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
             )
 
 
-@dataclass(frozen=True)
-class Envelope:
+class Envelope(NamedTuple):
     """A decoded plan request: its goal id, the request, and the owner's cancel token (or ``None``)."""
 
     goal_id: str
@@ -525,12 +525,25 @@ def decode_request(
 def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES) -> Envelope:
     """Decode and validate a plan request with its envelope (goal id, cancel token).
 
+    A request in the form the clients send (every field present and valid) takes one typed
+    msgspec decode (:func:`~eos_svc.service.request_wire.decode_fast`); anything else, the strict
+    stdlib parser and the field-by-field checks, which name the field and the reason.
+
     Raises:
         RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
     """
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
     raw = payload if isinstance(payload, bytes) else bytes(payload)
+    fast = decode_fast(raw, ID_PATTERN, TOKEN_PATTERN)  # the clients' form, in one typed decode
+    if fast is not None:
+        return _tuple_new(Envelope, fast)  # a NamedTuple made in C
+    return decode_checked(raw)
+
+
+def decode_checked(raw: bytes) -> Envelope:
+    """The full path of :func:`decode_envelope` (any size): the strict stdlib parser, then every
+    field checked in turn; raises a :class:`RequestError` naming the field and the reason."""
     try:
         data = _DECODER.decode(_text(raw))
     except DuplicateKeyError as exc:

@@ -71,10 +71,11 @@ def default_planner() -> Planner:
 
 
 def default_admission() -> Admission:
-    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable`)."""
-    from eos_svc.agents.admission import check_plannable  # lazy: Pinocchio and coal load here
+    """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable` on
+    the default hand, resolved once: :func:`~eos_svc.agents.admission.default_check`)."""
+    from eos_svc.agents.admission import default_check  # lazy: Pinocchio and coal load here
 
-    return check_plannable
+    return default_check()
 
 
 def _is_grasp_planner(planner: Planner | None) -> bool:
@@ -94,11 +95,13 @@ class _CycleSink:
     when a second comes (declaring one costs more than a put, and a 1-cycle plan needs none).
     Same key, encoding and congestion control either way, so the cycles stay in order."""
 
-    __slots__ = ("_key", "_publisher", "_sent", "_session")
+    __slots__ = ("_goal_id", "_key", "_prefix", "_publisher", "_sent", "_session")
 
-    def __init__(self, session: zenoh.Session, key: str) -> None:
+    def __init__(self, session: zenoh.Session, prefix: str, goal_id: str) -> None:
         self._session = session
-        self._key = key
+        self._prefix = prefix
+        self._goal_id = goal_id
+        self._key = ""  # the goal's cycle key, written when the first cycle is put
         self._publisher: Any = None
         self._sent = False
 
@@ -107,6 +110,7 @@ class _CycleSink:
         if self._publisher is not None:
             self._publisher.put(body)
         elif not self._sent:
+            self._key = proto.cycle_key(self._prefix, self._goal_id)
             self._session.put(self._key, body, encoding=_JSON, congestion_control=_BLOCK)
             self._sent = True
         else:
@@ -459,31 +463,20 @@ class PlanService:
 
     def _admit(self, query: zenoh.Query) -> proto.RequestError | None:
         """Queue the plan for a worker, or return why not."""
-        with self._lock:
-            self.stats.received += 1
-        payload = query.payload
-        if self._stopping:
-            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
-        size = 0 if payload is None else len(payload)
-        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
-            return proto.RequestError(
-                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
-            )
         try:
-            env = proto.decode_envelope(
-                b"" if payload is None else payload.to_bytes(), self.max_request_bytes
-            )
-        except proto.RequestError as err:
-            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
-        goal_id, request = env.goal_id, env.request
-        if self._admission is not None:
-            try:
-                self._admission(request)
-            except ValidationError as exc:  # the planner could not plan it: refused here, named
-                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        job = _Job(query, goal_id, request, env.cancel_token, _GoalCancel())
+            job = self._decode(query)
+        except Exception:  # a bug: counted all the same, answered by _on_plan
+            with self._lock:
+                self.stats.received += 1
+            raise
+        if not isinstance(job, _Job):
+            with self._lock:
+                self.stats.received += 1
+            return job
+        goal_id = job.goal_id
         refusal: proto.RequestError
-        with self._lock:
+        with self._lock:  # one lock for the count and the admission
+            self.stats.received += 1
             if goal_id in self._active:
                 refusal = proto.RequestError(
                     proto.E_DUPLICATE, "goal_id", f"goal {goal_id!r} is already queued or running", goal_id
@@ -501,6 +494,29 @@ class PlanService:
                     goal_id,
                 )
         return refusal
+
+    def _decode(self, query: zenoh.Query) -> _Job | proto.RequestError:
+        """The job of a plan query (decoded, validated, admitted by the planner), or why not."""
+        payload = query.payload
+        if self._stopping:
+            return proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
+        size = 0 if payload is None else len(payload)
+        if size > self.max_request_bytes:  # before any copy: the bytes stay in Zenoh until the reply
+            return proto.RequestError(
+                proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
+            )
+        try:
+            goal_id, request, token = proto.decode_envelope(
+                b"" if payload is None else payload.to_bytes(), self.max_request_bytes
+            )
+        except proto.RequestError as err:
+            return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
+        if self._admission is not None:
+            try:
+                self._admission(request)
+            except ValidationError as exc:  # the planner could not plan it: refused here, named
+                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
+        return _Job(query, goal_id, request, token, _GoalCancel())
 
     def _cancel(self, query: zenoh.Query) -> None:
         """Cancel a goal of this instance if the query carries the goal's cancel token.
@@ -579,7 +595,6 @@ class PlanService:
                     proto.E_UNAVAILABLE, "request", f"instance {self.instance} stopping", goal_id
                 )
             head = self._head(goal_id)
-            status_key = proto.status_key(self.prefix, goal_id)
             watchers = self._watched
             try:
                 watched = watchers.now()  # exact, before the first message
@@ -597,11 +612,14 @@ class PlanService:
                     "seed": job.request.seed,
                 }
             else:
-                publisher = _CycleSink(self.session, proto.cycle_key(self.prefix, goal_id))
+                publisher = _CycleSink(self.session, self.prefix, goal_id)
                 if watched:  # with the request: a watcher can draw the object
                     running = proto.dumps({"state": proto.STATE_RUNNING, "request": job.request.to_dict()})
                     self.session.put(
-                        status_key, head.encode() + running[1:], encoding=_JSON, congestion_control=_BLOCK
+                        proto.status_key(self.prefix, goal_id),
+                        head.encode() + running[1:],
+                        encoding=_JSON,
+                        congestion_control=_BLOCK,
                     )
                 result = self._plan(job, publisher, head, watched)
                 if self._stopping:
@@ -613,7 +631,7 @@ class PlanService:
             if watched or watchers.any:
                 status = proto.dumps({"status": result.get("status"), "cycles": result.get("cycles")})[1:-1]
                 self.session.put(
-                    status_key,
+                    proto.status_key(self.prefix, goal_id),
                     head_b + b'"state":"done",' + status + b',"result":' + encoded + b"}",
                     encoding=_JSON,
                     congestion_control=_BLOCK,
