@@ -51,6 +51,7 @@ from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
+from eos_svc.shape import kernels
 
 log = logging.getLogger(__name__)
 
@@ -294,6 +295,10 @@ class PlanService:
         if self._default_admission:
             self._admission = default_admission()
             self._admission(PlanRequest())  # loads the hand, measures its span: now, not on a request
+        if _is_grasp_planner(self._planner):
+            # the shape fit's compiled kernels, loaded in the background while the service
+            # already answers (its fits run their numpy reference until then: the same results)
+            kernels.load_in_background()
         try:
             accepted = set(inspect.signature(self._planner).parameters)
         except (TypeError, ValueError):
