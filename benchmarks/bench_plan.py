@@ -14,7 +14,7 @@ plan at a baseline revision (``--baseline REV``, default the commit before EP2 a
 fitting: ``256976e``), run from a ``git archive`` of it: this tree and the baseline each in
 child processes, in alternating rounds (the machine's load changes within a run).
 
-    .venv/bin/python benchmarks/bench_plan.py --suite [--baseline REV]
+    .venv/bin/python benchmarks/bench_plan.py --suite [--baseline REV] [--numpy-fit]
 
 compares instead the median plan time over the grasp experiment's fixed suite (29 objects,
 seed 1: spheres d/h 0.2–0.95, ellipsoids, cylinders and capsules in four poses, boxes of three
@@ -94,6 +94,11 @@ except ImportError:  # a revision before the compiled fit
 if kernels is not None:
     kernels.load()
 """
+#: ``--numpy-fit``: this tree's fit on its numpy reference throughout (a one-shot process's state)
+NUMPY_FIT = """
+from eos_svc.shape import kernels
+kernels.LOAD_AFTER = 10**12  # never loaded in the background either
+"""
 BASELINE_SCRIPT = LOAD_KERNELS + """
 import statistics, time
 from eos_svc.agents import PlanRequest, plan
@@ -157,7 +162,7 @@ def _child_samples(pythonpath: str, cwd: str, repeats: int, script: str = BASELI
 
 
 def interleaved_baseline(
-    rev: str, rounds: int = ROUNDS, plans: int = ROUND_PLANS, suite: bool = False
+    rev: str, rounds: int = ROUNDS, plans: int = ROUND_PLANS, suite: bool = False, numpy_fit: bool = False
 ) -> tuple[float, float] | None:
     """(median default-plan time of this tree, of revision ``rev``) in s: both in child processes,
     alternating rounds of ``plans`` plans, so that a change of the machine's load hits both
@@ -180,7 +185,10 @@ def interleaved_baseline(
         ours: list[float] = []
         theirs: list[float] = []
         for _ in range(rounds):
-            ours += _child_samples(here, here, plans, SUITE_SCRIPT if suite else BASELINE_SCRIPT)
+            script = SUITE_SCRIPT if suite else BASELINE_SCRIPT
+            if numpy_fit:
+                script = script.replace(LOAD_KERNELS, NUMPY_FIT)
+            ours += _child_samples(here, here, plans, script)
             theirs += _child_samples(tmp, tmp, plans)
         if len(ours) < (1 if suite else rounds * plans) or len(theirs) < rounds * plans:
             return None
@@ -196,16 +204,23 @@ def main(argv: list[str] | None = None) -> int:
         help="only compare the grasp suite's median plan time (eos experiment grasps' fixed suite, "
         "seed 1) with the baseline's default plan, interleaved in child processes",
     )
+    parser.add_argument(
+        "--numpy-fit",
+        action="store_true",
+        help="with --suite: this tree's fit on its numpy reference throughout (a one-shot process, "
+        "e.g. eos plan), not the compiled kernels a long-lived process loads",
+    )
     args = parser.parse_args(argv)
     if args.suite:
         rounds = 2
-        pair = interleaved_baseline(args.baseline, rounds=rounds, suite=True)
+        pair = interleaved_baseline(args.baseline, rounds=rounds, suite=True, numpy_fit=args.numpy_fit)
         if pair is None:
             print(f"could not run the suite or revision {args.baseline}")
             return 1
         ours, base = pair
         print(
-            f"grasp suite (fixed, seed 1) median plan vs the default plan at {args.baseline} (same run, "
+            f"grasp suite (fixed, seed 1{', fit in numpy' if args.numpy_fit else ''}) median plan vs the "
+            f"default plan at {args.baseline} (same run, "
             f"{rounds} alternating rounds in child processes): {ours * 1e3:.1f} ms vs {base * 1e3:.1f} ms "
             f"= {ours / base:.2f}x (goal: within 2x -> {'met' if ours <= 2.0 * base else 'NOT met'})"
         )
