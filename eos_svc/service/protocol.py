@@ -514,6 +514,11 @@ class Envelope(NamedTuple):
     cancel_token: str | None = None
 
 
+# the generated constructor's annotations as objects: namedtuple builds it in a namespace of its
+# own, where the module's postponed annotations (strings) cannot be resolved (pdoc reads them)
+Envelope.__new__.__annotations__ = {"goal_id": str, "request": PlanRequest, "cancel_token": str | None}
+
+
 def decode_request(
     payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES
 ) -> tuple[str, PlanRequest]:
