@@ -214,6 +214,26 @@ def _child_samples(pythonpath: str, cwd: str, repeats: int, script: str = BASELI
     return [float(v) for v in out.stdout.split()] if out.returncode == 0 else []
 
 
+def export(rev: str, folder: str) -> bool:
+    """``eos_svc`` and ``urdf`` of git revision ``rev`` into ``folder`` (False when git cannot)."""
+    archive = Path(folder) / "rev.tar"
+    done = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"], capture_output=True
+    )
+    if done.returncode != 0:
+        return False
+    with tarfile.open(archive) as tar:
+        tar.extractall(folder, filter="data")
+    return True
+
+
+def this_tree() -> str:
+    """The folder this process imports ``eos_svc`` from."""
+    import eos_svc
+
+    return str(Path(eos_svc.__file__).resolve().parents[1])
+
+
 def paired_suite(rev: str, rounds: int = 2, numpy_fit: bool = False) -> tuple[float, float, float] | None:
     """(median suite plan of this tree, median default plan of revision ``rev``, median of the
     pairs' ratios) in s: two long-lived child processes — this tree planning the grasp
@@ -225,18 +245,9 @@ def paired_suite(rev: str, rounds: int = 2, numpy_fit: bool = False) -> tuple[fl
 
     suite = [PlanRequest(obj=item.spec, seed=1).to_dict() for item in fixed_suite()]
     with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
-        archive = Path(tmp) / "rev.tar"
-        done = subprocess.run(
-            ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"],
-            capture_output=True,
-        )
-        if done.returncode != 0:
+        if not export(rev, tmp):
             return None
-        with tarfile.open(archive) as tar:
-            tar.extractall(tmp, filter="data")
-        import eos_svc
-
-        here = str(Path(eos_svc.__file__).resolve().parents[1])
+        here = this_tree()
         try:
             ours_child = PlanningChild(here, suite, NUMPY_FIT if numpy_fit else LOAD_KERNELS)
             theirs_child = PlanningChild(tmp, [{}], LOAD_KERNELS)  # its own default request
@@ -265,18 +276,9 @@ def interleaved_baseline(
     the grasp experiment's fixed suite instead (every object once, seed 1 — the median over
     the suite). None when the revision or a child fails."""
     with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
-        archive = Path(tmp) / "rev.tar"
-        done = subprocess.run(
-            ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"],
-            capture_output=True,
-        )
-        if done.returncode != 0:
+        if not export(rev, tmp):
             return None
-        with tarfile.open(archive) as tar:
-            tar.extractall(tmp, filter="data")
-        import eos_svc
-
-        here = str(Path(eos_svc.__file__).resolve().parents[1])
+        here = this_tree()
         ours: list[float] = []
         theirs: list[float] = []
         for _ in range(rounds):
