@@ -38,14 +38,13 @@ import math
 import statistics
 import subprocess
 import sys
-import tarfile
 import tempfile
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from _harness import table
+from _harness import ScriptChild, export_revision, table
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import ratio_sphere_request
@@ -78,7 +77,6 @@ def time_plans(
     return statistics.median(samples), cycles
 
 
-ROOT = Path(__file__).resolve().parents[1]
 #: objects of every class for the information-stage cost (cylinder and capsule across the approach)
 CLASS_OBJECTS = {
     "sphere": ObjectSpec(),
@@ -141,37 +139,16 @@ for line in sys.stdin:
 """
 
 
-class PlanningChild:
+class PlanningChild(ScriptChild):
     """A fresh interpreter importing ``eos_svc`` from ``tree`` (with ``prelude`` run first) that
     plans ``requests[i]`` for every index ``i`` sent and answers the plan's wall time (s)."""
 
     def __init__(self, tree: str, requests: list[dict], prelude: str) -> None:
-        self.proc = subprocess.Popen(
-            [sys.executable, "-c", prelude + PAIRED_CHILD, json.dumps(requests)],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=tree,
-            env={"PYTHONPATH": tree, "PATH": "/usr/bin:/bin"},
-        )
-        assert self.proc.stdin is not None and self.proc.stdout is not None
-        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
-        if self.stdout.readline().strip() != "ready":
-            raise RuntimeError(f"the planning child on {tree} failed to start")
+        super().__init__(tree, prelude + PAIRED_CHILD, json.dumps(requests))
 
     def plan(self, index: int) -> float:
         """Wall seconds of one plan of request ``index``."""
-        self.stdin.write(f"{index}\n")
-        self.stdin.flush()
-        line = self.stdout.readline()
-        if not line:
-            raise RuntimeError("a planning child died")
-        return float(line)
-
-    def close(self) -> None:
-        """End the child."""
-        self.stdin.close()
-        self.proc.wait()
+        return float(self.ask(str(index)))
 
 
 #: rounds of the interleaved comparison with the baseline revision, plans per round and side
@@ -214,19 +191,6 @@ def _child_samples(pythonpath: str, cwd: str, repeats: int, script: str = BASELI
     return [float(v) for v in out.stdout.split()] if out.returncode == 0 else []
 
 
-def export(rev: str, folder: str) -> bool:
-    """``eos_svc`` and ``urdf`` of git revision ``rev`` into ``folder`` (False when git cannot)."""
-    archive = Path(folder) / "rev.tar"
-    done = subprocess.run(
-        ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"], capture_output=True
-    )
-    if done.returncode != 0:
-        return False
-    with tarfile.open(archive) as tar:
-        tar.extractall(folder, filter="data")
-    return True
-
-
 def this_tree() -> str:
     """The folder this process imports ``eos_svc`` from."""
     import eos_svc
@@ -245,7 +209,7 @@ def paired_suite(rev: str, rounds: int = 2, numpy_fit: bool = False) -> tuple[fl
 
     suite = [PlanRequest(obj=item.spec, seed=1).to_dict() for item in fixed_suite()]
     with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
-        if not export(rev, tmp):
+        if not export_revision(rev, tmp):
             return None
         here = this_tree()
         try:
@@ -276,7 +240,7 @@ def interleaved_baseline(
     the grasp experiment's fixed suite instead (every object once, seed 1 — the median over
     the suite). None when the revision or a child fails."""
     with tempfile.TemporaryDirectory(prefix="eos_bench_") as tmp:
-        if not export(rev, tmp):
+        if not export_revision(rev, tmp):
             return None
         here = this_tree()
         ours: list[float] = []

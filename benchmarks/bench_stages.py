@@ -20,13 +20,10 @@ from __future__ import annotations
 import argparse
 import json
 import statistics
-import subprocess
 import sys
-import tarfile
 import tempfile
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from _harness import ROOT, ScriptChild, export_revision
 
 CHILD = """
 import json, sys, time
@@ -55,48 +52,17 @@ for line in sys.stdin:  # one plan per line: the index of its request
 """
 
 
-class Child:
+class Child(ScriptChild):
     """A fresh interpreter importing ``eos_svc`` from ``tree`` that plans one of ``requests`` per
     :meth:`plan` call and answers its CPU seconds per part."""
 
     def __init__(self, tree: str, requests: list[dict]) -> None:
-        self.proc = subprocess.Popen(
-            [sys.executable, "-c", CHILD, json.dumps(requests)],
-            stdin=subprocess.PIPE,
-            stdout=subprocess.PIPE,
-            text=True,
-            cwd=tree,
-            env={"PYTHONPATH": tree, "PATH": "/usr/bin:/bin"},
-        )
-        assert self.proc.stdin is not None and self.proc.stdout is not None
-        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
-        if self.stdout.readline().strip() != "ready":
-            raise RuntimeError(f"the child on {tree} failed to start")
+        super().__init__(tree, CHILD, json.dumps(requests))
 
     def plan(self, index: int) -> dict[str, float]:
         """CPU seconds per part of one plan of request ``index``."""
-        self.stdin.write(f"{index}\n")
-        self.stdin.flush()
-        line = self.stdout.readline()
-        if not line:
-            raise RuntimeError("a child died")
-        parts: dict[str, float] = json.loads(line)
+        parts: dict[str, float] = json.loads(self.ask(str(index)))
         return parts
-
-    def close(self) -> None:
-        """End the child."""
-        self.stdin.close()
-        self.proc.wait()
-
-
-def export(rev: str, folder: str) -> None:
-    """``eos_svc`` and ``urdf`` of git revision ``rev`` into ``folder``."""
-    archive = Path(folder) / "rev.tar"
-    subprocess.run(
-        ["git", "-C", str(ROOT), "archive", "-o", str(archive), rev, "eos_svc", "urdf"], check=True
-    )
-    with tarfile.open(archive) as tar:
-        tar.extractall(folder, filter="data")
 
 
 def quartile(values: list[float]) -> float:
@@ -121,7 +87,8 @@ def main(argv: list[str] | None = None) -> int:
             labels.append(obj.label)
             requests.append({"object": obj.spec.to_dict(), "seed": 1})
     with tempfile.TemporaryDirectory(prefix="eos_stages_") as tmp:
-        export(args.baseline, tmp)
+        if not export_revision(args.baseline, tmp):
+            raise RuntimeError(f"git archive of {args.baseline} failed")
         mine, base = Child(str(ROOT), requests), Child(tmp, requests)
         samples: dict[str, list[list[dict[str, float]]]] = {
             side: [[] for _ in requests] for side in ("this tree", args.baseline)
