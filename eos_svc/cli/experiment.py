@@ -35,10 +35,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("options", nargs=argparse.REMAINDER, help="the experiment's own options")
 
 
+#: the experiments that run whole plans (the shape fit among them); ``accuracy`` runs EP1 alone
+PLANNING = frozenset(EXPERIMENTS) - {"accuracy"}
+
+
 def run(args: argparse.Namespace) -> int:
     # the fit's compiled kernels before the first plan (≈ 1.5 s from numba's cache; ≈ 11 s the
     # first time on a new install): an experiment plans many times, and its plan times count
-    if not {"-h", "--help"} & set(args.options):
+    if args.experiment in PLANNING and not {"-h", "--help"} & set(args.options):
         kernels.load()
     module = importlib.import_module(EXPERIMENTS[args.experiment][0])
     return int(module.main(args.options))
