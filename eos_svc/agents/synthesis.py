@@ -561,18 +561,21 @@ class GraspSynthesis:
     def candidates_eager(self) -> list[GraspCandidate]:
         """:meth:`candidates` with every orientation simulated before any is checked and
         scored (the plain version :meth:`candidates` is tested against)."""
-        every = [frame for group in self._turn_groups() for frame in group]
-        every.sort(key=lambda f: f[0])  # candidate_frames' order: one group, sorted by turn below
-        return self._choose([every])
+        # every frame in one group, in candidate_frames' order (_choose sorts by turn within it)
+        return self._choose([self._frames()])
 
     def _turn_groups(self) -> list[list[tuple[int, str, np.ndarray]]]:
         """The candidate frames ``(index, label, R)`` in groups of equal wrist rotation
         (:func:`palm_turn` rounded to 1e-6 rad), the least-rotated group first, each group in
         :func:`candidate_frames`' order."""
         groups: dict[float, list[tuple[int, str, np.ndarray]]] = {}
-        for index, (label, R) in enumerate(candidate_frames(self.obj, self.vertical_only)):
-            groups.setdefault(round(palm_turn(R), 6), []).append((index, label, R))
+        for frame in self._frames():
+            groups.setdefault(round(palm_turn(frame[2]), 6), []).append(frame)
         return [groups[turn] for turn in sorted(groups)]
+
+    def _frames(self) -> list[tuple[int, str, np.ndarray]]:
+        """The candidate frames ``(index, label, R)`` in :func:`candidate_frames`' order."""
+        return [(i, label, R) for i, (label, R) in enumerate(candidate_frames(self.obj, self.vertical_only))]
 
     def _simulated(self, label: str, R: np.ndarray) -> GraspCandidate | None:
         """The candidate of one orientation at its best depth (None when it is rejected)."""
