@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.shape import Touches, compiled, fit, kernels, selection
+from eos_svc.shape import Touches, compiled, fit, selection
 
 #: bit for bit when numpy's products are the kernel's
 EXACT = compiled.blas_products_agree()
@@ -210,25 +210,52 @@ def postulate_fingerprint(post: selection.Postulate) -> tuple:
             sorted((k, f.chi2, f.start, f.theta.tobytes()) for k, f in post.fits.items()))
 
 
+SAME_POSTULATES = """
+import json, sys
+from eos_svc.shape import fit, kernels, selection
+sys.path.insert(0, sys.argv[2])
+import test_compiled as tc
+
+touches = tc.plan_touches(json.loads(sys.argv[1]))
+kernels.load()
+names = ("_residuals_and_geometry_numpy", "_difference_evaluation_numpy")
+reference = [getattr(fit, name) for name in names]
+for name in names:
+    setattr(fit, name, tc._not_called)  # the compiled kernels only: the numpy path would raise
+compiled_posts = [selection.select_class(t) for t in touches]
+for name, function in zip(names, reference):
+    setattr(fit, name, function)
+kernels.ready = lambda: False  # the numpy reference only
+numpy_posts = [selection.select_class(t) for t in touches]
+print(json.dumps([
+    {"same": tc.postulate_fingerprint(a) == tc.postulate_fingerprint(b), "kinds": [a.kind, b.kind],
+     "confidences": [a.confidence, b.confidence]}
+    for a, b in zip(compiled_posts, numpy_posts, strict=True)
+]))
+"""
+
+
 @pytest.mark.parametrize("request_json", PLANS, ids=["default", "cylinder", "box", "ellipsoid"])
-def test_select_class_postulates_the_same_compiled_or_numpy(request_json, monkeypatch):
+def test_select_class_postulates_the_same_compiled_or_numpy(request_json):
     """select_class on the touches of a real plan, with the compiled kernels and with the numpy
-    reference: the same class, confidence, object, posteriors and fits."""
-    touches = plan_touches(request_json)
-    assert touches, "the plan fitted no touches"
-    kernels.load()
-    with monkeypatch.context() as patch:  # the compiled kernels only: the numpy path would raise
-        for name in ("_residuals_and_geometry_numpy", "_difference_evaluation_numpy"):
-            patch.setattr(fit, name, _not_called)
-        compiled_posts = [selection.select_class(t) for t in touches]
-    monkeypatch.setattr(kernels, "ready", lambda: False)  # the numpy reference only
-    numpy_posts = [selection.select_class(t) for t in touches]
-    for a, b in zip(compiled_posts, numpy_posts, strict=True):
+    reference: the same class, confidence, object, posteriors and fits. In a fresh interpreter,
+    where no other test's threads or patches run beside it."""
+    compiled.warm_up()  # the on-disk cache exists (a first compilation would only take longer)
+    here = Path(__file__).resolve().parent
+    root = here.parents[1]
+    out = subprocess.run(
+        [sys.executable, "-c", SAME_POSTULATES, json.dumps(request_json), str(here)],
+        capture_output=True, text=True, check=True,
+        env={**os.environ, "PYTHONPATH": str(root)}, cwd=root, timeout=300,
+    ).stdout
+    pairs = json.loads(out)
+    assert pairs, "the plan fitted no touches"
+    for pair in pairs:
         if EXACT:
-            assert postulate_fingerprint(a) == postulate_fingerprint(b)
+            assert pair["same"]
         else:
-            assert a.kind == b.kind
-            assert a.confidence == pytest.approx(b.confidence, rel=1e-6, abs=1e-9)
+            assert pair["kinds"][0] == pair["kinds"][1]
+            assert pair["confidences"][0] == pytest.approx(pair["confidences"][1], rel=1e-6, abs=1e-9)
 
 
 def test_warm_up_compiles_what_the_fit_calls():
