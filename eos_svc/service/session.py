@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import json
 import socket
+import types
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import zenoh
+
+from eos_svc.service.zenoh_threads import kept_thread_state
 
 #: default listening endpoint of ``eos serve``
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -72,8 +75,20 @@ def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | 
     per query (≈ 1 ms each), and a process that exits with such an entity
     still declared hangs at interpreter shutdown. ``indirect`` is marked
     unstable in zenoh-python 1.x; without it the default handler is used.
+
+    A Python function or method (``callback`` or ``drop``) runs with the Zenoh thread's Python
+    state kept between calls (:func:`~eos_svc.service.zenoh_threads.kept_thread_state`); a
+    built-in such as ``SimpleQueue.put`` runs no Python frame and is passed as it is.
     """
+    callback = _kept_if_python(callback)
+    drop = None if drop is None else _kept_if_python(drop)
     try:
         return zenoh.handlers.Callback(callback, drop, indirect=False)
     except TypeError:  # pragma: no cover - a zenoh-python without the option
         return zenoh.handlers.Callback(callback, drop)
+
+
+def _kept_if_python(callback: Callable[..., Any]) -> Callable[..., Any]:
+    if isinstance(callback, (types.FunctionType, types.MethodType)):
+        return kept_thread_state(callback)
+    return callback
