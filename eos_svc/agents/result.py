@@ -142,8 +142,16 @@ class PlanResult:
             **fields,
         )
 
-    def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
-        """JSON-friendly form; the trace only when asked."""
+    def to_dict(self, include_trace: bool = False, *, jsonable: bool = True) -> dict[str, Any]:
+        """JSON-friendly form; the trace only when asked.
+
+        ``jsonable=False``: the same members as the result holds them, not converted nor
+        copied (do not modify them), for an encoder that writes tuples as arrays and
+        non-finite floats as ``null`` itself (msgspec: the service encodes a result straight
+        from them, the same bytes as from the converted form, without walking it twice).
+        The planner builds every member from plain values (str, int, float, bool, None, dict,
+        list, tuple), so only those two conversions differ.
+        """
         out = {
             "status": self.status,
             "reason": self.reason,
@@ -160,7 +168,7 @@ class PlanResult:
             "epsilon": self.epsilon,
             "friction": self.friction,
             "quality": self.quality,
-            "q_final": None if self.q_final is None else list(self.q_final),
+            "q_final": self.q_final,
             "diameter_angle_deg": self.diameter_angle_deg,
             "d_over_h": self.d_over_h,
             "hand_height": self.hand_height,
@@ -173,6 +181,8 @@ class PlanResult:
         }
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]
+        if not jsonable:
+            return out
         result: dict[str, Any] = to_jsonable(out)
         return result
 

@@ -46,6 +46,7 @@ from typing import Any
 import zenoh
 
 from eos_svc.agents.request import PlanRequest
+from eos_svc.agents.result import PlanResult
 from eos_svc.controller import CancelToken
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord
@@ -711,7 +712,10 @@ class PlanService:
         try:
             assert self._planner is not None
             outcome = self._planner(job.request, on_cycle=on_cycle, cancel=job.cancel, **self._planner_kwargs)
-            result = outcome.to_dict() if hasattr(outcome, "to_dict") else dict(outcome)
+            if type(outcome) is PlanResult:  # its members as held: encoded once, by msgspec, as is
+                result = outcome.to_dict(jsonable=False)
+            else:
+                result = outcome.to_dict() if hasattr(outcome, "to_dict") else dict(outcome)
         finally:
             with self._lock:
                 self.stats.cycles_published += seq

@@ -253,3 +253,52 @@ def test_cycle_record_json_from_concurrent_workers_with_different_weights():
     for t in threads:
         t.join(60)
     assert not bad
+
+
+def _plain(value: Any) -> bool:
+    """Every node is a str, int, float, bool, None, dict (str keys), list or tuple."""
+    if value is None or type(value) in (str, int, float, bool):
+        return True
+    if type(value) is dict:
+        return all(type(k) is str and _plain(v) for k, v in value.items())
+    if type(value) in (list, tuple):
+        return all(_plain(v) for v in value)
+    return False
+
+
+def test_plan_results_encoded_as_held_are_their_to_dict_json():
+    """The service encodes a PlanResult from ``to_dict(jsonable=False)`` (its members as held):
+    the same bytes as from ``to_dict()``, on real plans of every shape, cut short or whole, and
+    with the two members msgspec converts itself (a non-finite float, tuples)."""
+    import dataclasses
+
+    from eos_svc.agents.planner import plan
+    from eos_svc.agents.request import ObjectSpec
+
+    here = PlanRequest().obj.position
+    requests = [
+        PlanRequest(seed=3, max_cycles=1),
+        PlanRequest(seed=3),
+        PlanRequest(seed=8, tactile_noise=0.002),
+        PlanRequest(obj=ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, here, (0.4, -0.3, 0.9)), seed=1),
+        PlanRequest(obj=ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, here, (0.3, 0.6, -1.1)), seed=2),
+        PlanRequest(obj=ObjectSpec("ellipsoid", {"radii": (0.035, 0.03, 0.025)}, here), seed=4),
+        PlanRequest(obj=ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, here), seed=5, max_cycles=30),
+    ]
+    results = [plan(r, keep_trace=False) for r in requests]
+    results.append(
+        dataclasses.replace(
+            results[1],
+            epsilon=math.nan,
+            d_over_h=math.inf,
+            validation={"held": True, "directions": ("+x", "-x"), "drift": (0.001, -math.inf)},
+        )
+    )
+    statuses = set()
+    for result in results:
+        held = result.to_dict(jsonable=False)
+        assert _plain(held)
+        assert proto.encode_result(held) == proto.encode_result(result.to_dict())
+        assert json.loads(proto.encode_result(held)) == result.to_dict()
+        statuses.add(result.status)
+    assert len(statuses) >= 2  # cut short and whole plans among them
