@@ -280,7 +280,9 @@ def test_plan_results_encoded_as_held_are_their_to_dict_json():
         PlanRequest(seed=3, max_cycles=1),
         PlanRequest(seed=3),
         PlanRequest(seed=8, tactile_noise=0.002),
-        PlanRequest(obj=ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, here, (0.4, -0.3, 0.9)), seed=1),
+        PlanRequest(
+            obj=ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, here, (0.4, -0.3, 0.9)), seed=1
+        ),
         PlanRequest(obj=ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, here, (0.3, 0.6, -1.1)), seed=2),
         PlanRequest(obj=ObjectSpec("ellipsoid", {"radii": (0.035, 0.03, 0.025)}, here), seed=4),
         PlanRequest(obj=ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, here), seed=5, max_cycles=30),

@@ -57,9 +57,7 @@ def _run(handler_of: Any) -> tuple[list[bytes], dict[int, list[int]], int]:
 
 
 def test_a_python_callback_keeps_its_zenoh_thread_state_and_gets_the_same_samples():
-    plain_payloads, plain_counts, plain_faults = _run(
-        lambda f: zenoh.handlers.Callback(f, indirect=False)
-    )
+    plain_payloads, plain_counts, plain_faults = _run(lambda f: zenoh.handlers.Callback(f, indirect=False))
     kept_payloads, kept_counts, kept_faults = _run(direct_callback)
     # the same samples, in the same order, either way
     assert kept_payloads == plain_payloads == [str(i).encode() for i in range(N)]
