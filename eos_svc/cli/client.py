@@ -145,7 +145,7 @@ def run(args: argparse.Namespace) -> int:
         except ValidationError as exc:
             fail(f"GOAL_ID: {exc.reason}")
     token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
-    if token is not None and not proto.TOKEN_PATTERN.fullmatch(token):
+    if token is not None and not proto.is_token(token):
         fail(
             f"{'--token' if args.action == 'cancel' else '--cancel-token'}: must be 16-128 of A-Z a-z 0-9 _ -"
         )

@@ -293,7 +293,7 @@ class EosClient:
             proto.check_id(instance, "instance")  # one instance, never a wildcard
         if cancel_token is None:
             cancel_token = proto.new_cancel_token()
-        elif not proto.TOKEN_PATTERN.fullmatch(cancel_token):
+        elif not proto.is_token(cancel_token):
             raise proto.RequestError(
                 proto.E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -"
             )

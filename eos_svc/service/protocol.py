@@ -48,6 +48,9 @@ import msgspec
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.service.ids import ID_PATTERN as ID_PATTERN  # the protocol's names, defined there
+from eos_svc.service.ids import TOKEN_PATTERN as TOKEN_PATTERN
+from eos_svc.service.ids import is_id, is_token
 from eos_svc.service.request_wire import decode_fast
 
 #: version of the message schemas (the ``"schema"`` field of every message)
@@ -56,8 +59,6 @@ SCHEMA_VERSION = 1
 ROOT = "eos/@v1"
 #: largest plan request accepted (bytes of JSON)
 MAX_REQUEST_BYTES = 64 * 1024
-#: goal ids and namespaces: one plain key-expression chunk (no wildcards, no ``@``, no ``/``)
-ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
 
 # Error codes carried by error replies.
 E_TOO_LARGE = "payload_too_large"
@@ -82,9 +83,6 @@ ERROR_CODES = frozenset(
         E_FORBIDDEN,
     }
 )
-#: a cancel token: the goal owner's secret (16-128 URL-safe characters), sent with the request and
-#: with a cancel, never published
-TOKEN_PATTERN = re.compile(r"[A-Za-z0-9_\-]{16,128}")
 #: largest cancel request accepted (bytes of JSON)
 MAX_CANCEL_BYTES = 1024
 
@@ -142,7 +140,7 @@ def check_id(value: object, field: str) -> str:
     """Validate a goal id or namespace (one key-expression chunk, 1–64 chars of ``[A-Za-z0-9_.-]``)."""
     if not isinstance(value, str):
         raise RequestError(E_INVALID, field, f"must be a string, got {type(value).__name__}")
-    if not ID_PATTERN.fullmatch(value):
+    if not is_id(value):
         raise RequestError(
             E_INVALID,
             field,
@@ -470,7 +468,7 @@ def decode_cancel(payload: bytes | None) -> str | None:
     except (ValueError, RecursionError):
         return None
     token = data.get("cancel_token") if isinstance(data, dict) else None
-    return token if isinstance(token, str) and TOKEN_PATTERN.fullmatch(token) else None
+    return token if isinstance(token, str) and is_token(token) else None
 
 
 def token_matches(expected: str | None, given: str | None) -> bool:
@@ -540,7 +538,7 @@ def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MA
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
     raw = payload if isinstance(payload, bytes) else bytes(payload)
-    fast = decode_fast(raw, ID_PATTERN, TOKEN_PATTERN)  # the clients' form, in one typed decode
+    fast = decode_fast(raw)  # the clients' form, in one typed decode
     if fast is not None:
         return _tuple_new(Envelope, fast)  # a NamedTuple made in C
     return decode_checked(raw)
@@ -566,7 +564,7 @@ def decode_checked(raw: bytes) -> Envelope:
     if not isinstance(data, dict):
         raise RequestError(E_INVALID, "request", f"must be a JSON object, got {type(data).__name__}")
     goal_raw = data.get("goal_id")
-    goal_id = goal_raw if isinstance(goal_raw, str) and ID_PATTERN.fullmatch(goal_raw) else None
+    goal_id = goal_raw if isinstance(goal_raw, str) and is_id(goal_raw) else None
     if _LONG_DIGITS.search(raw):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
         _check_integers(data, "", goal_id)
     if "schema" not in data:
@@ -583,7 +581,7 @@ def decode_checked(raw: bytes) -> Envelope:
     check_id(goal_raw, "goal_id")
     assert goal_id is not None
     token = data.get("cancel_token")
-    if token is not None and not (isinstance(token, str) and TOKEN_PATTERN.fullmatch(token)):
+    if token is not None and not (isinstance(token, str) and is_token(token)):
         raise RequestError(E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -", goal_id)
     body = {k: v for k, v in data.items() if k not in ("schema", "goal_id", "cancel_token")}
     try:

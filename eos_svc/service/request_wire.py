@@ -18,14 +18,14 @@ What msgspec alone would let through, and how it is kept out:
 - an integer beyond ±2**64 (the full path refuses it, naming it): every field but ``rpy`` is
   bounded far below (msgspec refuses it there); an ``rpy`` angle of magnitude ≥ 1e19 (what a
   20-digit integer is) goes the full way;
-- a goal id or cancel token of the wrong form: checked with the protocol's own patterns.
+- a goal id or cancel token of the wrong form: checked against the protocol's own patterns
+  (:mod:`eos_svc.service.ids`).
 
 Strict UTF-8, no NaN/Infinity, no trailing data: msgspec refuses those itself.
 """
 
 from __future__ import annotations
 
-import re
 import struct
 from typing import Annotated, Literal
 
@@ -43,6 +43,7 @@ from eos_svc.agents.request import (
 )
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import Weights
+from eos_svc.service.ids import is_id, is_token
 
 #: an object size (m): > 0 and ≤ MAX_OBJECT_SIZE (ObjectSpec's ``_positive``)
 _Size = Annotated[float, msgspec.Meta(gt=0.0, le=MAX_OBJECT_SIZE)]
@@ -124,12 +125,9 @@ _pack3 = struct.Struct("3d").pack
 _HUGE = 1e19
 
 
-def decode_fast(
-    raw: bytes, id_pattern: re.Pattern[str], token_pattern: re.Pattern[str]
-) -> tuple[str, PlanRequest, str | None] | None:
+def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
     """``(goal_id, request, cancel_token)`` of a plan request in the clients' form, or ``None``:
-    take the full path (see the module doc). ``id_pattern``/``token_pattern``: what a goal id and
-    a cancel token must fully match."""
+    take the full path (see the module doc)."""
     try:
         msg = _decode(raw)
     except (msgspec.DecodeError, RecursionError, ValueError, TypeError):  # ValidationError: a DecodeError
@@ -143,11 +141,11 @@ def decode_fast(
     roll, pitch, yaw = obj.rpy
     if not (abs(roll) < _HUGE and abs(pitch) < _HUGE and abs(yaw) < _HUGE):
         return None
-    if not id_pattern.fullmatch(msg.goal_id):
+    if not is_id(msg.goal_id):
         return None
     if token is msgspec.UNSET:
         token = None
-    elif token is not None and not token_pattern.fullmatch(token):
+    elif token is not None and not is_token(token):
         return None
     w = msg.weights
     key = _pack3(w.default, w.opportunistic, w.learned)

@@ -130,3 +130,25 @@ def test_fuzz_near_valid_requests(obj, weights, rest):
 @given(st.text(max_size=200))
 def test_fuzz_text(text):
     _decode_only_request_errors(text.encode("utf-8", "surrogatepass"))
+
+
+@settings(max_examples=3000, deadline=None)
+@given(
+    st.one_of(
+        st.text(alphabet="aZ09_.-/*@é \x00", max_size=140),
+        st.text(max_size=140),
+        st.text(alphabet="abcXYZ0123456789_-", min_size=10, max_size=140),
+        st.text(alphabet="_-.", min_size=1, max_size=30),
+    )
+)
+def test_fast_id_and_token_checks_are_the_patterns(value):
+    """``is_id``/``is_token`` (string methods, on every request's path) answer as the patterns do."""
+    assert proto.is_id(value) == bool(proto.ID_PATTERN.fullmatch(value))
+    assert proto.is_token(value) == bool(proto.TOKEN_PATTERN.fullmatch(value))
+
+
+def test_fast_id_and_token_checks_on_edges():
+    for value in ("a", "a" * 64, "a" * 65, "-a", ".a", "_a", "a-._", "0", "", "a/b", "a*", "é", "a\n"):
+        assert proto.is_id(value) == bool(proto.ID_PATTERN.fullmatch(value)), value
+    for value in ("-" * 16, "_" * 128, "a" * 15, "a" * 16, "a" * 128, "a" * 129, "a" * 15 + ".", "ä" * 16):
+        assert proto.is_token(value) == bool(proto.TOKEN_PATTERN.fullmatch(value)), value

@@ -29,7 +29,7 @@ from eos_svc.service.request_wire import decode_fast
 
 
 def fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
-    return decode_fast(raw, proto.ID_PATTERN, proto.TOKEN_PATTERN)
+    return decode_fast(raw)
 
 
 def full(raw: bytes) -> tuple[str, PlanRequest, str | None] | proto.RequestError:
@@ -120,8 +120,11 @@ EPS = 1e-12
 # another form than the clients', e.g. an integral float for an integer)
 BOUNDS = [
     ("object.radius", [MAX_OBJECT_SIZE, 1e-9, 1], [0.0, -0.01, MAX_OBJECT_SIZE + EPS, 2, True, "0.03", None]),
-    ("object.position", [[MAX_POSITION, -MAX_POSITION, 0], [1, 2, 3]],
-     [[MAX_POSITION + 1e-9, 0, 0], [0, 0], [0, 0, 0, 0], [0, 0, "1"], "x", [0, True, 0]]),
+    (
+        "object.position",
+        [[MAX_POSITION, -MAX_POSITION, 0], [1, 2, 3]],
+        [[MAX_POSITION + 1e-9, 0, 0], [0, 0], [0, 0, 0, 0], [0, 0, "1"], "x", [0, True, 0]],
+    ),
     ("object.rpy", [[100.0, -1e18, 7], [0, 0, 0]], [[0, 0, None], [0, 0, False]]),
     ("seed", [0, 2**63 - 1, 12345], [-1, 2**63, 2**64, 3.0, True, "1", None]),
     ("tactile_noise", [0, 0.0, MAX_TACTILE_NOISE], [-1e-12, MAX_TACTILE_NOISE + 1e-12, None, False]),
@@ -164,7 +167,7 @@ def test_bounds_agree(path: str, accepted: list[object], refused: list[object]) 
         PLAIN.replace(b'"seed":1', b'"seed":' + b"1" * 30),
         # unknown fields, not UTF-8 JSON, not an object: the full path names the cause
         PLAIN[:-1] + b',"extra":1}',
-        b'\xef\xbb\xbf' + PLAIN,
+        b"\xef\xbb\xbf" + PLAIN,
         PLAIN.replace(b'"learned":0.0', b'"learned":NaN'),
         PLAIN + b"x",
         b"[]",
