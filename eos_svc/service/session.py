@@ -80,15 +80,16 @@ def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | 
     state kept between calls (:func:`~eos_svc.service.zenoh_threads.kept_thread_state`); a
     built-in such as ``SimpleQueue.put`` runs no Python frame and is passed as it is.
     """
-    callback = _kept_if_python(callback)
-    drop = None if drop is None else _kept_if_python(drop)
+    if type(callback) in _PYTHON_CODE:
+        callback = kept_thread_state(callback)
+    if type(drop) in _PYTHON_CODE:
+        drop = kept_thread_state(drop)  # type: ignore[arg-type]
     try:
         return zenoh.handlers.Callback(callback, drop, indirect=False)
     except TypeError:  # pragma: no cover - a zenoh-python without the option
         return zenoh.handlers.Callback(callback, drop)
 
 
-def _kept_if_python(callback: Callable[..., Any]) -> Callable[..., Any]:
-    if isinstance(callback, (types.FunctionType, types.MethodType)):
-        return kept_thread_state(callback)
-    return callback
+#: callables that run Python frames (a built-in such as ``SimpleQueue.put`` or a
+#: ``functools.partial`` of one runs none)
+_PYTHON_CODE = (types.FunctionType, types.MethodType)

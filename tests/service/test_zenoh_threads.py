@@ -2,15 +2,20 @@
 
 from __future__ import annotations
 
+import functools
+import json
 import queue
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any
 
 import zenoh
 
 from eos_svc.service import free_port, loopback, make_config
-from eos_svc.service.session import _kept_if_python, direct_callback
+from eos_svc.service.session import direct_callback
 from eos_svc.service.zenoh_threads import kept_thread_state
 
 N = 200
@@ -56,16 +61,41 @@ def _run(handler_of: Any) -> tuple[list[bytes], dict[int, list[int]], int]:
     return payloads, counts, faults
 
 
+def _compare_in_this_process() -> dict[str, Any]:
+    """Plain callbacks first (no Zenoh thread's state kept yet), then ``direct_callback``'s."""
+    plain = _run(lambda f: zenoh.handlers.Callback(f, indirect=False))
+    kept = _run(direct_callback)
+    return {
+        "plain": [[p.decode() for p in plain[0]], list(plain[1].values()), plain[2]],
+        "kept": [[p.decode() for p in kept[0]], list(kept[1].values()), kept[2]],
+    }
+
+
 def test_a_python_callback_keeps_its_zenoh_thread_state_and_gets_the_same_samples():
-    plain_payloads, plain_counts, plain_faults = _run(lambda f: zenoh.handlers.Callback(f, indirect=False))
-    kept_payloads, kept_counts, kept_faults = _run(direct_callback)
+    # in a fresh interpreter: Zenoh's threads are shared by every session of a process, and an
+    # earlier test's callbacks would already have kept their states
+    script = "import json; from tests.service.test_zenoh_threads import _compare_in_this_process as c; "
+    script += "print(json.dumps(c()))"
+    out = subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=Path(__file__).resolve().parents[2],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=True,
+    )
+    result = json.loads(out.stdout.strip().splitlines()[-1])
+    (plain_payloads, plain_counts, plain_faults), (kept_payloads, kept_counts, kept_faults) = (
+        result["plain"],
+        result["kept"],
+    )
     # the same samples, in the same order, either way
-    assert kept_payloads == plain_payloads == [str(i).encode() for i in range(N)]
+    assert kept_payloads == plain_payloads == [str(i) for i in range(N)]
     # plain: every call starts from a fresh thread state (its threading.local is empty again)...
-    assert all(seen == [1] * len(seen) for seen in plain_counts.values())
+    assert all(seen == [1] * len(seen) for seen in plain_counts)
     # ...kept: each Zenoh thread's state, and its threading.local, lives from call to call
-    assert all(seen == list(range(1, len(seen) + 1)) for seen in kept_counts.values())
-    assert sum(len(seen) for seen in kept_counts.values()) == N
+    assert all(seen == list(range(1, len(seen) + 1)) for seen in kept_counts)
+    assert sum(len(seen) for seen in kept_counts) == N
     # and no fresh frame stack is mapped (and faulted in) per call
     assert plain_faults >= N // 2
     assert kept_faults < plain_faults // 4
@@ -74,13 +104,16 @@ def test_a_python_callback_keeps_its_zenoh_thread_state_and_gets_the_same_sample
 def test_only_python_callables_are_wrapped():
     q: queue.SimpleQueue[Any] = queue.SimpleQueue()
     put = q.put
-    assert _kept_if_python(put) is put  # a built-in runs no Python frame: left as it is
+    end = functools.partial(q.put, None)
+    handler = direct_callback(put, end)
+    assert handler.callback is put and handler.drop is end  # built-ins run no Python frame: as they are
 
     def f(x: Any) -> None:
         q.put(x)
 
-    wrapped = _kept_if_python(f)
-    assert wrapped is not f and wrapped.__wrapped__ is f  # type: ignore[attr-defined]
-    wrapped(3)
-    assert q.get_nowait() == 3
-    assert kept_thread_state(lambda: 7)() == 7  # a drop callback: no argument
+    handler = direct_callback(f, lambda: q.put("dropped"))
+    assert handler.callback is not f and handler.callback.__wrapped__ is f
+    handler.callback(3)
+    handler.drop()
+    assert [q.get_nowait(), q.get_nowait()] == [3, "dropped"]
+    assert kept_thread_state(lambda: 7)() == 7
