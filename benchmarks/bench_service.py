@@ -373,15 +373,9 @@ def probe_server(port: int, out: str) -> None:
     _timed(srv, "_encode", "json0", "json1")
     _timed(srv._GoalWatchers, "now", "watch0", "watch1")
 
-    class Result:
-        def __init__(self, r: Any) -> None:
-            self.r = r
+    from eos_svc.agents.result import PlanResult
 
-        def to_dict(self) -> Any:
-            _stamp("to_dict0")
-            d = self.r.to_dict()
-            _stamp("to_dict1")
-            return d
+    _timed(PlanResult, "to_dict", "to_dict0", "to_dict1")  # the service calls to_dict(jsonable=False)
 
     def planner(request: Any, *, on_cycle: Any, cancel: Any, keep_trace: bool) -> Any:
         def cycle(rec: Any) -> None:
@@ -392,7 +386,7 @@ def probe_server(port: int, out: str) -> None:
         _stamp("plan0")
         r = plan(request, on_cycle=cycle, cancel=cancel, keep_trace=keep_trace, check=False)
         _stamp("plan1")
-        return Result(r)
+        return r
 
     class Probed(srv.PlanService):
         def _on_plan(self, query: Any) -> None:
@@ -456,7 +450,7 @@ _STEPS = [
     ("running0", "running1", "server: put status running"),
     ("plan0", "plan1", "plan in the server (incl. cycles)"),
     ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),
-    ("to_dict0", "to_dict1", "server: PlanResult.to_dict"),
+    ("to_dict0", "to_dict1", "server: PlanResult.to_dict (members as held)"),
     ("json0", "json1", "server: result to JSON"),
     ("done0", "done1", "server: put status done"),
     ("reply0", "reply1", "server: query.reply call"),
