@@ -108,8 +108,15 @@ def _wait_for(stop: threading.Event, limit_s: float) -> None:
 ECHO_REPLY_BYTES = 1600
 
 
-def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES) -> None:
-    """``--echo-server``: a queryable answering every get at once from its own thread (loopback)."""
+def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES, plan_first: bool = False) -> None:
+    """``--echo-server``: a queryable answering every get at once from its own thread (loopback).
+
+    ``plan_first``: the answering thread runs the 1-cycle plan (``PlanRequest(seed=3,
+    max_cycles=1)``, no admission check, as the service runs it) before each reply: a bare
+    get->reply carrying the same work as the service's, without any service code."""
+    work = PlanRequest(seed=3, max_cycles=1)
+    if plan_first:
+        plan(work, keep_trace=False, check=False)  # warm: the hand, the fit
     session = zenoh.open(make_config(listen=[loopback(port)]))
     inbox: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
     qable = session.declare_queryable(
@@ -122,6 +129,8 @@ def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES) -> None:
     def answer() -> None:
         while True:
             q = inbox.get()
+            if plan_first:
+                plan(work, keep_trace=False, check=False)
             q.reply("bench/echo", body)
             q.drop()
 
@@ -132,10 +141,11 @@ def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES) -> None:
     session.close()
 
 
-def start_echo(reply_bytes: int) -> tuple[subprocess.Popen[str], zenoh.Session]:
+def start_echo(reply_bytes: int, plan_first: bool = False) -> tuple[subprocess.Popen[str], zenoh.Session]:
     port = free_port()
     proc = subprocess.Popen(
-        [sys.executable, __file__, "--echo-server", str(port), str(reply_bytes)],
+        [sys.executable, __file__, "--echo-server", str(port), str(reply_bytes)]
+        + (["--plan-first"] if plan_first else []),
         stdout=subprocess.PIPE,
         text=True,
     )
@@ -165,10 +175,16 @@ def echo_round_trip(session: zenoh.Session, payload: bytes) -> float:
 
 
 def overhead(
-    client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int, watch: bool
-) -> tuple[float, float, float, int]:
-    """Interleaved medians (ms): in-process plan, service round trip, bare echo; and the plan's cycles."""
-    local, remote, bare = [], [], []
+    client: EosClient,
+    echo: zenoh.Session,
+    request: PlanRequest,
+    n: int,
+    watch: bool,
+    echo_planning: zenoh.Session | None = None,
+) -> tuple[float, float, float, int, float]:
+    """Interleaved medians (ms): in-process plan, service round trip, bare echo; the plan's
+    cycles; and (with ``echo_planning``) the round trip of the echo that plans first (else nan)."""
+    local, remote, bare, floor = [], [], [], []
     cycles = 0
     payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
     for i in range(n + 5):
@@ -182,11 +198,15 @@ def overhead(
         cycles = out.result["cycles"]
         plan(request, keep_trace=False)  # the echo, too, right after an in-process plan
         rt = echo_round_trip(echo, payload)
+        if echo_planning is not None:
+            plan(request, keep_trace=False)
+            floor.append(echo_round_trip(echo_planning, payload))
         if i >= 5:  # warm-up
             local.append(t1 - t0)
             remote.append(t2 - t1)
             bare.append(rt)
-    return median_ms(local), median_ms(remote), median_ms(bare), cycles
+    floor_ms = median_ms(floor[5:]) if floor else float("nan")
+    return median_ms(local), median_ms(remote), median_ms(bare), cycles, floor_ms
 
 
 def start_router() -> tuple[subprocess.Popen[str], int]:
@@ -549,7 +569,8 @@ def overhead_part(n_rt: int) -> None:
     print(f"bare Zenoh get->reply round trip, back to back (two sessions, one process): {bare:.3f} ms median")
 
     servers = start_servers(1, planner="grasp", workers=1)
-    echo_proc = None
+    echo_proc = floor_proc = None
+    echo = echo_planning = None
     try:
         client = EosClient.open(make_config(connect=[loopback(servers[0].port)]))
         client.wait_for_instances(1, timeout=15)
@@ -560,22 +581,29 @@ def overhead_part(n_rt: int) -> None:
             + b"}"
         )
         echo_proc, echo = start_echo(reply_bytes)
+        floor_proc, echo_planning = start_echo(reply_bytes, plan_first=True)
         rows: list[tuple[str, float, float, float, int]] = []
         one = PlanRequest(seed=3, max_cycles=1)
+        floor = float("nan")
         for label, req, n, watch in (
             ("1-cycle plan, no stream", one, n_rt, False),
             ("1-cycle plan, live stream", one, n_rt, True),
             ("default plan (seed 3), live stream", PlanRequest(seed=3), max(10, n_rt // 10), True),
         ):
-            loc, rem, bare_rt, cyc = overhead(client, echo, req, n, watch)
+            loc, rem, bare_rt, cyc, planned = overhead(
+                client, echo, req, n, watch, echo_planning if req is one and not watch else None
+            )
             rows.append((label, loc, rem, bare_rt, cyc))
+            floor = planned if req is one and not watch else floor
         client.close()
     finally:
         stop_servers(servers)
-        if echo_proc is not None:
-            echo.close()
-            echo_proc.terminate()
-            echo_proc.wait(10)
+        for proc, session in ((echo_proc, echo), (floor_proc, echo_planning)):
+            if session is not None:
+                session.close()
+            if proc is not None:
+                proc.terminate()
+                proc.wait(10)
     print("\n1. round-trip overhead over the in-process plan (medians of interleaved runs)")
     print(
         "   in-process: plan(request, keep_trace=False), no cycle callback; overhead = service - in-process,"
@@ -604,6 +632,15 @@ def overhead_part(n_rt: int) -> None:
     print(
         "   bare get->reply: a queryable in another process, same reply size, measured in the same loop "
         "(the transport floor here)"
+    )
+    loc, rem, bare_rt = rows[0][1], rows[0][2], rows[0][3]
+    print(
+        f"   the same bare get->reply whose queryable runs the same 1-cycle plan before replying: "
+        f"{floor - loc:.2f} ms over the in-process plan ({(floor - loc) / bare_rt:.2f}x the bare get->reply;"
+    )
+    print(
+        "   no service code: idle wake-ups after the plan and the plan's own cost in another process); "
+        f"the service's round trip adds {rem - floor:.2f} ms to it"
     )
 
 
@@ -658,10 +695,12 @@ def main() -> int:
     parser.add_argument("--breakdown", action="store_true", help="time each step of one request, then stop")
     parser.add_argument("--only", choices=("overhead", "scale-out"), help="run one of the two parts")
     parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
+    parser.add_argument("--plan-first", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo_server is not None:
-        echo_server(*args.echo_server)
+        port, reply_bytes = args.echo_server
+        echo_server(port, reply_bytes, plan_first=args.plan_first)
         return 0
     if args.probe_server is not None:
         probe_server(int(args.probe_server[0]), args.probe_server[1])
