@@ -59,6 +59,29 @@ def test_leastsq_does_not_depend_on_memory_past_its_jacobian():
     assert all(np.array_equal(x, zero[0]) for x in zero + large)
 
 
+def test_a_zero_row_makes_leastsq_independent_of_memory_past_its_jacobian():
+    """The fit's workaround (:func:`eos_svc.shape.fit._with_zero_row`, used when k is odd and
+    m·k even): the same problem with one zero residual more gives the same iterates whatever
+    the freed memory held, and the x a MINPACK reading no further than its array gives (the
+    stale value 0 adds nothing to the norm)."""
+    A, b = _collinear_problem()
+    k = A.shape[1]
+    assert k % 2 == 1 and A.size % 2 == 0
+
+    def solve(stale: float) -> np.ndarray:
+        for size in (A.size + 1, A.size + k + 1):  # the unpadded and the padded Jacobian's size
+            block = np.full(size, stale)
+            del block
+        x, *_ = leastsq(fit._with_zero_row(lambda x: A @ x - b), np.zeros(k),
+                        Dfun=fit._with_zero_row(lambda x: A.copy()), full_output=True)
+        out: np.ndarray = x
+        return out
+
+    reference = _solve_after_freeing(0.0, A, b)
+    for stale in (0.0, 1e3, -3e5, 1.0):
+        assert np.array_equal(solve(stale), reference)
+
+
 def _place(a: np.ndarray, offset: int) -> np.ndarray:
     """A copy of ``a`` starting ``offset`` doubles past a 64-byte boundary."""
     raw = np.empty(a.size + 16)
