@@ -119,3 +119,55 @@ def test_numpy_reference_is_independent_of_alignment(kind):
             theta, rotation = _place(theta0, offset), _place(r0, offset)
             R, J, _ = fit._difference_evaluation_numpy(theta, kind, rotation, moved)
             assert np.array_equal(R, R0) and np.array_equal(J, J0)
+
+
+def _random_touches(seed: int) -> Touches:
+    """6–15 noisy contacts about an ellipsoid-like cloud and 6 free samples (m = 4·n + 6, even)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(6, 16))
+    u = rng.normal(size=(n, 3))
+    normals = u / np.linalg.norm(u, axis=1, keepdims=True)
+    centres = normals * rng.uniform(0.02, 0.06, 3) + rng.normal(scale=2e-3, size=(n, 3))
+    return Touches(centres, normals, np.full(n, 0.008), rng.normal(size=(6, 3)) * 0.1, np.full(6, 0.008))
+
+
+def _leastsq_after_freeing(stale: float, sizes: tuple[int, ...]):
+    """scipy's leastsq, called right after freeing blocks of ``sizes`` doubles whose last holds
+    ``stale`` (the Jacobian's malloc size classes: the next allocation of the size is it)."""
+
+    def call(*args, **kwargs):
+        for size in sizes:
+            block = np.full(size, stale)
+            del block
+        return leastsq(*args, **kwargs)
+
+    return call
+
+
+@pytest.mark.parametrize(("seed", "kind", "start"), [(1, "box", 1), (12, "cylinder", 0), (12, "cylinder", 3)])
+def test_a_fit_is_independent_of_memory_past_minpacks_jacobian(seed, kind, start, monkeypatch):
+    """Touches (m·k even) on which scipy's MINPACK, called as it is, ends elsewhere when the 8
+    bytes past its Jacobian hold 1e3 instead of 0; the fit's Levenberg–Marquardt
+    (:func:`~eos_svc.shape.fit.levenberg_marquardt`) ends at the same bits whatever they
+    hold — those of the stale value 0, i.e. of a MINPACK reading no further than its array."""
+    touches = _random_touches(seed)
+    m, k = fit.residual_count(touches), fit.N_PARAMS[kind]
+    theta0, r0 = fit.ClassStarts(touches).of(kind)[start]
+    assert (m * k) % 2 == 0 and k % 2 == 1
+    sizes = (k * m + 1, k * (m + 1) + 1)
+
+    def unpadded(stale: float) -> bytes:
+        ev = fit._Evaluations(kind, r0, touches)
+        x, *_ = _leastsq_after_freeing(stale, sizes[:1])(
+            ev.residuals, theta0.copy(), Dfun=ev.jacobian, full_output=True,
+            ftol=1e-8, xtol=1e-8, gtol=1e-8, maxfev=20)
+        return bytes(x.tobytes())
+
+    if all(unpadded(1e3) == unpadded(0.0) for _ in range(5)):
+        pytest.skip("scipy's MINPACK no longer reads past its Jacobian on these touches")
+    results = set()
+    for stale in (0.0, 1e3, -3e5, 0.0):
+        monkeypatch.setattr(fit, "leastsq", _leastsq_after_freeing(stale, sizes))
+        x, _ = fit.levenberg_marquardt(theta0, kind, r0, touches, 20, fit._Evaluations(kind, r0, touches))
+        results.add(x.tobytes())
+    assert results == {unpadded(0.0)}
