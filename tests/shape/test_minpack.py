@@ -47,18 +47,6 @@ def _solve_after_freeing(stale: float, A: np.ndarray, b: np.ndarray) -> np.ndarr
     return out
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="scipy's C MINPACK qrfac reads one element past the Jacobian when it recomputes the "
-    "last column's norm (see the module docstring); XPASS means scipy fixed it",
-)
-def test_leastsq_does_not_depend_on_memory_past_its_jacobian():
-    A, b = _collinear_problem()
-    zero = [_solve_after_freeing(0.0, A, b) for _ in range(3)]
-    large = [_solve_after_freeing(1e3, A, b) for _ in range(3)]
-    assert all(np.array_equal(x, zero[0]) for x in zero + large)
-
-
 def test_a_zero_row_makes_leastsq_independent_of_memory_past_its_jacobian():
     """The fit's workaround (:func:`eos_svc.shape.fit._with_zero_row`, used when k is odd and
     m·k even): the same problem with one zero residual more gives the same iterates whatever
@@ -78,6 +66,10 @@ def test_a_zero_row_makes_leastsq_independent_of_memory_past_its_jacobian():
         return out
 
     reference = _solve_after_freeing(0.0, A, b)
+    # the bug first: unpadded, the freed memory's value changes the iterates (else there is
+    # nothing to work around here: scipy fixed qrfac, or the freed block was not reused)
+    if all(np.array_equal(_solve_after_freeing(1e3, A, b), reference) for _ in range(3)):
+        pytest.skip("scipy's leastsq did not read the freed memory past its Jacobian here")
     for stale in (0.0, 1e3, -3e5, 1.0):
         assert np.array_equal(solve(stale), reference)
 
