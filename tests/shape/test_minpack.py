@@ -63,8 +63,12 @@ def zero_row_case() -> str:
         for size in (A.size + 1, A.size + k + 1):  # the unpadded and the padded Jacobian's size
             block = np.full(size, stale)
             del block
-        x, *_ = leastsq(fit._with_zero_row(lambda x: A @ x - b), np.zeros(k),
-                        Dfun=fit._with_zero_row(lambda x: A.copy()), full_output=True)
+        x, *_ = leastsq(
+            fit._with_zero_row(lambda x: A @ x - b),
+            np.zeros(k),
+            Dfun=fit._with_zero_row(lambda x: A.copy()),
+            full_output=True,
+        )
         out: np.ndarray = x
         return out
 
@@ -130,10 +134,14 @@ def test_numpy_reference_is_independent_of_alignment(kind):
     for theta0, r0 in shared.of(kind):
         R0, J0, _ = fit._difference_evaluation_numpy(theta0, kind, r0, data)
         for offset in range(8):
-            moved = dataclasses.replace(data, **{
-                f.name: _place(getattr(data, f.name), offset)
-                for f in dataclasses.fields(data) if isinstance(getattr(data, f.name), np.ndarray)
-            })
+            moved = dataclasses.replace(
+                data,
+                **{
+                    f.name: _place(getattr(data, f.name), offset)
+                    for f in dataclasses.fields(data)
+                    if isinstance(getattr(data, f.name), np.ndarray)
+                },
+            )
             theta, rotation = _place(theta0, offset), _place(r0, offset)
             R, J, _ = fit._difference_evaluation_numpy(theta, kind, rotation, moved)
             assert np.array_equal(R, R0) and np.array_equal(J, J0)
@@ -176,8 +184,15 @@ def fit_case(seed: int, kind: str, start: int) -> str:
     def unpadded(stale: float) -> bytes:
         ev = fit._Evaluations(kind, r0, touches)
         x, *_ = _leastsq_after_freeing(stale, sizes[:1])(
-            ev.residuals, theta0.copy(), Dfun=ev.jacobian, full_output=True,
-            ftol=1e-8, xtol=1e-8, gtol=1e-8, maxfev=20)
+            ev.residuals,
+            theta0.copy(),
+            Dfun=ev.jacobian,
+            full_output=True,
+            ftol=1e-8,
+            xtol=1e-8,
+            gtol=1e-8,
+            maxfev=20,
+        )
         return bytes(x.tobytes())
 
     if all(unpadded(1e3) == unpadded(0.0) for _ in range(5)):
