@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import socket
 import types
@@ -76,20 +77,28 @@ def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | 
     still declared hangs at interpreter shutdown. ``indirect`` is marked
     unstable in zenoh-python 1.x; without it the default handler is used.
 
-    A Python function or method (``callback`` or ``drop``) runs with the Zenoh thread's Python
-    state kept between calls (:func:`~eos_svc.service.zenoh_threads.kept_thread_state`); a
-    built-in such as ``SimpleQueue.put`` runs no Python frame and is passed as it is.
+    A ``callback`` or ``drop`` that runs Python code runs with the Zenoh thread's Python state
+    kept between calls (:func:`~eos_svc.service.zenoh_threads.kept_thread_state`); a built-in
+    such as ``SimpleQueue.put``, or a ``functools.partial`` of one, runs no Python frame and is
+    passed as it is.
     """
-    if type(callback) in _PYTHON_CODE:
+    if _runs_python(callback):
         callback = kept_thread_state(callback)
-    if type(drop) in _PYTHON_CODE:
-        drop = kept_thread_state(drop)  # type: ignore[arg-type]
+    if drop is not None and _runs_python(drop):
+        drop = kept_thread_state(drop)
     try:
         return zenoh.handlers.Callback(callback, drop, indirect=False)
     except TypeError:  # pragma: no cover - a zenoh-python without the option
         return zenoh.handlers.Callback(callback, drop)
 
 
-#: callables that run Python frames (a built-in such as ``SimpleQueue.put`` or a
-#: ``functools.partial`` of one runs none)
-_PYTHON_CODE = (types.FunctionType, types.MethodType)
+#: callables implemented in C, which run no Python frame
+_BUILT_IN = (types.BuiltinFunctionType, types.MethodWrapperType, types.WrapperDescriptorType)
+
+
+def _runs_python(callback: Callable[..., Any]) -> bool:
+    """Whether calling ``callback`` runs Python code: anything but a built-in (such as
+    ``SimpleQueue.put``) or a ``functools.partial`` of one."""
+    while isinstance(callback, functools.partial):
+        callback = callback.func
+    return not isinstance(callback, _BUILT_IN)

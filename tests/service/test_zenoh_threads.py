@@ -101,7 +101,7 @@ def test_a_python_callback_keeps_its_zenoh_thread_state_and_gets_the_same_sample
     assert kept_faults < plain_faults // 4
 
 
-def test_only_python_callables_are_wrapped():
+def test_only_callables_that_run_python_are_wrapped():
     q: queue.SimpleQueue[Any] = queue.SimpleQueue()
     put = q.put
     end = functools.partial(q.put, None)
@@ -111,9 +111,18 @@ def test_only_python_callables_are_wrapped():
     def f(x: Any) -> None:
         q.put(x)
 
+    class Recorder:
+        def __call__(self, x: Any) -> None:
+            q.put(("instance", x))
+
     handler = direct_callback(f, lambda: q.put("dropped"))
     assert handler.callback is not f and handler.callback.__wrapped__ is f
     handler.callback(3)
     handler.drop()
     assert [q.get_nowait(), q.get_nowait()] == [3, "dropped"]
+    for runs_python in (functools.partial(f), Recorder()):  # Python code behind other callables
+        handler = direct_callback(runs_python)
+        assert handler.callback is not runs_python and handler.callback.__wrapped__ is runs_python
+        handler.callback(4)
+    assert [q.get_nowait(), q.get_nowait()] == [4, ("instance", 4)]
     assert kept_thread_state(lambda: 7)() == 7
