@@ -403,7 +403,7 @@ class EosClient:
         wid = -1
         sub = None
         stream = _Stream(iid, events) if watch else None
-        lost = False
+        issued = lost = False
         try:
             if stream is not None:
                 sub = self.session.declare_subscriber(
@@ -421,6 +421,7 @@ class EosClient:
                 timeout=timeout,
                 cancellation_token=waiter.token,
             )
+            issued = True  # Zenoh has the handler: its _END will come
             # registered while the query travels (off its path): a token withdrawn before this
             # goes unseen here, but the query then ends without a reply — lost all the same
             wid = next(self._waiter_ids)
@@ -439,8 +440,9 @@ class EosClient:
                 with self._lock:
                     self._waiters.pop(wid, None)
                     self._inflight[iid] -= 1
-            # no stream (no subscriber put into its queue) and not cancelled: spare for later
-            if not watch and not lost and len(self._spare_waiters) < _SPARE_WAITERS:
+            # issued (its _END will come), no stream (no subscriber put into its queue) and not
+            # cancelled: spare for later
+            if issued and not watch and not lost and len(self._spare_waiters) < _SPARE_WAITERS:
                 self._spare_waiters.append(waiter)
 
     def _waiter(self) -> _Waiter:

@@ -6,6 +6,8 @@ from __future__ import annotations
 import threading
 import time
 
+import pytest
+
 from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import _END, _Waiter
@@ -100,3 +102,15 @@ def test_a_refused_request_leaves_a_reusable_waiter(port, services, clients):
     assert len(client._spare_waiters) == 1
     out = client.plan(ONE, watch=False)  # served by the same waiter once the refusal's query ended
     assert out.result["cycles"] == 1
+
+
+def test_a_waiter_whose_query_was_never_issued_is_not_kept(port, services, clients):
+    """No query, no ``_END`` ever: such a waiter would stay unusable in the spare list."""
+    services(port, planner=root_plan)
+    client = clients(port)
+    client.wait_for_instances(1)
+    payload = proto.encode_request("g-never-1", ONE, proto.new_cancel_token())
+    with pytest.raises(Exception):  # noqa: B017 - Zenoh's own error for an invalid key expression
+        client._attempt("a*b", "g-never-1", payload, None, False, 1.0)  # no such key: get never runs
+    assert client._spare_waiters == []
+    assert client.plan(ONE, watch=False).result["cycles"] == 1  # and the client goes on
