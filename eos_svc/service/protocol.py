@@ -274,11 +274,13 @@ def loads_message(data: bytes) -> Any:
 
 def encode_result(obj: Any) -> bytes:
     """A plan result (or any message body) as compact JSON bytes, fast (msgspec; non-finite
-    floats become ``null``); values msgspec cannot encode go through ``to_jsonable`` first."""
+    floats become ``null``); values msgspec cannot encode (NumPy scalars and arrays, objects
+    with ``to_dict``) go through ``to_jsonable`` first, and msgspec writes that: the same bytes
+    as converting first whenever the plain values agree."""
     try:
         return _msgspec_encode(obj)
     except (TypeError, ValueError, OverflowError, msgspec.EncodeError):
-        return dumps(to_jsonable(obj))
+        return _msgspec_encode(to_jsonable(obj))
 
 
 def dumps(obj: Any) -> bytes:
