@@ -823,12 +823,13 @@ def levenberg_marquardt(
     needs that only for the best start). ``evaluations``: the fit's :class:`_Evaluations`
     (of ``kind``, ``r0``, ``touches``), to ask for the Jacobian at θ afterwards."""
     ev = _Evaluations(kind, r0, touches) if evaluations is None else evaluations
-    m = residual_count(touches)
-    inert = (m * len(theta0)) % 2 == 0 and len(theta0) % 2 == 1
+    m, k = residual_count(touches), len(theta0)
+    assert m >= k, "MINPACK needs at least as many residuals as parameters (fit_class checks it)"
+    pad_row = (m * k) % 2 == 0 and k % 2 == 1  # see _with_zero_row
     x, _, info, _, _ = leastsq(
-        _with_zero_row(ev.residuals) if inert else ev.residuals,
+        _with_zero_row(ev.residuals) if pad_row else ev.residuals,
         np.asarray(theta0, dtype=float),
-        Dfun=_with_zero_row(ev.jacobian) if inert else ev.jacobian,
+        Dfun=_with_zero_row(ev.jacobian) if pad_row else ev.jacobian,
         full_output=True,
         ftol=1e-8,
         xtol=1e-8,
