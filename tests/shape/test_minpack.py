@@ -53,8 +53,8 @@ def _solve_after_freeing(stale: float, A: np.ndarray, b: np.ndarray) -> np.ndarr
 def zero_row_case() -> str:
     """The fit's workaround (:func:`eos_svc.shape.fit._with_zero_row`, used when k is odd and
     m·k even): the same problem with one zero residual more gives the same iterates whatever
-    the freed memory held, and the x a MINPACK reading no further than its array gives (the
-    stale value 0 adds nothing to the norm)."""
+    the freed memory held. (Not compared with the unpadded solve after freeing zeros: whether
+    that one read the freed block depends on the heap, the thing under test.)"""
     A, b = _collinear_problem()
     k = A.shape[1]
     assert k % 2 == 1 and A.size % 2 == 0
@@ -77,8 +77,8 @@ def zero_row_case() -> str:
     # nothing to work around here: scipy fixed qrfac, or the freed block was not reused)
     if all(np.array_equal(_solve_after_freeing(1e3, A, b), reference) for _ in range(3)):
         return "skip: scipy's leastsq did not read the freed memory past its Jacobian here"
-    for stale in (0.0, 1e3, -3e5, 1.0):
-        assert np.array_equal(solve(stale), reference)
+    padded = {solve(stale).tobytes() for stale in (0.0, 1e3, -3e5, 1.0, 0.0)}
+    assert len(padded) == 1, "the padded solve depends on the memory past MINPACK's Jacobian"
     return "ok"
 
 
@@ -173,8 +173,9 @@ def _leastsq_after_freeing(stale: float, sizes: tuple[int, ...]):
 def fit_case(seed: int, kind: str, start: int) -> str:
     """Touches (m·k even) on which scipy's MINPACK, called as it is, ends elsewhere when the 8
     bytes past its Jacobian hold 1e3 instead of 0; the fit's Levenberg–Marquardt
-    (:func:`~eos_svc.shape.fit.levenberg_marquardt`) ends at the same bits whatever they
-    hold — those of the stale value 0, i.e. of a MINPACK reading no further than its array."""
+    (:func:`~eos_svc.shape.fit.levenberg_marquardt`) ends at the same bits whatever they hold.
+    (Not compared with the unpadded fit after freeing zeros: whether that one read the freed
+    block depends on the heap, the thing under test.)"""
     touches = _random_touches(seed)
     m, k = fit.residual_count(touches), fit.N_PARAMS[kind]
     theta0, r0 = fit.ClassStarts(touches).of(kind)[start]
@@ -205,7 +206,7 @@ def fit_case(seed: int, kind: str, start: int) -> str:
             results.add(x.tobytes())
     finally:
         fit.leastsq = leastsq  # type: ignore[attr-defined]
-    assert results == {unpadded(0.0)}
+    assert len(results) == 1, "the fit depends on the memory past MINPACK's Jacobian"
     return "ok"
 
 
