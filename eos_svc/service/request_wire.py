@@ -67,18 +67,23 @@ class _Ellipsoid(_Shape, tag="ellipsoid"):
     radii: _Size3
 
 
-class _Cylinder(_Shape, tag="cylinder"):
+class _RadiusLength(_Shape):
+    """The size fields a cylinder and a capsule share (not itself a member of the union)."""
+
     radius: _Size
     length: _Size
+
+
+class _Cylinder(_RadiusLength, tag="cylinder"):
+    pass
 
 
 class _Box(_Shape, tag="box"):
     size: _Size3
 
 
-class _Capsule(_Shape, tag="capsule"):
-    radius: _Size
-    length: _Size
+class _Capsule(_RadiusLength, tag="capsule"):
+    pass
 
 
 class _Weights(msgspec.Struct, forbid_unknown_fields=True):
