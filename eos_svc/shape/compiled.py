@@ -60,6 +60,10 @@ _ITERATIONS = 30
 _STEP_BOUND = 1e-12
 #: groups=None: the whole call is one group
 _ONE_GROUP = np.zeros(1, dtype=np.int64)
+#: the touches as the kernels take them: (points (N, 3), count, radii (count,), sensed normals
+#: (count, 3), free radii (N − count,), gap offset, σ distance, σ normal) — the fit's
+#: :attr:`eos_svc.shape.fit.FitData.kernel_touches`
+KernelTouches = tuple[np.ndarray, int, np.ndarray, np.ndarray, np.ndarray, float, float, float]
 
 
 @intrinsic
@@ -413,19 +417,13 @@ def residuals_and_geometry(
     r0: np.ndarray,
     groups: np.ndarray | None,
     log_size_range: tuple[float, float],
-    points: np.ndarray,
-    count: int,
-    radii: np.ndarray,
-    normals: np.ndarray,
-    free_radii: np.ndarray,
-    gap_offset: float,
-    sigma_distance: float,
-    sigma_normal: float,
+    touches: KernelTouches,
 ) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(whitened residuals (K, m), (centres (K, 3), rotations (K, 3, 3), sizes (K, s))) of K
     parameter vectors ``thetas`` (K, k) of ``kind``, each about ``r0`` (3, 3) or its own row
-    of ``r0`` (K, 3, 3), at the N world ``points`` (N, 3) (m): the first ``count`` are contact
-    tip centres (radii, sensed ``normals``), the rest free samples (``free_radii``). The
+    of ``r0`` (K, 3, 3), at the touches (:data:`KernelTouches`: N world points (N, 3) (m), the
+    first ``count`` of them contact tip centres with radii and sensed normals, the rest free
+    samples with their radii; the noise model's constants). The
     residuals' layout is the reference's: ``count`` distances, 3·count normal components,
     N − count free-space hinges. ``groups``: first rows of groups of rows evaluated as if in
     separate calls (see the module docstring)."""
@@ -441,14 +439,7 @@ def residuals_and_geometry(
         _ONE_GROUP if groups is None else np.ascontiguousarray(groups, dtype=np.int64),
         float(log_size_range[0]),
         float(log_size_range[1]),
-        points,
-        int(count),
-        radii,
-        normals,
-        free_radii,
-        float(gap_offset),
-        float(sigma_distance),
-        float(sigma_normal),
+        *touches,
     )
     return R, (centres, rotations, sizes)
 
@@ -502,14 +493,7 @@ def difference_evaluation(
     r0: np.ndarray,
     step: float,
     log_size_range: tuple[float, float],
-    points: np.ndarray,
-    count: int,
-    radii: np.ndarray,
-    normals: np.ndarray,
-    free_radii: np.ndarray,
-    gap_offset: float,
-    sigma_distance: float,
-    sigma_normal: float,
+    touches: KernelTouches,
 ) -> tuple[np.ndarray, np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """(whitened residuals at ``theta`` (m,), forward-difference Jacobian (m, k), the geometry
     (centres, rotations, sizes) of the k + 2 rows evaluated) in one call: the k + 1 difference
@@ -526,14 +510,7 @@ def difference_evaluation(
         float(step),
         float(log_size_range[0]),
         float(log_size_range[1]),
-        points,
-        int(count),
-        radii,
-        normals,
-        free_radii,
-        float(gap_offset),
-        float(sigma_distance),
-        float(sigma_normal),
+        *touches,
     )
     return r, quotients.T, (centres, rotations, sizes)
 
@@ -564,17 +541,14 @@ def warm_up() -> None:
     points = np.array([[0.05, 0.0, 0.0], [0.0, 0.05, 0.0], [0.0, 0.0, 0.2]])
     normals = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     radii, free_radii = np.full(2, 0.01), np.full(1, 0.01)
+    touches: KernelTouches = (points, 2, radii, normals, free_radii, 0.0, 0.001, 0.1)
     for kind, k in (("sphere", 4), ("ellipsoid", 9), ("box", 9), ("cylinder", 7), ("capsule", 7)):
         thetas = np.full((2, k), -3.0)
         for r0 in (np.eye(3), np.repeat(np.eye(3)[None], 2, axis=0)):
             for groups in (None, np.array([0, 1])):
-                residuals_and_geometry(
-                    kind, thetas, r0, groups, (math.log(1e-4), 0.0), points, 2, radii, normals,
-                    free_radii, 0.0, 0.001, 0.1,
-                )
+                residuals_and_geometry(kind, thetas, r0, groups, (math.log(1e-4), 0.0), touches)
             difference_evaluation(
-                kind, thetas[0], r0[0] if r0.ndim == 3 else r0, 1e-8, (math.log(1e-4), 0.0), points, 2,
-                radii, normals, free_radii, 0.0, 0.001, 0.1,
+                kind, thetas[0], r0[0] if r0.ndim == 3 else r0, 1e-8, (math.log(1e-4), 0.0), touches
             )
     _products(points, np.eye(3))
     kernels.mark_ready()

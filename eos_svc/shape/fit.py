@@ -26,12 +26,16 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import TYPE_CHECKING
 
 import numpy as np
 from scipy.optimize import least_squares, leastsq
 
 from eos_svc.shape import kernels, primitives
 from eos_svc.shape.touches import Touches
+
+if TYPE_CHECKING:  # numba loads with the compiled module: only its type here
+    from eos_svc.shape.compiled import KernelTouches
 
 #: number of parameters of each class
 N_PARAMS = {"sphere": 4, "ellipsoid": 9, "box": 9, "cylinder": 7, "capsule": 7}
@@ -275,6 +279,21 @@ class FitData:
     sigma_distance: float
     sigma_normal: float
 
+    @cached_property
+    def kernel_touches(self) -> KernelTouches:
+        """These fields as the compiled kernels take them (:data:`eos_svc.shape.compiled.KernelTouches`:
+        the points (N, 3), then the rest as plain ints, arrays and floats), built once per fit."""
+        return (
+            self.points[0],
+            int(self.count),
+            self.radii,
+            self.normals,
+            self.free_radii,
+            float(self.gap_offset),
+            float(self.sigma_distance),
+            float(self.sigma_normal),
+        )
+
     @classmethod
     def of(cls, touches: Touches) -> FitData:
         """The fit data of ``touches``."""
@@ -328,10 +347,7 @@ def _residuals_and_geometry_compiled(
     ellipsoid's Newton stop and picks the axis products, every other row is independent)."""
     from eos_svc.shape import compiled  # numba on first use: importing the package stays light
 
-    return compiled.residuals_and_geometry(
-        kind, thetas, r0, groups, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
-        data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
-    )
+    return compiled.residuals_and_geometry(kind, thetas, r0, groups, LOG_SIZE_RANGE, data.kernel_touches)
 
 
 def _residuals_and_geometry_numpy(
@@ -736,10 +752,7 @@ def _difference_evaluation_compiled(
     (:func:`eos_svc.shape.compiled.difference_evaluation`)."""
     from eos_svc.shape import compiled  # numba on first use: importing the package stays light
 
-    return compiled.difference_evaluation(
-        kind, theta, r0, JACOBIAN_STEP, LOG_SIZE_RANGE, data.points[0], data.count, data.radii,
-        data.normals, data.free_radii, data.gap_offset, data.sigma_distance, data.sigma_normal,
-    )
+    return compiled.difference_evaluation(kind, theta, r0, JACOBIAN_STEP, LOG_SIZE_RANGE, data.kernel_touches)
 
 
 def _difference_evaluation_numpy(
