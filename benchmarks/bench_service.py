@@ -155,12 +155,13 @@ def start_echo(reply_bytes: int, plan_first: bool = False) -> tuple[subprocess.P
     return proc, session
 
 
-def echo_round_trip(session: zenoh.Session, payload: bytes) -> float:
-    """One get->reply to the echo server (s), through a callback and a queue as the client does."""
+def echo_round_trip(session: zenoh.Session, payload: bytes, key: Any = "bench/echo") -> float:
+    """One get->reply to the echo server (s), through a callback and a queue as the client does
+    (``key``: another queryable's, e.g. a service instance's plan key)."""
     events: queue.SimpleQueue[Any] = queue.SimpleQueue()
     t0 = time.perf_counter()
     session.get(
-        "bench/echo",
+        key,
         zenoh.handlers.Callback(events.put, lambda: events.put(None), indirect=False),
         payload=payload,
         consolidation=zenoh.ConsolidationMode.NONE,
@@ -168,7 +169,7 @@ def echo_round_trip(session: zenoh.Session, payload: bytes) -> float:
     )
     reply = events.get(timeout=5)
     dt = time.perf_counter() - t0
-    assert reply is not None
+    assert reply is not None and reply.ok is not None, reply
     while events.get(timeout=5) is not None:
         pass
     return dt
@@ -219,6 +220,31 @@ def planning_echo(
             planned.append(rt_planned)
             bare.append(rt)
     return median_ms(local), median_ms(planned), median_ms(bare)
+
+
+def raw_service(
+    client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int
+) -> tuple[float, float, float]:
+    """Interleaved medians (ms), as :func:`overhead` runs them: in-process plan, a plain get to
+    the service's instance with the request encoded beforehand (a fresh goal id and cancel token
+    each) and its reply's bytes not parsed — the service without the client library — and bare
+    echo. A loop of its own, after the service's, on the same client session."""
+    local, raw, bare = [], [], []
+    key = proto.plan_key(client.prefix, client.instances()[0])
+    echo_payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
+    for i in range(n + 5):
+        payload = proto.encode_request(f"g-raw{i:08d}-1", request, proto.new_cancel_token())
+        t0 = time.perf_counter()
+        plan(request, keep_trace=False)
+        t1 = time.perf_counter()
+        rt_raw = echo_round_trip(client.session, payload, key)
+        plan(request, keep_trace=False)
+        rt = echo_round_trip(echo, echo_payload)
+        if i >= 5:
+            local.append(t1 - t0)
+            raw.append(rt_raw)
+            bare.append(rt)
+    return median_ms(local), median_ms(raw), median_ms(bare)
 
 
 def start_router() -> tuple[subprocess.Popen[str], int]:
@@ -602,6 +628,7 @@ def overhead_part(n_rt: int) -> None:
         ):
             loc, rem, bare_rt, cyc = overhead(client, echo, req, n, watch)
             rows.append((label, loc, rem, bare_rt, cyc))
+        server_alone = raw_service(client, echo, one, n_rt)
         client.close()
         floor_proc, echo_planning = start_echo(reply_bytes, plan_first=True)  # only now: see planning_echo
         floor = planning_echo(echo, echo_planning, one, n_rt)
@@ -642,9 +669,18 @@ def overhead_part(n_rt: int) -> None:
         "   bare get->reply: a queryable in another process, same reply size, measured in the same loop "
         "(the transport floor here)"
     )
+    r_local, r_raw, r_bare = server_alone
+    print(
+        "   then, in loops of their own: a plain get to the service, the request encoded beforehand and the "
+        f"reply's bytes not parsed, takes {r_raw - r_local:.2f} ms over the in-process plan"
+    )
+    print(
+        f"   ({(r_raw - r_local) / r_bare:.2f}x the bare get->reply of that loop, {r_bare:.2f} ms): the service "
+        "without the client library (its share: the rest of the first row)"
+    )
     f_local, f_planned, f_bare = floor
     print(
-        "   then, in a loop of its own: the same bare get->reply whose queryable runs the same 1-cycle plan "
+        "   and the same bare get->reply whose queryable runs the same 1-cycle plan "
         f"first takes {f_planned - f_local:.2f} ms over the in-process plan"
     )
     print(
