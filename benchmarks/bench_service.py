@@ -19,7 +19,11 @@
    Zenoh get→reply to a queryable in another process answering from its own
    thread, with a request and a reply of the same sizes as the plan's (the
    transport floor in the same conditions). Goal: the 1-cycle plan's
-   overhead (no stream) ≤ 2× that bare get→reply.
+   overhead (no stream) ≤ 2× that bare get→reply. Then, each in a loop of its
+   own: a plain get to the service with the request encoded beforehand and the
+   reply not parsed (the service without the client library), and a bare
+   get→reply whose queryable runs the same plan first (no service code: the
+   floor of this measure).
 2. Scale-out: plans per second with one and with two service processes (one
    worker each), the same plans sent by concurrent client threads, in
    alternating batches on the same two processes ("one": every plan to the
