@@ -679,8 +679,8 @@ def overhead_part(n_rt: int) -> None:
         f"reply's bytes not parsed, takes {r_raw - r_local:.2f} ms over the in-process plan"
     )
     print(
-        f"   ({(r_raw - r_local) / r_bare:.2f}x the bare get->reply of that loop, {r_bare:.2f} ms): the service "
-        "without the client library (its share: the rest of the first row)"
+        f"   ({(r_raw - r_local) / r_bare:.2f}x the bare get->reply of that loop, {r_bare:.2f} ms): "
+        "the service without the client library (its share: the rest of the first row)"
     )
     f_local, f_planned, f_bare = floor
     print(
