@@ -55,6 +55,7 @@ import sys
 import threading
 import time
 from collections import defaultdict
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -204,51 +205,52 @@ def overhead(
     return median_ms(local), median_ms(remote), median_ms(bare), cycles
 
 
-def planning_echo(
-    echo: zenoh.Session, echo_planning: zenoh.Session, request: PlanRequest, n: int
+def interleaved(
+    request: PlanRequest, echo: zenoh.Session, n: int, round_trip: Callable[[int], float]
 ) -> tuple[float, float, float]:
-    """Interleaved medians (ms), as :func:`overhead` runs them: in-process plan, the round trip of
-    the echo that runs the same plan before replying, bare echo. A loop of its own, after the
-    service's: a plan in another process between the service's requests would change them."""
-    local, planned, bare = [], [], []
+    """Interleaved medians (ms), as :func:`overhead` runs them: the in-process plan,
+    ``round_trip(i)`` right after it (the i-th round trip under test, s), then another
+    in-process plan and the bare echo; the first five rounds are warm-up."""
+    local, tested, bare = [], [], []
     payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
     for i in range(n + 5):
         t0 = time.perf_counter()
         plan(request, keep_trace=False)
         t1 = time.perf_counter()
-        rt_planned = echo_round_trip(echo_planning, payload)
+        rt_tested = round_trip(i)
         plan(request, keep_trace=False)
         rt = echo_round_trip(echo, payload)
         if i >= 5:
             local.append(t1 - t0)
-            planned.append(rt_planned)
+            tested.append(rt_tested)
             bare.append(rt)
-    return median_ms(local), median_ms(planned), median_ms(bare)
+    return median_ms(local), median_ms(tested), median_ms(bare)
+
+
+def planning_echo(
+    echo: zenoh.Session, echo_planning: zenoh.Session, request: PlanRequest, n: int
+) -> tuple[float, float, float]:
+    """:func:`interleaved` medians of the echo that runs the same plan before replying. A loop of
+    its own, after the service's: a plan in another process between the service's requests
+    would change them."""
+    payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
+    return interleaved(request, echo, n, lambda _: echo_round_trip(echo_planning, payload))
 
 
 def raw_service(
     client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int
 ) -> tuple[float, float, float]:
-    """Interleaved medians (ms), as :func:`overhead` runs them: in-process plan, a plain get to
-    the service's instance with the request encoded beforehand (a fresh goal id and cancel token
-    each) and its reply's bytes not parsed — the service without the client library — and bare
-    echo. A loop of its own, after the service's, on the same client session."""
-    local, raw, bare = [], [], []
+    """:func:`interleaved` medians of a plain get to the service's instance with the request
+    encoded first (a fresh goal id and cancel token each, outside the timing) and its reply's
+    bytes not parsed — the service without the client library. A loop of its own, after the
+    service's, on the same client session."""
     key = proto.plan_key(client.prefix, client.instances()[0])
-    echo_payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
-    for i in range(n + 5):
+
+    def raw_get(i: int) -> float:
         payload = proto.encode_request(f"g-raw{i:08d}-1", request, proto.new_cancel_token())
-        t0 = time.perf_counter()
-        plan(request, keep_trace=False)
-        t1 = time.perf_counter()
-        rt_raw = echo_round_trip(client.session, payload, key)
-        plan(request, keep_trace=False)
-        rt = echo_round_trip(echo, echo_payload)
-        if i >= 5:
-            local.append(t1 - t0)
-            raw.append(rt_raw)
-            bare.append(rt)
-    return median_ms(local), median_ms(raw), median_ms(bare)
+        return echo_round_trip(client.session, payload, key)
+
+    return interleaved(request, echo, n, raw_get)
 
 
 def start_router() -> tuple[subprocess.Popen[str], int]:
