@@ -20,6 +20,7 @@ from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord, to_jsonable
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan
+from tests.service.threads import run_in_threads
 
 
 def reference_to_jsonable(value: Any) -> Any:
@@ -235,8 +236,6 @@ def test_encoded_plan_requests_read_back_exactly(seed):
 
 
 def test_cycle_record_json_from_concurrent_workers_with_different_weights():
-    import threading
-
     bad: list[bytes] = []
 
     def work(weights: Weights) -> None:
@@ -247,11 +246,7 @@ def test_cycle_record_json_from_concurrent_workers_with_different_weights():
             if got != expected:
                 bad.append(got)
 
-    threads = [threading.Thread(target=work, args=(w,)) for w in (Weights(0.5, 0.5, 0.0), Weights(0.2, 0.8))]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(60)
+    run_in_threads(work, (Weights(0.5, 0.5, 0.0), Weights(0.2, 0.8)), 60)
     assert not bad
 
 

@@ -14,6 +14,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import PlanOutcome, ServiceUnavailableError
 from eos_svc.service.demo_planner import slowed
+from tests.service.threads import run_in_threads
 
 OK_STATUS = "completed" if os.environ.get("EOS_TEST_PLANNER") == "root" else "success"
 STATUSES = {"success", "failed", "stalled", "cycle_limit", "deadline", "cancelled", "error", "completed"}
@@ -238,12 +239,7 @@ def test_busy_past_the_queue_bound(port, services, clients, grasp_planner):
         except proto.RequestError as err:
             outs.append(err)
 
-    threads = [threading.Thread(target=ask, args=(f"b{i}",)) for i in range(4)]
-    for t in threads:
-        t.start()
-        time.sleep(0.03)
-    for t in threads:
-        t.join(15)
+    run_in_threads(ask, (f"b{i}" for i in range(4)), 15, stagger=0.03)
     busy = [o for o in outs if isinstance(o, proto.RequestError)]
     done = [o for o in outs if isinstance(o, PlanOutcome)]
     assert len(outs) == 4 and len(done) == 2 and len(busy) == 2
@@ -276,11 +272,7 @@ def test_concurrent_plans_all_answered_with_complete_streams(port, services, cli
         with lock:
             outs.append(out)
 
-    threads = [threading.Thread(target=run, args=(i,)) for i in range(8)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(20)
+    run_in_threads(run, range(8), 20)
     assert sorted(o.goal_id for o in outs) == sorted(f"c{i}" for i in range(8))
     for o in outs:
         assert_stream_complete(o)
@@ -294,14 +286,7 @@ def test_discovery_and_spreading_over_two_instances(port, services, clients, gra
     assert client.wait_for_instances(2) == sorted([a.instance, b.instance])
     assert client.discover() == sorted([a.instance, b.instance])
     outs: list[PlanOutcome] = []
-    threads = [
-        threading.Thread(target=lambda i=i: outs.append(client.plan(PlanRequest(), goal_id=f"s{i}")))
-        for i in range(8)
-    ]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(20)
+    run_in_threads(lambda i: outs.append(client.plan(PlanRequest(), goal_id=f"s{i}")), range(8), 20)
     used = {o.instance for o in outs}
     assert used == {a.instance, b.instance}
     assert a.stats.replied_ok >= 2 and b.stats.replied_ok >= 2

@@ -3,7 +3,6 @@ has ended, and never one whose query is still running (eos_svc.service.client._W
 
 from __future__ import annotations
 
-import threading
 import time
 
 import pytest
@@ -12,6 +11,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import _END, _Waiter
 from eos_svc.service.demo_planner import root_plan
+from tests.service.threads import run_in_threads
 
 ONE = PlanRequest(seed=3, max_cycles=1)
 
@@ -79,11 +79,7 @@ def test_concurrent_plans_through_one_client_never_share_a_waiter(port, services
         except BaseException as exc:
             errors.append(exc)
 
-    threads = [threading.Thread(target=work, args=(k,)) for k in range(4)]
-    for t in threads:
-        t.start()
-    for t in threads:
-        t.join(60)
+    run_in_threads(work, range(4), 60)
     assert not errors
     assert results == {s: s for s in results} and len(results) == 32  # each its own reply
     assert len(client._spare_waiters) <= 8
