@@ -180,39 +180,19 @@ def echo_round_trip(session: zenoh.Session, payload: bytes, key: Any = "bench/ec
     return dt
 
 
-def overhead(
-    client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int, watch: bool
-) -> tuple[float, float, float, int]:
-    """Interleaved medians (ms): in-process plan, service round trip, bare echo; and the plan's cycles."""
-    local, remote, bare = [], [], []
-    cycles = 0
-    payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
-    for i in range(n + 5):
-        t0 = time.perf_counter()
-        plan(request, keep_trace=False)
-        t1 = time.perf_counter()
-        out = client.plan(request, watch=watch)
-        t2 = time.perf_counter()
-        if watch:
-            assert out.complete
-        cycles = out.result["cycles"]
-        plan(request, keep_trace=False)  # the echo, too, right after an in-process plan
-        rt = echo_round_trip(echo, payload)
-        if i >= 5:  # warm-up
-            local.append(t1 - t0)
-            remote.append(t2 - t1)
-            bare.append(rt)
-    return median_ms(local), median_ms(remote), median_ms(bare), cycles
+def echo_payload(request: PlanRequest) -> bytes:
+    """The bare get->reply's request: as many bytes as ``request``'s plan request."""
+    return b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
 
 
 def interleaved(
     request: PlanRequest, echo: zenoh.Session, n: int, round_trip: Callable[[int], float]
 ) -> tuple[float, float, float]:
-    """Interleaved medians (ms), as :func:`overhead` runs them: the in-process plan,
-    ``round_trip(i)`` right after it (the i-th round trip under test, s), then another
-    in-process plan and the bare echo; the first five rounds are warm-up."""
+    """Interleaved medians (ms): the in-process plan, ``round_trip(i)`` right after it (the i-th
+    round trip under test, s), then another in-process plan (the echo, too, right after one) and
+    the bare echo; the first five rounds are warm-up."""
     local, tested, bare = [], [], []
-    payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
+    payload = echo_payload(request)
     for i in range(n + 5):
         t0 = time.perf_counter()
         plan(request, keep_trace=False)
@@ -227,13 +207,33 @@ def interleaved(
     return median_ms(local), median_ms(tested), median_ms(bare)
 
 
+def overhead(
+    client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int, watch: bool
+) -> tuple[float, float, float, int]:
+    """:func:`interleaved` medians of the service round trip (``client.plan``); and the plan's cycles."""
+    cycles = 0
+
+    def service_round_trip(_: int) -> float:
+        nonlocal cycles
+        t0 = time.perf_counter()
+        out = client.plan(request, watch=watch)
+        dt = time.perf_counter() - t0
+        if watch:
+            assert out.complete
+        cycles = out.result["cycles"]
+        return dt
+
+    local, remote, bare = interleaved(request, echo, n, service_round_trip)
+    return local, remote, bare, cycles
+
+
 def planning_echo(
     echo: zenoh.Session, echo_planning: zenoh.Session, request: PlanRequest, n: int
 ) -> tuple[float, float, float]:
     """:func:`interleaved` medians of the echo that runs the same plan before replying. A loop of
     its own, after the service's: a plan in another process between the service's requests
     would change them."""
-    payload = b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
+    payload = echo_payload(request)
     return interleaved(request, echo, n, lambda _: echo_round_trip(echo_planning, payload))
 
 
