@@ -37,7 +37,7 @@ from eos_svc.errors import ComputationError, ValidationError
 from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
-from eos_svc.service.session import free_port, loopback, make_config
+from eos_svc.service.session import direct_callback, free_port, loopback, make_config
 
 
 @dataclass
@@ -194,7 +194,7 @@ class Observer:
         self._lock = threading.Lock()
         self.seqs: dict[tuple[str, str], list[int]] = defaultdict(list)
         self.done: dict[tuple[str, str], int] = {}
-        self._sub = session.declare_subscriber(proto.goal_keys(prefix), self._on)
+        self._sub = session.declare_subscriber(proto.goal_keys(prefix), direct_callback(self._on))
 
     def _on(self, sample: zenoh.Sample) -> None:
         msg = json.loads(sample.payload.to_bytes())
