@@ -37,7 +37,11 @@
    the router (``/proc``): which of them saturates, if any.
 
 ``--breakdown`` times one request's path across both processes (timestamps on
-the monotonic clock, which both share) and prints the median of every step.
+the monotonic clock, which both share) and prints the median of every step; then
+it times the bare get->reply and the planning one (no service code) the same way
+and prints the steps they share with the service's request beside the service's:
+the transport legs, the answering thread's wake-up, the plan, the reply call, the
+client's wake-up. What the service adds is the rest.
 
 Loopback only (tcp/127.0.0.1), multicast scouting off.
 """
@@ -46,12 +50,14 @@ from __future__ import annotations
 
 import argparse
 import importlib.metadata
+import json
 import os
 import queue
 import signal
 import statistics
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections import defaultdict
@@ -66,6 +72,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
 from eos_svc.service import protocol as proto
 from eos_svc.service.reliability import Server, start_servers, stop_servers
+from eos_svc.service.session import direct_callback
 
 
 def median_ms(xs: list[float]) -> float:
@@ -113,30 +120,48 @@ def _wait_for(stop: threading.Event, limit_s: float) -> None:
 ECHO_REPLY_BYTES = 1600
 
 
-def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES, plan_first: bool = False) -> None:
+def echo_server(
+    port: int, reply_bytes: int = ECHO_REPLY_BYTES, plan_first: bool = False, stamps_out: str | None = None
+) -> None:
     """``--echo-server``: a queryable answering every get at once from its own thread (loopback).
 
     ``plan_first``: the answering thread runs the 1-cycle plan (``PlanRequest(seed=3,
     max_cycles=1)``, no admission check, as the service runs it) before each reply: a bare
-    get->reply carrying the same work as the service's, without any service code."""
+    get->reply carrying the same work as the service's, without any service code.
+    ``stamps_out``: stamp the steps the service's probe stamps too (the queryable's callback, a
+    Python function in Zenoh's thread as the service's; the answering thread's wake-up; the
+    reply call) and write them to this file at SIGTERM (``--breakdown``)."""
     work = PlanRequest(seed=3, max_cycles=1)
     if plan_first:
         plan(work, keep_trace=False, check=False)  # warm: the hand, the fit
+    if stamps_out is not None:
+        sys.setswitchinterval(0.001)  # as eos serve
     session = zenoh.open(make_config(listen=[loopback(port)]))
     inbox: queue.SimpleQueue[zenoh.Query] = queue.SimpleQueue()
+
+    def stamped_put(query: zenoh.Query) -> None:
+        _stamp("callback")
+        inbox.put(query)
+
     qable = session.declare_queryable(
-        "bench/echo", zenoh.handlers.Callback(inbox.put, indirect=False), complete=True
+        "bench/echo",
+        direct_callback(stamped_put) if stamps_out else zenoh.handlers.Callback(inbox.put, indirect=False),
+        complete=True,
     )
     body = b"x" * reply_bytes
+    stamp = _stamp if stamps_out else lambda _label: None
     stop = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: stop.set())
 
     def answer() -> None:
         while True:
             q = inbox.get()
+            stamp("worker")
             if plan_first:
                 plan(work, keep_trace=False, check=False)
+            stamp("reply0")
             q.reply("bench/echo", body)
+            stamp("reply1")
             q.drop()
 
     threading.Thread(target=answer, daemon=True).start()
@@ -144,13 +169,19 @@ def echo_server(port: int, reply_bytes: int = ECHO_REPLY_BYTES, plan_first: bool
     _wait_for(stop, 600)  # bounded: the benchmark ends it long before
     qable.undeclare()
     session.close()
+    if stamps_out is not None:
+        with open(stamps_out, "w") as f:
+            json.dump(_STAMPS, f)
 
 
-def start_echo(reply_bytes: int, plan_first: bool = False) -> tuple[subprocess.Popen[str], zenoh.Session]:
+def start_echo(
+    reply_bytes: int, plan_first: bool = False, stamps_out: str | None = None
+) -> tuple[subprocess.Popen[str], zenoh.Session]:
     port = free_port()
     proc = subprocess.Popen(
         [sys.executable, __file__, "--echo-server", str(port), str(reply_bytes)]
-        + (["--plan-first"] if plan_first else []),
+        + (["--plan-first"] if plan_first else [])
+        + (["--stamps", stamps_out] if stamps_out else []),
         stdout=subprocess.PIPE,
         text=True,
     )
@@ -178,6 +209,12 @@ def echo_round_trip(session: zenoh.Session, payload: bytes, key: Any = "bench/ec
     while events.get(timeout=5) is not None:
         pass
     return dt
+
+
+def plan_reply_bytes(instance: str, result: dict[str, Any]) -> int:
+    """Bytes of the service's reply to a plan whose result is ``result`` (what the echo sends)."""
+    head = b'{"schema":1,"goal_id":"g-000000000000-1","instance":"%s","result":' % instance.encode()
+    return len(head + proto.encode_result(result) + b"}")
 
 
 def echo_payload(request: PlanRequest) -> bytes:
@@ -427,8 +464,6 @@ class _Proxy:
 
 def probe_server(port: int, out: str) -> None:
     """``--probe-server``: a one-worker grasp service with timestamps on every step."""
-    import json
-
     from eos_svc.service import protocol as proto
     from eos_svc.service import server as srv
 
@@ -527,11 +562,96 @@ _STEPS = [
 ]
 
 
-def breakdown(n: int) -> None:
-    """Time the steps of ``n`` 1-cycle requests (no stream), interleaved with in-process plans."""
-    import json
-    import tempfile
+#: the steps a planning echo (no service code) shares with the service's request: (from, to,
+#: what, the service's step in _STEPS)
+_ECHO_STEPS = [
+    ("get0", "callback", "transport: get -> server callback (GIL taken)", ("get0", "callback")),
+    ("callback", "worker", "server: queue, wake the answering thread", ("admitted", "worker")),
+    ("worker", "reply0", "plan in the server", ("plan0", "plan1")),
+    ("reply0", "reply1", "server: query.reply call", ("reply0", "reply1")),
+    ("reply0", "reply_cb", "transport: reply -> client callback (GIL taken)", ("reply0", "reply_cb")),
+    ("reply_cb", "end", "client: wake the waiting thread", ("reply_cb", "loads0")),
+]
 
+
+def _step_medians(
+    starts: list[int], server_stamps: list[tuple[str, int]], steps: list[tuple[str, str]], skip: int
+) -> dict[tuple[str, str], float]:
+    """Median µs of every step in ``steps`` over the requests after the first ``skip``: the
+    client's stamps of a request run from its index in ``starts`` (into ``_STAMPS``), the
+    server's from its ``callback`` stamp."""
+    client_runs = [_STAMPS[a:b] for a, b in zip(starts, [*starts[1:], len(_STAMPS)], strict=True)]
+    server_runs: list[list[tuple[str, int]]] = []
+    for label, t in server_stamps:
+        if label == "callback":
+            server_runs.append([])
+        if server_runs:
+            server_runs[-1].append((label, t))
+    found: dict[tuple[str, str], list[float]] = defaultdict(list)
+    for c_run, s_run in list(zip(client_runs, server_runs, strict=False))[skip:]:
+        first: dict[str, int] = {}
+        for label, t in c_run + s_run:
+            first.setdefault(label, t)
+        for a, b in steps:
+            if a in first and b in first:
+                found[(a, b)].append((first[b] - first[a]) / 1e3)
+    return {step: statistics.median(times) for step, times in found.items()}
+
+
+def _echo_steps(
+    n: int, reply_bytes: int, plan_first: bool
+) -> tuple[float, float, dict[tuple[str, str], float]]:
+    """The echo's round trip and its time over the in-process plan (ms), and its steps (µs):
+    ``n`` gets, each right after an in-process plan, as :func:`breakdown` times the service's;
+    the reply taken by a Python callback in Zenoh's thread, as the client library's is stamped.
+    ``plan_first``: the planning echo (see :func:`echo_server`)."""
+    fd, out = tempfile.mkstemp(prefix="eos-echo-", suffix=".json")
+    os.close(fd)
+    proc, session = start_echo(reply_bytes, plan_first=plan_first, stamps_out=out)
+    payload = echo_payload(PlanRequest(seed=3, max_cycles=1))
+    request = PlanRequest(seed=3, max_cycles=1)
+    starts, trips, over = [], [], []
+    try:
+        for i in range(n + 10):
+            events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+
+            def on_reply(reply: Any, events: queue.SimpleQueue[Any] = events) -> None:
+                _stamp("reply_cb")
+                events.put(reply)
+
+            t0 = time.perf_counter_ns()
+            plan(request, keep_trace=False)
+            t1 = time.perf_counter_ns()
+            starts.append(len(_STAMPS))
+            _stamp("get0")
+            session.get(
+                "bench/echo",
+                direct_callback(on_reply, lambda events=events: events.put(None)),
+                payload=payload,
+                consolidation=zenoh.ConsolidationMode.NONE,
+                timeout=5,
+            )
+            assert events.get(timeout=5) is not None
+            _stamp("end")
+            while events.get(timeout=5) is not None:
+                pass
+            if i >= 10:
+                trips.append(_STAMPS[-1][1] - t1)
+                over.append((_STAMPS[-1][1] - t1) - (t1 - t0))
+    finally:
+        session.close()
+        proc.send_signal(signal.SIGTERM)
+        proc.wait(30)
+    with open(out) as f:
+        server_stamps = json.load(f)
+    os.unlink(out)
+    steps = _step_medians(starts, server_stamps, [(a, b) for a, b, _, _ in _ECHO_STEPS], 10)
+    return statistics.median(trips) / 1e6, statistics.median(over) / 1e6, steps
+
+
+def breakdown(n: int) -> None:
+    """Time the steps of ``n`` 1-cycle requests (no stream), interleaved with in-process plans;
+    then the steps a planning echo shares with them, timed the same way."""
     from eos_svc.service import client as cli
     from eos_svc.service import protocol as proto
 
@@ -560,39 +680,27 @@ def breakdown(n: int) -> None:
     request = PlanRequest(seed=3, max_cycles=1)
     local, remote = [], []
     starts = []
+    reply_bytes = 0
     for i in range(n + 10):
         t0 = time.perf_counter_ns()
         plan(request, keep_trace=False)
         t1 = time.perf_counter_ns()
         starts.append(len(_STAMPS))
         _stamp("start")
-        client.plan(request, watch=False)
+        outcome = client.plan(request, watch=False)
         _stamp("end")
         if i >= 10:
             local.append(t1 - t0)
             remote.append(_STAMPS[-1][1] - t1)
+        reply_bytes = plan_reply_bytes("probe", outcome.result)
     client.close()
+    cli.direct_callback = direct  # type: ignore[assignment]
     proc.send_signal(signal.SIGTERM)
     proc.wait(30)
     with open(out) as f:
         server_stamps = json.load(f)
     os.unlink(out)
-    # one list of events per request: the client's from its "start", the server's from its "callback"
-    client_runs = [_STAMPS[a:b] for a, b in zip(starts, [*starts[1:], len(_STAMPS)], strict=True)]
-    server_runs: list[list[tuple[str, int]]] = []
-    for label, t in server_stamps:
-        if label == "callback":
-            server_runs.append([])
-        if server_runs:
-            server_runs[-1].append((label, t))
-    steps: dict[tuple[str, str], list[float]] = defaultdict(list)
-    for c_run, s_run in list(zip(client_runs, server_runs, strict=False))[10:]:
-        first: dict[str, int] = {}
-        for label, t in c_run + s_run:
-            first.setdefault(label, t)
-        for a, b, _ in _STEPS:
-            if a in first and b in first:
-                steps[(a, b)].append((first[b] - first[a]) / 1e3)
+    steps = _step_medians(starts, server_stamps, [(a, b) for a, b, _ in _STEPS], 10)
     m = statistics.median
     print(
         f"breakdown of a 1-cycle plan request, no stream ({n} requests, medians; "
@@ -603,8 +711,20 @@ def breakdown(n: int) -> None:
         f"overhead {(m(remote) - m(local)) / 1e6:.2f} ms"
     )
     for a, b, what in _STEPS:
-        if steps[(a, b)]:
-            print(f"   {what:<50} {m(steps[(a, b)]):8.0f} µs")
+        if (a, b) in steps:
+            print(f"   {what:<50} {steps[(a, b)]:8.0f} µs")
+    bare_trip, _, bare_steps = _echo_steps(n, reply_bytes, plan_first=False)
+    _, echo_over, echo_steps = _echo_steps(n, reply_bytes, plan_first=True)
+    print(
+        f"the same steps of a bare get->reply ({bare_trip:.2f} ms) and of one whose queryable runs the same "
+        f"plan first ({echo_over:.2f} ms over the in-process plan), each right after an in-process plan: "
+        f"no service code; {n} requests each, medians"
+    )
+    print(f"   {'step':<50} {'bare':>8}    {'planning':>8}    {'service':>8}")
+    for a, b, what, service_step in _ECHO_STEPS:
+        if (a, b) in echo_steps and service_step in steps:
+            bare = f"{bare_steps[(a, b)]:8.0f} µs" if (a, b) in bare_steps else f"{'-':>8}   "
+            print(f"   {what:<50} {bare} {echo_steps[(a, b)]:8.0f} µs {steps[service_step]:8.0f} µs")
 
 
 def overhead_part(n_rt: int) -> None:
@@ -618,11 +738,9 @@ def overhead_part(n_rt: int) -> None:
     try:
         client = EosClient.open(make_config(connect=[loopback(servers[0].port)]))
         client.wait_for_instances(1, timeout=15)
-        reply_bytes = len(  # the echo answers with as many bytes as a 1-cycle plan's reply
-            b'{"schema":1,"goal_id":"g-000000000000-1","instance":"%s","result":'
-            % servers[0].instance.encode()
-            + proto.encode_result(client.plan(PlanRequest(seed=3, max_cycles=1), watch=False).result)
-            + b"}"
+        # the echo answers with as many bytes as a 1-cycle plan's reply
+        reply_bytes = plan_reply_bytes(
+            servers[0].instance, client.plan(PlanRequest(seed=3, max_cycles=1), watch=False).result
         )
         echo_proc, echo = start_echo(reply_bytes)
         rows: list[tuple[str, float, float, float, int]] = []
@@ -747,11 +865,12 @@ def main() -> int:
     parser.add_argument("--only", choices=("overhead", "scale-out"), help="run one of the two parts")
     parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
     parser.add_argument("--plan-first", action="store_true", help=argparse.SUPPRESS)
+    parser.add_argument("--stamps", metavar="OUT", help=argparse.SUPPRESS)
     parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo_server is not None:
         port, reply_bytes = args.echo_server
-        echo_server(port, reply_bytes, plan_first=args.plan_first)
+        echo_server(port, reply_bytes, plan_first=args.plan_first, stamps_out=args.stamps)
         return 0
     if args.probe_server is not None:
         probe_server(int(args.probe_server[0]), args.probe_server[1])
