@@ -621,8 +621,8 @@ def _echo_steps(
     fd, out = tempfile.mkstemp(prefix="eos-echo-", suffix=".json")
     os.close(fd)
     proc, session = start_echo(reply_bytes, plan_first=plan_first, stamps_out=out)
-    payload = echo_payload(PlanRequest(seed=3, max_cycles=1))
     request = PlanRequest(seed=3, max_cycles=1)
+    payload = echo_payload(request)
     starts, trips, over = [], [], []
     try:
         for i in range(n + 10):
@@ -664,7 +664,7 @@ def _echo_steps(
 
 def breakdown(n: int) -> None:
     """Time the steps of ``n`` 1-cycle requests (no stream), interleaved with in-process plans;
-    then the steps a planning echo shares with them, timed the same way."""
+    then the steps a bare and a planning get->reply share with them, timed the same way."""
     from eos_svc.service import client as cli
     from eos_svc.service import protocol as proto
 
