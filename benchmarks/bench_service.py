@@ -384,6 +384,67 @@ def _batch(
     return Batch(len(requests) / wall, wall, plan_s, len(used), {k: cpu1[k] - cpu0[k] for k in cpu1})
 
 
+def plain_planner() -> None:
+    """``--plain-planner``: plans with no service around them: every line on stdin is a seed,
+    planned (the default request otherwise), then ``done``."""
+    plan(PlanRequest(seed=1), keep_trace=False)  # warm: the hand, the fit (kernels loaded by main)
+    print("planner ready", flush=True)
+    for line in sys.stdin:
+        plan(PlanRequest(seed=int(line)), keep_trace=False)
+        print("done", flush=True)
+
+
+class PlainPlanners:
+    """Two :func:`plain_planner` processes: the scale-out's plans in the first alone or spread over
+    both, timed in the same rounds as the service's batches — what this machine's two cores give
+    the planner by itself then (the ceiling of the service's two / one)."""
+
+    def __init__(self) -> None:
+        self.procs = [
+            subprocess.Popen(
+                [sys.executable, __file__, "--plain-planner"],
+                stdin=subprocess.PIPE,
+                stdout=subprocess.PIPE,
+                text=True,
+            )
+            for _ in range(2)
+        ]
+        for proc in self.procs:
+            assert proc.stdout is not None and "planner ready" in proc.stdout.readline()
+
+    def rate(self, seeds: list[int], processes: int) -> float:
+        """Plans per second of ``seeds`` in the first process alone (1) or over both (2), each
+        process taking the next seed when it is done with one (as the service's workers do)."""
+        todo: queue.SimpleQueue[int] = queue.SimpleQueue()
+        for seed in seeds:
+            todo.put(seed)
+
+        def feed(proc: subprocess.Popen[str]) -> None:
+            assert proc.stdin is not None and proc.stdout is not None
+            while True:
+                try:
+                    seed = todo.get_nowait()
+                except queue.Empty:
+                    return
+                proc.stdin.write(f"{seed}\n")
+                proc.stdin.flush()
+                assert proc.stdout.readline().strip() == "done"
+
+        feeders = [threading.Thread(target=feed, args=(proc,)) for proc in self.procs[:processes]]
+        t0 = time.perf_counter()
+        for t in feeders:
+            t.start()
+        for t in feeders:
+            t.join()
+        return len(seeds) / (time.perf_counter() - t0)
+
+    def close(self) -> None:
+        for proc in self.procs:
+            if proc.stdin is not None:
+                proc.stdin.close()
+            proc.wait(10)
+
+
 #: seconds from a service process's start to the end of the scale-out's warm-up: each process
 #: loads the fit's compiled kernels in a background thread when it starts (1-2 s here, from
 #: numba's cache on disk, which this process's own ``kernels.load()`` writes if it is missing),
@@ -392,12 +453,17 @@ KERNELS_LOAD_S = 3.0
 
 
 def scale_out(
-    requests: list[PlanRequest], threads: int, rounds: int, via_router: bool = False
-) -> tuple[list[Batch], list[Batch]]:
+    requests: list[PlanRequest],
+    threads: int,
+    rounds: int,
+    via_router: bool = False,
+    plain: PlainPlanners | None = None,
+) -> tuple[list[Batch], list[Batch], list[float]]:
     """Plans/s with one and with two service processes, in alternating batches on the same two
     processes (one worker each): "one" sends every plan to inst-0 (inst-1 idles), "two" spreads
     them. Peer to peer, or every session a Zenoh client of a router process. Returns the batches
-    of each round: (one, two)."""
+    of each round: (one, two), and ``plain``'s two / one in each round (after the service's
+    batches; empty without ``plain``)."""
     router = None
     if via_router:
         router, router_port = start_router()
@@ -409,6 +475,7 @@ def scale_out(
     started = time.monotonic()
     one: list[Batch] = []
     two: list[Batch] = []
+    ceiling: list[float] = []
     try:
         client = EosClient.open(config)
         client.wait_for_instances(2, timeout=15)
@@ -419,16 +486,20 @@ def scale_out(
         pids = {"services": [s.proc.pid for s in servers]}
         if router is not None:
             pids["router"] = [router.pid]
+        seeds = [r.seed for r in requests]
         for _ in range(rounds):
             one.append(_batch(client, requests, threads, servers[0].instance, pids))
             two.append(_batch(client, requests, threads, None, pids))
+            if plain is not None:
+                alone = plain.rate(seeds, 1)  # in the order of the service's batches: one, then two
+                ceiling.append(plain.rate(seeds, 2) / alone)
         client.close()
     finally:
         stop_servers(servers)
         if router is not None:
             router.terminate()
             router.wait(10)
-    return one, two
+    return one, two, ceiling
 
 
 # ---------------------------------------------------------------------------------------- --breakdown
@@ -836,8 +907,15 @@ def scale_out_part(n_tp: int, rounds: int) -> None:
         "'two' = spread over both"
     )
     ratios = {}
-    for topology, via_router in (("peer to peer", False), ("through a router", True)):
-        one, two = scale_out(requests, threads=4, rounds=rounds, via_router=via_router)
+    plain = PlainPlanners()
+    try:
+        runs = {
+            topology: scale_out(requests, threads=4, rounds=rounds, via_router=via_router, plain=plain)
+            for topology, via_router in (("peer to peer", False), ("through a router", True))
+        }
+    finally:
+        plain.close()
+    for topology, (one, two, ceiling) in runs.items():
         per_round = [b.rate / a.rate for a, b in zip(one, two, strict=True)]
         ratios[topology] = statistics.median(per_round)
         med = statistics.median
@@ -845,6 +923,12 @@ def scale_out_part(n_tp: int, rounds: int) -> None:
             f"   {topology:<17} one {med(b.rate for b in one):6.2f} plans/s, two "
             f"{med(b.rate for b in two):6.2f} plans/s; two / one per round "
             f"{', '.join(f'{r:.2f}' for r in per_round)} -> median {ratios[topology]:.2f}x"
+        )
+        print(
+            f"   {'':<17} the same plans in two plain planner processes (no service, no Zenoh), right "
+            f"after in each round: two / one {', '.join(f'{r:.2f}' for r in ceiling)} -> median "
+            f"{med(ceiling):.2f}x (what the two cores gave the planner itself; the service's "
+            f"{ratios[topology]:.2f}x is {ratios[topology] / med(ceiling):.0%} of it)"
         )
         # two / one = 2 x (busy two / busy one) / (plan time two / plan time one)
         slower = med(med(b.plan_s) for b in two) / med(med(b.plan_s) for b in one)
@@ -879,11 +963,16 @@ def main() -> int:
     parser.add_argument("--echo-server", type=int, nargs=2, metavar=("PORT", "BYTES"), help=argparse.SUPPRESS)
     parser.add_argument("--plan-first", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--stamps", metavar="OUT", help=argparse.SUPPRESS)
+    parser.add_argument("--plain-planner", action="store_true", help=argparse.SUPPRESS)
     parser.add_argument("--probe-server", nargs=2, metavar=("PORT", "OUT"), help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.echo_server is not None:
         port, reply_bytes = args.echo_server
         echo_server(port, reply_bytes, plan_first=args.plan_first, stamps_out=args.stamps)
+        return 0
+    if args.plain_planner:
+        kernels.load()
+        plain_planner()
         return 0
     if args.probe_server is not None:
         probe_server(int(args.probe_server[0]), args.probe_server[1])
