@@ -36,7 +36,10 @@
    time goes: each plan's own duration in its process (``wall_time_s``) with
    one and with two processes busy, the fraction of each process's time spent
    planning, and the CPU time per plan of the service processes, the client and
-   the router (``/proc``): which of them saturates, if any.
+   the router (``/proc``): which of them saturates, if any. Each round also plans
+   the same requests in two plain planner processes (no service, no Zenoh; one
+   alone, then both) right after the service's batches: their two / one is what
+   the machine's two cores gave the planner itself in those minutes.
 
 ``--breakdown`` times one request's path across both processes (timestamps on
 the monotonic clock, which both share) and prints the median of every step; then
