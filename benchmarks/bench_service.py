@@ -151,7 +151,7 @@ def echo_server(
 
     qable = session.declare_queryable(
         "bench/echo",
-        direct_callback(stamped_put) if stamps_out else zenoh.handlers.Callback(inbox.put, indirect=False),
+        direct_callback(stamped_put if stamps_out else inbox.put),
         complete=True,
     )
     body = b"x" * reply_bytes
@@ -197,20 +197,35 @@ def start_echo(
     return proc, session
 
 
-def echo_round_trip(session: zenoh.Session, payload: bytes, key: Any = "bench/echo") -> float:
+def echo_round_trip(
+    session: zenoh.Session, payload: bytes, key: Any = "bench/echo", stamped: bool = False
+) -> float:
     """One get->reply to the echo server (s), through a callback and a queue as the client does
-    (``key``: another queryable's, e.g. a service instance's plan key)."""
+    (``key``: another queryable's, e.g. a service instance's plan key). ``stamped``
+    (``--breakdown``): stamp ``get0``, ``reply_cb`` (in a Python callback in Zenoh's thread, as
+    the client library's reply is stamped) and ``end``."""
     events: queue.SimpleQueue[Any] = queue.SimpleQueue()
+
+    def stamped_put(reply: Any) -> None:
+        _stamp("reply_cb")
+        events.put(reply)
+
     t0 = time.perf_counter()
+    if stamped:
+        _stamp("get0")
     session.get(
         key,
-        zenoh.handlers.Callback(events.put, lambda: events.put(None), indirect=False),
+        direct_callback(stamped_put, lambda: events.put(None))
+        if stamped
+        else zenoh.handlers.Callback(events.put, lambda: events.put(None), indirect=False),
         payload=payload,
         consolidation=zenoh.ConsolidationMode.NONE,
         timeout=5,
     )
     reply = events.get(timeout=5)
     dt = time.perf_counter() - t0
+    if stamped:
+        _stamp("end")
     assert reply is not None and reply.ok is not None, reply
     while events.get(timeout=5) is not None:
         pass
@@ -697,34 +712,18 @@ def _echo_steps(
     proc, session = start_echo(reply_bytes, plan_first=plan_first, stamps_out=out)
     request = PlanRequest(seed=3, max_cycles=1)
     payload = echo_payload(request)
-    starts, trips, over = [], [], []
+    starts: list[int] = []
+    trips, over = [], []
     try:
         for i in range(n + 10):
-            events: queue.SimpleQueue[Any] = queue.SimpleQueue()
-
-            def on_reply(reply: Any, events: queue.SimpleQueue[Any] = events) -> None:
-                _stamp("reply_cb")
-                events.put(reply)
-
-            t0 = time.perf_counter_ns()
+            t0 = time.perf_counter()
             plan(request, keep_trace=False)
-            t1 = time.perf_counter_ns()
+            t1 = time.perf_counter()
             starts.append(len(_STAMPS))
-            _stamp("get0")
-            session.get(
-                "bench/echo",
-                direct_callback(on_reply, lambda events=events: events.put(None)),
-                payload=payload,
-                consolidation=zenoh.ConsolidationMode.NONE,
-                timeout=5,
-            )
-            assert events.get(timeout=5) is not None
-            _stamp("end")
-            while events.get(timeout=5) is not None:
-                pass
+            trip = echo_round_trip(session, payload, stamped=True)
             if i >= 10:
-                trips.append(_STAMPS[-1][1] - t1)
-                over.append((_STAMPS[-1][1] - t1) - (t1 - t0))
+                trips.append(trip)
+                over.append(trip - (t1 - t0))
     finally:
         session.close()
         proc.send_signal(signal.SIGTERM)
@@ -733,7 +732,7 @@ def _echo_steps(
         server_stamps = json.load(f)
     os.unlink(out)
     steps = _step_medians(starts, server_stamps, [(a, b) for a, b, _, _ in _ECHO_STEPS], 10)
-    return statistics.median(trips) / 1e6, statistics.median(over) / 1e6, steps
+    return median_ms(trips), median_ms(over), steps
 
 
 def breakdown(n: int) -> None:
@@ -767,7 +766,6 @@ def breakdown(n: int) -> None:
     request = PlanRequest(seed=3, max_cycles=1)
     local, remote = [], []
     starts = []
-    reply_bytes = 0
     for i in range(n + 10):
         t0 = time.perf_counter_ns()
         plan(request, keep_trace=False)
@@ -779,7 +777,7 @@ def breakdown(n: int) -> None:
         if i >= 10:
             local.append(t1 - t0)
             remote.append(_STAMPS[-1][1] - t1)
-        reply_bytes = plan_reply_bytes("probe", outcome.result)
+    reply_bytes = plan_reply_bytes("probe", outcome.result)  # the echoes answer with as many bytes
     client.close()
     cli.direct_callback = direct  # type: ignore[assignment]
     proc.send_signal(signal.SIGTERM)
@@ -973,17 +971,17 @@ def main() -> int:
         port, reply_bytes = args.echo_server
         echo_server(port, reply_bytes, plan_first=args.plan_first, stamps_out=args.stamps)
         return 0
-    if args.plain_planner:
-        kernels.load()
-        plain_planner()
-        return 0
     if args.probe_server is not None:
         probe_server(int(args.probe_server[0]), args.probe_server[1])
         return 0
     # the fit's compiled kernels, as the service processes run it (they load them at start): this
-    # process's own plans (the in-process baseline) run the same code, and numba's cache on disk
-    # is written here if missing, so that the services load the kernels instead of compiling them
+    # process's own plans (the in-process baseline, the plain planners') run the same code, and
+    # numba's cache on disk is written here if missing, so that the services load the kernels
+    # instead of compiling them
     kernels.load()
+    if args.plain_planner:
+        plain_planner()
+        return 0
     if args.breakdown:
         breakdown(40 if args.quick else 120)
         return 0
