@@ -570,12 +570,25 @@ class EosClient:
             raise refusal
         return found
 
-    def watch(self, callback: Callable[[str, dict[str, Any]], None], goal_id: str = "*") -> Any:
+    def watch(
+        self,
+        callback: Callable[[str, dict[str, Any]], None],
+        goal_id: str = "*",
+        *,
+        sync_timeout: float | None = 2.0,
+    ) -> Any:
         """Subscribe to cycle and status messages (of every goal by default).
 
         ``callback(kind, message)`` runs in a Zenoh callback thread with ``kind``
         ``"cycle"`` or ``"status"``; keep it short. Returns the subscriber
         (``undeclare()`` it to stop).
+
+        A subscriber's declaration travels to each instance on its own, unacknowledged: a
+        plan another client sends right after could start on an instance that does not know
+        the watcher yet, and that goal's first messages (its ``running`` status) would be
+        missed. So unless ``sync_timeout`` is ``None`` this returns only after a round trip
+        to every live instance (see :meth:`sync_with_instances`), at most ``sync_timeout``
+        seconds: from then on every goal they start is seen from its first message.
         """
 
         def on_sample(sample: zenoh.Sample) -> None:
@@ -586,6 +599,32 @@ class EosClient:
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"
             callback(kind, msg)
 
-        return self.session.declare_subscriber(
+        subscriber = self.session.declare_subscriber(
             proto.goal_keys(self.prefix, goal_id), direct_callback(on_sample)
         )
+        if sync_timeout is not None:
+            self.sync_with_instances(sync_timeout)
+        return subscriber
+
+    def sync_with_instances(self, timeout: float = 2.0) -> list[str]:
+        """Make a round trip to every live instance; return the instances that answered (sorted).
+
+        Zenoh delivers one session's messages to a peer in the order they were sent, so an
+        instance that answers has already received everything this session declared before
+        the call (subscribers above all). The round trip is a cancel query for a goal id no
+        client uses: each instance answers ``found: false`` and nothing else happens.
+        """
+        answered: set[str] = set()
+        probe_goal = f"sync-{secrets.token_hex(8)}"
+        for reply in self.session.get(
+            proto.cancel_key(self.prefix, probe_goal),
+            target=zenoh.QueryTarget.ALL,
+            consolidation=_NO_CONSOLIDATION,
+            timeout=timeout,
+        ):
+            if reply.ok is not None:
+                try:
+                    answered.add(str(proto.loads_message(reply.ok.payload.to_bytes())["instance"]))
+                except (ValueError, KeyError, TypeError):
+                    continue
+        return sorted(answered)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from typing import Any
 
 import pytest
@@ -42,9 +43,14 @@ def test_a_stranger_knowing_the_goal_id_cannot_cancel_the_owner_can(port, servic
     owner.wait_for_instances(2)
     stranger.wait_for_instances(2)
     seen: list[tuple[str, dict[str, Any]]] = []
-    sub = stranger.watch(lambda kind, msg: seen.append((kind, msg)))  # every goal's messages
+    # every goal's messages; watch() returns once both instances know the subscriber
+    sub = stranger.watch(lambda kind, msg: seen.append((kind, msg)))
     t, box = _start_long_plan(owner, "mine-1", cancel_token="owner-secret-0123456789")
-    learned = {msg["goal_id"] for kind, msg in list(seen) if kind == "status"}
+    learned: set[str] = set()
+    deadline = time.monotonic() + 5  # the stranger's copy travels its own route
+    while "mine-1" not in learned and time.monotonic() < deadline:
+        learned = {msg["goal_id"] for kind, msg in list(seen) if kind == "status"}
+        time.sleep(0.005)
     assert "mine-1" in learned  # the goal id is public
     for token in (None, "wrong-secret-0123456789", "owner-secret-012345678X"):
         with pytest.raises(proto.RequestError) as info:
