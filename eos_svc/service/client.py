@@ -243,14 +243,24 @@ class EosClient:
             return sorted(self._live)
 
     def discover(self, timeout: float = 1.0) -> list[str]:
-        """Ask the network for the instances' liveliness tokens (a liveliness query)."""
+        """The instances alive now (sorted): the answers to a liveliness query on their tokens,
+        together with the tokens this client's liveliness subscriber holds.
+
+        Both, because through a router on a loaded machine Zenoh (1.x) now and then answers a
+        liveliness query with nothing, once or for a while, while the tokens are alive and the
+        subscriber has them (seen here about one query in six with both cores busy). With
+        neither holding any token, this waits for the subscriber up to ``timeout`` seconds.
+        """
+        end = time.monotonic() + timeout
         found = set()
         for reply in self.session.liveliness().get(proto.instance_key(self.prefix), timeout=timeout):
             if reply.ok is not None:
                 found.add(str(reply.ok.key_expr).rsplit("/", 1)[-1])
-        with self._lock:
+        with self._live_changed:
             self._live |= found
-        return sorted(found)
+            while not self._live and (left := end - time.monotonic()) > 0:
+                self._live_changed.wait(left)
+            return sorted(self._live)
 
     def wait_for_instances(self, n: int = 1, timeout: float = 5.0) -> list[str]:
         """Block until at least ``n`` instances are alive; returns them (raises ServiceUnavailableError)."""
