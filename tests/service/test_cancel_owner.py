@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import os
 import threading
-import time
 from typing import Any
 
 import pytest
@@ -14,6 +13,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import PlanOutcome
 from eos_svc.service.demo_planner import slowed
+from tests.service.waiting import wait_until
 
 
 def _start_long_plan(client: Any, goal: str, **kwargs: Any) -> tuple[threading.Thread, dict[str, Any]]:
@@ -46,12 +46,12 @@ def test_a_stranger_knowing_the_goal_id_cannot_cancel_the_owner_can(port, servic
     # every goal's messages; watch() returns once both instances know the subscriber
     sub = stranger.watch(lambda kind, msg: seen.append((kind, msg)))
     t, box = _start_long_plan(owner, "mine-1", cancel_token="owner-secret-0123456789")
-    learned: set[str] = set()
-    deadline = time.monotonic() + 5  # the stranger's copy travels its own route
-    while "mine-1" not in learned and time.monotonic() < deadline:
-        learned = {msg["goal_id"] for kind, msg in list(seen) if kind == "status"}
-        time.sleep(0.005)
-    assert "mine-1" in learned  # the goal id is public
+
+    def learned() -> set[str]:
+        return {msg["goal_id"] for kind, msg in list(seen) if kind == "status"}
+
+    wait_until(lambda: "mine-1" in learned(), 5)  # the stranger's copy travels its own route
+    assert "mine-1" in learned()  # the goal id is public
     for token in (None, "wrong-secret-0123456789", "owner-secret-012345678X"):
         with pytest.raises(proto.RequestError) as info:
             stranger.cancel("mine-1", cancel_token=token)
@@ -85,9 +85,7 @@ def test_a_goal_sent_without_a_token_cannot_be_cancelled(port, services, clients
     client.wait_for_instances(1)
     payload = proto.encode_request("tokenless", PlanRequest(max_cycles=30))  # no cancel_token
     handler = client.session.get(proto.plan_key(client.prefix, svc.instance), payload=payload, timeout=20)
-    deadline = threading.Event()
-    while "tokenless" not in svc._active and not deadline.wait(0.01):
-        pass
+    wait_until(lambda: "tokenless" in svc._active, 20)
     with pytest.raises(proto.RequestError) as info:
         client.cancel("tokenless", cancel_token="any-secret-0123456789")
     assert info.value.code == proto.E_FORBIDDEN and "without a cancel_token" in info.value.reason

@@ -4,13 +4,13 @@ instance (three real instances on loopback)."""
 from __future__ import annotations
 
 import json
-import time
 
 import pytest
 import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.service import protocol as proto
+from tests.service.waiting import wait_until
 
 
 @pytest.fixture
@@ -19,9 +19,7 @@ def three(port, services, clients, grasp_planner):
     svcs += [services(connect=(port,), planner=grasp_planner, instance=i) for i in ("inst-a", "inst-c")]
     client = clients(port)
     client.wait_for_instances(3)
-    deadline = time.monotonic() + 5
-    while any(len(s._peers) < 3 for s in svcs) and time.monotonic() < deadline:  # they see each other
-        time.sleep(0.01)
+    wait_until(lambda: all(len(s._peers) >= 3 for s in svcs), 5)  # they see each other
     return svcs, client
 
 

@@ -19,6 +19,7 @@ from eos_svc.agents.request import PlanRequest
 from eos_svc.service.client import EosClient
 from eos_svc.service.server import PlanService
 from eos_svc.service.session import free_port
+from tests.service.waiting import wait_until
 
 ROOT = Path(__file__).resolve().parents[2]
 CONFIG = ROOT / "config"
@@ -189,15 +190,13 @@ def test_router_three_instances_clients_in_processes_kill_and_freeze(deployment)
             )
             for k in range(3)
         ]
-        # SIGKILL inst-2 while it runs a plan
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
+
+        def inst2_busy() -> bool:
             with lock:
-                busy = bool(running["inst-2"])
-            if busy:
-                break
-            time.sleep(0.005)
-        assert busy, "inst-2 never ran a plan"
+                return bool(running["inst-2"])
+
+        # SIGKILL inst-2 while it runs a plan
+        assert wait_until(inst2_busy, 60, interval=0.005), "inst-2 never ran a plan"
         deployment["instances"][2].send_signal(signal.SIGKILL)
         outputs = [c.communicate(timeout=120) for c in clients]
         sub.undeclare()

@@ -15,6 +15,7 @@ from eos_svc.service import protocol as proto
 from eos_svc.service.client import PlanOutcome, ServiceUnavailableError
 from eos_svc.service.demo_planner import slowed
 from tests.service.threads import run_in_threads
+from tests.service.waiting import wait_until
 
 OK_STATUS = "completed" if os.environ.get("EOS_TEST_PLANNER") == "root" else "success"
 STATUSES = {"success", "failed", "stalled", "cycle_limit", "deadline", "cancelled", "error", "completed"}
@@ -293,9 +294,7 @@ def test_discovery_and_spreading_over_two_instances(port, services, clients, gra
     for o in outs:
         assert_stream_complete(o)
     b.stop()
-    deadline = time.monotonic() + 5
-    while b.instance in client.instances() and time.monotonic() < deadline:
-        time.sleep(0.02)
+    wait_until(lambda: b.instance not in client.instances(), 5, interval=0.02)
     assert client.instances() == [a.instance]
 
 

@@ -5,10 +5,10 @@ connected through the first)."""
 from __future__ import annotations
 
 import threading
-import time
 from typing import Any
 
 from eos_svc.agents.request import PlanRequest
+from tests.service.waiting import wait_until
 
 
 def test_sync_with_instances_names_every_live_instance(port, services, clients):
@@ -40,11 +40,12 @@ def test_a_watcher_sees_every_goal_from_its_running_status(port, services, clien
         sub = watcher.watch(on_message)
         out = owner.plan(PlanRequest(max_cycles=3, seed=k), goal_id=f"w-{k}")
         assert out.status == "cycle_limit"
-        for _ in range(500):  # the done status travels to the watcher on its own route
-            with lock:
-                if any(kd == "status" and m.get("state") == "done" for kd, m in seen):
-                    break
-            time.sleep(0.01)
+
+        def ended(box: list = seen, guard: Any = lock) -> bool:
+            with guard:
+                return any(kd == "status" and m.get("state") == "done" for kd, m in box)
+
+        wait_until(ended, 5)  # the done status travels to the watcher on its own route
         sub.undeclare()
         with lock:
             mine = [(kd, m) for kd, m in seen if m.get("goal_id") == f"w-{k}"]
