@@ -563,13 +563,7 @@ class EosClient:
                 cancel_token = self._tokens.get(goal_id)
         found = False
         refusal: proto.RequestError | None = None
-        for reply in self.session.get(
-            proto.cancel_key(self.prefix, goal_id),
-            payload=proto.encode_cancel(cancel_token),
-            target=zenoh.QueryTarget.ALL,
-            consolidation=_NO_CONSOLIDATION,
-            timeout=timeout,
-        ):
+        for reply in self._cancel_query(goal_id, proto.encode_cancel(cancel_token), timeout):
             if reply.ok is not None:
                 try:
                     found = found or bool(proto.loads_message(reply.ok.payload.to_bytes()).get("found"))
@@ -580,6 +574,17 @@ class EosClient:
         if refusal is not None and not found:
             raise refusal
         return found
+
+    def _cancel_query(self, goal_id: str, payload: bytes | None, timeout: float) -> Any:
+        """A query on ``P/cancel/<goal_id>`` that every live instance answers (target ``ALL``, no
+        consolidation): its replies, as Zenoh hands them (``timeout`` in seconds)."""
+        return self.session.get(
+            proto.cancel_key(self.prefix, goal_id),
+            payload=payload,
+            target=zenoh.QueryTarget.ALL,
+            consolidation=_NO_CONSOLIDATION,
+            timeout=timeout,
+        )
 
     def watch(
         self,
@@ -626,13 +631,7 @@ class EosClient:
         client uses: each instance answers ``found: false`` and nothing else happens.
         """
         answered: set[str] = set()
-        probe_goal = f"sync-{secrets.token_hex(8)}"
-        for reply in self.session.get(
-            proto.cancel_key(self.prefix, probe_goal),
-            target=zenoh.QueryTarget.ALL,
-            consolidation=_NO_CONSOLIDATION,
-            timeout=timeout,
-        ):
+        for reply in self._cancel_query(f"sync-{secrets.token_hex(8)}", None, timeout):
             if reply.ok is not None:
                 try:
                     answered.add(str(proto.loads_message(reply.ok.payload.to_bytes())["instance"]))
