@@ -700,6 +700,23 @@ def _step_medians(
     return {step: statistics.median(times) for step, times in found.items()}
 
 
+def _stamps_file(prefix: str) -> str:
+    """A new empty file for a server process's stamps (``--stamps`` / ``--probe-server``)."""
+    fd, out = tempfile.mkstemp(prefix=prefix, suffix=".json")
+    os.close(fd)
+    return out
+
+
+def _stop_for_stamps(proc: subprocess.Popen[str], out: str) -> list[tuple[str, int]]:
+    """Stop a server process (SIGTERM: it writes its stamps to ``out`` as it ends); its stamps."""
+    proc.send_signal(signal.SIGTERM)
+    proc.wait(30)
+    with open(out) as f:
+        stamps = [(label, t) for label, t in json.load(f)]
+    os.unlink(out)
+    return stamps
+
+
 def _echo_steps(
     n: int, reply_bytes: int, plan_first: bool
 ) -> tuple[float, float, dict[tuple[str, str], float]]:
@@ -707,8 +724,7 @@ def _echo_steps(
     ``n`` gets, each right after an in-process plan, as :func:`breakdown` times the service's;
     the reply taken by a Python callback in Zenoh's thread, as the client library's is stamped.
     ``plan_first``: the planning echo (see :func:`echo_server`)."""
-    fd, out = tempfile.mkstemp(prefix="eos-echo-", suffix=".json")
-    os.close(fd)
+    out = _stamps_file("eos-echo-")
     proc, session = start_echo(reply_bytes, plan_first=plan_first, stamps_out=out)
     request = PlanRequest(seed=3, max_cycles=1)
     payload = echo_payload(request)
@@ -726,11 +742,7 @@ def _echo_steps(
                 over.append(trip - (t1 - t0))
     finally:
         session.close()
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(30)
-    with open(out) as f:
-        server_stamps = json.load(f)
-    os.unlink(out)
+        server_stamps = _stop_for_stamps(proc, out)
     steps = _step_medians(starts, server_stamps, [(a, b) for a, b, _, _ in _ECHO_STEPS], 10)
     return median_ms(trips), median_ms(over), steps
 
@@ -741,8 +753,7 @@ def breakdown(n: int) -> None:
     from eos_svc.service import client as cli
     from eos_svc.service import protocol as proto
 
-    fd, out = tempfile.mkstemp(prefix="eos-probe-", suffix=".json")
-    os.close(fd)
+    out = _stamps_file("eos-probe-")
     port = free_port()
     proc = subprocess.Popen(
         [sys.executable, __file__, "--probe-server", str(port), out], stdout=subprocess.PIPE, text=True
@@ -780,11 +791,7 @@ def breakdown(n: int) -> None:
     reply_bytes = plan_reply_bytes("probe", outcome.result)  # the echoes answer with as many bytes
     client.close()
     cli.direct_callback = direct  # type: ignore[assignment]
-    proc.send_signal(signal.SIGTERM)
-    proc.wait(30)
-    with open(out) as f:
-        server_stamps = json.load(f)
-    os.unlink(out)
+    server_stamps = _stop_for_stamps(proc, out)
     steps = _step_medians(starts, server_stamps, [(a, b) for a, b, _ in _STEPS], 10)
     m = statistics.median
     print(
