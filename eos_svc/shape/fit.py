@@ -177,6 +177,24 @@ _SKEW_SIGN = np.array([-1.0, 1.0, 1.0, -1.0, -1.0, 1.0])
 _EYE = np.eye(3)
 
 
+def libm_exp(a: np.ndarray) -> np.ndarray:
+    """``exp`` of every element as the C library computes it (``math.exp``: the compiled
+    kernels' exp). numpy's own vectorised exp (numpy ≥ 2.4 on AVX2 machines) differs from it in
+    the last bit for a few per cent of arguments, and this numpy reference must give the
+    kernels' results bit for bit (a service's fits run it until the kernels are loaded)."""
+    return np.array([math.exp(v) for v in a.ravel().tolist()]).reshape(a.shape)
+
+
+def libm_sin_cos(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``sin`` and ``cos`` of every element as the C library computes them (``math.sin``,
+    ``math.cos``: the compiled kernels'), for the reason of :func:`libm_exp` (numpy's
+    vectorised sin and cos, on AVX-512 machines, are not the C library's either)."""
+    values = a.ravel().tolist()
+    sin = np.array([math.sin(v) for v in values]).reshape(a.shape)
+    cos = np.array([math.cos(v) for v in values]).reshape(a.shape)
+    return sin, cos
+
+
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     """Rodrigues for (K, 3) rotation vectors → (K, 3, 3)."""
     theta = primitives.norm(omega)
@@ -184,7 +202,8 @@ def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
     flat = np.zeros((len(omega), 9))
     flat[:, _SKEW_AT] = k.take(_SKEW_OF, axis=1) * _SKEW_SIGN
     K = flat.reshape(-1, 3, 3)
-    s, c = np.sin(theta)[:, None, None], np.cos(theta)[:, None, None]
+    sin, cos = libm_sin_cos(theta)
+    s, c = sin[:, None, None], cos[:, None, None]
     out: np.ndarray = _EYE + s * K + (1.0 - c) * (K @ K)
     return out
 
@@ -239,7 +258,7 @@ def batch_geometry(
     every row of a group is about its first row's)."""
     centres = thetas[:, :3]
     # np.clip's arithmetic (the bound or the value itself) without its wrapper
-    sizes = np.exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
+    sizes = libm_exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
     K = len(thetas)
     if kind == "sphere":
         rotations = _identities(K)

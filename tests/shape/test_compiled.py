@@ -325,3 +325,15 @@ def test_a_fresh_process_fits_in_numpy_then_loads_the_kernels_behind():
     seen = json.loads(out)
     assert seen == {"one_fit": {"loader": False, "numba": False}, "ready": True, "error": "None",
                     "same": True, "kind": "sphere"}
+
+
+def test_the_reference_exp_sin_and_cos_are_the_c_librarys():
+    """The numpy reference takes exp, sin and cos from the C library, as the kernels do: numpy's
+    vectorised ones differ from it in the last bit for some arguments on some machines."""
+    rng = np.random.default_rng(2)
+    a = rng.uniform(-12.0, 3.0, size=(40, 3))
+    assert np.array_equal(fit.libm_exp(a), np.array([[math.exp(v) for v in row] for row in a]))
+    theta = rng.uniform(0.0, 4.0, size=257)
+    sin, cos = fit.libm_sin_cos(theta)
+    assert sin.shape == cos.shape == theta.shape
+    assert sin.tolist() == [math.sin(v) for v in theta] and cos.tolist() == [math.cos(v) for v in theta]
