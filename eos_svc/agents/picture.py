@@ -188,6 +188,11 @@ def draw_grasp(
     fig = Figure(figsize=(12, 10), dpi=100)
     FigureCanvasAgg(fig)
     ax3 = fig.add_subplot(2, 2, 1, projection="3d")
+    # the limits first, so that the axes never autoscale: matplotlib 3.11's 3-D autoscaling
+    # (axes3d ``_autoscale_axis``) warned of a float overflow now and then in the test suite
+    for setter, c in zip((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), centre, strict=True):
+        setter(c - half, c + half)
+    ax3.set_box_aspect((1, 1, 1))
     for name, polys, colour, alpha in solids:
         coll = Poly3DCollection(
             [p * scale for p in polys],
@@ -201,9 +206,6 @@ def draw_grasp(
         pm = p * scale
         ax3.scatter(*pm, color=CONTACT_COLOUR, s=30, depthshade=False)
         ax3.quiver(*pm, *(-n * arrow), color=CONTACT_COLOUR, linewidth=2)
-    for setter, c in zip((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), centre, strict=True):
-        setter(c - half, c + half)
-    ax3.set_box_aspect((1, 1, 1))
     ax3.set_xlabel("x (mm)")
     ax3.set_ylabel("y (mm)")
     ax3.set_zlabel("z (mm)")
