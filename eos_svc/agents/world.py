@@ -31,7 +31,7 @@ from typing import Any
 import coal
 import numpy as np
 
-from eos_svc.agents.coverage import column_counts, space_filling_order, wrist_columns
+from eos_svc.agents.coverage import SpaceFillingOrder, column_counts, wrist_columns
 from eos_svc.agents.probe_pose import probe_pose
 from eos_svc.agents.probing import ProbeChoice, ProbeOutcome, densify
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
@@ -90,7 +90,7 @@ class GraspWorld:
         # scene.set_object_placement would need these refreshed (_refresh_object_bound).
         self._refresh_object_bound()
         # the search's lattice order, drawn from rng at the first search move (see search_step)
-        self._search_order: list[tuple[int, int]] | None = None
+        self._search_order: SpaceFillingOrder | None = None
         self._search_columns = np.empty((0, 0, 2))
 
     def _refresh_object_bound(self) -> None:
@@ -237,11 +237,11 @@ class GraspWorld:
         """
         p = self.params
         if self._search_order is None:
-            self._search_order = space_filling_order(column_counts(p), self.rng)
+            self._search_order = SpaceFillingOrder(column_counts(p), self.rng)
             self._search_columns = wrist_columns(p)
         if not self._search_order:  # every column swept: sweep them again
-            self._search_order = space_filling_order(column_counts(p), self.rng)
-        j, k = self._search_order.pop(0)
+            self._search_order = SpaceFillingOrder(column_counts(p), self.rng)
+        j, k = self._search_order.take()
         y, z = (float(v) for v in self._search_columns[j, k])
         x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
         moved = 0.0
@@ -262,14 +262,14 @@ class GraspWorld:
     def _bumped(self) -> None:
         """After a bump: sweep next the column that puts the grasp centre's line nearest the
         point of the object the hand bumped into (the object is there)."""
-        order = self._search_order
-        if not order:
+        if not self._search_order:
             return
+        order = self._search_order.pending()
         witness = np.asarray(self.scene.min_distance(self.state).point_object)
         cols = self._search_columns
         want = witness[1:] - np.asarray(self.params.grasp_centre)[1:]
         n = min(range(len(order)), key=lambda i: float(np.sum((cols[order[i]] - want) ** 2)))
-        order.insert(0, order.pop(n))
+        self._search_order.move_to_front(n)
 
     def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> tuple[float, bool]:
         """Translate the wrist in a straight line toward ``target`` (world, m), guarded.

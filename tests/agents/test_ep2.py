@@ -8,7 +8,9 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
-from eos_svc.agents.planner import build_world
+from eos_svc.agents.ep2 import side_fingers
+from eos_svc.agents.planner import build_world, default_hand
+from eos_svc.kinematics import allegro_hand
 
 
 def world_with(spec: ObjectSpec, noise: float = 2e-4, seed: int = 1):
@@ -101,3 +103,16 @@ def test_ep1_repeats_while_its_curvature_is_not_trusted_then_ep2():
     assert details[again + 1][0] == "ep1" and again < first_ep2
     assert result.ep1_runs >= 3
     assert result.shape["class"] == "sphere" and result.shape["confidence"] >= 0.9
+
+
+@pytest.mark.parametrize("make_hand", [default_hand, allegro_hand], ids=["hand3x3", "allegro"])
+def test_side_fingers_lead_along_plus_and_minus_y(make_hand):
+    hand = make_hand()
+    state = hand.state(hand.neutral())
+    upper = [f for f in hand.finger_names if f != hand.description.opposing_finger]
+    sides = side_fingers(hand)
+    ys = {f: float(state.tip_position(f)[1]) for f in upper}
+    assert set(sides) == {+1, -1} and sides[+1] in upper and sides[-1] in upper
+    assert ys[sides[+1]] == max(ys.values()) and ys[sides[-1]] == min(ys.values())
+    sides[+1] = "changed"  # each call gets its own dict: the per-hand value is not changed
+    assert side_fingers(hand)[+1] != "changed"
