@@ -258,7 +258,8 @@ def batch_geometry(
     every row of a group is about its first row's)."""
     centres = thetas[:, :3]
     # np.clip's arithmetic (the bound or the value itself) without its wrapper
-    sizes = libm_exp(np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1]))
+    log_sizes = np.minimum(np.maximum(thetas[:, _SIZE_SLICE[kind]], LOG_SIZE_RANGE[0]), LOG_SIZE_RANGE[1])
+    sizes = libm_exp(log_sizes)
     K = len(thetas)
     if kind == "sphere":
         rotations = _identities(K)
