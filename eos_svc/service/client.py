@@ -95,6 +95,12 @@ class _LostError(EosError):
     """The instance answering an attempt was lost (liveliness token gone); try another."""
 
 
+def _zenoh_timeout(err: Any) -> bool:
+    """Whether an error reply is Zenoh's own for a query that timed out (the payload
+    ``Timeout``, not JSON: the service's error replies are JSON)."""
+    return bool(err.encoding != _JSON and err.payload.to_bytes() == b"Timeout")
+
+
 #: spare waiters a client keeps (about the threads that plan through it at once)
 _SPARE_WAITERS = 8
 
@@ -519,6 +525,8 @@ class EosClient:
             elif kind == "reply":
                 if item.ok is not None:
                     reply = proto.loads_message(item.ok.payload.to_bytes())
+                elif _zenoh_timeout(item.err):  # the instance never answered: try another
+                    raise _LostError("no reply before the timeout")
                 else:
                     error = proto.error_from_payload(item.err.payload.to_bytes())
                 grace_at = time.monotonic() + self.status_grace_s
