@@ -75,7 +75,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
             type=positive_float,
             default=None,
             metavar="S",
-            help="seconds to wait for an answer (plan: the request's deadline + 10; watch: stop after S s)",
+            help="seconds to wait for an answer (plan: the request's deadline + 10, per instance asked: "
+            "one that does not answer in time is given up for another; watch: stop after S s)",
         )
     from eos_svc.cli.view import add_view_arguments
 

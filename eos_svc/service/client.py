@@ -95,10 +95,16 @@ class _LostError(EosError):
     """The instance answering an attempt was lost (liveliness token gone); try another."""
 
 
-def _zenoh_timeout(err: Any) -> bool:
+def _zenoh_timeout(err: zenoh.ReplyError) -> bool:
     """Whether an error reply is Zenoh's own for a query that timed out (the payload
     ``Timeout``, not JSON: the service's error replies are JSON)."""
-    return bool(err.encoding != _JSON and err.payload.to_bytes() == b"Timeout")
+    return err.encoding != _JSON and err.payload.to_bytes() == b"Timeout"
+
+
+class _TimedOutError(_LostError):
+    """The instance asked gave no reply before the query's timeout: it may still be running or
+    queueing the goal, so this call does not ask it again (it would refuse the goal id as a
+    duplicate)."""
 
 
 #: spare waiters a client keeps (about the threads that plan through it at once)
@@ -324,7 +330,10 @@ class EosClient:
             instance: ask this instance only (no spreading, no retry elsewhere).
             watch: subscribe to the goal's cycles and status (needed for ``on_cycle``).
             timeout: seconds to wait for one instance's answer (default: the
-                request's deadline + ``timeout_margin_s``).
+                request's deadline + ``timeout_margin_s``). An instance that does not answer
+                in time is not asked again by this call; the plan goes to another, so the
+                whole call may wait up to ``max_attempts × timeout`` (and the instance given up
+                may still be running the plan).
             max_attempts: instances to try before giving up.
             cancel_token: the goal's secret for :meth:`cancel` (default: a fresh random one,
                 kept by this client while the plan runs; never published by the service).
@@ -368,24 +377,25 @@ class EosClient:
             deadline = req.deadline_s if isinstance(req, PlanRequest) else req.get("deadline_s", 10.0)
             timeout = (deadline if isinstance(deadline, (int, float)) else 60.0) + self.timeout_margin_s
         t0 = time.monotonic()
-        exclude: set[str] = set()
+        exclude: set[str] = set()  # tried in this round
+        timed_out: set[str] = set()  # never asked again in this call (see _TimedOutError)
         last_error: str = "no service instance found"
         for attempt in range(1, max_attempts + 1):
-            iid = instance or self._choose(exclude)
+            iid = instance or self._choose(exclude | timed_out)
             if iid is None:
                 self.discover(timeout=0.5)
-                iid = self._choose(exclude)
+                iid = self._choose(exclude | timed_out)
                 if iid is None and exclude:  # every instance tried: start over after a pause
                     time.sleep(0.05 * attempt)
                     exclude.clear()
-                    iid = self._choose(exclude)
+                    iid = self._choose(timed_out)
             if iid is None:
                 raise ServiceUnavailableError(last_error)
             try:
                 outcome = self._attempt(iid, goal_id, payload, on_cycle, watch, timeout)
             except _LostError as lost:
                 last_error = f"instance {iid}: {lost}"
-                exclude.add(iid)
+                (timed_out if isinstance(lost, _TimedOutError) else exclude).add(iid)
                 if instance is not None:
                     break
                 continue
@@ -525,8 +535,10 @@ class EosClient:
             elif kind == "reply":
                 if item.ok is not None:
                     reply = proto.loads_message(item.ok.payload.to_bytes())
-                elif _zenoh_timeout(item.err):  # the instance never answered: try another
-                    raise _LostError("no reply before the timeout")
+                elif _zenoh_timeout(item.err):  # Zenoh's, not the instance's
+                    if reply is None and error is None:  # it never answered: try another
+                        raise _TimedOutError(f"no reply within the query's timeout ({timeout:g} s)")
+                    continue  # the answer came; the query timed out waiting for its end
                 else:
                     error = proto.error_from_payload(item.err.payload.to_bytes())
                 grace_at = time.monotonic() + self.status_grace_s

@@ -6,12 +6,15 @@ cycle stream."""
 from __future__ import annotations
 
 import threading
+import time
 from typing import Any
 
 import pytest
+import zenoh
 
 from eos_svc.agents.request import PlanRequest
-from eos_svc.service import ServiceUnavailableError
+from eos_svc.service import ServiceUnavailableError, loopback, make_config
+from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan
 from tests.service.waiting import wait_until
 
@@ -52,6 +55,7 @@ def test_a_withdrawn_token_loses_the_attempt_and_another_instance_plans(port, se
     try:
         assert started.wait(10), "the plan did not reach the stuck instance"
         token = stuck._entities[-1]  # its liveliness token, declared last
+        assert type(token).__name__ == "LivelinessToken"
         token.undeclare()
         t.join(15)
         assert not t.is_alive(), "the client did not give up on the stuck instance"
@@ -63,14 +67,60 @@ def test_a_withdrawn_token_loses_the_attempt_and_another_instance_plans(port, se
 
 
 @pytest.mark.parametrize("watch", [False, True])
-def test_a_query_that_times_out_is_lost_not_an_internal_error(port, services, clients, watch):
+def test_an_instance_that_times_out_is_not_asked_again(port, services, clients, watch):
+    """Zenoh's own ``Timeout`` reply loses the attempt (never an ``internal_error``), and the
+    instance, which may still hold the goal, is not asked again by this call (it would refuse
+    the goal id as a duplicate): with one instance, the default three attempts end in
+    ServiceUnavailableError after one query."""
     release, started = threading.Event(), threading.Event()
-    services(port, planner=_held_planner(release, started))
+    svc = services(port, planner=_held_planner(release, started))
     client = clients(port)
     client.wait_for_instances(1)
+    t0 = time.monotonic()
     try:
-        with pytest.raises(ServiceUnavailableError, match="no reply before the timeout"):
-            client.plan(ONE, watch=watch, timeout=0.5, max_attempts=1)
+        with pytest.raises(ServiceUnavailableError, match="no reply within the query's timeout"):
+            client.plan(ONE, watch=watch, timeout=0.5)
     finally:
         release.set()
+    assert time.monotonic() - t0 < 3.0  # one query (0.5 s) and one discovery (0.5 s), no more
+    assert svc.stats.received == 1 and svc.stats.replied_err == 0  # asked once, never refused
     assert _settled(client)
+
+
+def test_every_instance_timed_out_is_tried_once(port, services, clients):
+    release = threading.Event()
+    a = services(port, planner=_held_planner(release, threading.Event()), instance="a")
+    b = services(None, (port,), planner=_held_planner(release, threading.Event()), instance="b")
+    client = clients(port)
+    client.wait_for_instances(2)
+    try:
+        with pytest.raises(ServiceUnavailableError, match="no reply within the query's timeout"):
+            client.plan(ONE, watch=False, timeout=0.5)
+    finally:
+        release.set()
+    assert (a.stats.received, b.stats.received) == (1, 1)
+    assert a.stats.replied_err == b.stats.replied_err == 0
+
+
+def test_an_instances_own_error_reply_saying_timeout_is_a_refusal(port, clients):
+    """Only Zenoh's timeout (its own encoding) is a lost attempt: an instance's JSON error reply
+    whose payload reads "Timeout" stays what the instance said."""
+    session = zenoh.open(make_config(listen=[loopback(port)]))
+    try:
+        prefix = proto.prefix(None)
+
+        def refuse(query: zenoh.Query) -> None:
+            query.reply_err(b"Timeout", encoding=zenoh.Encoding.APPLICATION_JSON)
+            query.drop()
+
+        qable = session.declare_queryable(proto.plan_key(prefix, "fake-1"), refuse, complete=True)
+        token = session.liveliness().declare_token(proto.instance_key(prefix, "fake-1"))
+        client = clients(port)
+        client.wait_for_instances(1)
+        with pytest.raises(proto.RequestError) as err:
+            client.plan(ONE, watch=False, timeout=2.0)
+        assert err.value.code == proto.E_INTERNAL and "Timeout" in err.value.reason
+        token.undeclare()
+        qable.undeclare()
+    finally:
+        session.close()
