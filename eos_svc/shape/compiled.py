@@ -10,7 +10,7 @@ its k forward-difference neighbours, with the Jacobian's quotients, in one call.
 per-call overhead on these small arrays (a few hundred numbers, some sixty calls) is what the
 reference spends its time on; here one call does it all.
 
-Three things the reference does implicitly are spelled out:
+Four things the reference does implicitly are spelled out:
 
 * **Matrix products.** numpy hands ``@`` to OpenBLAS, whose double-precision kernels on this
   machine's x86-64 (Haswell and later: fused multiply-add) sum a length-3 product as
@@ -27,6 +27,9 @@ Three things the reference does implicitly are spelled out:
   the cylinder's and capsule's axes come from (a group of one row: ``gemv``).
 * **numpy's ``maximum``/``minimum``** return their first argument on ties (and NaN): so do
   :func:`_maximum` and :func:`_minimum`.
+* **exp, sin and cos** are the C library's on both sides: the kernels' ``math`` functions
+  (numba without Intel's SVML) and, in the reference, :func:`~eos_svc.shape.fit.libm_exp` and
+  :func:`~eos_svc.shape.fit.libm_sin_cos` (numpy's own, dispatched by CPU, may round otherwise).
 
 The kernels use numpy's error model (a division by zero gives ±inf or NaN, as in the
 reference, not Python's exception). Every kernel is compiled on first use and cached on disk

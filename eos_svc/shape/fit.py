@@ -179,16 +179,17 @@ _EYE = np.eye(3)
 
 def libm_exp(a: np.ndarray) -> np.ndarray:
     """``exp`` of every element as the C library computes it (``math.exp``: the compiled
-    kernels' exp). numpy's own vectorised exp (numpy ≥ 2.4 on AVX2 machines) differs from it in
-    the last bit for a few per cent of arguments, and this numpy reference must give the
-    kernels' results bit for bit (a service's fits run it until the kernels are loaded)."""
+    kernels' exp). numpy dispatches its vectorised exp by CPU: on an AVX-512 machine (numpy
+    2.4's X86_V4 path) it differs from the C library's in the last bit for ≈ 5 % of arguments,
+    and this numpy reference must give the kernels' results bit for bit (a service's fits run
+    it until the kernels are loaded)."""
     return np.array([math.exp(v) for v in a.ravel().tolist()]).reshape(a.shape)
 
 
 def libm_sin_cos(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``sin`` and ``cos`` of every element as the C library computes them (``math.sin``,
-    ``math.cos``: the compiled kernels'), for the reason of :func:`libm_exp` (numpy's
-    vectorised sin and cos, on AVX-512 machines, are not the C library's either)."""
+    ``math.cos``: the compiled kernels'): numpy dispatches these by CPU too, so they may differ
+    from the C library's as its exp does (:func:`libm_exp`)."""
     values = a.ravel().tolist()
     sin = np.array([math.sin(v) for v in values]).reshape(a.shape)
     cos = np.array([math.cos(v) for v in values]).reshape(a.shape)

@@ -49,7 +49,8 @@ print(json.dumps({
 
 
 def _pip(*args: str, python: str = sys.executable, cwd: Path | None = None) -> None:
-    # without the caller's PYTHONPATH: a checkout on it would count as eos_svc installed already
+    # without the caller's PYTHONPATH (a checkout on it would count as eos_svc installed already)
+    # and VIRTUAL_ENV (pip is the fresh venv's)
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
     subprocess.run([python, "-m", "pip", *args], check=True, cwd=cwd, env=env, capture_output=True, text=True)
 
