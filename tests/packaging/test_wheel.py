@@ -48,11 +48,16 @@ print(json.dumps({
 """
 
 
+def _outside_env() -> dict[str, str]:
+    """The environment without the caller's PYTHONPATH (a checkout on it would count as eos_svc
+    installed already) and VIRTUAL_ENV (the fresh venv's own interpreter and pip run)."""
+    return {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+
+
 def _pip(*args: str, python: str = sys.executable, cwd: Path | None = None) -> None:
-    # without the caller's PYTHONPATH (a checkout on it would count as eos_svc installed already)
-    # and VIRTUAL_ENV (pip is the fresh venv's)
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
-    subprocess.run([python, "-m", "pip", *args], check=True, cwd=cwd, env=env, capture_output=True, text=True)
+    subprocess.run(
+        [python, "-m", "pip", *args], check=True, cwd=cwd, env=_outside_env(), capture_output=True, text=True
+    )
 
 
 @pytest.fixture(scope="module")
@@ -105,7 +110,7 @@ def test_fresh_venv_installs_the_wheel_and_runs_plan_ep1_and_an_embedding(wheel:
     _pip("install", "--quiet", str(wheel), python=python)  # dependencies from the index (pip cache)
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
-    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    env = _outside_env()
     eos = str(venv / "bin" / "eos")
     plan = subprocess.run([eos, "plan", "--json"], cwd=elsewhere, env=env, capture_output=True, text=True)
     assert plan.returncode == 0, plan.stderr
