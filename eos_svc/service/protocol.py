@@ -436,10 +436,15 @@ def new_cancel_token() -> str:
 
 
 def encode_request(
-    goal_id: str, request: PlanRequest | Mapping[str, Any], cancel_token: str | None = None
+    goal_id: str,
+    request: PlanRequest | Mapping[str, Any],
+    cancel_token: str | None = None,
+    watch: bool | None = None,
 ) -> bytes:
-    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,] <PlanRequest
-    fields>}``. Without a ``cancel_token`` nobody can cancel the goal.
+    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,]
+    ["watch": ...,] <PlanRequest fields>}``. Without a ``cancel_token`` nobody can cancel the
+    goal. ``watch``: whether the requester subscribes to the goal's messages before sending
+    (see :class:`Envelope`); ``None`` leaves it out and the service asks Zenoh instead.
 
     A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
     their shortest round-trip digits, e.g. ``1e-05`` as ``0.00001``); a mapping is sent as given,
@@ -447,6 +452,8 @@ def encode_request(
     envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
     if cancel_token is not None:
         envelope["cancel_token"] = cancel_token
+    if watch is not None:
+        envelope["watch"] = bool(watch)
     if isinstance(request, PlanRequest):
         return _msgspec_encode({**envelope, **request.to_dict()})  # no key of the body is the envelope's
     body = dict(request)
@@ -507,16 +514,30 @@ def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
 
 
 class Envelope(NamedTuple):
-    """A decoded plan request: its goal id, the request, and the owner's cancel token (or ``None``)."""
+    """A decoded plan request: its goal id, the request, the owner's cancel token (or ``None``)
+    and the requester's ``watch`` hint: ``True`` when it subscribed to the goal's messages before
+    sending (the service publishes them from the start without asking Zenoh), ``False`` when it
+    did not (the service publishes them only for the other watchers it knows of), ``None`` when
+    the request does not say (the service asks Zenoh's routing tables)."""
 
     goal_id: str
     request: PlanRequest
     cancel_token: str | None = None
+    watch: bool | None = None
 
 
 # the generated constructor's annotations as objects: namedtuple builds it in a namespace of its
 # own, where the module's postponed annotations (strings) cannot be resolved (pdoc reads them)
-Envelope.__new__.__annotations__ = {"goal_id": str, "request": PlanRequest, "cancel_token": str | None}
+Envelope.__new__.__annotations__ = {
+    "goal_id": str,
+    "request": PlanRequest,
+    "cancel_token": str | None,
+    "watch": bool | None,
+}
+
+
+#: the envelope's keys around a plan request's own fields
+_ENVELOPE_KEYS = frozenset(("schema", "goal_id", "cancel_token", "watch"))
 
 
 def decode_request(
@@ -585,14 +606,17 @@ def decode_checked(raw: bytes) -> Envelope:
     token = data.get("cancel_token")
     if token is not None and not (isinstance(token, str) and is_token(token)):
         raise RequestError(E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -", goal_id)
-    body = {k: v for k, v in data.items() if k not in ("schema", "goal_id", "cancel_token")}
+    watch = data.get("watch")
+    if "watch" in data and type(watch) is not bool:
+        raise RequestError(E_INVALID, "watch", f"must be true or false, got {type(watch).__name__}", goal_id)
+    body = {k: v for k, v in data.items() if k not in _ENVELOPE_KEYS}
     try:
         request = PlanRequest.from_dict(body)
     except ValidationError as exc:
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
         raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
-    return Envelope(goal_id, request, token)
+    return Envelope(goal_id, request, token, watch)
 
 
 def error_from_payload(payload: bytes) -> RequestError:

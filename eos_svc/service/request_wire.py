@@ -103,6 +103,7 @@ class _Request(msgspec.Struct, forbid_unknown_fields=True):
     deadline_s: Annotated[float, msgspec.Meta(gt=0.0, le=MAX_DEADLINE_S)] | None
     friction: Annotated[float, msgspec.Meta(ge=0.0, le=MAX_FRICTION)]
     cancel_token: str | msgspec.UnsetType | None = msgspec.UNSET
+    watch: bool | msgspec.UnsetType = msgspec.UNSET
 
 
 _decode = msgspec.json.Decoder(_Request).decode
@@ -117,7 +118,7 @@ _SHAPES: dict[type, tuple[str, tuple[str, ...]]] = {
         (_Capsule, ("radius", "length")),
     )
 }
-#: keys of a request besides the object's size fields and the cancel token: 9 at the top level
+#: keys of a request besides the object's size fields, the cancel token and the watch hint: 9 at the top level
 #: (schema, goal_id, object, weights, seed, tactile_noise, max_cycles, deadline_s, friction),
 #: the object's shape, position, rpy and the 3 weights
 _FIXED_KEYS = 15
@@ -130,9 +131,9 @@ _pack3 = struct.Struct("3d").pack
 _HUGE = 1e19
 
 
-def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
-    """``(goal_id, request, cancel_token)`` of a plan request in the clients' form, or ``None``:
-    take the full path (see the module doc)."""
+def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None, bool | None] | None:
+    """``(goal_id, request, cancel_token, watch)`` of a plan request in the clients' form (an
+    absent token or watch hint as ``None``), or ``None``: take the full path (see the module doc)."""
     try:
         msg = _decode(raw)
     except (msgspec.DecodeError, RecursionError, ValueError, TypeError):  # ValidationError: a DecodeError
@@ -140,7 +141,8 @@ def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
     obj = msg.object
     shape, sizes = _SHAPES[type(obj)]
     token = msg.cancel_token
-    keys = _FIXED_KEYS + len(sizes) + (token is not msgspec.UNSET)
+    watch = msg.watch
+    keys = _FIXED_KEYS + len(sizes) + (token is not msgspec.UNSET) + (watch is not msgspec.UNSET)
     if raw.count(b":") != keys:  # a key given twice (or a colon in a string: either way)
         return None
     roll, pitch, yaw = obj.rpy
@@ -169,4 +171,4 @@ def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
     request = PlanRequest.from_checked(
         spec, weights, msg.seed, msg.tactile_noise, msg.max_cycles, msg.deadline_s, msg.friction
     )
-    return msg.goal_id, request, token
+    return msg.goal_id, request, token, (None if watch is msgspec.UNSET else watch)

@@ -28,16 +28,16 @@ from eos_svc.service import protocol as proto
 from eos_svc.service.request_wire import decode_fast
 
 
-def fast(raw: bytes) -> tuple[str, PlanRequest, str | None] | None:
+def fast(raw: bytes) -> tuple[str, PlanRequest, str | None, bool | None] | None:
     return decode_fast(raw)
 
 
-def full(raw: bytes) -> tuple[str, PlanRequest, str | None] | proto.RequestError:
+def full(raw: bytes) -> tuple[str, PlanRequest, str | None, bool | None] | proto.RequestError:
     try:
         env = proto.decode_checked(raw)
     except proto.RequestError as err:
         return err
-    return env.goal_id, env.request, env.cancel_token
+    return env.goal_id, env.request, env.cancel_token, env.watch
 
 
 def agrees(raw: bytes) -> bool:
@@ -93,10 +93,11 @@ def test_client_requests_take_the_fast_path_and_decode_as_the_full_path(seed: in
     for i in range(50):
         request = random_request(rng)
         token = proto.new_cancel_token() if i % 3 else None
-        raw = proto.encode_request(f"g-{seed}-{i}", request, token)
+        watch = (None, True, False)[i % 3 if seed % 2 else (i // 3) % 3]
+        raw = proto.encode_request(f"g-{seed}-{i}", request, token, watch)
         assert agrees(raw), raw
         env = proto.decode_envelope(raw)
-        assert (env.goal_id, env.request, env.cancel_token) == (f"g-{seed}-{i}", request, token)
+        assert tuple(env) == (f"g-{seed}-{i}", request, token, watch)
 
 
 def _base() -> dict[str, object]:
@@ -136,6 +137,7 @@ BOUNDS = [
     ("schema", [1], [1.0, 2, 0, True, "1", None]),
     ("goal_id", ["a", "A.b-c_9", "x" * 64], ["", "x" * 65, "a/b", "a*", "-a", 5, None, "a\n"]),
     ("cancel_token", [None, "A" * 16, "_-" * 64], ["short", "a" * 129, "a b" * 8, 5, False]),
+    ("watch", [True, False], [None, 1, 0, "true", [], {}]),
     ("object.shape", ["sphere"], ["cube", "Sphere", None, 1]),
 ]
 
@@ -159,6 +161,7 @@ def test_bounds_agree(path: str, accepted: list[object], refused: list[object]) 
     [
         # a repeated key: msgspec would keep the last value; the wire refuses it (full path)
         PLAIN[:-1] + b',"seed":5}',
+        PLAIN[:-1] + b',"watch":true,"watch":false}',
         PLAIN.replace(b'"seed":1', b'"seed" :1,"seed":2'),
         PLAIN.replace(b'"radius"', b'"radius":0.02,"radius"'),
         # huge integers: named by the full path
@@ -181,7 +184,7 @@ def test_what_msgspec_alone_would_misread_goes_the_full_way(raw: bytes) -> None:
     if not isinstance(want, proto.RequestError):  # the byte-order mark: ignored by the full path
         assert raw.startswith(b"\xef\xbb\xbf")
         env = proto.decode_envelope(raw)
-        assert (env.goal_id, env.request, env.cancel_token) == want
+        assert tuple(env) == want
         return
     with pytest.raises(proto.RequestError) as got:
         proto.decode_envelope(raw)
@@ -224,3 +227,20 @@ def test_number_literals_decode_bit_for_bit(literal: bytes) -> None:
             assert fast(raw) is None  # out of range: the full path refuses it
             continue
         assert agrees(raw), raw
+
+
+@pytest.mark.parametrize("watch", [None, True, False])
+def test_the_watch_hint_is_written_only_when_given_and_read_back(watch: bool | None) -> None:
+    raw = proto.encode_request("g-1", PlanRequest(), None, watch)
+    assert (b'"watch"' in raw) is (watch is not None)
+    assert fast(raw) == full(raw) == ("g-1", PlanRequest(), None, watch)
+
+
+@pytest.mark.parametrize("value", [None, 1, "false", [True]])
+def test_a_watch_hint_that_is_not_a_boolean_is_named(value: object) -> None:
+    doc = json.loads(PLAIN)
+    doc["watch"] = value
+    with pytest.raises(proto.RequestError) as got:
+        proto.decode_envelope(json.dumps(doc).encode())
+    assert (got.value.code, got.value.field) == (proto.E_INVALID, "watch")
+    assert "must be true or false" in got.value.reason
