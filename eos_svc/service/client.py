@@ -211,6 +211,9 @@ class EosClient:
         self._plan_keys: dict[str, zenoh.KeyExpr] = {}
         #: waiters of attempts without a stream, kept for later attempts (see _Waiter)
         self._spare_waiters: list[_Waiter] = []
+        #: whether watch() was called: this session may hold goal subscribers of its own, so its
+        #: plans do not tell the service whether they are watched (it asks Zenoh; see plan())
+        self._watching = False
         self._live_changed = threading.Condition(self._lock)
         self._token_sub = session.liveliness().declare_subscriber(
             proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
@@ -328,7 +331,11 @@ class EosClient:
             goal_id: the goal id (default: ``g-<random hex of this client>-<n>``, n = 1, 2, ...).
             on_cycle: called with every cycle message, in order, in this thread.
             instance: ask this instance only (no spreading, no retry elsewhere).
-            watch: subscribe to the goal's cycles and status (needed for ``on_cycle``).
+            watch: subscribe to the goal's cycles and status (needed for ``on_cycle``). The
+                request says so (its ``watch`` hint), so the instance need not ask Zenoh
+                whether anyone watches; once this client has called :meth:`watch`, its requests
+                leave the hint out (a subscriber of its own may match the goal) and the
+                instance asks.
             timeout: seconds to wait for one instance's answer (default: the
                 request's deadline + ``timeout_margin_s``). An instance that does not answer
                 in time is not asked again by this call; the plan goes to another, so the
@@ -355,7 +362,7 @@ class EosClient:
             raise proto.RequestError(
                 proto.E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -"
             )
-        payload = proto.encode_request(goal_id, req, cancel_token)
+        payload = proto.encode_request(goal_id, req, cancel_token, None if self._watching else watch)
         self._tokens[goal_id] = cancel_token  # one dict store or pop: atomic, no lock needed
         try:
             return self._plan(goal_id, req, payload, on_cycle, instance, watch, timeout, max_attempts)
@@ -635,6 +642,7 @@ class EosClient:
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"
             callback(kind, msg)
 
+        self._watching = True  # before the subscriber: from now on plan() leaves its hint out
         subscriber = self.session.declare_subscriber(
             proto.goal_keys(self.prefix, goal_id), direct_callback(on_sample)
         )

@@ -32,6 +32,7 @@ dropped (a wildcard one another instance answers is only dropped).
 
 from __future__ import annotations
 
+import functools
 import inspect
 import logging
 import os
@@ -58,6 +59,11 @@ log = logging.getLogger(__name__)
 
 _JSON = zenoh.Encoding.APPLICATION_JSON
 _BLOCK = zenoh.CongestionControl.BLOCK
+
+#: the dispatcher's work items: (kind, query, refusal); None stops it
+_Item = tuple[str, "zenoh.Query | None", "proto.RequestError | None"]
+#: the item that asks the dispatcher to refresh the goal watchers' flag (_GoalWatchers.refresh)
+_REFRESH: _Item = ("refresh", None, None)
 
 #: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
 Planner = Callable[..., Any]
@@ -136,21 +142,32 @@ class _GoalWatchers:
       tables that would route a put), exact: a client's subscriber declared before it sends
       the plan query reaches the service before the query (in order on the same link), so a
       goal watched from the start gets every message. A few µs warm, tens of µs in a process
-      that has been idle (cold caches): asked once per plan, and only when ``any`` is false.
-    - :attr:`any`: the last status a matching listener reported: a Python bool, free to read
-      before every cycle, but notified asynchronously (it may lag a new subscriber by a few
-      milliseconds): enough for a watcher that comes in the middle of a plan.
+      that has been idle (cold caches): asked once per plan whose request does not say
+      whether its sender watches, and only when ``any`` is false.
+    - :attr:`any`: a Python bool, free to read before every cycle. A matching listener's
+      notice sets it at once when it says "matching" (a put too many costs little) and asks
+      for :meth:`refresh` (``on_notice``: the service's dispatcher thread runs it), which sets
+      it to :meth:`now`; so it turns false only from an exact reading, never from a notice
+      Zenoh delivered late or out of order (it delivers them from tasks it spawns). It lags a
+      new subscriber by the notice's delay (a few milliseconds): enough for a watcher that
+      comes in the middle of a plan; a watcher that syncs with the instance
+      (:meth:`~eos_svc.service.EosClient.watch`: a cancel query, whose handler refreshes it
+      before answering) is counted from then on.
     """
 
-    __slots__ = ("_listener", "_publisher", "any")
+    __slots__ = ("_listener", "_on_notice", "_publisher", "any")
 
-    def __init__(self, session: zenoh.Session, prefix: str) -> None:
+    def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
         self._publisher = session.declare_publisher(proto.goal_keys(prefix))
         self.any = False
+        self._on_notice = on_notice
         self._listener = self._publisher.declare_matching_listener(direct_callback(self._on_status))
 
     def _on_status(self, status: Any) -> None:
-        self.any = bool(status.matching)  # one attribute store: never blocks, never calls Zenoh
+        # in Zenoh's thread: an attribute store and a queue put; never blocks, never calls Zenoh
+        if status.matching:
+            self.any = True
+        self._on_notice()
 
     def now(self) -> bool:
         """True when at least one subscriber matches some goal's messages now (exact)."""
@@ -158,6 +175,11 @@ class _GoalWatchers:
             return True
         status = self._publisher.matching_status  # a MatchingStatus (the 1.x stubs say bool)
         return bool(getattr(status, "matching", status))
+
+    def refresh(self) -> None:
+        """Set :attr:`any` to the routing tables' answer now (not from Zenoh's thread)."""
+        status = self._publisher.matching_status
+        self.any = bool(getattr(status, "matching", status))
 
     def undeclare(self) -> None:
         """Undeclare the listener and the publisher."""
@@ -195,6 +217,7 @@ class _Job:
     request: PlanRequest
     cancel_token: str | None = None  # the owner's secret: a cancel must carry it
     cancel: CancelToken = field(default_factory=_GoalCancel)
+    watch: bool | None = None  # the requester's hint: it subscribed to the goal (see proto.Envelope)
 
 
 @dataclass
@@ -263,9 +286,7 @@ class PlanService:
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
         self.stats = ServiceStats()
-        self._inbox: queue.SimpleQueue[tuple[str, zenoh.Query, proto.RequestError | None] | None] = (
-            queue.SimpleQueue()
-        )
+        self._inbox: queue.SimpleQueue[_Item | None] = queue.SimpleQueue()
         # bounded by admission: at most workers + queue_size goals active (running or waiting)
         self._jobs: queue.SimpleQueue[_Job | None] = queue.SimpleQueue()
         self._active: dict[str, _Job] = {}
@@ -329,7 +350,8 @@ class PlanService:
                 proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
             )
         )
-        self._watched = _GoalWatchers(s, self.prefix)  # before the plan queryable: _run asks it
+        # before the plan queryable: _run asks it; its notices become refreshes in the dispatcher
+        self._watched = _GoalWatchers(s, self.prefix, functools.partial(self._inbox.put, _REFRESH))
         self._entities.append(self._watched)
         self._entities.append(
             s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
@@ -425,6 +447,9 @@ class PlanService:
             if item is None:
                 break
             kind, query, refusal = item
+            if query is None:  # _REFRESH: a matching notice came
+                self._refresh_watchers()
+                continue
             try:
                 if kind == "wildcard" and refusal is None:  # another instance answers it
                     query.drop()
@@ -441,10 +466,19 @@ class PlanService:
                 item = self._inbox.get_nowait()
             except queue.Empty:
                 break
-            if item is not None:
+            if item is not None and item[1] is not None:
                 self._reply_err(
                     item[1], item[2] or proto.RequestError(proto.E_UNAVAILABLE, "request", "service stopping")
                 )
+
+    def _refresh_watchers(self) -> None:
+        """:meth:`_GoalWatchers.refresh` (in the dispatcher: it calls Zenoh); after stop() has
+        undeclared the watchers' publisher, nothing."""
+        try:
+            self._watched.refresh()
+        except Exception:
+            if not self._stopping:
+                log.warning("could not read whether anyone watches the goals", exc_info=True)
 
     def _wildcard_refusal(self, query: zenoh.Query) -> proto.RequestError | None:
         """The one answer to a plan query whose key names no single instance, or ``None`` to stay
@@ -512,7 +546,7 @@ class PlanService:
                 proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
             )
         try:
-            goal_id, request, token = proto.decode_envelope(
+            goal_id, request, token, watch = proto.decode_envelope(
                 b"" if payload is None else payload.to_bytes(), self.max_request_bytes
             )
         except proto.RequestError as err:
@@ -522,7 +556,7 @@ class PlanService:
                 self._admission(request)
             except ValidationError as exc:  # the planner could not plan it: refused here, named
                 return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        return _Job(query, goal_id, request, token, _GoalCancel())
+        return _Job(query, goal_id, request, token, _GoalCancel(), watch)
 
     def _cancel(self, query: zenoh.Query) -> None:
         """Cancel a goal of this instance if the query carries the goal's cancel token.
@@ -531,6 +565,9 @@ class PlanService:
         error when it has it and the token is missing or wrong (goal ids are public: anyone
         subscribed to ``P/goal/*/status`` learns them; the token is the owner's secret).
         """
+        # a watcher syncing with this instance (EosClient.watch) sends such a query after its
+        # subscriber: counted from now on, before the answer lets it go on
+        self._refresh_watchers()
         goal_id = str(query.key_expr).rsplit("/", 1)[-1]
         with self._lock:
             job = self._active.get(goal_id)
@@ -603,7 +640,9 @@ class PlanService:
             head = self._head(goal_id)
             watchers = self._watched
             try:
-                watched = watchers.now()  # exact, before the first message
+                # the requester's own word for its subscriber, and the watchers known for the
+                # others; a request that does not say: exact, before the first message
+                watched = watchers.now() if job.watch is None else (job.watch or watchers.any)
             except Exception:
                 if self._stopping:  # stop() undeclared the watcher publisher meanwhile
                     raise proto.RequestError(

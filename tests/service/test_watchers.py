@@ -5,11 +5,18 @@ from __future__ import annotations
 import queue
 import threading
 from collections.abc import Callable
+from types import SimpleNamespace
 from typing import Any
+
+import zenoh
 
 from eos_svc.agents.request import PlanRequest
 from eos_svc.records import CycleRecord
+from eos_svc.service import make_config
+from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import slowed
+from eos_svc.service.server import _GoalWatchers
+from tests.service.waiting import wait_until
 
 
 def signalling(planner: Callable[..., Any], after: int, event: threading.Event) -> Callable[..., Any]:
@@ -64,3 +71,72 @@ def test_a_watcher_that_comes_mid_plan_gets_the_rest_numbered(port, services, cl
     assert svc.stats.cycles_sent == len(cycles)  # only the cycles put while watched
     assert [s["state"] for s in statuses] == ["done"]  # nobody watched at the start: no "running"
     assert statuses[0]["result"] == out.result
+
+
+def test_once_the_last_watcher_leaves_unwatched_plans_send_nothing(port, services, clients):
+    """The flag the watch hint relies on turns false again (an exact reading after Zenoh's
+    notice): plans whose owner does not watch then build and put no message."""
+    svc = services(port)
+    client = clients(port)
+    watcher = clients(port)
+    client.wait_for_instances(1)
+    watcher.wait_for_instances(1)
+    seen: queue.SimpleQueue[tuple[str, dict[str, Any]]] = queue.SimpleQueue()
+    sub = watcher.watch(lambda kind, msg: seen.put((kind, msg)))
+    out = client.plan(PlanRequest(max_cycles=3), goal_id="seen-1", watch=False)
+    assert out.result["cycles_published"] == 3
+    messages = [seen.get(timeout=10) for _ in range(5)]  # running, 3 cycles, done
+    assert [m.get("state", m.get("seq")) for _kind, m in messages] == ["running", 1, 2, 3, "done"]
+    sent = svc.stats.cycles_sent
+    assert sent == 3
+    sub.undeclare()
+    wait_until(lambda: not svc._watched.any, 10)  # the listener's notice, then the exact reading
+    out = client.plan(PlanRequest(max_cycles=3), goal_id="unseen-1", watch=False)
+    assert out.result["cycles_published"] == 3
+    assert svc.stats.cycles_sent == sent  # numbered, not sent
+    assert seen.empty()
+
+
+def test_a_request_without_the_hint_is_watched_from_its_start(port, services, clients):
+    """A client that does not send the ``watch`` hint (another language's, an older one) and
+    subscribes just before its request gets every message: the instance asks Zenoh."""
+    services(port)
+    client = clients(port)
+    client.wait_for_instances(1)
+    session = client.session
+    for k in range(5):
+        seen: queue.SimpleQueue[Any] = queue.SimpleQueue()
+        sub = session.declare_subscriber(
+            proto.goal_keys(client.prefix, f"raw-{k}"), lambda sample, box=seen: box.put(sample)
+        )
+        payload = proto.encode_request(f"raw-{k}", PlanRequest(max_cycles=2, seed=k))
+        assert b'"watch"' not in payload
+        replies = list(
+            session.get(proto.plan_key(client.prefix, client.instances()[0]), payload=payload, timeout=30)
+        )
+        assert len(replies) == 1 and replies[0].ok is not None
+        first = proto.loads_message(seen.get(timeout=10).payload.to_bytes())
+        sub.undeclare()
+        assert first.get("state") == "running", first
+
+
+def test_a_matching_notice_never_turns_the_flag_false_by_itself():
+    """Zenoh delivers matching notices from tasks it spawns, late and possibly out of order: a
+    notice may say "matching" (the flag turns true at once: a put too many costs little) but the
+    flag turns false only from an exact reading (``refresh``), which every notice asks for."""
+    session = zenoh.open(make_config())
+    try:
+        notices: list[int] = []
+        watchers = _GoalWatchers(session, proto.prefix(None), lambda: notices.append(1))
+        wait_until(lambda: bool(notices), 5)  # the listener's first notice: nobody matches
+        notices.clear()
+        watchers.any = True
+        watchers._on_status(SimpleNamespace(matching=False))  # a late notice of a watcher gone
+        assert watchers.any is True and notices == [1]
+        watchers.refresh()  # what the dispatcher runs for that notice: nobody matches
+        assert watchers.any is False
+        watchers._on_status(SimpleNamespace(matching=True))
+        assert watchers.any is True and notices == [1, 1]
+        watchers.undeclare()
+    finally:
+        session.close()
