@@ -238,9 +238,15 @@ def plan_reply_bytes(instance: str, result: dict[str, Any]) -> int:
     return len(head + proto.encode_result(result) + b"}")
 
 
+def request_bytes(request: PlanRequest) -> bytes:
+    """``request`` as ``EosClient.plan(request, watch=False)`` sends it (goal id of the same
+    length, a cancel token, the watch hint)."""
+    return proto.encode_request("g-000000000000-1", request, proto.new_cancel_token(), False)
+
+
 def echo_payload(request: PlanRequest) -> bytes:
     """The bare get->reply's request: as many bytes as ``request``'s plan request."""
-    return b"x" * len(proto.encode_request("g-000000000000-1", request, proto.new_cancel_token()))
+    return b"x" * len(request_bytes(request))
 
 
 def interleaved(
@@ -299,13 +305,14 @@ def raw_service(
     client: EosClient, echo: zenoh.Session, request: PlanRequest, n: int
 ) -> tuple[float, float, float]:
     """:func:`interleaved` medians of a plain get to the service's instance with the request
-    encoded first (a fresh goal id and cancel token each, outside the timing) and its reply's
+    encoded first (a fresh goal id and cancel token each and the client's watch hint, outside the
+    timing) and its reply's
     bytes not parsed — the service without the client library. A loop of its own, after the
     service's, on the same client session."""
     key = proto.plan_key(client.prefix, client.instances()[0])
 
     def raw_get(i: int) -> float:
-        payload = proto.encode_request(f"g-raw{i:08d}-1", request, proto.new_cancel_token())
+        payload = proto.encode_request(f"g-raw{i:08d}-1", request, proto.new_cancel_token(), False)
         return echo_round_trip(client.session, payload, key)
 
     return interleaved(request, echo, n, raw_get)
@@ -873,7 +880,7 @@ def overhead_part(n_rt: int) -> None:
     ratio = (rows[0][2] - rows[0][1]) / rows[0][3]
     print(
         f"   1-cycle plan, no stream: overhead / bare get->reply = {ratio:.2f}x "
-        f"(request {len(proto.encode_request('g-000000000000-1', one, proto.new_cancel_token()))} B, "
+        f"(request {len(request_bytes(one))} B, "
         f"reply {reply_bytes} B); goal ≤ 2x: {'met' if ratio <= 2.0 else 'NOT met'}"
     )
     per_cycle = (rows[2][2] - rows[2][1] - (rows[1][2] - rows[1][1])) / max(1, rows[2][4] - 1)
