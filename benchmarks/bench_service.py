@@ -11,10 +11,11 @@
    The baseline is ``plan(request, keep_trace=False)`` in this process with no
    cycle callback: what a caller pays without the service. Everything the
    service adds counts as overhead: encoding, sending, decoding and validating
-   the request, the hand-off to a worker, asking Zenoh whether anyone watches
-   the goal (the ``running`` and ``done`` status messages and every cycle are
-   built and published only when some subscriber matches; with "no stream"
-   nobody subscribes, with "live stream" the client does), the result to JSON,
+   the request, the hand-off to a worker, deciding whether anyone watches the
+   goal (the request's watch hint, which the client sends; the ``running`` and
+   ``done`` status messages and every cycle are built and published only when
+   some subscriber matches; with "no stream" nobody subscribes, with "live
+   stream" the client does), the result to JSON,
    the reply and its parsing. Measured in the same loop: a bare
    Zenoh get→reply to a queryable in another process answering from its own
    thread, with a request and a reply of the same sizes as the plan's (the
@@ -579,7 +580,7 @@ def probe_server(port: int, out: str) -> None:
     sys.setswitchinterval(0.001)  # as eos serve
     _timed(proto, "decode_envelope", "decode0", "decode1")
     _timed(srv, "_encode", "json0", "json1")
-    _timed(srv._GoalWatchers, "now", "watch0", "watch1")
+    _timed(srv._GoalWatchers, "watched", "watch0", "watch1")
 
     from eos_svc.agents.result import PlanResult
 
@@ -654,7 +655,7 @@ _STEPS = [
     ("admission1", "admitted", "server: job, queue"),
     ("admitted", "worker", "server: wake the worker thread"),
     ("worker", "watch0", "server: message heads"),
-    ("watch0", "watch1", "server: anyone watching? (matching status)"),
+    ("watch0", "watch1", "server: anyone watching? (the hint; no hint: Zenoh)"),
     ("running0", "running1", "server: put status running"),
     ("plan0", "plan1", "plan in the server (incl. cycles)"),
     ("cycle0", "cycle1", "  of which: cycle 1 to JSON + put"),

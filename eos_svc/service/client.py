@@ -333,9 +333,11 @@ class EosClient:
             instance: ask this instance only (no spreading, no retry elsewhere).
             watch: subscribe to the goal's cycles and status (needed for ``on_cycle``). The
                 request says so (its ``watch`` hint), so the instance need not ask Zenoh
-                whether anyone watches; once this client has called :meth:`watch`, its requests
-                leave the hint out (a subscriber of its own may match the goal) and the
-                instance asks.
+                whether anyone watches: ``False`` tells it this session has no subscriber of
+                the goal — one declared on :attr:`session` directly is counted only once
+                Zenoh notifies the instance (a goal may start unseen by it). Once this client
+                has called :meth:`watch` (for good: it does not know when that subscriber
+                goes), its requests leave the hint out and the instance asks.
             timeout: seconds to wait for one instance's answer (default: the
                 request's deadline + ``timeout_margin_s``). An instance that does not answer
                 in time is not asked again by this call; the plan goes to another, so the

@@ -606,9 +606,11 @@ def decode_checked(raw: bytes) -> Envelope:
     token = data.get("cancel_token")
     if token is not None and not (isinstance(token, str) and is_token(token)):
         raise RequestError(E_INVALID, "cancel_token", "must be 16-128 characters of A-Z a-z 0-9 _ -", goal_id)
-    watch = data.get("watch")
-    if "watch" in data and type(watch) is not bool:
-        raise RequestError(E_INVALID, "watch", f"must be true or false, got {type(watch).__name__}", goal_id)
+    watch = data.get("watch")  # absent or null: no hint
+    if watch is not None and type(watch) is not bool:
+        raise RequestError(
+            E_INVALID, "watch", f"must be true, false or null, got {type(watch).__name__}", goal_id
+        )
     body = {k: v for k, v in data.items() if k not in _ENVELOPE_KEYS}
     try:
         request = PlanRequest.from_dict(body)

@@ -103,7 +103,7 @@ class _Request(msgspec.Struct, forbid_unknown_fields=True):
     deadline_s: Annotated[float, msgspec.Meta(gt=0.0, le=MAX_DEADLINE_S)] | None
     friction: Annotated[float, msgspec.Meta(ge=0.0, le=MAX_FRICTION)]
     cancel_token: str | msgspec.UnsetType | None = msgspec.UNSET
-    watch: bool | msgspec.UnsetType = msgspec.UNSET
+    watch: bool | msgspec.UnsetType | None = msgspec.UNSET
 
 
 _decode = msgspec.json.Decoder(_Request).decode
@@ -171,4 +171,4 @@ def decode_fast(raw: bytes) -> tuple[str, PlanRequest, str | None, bool | None] 
     request = PlanRequest.from_checked(
         spec, weights, msg.seed, msg.tactile_noise, msg.max_cycles, msg.deadline_s, msg.friction
     )
-    return msg.goal_id, request, token, (None if watch is msgspec.UNSET else watch)
+    return msg.goal_id, request, token, (None if watch is msgspec.UNSET else watch)  # null: None too

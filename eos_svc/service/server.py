@@ -61,7 +61,7 @@ _JSON = zenoh.Encoding.APPLICATION_JSON
 _BLOCK = zenoh.CongestionControl.BLOCK
 
 #: the dispatcher's work items: (kind, query, refusal); None stops it
-_Item = tuple[str, "zenoh.Query | None", "proto.RequestError | None"]
+_Item = tuple[str, zenoh.Query | None, proto.RequestError | None]
 #: the item that asks the dispatcher to refresh the goal watchers' flag (_GoalWatchers.refresh)
 _REFRESH: _Item = ("refresh", None, None)
 
@@ -147,12 +147,15 @@ class _GoalWatchers:
     - :attr:`any`: a Python bool, free to read before every cycle. A matching listener's
       notice sets it at once when it says "matching" (a put too many costs little) and asks
       for :meth:`refresh` (``on_notice``: the service's dispatcher thread runs it), which sets
-      it to :meth:`now`; so it turns false only from an exact reading, never from a notice
-      Zenoh delivered late or out of order (it delivers them from tasks it spawns). It lags a
-      new subscriber by the notice's delay (a few milliseconds): enough for a watcher that
-      comes in the middle of a plan; a watcher that syncs with the instance
+      it to the routing tables' answer; so it turns false only from an exact reading, never
+      from a notice Zenoh delivered late or out of order (it delivers them from tasks it
+      spawns). A notice that comes during a reading may leave the flag one reading behind; the
+      refresh that notice asks for follows in the same thread. It lags a new subscriber by the
+      notice's delay (well under a millisecond to a few): enough for a watcher that comes in
+      the middle of a plan; a watcher that syncs with the instance
       (:meth:`~eos_svc.service.EosClient.watch`: a cancel query, whose handler refreshes it
       before answering) is counted from then on.
+    - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
 
     __slots__ = ("_listener", "_on_notice", "_publisher", "any")
@@ -162,12 +165,20 @@ class _GoalWatchers:
         self.any = False
         self._on_notice = on_notice
         self._listener = self._publisher.declare_matching_listener(direct_callback(self._on_status))
+        self.refresh()  # the watchers already there, exactly, without waiting for a notice
 
     def _on_status(self, status: Any) -> None:
         # in Zenoh's thread: an attribute store and a queue put; never blocks, never calls Zenoh
         if status.matching:
             self.any = True
         self._on_notice()
+
+    def watched(self, hint: bool | None) -> bool:
+        """Whether to publish a goal's messages from its start: the requester's ``watch`` hint
+        (it subscribed, or not: then the watchers known, :attr:`any`), or without one :meth:`now`."""
+        if hint is None:
+            return self.now()
+        return hint or self.any
 
     def now(self) -> bool:
         """True when at least one subscriber matches some goal's messages now (exact)."""
@@ -334,6 +345,11 @@ class PlanService:
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
         self._plan_key_text = str(self._plan_key)
+        s = self.session
+        # before the threads (the dispatcher refreshes it) and the plan queryable (_run asks it);
+        # its notices become refreshes in the dispatcher
+        self._watched = _GoalWatchers(s, self.prefix, functools.partial(self._inbox.put, _REFRESH))
+        self._entities.append(self._watched)
         self._threads.append(
             threading.Thread(target=self._dispatch, name=f"eos-dispatch-{self.instance}", daemon=True)
         )
@@ -343,16 +359,12 @@ class PlanService:
             )
         for t in self._threads:
             t.start()
-        s = self.session
         # the other instances (their tokens): who answers a plan query that names no single instance
         self._entities.append(
             s.liveliness().declare_subscriber(
                 proto.instance_key(self.prefix), direct_callback(self._on_token), history=True
             )
         )
-        # before the plan queryable: _run asks it; its notices become refreshes in the dispatcher
-        self._watched = _GoalWatchers(s, self.prefix, functools.partial(self._inbox.put, _REFRESH))
-        self._entities.append(self._watched)
         self._entities.append(
             s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
         )
@@ -640,9 +652,7 @@ class PlanService:
             head = self._head(goal_id)
             watchers = self._watched
             try:
-                # the requester's own word for its subscriber, and the watchers known for the
-                # others; a request that does not say: exact, before the first message
-                watched = watchers.now() if job.watch is None else (job.watch or watchers.any)
+                watched = watchers.watched(job.watch)  # before the first message
             except Exception:
                 if self._stopping:  # stop() undeclared the watcher publisher meanwhile
                     raise proto.RequestError(

@@ -137,7 +137,7 @@ BOUNDS = [
     ("schema", [1], [1.0, 2, 0, True, "1", None]),
     ("goal_id", ["a", "A.b-c_9", "x" * 64], ["", "x" * 65, "a/b", "a*", "-a", 5, None, "a\n"]),
     ("cancel_token", [None, "A" * 16, "_-" * 64], ["short", "a" * 129, "a b" * 8, 5, False]),
-    ("watch", [True, False], [None, 1, 0, "true", [], {}]),
+    ("watch", [True, False, None], [1, 0, "true", [], {}]),
     ("object.shape", ["sphere"], ["cube", "Sphere", None, 1]),
 ]
 
@@ -236,11 +236,19 @@ def test_the_watch_hint_is_written_only_when_given_and_read_back(watch: bool | N
     assert fast(raw) == full(raw) == ("g-1", PlanRequest(), None, watch)
 
 
-@pytest.mark.parametrize("value", [None, 1, "false", [True]])
+@pytest.mark.parametrize("value", [1, "false", [True]])
 def test_a_watch_hint_that_is_not_a_boolean_is_named(value: object) -> None:
+    """true or false; null is no hint, as an absent one (as a null cancel_token is no token)."""
     doc = json.loads(PLAIN)
     doc["watch"] = value
     with pytest.raises(proto.RequestError) as got:
         proto.decode_envelope(json.dumps(doc).encode())
     assert (got.value.code, got.value.field) == (proto.E_INVALID, "watch")
-    assert "must be true or false" in got.value.reason
+    assert "must be true, false or null" in got.value.reason
+
+
+def test_a_null_watch_hint_is_no_hint() -> None:
+    doc = json.loads(PLAIN)
+    doc["watch"] = None
+    raw = json.dumps(doc).encode()
+    assert fast(raw) == full(raw) == ("g-1", PlanRequest(), None, None)

@@ -94,17 +94,38 @@ def test_once_the_last_watcher_leaves_unwatched_plans_send_nothing(port, service
     out = client.plan(PlanRequest(max_cycles=3), goal_id="unseen-1", watch=False)
     assert out.result["cycles_published"] == 3
     assert svc.stats.cycles_sent == sent  # numbered, not sent
-    assert seen.empty()
+
+
+class _NoticesNeverCome:
+    """An instance's watchers as if Zenoh's matching notices (and refreshes) had not come yet:
+    the flag stays false; an exact reading still asks the routing tables."""
+
+    any = False
+
+    def __init__(self, real: _GoalWatchers) -> None:
+        self._real = real
+
+    def watched(self, hint: bool | None) -> bool:
+        return _GoalWatchers.watched(self, hint)  # type: ignore[arg-type]
+
+    def now(self) -> bool:
+        self._real.refresh()
+        return self._real.any
+
+    def refresh(self) -> None:
+        pass
 
 
 def test_a_request_without_the_hint_is_watched_from_its_start(port, services, clients):
     """A client that does not send the ``watch`` hint (another language's, an older one) and
-    subscribes just before its request gets every message: the instance asks Zenoh."""
-    services(port)
+    subscribes just before its request gets every message: the instance asks Zenoh — even
+    when no notice of that subscriber has come (the flag held false here)."""
+    svc = services(port)
+    svc._watched = _NoticesNeverCome(svc._watched)  # type: ignore[assignment]
     client = clients(port)
     client.wait_for_instances(1)
     session = client.session
-    for k in range(5):
+    for k in range(3):
         seen: queue.SimpleQueue[Any] = queue.SimpleQueue()
         sub = session.declare_subscriber(
             proto.goal_keys(client.prefix, f"raw-{k}"), lambda sample, box=seen: box.put(sample)
@@ -118,6 +139,11 @@ def test_a_request_without_the_hint_is_watched_from_its_start(port, services, cl
         first = proto.loads_message(seen.get(timeout=10).payload.to_bytes())
         sub.undeclare()
         assert first.get("state") == "running", first
+    # the same with the hint false: the instance takes the sender's word and, knowing of no
+    # other watcher, builds and sends nothing
+    sent = svc.stats.cycles_sent
+    out = client.plan(PlanRequest(max_cycles=2), goal_id="hint-false", watch=False)
+    assert out.result["cycles_published"] == 2 and svc.stats.cycles_sent == sent
 
 
 def test_a_matching_notice_never_turns_the_flag_false_by_itself():
