@@ -145,33 +145,36 @@ class _GoalWatchers:
       that has been idle (cold caches): asked once per plan whose request does not say
       whether its sender watches, and only when ``any`` is false.
     - :attr:`any`: a Python bool, free to read before every cycle. A matching listener's
-      notice sets it at once when it says "matching" (a put too many costs little) and asks
-      for :meth:`refresh` (``on_notice``: the service's dispatcher thread runs it), which sets
-      it to the routing tables' answer; so it turns false only from an exact reading, never
-      from a notice Zenoh delivered late or out of order (it delivers them from tasks it
-      spawns). A notice that comes during a reading may leave the flag one reading behind; the
-      refresh that notice asks for follows in the same thread. It lags a new subscriber by the
-      notice's delay (well under a millisecond to a few): enough for a watcher that comes in
-      the middle of a plan; a watcher that syncs with the instance
-      (:meth:`~eos_svc.service.EosClient.watch`: a cancel query, whose handler refreshes it
-      before answering) is counted from then on.
+      notice that says "matching" sets it at once (a put too many costs little; nothing is
+      woken on the request's path); one that says "nobody" asks for :meth:`refresh`
+      (``on_notice``: the service's dispatcher thread runs it), which sets it to the routing
+      tables' answer. The service also refreshes it after every plan that found it set (after
+      the reply) and before answering every cancel query. So it turns false only from an
+      exact reading, never from a notice Zenoh delivered late or out of order (it delivers
+      them from tasks it spawns), and a stale "matching" lasts at most one plan. It lags a new
+      subscriber by the notice's delay (well under a millisecond to a few): enough for a
+      watcher that comes in the middle of a plan; a watcher that syncs with the instance
+      (:meth:`~eos_svc.service.EosClient.watch`: a cancel query) is counted from then on.
     - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
 
-    __slots__ = ("_listener", "_on_notice", "_publisher", "any")
+    __slots__ = ("_listener", "_matching_notices", "_on_notice", "_publisher", "any")
 
     def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
         self._publisher = session.declare_publisher(proto.goal_keys(prefix))
         self.any = False
+        self._matching_notices = 0  # changes with every "matching" notice (see refresh)
         self._on_notice = on_notice
         self._listener = self._publisher.declare_matching_listener(direct_callback(self._on_status))
         self.refresh()  # the watchers already there, exactly, without waiting for a notice
 
     def _on_status(self, status: Any) -> None:
-        # in Zenoh's thread: an attribute store and a queue put; never blocks, never calls Zenoh
+        # in Zenoh's thread: an attribute store or a queue put; never blocks, never calls Zenoh
         if status.matching:
-            self.any = True
-        self._on_notice()
+            self._matching_notices += 1
+            self.any = True  # believed at once (a put too many costs little), nothing woken
+        else:
+            self._on_notice()  # "nobody": believed only from the tables, read in another thread
 
     def watched(self, hint: bool | None) -> bool:
         """Whether to publish a goal's messages from its start: the requester's ``watch`` hint
@@ -188,9 +191,18 @@ class _GoalWatchers:
         return bool(getattr(status, "matching", status))
 
     def refresh(self) -> None:
-        """Set :attr:`any` to the routing tables' answer now (not from Zenoh's thread)."""
-        status = self._publisher.matching_status
-        self.any = bool(getattr(status, "matching", status))
+        """Set :attr:`any` to the routing tables' answer now (not from Zenoh's thread). A
+        "matching" notice that comes while the tables are read makes it read them again, so a
+        "nobody" read before that notice never overwrites it."""
+        while True:
+            mark = self._matching_notices
+            status = self._publisher.matching_status
+            matching = bool(getattr(status, "matching", status))
+            self.any = matching
+            # stored first, checked after: a notice before the store is seen here, one after it
+            # set the flag itself
+            if matching or self._matching_notices == mark:
+                return
 
     def undeclare(self) -> None:
         """Undeclare the listener and the publisher."""
@@ -484,7 +496,7 @@ class PlanService:
                 )
 
     def _refresh_watchers(self) -> None:
-        """:meth:`_GoalWatchers.refresh` (in the dispatcher: it calls Zenoh); after stop() has
+        """:meth:`_GoalWatchers.refresh` (in our threads: it calls Zenoh); after stop() has
         undeclared the watchers' publisher, nothing."""
         try:
             self._watched.refresh()
@@ -727,6 +739,8 @@ class PlanService:
                     publisher.undeclare()
                 except Exception:
                     log.debug("undeclare failed", exc_info=True)
+            if self._watched.any:  # a "matching" notice is believed until the tables are read
+                self._refresh_watchers()
 
     def _done_refused(self, goal_id: str) -> None:
         """Close a goal the planner refused after admission: ``done`` with status ``refused``, no

@@ -148,21 +148,66 @@ def test_a_request_without_the_hint_is_watched_from_its_start(port, services, cl
 
 def test_a_matching_notice_never_turns_the_flag_false_by_itself():
     """Zenoh delivers matching notices from tasks it spawns, late and possibly out of order: a
-    notice may say "matching" (the flag turns true at once: a put too many costs little) but the
-    flag turns false only from an exact reading (``refresh``), which every notice asks for."""
+    notice that says "matching" turns the flag true at once (a put too many costs little) and
+    wakes nobody; one that says "nobody" asks for an exact reading (``refresh``), the only way
+    the flag turns false."""
     session = zenoh.open(make_config())
     try:
         notices: list[int] = []
         watchers = _GoalWatchers(session, proto.prefix(None), lambda: notices.append(1))
-        wait_until(lambda: bool(notices), 5)  # the listener's first notice: nobody matches
-        notices.clear()
+        assert watchers.any is False  # read from the tables at once: nobody
         watchers.any = True
+        notices.clear()
         watchers._on_status(SimpleNamespace(matching=False))  # a late notice of a watcher gone
         assert watchers.any is True and notices == [1]
         watchers.refresh()  # what the dispatcher runs for that notice: nobody matches
         assert watchers.any is False
         watchers._on_status(SimpleNamespace(matching=True))
-        assert watchers.any is True and notices == [1, 1]
+        assert watchers.any is True and notices == [1]  # believed as it is
+        watchers.undeclare()
+    finally:
+        session.close()
+
+
+def test_a_stale_matching_notice_lasts_one_plan(port, services, clients):
+    """A "matching" notice that came late (the watcher already gone) is believed only until the
+    plan that found it ends: the instance then reads the tables."""
+    svc = services(port)
+    client = clients(port)
+    client.wait_for_instances(1)
+    svc._watched.any = True  # as a late "matching" notice would leave it, nobody subscribed
+    client.plan(PlanRequest(max_cycles=2), goal_id="stale-1", watch=False)
+    sent = svc.stats.cycles_sent
+    assert sent == 2  # believed: built and put, to nobody
+    wait_until(lambda: not svc._watched.any, 5)  # read after the reply
+    client.plan(PlanRequest(max_cycles=2), goal_id="stale-2", watch=False)
+    assert svc.stats.cycles_sent == sent
+
+
+def test_a_matching_notice_during_a_reading_is_not_overwritten():
+    """The dispatcher reads "nobody" from the tables; a "matching" notice lands before it stores
+    that answer: the reading is taken again (here the publisher's matching status is read
+    through a property that delivers such a notice during the first reading)."""
+    session = zenoh.open(make_config())
+    try:
+        watchers = _GoalWatchers(session, proto.prefix(None), lambda: None)
+        real = watchers._publisher
+        readings: list[bool] = []
+
+        class NoticeDuringReading:
+            @property
+            def matching_status(self) -> Any:
+                status = real.matching_status
+                readings.append(bool(status.matching))
+                if len(readings) == 1:  # the subscriber arrives, its notice with it
+                    watchers._on_status(SimpleNamespace(matching=True))
+                return status
+
+        watchers._publisher = NoticeDuringReading()
+        watchers.refresh()
+        assert readings == [False, False]  # read again after the notice
+        assert watchers.any is False  # the tables' answer: the notice was made up here
+        watchers._publisher = real
         watchers.undeclare()
     finally:
         session.close()
