@@ -148,22 +148,37 @@ class _GoalWatchers:
       notice that says "matching" sets it at once (a put too many costs little; nothing is
       woken on the request's path); one that says "nobody" asks for :meth:`refresh`
       (``on_notice``: the service's dispatcher thread runs it), which sets it to the routing
-      tables' answer. The service also refreshes it after every plan that found it set (after
-      the reply) and before answering every cancel query. So it turns false only from an
-      exact reading, never from a notice Zenoh delivered late or out of order (it delivers
-      them from tasks it spawns), and a stale "matching" lasts at most one plan. It lags a new
-      subscriber by the notice's delay (well under a millisecond to a few): enough for a
+      tables' answer. The service also refreshes it after every plan that ends with it set or
+      with Zenoh's last notice saying "matching" (after the reply), and before answering every
+      cancel query. Readings are taken one at a time (a lock), so an older one never overwrites
+      a newer one, and a "matching" notice that comes during a reading makes it read again. So
+      the flag turns false only from an exact reading, never from a notice Zenoh delivered late
+      or out of order (it delivers them from tasks it spawns); a stale "matching" lasts until
+      the first plan that ends after it (plans running meanwhile publish to nobody). It lags a
+      new subscriber by the notice's delay (well under a millisecond to a few): enough for a
       watcher that comes in the middle of a plan; a watcher that syncs with the instance
       (:meth:`~eos_svc.service.EosClient.watch`: a cancel query) is counted from then on.
     - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
 
-    __slots__ = ("_listener", "_matching_notices", "_on_notice", "_publisher", "any")
+    __slots__ = (
+        "_listener",
+        "_matching_notices",
+        "_on_notice",
+        "_publisher",
+        "_reading",
+        "any",
+        "zenoh_says_matching",
+    )
 
     def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
         self._publisher = session.declare_publisher(proto.goal_keys(prefix))
         self.any = False
+        #: what Zenoh's last notice said: Zenoh notifies only when its own state changes, which
+        #: a reading of ours may have left behind; the worker reads the tables while it is true
+        self.zenoh_says_matching = False
         self._matching_notices = 0  # changes with every "matching" notice (see refresh)
+        self._reading = threading.Lock()  # one reading at a time (see refresh)
         self._on_notice = on_notice
         self._listener = self._publisher.declare_matching_listener(direct_callback(self._on_status))
         self.refresh()  # the watchers already there, exactly, without waiting for a notice
@@ -171,9 +186,11 @@ class _GoalWatchers:
     def _on_status(self, status: Any) -> None:
         # in Zenoh's thread: an attribute store or a queue put; never blocks, never calls Zenoh
         if status.matching:
-            self._matching_notices += 1
+            self.zenoh_says_matching = True
+            self._matching_notices += 1  # the counter first, then the flag (see refresh)
             self.any = True  # believed at once (a put too many costs little), nothing woken
         else:
+            self.zenoh_says_matching = False
             self._on_notice()  # "nobody": believed only from the tables, read in another thread
 
     def watched(self, hint: bool | None) -> bool:
@@ -191,23 +208,29 @@ class _GoalWatchers:
         return bool(getattr(status, "matching", status))
 
     def refresh(self) -> None:
-        """Set :attr:`any` to the routing tables' answer now (not from Zenoh's thread). A
-        "matching" notice that comes while the tables are read makes it read them again, so a
-        "nobody" read before that notice never overwrites it."""
-        while True:
-            mark = self._matching_notices
-            status = self._publisher.matching_status
-            matching = bool(getattr(status, "matching", status))
-            self.any = matching
-            # stored first, checked after: a notice before the store is seen here, one after it
-            # set the flag itself
-            if matching or self._matching_notices == mark:
-                return
+        """Set :attr:`any` to the routing tables' answer now (from our threads, never from
+        Zenoh's). One reading at a time: Zenoh releases the GIL while it reads, so without the
+        lock a worker's "nobody" could be stored after the dispatcher's newer "matching" (a
+        watcher's sync). A "matching" notice that comes while the tables are read makes it read
+        them again, so a "nobody" read before that notice never overwrites it."""
+        with self._reading:  # never taken in Zenoh's threads: waiting on it cannot block them
+            while True:
+                mark = self._matching_notices
+                status = self._publisher.matching_status
+                matching = bool(getattr(status, "matching", status))
+                self.any = matching
+                # stored first, checked after: a notice before the store is seen here, one
+                # after it set the flag itself
+                if matching or self._matching_notices == mark:
+                    return
 
     def undeclare(self) -> None:
-        """Undeclare the listener and the publisher."""
-        self._listener.undeclare()
-        self._publisher.undeclare()
+        """Undeclare the listener and the publisher (each tried, whatever the other did)."""
+        try:
+            self._listener.undeclare()
+        finally:
+            with self._reading:  # not while a reading uses the publisher
+                self._publisher.undeclare()
 
 
 class _GoalCancel(CancelToken):
@@ -358,8 +381,8 @@ class PlanService:
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
         self._plan_key_text = str(self._plan_key)
         s = self.session
-        # before the threads (the dispatcher refreshes it) and the plan queryable (_run asks it);
-        # its notices become refreshes in the dispatcher
+        # before the threads (they refresh it) and the plan queryable (_run asks it); its
+        # "nobody" notices become refreshes in the dispatcher
         self._watched = _GoalWatchers(s, self.prefix, functools.partial(self._inbox.put, _REFRESH))
         self._entities.append(self._watched)
         self._threads.append(
@@ -471,7 +494,7 @@ class PlanService:
             if item is None:
                 break
             kind, query, refusal = item
-            if query is None:  # _REFRESH: a matching notice came
+            if query is None:  # _REFRESH: a "nobody" notice came
                 self._refresh_watchers()
                 continue
             try:
@@ -739,7 +762,8 @@ class PlanService:
                     publisher.undeclare()
                 except Exception:
                     log.debug("undeclare failed", exc_info=True)
-            if self._watched.any:  # a "matching" notice is believed until the tables are read
+            watchers = self._watched
+            if watchers.any or watchers.zenoh_says_matching:  # believed until the tables are read
                 self._refresh_watchers()
 
     def _done_refused(self, goal_id: str) -> None:

@@ -73,7 +73,7 @@ def test_a_sync_sets_the_watchers_flag_from_the_routing_tables(port, services, c
         assert client.sync_with_instances(5.0) == [svc.instance]
         assert svc._watched.any is True
     sub.undeclare()
-    wait_until(lambda: not svc._watched.any, 10)
+    assert wait_until(lambda: not svc._watched.any, 10)
     svc._watched.any = True  # as if a late notice had said "matching"
     assert client.sync_with_instances(5.0) == [svc.instance]
     assert svc._watched.any is False

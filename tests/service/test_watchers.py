@@ -90,7 +90,7 @@ def test_once_the_last_watcher_leaves_unwatched_plans_send_nothing(port, service
     sent = svc.stats.cycles_sent
     assert sent == 3
     sub.undeclare()
-    wait_until(lambda: not svc._watched.any, 10)  # the listener's notice, then the exact reading
+    assert wait_until(lambda: not svc._watched.any, 10)  # the listener's notice, then the exact reading
     out = client.plan(PlanRequest(max_cycles=3), goal_id="unseen-1", watch=False)
     assert out.result["cycles_published"] == 3
     assert svc.stats.cycles_sent == sent  # numbered, not sent
@@ -179,7 +179,7 @@ def test_a_stale_matching_notice_lasts_one_plan(port, services, clients):
     client.plan(PlanRequest(max_cycles=2), goal_id="stale-1", watch=False)
     sent = svc.stats.cycles_sent
     assert sent == 2  # believed: built and put, to nobody
-    wait_until(lambda: not svc._watched.any, 5)  # read after the reply
+    assert wait_until(lambda: not svc._watched.any, 5)  # read after the reply
     client.plan(PlanRequest(max_cycles=2), goal_id="stale-2", watch=False)
     assert svc.stats.cycles_sent == sent
 
@@ -211,3 +211,66 @@ def test_a_matching_notice_during_a_reading_is_not_overwritten():
         watchers.undeclare()
     finally:
         session.close()
+
+
+def test_readings_are_taken_one_at_a_time():
+    """Zenoh releases the GIL while it reads the tables: a worker's reading of "nobody", taken
+    before a watcher came but stored after the dispatcher's reading of "matching" (the watcher's
+    sync), must not win. The tables here are a stand-in whose first reading, in the worker,
+    pauses between reading and returning."""
+    session = zenoh.open(make_config())
+    try:
+        watchers = _GoalWatchers(session, proto.prefix(None), lambda: None)
+        real = watchers._publisher
+        read_nobody, resume = threading.Event(), threading.Event()
+
+        class Tables:
+            matching = False
+
+            @property
+            def matching_status(self) -> Any:
+                value = self.matching
+                if threading.current_thread().name == "worker" and not read_nobody.is_set():
+                    read_nobody.set()
+                    resume.wait(10)  # the worker's reading, late to be stored
+                return SimpleNamespace(matching=value)
+
+        tables = Tables()
+        watchers._publisher = tables
+        worker = threading.Thread(target=watchers.refresh, name="worker")
+        worker.start()
+        assert read_nobody.wait(10)
+        tables.matching = True  # a watcher subscribes and syncs: the dispatcher reads the tables
+        dispatcher = threading.Thread(target=watchers.refresh, name="dispatcher")
+        dispatcher.start()
+        dispatcher.join(0.3)  # with one reading at a time it waits for the worker's
+        resume.set()
+        worker.join(10)
+        dispatcher.join(10)
+        assert watchers.any is True
+        watchers._publisher = real
+        watchers.undeclare()
+    finally:
+        session.close()
+
+
+def test_a_watcher_zenoh_will_not_notify_again_is_counted_after_the_next_plan(port, services, clients):
+    """Zenoh notifies only when its own matching state changes; a reading of ours taken between
+    one watcher leaving and another coming can leave the flag false with Zenoh's state true (no
+    notice will come). The worker reads the tables after a plan while Zenoh's last notice said
+    "matching": here the flag is set false by hand under a bare subscriber (no sync)."""
+    svc = services(port)
+    client = clients(port)
+    other = clients(port)
+    client.wait_for_instances(1)
+    sub = other.session.declare_subscriber(proto.goal_keys(other.prefix), lambda _sample: None)
+    try:
+        assert wait_until(lambda: svc._watched.zenoh_says_matching and svc._watched.any, 10)
+        svc._watched.any = False  # as a reading left behind by Zenoh's state would leave it
+        client.plan(PlanRequest(max_cycles=2), goal_id="unseen-2", watch=False)
+        sent = svc.stats.cycles_sent
+        assert wait_until(lambda: svc._watched.any, 5)  # read after that plan's reply
+        client.plan(PlanRequest(max_cycles=2), goal_id="seen-2", watch=False)
+        assert svc.stats.cycles_sent == sent + 2
+    finally:
+        sub.undeclare()
