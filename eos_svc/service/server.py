@@ -202,8 +202,10 @@ class _GoalWatchers:
 
     def now(self) -> bool:
         """True when at least one subscriber matches some goal's messages now (exact)."""
-        if self.any:
-            return True
+        return self.any or self._tables_say_matching()
+
+    def _tables_say_matching(self) -> bool:
+        """The publisher's matching status, read from Zenoh's routing tables now."""
         status = self._publisher.matching_status  # a MatchingStatus (the 1.x stubs say bool)
         return bool(getattr(status, "matching", status))
 
@@ -216,8 +218,7 @@ class _GoalWatchers:
         with self._reading:  # never taken in Zenoh's threads: waiting on it cannot block them
             while True:
                 mark = self._matching_notices
-                status = self._publisher.matching_status
-                matching = bool(getattr(status, "matching", status))
+                matching = self._tables_say_matching()
                 self.any = matching
                 # stored first, checked after: a notice before the store is seen here, one
                 # after it set the flag itself
