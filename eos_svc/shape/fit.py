@@ -183,7 +183,7 @@ def libm_exp(a: np.ndarray) -> np.ndarray:
     2.4's X86_V4 path) it differs from the C library's in the last bit for ≈ 5 % of arguments,
     and this numpy reference must give the kernels' results bit for bit (a service's fits run
     it until the kernels are loaded)."""
-    return np.array([math.exp(v) for v in a.ravel().tolist()]).reshape(a.shape)
+    return _elementwise(math.exp, a.ravel().tolist(), a.shape)
 
 
 def libm_sin_cos(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -191,9 +191,14 @@ def libm_sin_cos(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     ``math.cos``: the compiled kernels'): numpy dispatches these by CPU too, so they may differ
     from the C library's as its exp does (:func:`libm_exp`)."""
     values = a.ravel().tolist()
-    sin = np.array([math.sin(v) for v in values]).reshape(a.shape)
-    cos = np.array([math.cos(v) for v in values]).reshape(a.shape)
-    return sin, cos
+    return _elementwise(math.sin, values, a.shape), _elementwise(math.cos, values, a.shape)
+
+
+def _elementwise(
+    function: Callable[[float], float], values: list[float], shape: tuple[int, ...]
+) -> np.ndarray:
+    """``function`` of every value (Python floats, in C order), as an array of ``shape``."""
+    return np.array([function(v) for v in values]).reshape(shape)
 
 
 def _batch_rotation_vectors(omega: np.ndarray) -> np.ndarray:
