@@ -307,9 +307,8 @@ def raw_service(
 ) -> tuple[float, float, float]:
     """:func:`interleaved` medians of a plain get to the service's instance with the request
     encoded first (a fresh goal id and cancel token each and the client's watch hint, outside the
-    timing) and its reply's
-    bytes not parsed — the service without the client library. A loop of its own, after the
-    service's, on the same client session."""
+    timing) and its reply's bytes not parsed — the service without the client library. A loop
+    of its own, after the service's, on the same client session."""
     key = proto.plan_key(client.prefix, client.instances()[0])
 
     def raw_get(i: int) -> float:
