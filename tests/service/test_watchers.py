@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import queue
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from types import SimpleNamespace
 from typing import Any
 
+import pytest
 import zenoh
 
 from eos_svc.agents.request import PlanRequest
@@ -146,27 +147,41 @@ def test_a_request_without_the_hint_is_watched_from_its_start(port, services, cl
     assert out.result["cycles_published"] == 2 and svc.stats.cycles_sent == sent
 
 
-def test_a_matching_notice_never_turns_the_flag_false_by_itself():
+@pytest.fixture
+def lone_watchers() -> Iterator[Callable[..., _GoalWatchers]]:
+    """Factory: a service's goal watchers on a Zenoh session of their own (no service); at the
+    end, the real publisher put back where a test swapped it, undeclared, the session closed."""
+    session = zenoh.open(make_config())
+    made: list[tuple[_GoalWatchers, Any]] = []
+
+    def make(on_notice: Callable[[], None] = lambda: None) -> _GoalWatchers:
+        watchers = _GoalWatchers(session, proto.prefix(None), on_notice)
+        made.append((watchers, watchers._publisher))
+        return watchers
+
+    yield make
+    for watchers, publisher in made:
+        watchers._publisher = publisher
+        watchers.undeclare()
+    session.close()
+
+
+def test_a_matching_notice_never_turns_the_flag_false_by_itself(lone_watchers):
     """Zenoh delivers matching notices from tasks it spawns, late and possibly out of order: a
     notice that says "matching" turns the flag true at once (a put too many costs little) and
     wakes nobody; one that says "nobody" asks for an exact reading (``refresh``), the only way
     the flag turns false."""
-    session = zenoh.open(make_config())
-    try:
-        notices: list[int] = []
-        watchers = _GoalWatchers(session, proto.prefix(None), lambda: notices.append(1))
-        assert watchers.any is False  # read from the tables at once: nobody
-        watchers.any = True
-        notices.clear()
-        watchers._on_status(SimpleNamespace(matching=False))  # a late notice of a watcher gone
-        assert watchers.any is True and notices == [1]
-        watchers.refresh()  # what the dispatcher runs for that notice: nobody matches
-        assert watchers.any is False
-        watchers._on_status(SimpleNamespace(matching=True))
-        assert watchers.any is True and notices == [1]  # believed as it is
-        watchers.undeclare()
-    finally:
-        session.close()
+    notices: list[int] = []
+    watchers = lone_watchers(lambda: notices.append(1))
+    assert watchers.any is False  # read from the tables at once: nobody
+    watchers.any = True
+    notices.clear()
+    watchers._on_status(SimpleNamespace(matching=False))  # a late notice of a watcher gone
+    assert watchers.any is True and notices == [1]
+    watchers.refresh()  # what the dispatcher runs for that notice: nobody matches
+    assert watchers.any is False
+    watchers._on_status(SimpleNamespace(matching=True))
+    assert watchers.any is True and notices == [1]  # believed as it is
 
 
 def test_a_stale_matching_notice_lasts_one_plan(port, services, clients):
@@ -184,74 +199,61 @@ def test_a_stale_matching_notice_lasts_one_plan(port, services, clients):
     assert svc.stats.cycles_sent == sent
 
 
-def test_a_matching_notice_during_a_reading_is_not_overwritten():
+def test_a_matching_notice_during_a_reading_is_not_overwritten(lone_watchers):
     """The dispatcher reads "nobody" from the tables; a "matching" notice lands before it stores
     that answer: the reading is taken again (here the publisher's matching status is read
     through a property that delivers such a notice during the first reading)."""
-    session = zenoh.open(make_config())
-    try:
-        watchers = _GoalWatchers(session, proto.prefix(None), lambda: None)
-        real = watchers._publisher
-        readings: list[bool] = []
+    watchers = lone_watchers()
+    real = watchers._publisher
+    readings: list[bool] = []
 
-        class NoticeDuringReading:
-            @property
-            def matching_status(self) -> Any:
-                status = real.matching_status
-                readings.append(bool(status.matching))
-                if len(readings) == 1:  # the subscriber arrives, its notice with it
-                    watchers._on_status(SimpleNamespace(matching=True))
-                return status
+    class NoticeDuringReading:
+        @property
+        def matching_status(self) -> Any:
+            status = real.matching_status
+            readings.append(bool(status.matching))
+            if len(readings) == 1:  # the subscriber arrives, its notice with it
+                watchers._on_status(SimpleNamespace(matching=True))
+            return status
 
-        watchers._publisher = NoticeDuringReading()
-        watchers.refresh()
-        assert readings == [False, False]  # read again after the notice
-        assert watchers.any is False  # the tables' answer: the notice was made up here
-        watchers._publisher = real
-        watchers.undeclare()
-    finally:
-        session.close()
+    watchers._publisher = NoticeDuringReading()
+    watchers.refresh()
+    assert readings == [False, False]  # read again after the notice
+    assert watchers.any is False  # the tables' answer: the notice was made up here
 
 
-def test_readings_are_taken_one_at_a_time():
+def test_readings_are_taken_one_at_a_time(lone_watchers):
     """Zenoh releases the GIL while it reads the tables: a worker's reading of "nobody", taken
     before a watcher came but stored after the dispatcher's reading of "matching" (the watcher's
     sync), must not win. The tables here are a stand-in whose first reading, in the worker,
     pauses between reading and returning."""
-    session = zenoh.open(make_config())
-    try:
-        watchers = _GoalWatchers(session, proto.prefix(None), lambda: None)
-        real = watchers._publisher
-        read_nobody, resume = threading.Event(), threading.Event()
+    watchers = lone_watchers()
+    read_nobody, resume = threading.Event(), threading.Event()
 
-        class Tables:
-            matching = False
+    class Tables:
+        matching = False
 
-            @property
-            def matching_status(self) -> Any:
-                value = self.matching
-                if threading.current_thread().name == "worker" and not read_nobody.is_set():
-                    read_nobody.set()
-                    resume.wait(10)  # the worker's reading, late to be stored
-                return SimpleNamespace(matching=value)
+        @property
+        def matching_status(self) -> Any:
+            value = self.matching
+            if threading.current_thread().name == "worker" and not read_nobody.is_set():
+                read_nobody.set()
+                resume.wait(10)  # the worker's reading, late to be stored
+            return SimpleNamespace(matching=value)
 
-        tables = Tables()
-        watchers._publisher = tables
-        worker = threading.Thread(target=watchers.refresh, name="worker")
-        worker.start()
-        assert read_nobody.wait(10)
-        tables.matching = True  # a watcher subscribes and syncs: the dispatcher reads the tables
-        dispatcher = threading.Thread(target=watchers.refresh, name="dispatcher")
-        dispatcher.start()
-        dispatcher.join(0.3)  # with one reading at a time it waits for the worker's
-        resume.set()
-        worker.join(10)
-        dispatcher.join(10)
-        assert watchers.any is True
-        watchers._publisher = real
-        watchers.undeclare()
-    finally:
-        session.close()
+    tables = Tables()
+    watchers._publisher = tables
+    worker = threading.Thread(target=watchers.refresh, name="worker")
+    worker.start()
+    assert read_nobody.wait(10)
+    tables.matching = True  # a watcher subscribes and syncs: the dispatcher reads the tables
+    dispatcher = threading.Thread(target=watchers.refresh, name="dispatcher")
+    dispatcher.start()
+    dispatcher.join(0.3)  # with one reading at a time it waits for the worker's
+    resume.set()
+    worker.join(10)
+    dispatcher.join(10)
+    assert watchers.any is True
 
 
 def test_a_watcher_zenoh_will_not_notify_again_is_counted_after_the_next_plan(port, services, clients):
