@@ -24,6 +24,14 @@ plan by plan (the machine's speed swings within seconds here), two rounds over t
 prints the ratio of the medians and the median of the pairs' ratios. ``--numpy-fit`` keeps
 this tree's fit on its numpy reference throughout (a one-shot process's state).
 
+    .venv/bin/python benchmarks/bench_plan.py --short
+
+times a 1-cycle plan (the shape of a service's small request) back to back and after 4 ms
+asleep (a process between requests: cold caches), with the plan's hand state and scene lent
+from the hand's spares (:mod:`eos_svc.agents.world_parts`, what ``plan`` does) against new ones
+built for every plan (the spares switched off: ``keep = 0``), in alternating blocks in this
+process; medians and the ratio.
+
 Every process that times plans loads the fit's compiled kernels first where its tree has them
 (``eos_svc.shape.kernels.load()``): the state of a long-lived process — the service, the
 experiments. A one-shot ``eos plan`` fits with their numpy reference (the same results, ≈ 3×
@@ -47,7 +55,8 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _harness import ScriptChild, export_revision, table
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
-from eos_svc.agents.planner import ratio_sphere_request
+from eos_svc.agents.planner import default_hand, ratio_sphere_request
+from eos_svc.agents.world_parts import world_parts
 from eos_svc.cli.plan import format_cycle
 from eos_svc.shape import kernels
 
@@ -256,6 +265,36 @@ def interleaved_baseline(
         return statistics.median(ours), statistics.median(theirs)
 
 
+SHORT_ROUNDS = 6
+SHORT_BLOCK = 40
+
+
+def short_plans(rounds: int = SHORT_ROUNDS, block: int = SHORT_BLOCK) -> dict[tuple[str, str], float]:
+    """Median 1-cycle plan time (s) by (parts, timing): parts ``lent`` or ``new``, timing
+    ``back to back`` or ``after 4 ms asleep``; alternating blocks of ``block`` plans."""
+    hand = default_hand()
+    parts = world_parts(hand)
+    kept = parts.keep
+    request = PlanRequest(seed=3, max_cycles=1)
+    samples: dict[tuple[str, str], list[float]] = {}
+    try:
+        for _ in range(rounds):
+            for mode, keep in (("new", 0), ("lent", kept)):
+                parts.keep = keep
+                plan(request, keep_trace=False, check=False)  # gives back (lent) or not (new)
+                for timing, nap in (("back to back", 0.0), ("after 4 ms asleep", 0.004)):
+                    times = samples.setdefault((mode, timing), [])
+                    for _ in range(block):
+                        if nap:
+                            time.sleep(nap)
+                        t0 = time.perf_counter()
+                        plan(request, keep_trace=False, check=False)
+                        times.append(time.perf_counter() - t0)
+    finally:
+        parts.keep = kept
+    return {k: statistics.median(v) for k, v in samples.items()}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description="whole plans: time, cycles, information-stage cost")
     parser.add_argument("--baseline", default="256976e", help="git revision to compare the default plan with")
@@ -271,7 +310,27 @@ def main(argv: list[str] | None = None) -> int:
         help="with --suite: this tree's fit on its numpy reference throughout (a one-shot process, "
         "e.g. eos plan), not the compiled kernels a long-lived process loads",
     )
+    parser.add_argument(
+        "--short",
+        action="store_true",
+        help="only time a 1-cycle plan back to back and after idling, with the plan's state and "
+        "scene lent from the hand's spares vs built new (alternating, this process)",
+    )
     args = parser.parse_args(argv)
+    if args.short:
+        plan(PlanRequest(seed=3, max_cycles=1))  # load the hand
+        medians = short_plans()
+        print(
+            f"1-cycle plan (seed 3), medians of {SHORT_ROUNDS} alternating blocks of {SHORT_BLOCK} plans "
+            "each: the plan's hand state and scene lent (spares) vs built new"
+        )
+        for timing in ("back to back", "after 4 ms asleep"):
+            lent, new = medians[("lent", timing)], medians[("new", timing)]
+            print(
+                f"  {timing:<18} lent {lent * 1e3:6.3f} ms   new {new * 1e3:6.3f} ms   "
+                f"lent / new {lent / new:.2f}x"
+            )
+        return 0
     if args.suite:
         rounds = 2
         paired = paired_suite(args.baseline, rounds=rounds, numpy_fit=args.numpy_fit)

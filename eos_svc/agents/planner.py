@@ -57,6 +57,7 @@ from eos_svc.agents.result import PlanResult
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.agents.world_parts import WorldParts, world_parts
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
@@ -136,12 +137,17 @@ def build_world(
     params: WorldParameters | None = None,
     *,
     check: bool = True,
+    parts: WorldParts | None = None,
 ) -> GraspWorld:
     """The world of one plan: hand at its start pose, the object, seeded randomness.
 
     Args:
         check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` when
             the caller already has).
+        parts: lend the hand state and the scene from these (the hand's
+            :func:`~eos_svc.agents.world_parts.world_parts`); the caller gives them back when
+            it is done with the world (:meth:`~eos_svc.agents.world_parts.WorldParts.give_back`).
+            Default: new ones.
 
     Raises:
         ValidationError: the object is out of reach, overlaps the hand or is too large
@@ -151,12 +157,16 @@ def build_world(
     params = params or parameters_for(hand)
     if check:
         check_plannable(request, hand, params)
-    obj = make_object(request.obj)
+    if parts is not None:
+        if parts.hand is not hand:
+            raise ValueError("parts: they belong to another hand than the world's")
+        state, scene = parts.lend(request.obj)
+    else:
+        state, scene = hand.state(hand.neutral()), Scene(hand, make_object(request.obj))
     search_seed, sensor_seed = np.random.SeedSequence(request.seed).spawn(2)
-    state = hand.state(hand.neutral())
     world = GraspWorld(
         hand=hand,
-        scene=Scene(hand, obj),
+        scene=scene,
         state=state,
         sensor=TactileSensor(noise_std=request.tactile_noise, rng=np.random.default_rng(sensor_seed)),
         rng=np.random.default_rng(search_seed),
@@ -246,7 +256,8 @@ def plan(
     params = params or parameters_for(hand)
     if check:
         check_plannable(request, hand, params)
-    world = build_world(request, hand, params, check=False)
+    parts = world_parts(hand)  # the state and scene of an earlier plan (same object), if any
+    world = build_world(request, hand, params, check=False, parts=parts)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
@@ -276,7 +287,7 @@ def plan(
     if request.obj.shape == "sphere":
         truth["radius"] = request.obj.size["radius"]
     shape = board.get(keys.SHAPE)
-    return PlanResult.from_run(
+    result = PlanResult.from_run(
         run,
         request=request,
         shape=shape,
@@ -294,6 +305,8 @@ def plan(
         q_final=tuple(float(x) for x in world.state.q),
         wall_time_s=time.perf_counter() - t0,
     )
+    parts.give_back(request.obj, world.state, world.scene)  # the plan ended normally: reusable
+    return result
 
 
 def remember(memory: GraspMemory, world: GraspWorld, board: Board, grasp_cycles: int, success: bool) -> None:
