@@ -542,8 +542,9 @@ class EosClient:
             elif kind == "final":
                 final = item
             elif kind == "reply":
-                if item.ok is not None:
-                    reply = proto.loads_message(item.ok.payload.to_bytes())
+                ok = item.ok  # read once: every read makes a new Sample object in Zenoh's binding
+                if ok is not None:
+                    reply = proto.loads_message(ok.payload.to_bytes())
                 elif _zenoh_timeout(item.err):  # Zenoh's, not the instance's
                     if reply is None and error is None:  # it never answered: try another
                         raise _TimedOutError(f"no reply within the query's timeout ({timeout:g} s)")
