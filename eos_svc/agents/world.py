@@ -80,11 +80,6 @@ class GraspWorld:
             gid = self.hand.tip_geometry_id(f)
             if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
                 self._tip_bound[f] = (self.hand.tip_frame_id(f), float(self.hand.tip_radius(f)))
-        self._frame_views: dict[int, np.ndarray] = {}
-        self._frame_views_of: HandState | None = None
-        self._palm_views_of: tuple[HandState, np.ndarray, np.ndarray] | None = None
-        self._bound_views: list[tuple[np.ndarray, np.ndarray]] = []
-        self._views_of: HandState | None = None
         # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
         # for a world's lifetime (a plan never moves it); moving it with
         # scene.set_object_placement would need these refreshed (_refresh_object_bound).
@@ -118,11 +113,7 @@ class GraspWorld:
         """Live views of the palm frame's world translation (m) and rotation in the current
         state: they follow every move (reading ``data.oMf[i]`` from Python costs µs; do not
         modify them, copy what must outlive a move)."""
-        views = self._palm_views_of
-        if views is None or views[0] is not self.state:
-            palm = self.state.data.oMf[self.hand.palm_frame_id]
-            views = self._palm_views_of = (self.state, palm.translation, palm.rotation)
-        return views[1], views[2]
+        return self.state.frame_views(self.hand.palm_frame_id)
 
     def object_gap_to_grasp_centre(self) -> float:
         """Distance from the grasp centre to the object surface, m (negative inside; memoised)."""
@@ -687,14 +678,7 @@ class GraspWorld:
 
     def _frame_translation(self, frame_id: int) -> np.ndarray:
         """Live view of a frame's world translation in the current state (do not modify)."""
-        views = self._frame_views
-        if self._frame_views_of is not self.state:
-            views = self._frame_views = {}
-            self._frame_views_of = self.state
-        view = views.get(frame_id)
-        if view is None:
-            view = views[frame_id] = self.state.data.oMf[frame_id].translation
-        return view
+        return self.state.frame_views(frame_id)[0]
 
     def _min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
@@ -723,12 +707,7 @@ class GraspWorld:
         object's bounding ball (about ``centre`` instead of the object's, when given)."""
         state = self.state
         state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
-        views = self._bound_views
-        if self._views_of is not state:
-            # live views of every geometry's placement (reading oMg[i] from Python costs µs)
-            oMg = state.geometry_data.oMg
-            views = self._bound_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
-            self._views_of = state
+        views = state.geometry_views()  # live views of every geometry's placement
         about = self._obj_centre if centre is None else centre
         return ball_gap_lower_bounds(self._bounds, views, geometry_ids, about, self._obj_radius)
 

@@ -30,7 +30,19 @@ class HandState:
     need the tips); every query afterwards reads those results.
     """
 
-    __slots__ = ("_gdata", "_geom_stale", "_gmodel", "_jac_stale", "_q", "_tips", "data", "hand", "model")
+    __slots__ = (
+        "_frame_views",
+        "_gdata",
+        "_geom_stale",
+        "_geometry_views",
+        "_gmodel",
+        "_jac_stale",
+        "_q",
+        "_tips",
+        "data",
+        "hand",
+        "model",
+    )
 
     def __init__(self, hand: HandModel, q: object = None) -> None:
         self.hand = hand
@@ -54,6 +66,9 @@ class HandState:
                 self.data.oMf[fid].translation,
                 pin.SE3.Identity(),
             )
+        # live views into data.oMf / the geometry data's oMg, made on first use (see frame_views)
+        self._frame_views: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._geometry_views: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._q = hand.neutral()
         self.update(self._q if q is None else q)
 
@@ -130,6 +145,26 @@ class HandState:
         view: np.ndarray = self._tip(finger)[3].view()
         view.flags.writeable = False
         return view
+
+    def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """Live views of frame ``frame_id``'s world translation (m) and rotation: they follow
+        every :meth:`update` (do not modify them; copy what must outlive a move). Made once per
+        state: reading ``data.oMf[i]`` from Python costs µs (tens in a process that has idled)."""
+        views = self._frame_views.get(frame_id)
+        if views is None:
+            placement = self.data.oMf[frame_id]
+            views = self._frame_views[frame_id] = (placement.translation, placement.rotation)
+        return views
+
+    def geometry_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Live views of every collision geometry's world translation (m) and rotation, by
+        geometry id: they hold the placements :attr:`geometry_data` last computed (read it
+        after an update first). Made once per state, like :meth:`frame_views`."""
+        views = self._geometry_views
+        if views is None:
+            oMg = self._gdata.oMg
+            views = self._geometry_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
+        return views
 
     def palm_placement(self) -> pin.SE3:
         """World placement of the palm frame, a copy."""

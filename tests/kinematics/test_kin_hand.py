@@ -134,6 +134,27 @@ def test_state_consistency(hand: HandModel, random_q: RandQ) -> None:
     assert np.allclose(st.q, q)
 
 
+def test_live_views_follow_every_update(hand: HandModel, random_q: RandQ) -> None:
+    rng = np.random.default_rng(7)
+    state = hand.state()
+    palm_t, palm_r = state.frame_views(hand.palm_frame_id)
+    geometry = state.geometry_views()
+    assert state.frame_views(hand.palm_frame_id)[0] is palm_t  # made once per state
+    assert state.geometry_views() is geometry
+    for _ in range(5):
+        state.update(random_q(hand, rng))
+        palm = state.palm_placement()
+        np.testing.assert_array_equal(palm_t, palm.translation)
+        np.testing.assert_array_equal(palm_r, palm.rotation)
+        oMg = state.geometry_data.oMg  # the placements at this q: the views follow them
+        assert len(geometry) == hand.collision_model.ngeoms
+        for gid, (t, r) in enumerate(geometry):
+            np.testing.assert_array_equal(t, oMg[gid].translation)
+            np.testing.assert_array_equal(r, oMg[gid].rotation)
+    copy = state.copy()  # a copy has its own data, and views of it
+    assert copy.frame_views(hand.palm_frame_id)[0] is not palm_t
+
+
 def test_neutral_geometry(hand: HandModel) -> None:
     st = hand.state()
     p1, p2, p3 = (st.tip_position(f) for f in ("finger1", "finger2", "finger3"))
