@@ -163,12 +163,15 @@ def build_world(
         state, scene = parts.lend(request.obj)
     else:
         state, scene = hand.state(hand.neutral()), Scene(hand, make_object(request.obj))
-    search_seed, sensor_seed = np.random.SeedSequence(request.seed).spawn(2)
+    # SeedSequence(seed).spawn(2)'s two children, made directly (the sensor's generator is made
+    # only if it takes a noisy reading)
+    search_seed = np.random.SeedSequence(request.seed, spawn_key=(0,))
+    sensor_seed = np.random.SeedSequence(request.seed, spawn_key=(1,))
     world = GraspWorld(
         hand=hand,
         scene=scene,
         state=state,
-        sensor=TactileSensor(noise_std=request.tactile_noise, rng=np.random.default_rng(sensor_seed)),
+        sensor=TactileSensor(noise_std=request.tactile_noise, rng=sensor_seed),
         rng=np.random.default_rng(search_seed),
         params=params,
         estimator=CurvatureEstimator(),

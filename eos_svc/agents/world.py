@@ -63,23 +63,23 @@ class GraspWorld:
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, Any] = {}
-        # per finger: the q index of its first joint (its angle, see finger_angle)
-        self._angle_q = {f: self.hand.finger_joint_limits(f)[0][0] for f in self.hand.finger_names}
         # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
         # (the object taken as its bounding ball): a min over geometries skips the exact
         # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
         # Also whether a wrist translation moves the palm origin to the wrist's x, y, z bit for
-        # bit (see _deferred_wrist_move).
-        self._links, self.probe, self._bounds, self._palm_at_wrist_xyz = _derived_for(self.hand, self.sweeps)
-        self._finger_q = {f: self.hand.finger_q_index(f) for f in self.hand.finger_names}
-        # per finger with a sphere tip (the scene measures it from the tip frame): its frame
-        # and radius, for a lower bound of the tip's distance (see _closing_clear)
-        self._tip_bound: dict[str, tuple[int, float]] = {}
-        geometries = self.hand.collision_model.geometryObjects
-        for f in self.hand.finger_names:
-            gid = self.hand.tip_geometry_id(f)
-            if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
-                self._tip_bound[f] = (self.hand.tip_frame_id(f), float(self.hand.tip_radius(f)))
+        # bit (see _deferred_wrist_move), and per finger: the q index of its first joint (its
+        # angle, see finger_angle), its q indices, and with a sphere tip (the scene measures it
+        # from the tip frame) its frame and radius, for a lower bound of the tip's distance
+        # (see _closing_clear). All derived from the hand alone, once (shared read-only).
+        (
+            self._links,
+            self.probe,
+            self._bounds,
+            self._palm_at_wrist_xyz,
+            self._angle_q,
+            self._finger_q,
+            self._tip_bound,
+        ) = _derived_for(self.hand, self.sweeps)
         # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
         # for a world's lifetime (a plan never moves it); moving it with
         # scene.set_object_placement would need these refreshed (_refresh_object_bound).
@@ -718,20 +718,48 @@ _DERIVED: PerHandCache[tuple[Any, ...]] = PerHandCache(keep=8)
 
 def _derived_for(
     hand: HandModel, sweeps: dict[str, FingerSweep]
-) -> tuple[dict[str, list[int]], ProbeChoice, list[tuple[int, Any, Any, float]], bool]:
+) -> tuple[
+    dict[str, list[int]],
+    ProbeChoice,
+    list[tuple[int, Any, Any, float]],
+    bool,
+    dict[str, int],
+    dict[str, np.ndarray],
+    dict[str, tuple[int, float]],
+]:
     """The finger link geometries, the probe choice, the geometries' distance bounds of
-    ``hand`` (with ``sweeps``) and :func:`palm_origin_is_wrist_xyz`, computed once per hand and
-    sweeps (they never change; every plan's world shares them read-only)."""
-    links, probe, bounds, palm_at_wrist_xyz = _DERIVED.get(
+    ``hand`` (with ``sweeps``), :func:`palm_origin_is_wrist_xyz`, and per finger: its first
+    joint's q index, its q indices, and for a sphere tip its frame id and radius (m); computed
+    once per hand and sweeps (they never change; every plan's world shares them read-only)."""
+    return _DERIVED.get(
         (hand, sweeps),
         lambda: (
             finger_link_geometries(hand),
             ProbeChoice.for_hand(hand, sweeps),
             hand_bound_table(hand),
             palm_origin_is_wrist_xyz(hand),
+            {f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
+            {f: _read_only(hand.finger_q_index(f)) for f in hand.finger_names},
+            _sphere_tips(hand),
         ),
     )
-    return links, probe, bounds, palm_at_wrist_xyz
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+def _sphere_tips(hand: HandModel) -> dict[str, tuple[int, float]]:
+    """Per finger whose tip is a sphere (no tip geometry, or a coal sphere): its tip frame id and
+    radius (m)."""
+    geometries = hand.collision_model.geometryObjects
+    tips: dict[str, tuple[int, float]] = {}
+    for f in hand.finger_names:
+        gid = hand.tip_geometry_id(f)
+        if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
+            tips[f] = (hand.tip_frame_id(f), float(hand.tip_radius(f)))
+    return tips
 
 
 def palm_origin_is_wrist_xyz(hand: HandModel) -> bool:

@@ -49,7 +49,9 @@ class TactileSensor:
         noise_std: standard deviation of the tangential position noise, m (≥ 0).
         pitch: taxel pitch, m (> 0), or None for a continuous sensor.
         contact_tolerance: distances ≤ this (m) count as contact.
-        rng: a numpy Generator, or a seed, or None (fresh entropy).
+        rng: a numpy Generator, or a seed (an int or a ``SeedSequence``: the generator is made
+            from it on the first noisy reading; a plan that never touches makes none), or None
+            (fresh entropy).
     """
 
     def __init__(
@@ -57,7 +59,7 @@ class TactileSensor:
         noise_std: float = 2e-4,
         pitch: float | None = None,
         contact_tolerance: float = 1e-4,
-        rng: np.random.Generator | int | None = None,
+        rng: np.random.Generator | np.random.SeedSequence | int | None = None,
     ) -> None:
         if not (math.isfinite(noise_std) and noise_std >= 0.0):
             raise KinematicsError("noise_std", f"must be finite and ≥ 0 m, got {noise_std!r}")
@@ -70,7 +72,16 @@ class TactileSensor:
         self.noise_std = float(noise_std)
         self.pitch = None if pitch is None else float(pitch)
         self.contact_tolerance = float(contact_tolerance)
-        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        self._rng: np.random.Generator | None = rng if isinstance(rng, np.random.Generator) else None
+        self._seed = None if isinstance(rng, np.random.Generator) else rng
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The position noise's generator (made from the seed given on first use)."""
+        rng = self._rng
+        if rng is None:
+            rng = self._rng = np.random.default_rng(self._seed)
+        return rng
 
     def read(self, state: HandState, contact: Contact) -> TactileReading:
         """The reading of ``contact.finger``'s sensor for this contact (state at the same q).

@@ -154,3 +154,11 @@ def test_plans_with_lent_parts_are_the_plans_with_new_ones(fresh_parts, seed):
         assert _result(request) == with_new[i], request.obj.shape
         assert _result(request) == with_new[i], request.obj.shape
     assert fresh_parts.spares() == (1, 4)
+
+
+def test_a_worlds_generators_are_the_seed_sequences_two_children(hand):
+    search, sensor = np.random.SeedSequence(12345).spawn(2)
+    world = build_world(PlanRequest(seed=12345, tactile_noise=2e-4), hand)
+    assert np.array_equal(world.rng.random(8), np.random.default_rng(search).random(8))
+    assert np.array_equal(world.sensor.rng.random(8), np.random.default_rng(sensor).random(8))
+

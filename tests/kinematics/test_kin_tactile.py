@@ -57,6 +57,21 @@ def test_noise_is_tangential_gaussian_and_seeded(hand: HandModel) -> None:
     assert np.array_equal(again.read(st, con).point_tip, pts[0])
 
 
+@pytest.mark.parametrize("seed", [42, np.random.SeedSequence(7, spawn_key=(1,))])
+def test_a_seeded_sensor_makes_its_generator_at_its_first_noisy_reading(
+    hand: HandModel, seed: object
+) -> None:
+    scene, st = _touching(hand)
+    con = scene.contact(st, "finger1")
+    lazy = TactileSensor(noise_std=2e-4, rng=seed)  # type: ignore[arg-type]
+    assert lazy._rng is None  # nothing made yet
+    TactileSensor(noise_std=0.0, rng=seed).read(st, con)  # type: ignore[arg-type]
+    eager = TactileSensor(noise_std=2e-4, rng=np.random.default_rng(seed))  # type: ignore[arg-type]
+    for _ in range(3):
+        assert np.array_equal(lazy.read(st, con).point_tip, eager.read(st, con).point_tip)
+    assert lazy._rng is not None
+
+
 def test_taxel_pitch_quantizes(hand: HandModel) -> None:
     scene, st = _touching(hand)
     con = scene.contact(st, "finger1")
