@@ -22,8 +22,11 @@ hands and objects here are primitives. The same request gives the same cycles an
 way (``tests/agents/test_world_parts.py``).
 
 Each lent part belongs to one plan until given back (a lock guards the spares: plans in several
-threads never share one). At most ``keep`` of each are kept, the least recently given back
-dropped first.
+threads never share one). One reference outlives a plan: EP1's per-thread roller
+(:func:`eos_svc.kinematics.ep1.run_ep1` keeps one per hand and finger) still holds the state and
+scene it last rolled on, and is re-pointed to the next plan's (``use_scene``, ``retarget(state=)``)
+before it reads or writes anything. At most ``keep`` of each are kept, the least recently given
+back dropped first.
 """
 
 from __future__ import annotations

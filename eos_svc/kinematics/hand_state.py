@@ -22,6 +22,12 @@ _LWA = pin.LOCAL_WORLD_ALIGNED
 _F64 = np.dtype(np.float64)
 
 
+def _read_only(view: np.ndarray) -> np.ndarray:
+    """``view`` marked read-only (the memory behind it stays Pinocchio's, updated in place)."""
+    view.flags.writeable = False
+    return view
+
+
 class HandState:
     """q, Pinocchio data and geometry data of one hand, kept consistent.
 
@@ -147,23 +153,26 @@ class HandState:
         return view
 
     def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
-        """Live views of frame ``frame_id``'s world translation (m) and rotation: they follow
-        every :meth:`update` (do not modify them; copy what must outlive a move). Made once per
-        state: reading ``data.oMf[i]`` from Python costs µs (tens in a process that has idled)."""
+        """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
+        follow every :meth:`update` (copy what must outlive a move). Made once per state:
+        reading ``data.oMf[i]`` from Python costs µs (tens in a process that has idled)."""
         views = self._frame_views.get(frame_id)
         if views is None:
             placement = self.data.oMf[frame_id]
-            views = self._frame_views[frame_id] = (placement.translation, placement.rotation)
+            views = (_read_only(placement.translation), _read_only(placement.rotation))
+            self._frame_views[frame_id] = views
         return views
 
     def geometry_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Live views of every collision geometry's world translation (m) and rotation, by
-        geometry id: they hold the placements :attr:`geometry_data` last computed (read it
+        """Live read-only views of every collision geometry's world translation (m) and rotation,
+        by geometry id: they hold the placements :attr:`geometry_data` last computed (read it
         after an update first). Made once per state, like :meth:`frame_views`."""
         views = self._geometry_views
         if views is None:
             oMg = self._gdata.oMg
-            views = self._geometry_views = [(oMg[i].translation, oMg[i].rotation) for i in range(len(oMg))]
+            views = self._geometry_views = [
+                (_read_only(oMg[i].translation), _read_only(oMg[i].rotation)) for i in range(len(oMg))
+            ]
         return views
 
     def palm_placement(self) -> pin.SE3:

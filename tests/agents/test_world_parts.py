@@ -27,15 +27,19 @@ def hand():
     return default_hand()
 
 
-@pytest.fixture
-def fresh_parts(hand, monkeypatch):
-    """The hand's parts with no spares kept while the test runs (every plan builds its own)."""
-    parts = world_parts(hand)
+def _without_spares(parts: WorldParts, monkeypatch: pytest.MonkeyPatch) -> WorldParts:
+    """``parts`` with no spares and none kept while the test runs (every plan builds its own)."""
     monkeypatch.setattr(parts, "keep", 0)
     monkeypatch.setattr(parts, "_states", [])
     monkeypatch.setattr(parts, "_scenes", type(parts._scenes)())
     monkeypatch.setattr(parts, "_scene_count", 0)
     return parts
+
+
+@pytest.fixture
+def fresh_parts(hand, monkeypatch):
+    """The hand's parts with no spares kept while the test runs (every plan builds its own)."""
+    return _without_spares(world_parts(hand), monkeypatch)
 
 
 def _result(request: PlanRequest) -> dict:
@@ -88,6 +92,10 @@ def test_a_scene_is_lent_only_for_the_same_object(hand):
     assert object_key(ObjectSpec(position=(0.21, 0.0, -0.015))) != object_key(
         ObjectSpec(position=(0.21, -0.0, -0.015))
     )
+    turned = ObjectSpec(BOX.shape, BOX.size, BOX.position, (0.0, 0.0, 0.41))  # the pose's rpy alone
+    state, scene = parts.lend(BOX)
+    parts.give_back(BOX, state, scene)
+    assert parts.lend(turned)[1] is not scene
 
 
 def test_spares_are_bounded_and_the_least_recently_given_back_go_first(hand):
@@ -161,4 +169,51 @@ def test_a_worlds_generators_are_the_seed_sequences_two_children(hand):
     world = build_world(PlanRequest(seed=12345, tactile_noise=2e-4), hand)
     assert np.array_equal(world.rng.random(8), np.random.default_rng(search).random(8))
     assert np.array_equal(world.sensor.rng.random(8), np.random.default_rng(sensor).random(8))
+
+
+def test_a_plan_that_raises_keeps_its_parts(hand, monkeypatch):
+    parts = world_parts(hand)
+    plan(PlanRequest(seed=5, max_cycles=1))  # gives its parts back
+    before = parts.spares()
+
+    def broken(*_a, **_k):
+        raise RuntimeError("a bug after the run")
+
+    monkeypatch.setattr("eos_svc.agents.planner.PlanResult.from_run", broken)
+    with pytest.raises(RuntimeError, match="a bug"):
+        plan(PlanRequest(seed=5, max_cycles=1))
+    assert parts.spares() == (before[0] - 1, before[1] - 1)  # lent, never given back
+
+
+def test_plans_in_two_threads_are_the_plans_in_one(hand):
+    requests = [PlanRequest(obj=o, seed=2) for o in (SPHERE, SPHERE, BOX, BOX)]
+    alone = [_result(r) for r in requests]
+    got: dict[int, dict] = {}
+    barrier = threading.Barrier(2)
+
+    def worker(indices: list[int]) -> None:
+        barrier.wait()
+        for i in indices:
+            got[i] = _result(requests[i])
+
+    threads = [threading.Thread(target=worker, args=(ix,)) for ix in ([0, 2], [1, 3])]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert [got[i] for i in range(4)] == alone
+
+
+def test_another_hands_plans_with_lent_parts_are_the_plans_with_new_ones(monkeypatch):
+    allegro = allegro_hand()
+    parts = _without_spares(world_parts(allegro), monkeypatch)
+    request = PlanRequest(obj=CYLINDER, seed=3)
+    with_new = plan(request, hand=allegro).to_dict()
+    with_new.pop("wall_time_s")
+    parts.keep = 4
+    for _ in range(2):
+        lent = plan(request, hand=allegro).to_dict()
+        lent.pop("wall_time_s")
+        assert lent == with_new
+    assert parts.spares() == (1, 1)
 

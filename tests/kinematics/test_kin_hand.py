@@ -141,6 +141,9 @@ def test_live_views_follow_every_update(hand: HandModel, random_q: RandQ) -> Non
     geometry = state.geometry_views()
     assert state.frame_views(hand.palm_frame_id)[0] is palm_t  # made once per state
     assert state.geometry_views() is geometry
+    for view in (palm_t, palm_r, *geometry[0]):
+        with pytest.raises(ValueError, match="read-only"):
+            view[0] = 1.0
     for _ in range(5):
         state.update(random_q(hand, rng))
         palm = state.palm_placement()
