@@ -47,8 +47,8 @@ def grasp_geometry(world: GraspWorld, friction: float = DEFAULT_FRICTION) -> dic
         contacts[finger] = {
             "touching": bool(c.distance <= world.params.contact_tolerance),
             "distance": float(c.distance),
-            "point": np.round(c.point_object, 6).tolist(),
-            "normal": np.round(c.normal, 6).tolist(),
+            "point": c.point_object.round(6).tolist(),  # np.round's own method, without its wrapper
+            "normal": c.normal.round(6).tolist(),
         }
     all_touch = all(c["touching"] for c in contacts.values())
     angle = None

@@ -44,7 +44,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass, fields
 from typing import Any
 
 import numpy as np
@@ -97,8 +97,13 @@ class GraspQuality:
     dimension: int
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly form."""
-        return asdict(self)
+        """JSON-friendly form: the fields in order (all scalars; ``dataclasses.asdict``'s
+        recursive copy cost ≈ 40 µs a plan for the same dict)."""
+        return {name: getattr(self, name) for name in _QUALITY_FIELDS}
+
+
+#: GraspQuality's field names, in order
+_QUALITY_FIELDS = tuple(f.name for f in fields(GraspQuality))
 
 
 def _array(value: ArrayLike, name: str) -> np.ndarray:

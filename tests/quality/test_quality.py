@@ -275,3 +275,17 @@ def test_cross_rows_and_rank_equal_numpys_bit_for_bit():
         w = rng.normal(size=(12, rank)) @ rng.normal(size=(rank, 6))
         size = float(np.max(np.abs(w)))
         assert epsilon_of_wrenches(w)[1] == np.linalg.matrix_rank(w, tol=1e-9 * max(size, 1.0)) == rank
+
+
+def test_to_dict_is_asdict():
+    import dataclasses
+
+    from eos_svc.agents.quality import GraspQuality
+
+    for q in (
+        GraspQuality(True, 0.123, 0.5, 8, 0.03, 3, 6, 6),
+        GraspQuality(False, 0.0, 0.0, 1, 0.01, 0, 0, 3),
+    ):
+        got = q.to_dict()
+        assert got == dataclasses.asdict(q) and list(got) == list(dataclasses.asdict(q))
+
