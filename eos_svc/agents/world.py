@@ -26,7 +26,7 @@ import contextlib
 import math
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 import coal
 import numpy as np
@@ -40,6 +40,7 @@ from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, Tacti
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table
 from eos_svc.kinematics.hand_cache import PerHandCache
+from eos_svc.kinematics.hand_state import read_only
 
 
 @dataclass
@@ -63,23 +64,19 @@ class GraspWorld:
         self._grasp_centre = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move; derived quantities are memoised per version
         self._memo: dict[object, Any] = {}
-        # self._bounds: per hand geometry, a cheap lower bound on its distance to the object
-        # (the object taken as its bounding ball): a min over geometries skips the exact
-        # queries that cannot be the minimum (the result is the same). See eos_svc.kinematics.gap_bounds.
-        # Also whether a wrist translation moves the palm origin to the wrist's x, y, z bit for
-        # bit (see _deferred_wrist_move), and per finger: the q index of its first joint (its
-        # angle, see finger_angle), its q indices, and with a sphere tip (the scene measures it
-        # from the tip frame) its frame and radius, for a lower bound of the tip's distance
-        # (see _closing_clear). All derived from the hand alone, once (shared read-only).
-        (
-            self._links,
-            self.probe,
-            self._bounds,
-            self._palm_at_wrist_xyz,
-            self._angle_q,
-            self._finger_q,
-            self._tip_bound,
-        ) = _derived_for(self.hand, self.sweeps)
+        # derived from the hand alone, once (see _HandDerived). self._bounds: a cheap lower bound
+        # per hand geometry on its distance to the object (the object taken as its bounding
+        # ball): a min over geometries skips the exact queries that cannot be the minimum (the
+        # result is the same; see eos_svc.kinematics.gap_bounds). self._tip_bound serves
+        # _closing_clear, self._palm_at_wrist_xyz _deferred_wrist_move.
+        derived = _derived_for(self.hand, self.sweeps)
+        self._links = derived.links
+        self.probe = derived.probe
+        self._bounds = derived.bounds
+        self._palm_at_wrist_xyz = derived.palm_at_wrist_xyz
+        self._angle_q = derived.angle_q
+        self._finger_q = derived.finger_q
+        self._tip_bound = derived.tip_bound
         # The object's bounding ball for the guarded motions' lower bounds. The object is fixed
         # for a world's lifetime (a plan never moves it); moving it with
         # scene.set_object_placement would need these refreshed (_refresh_object_bound).
@@ -712,42 +709,44 @@ class GraspWorld:
         return ball_gap_lower_bounds(self._bounds, views, geometry_ids, about, self._obj_radius)
 
 
+class _HandDerived(NamedTuple):
+    """What a world derives from its hand and sweeps alone (shared read-only by every plan)."""
+
+    #: per finger: its link geometries (what stops a closing finger as "link")
+    links: dict[str, list[int]]
+    #: which finger explores the object's top and bottom, at which angle
+    probe: ProbeChoice
+    #: per hand geometry: how to bound its gap to the object's bounding ball from below
+    bounds: list[tuple[int, Any, Any, float]]
+    #: :func:`palm_origin_is_wrist_xyz`
+    palm_at_wrist_xyz: bool
+    #: per finger: the q index of its first joint (its angle)
+    angle_q: dict[str, int]
+    #: per finger: its joints' q indices (read-only)
+    finger_q: dict[str, np.ndarray]
+    #: per finger with a sphere tip: its tip frame id and radius (m)
+    tip_bound: dict[str, tuple[int, float]]
+
+
 #: per hand and sweeps: what a world derives from them alone (see _derived_for)
-_DERIVED: PerHandCache[tuple[Any, ...]] = PerHandCache(keep=8)
+_DERIVED: PerHandCache[_HandDerived] = PerHandCache(keep=8)
 
 
-def _derived_for(
-    hand: HandModel, sweeps: dict[str, FingerSweep]
-) -> tuple[
-    dict[str, list[int]],
-    ProbeChoice,
-    list[tuple[int, Any, Any, float]],
-    bool,
-    dict[str, int],
-    dict[str, np.ndarray],
-    dict[str, tuple[int, float]],
-]:
-    """The finger link geometries, the probe choice, the geometries' distance bounds of
-    ``hand`` (with ``sweeps``), :func:`palm_origin_is_wrist_xyz`, and per finger: its first
-    joint's q index, its q indices, and for a sphere tip its frame id and radius (m); computed
-    once per hand and sweeps (they never change; every plan's world shares them read-only)."""
+def _derived_for(hand: HandModel, sweeps: dict[str, FingerSweep]) -> _HandDerived:
+    """:class:`_HandDerived` of ``hand`` and ``sweeps``, computed once per hand and sweeps (they
+    never change; every plan's world shares them read-only)."""
     return _DERIVED.get(
         (hand, sweeps),
-        lambda: (
-            finger_link_geometries(hand),
-            ProbeChoice.for_hand(hand, sweeps),
-            hand_bound_table(hand),
-            palm_origin_is_wrist_xyz(hand),
-            {f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
-            {f: _read_only(hand.finger_q_index(f)) for f in hand.finger_names},
-            _sphere_tips(hand),
+        lambda: _HandDerived(
+            links=finger_link_geometries(hand),
+            probe=ProbeChoice.for_hand(hand, sweeps),
+            bounds=hand_bound_table(hand),
+            palm_at_wrist_xyz=palm_origin_is_wrist_xyz(hand),
+            angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
+            finger_q={f: read_only(hand.finger_q_index(f)) for f in hand.finger_names},
+            tip_bound=_sphere_tips(hand),
         ),
     )
-
-
-def _read_only(a: np.ndarray) -> np.ndarray:
-    a.flags.writeable = False
-    return a
 
 
 def _sphere_tips(hand: HandModel) -> dict[str, tuple[int, float]]:

@@ -16,16 +16,17 @@ from .errors import ConfigurationError, UnknownNameError, WorkspaceError
 if TYPE_CHECKING:
     from .hand_model import HandModel
 
-__all__ = ["HandState"]
+__all__ = ["HandState", "read_only"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
 _F64 = np.dtype(np.float64)
 
 
-def _read_only(view: np.ndarray) -> np.ndarray:
-    """``view`` marked read-only (the memory behind it stays Pinocchio's, updated in place)."""
-    view.flags.writeable = False
-    return view
+def read_only(array: np.ndarray) -> np.ndarray:
+    """``array`` marked read-only, in place (a view's memory stays its owner's: Pinocchio still
+    updates it)."""
+    array.flags.writeable = False
+    return array
 
 
 class HandState:
@@ -148,9 +149,7 @@ class HandState:
     def tip_centre_view(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m, as a live read-only view that
         follows every :meth:`update` (no copy: for loops that read it after each move)."""
-        view: np.ndarray = self._tip(finger)[3].view()
-        view.flags.writeable = False
-        return view
+        return read_only(self._tip(finger)[3].view())
 
     def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
         """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
@@ -159,7 +158,7 @@ class HandState:
         views = self._frame_views.get(frame_id)
         if views is None:
             placement = self.data.oMf[frame_id]
-            views = (_read_only(placement.translation), _read_only(placement.rotation))
+            views = (read_only(placement.translation), read_only(placement.rotation))
             self._frame_views[frame_id] = views
         return views
 
@@ -171,7 +170,7 @@ class HandState:
         if views is None:
             oMg = self._gdata.oMg
             views = self._geometry_views = [
-                (_read_only(oMg[i].translation), _read_only(oMg[i].rotation)) for i in range(len(oMg))
+                (read_only(oMg[i].translation), read_only(oMg[i].rotation)) for i in range(len(oMg))
             ]
         return views
 
