@@ -41,12 +41,13 @@ def write_json(path: Path, data: Any) -> Path:
 
 
 def write_csv(path: Path, rows: Iterable[dict[str, Any]]) -> Path:
-    """Write dict rows as CSV (header from the first row)."""
+    """Write dict rows as CSV (the header: every key, in the order first seen; a row without a
+    key leaves its cell empty)."""
     rows = list(rows)
     path.parent.mkdir(parents=True, exist_ok=True)
     with path.open("w", newline="", encoding="utf-8") as f:
         if rows:
-            writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+            writer = csv.DictWriter(f, fieldnames=list(dict.fromkeys(k for row in rows for k in row)))
             writer.writeheader()
             writer.writerows(rows)
     return path

@@ -10,9 +10,10 @@ every class and the poses that matter for a three-finger hand approaching along 
 - boxes of three aspect ratios (cube, plate, bar) at yaw 0°, 30° and 60°.
 
 The held-back suite draws other sizes, orientations and positions from a seeded generator
-(seed :data:`HELD_BACK_SEED`), so a goal can be checked on objects nobody tuned on.
+(seed :data:`HELD_BACK_SEED`), so a goal can be checked on objects nobody tuned on. A random
+draw (:func:`random_draw`) goes further: any class, any size in a range of the hand's span, any
+orientation, anywhere near the default position.
 """
-
 
 import math
 from typing import NamedTuple
@@ -135,4 +136,72 @@ def held_back_suite(per_class: int = 3, seed: int = HELD_BACK_SEED) -> list[Suit
         edges = tuple(mm(0.025, 0.07) for _ in range(3))
         yaw = (0.0, 0.0, mm(0.0, math.pi / 2))
         out.append(SuiteObject(f"hb box {i}", ObjectSpec("box", {"size": edges}, position(), yaw)))
+    return out
+
+
+#: half-widths (m) of the box around the default position a random draw places objects in
+DRAW_POSITION_SPREAD = (0.10, 0.12, 0.12)
+#: the classes a random draw chooses from, uniformly
+DRAW_CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
+
+
+class DrawnObject(NamedTuple):
+    """One object of a random draw and the plan seed drawn with it."""
+
+    label: str
+    spec: ObjectSpec
+    seed: int
+
+
+def random_draw(
+    count: int, draw_seed: int, sizes: tuple[float, float] = (0.15, 0.50), span: float | None = None
+) -> list[DrawnObject]:
+    """``count`` objects drawn from a seeded generator: the class uniform over
+    :data:`DRAW_CLASSES`; every size field uniform in ``sizes`` × the hand's span (m; a radius,
+    half a length or half an edge over half of it, so that a full width is in the range); a
+    uniformly random orientation (a random rotation, as roll, pitch, yaw); the position uniform in
+    the default position ± :data:`DRAW_POSITION_SPREAD`; one plan seed each. Nothing is filtered
+    here: the caller asks admission which it accepts.
+
+    Args:
+        count: objects to draw (≥ 1).
+        draw_seed: the generator's seed.
+        sizes: (low, high) fractions of the span (0 < low ≤ high).
+        span: the hand's span (m); default: hand3x3's, as admission measures it.
+    """
+    from scipy.spatial.transform import Rotation
+
+    if span is None:
+        from eos_svc.agents.admission import hand_span
+
+        span = hand_span(default_hand())
+    lo, hi = sizes
+    rng = np.random.default_rng(draw_seed)
+    base = np.asarray(default_position())
+    spread = np.asarray(DRAW_POSITION_SPREAD)
+    out = []
+    for i in range(count):
+        shape = DRAW_CLASSES[int(rng.integers(len(DRAW_CLASSES)))]
+
+        def width() -> float:
+            return round(float(rng.uniform(lo, hi)) * span, 4)
+
+        if shape == "sphere":
+            size: dict = {"radius": round(width() / 2, 4)}
+        elif shape == "ellipsoid":
+            size = {"radii": tuple(round(width() / 2, 4) for _ in range(3))}
+        elif shape in ("cylinder", "capsule"):
+            size = {"radius": round(width() / 2, 4), "length": width()}
+        else:
+            size = {"size": tuple(width() for _ in range(3))}
+        rpy = Rotation.random(random_state=rng).as_euler("xyz")
+        position = base + rng.uniform(-spread, spread)
+        seed = int(rng.integers(1, 2**31 - 1))
+        spec = ObjectSpec(
+            shape,
+            size,
+            tuple(round(float(v), 4) for v in position),  # type: ignore[arg-type]
+            tuple(round(float(v), 4) for v in rpy),  # type: ignore[arg-type]
+        )
+        out.append(DrawnObject(f"draw {draw_seed}:{i} {shape}", spec, seed))
     return out

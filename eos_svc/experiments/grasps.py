@@ -10,6 +10,8 @@ good grasps are held ≥ 98 %).
     eos experiment grasps                      # the fixed suite, 5 seeds
     eos experiment grasps --held-back          # the seeded held-back suite instead
     eos experiment grasps --quick --seeds 1    # one object per class
+    eos experiment grasps --random 40 --draw-seed 3 [--sizes 0.15 0.5] [--no-validate]
+                                               # a random draw: any class, size, pose
 """
 
 from __future__ import annotations
@@ -27,7 +29,14 @@ from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
-from eos_svc.experiments.grasp_suite import SuiteObject, fixed_suite, held_back_suite, quick_suite
+from eos_svc.experiments.grasp_suite import (
+    DrawnObject,
+    SuiteObject,
+    fixed_suite,
+    held_back_suite,
+    quick_suite,
+    random_draw,
+)
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
 
@@ -35,13 +44,33 @@ from eos_svc.validation.validate import MAX_SECONDS
 HELD_GOAL = 0.98
 
 
-def plan_and_validate(obj: SuiteObject, seed: int, validation: dict[str, Any]) -> dict[str, Any]:
-    """One run: plan the object with ``seed``, validate the final grasp; a flat row."""
+def plan_and_validate(
+    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None
+) -> dict[str, Any]:
+    """One run: plan the object with ``seed``, validate the final grasp (unless ``validation``
+    is None: then ``held`` is None); a flat row."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
         result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
     except ValidationError as exc:  # the planner refuses the request: not a run
-        return {**row, "status": "rejected", "reason": str(exc), "good_grasp": None, "held": None}
+        return {
+            **row,
+            "status": "rejected",
+            "reason": str(exc),
+            "refused_field": exc.field,
+            "good_grasp": None,
+            "held": None,
+        }
+    if validation is None:
+        return {
+            **row,
+            "status": result.status,
+            "reason": result.reason,
+            "good_grasp": bool(result.good_grasp),
+            "held": None,
+            "epsilon": result.epsilon,
+            "plan_time_s": result.wall_time_s,
+        }
     try:
         check = validate_grasp(result, **validation)
     except SimulationError as exc:  # counted as not held, and said so
@@ -74,12 +103,17 @@ def plan_and_validate(obj: SuiteObject, seed: int, validation: dict[str, Any]) -
     }
 
 
-def _rate(values: list[bool]) -> float | None:
-    return float(np.mean(values)) if values else None
+def _rate(values: list[bool | None]) -> float | None:
+    known = [v for v in values if v is not None]
+    return float(np.mean(known)) if known else None
 
 
-def summarise(objects: Sequence[SuiteObject], runs: list[dict[str, Any]]) -> tuple[list[dict], dict]:
-    """Per-object rows and the totals (confusion counts of good_grasp against held)."""
+def summarise(
+    objects: Sequence[SuiteObject | DrawnObject], runs: list[dict[str, Any]]
+) -> tuple[list[dict], dict]:
+    """Per-object rows and the totals: confusion counts of good_grasp against held (when the
+    runs were validated), refusals counted by the field admission named, and every admitted run
+    that did not end in a good grasp listed with its status and reason."""
     rows = []
     for obj in objects:
         mine = [r for r in runs if r["object"] == obj.label]
@@ -94,71 +128,94 @@ def summarise(objects: Sequence[SuiteObject], runs: list[dict[str, Any]]) -> tup
                 "success_rate": _rate([r["status"] == "success" for r in done]),
                 "good_grasp_rate": _rate([r["good_grasp"] for r in done]),
                 "held_rate": _rate([r["held"] for r in done]),
-                "good_and_held": sum(r["held"] for r in good),
+                "good_and_held": sum(bool(r["held"]) for r in good),
                 "good": len(good),
                 "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
             }
         )
     done = [r for r in runs if r["status"] != "rejected"]
+    refused: dict[str, int] = {}
+    for r in runs:
+        if r["status"] == "rejected":
+            refused[r["refused_field"]] = refused.get(r["refused_field"], 0) + 1
+    failures = [
+        {"object": r["object"], "seed": r["seed"], "status": r["status"], "reason": r["reason"]}
+        for r in done
+        if not r["good_grasp"]
+    ]
+    validated = [r for r in done if r["held"] is not None]
     confusion = {
-        "good_held": sum(r["good_grasp"] and r["held"] for r in done),
-        "good_dropped": sum(r["good_grasp"] and not r["held"] for r in done),
-        "not_good_held": sum(not r["good_grasp"] and r["held"] for r in done),
-        "not_good_dropped": sum(not r["good_grasp"] and not r["held"] for r in done),
+        "good_held": sum(r["good_grasp"] and r["held"] for r in validated),
+        "good_dropped": sum(r["good_grasp"] and not r["held"] for r in validated),
+        "not_good_held": sum(not r["good_grasp"] and r["held"] for r in validated),
+        "not_good_dropped": sum(not r["good_grasp"] and not r["held"] for r in validated),
     }
     good = confusion["good_held"] + confusion["good_dropped"]
     totals = {
         "runs": len(done),
         "rejected": len(runs) - len(done),
+        "refused_by_field": refused,
+        "validated": len(validated),
         "confusion": confusion,
+        "success_rate": _rate([r["status"] == "success" for r in done]),
         "good_grasp_rate": _rate([r["good_grasp"] for r in done]),
-        "held_rate": _rate([r["held"] for r in done]),
+        "success_without_good_grasp": sum(r["status"] == "success" and not r["good_grasp"] for r in done),
+        "held_rate": _rate([r["held"] for r in validated]),
         "held_given_good": confusion["good_held"] / good if good else None,
         "held_goal": HELD_GOAL,
         "goal_met": (confusion["good_held"] / good >= HELD_GOAL) if good else None,
-        "agreement": (confusion["good_held"] + confusion["not_good_dropped"]) / len(done) if done else None,
-        "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
-        "median_validation_time_s": float(np.median([r["validation_time_s"] for r in done]))
-        if done
+        "agreement": (confusion["good_held"] + confusion["not_good_dropped"]) / len(validated)
+        if validated
         else None,
+        "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
+        "median_validation_time_s": float(np.median([r["validation_time_s"] for r in validated]))
+        if validated
+        else None,
+        "failures": failures,
     }
     return rows, totals
 
 
 def run(
-    objects: Sequence[SuiteObject] | None = None,
+    objects: Sequence[SuiteObject | DrawnObject] | None = None,
     seeds: int = 5,
     out: Path = Path("results/grasps"),
     name: str = "grasps",
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
+    validate: bool = True,
 ) -> dict:
-    """Plan and validate every object over ``seeds`` seeds; write ``name``.json, .csv,
-    ``name``_runs.csv and ``name``.png into ``out``."""
+    """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
+    drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
+    ``name``.png into ``out``."""
     objects = list(fixed_suite() if objects is None else objects)
-    validation = dict(validation or {})
+    checks = dict(validation or {}) if validate else None
+    jobs = [
+        (obj, seed)
+        for obj in objects
+        for seed in ([obj.seed] if isinstance(obj, DrawnObject) else range(1, seeds + 1))
+    ]
     runs: list[dict[str, Any]] = []
-    total = len(objects) * seeds
     t0 = time.perf_counter()
-    for obj in objects:
-        for seed in range(1, seeds + 1):
-            runs.append(plan_and_validate(obj, seed, validation))
-            if not quiet:
-                elapsed = time.perf_counter() - t0
-                print(
-                    f"\r{name}: {len(runs)}/{total} plans validated, {elapsed:.0f} s, "
-                    f"~{elapsed / len(runs) * (total - len(runs)):.0f} s left ({obj.label})        ",
-                    end="",
-                    file=sys.stderr,
-                    flush=True,
-                )
+    for obj, seed in jobs:
+        runs.append(plan_and_validate(obj, seed, checks))
+        if not quiet:
+            elapsed = time.perf_counter() - t0
+            print(
+                f"\r{name}: {len(runs)}/{len(jobs)} plans{' validated' if validate else ''}, "
+                f"{elapsed:.0f} s, ~{elapsed / len(runs) * (len(jobs) - len(runs)):.0f} s left "
+                f"({obj.label})        ",
+                end="",
+                file=sys.stderr,
+                flush=True,
+            )
     if not quiet:
         print(file=sys.stderr)
     rows, totals = summarise(objects, runs)
     data = {
         "suite": name,
         "seeds": seeds,
-        "validation": validation,
+        "validation": checks,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
         "rows": rows,
         "totals": totals,
@@ -198,9 +255,12 @@ def _pct(value: float | None) -> str:
 
 
 def report(data: dict) -> str:
-    """Human-readable table and the confusion counts."""
+    """Human-readable table, the confusion counts, the refusals by field and every admitted run
+    that did not end in a good grasp."""
     lines = ["  object                          runs  success  good   held  good->held  plan ms"]
     for r in data["rows"]:
+        if not r["runs"]:
+            continue
         plan_ms = "-" if r["median_plan_time_s"] is None else f"{r['median_plan_time_s'] * 1000:.0f}"
         lines.append(
             f"  {r['object']:<30} {r['runs']:>5}  {_pct(r['success_rate'])}  {_pct(r['good_grasp_rate'])}"
@@ -208,20 +268,35 @@ def report(data: dict) -> str:
         )
     t = data["totals"]
     c = t["confusion"]
-    lines += [
-        f"runs {t['runs']} (rejected by the planner: {t['rejected']}); "
-        f"good grasps {_pct(t['good_grasp_rate'])}, held {_pct(t['held_rate'])}",
-        "confusion (end agent's good_grasp vs Drake's held):",
-        "                 held  dropped",
-        f"  good       {c['good_held']:>8} {c['good_dropped']:>8}",
-        f"  not good   {c['not_good_held']:>8} {c['not_good_dropped']:>8}",
-        f"good grasps held: {_pct(t['held_given_good'])} (goal {HELD_GOAL:.0%}, met: {t['goal_met']}); "
-        f"agreement {_pct(t['agreement'])}; median plan {t['median_plan_time_s'] * 1000:.0f} ms, "
-        f"median validation {t['median_validation_time_s']:.1f} s"
-        if t["runs"]
-        else "no runs",
-    ]
+    refused = ", ".join(f"{field} {n}" for field, n in sorted(t["refused_by_field"].items())) or "none"
+    lines.append(
+        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}); "
+        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])}, "
+        f"success without a good grasp: {t['success_without_good_grasp']}"
+    )
+    if t["validated"]:
+        lines += [
+            f"validated in Drake: {t['validated']}; held {_pct(t['held_rate'])}",
+            "confusion (end agent's good_grasp vs Drake's held):",
+            "                 held  dropped",
+            f"  good       {c['good_held']:>8} {c['good_dropped']:>8}",
+            f"  not good   {c['not_good_held']:>8} {c['not_good_dropped']:>8}",
+            f"good grasps held: {_pct(t['held_given_good'])} (goal {HELD_GOAL:.0%}, met: {t['goal_met']}); "
+            f"agreement {_pct(t['agreement'])}; median validation {t['median_validation_time_s']:.1f} s",
+        ]
+    if t["runs"]:
+        lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
+    if t["failures"]:
+        lines.append(f"not a good grasp ({len(t['failures'])}):")
+        lines += [f"  {f['object']} seed {f['seed']}: {f['status']} — {f['reason']}" for f in t["failures"]]
     return "\n".join(lines)
+
+
+def _fraction_pair(text: str) -> float:
+    value = positive_float(text)
+    if value > 1.5:
+        raise argparse.ArgumentTypeError(f"must be a fraction of the hand's span ≤ 1.5, got {text}")
+    return value
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -237,6 +312,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="run the held-back suite (seeded random sizes, poses and positions) instead of the fixed one",
     )
     parser.add_argument(
+        "--random",
+        type=int_at_least(1),
+        default=None,
+        metavar="N",
+        help="a random draw of N objects instead: any class, size, orientation, near the default position",
+    )
+    parser.add_argument("--draw-seed", type=int, default=1, help="the random draw's seed (1)")
+    parser.add_argument(
+        "--sizes",
+        type=_fraction_pair,
+        nargs=2,
+        default=(0.15, 0.50),
+        metavar=("LO", "HI"),
+        help="the random draw's widths as fractions of the hand's span (0.15 0.5)",
+    )
+    parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -248,12 +340,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.seconds > MAX_SECONDS:
         parser.error(f"argument --seconds: must be ≤ {MAX_SECONDS:g}, got {args.seconds:g}")
+    lo, hi = args.sizes
+    if lo > hi:
+        parser.error(f"argument --sizes: LO must be ≤ HI, got {lo:g} {hi:g}")
     seeds = args.seeds or (2 if args.quick else 5)
-    if args.held_back:
+    objects: Sequence[SuiteObject | DrawnObject]
+    if args.random is not None:
+        objects, name = random_draw(args.random, args.draw_seed, (lo, hi)), "grasps_random"
+        print(
+            f"random draw: {args.random} objects, draw seed {args.draw_seed}, "
+            f"widths {lo:g}-{hi:g} of the span",
+            file=sys.stderr,
+        )
+    elif args.held_back:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
-    data = run(objects, seeds, args.out, name, validation={"seconds": args.seconds})
+    data = run(
+        objects, seeds, args.out, name, validation={"seconds": args.seconds}, validate=not args.no_validate
+    )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")
     return 0

@@ -47,3 +47,59 @@ def test_tiny_suite_end_to_end(tmp_path):
     with (tmp_path / "grasps_runs.csv").open() as f:
         assert [r["object"] for r in csv.DictReader(f)] == [o.label for o in objects]
     assert "confusion" in grasps.report(data)
+
+
+def test_random_draw_is_seeded_and_within_its_ranges():
+    from eos_svc.experiments.grasp_suite import (
+        DRAW_CLASSES,
+        DRAW_POSITION_SPREAD,
+        default_position,
+        random_draw,
+    )
+
+    span = 0.2
+    draw = random_draw(60, draw_seed=5, sizes=(0.2, 0.4), span=span)
+    assert draw == random_draw(60, draw_seed=5, sizes=(0.2, 0.4), span=span)  # seeded
+    assert draw != random_draw(60, draw_seed=6, sizes=(0.2, 0.4), span=span)
+    assert {o.spec.shape for o in draw} == set(DRAW_CLASSES)
+    assert len({o.label for o in draw}) == len(draw)
+    base = default_position()
+    for o in draw:
+        size = o.spec.size
+        widths = (
+            ([2 * size["radius"]] if "radius" in size else [])
+            + [2 * r for r in size.get("radii", ())]
+            + list(size.get("size", ()))
+            + ([size["length"]] if "length" in size else [])
+        )
+        for w in widths:  # every full width in [0.2, 0.4] x span (rounded to 0.1 mm)
+            assert 0.2 * span - 2e-4 <= w <= 0.4 * span + 2e-4, (o.label, size)
+        for p, b, s in zip(o.spec.position, base, DRAW_POSITION_SPREAD, strict=True):
+            assert abs(p - b) <= s + 1e-4
+        assert o.seed >= 1
+
+
+def test_random_draw_experiment_lists_failures_and_refusals(tmp_path, capsys):
+    code = grasps.main(["--random", "8", "--draw-seed", "2", "--no-validate", "--out", str(tmp_path)])
+    assert code == 0
+    out = capsys.readouterr().out
+    data = json.loads((tmp_path / "grasps_random.json").read_text())
+    totals = data["totals"]
+    assert totals["runs"] + totals["rejected"] == 8
+    assert sum(totals["refused_by_field"].values()) == totals["rejected"]
+    assert totals["validated"] == 0 and all(r["held"] is None for r in data["runs"])
+    not_good = [r for r in data["runs"] if r["status"] != "rejected" and not r["good_grasp"]]
+    assert [f["object"] for f in totals["failures"]] == [r["object"] for r in not_good]
+    for f in totals["failures"]:  # every failure named, with its status and reason
+        assert f"{f['object']} seed {f['seed']}: {f['status']}" in out
+    assert totals["success_without_good_grasp"] == 0
+    assert "refused by admission" in out
+
+
+def test_random_draw_sizes_are_checked(capsys):
+    import pytest
+
+    with pytest.raises(SystemExit) as exc:
+        grasps.main(["--random", "2", "--sizes", "0.5", "0.2"])
+    assert exc.value.code == 2
+    assert "--sizes: LO must be ≤ HI" in capsys.readouterr().err
