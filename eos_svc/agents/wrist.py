@@ -8,7 +8,10 @@ stop short, the hand is as close as it can get: the wrist re-predicts, on the
 postulated object, where each fingertip lands when it closes from here and
 makes those the fingers' chosen contacts (the cycle record says so).
 Opportunistic sub-rating: 1 − d/h while the hand is not there yet and no
-fingertip touches.
+fingertip touches, and never below :data:`WRIST_FLOOR` then: for an object as wide as the hand
+is high (d/h ≥ 1: the paper's "too big" ratio, yet within the fingertips' span) the fingers
+cannot land from the pre-grasp stand-off, so the wrist is the only agent that can still bring
+the hand to its grasp — rated 0 it would be passed over and the run would stall.
 """
 
 from __future__ import annotations
@@ -24,6 +27,10 @@ from eos_svc.agents.search import search_move, search_rating
 from eos_svc.agents.synthesis import landing
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+
+
+#: the wrist's least opportunistic sub-rating while the hand is short of its grasp position
+WRIST_FLOOR = 0.05
 
 
 class WristAgent(GraspAgent):
@@ -49,7 +56,7 @@ class WristAgent(GraspAgent):
             return search_rating(board)
         if keys.TARGET not in board or board.get(keys.AT_TARGET) or self.any_touching(board):
             return 0.0
-        return max(0.0, 1.0 - self.d_over_h(board))
+        return max(WRIST_FLOOR, 1.0 - self.d_over_h(board))
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         if ctx.stage == SEARCH:
