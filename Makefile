@@ -11,7 +11,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-all lint docs bench clean chromium kernels
+.PHONY: run test test-all lint format docs bench clean chromium kernels
 
 $(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -46,9 +46,14 @@ kernels: $(STAMP)
 test-all: $(STAMP) chromium kernels
 	$(PY) -m pytest -q -m "slow or not slow"
 
+# lint: ruff's rules, ruff's formatting (checked, not applied: `make format` applies it) and mypy
 lint: $(STAMP)
-	$(VENV)/bin/ruff check eos_svc tests benchmarks clients
+	$(VENV)/bin/ruff check eos_svc tests benchmarks clients docs/api.py
+	$(VENV)/bin/ruff format --check eos_svc tests benchmarks clients docs/api.py
 	$(VENV)/bin/mypy
+
+format: $(STAMP)
+	$(VENV)/bin/ruff format eos_svc tests benchmarks clients docs/api.py
 
 # The API reference, built from the docstrings into build/api/ (not kept in git) by pdoc;
 # any pdoc warning (e.g. an annotation it cannot resolve) fails the build.
