@@ -289,9 +289,7 @@ class CurvatureEstimator:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.flat_curvature) and self.flat_curvature > 0):
-            raise ValidationError(
-                "flat_curvature", f"must be a positive number, got {self.flat_curvature}"
-            )
+            raise ValidationError("flat_curvature", f"must be a positive number, got {self.flat_curvature}")
 
     @property
     def samples(self) -> tuple[CurvatureSample, ...]:
@@ -329,8 +327,7 @@ class CurvatureEstimator:
         m = len(self._samples)
         if m < 2:
             raise UnderdeterminedError(
-                "samples",
-                f"need samples from two independent roll directions, have {m} sample(s)"
+                "samples", f"need samples from two independent roll directions, have {m} sample(s)"
             )
         # CurvatureSample.rows() of every sample, stacked (vectorised: one array op per term)
         samples = self._samples
@@ -356,7 +353,7 @@ class CurvatureEstimator:
             raise UnderdeterminedError(
                 "samples",
                 "do not determine the curvature form: roll along two independent "
-                "tangent directions (contact velocities are parallel or zero)"
+                "tangent directions (contact velocities are parallel or zero)",
             )
         theta = _solve(AtA, A.T @ b)
         r = b - A @ theta

@@ -50,7 +50,10 @@ _SET_FINGER, _SET_DISTANCE, _SET_POINT_TIP, _SET_POINT_OBJECT, _SET_NORMAL = slo
 
 
 def _fast_contact(
-    finger: str, distance: float, point_tip: np.ndarray, point_object: np.ndarray,
+    finger: str,
+    distance: float,
+    point_tip: np.ndarray,
+    point_object: np.ndarray,
     normal: np.ndarray,
 ) -> Contact:
     """Contact(...) without the frozen dataclass __init__ (which costs ~2 µs): fills the slots
@@ -150,8 +153,7 @@ class Scene:
         self._tip_gmodel, self._tip_gdata = gm, gd
         # per finger: name, radius, and its DistanceResult (a reference into the GeometryData)
         self._tip_batch = [
-            (name, self._tips[name][1], gd.distanceResults[k])
-            for k, name in enumerate(hand.finger_names)
+            (name, self._tips[name][1], gd.distanceResults[k]) for k, name in enumerate(hand.finger_names)
         ]
 
     def set_object_placement(self, placement: pin.SE3) -> None:
@@ -188,14 +190,10 @@ class Scene:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             # coal's sphere–primitive witnesses and normal (object → tip) are exact for the
             # sphere, box, capsule and cylinder; GJK-accurate (~µm) for the ellipsoid.
-            return _fast_contact(
-                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-            )
+            return _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None
-        coal.distance(
-            self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res
-        )
+        coal.distance(self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res)
         return Contact(
             finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
         )
@@ -239,9 +237,7 @@ class Scene:
         pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
         pin.computeDistances(gm, gd)
         return tuple(
-            _fast_contact(
-                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-            )
+            _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
             if (d := res.min_distance) >= 0.0
             # penetration: the exact contact, as in contact()
             else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
