@@ -36,7 +36,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,104 +57,11 @@ DEFAULT_FLAT_CURVATURE = 1.0
 Array = NDArray[np.float64]
 
 
-try:  # the gufuncs behind np.linalg's small-matrix functions (same LAPACK calls)
-    from numpy.linalg import _umath_linalg
-
-    _ulinalg: Any = _umath_linalg
-except ImportError:  # pragma: no cover - other NumPy layouts: the public functions only
-    _ulinalg = None
-
-
-def _private_linalg_agrees(u: Any) -> bool:
-    """True when NumPy's private gufuncs exist, take the signatures used below and agree with
-    the public functions on a small problem (checked once at import: a NumPy release that
-    renames or changes them makes every wrapper fall back to the public function)."""
-    if u is None:
-        return False
-    a = np.array([[2.0, 0.5], [0.5, 1.0]])
-    b = np.array([1.0, 2.0])
-    A = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
-    B = np.array([[1.0], [2.0], [3.0]])
-    try:
-        with np.errstate(all="ignore"):
-            return bool(
-                np.allclose(u.eigvalsh_lo(a, signature="d->d"), np.linalg.eigvalsh(a))
-                and np.allclose(u.eigh_lo(a, signature="d->dd")[0], np.linalg.eigh(a)[0])
-                and np.allclose(u.solve1(a, b, signature="dd->d"), np.linalg.solve(a, b))
-                and np.allclose(u.inv(a, signature="d->d"), np.linalg.inv(a))
-                and np.allclose(
-                    u.lstsq(A, B, 3 * float(np.finfo(float).eps), signature="ddd->ddid")[0],
-                    np.linalg.lstsq(A, B, rcond=None)[0],
-                )
-            )
-    except Exception:  # missing, renamed or re-signed in this NumPy
-        return False
-
-
-if not _private_linalg_agrees(_ulinalg):
-    _ulinalg = None
-
-
-def _finite(a: np.ndarray) -> bool:
-    return math.isfinite(sum(a.reshape(-1).tolist()))
-
-
-def _eigvalsh(a: np.ndarray) -> np.ndarray:
-    """``np.linalg.eigvalsh(a)`` for a real symmetric matrix, without its wrapper (~10 µs):
-    the same gufunc; anything but a finite result is redone by the public function (which
-    raises as before)."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            w = _ulinalg.eigvalsh_lo(a, signature="d->d")
-        if _finite(w):
-            return w
-    return np.linalg.eigvalsh(a)
-
-
-def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.linalg.eigh(a)`` (eigenvalues, eigenvectors), as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            w, v = _ulinalg.eigh_lo(a, signature="d->dd")
-        if _finite(w) and _finite(v):
-            return w, v
-    w, v = np.linalg.eigh(a)
-    return w, v
-
-
-def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.solve(a, b)`` for a vector ``b``, as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            x = _ulinalg.solve1(a, b, signature="dd->d")
-        if _finite(x):
-            return x
-    return np.linalg.solve(a, b)
-
-
-def _inv(a: np.ndarray) -> np.ndarray:
-    """``np.linalg.inv(a)``, as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            x = _ulinalg.inv(a, signature="d->d")
-        if _finite(x):
-            return x
-    return np.linalg.inv(a)
-
-
-def lstsq_solution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.lstsq(a, b, rcond=None)[0]`` for real 2-D ``a`` (m×n, m ≥ n) and ``b`` (m×k),
-    as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        m, n = a.shape
-        with np.errstate(all="ignore"):
-            x, _, _, _ = _ulinalg.lstsq(a, b, _EPS * max(m, n), signature="ddd->ddid")
-        if _finite(x):
-            return x
-    return np.linalg.lstsq(a, b, rcond=None)[0]
-
-
-_EPS = float(np.finfo(float).eps)
+# the linear algebra of the estimate (the names the tests of its numbers use)
+_eigvalsh = np.linalg.eigvalsh
+_eigh = np.linalg.eigh
+_solve = np.linalg.solve
+_inv = np.linalg.inv
 
 
 class UnderdeterminedError(ValidationError):

@@ -17,7 +17,6 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ._slots import slot_setters
 from .hand import HandModel, HandState, KinematicsError
 from .objects import SurfaceObject
 
@@ -41,30 +40,6 @@ class Contact:
     point_tip: np.ndarray
     point_object: np.ndarray
     normal: np.ndarray
-
-
-_new = object.__new__
-_SET_FINGER, _SET_DISTANCE, _SET_POINT_TIP, _SET_POINT_OBJECT, _SET_NORMAL = slot_setters(
-    Contact, "finger", "distance", "point_tip", "point_object", "normal"
-)
-
-
-def _fast_contact(
-    finger: str,
-    distance: float,
-    point_tip: np.ndarray,
-    point_object: np.ndarray,
-    normal: np.ndarray,
-) -> Contact:
-    """Contact(...) without the frozen dataclass __init__ (which costs ~2 µs): fills the slots
-    directly. The instance is still frozen for its users."""
-    c: Contact = _new(Contact)
-    _SET_FINGER(c, finger)
-    _SET_DISTANCE(c, distance)
-    _SET_POINT_TIP(c, point_tip)
-    _SET_POINT_OBJECT(c, point_object)
-    _SET_NORMAL(c, normal)
-    return c
 
 
 class Scene:
@@ -190,7 +165,7 @@ class Scene:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             # coal's sphere–primitive witnesses and normal (object → tip) are exact for the
             # sphere, box, capsule and cylinder; GJK-accurate (~µm) for the ellipsoid.
-            return _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
+            return Contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None
         coal.distance(self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res)
@@ -237,7 +212,7 @@ class Scene:
         pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
         pin.computeDistances(gm, gd)
         return tuple(
-            _fast_contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
+            Contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
             if (d := res.min_distance) >= 0.0
             # penetration: the exact contact, as in contact()
             else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
