@@ -190,7 +190,8 @@ def _chart_at_mean(
     b /= np.linalg.norm(b)
     ex = ex_tip - (ex_tip @ b) * b
     ex /= np.linalg.norm(ex)
-    return _log_chart(P, b, ex, np.cross(b, ex), r, directions)
+    ey = np.array((b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]))
+    return _log_chart(P, b, ex, ey, r, directions)  # ey = b × ex
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -121,8 +121,6 @@ class RollingQP:
             hand.collision_model.geometryObjects[gid].geometry, coal.Sphere
         ):
             raise KinematicsError("finger", f"{finger}'s tip is not a sphere; cannot roll it")
-        if not all(j.nq == 1 and j.nv == 1 for j in hand.model.joints[1:]):
-            raise KinematicsError("hand", "RollingQP needs 1-DoF joints (q + q̇ dt is then exact)")
         self.hand, self.scene, self.finger, self.tactile = hand, scene, finger, tactile
         self.solver, self.dt, self.gap_gain = solver, float(dt), float(gap_gain)
         self.second_order, self.closed_form = bool(second_order), bool(closed_form)
@@ -130,7 +128,8 @@ class RollingQP:
         self._fid = hand.tip_frame_id(finger)
         self._model = hand.model
         self._data = hand.model.createData()
-        #: the active joints' indices in q and q̇ (1-DoF joints: the same)
+        #: the active joints' indices in q and q̇ (the same: the hand model's finger and wrist joints
+        #: are 1-DoF, so q + q̇ dt is exact)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
         self.box = JointBox(
