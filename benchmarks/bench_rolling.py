@@ -27,7 +27,7 @@ import qpsolvers
 
 import eos_svc.kinematics as kin_now
 import eos_svc.kinematics.ep1
-import eos_svc.kinematics.rolling
+import eos_svc.kinematics.rolling  # noqa: F401  (kin_now.rolling)
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from _baseline import load_kinematics
@@ -87,11 +87,14 @@ def ep1_runner(kin: ModuleType) -> Callable[[], Any]:
 
 def osqp_every_step(run: Callable[[], Any]) -> Callable[[], Any]:
     """``run`` with the closed form switched off (every step through the qpsolvers backend)."""
-    rolling = kin_now.rolling
+    rolling: Any = kin_now.rolling
     solve = rolling.solve_rolling_qp
 
+    def backend_only(problem: Any, solver: str, closed_form: bool) -> Any:
+        return solve(problem, solver, False)
+
     def without_closed_form() -> Any:
-        rolling.solve_rolling_qp = lambda problem, solver, closed_form: solve(problem, solver, False)
+        rolling.solve_rolling_qp = backend_only
         try:
             return run()
         finally:

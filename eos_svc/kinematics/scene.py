@@ -75,8 +75,6 @@ class Scene:
         # use): the query coal.distance makes, without its per-call dispatch (≈ 2 µs a query)
         self._point_distance = coal.ComputeDistance(self._obj_geom, self._point)
         self._gap_distance: dict[int, coal.ComputeDistance] = {}
-        self._tip_gmodel: pin.GeometryModel | None = None  # built by the first tip_contacts
-        self._tip_model_tried = False
         self.set_object_placement(obj.placement)
         # the hand's collision shapes by geometry id (reading them through the geometry model's
         # vector from Python costs ~3 µs a query)
@@ -95,42 +93,6 @@ class Scene:
             self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
             self._functors[name] = coal.ComputeDistance(self._obj_geom, shape)
 
-    def _build_tip_model(self) -> None:
-        """Every sphere fingertip against the object in one Pinocchio call: a GeometryModel of
-        the tips and the object (on the universe joint), one (object, tip) collision pair per
-        finger, so that ``pin.computeDistances`` runs all the coal queries (see
-        :meth:`tip_contacts`). Built on first use (≈ 0.2 ms); not when a fingertip is not a
-        sphere."""
-        self._tip_model_tried = True
-        hand = self.hand
-        if not all(self._tips[f][3] for f in hand.finger_names):
-            return
-        gm = pin.GeometryModel()
-        for name in hand.finger_names:
-            fid, _, shape, _ = self._tips[name]
-            gid = hand.tip_geometry_id(name)
-            if gid is not None:
-                go = hand.collision_model.geometryObjects[gid]
-                joint, frame, placement = go.parentJoint, go.parentFrame, go.placement
-            else:  # the tip sphere is centred on the tip frame
-                f = hand.model.frames[fid]
-                joint, frame, placement = f.parentJoint, fid, f.placement
-            gm.addGeometryObject(pin.GeometryObject(f"{name}_tip", joint, frame, placement, shape))
-        self._obj_gid = gm.addGeometryObject(
-            pin.GeometryObject("object", 0, 0, pin.SE3(self.object.placement), self._obj_geom)
-        )
-        for k in range(len(hand.finger_names)):
-            gm.addCollisionPair(pin.CollisionPair(self._obj_gid, k))
-        gd = pin.GeometryData(gm)
-        for req in gd.distanceRequests:
-            req.enable_signed_distance = True
-            req.gjk_tolerance = self._req.gjk_tolerance
-        self._tip_gmodel, self._tip_gdata = gm, gd
-        # per finger: name, radius, and its DistanceResult (a reference into the GeometryData)
-        self._tip_batch = [
-            (name, self._tips[name][1], gd.distanceResults[k]) for k, name in enumerate(hand.finger_names)
-        ]
-
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
         ``obj.placement``: the scene caches the coal transform."""
@@ -139,8 +101,6 @@ class Scene:
             np.asarray(placement.rotation, dtype=float),
             np.asarray(placement.translation, dtype=float),
         )
-        if self._tip_gmodel is not None:
-            self._tip_gmodel.geometryObjects[self._obj_gid].placement = pin.SE3(placement)
 
     def contact(self, state: HandState, finger: str) -> Contact:
         """Closest points between finger ``finger``'s tip and the object."""
@@ -185,39 +145,14 @@ class Scene:
         return Contact(finger, sd - r, c - r * n, p_obj, n)
 
     def tip_contacts(self, state: HandState) -> tuple[Contact, ...]:
-        """:meth:`contact` of every finger, in ``hand.finger_names`` order (world frame, m):
-        signed distance, witness points on the tip and the object, normal object → tip.
-
-        One ``pin.updateGeometryPlacements`` + ``pin.computeDistances`` over (object, tip)
-        collision pairs instead of one coal query per finger: the same coal algorithms, so the
-        same contacts (exactly for sphere, box, cylinder and capsule objects; the ellipsoid's GJK
-        witness within µm), except that the tip sphere sits at its collision geometry's
-        placement, which :class:`HandModel` checks to be the tip frame within 1e-6 m.
-        Penetrating tips take the exact analytic path, as in :meth:`contact`. The first call
-        builds the tips' geometry model (≈ 0.2 ms). With ``exact_tips`` or a non-sphere
-        fingertip it is :meth:`contact` per finger. Every returned array is the contact's own.
+        """:meth:`contact` of every finger, in ``hand.finger_names`` order.
 
         Raises:
             KinematicsError: ``state`` belongs to another hand model.
         """
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
-        gm = self._tip_gmodel
-        if gm is None or self.exact_tips:
-            if not (self._tip_model_tried or self.exact_tips):
-                self._build_tip_model()
-                return self.tip_contacts(state)
-            return tuple(self.contact(state, f) for f in self.hand.finger_names)
-        gd = self._tip_gdata
-        pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
-        pin.computeDistances(gm, gd)
-        return tuple(
-            Contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
-            if (d := res.min_distance) >= 0.0
-            # penetration: the exact contact, as in contact()
-            else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
-            for finger, r, res in self._tip_batch
-        )
+        return tuple(self.contact(state, f) for f in self.hand.finger_names)
 
     def contacts(self, state: HandState) -> dict[str, Contact]:
         """:meth:`contact` for every finger."""
