@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 import coal
 import numpy as np
-import pinocchio as pin
 import qpsolvers
 
 from .geometry import unit_vector
@@ -33,8 +32,6 @@ from .tactile import TactileReading, TactileSensor
 from .tip_contact import SphereTipProbe
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
-
-_LWA = pin.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True, slots=True)
@@ -67,8 +64,8 @@ class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
     Args:
-        state: the hand state at the start of the roll; the roller drives its own Pinocchio data
-            and brings ``state`` up to date when :attr:`state` is read.
+        state: the hand state at the start of the roll (pink's ``Configuration``): each step
+            updates it to the step's configuration (with the last q̇, for the second-order term).
         finger: the rolling finger (its tip must be a sphere).
         axis: world rolling axis (unit after normalisation; tangent to the object at the
             contact — its normal component is removed unless ``project_axis`` is False).
@@ -125,9 +122,6 @@ class RollingQP:
         self.solver, self.dt, self.gap_gain = solver, float(dt), float(gap_gain)
         self.second_order, self.closed_form = bool(second_order), bool(closed_form)
         self.radius = hand.tip_radius(finger)
-        self._fid = hand.tip_frame_id(finger)
-        self._model = hand.model
-        self._data = hand.model.createData()
         #: the active joints' indices in q and q̇ (the same: the hand model's finger and wrist joints
         #: are 1-DoF, so q + q̇ dt is exact)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
@@ -142,9 +136,7 @@ class RollingQP:
         self._cost = np.diag(w)
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
         self._state = state
-        self._q = state.q
         self._qdot = np.zeros(hand.nv)
-        self._zero = np.zeros(hand.nv)
         #: the QP of the last step (or of :meth:`build`)
         self.problem: qpsolvers.Problem | None = None
         self.retarget(axis, omega, state=state, project_axis=project_axis)
@@ -161,10 +153,12 @@ class RollingQP:
             if state.hand is not self.hand:
                 raise KinematicsError("state", "belongs to another hand model")
             self._state, self._q = state, state.q
+            # live views of the tip's world translation and rotation: they follow every update
+            self._centre, self._rotation = state.frame_views(self.hand.tip_frame_id(self.finger))
         self._qdot[:] = 0.0
+        self._state.update(self._q)
         self._probe.place_object(self.scene.object.placement)
-        self._kinematics()
-        n = self._probe.measure(self._tip.translation).normal
+        n = self._probe.measure(self._centre).normal
         a = unit_vector("axis", axis)
         if project_axis:
             a = a - (a @ n) * n
@@ -176,7 +170,6 @@ class RollingQP:
         wx, wy, wz = (self.omega * self.axis).tolist()
         self._omega_axis = (wx, wy, wz)
 
-    # ------------------------------------------------------------------ state
     @property
     def q(self) -> np.ndarray:
         """Current configuration (a copy)."""
@@ -184,30 +177,19 @@ class RollingQP:
 
     @property
     def state(self) -> HandState:
-        """The caller's hand state, brought up to the current configuration."""
+        """The caller's hand state, brought up to the current configuration (during a roll it holds
+        the configuration at the start of the last step)."""
         self._state.update(self._q)
         return self._state
 
-    # ------------------------------------------------------------------ the step
-    def _kinematics(self) -> np.ndarray | None:
-        """Forward kinematics at q (with the last q̇), the tip placement and Jacobian; returns
-        ``J̇ q̇`` for the second-order targets (None without them)."""
-        model, data = self._model, self._data
-        pin.forwardKinematics(model, data, self._q, self._qdot, self._zero)
-        pin.computeJointJacobians(model, data)
-        self._tip = pin.updateFramePlacement(model, data, self._fid)
-        self._jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA)[:, self.active]
-        if not self.second_order:
-            return None
-        drift: np.ndarray = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
-        return drift
-
     def _build(self) -> tuple[qpsolvers.Problem, Contact]:
-        drift = self._kinematics()
-        contact = self._probe.measure(self._tip.translation)
+        """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
+        state = self._state
+        state.update(self._q, self._qdot if self.second_order else None)
+        contact = self._probe.measure(self._centre)
         problem = rolling_problem(
-            self._jacobian,
-            drift,
+            state.tip_jacobian(self.finger)[:, self.active],
+            state.tip_drift(self.finger) if self.second_order else None,
             contact,
             self.radius,
             self._omega_axis,
@@ -227,7 +209,7 @@ class RollingQP:
     def step(self) -> RollingStep:
         """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
         problem, contact = self._build()
-        rotation = np.array(self._tip.rotation)
+        rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
         x, closed = solve_rolling_qp(problem, self.solver, self.closed_form)
         self._qdot[self.active] = x

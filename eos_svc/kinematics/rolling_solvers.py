@@ -66,9 +66,8 @@ def equality_optimum(problem: qpsolvers.Problem, tolerance: float = BOUND_TOLERA
     if info != 0:
         return None
     x: np.ndarray = A_scaled.T @ y
-    if (x >= lb - tolerance).all() and (x <= ub + tolerance).all():
-        return x
-    return None
+    # the smallest slack to either bound, ≥ −tolerance (False on NaN)
+    return x if np.minimum(x - lb, ub - x).min() >= -tolerance else None
 
 
 def solve_rolling_qp(
