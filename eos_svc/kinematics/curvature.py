@@ -235,27 +235,14 @@ class CurvatureEstimator:
             raise UnderdeterminedError(
                 "samples", f"need samples from two independent roll directions, have {m} sample(s)"
             )
-        # CurvatureSample.rows() of every sample, stacked (vectorised: one array op per term)
-        samples = self._samples
-        U = np.array([s.contact_velocity for s in samples])  # (m, 2)
-        W = np.array([s.omega_xy for s in samples])
-        K = np.array([s.K_f for s in samples])  # (m, 2, 2)
-        A3 = np.zeros((m, 2, 3))
-        A3[:, 0, :2] = U
-        A3[:, 1, 1:] = U
-        A = A3.reshape(2 * m, 3)
-        Ku = K[:, :, 0] * U[:, :1] + K[:, :, 1] * U[:, 1:]  # K_f u, as in rows()
-        zw = np.empty((m, 2))  # = np.stack([-W[:, 1], W[:, 0]], axis=1), without its copies
-        np.negative(W[:, 1], out=zw[:, 0])
-        zw[:, 1] = W[:, 0]
-        b = (zw - Ku).reshape(2 * m)
+        # CurvatureSample.rows() of every sample, stacked
+        rows = [sample.rows() for sample in self._samples]
+        A = np.concatenate([a for a, _ in rows])
+        b = np.concatenate([rhs for _, rhs in rows])
         AtA = A.T @ A
-        scale = float(AtA.trace())  # = np.trace(AtA), without the wrapper
-        # 2-norm condition number of the symmetric AtA from its eigenvalues (np.linalg.cond would
-        # take an SVD through a heavier wrapper)
+        # 2-norm condition number of the symmetric AtA from its eigenvalues
         ev = np.abs(_eigvalsh(AtA))
-        ev_min = float(ev.min())
-        if scale == 0.0 or ev_min == 0.0 or float(ev.max()) / ev_min > 1e12:
+        if np.trace(AtA) == 0.0 or ev.min() == 0.0 or ev.max() / ev.min() > 1e12:
             raise UnderdeterminedError(
                 "samples",
                 "do not determine the curvature form: roll along two independent "
@@ -267,20 +254,16 @@ class CurvatureEstimator:
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
         cov = s2 * _inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
-        # the scalars as floats (numpy's scalar arithmetic costs µs per operation; the same
-        # IEEE operations in the same order give the same numbers)
-        t0, t1, t2 = theta.tolist()
-        form = np.array([[t0, t1], [t1, t2]])
+        form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
         evals, evecs = _eigh(form)
-        e0, e1 = evals.tolist()
-        ks = (e1, e0)  # k1 >= k2 (eigh's eigenvalues ascend)
-        dirs = evecs[:, ::-1].copy()  # = evecs[:, [1, 0]]
+        ks = (float(evals[1]), float(evals[0]))  # k1 >= k2 (eigh's eigenvalues ascend)
+        dirs = evecs[:, [1, 0]]
         sig = []
-        for vx, vy in dirs.T.tolist():  # the columns
+        for vx, vy in dirs.T:  # the columns
             g = np.array([vx * vx, 2 * vx * vy, vy * vy])
             sig.append(math.sqrt(max(float(g @ cov @ g), 0.0)) if dof > 0 else math.inf)
         gH = np.array([0.5, 0.0, 0.5])
-        H = 0.5 * (t0 + t2)
+        H = float(0.5 * (theta[0] + theta[2]))
         sH = math.sqrt(max(float(gH @ cov @ gH), 0.0)) if dof > 0 else math.inf
         kf = self.flat_curvature
         flat = tuple(abs(k) <= max(kf, 2.0 * s) for k, s in zip(ks, sig, strict=True))
@@ -294,9 +277,9 @@ class CurvatureEstimator:
             principal_directions=dirs,
             radii=(radii[0], radii[1]),
             sigma_curvatures=(sig[0], sig[1]),
-            mean_curvature=float(H),
+            mean_curvature=H,
             sigma_mean_curvature=sH,
-            mean_radius=math.inf if mean_flat else 1.0 / float(H),
+            mean_radius=math.inf if mean_flat else 1.0 / H,
             relative_error=rel,
             rating=max(0.0, 1.0 - rel) if math.isfinite(rel) else 0.0,
             flat=(bool(flat[0]), bool(flat[1])),

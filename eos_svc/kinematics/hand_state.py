@@ -19,7 +19,6 @@ if TYPE_CHECKING:
 __all__ = ["HandState", "read_only"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
-_F64 = np.dtype(np.float64)
 
 
 def read_only(array: np.ndarray) -> np.ndarray:
@@ -92,15 +91,7 @@ class HandState:
         (:meth:`joint_jacobians`), the geometry placements on first use of :attr:`geometry_data`.
         With joint velocities ``v`` (nv), also the frames' velocities, for :meth:`tip_drift`."""
         hand = self.hand
-        if (  # inlined fast path of HandModel.validate_q (this is the hot path)
-            type(q) is np.ndarray
-            and q.dtype is _F64
-            and q.shape == hand._q_shape
-            and math.isfinite(sum(q.tolist()))
-        ):
-            qa = q.copy()
-        else:
-            qa = hand.validate_q(q)
+        qa = hand.validate_q(q)
         model, data = self.model, self.data
         if v is None:
             pin.framesForwardKinematics(model, data, qa)  # data.oMi and data.oMf

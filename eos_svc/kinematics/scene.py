@@ -17,7 +17,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from .hand import HandModel, HandState, KinematicsError
+from .hand import HandModel, HandState, KinematicsError, UnknownNameError
 from .objects import SurfaceObject
 
 __all__ = ["Contact", "Scene"]
@@ -104,18 +104,13 @@ class Scene:
 
     def contact(self, state: HandState, finger: str) -> Contact:
         """Closest points between finger ``finger``'s tip and the object."""
-        try:
-            _, r, shape, is_sphere = self._tips[finger]
-        except KeyError:
-            from .hand import UnknownNameError
-
-            raise UnknownNameError(
-                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
-            ) from None
+        if finger not in self._tips:
+            raise UnknownNameError("finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}")
+        _, r, shape, is_sphere = self._tips[finger]
         res = self._res
         res.clear()
         if is_sphere:
-            c = state._tips[finger][3]  # live view of the tip centre (world)
+            c = state.tip_centre_view(finger)  # the tip centre (world)
             if self.exact_tips:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             self._tf_tip.setTranslation(c)
