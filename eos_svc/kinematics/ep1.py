@@ -271,17 +271,7 @@ def run_ep1(
     gaps: list[float] = [abs(ct0.distance)]
     ex_tip = R0.T @ F[:, 0]  # the frame's x in the tip frame
     in_plane = [np.array([math.cos(math.radians(d)), math.sin(math.radians(d))]) for d in dirs]
-    rq = RollingQP(
-        state,
-        finger,
-        F[:, :2] @ in_plane[0],
-        omega,
-        dt,
-        solver,
-        scene=scene,
-        tactile=tactile_sensor,
-        project_axis=False,
-    )
+    rq: RollingQP | None = None
     steps = 0
     path: list[np.ndarray] = [state.q.copy()] if path_every > 0 else []
     for phi_deg, a_xy in zip(dirs, in_plane, strict=True):
@@ -291,7 +281,13 @@ def run_ep1(
         set_of: list[int] = []  # 0: the outward half-legs, 1: the sweep back
         for sign, n_steps, k_set in legs:
             # the axis stays the one tangent at the start (fixed for the whole direction)
-            rq.retarget(axis, sign * omega, project_axis=False)
+            if rq is None:
+                rq = RollingQP(
+                    state, finger, axis, sign * omega, dt, solver, scene=scene, tactile=tactile_sensor,
+                    project_axis=False,
+                )  # fmt: skip
+            else:
+                rq.retarget(axis, sign * omega, project_axis=False)
             for _ in range(n_steps):
                 s = rq.step()
                 assert s.reading is not None
@@ -315,6 +311,7 @@ def run_ep1(
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
             s_fit = _fit_slope(th_all[sets == k], _chart_at_mean(P, ex_tip, r))
             samples.append(est.add_sample(a_xy, s_fit, K_f))
+    assert rq is not None
     state.update(rq.q)
     max_slip = max(slips)
     max_gap = max(gaps)
