@@ -61,7 +61,7 @@ class HandState:
         self._jac_stale = True
         # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
         # joint id, the joint placement (a live reference into data.oMi), the tip translation
-        # (a live view into data.oMf; never handed out), and a reusable point placement.
+        # (a live read-only view into data.oMf), and a reusable point placement.
         self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
         for name in hand.finger_names:
             fid = hand.tip_frame_id(name)
@@ -70,7 +70,7 @@ class HandState:
                 fid,
                 jid,
                 self.data.oMi[jid],
-                self.data.oMf[fid].translation,
+                read_only(self.data.oMf[fid].translation),
                 pin.SE3.Identity(),
             )
         # live views into data.oMf / the geometry data's oMg, made on first use (see frame_views)
@@ -161,7 +161,7 @@ class HandState:
     def tip_centre_view(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m, as a live read-only view that
         follows every :meth:`update` (no copy: for loops that read it after each move)."""
-        return read_only(self._tip(finger)[3].view())
+        return self._tip(finger)[3]
 
     def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
         """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
