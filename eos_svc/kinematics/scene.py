@@ -71,19 +71,12 @@ class Scene:
         self._tf_tip = coal.Transform3s()
         self._point = coal.Sphere(1e-9)  # a point probe for point_gap
         self._tf_point = coal.Transform3s()
-        # coal distance functors (object–point probe; object–hand geometry by id, made on first
-        # use): the query coal.distance makes, without its per-call dispatch (≈ 2 µs a query)
-        self._point_distance = coal.ComputeDistance(self._obj_geom, self._point)
-        self._gap_distance: dict[int, coal.ComputeDistance] = {}
         self.set_object_placement(obj.placement)
         # the hand's collision shapes by geometry id (reading them through the geometry model's
         # vector from Python costs ~3 µs a query)
         self._hand_shapes = [go.geometry for go in hand.collision_model.geometryObjects]
-        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere), and
-        # a coal distance functor object–tip (cheaper per call than coal.distance; it holds
-        # raw pointers to both shapes, which self._tips and self.object keep alive).
+        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere)
         self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
-        self._functors: dict[str, coal.ComputeDistance] = {}
         for name in hand.finger_names:
             gid = hand.tip_geometry_id(name)
             r = hand.tip_radius(name)
@@ -91,7 +84,6 @@ class Scene:
             is_sphere = geom is None or isinstance(geom, coal.Sphere)
             shape = geom if geom is not None else coal.Sphere(r)
             self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
-            self._functors[name] = coal.ComputeDistance(self._obj_geom, shape)
 
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
@@ -114,7 +106,7 @@ class Scene:
             if self.exact_tips:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             self._tf_tip.setTranslation(c)
-            self._functors[finger](self._tf_obj, self._tf_tip, self._req, res)
+            coal.distance(self._obj_geom, self._tf_obj, shape, self._tf_tip, self._req, res)
             d = res.min_distance
             if d < 0.0:  # penetration: coal's EPA / sphere-cylinder depth is approximate
                 return self._analytic_sphere_contact(finger, c.copy(), r)
@@ -162,12 +154,11 @@ class Scene:
     def gap(self, state: HandState, gid: int) -> float:
         """Signed distance (m) between hand collision geometry ``gid`` and the object, without
         witness points (the cheap query for guarded motions)."""
-        functor = self._gap_distance.get(gid)
-        if functor is None:
-            functor = self._gap_distance[gid] = coal.ComputeDistance(self._obj_geom, self._hand_shapes[gid])
         res = self._res
         res.clear()
-        functor(self._tf_obj, state.geometry_data.oMg[gid], self._req, res)
+        coal.distance(
+            self._obj_geom, self._tf_obj, self._hand_shapes[gid], state.geometry_data.oMg[gid], self._req, res
+        )
         return float(res.min_distance)
 
     def point_gap(self, point: np.ndarray) -> float:
@@ -175,7 +166,7 @@ class Scene:
         self._tf_point.setTranslation(np.asarray(point, dtype=float))
         res = self._res
         res.clear()
-        self._point_distance(self._tf_obj, self._tf_point, self._req, res)
+        coal.distance(self._obj_geom, self._tf_obj, self._point, self._tf_point, self._req, res)
         return float(res.min_distance)
 
     def _geometry_distance(self, state: HandState, gid: int) -> Contact:

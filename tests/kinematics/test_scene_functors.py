@@ -1,5 +1,6 @@
-"""``Scene.gap`` and ``Scene.point_gap`` query coal through distance functors: the distances of
-``coal.distance`` itself, bit for bit, for every object shape, in any order of queries."""
+"""``Scene.gap`` and ``Scene.point_gap`` give the distances of a fresh ``coal.distance`` query, bit
+for bit, for every object shape, in any order of queries (the scene's reused request, result and
+transforms keep nothing from one query to the next)."""
 
 from __future__ import annotations
 
