@@ -45,7 +45,6 @@ class HandState:
         "_jac_stale",
         "_q",
         "_tips",
-        "_velocity",
         "data",
         "hand",
         "model",
@@ -77,7 +76,6 @@ class HandState:
         self._frame_views: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._geometry_views: list[tuple[np.ndarray, np.ndarray]] | None = None
         self._q = hand.neutral()
-        self._velocity = False
         self.update(self._q if q is None else q)
 
     @property
@@ -85,38 +83,19 @@ class HandState:
         """The current configuration (a copy)."""
         return self._q.copy()
 
-    def update(self, q: object, v: np.ndarray | None = None) -> None:
+    def update(self, q: object) -> None:
         """Set ``q`` (validated: length, finite) and recompute the kinematics (joint and frame
         placements); the joint Jacobians follow on first use of a Jacobian
-        (:meth:`joint_jacobians`), the geometry placements on first use of :attr:`geometry_data`.
-        With joint velocities ``v`` (nv), also the frames' velocities, for :meth:`tip_drift`."""
+        (:meth:`joint_jacobians`), the geometry placements on first use of :attr:`geometry_data`."""
         hand = self.hand
         qa = hand.validate_q(q)
         model, data = self.model, self.data
-        if v is None:
-            pin.framesForwardKinematics(model, data, qa)  # data.oMi and data.oMf
-        else:
-            if v.shape != (hand.nv,):
-                raise ConfigurationError("v", f"must have shape ({hand.nv},), got {v.shape}")
-            pin.forwardKinematics(model, data, qa, v, np.zeros(hand.nv))
-            pin.updateFramePlacements(model, data)
-        self._velocity = v is not None
+        pin.framesForwardKinematics(model, data, qa)  # data.oMi and data.oMf
         # joint Jacobians and geometry placements are computed on first use (most updates only
         # need the tips' placements)
         self._jac_stale = True
         self._geom_stale = True
         self._q = qa
-
-    def tip_drift(self, finger: str) -> np.ndarray:
-        """``J̇ v`` of the tip frame (6, LOCAL_WORLD_ALIGNED: linear then angular, m/s², rad/s²) at
-        the velocity ``v`` of the last :meth:`update` — the tip's classical acceleration with zero
-        joint accelerations; zero after an update without ``v``."""
-        if not self._velocity:
-            return np.zeros(6)
-        drift: np.ndarray = pin.getFrameClassicalAcceleration(
-            self.model, self.data, self._tip(finger)[0], _LWA
-        ).vector
-        return drift
 
     def joint_jacobians(self) -> None:
         """Compute the joint Jacobians (``data.J``, world frame) at the current q, once per

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 
 import coal
 import numpy as np
+import pinocchio as pin
 import qpsolvers
 
 from .geometry import unit_vector
@@ -32,6 +33,8 @@ from .tactile import TactileReading, TactileSensor
 from .tip_contact import SphereTipProbe
 
 __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
+
+_LWA = pin.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(frozen=True, slots=True)
@@ -64,8 +67,8 @@ class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
     Args:
-        state: the hand state at the start of the roll (pink's ``Configuration``): each step
-            updates it to the step's configuration (with the last q̇, for the second-order term).
+        state: the hand state at the start of the roll; the roller steps on Pinocchio data of
+            its own and brings ``state`` up to its configuration when :attr:`state` is read.
         finger: the rolling finger (its tip must be a sphere).
         axis: world rolling axis (unit after normalisation; tangent to the object at the
             contact — its normal component is removed unless ``project_axis`` is False).
@@ -135,8 +138,15 @@ class RollingQP:
         self.weights = w
         self._cost = np.diag(w)
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
+        # the roller's own Pinocchio data (the kinematics of its steps); live views of the tip's
+        # world translation and rotation in it, which follow every step
+        self._fid = hand.tip_frame_id(finger)
+        self._data = hand.model.createData()
+        tip = self._data.oMf[self._fid]
+        self._centre, self._rotation = tip.translation, tip.rotation
         self._state = state
         self._qdot = np.zeros(hand.nv)
+        self._zero = np.zeros(hand.nv)
         #: the QP of the last step (or of :meth:`build`)
         self.problem: qpsolvers.Problem | None = None
         self.retarget(axis, omega, state=state, project_axis=project_axis)
@@ -153,10 +163,8 @@ class RollingQP:
             if state.hand is not self.hand:
                 raise KinematicsError("state", "belongs to another hand model")
             self._state, self._q = state, state.q
-            # live views of the tip's world translation and rotation: they follow every update
-            self._centre, self._rotation = state.frame_views(self.hand.tip_frame_id(self.finger))
         self._qdot[:] = 0.0
-        self._state.update(self._q)
+        self._kinematics()
         self._probe.place_object(self.scene.object.placement)
         n = self._probe.measure(self._centre).normal
         a = unit_vector("axis", axis)
@@ -177,19 +185,28 @@ class RollingQP:
 
     @property
     def state(self) -> HandState:
-        """The caller's hand state, brought up to the current configuration (during a roll it holds
-        the configuration at the start of the last step)."""
+        """The caller's hand state, brought up to the current configuration."""
         self._state.update(self._q)
         return self._state
 
+    def _kinematics(self) -> tuple[np.ndarray, np.ndarray]:
+        """Forward kinematics at q with the last q̇; the tip's placement (seen through the live
+        views), its Jacobian over the active joints and ``J̇ q̇`` (LOCAL_WORLD_ALIGNED)."""
+        model, data = self.hand.model, self._data
+        pin.forwardKinematics(model, data, self._q, self._qdot, self._zero)
+        pin.updateFramePlacement(model, data, self._fid)
+        pin.computeJointJacobians(model, data)
+        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA).take(self.active, axis=1)
+        drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
+        return jacobian, drift
+
     def _build(self) -> tuple[qpsolvers.Problem, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
-        state = self._state
-        state.update(self._q, self._qdot if self.second_order else None)
+        jacobian, drift = self._kinematics()
         contact = self._probe.measure(self._centre)
         problem = rolling_problem(
-            state.tip_jacobian(self.finger)[:, self.active],
-            state.tip_drift(self.finger) if self.second_order else None,
+            jacobian,
+            drift if self.second_order else None,
             contact,
             self.radius,
             self._omega_axis,
