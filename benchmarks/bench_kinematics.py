@@ -1,11 +1,11 @@
 """Cost of one kinematics-and-contact update of the hand3x3 against a sphere.
 
 One update = forward kinematics (with joint Jacobians), the three fingertip–object distances
-with witness points and normal (``Scene.tip_contacts``), and the three fingertip Jacobians
+with witness points and normal (``Scene.contact``), and the three fingertip Jacobians
 (``HandState.tip_jacobian``: the tip frame, i.e. the fingertip sphere's centre and its angular
 velocity, 6×nv). Printed beside the bare Pinocchio and coal calls doing the same work, measured
-in the same run (the floor), and the ratio; also the same update with one coal query per finger
-and with the Jacobians of the material points at the contacts. Medians over repeated runs.
+in the same run (the floor), and the ratio; also the same update with the Jacobians of the
+material points at the contacts. Medians over repeated runs.
 
     .venv/bin/python benchmarks/bench_kinematics.py [--repeat 31] [--number 2000] [--baseline REV]
 
@@ -77,35 +77,23 @@ def setup(kin: ModuleType) -> tuple[Callable[[], None], dict[str, object]]:
 
     # One update: FK (with joint Jacobians), the three fingertip-object contacts with witness
     # points and normal, the three fingertip Jacobians (tip frame: centre velocity and ω).
-    if hasattr(scene, "tip_contacts"):
-
-        def ours() -> None:
-            state.update(q)
-            scene.tip_contacts(state)  # one computeDistances for the three tips
-            for f in fingers:
-                state.tip_jacobian(f)
-
-    else:  # an older eos_svc.kinematics (--baseline)
-
-        def ours() -> None:
-            state.update(q)
-            for f in fingers:
-                scene.contact(state, f)
-                state.tip_jacobian(f)
+    def ours() -> None:
+        state.update(q)
+        for f in fingers:
+            scene.contact(state, f)
+            state.tip_jacobian(f)
 
     def with_point_jacobians() -> None:  # the Jacobians at the contact points instead
         state.update(q)
         for c in scene.tip_contacts(state):
             state.tip_point_jacobian(c.finger, c.point_tip)
 
-    def per_finger() -> None:  # one coal query per finger
-        state.update(q)
-        for f in fingers:
-            scene.contact(state, f)
-            state.tip_jacobian(f)
-
     return ours, {
-        "hand": hand, "q": q, "state": state, "scene": scene, "obj": obj, "per_finger": per_finger,
+        "hand": hand,
+        "q": q,
+        "state": state,
+        "scene": scene,
+        "obj": obj,
         "with_point_jacobians": with_point_jacobians,
     }
 
@@ -134,6 +122,8 @@ def interleaved_us(fns: dict[str, Callable[[], None]], number: int, repeat: int)
 def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> dict[str, float]:
     ours, objs = setup(kin_now)
     hand, q, state, scene, obj = (objs[k] for k in ("hand", "q", "state", "scene", "obj"))
+    with_point_jacobians = objs["with_point_jacobians"]
+    assert callable(with_point_jacobians)
     assert isinstance(hand, kin_now.HandModel) and isinstance(q, np.ndarray)
     assert isinstance(state, kin_now.HandState) and isinstance(scene, kin_now.Scene)
     assert isinstance(obj, kin_now.Sphere)
@@ -164,30 +154,6 @@ def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> d
             res.clear()
             coal.distance(obj.geometry, tf_obj, tip, tf_tip, req, res)
             res.getNearestPoint1()
-
-    # The batched floor: all three tip-object distances in one computeDistances (the geometry
-    # model of the tips and the object that Scene.tip_contacts uses), then per finger the
-    # witness points, normal and the Jacobian at the contact.
-    scene.tip_contacts(state)  # builds the scene's geometry model of the tips and the object
-    tgm, tgd = scene._tip_gmodel, pin.GeometryData(scene._tip_gmodel)
-    for r_ in tgd.distanceRequests:
-        r_.enable_signed_distance = True
-    tres = list(tgd.distanceResults)
-    jids = [int(model.frames[fid].parentJoint) for fid in fids]
-    M = pin.SE3.Identity()
-    oMi = [data.oMi[j] for j in jids]
-    bwork = list(zip(jids, oMi, tres, strict=True))
-
-    def floor_batched() -> None:
-        pin.computeJointJacobians(model, data, q)
-        pin.updateFramePlacements(model, data)
-        pin.updateGeometryPlacements(model, data, tgm, tgd)
-        pin.computeDistances(tgm, tgd)
-        for jid, oM, rr in bwork:
-            p = rr.getNearestPoint2()
-            rr.getNearestPoint1()
-            M.translation = oM.actInv(p)
-            pin.getFrameJacobian(model, data, jid, M, LWA)
 
     def fk_only() -> None:
         pin.forwardKinematics(model, data, q)
@@ -222,11 +188,7 @@ def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> d
     rows = {
         "update (FK + 3 tip Jacobians + 3 tip-object distances)": median_us(ours, number, repeat),
         "floor: bare Pinocchio + coal calls, same work": median_us(floor, number, repeat),
-        "  same, one computeDistances for the 3 tips": median_us(floor_batched, number, repeat),
-        "  update with one coal query per finger": median_us(objs["per_finger"], number, repeat),  # type: ignore[arg-type]
-        "  update with Jacobians at the contact points": median_us(
-            objs["with_point_jacobians"], number, repeat  # type: ignore[arg-type]
-        ),
+        "  update with Jacobians at the contact points": median_us(with_point_jacobians, number, repeat),
         "  Pinocchio FK + frame placements": median_us(fk_only, number, repeat),
         "  Pinocchio joint Jacobians + 3 frame Jacobians": median_us(jac_only, number, repeat),
         "  coal sphere-sphere distance (1)": median_us(coal_only, number, repeat),
@@ -235,27 +197,35 @@ def main(number: int = 2000, repeat: int = 31, baseline: str | None = None) -> d
         "  HandState.tip_point_jacobian (1 finger)": median_us(point_jac_only, number, repeat),
         "  HandState.tip_jacobian (1 finger)": median_us(tip_jac_only, number, repeat),
     }
-    print(f"python {platform.python_version()}, pinocchio {pin.__version__}, "
-          f"{platform.machine()}; median (min) of {repeat} runs x {number} calls")
+    print(
+        f"python {platform.python_version()}, pinocchio {pin.__version__}, "
+        f"{platform.machine()}; median (min) of {repeat} runs x {number} calls"
+    )
     for name, (med, best) in rows.items():
         print(f"{name:58s} {med:8.2f} µs  ({best:.2f})")
     ratio = rows[next(iter(rows))][0] / rows["floor: bare Pinocchio + coal calls, same work"][0]
     goal = 20.0
     med = rows[next(iter(rows))][0]
-    print(f"ratio update / floor: {ratio:.2f}; goal ≤ {goal:.0f} µs on THIS machine: "
-          f"{'met' if med <= goal else 'NOT met'}")
+    print(
+        f"ratio update / floor: {ratio:.2f}; goal ≤ {goal:.0f} µs on THIS machine: "
+        f"{'met' if med <= goal else 'NOT met'}"
+    )
     # a yardstick of this machine's speed: compare machines (or loads) by it, not by the rows
     fk = rows["  Pinocchio FK + frame placements"][0]
     floor_us = rows["floor: bare Pinocchio + coal calls, same work"][0]
-    print(f"calibration: FK + frame placements {fk:.2f} µs here; update = {med / fk:.1f} FK, "
-          f"floor = {floor_us / fk:.1f} FK")
+    print(
+        f"calibration: FK + frame placements {fk:.2f} µs here; update = {med / fk:.1f} FK, "
+        f"floor = {floor_us / fk:.1f} FK"
+    )
     out = {"update_us": med, "ratio": ratio}
     if baseline is not None:
         old, _ = setup(load_kinematics(baseline))
         both = interleaved_us({"current": ours, "baseline": old, "floor": floor}, number, repeat)
-        print(f"\nsame run, interleaved: update now {both['current']:.2f} µs, at {baseline} "
-              f"{both['baseline']:.2f} µs (ratio {both['baseline'] / both['current']:.2f}); "
-              f"floor {both['floor']:.2f} µs")
+        print(
+            f"\nsame run, interleaved: update now {both['current']:.2f} µs, at {baseline} "
+            f"{both['baseline']:.2f} µs (ratio {both['baseline'] / both['current']:.2f}); "
+            f"floor {both['floor']:.2f} µs"
+        )
         out["baseline_us"] = both["baseline"]
     return out
 

@@ -36,7 +36,6 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -58,104 +57,11 @@ DEFAULT_FLAT_CURVATURE = 1.0
 Array = NDArray[np.float64]
 
 
-try:  # the gufuncs behind np.linalg's small-matrix functions (same LAPACK calls)
-    from numpy.linalg import _umath_linalg
-
-    _ulinalg: Any = _umath_linalg
-except ImportError:  # pragma: no cover - other NumPy layouts: the public functions only
-    _ulinalg = None
-
-
-def _private_linalg_agrees(u: Any) -> bool:
-    """True when NumPy's private gufuncs exist, take the signatures used below and agree with
-    the public functions on a small problem (checked once at import: a NumPy release that
-    renames or changes them makes every wrapper fall back to the public function)."""
-    if u is None:
-        return False
-    a = np.array([[2.0, 0.5], [0.5, 1.0]])
-    b = np.array([1.0, 2.0])
-    A = np.array([[1.0, 0.0], [0.0, 1.0], [1.0, 1.0]])
-    B = np.array([[1.0], [2.0], [3.0]])
-    try:
-        with np.errstate(all="ignore"):
-            return bool(
-                np.allclose(u.eigvalsh_lo(a, signature="d->d"), np.linalg.eigvalsh(a))
-                and np.allclose(u.eigh_lo(a, signature="d->dd")[0], np.linalg.eigh(a)[0])
-                and np.allclose(u.solve1(a, b, signature="dd->d"), np.linalg.solve(a, b))
-                and np.allclose(u.inv(a, signature="d->d"), np.linalg.inv(a))
-                and np.allclose(
-                    u.lstsq(A, B, 3 * float(np.finfo(float).eps), signature="ddd->ddid")[0],
-                    np.linalg.lstsq(A, B, rcond=None)[0],
-                )
-            )
-    except Exception:  # missing, renamed or re-signed in this NumPy
-        return False
-
-
-if not _private_linalg_agrees(_ulinalg):
-    _ulinalg = None
-
-
-def _finite(a: np.ndarray) -> bool:
-    return math.isfinite(sum(a.reshape(-1).tolist()))
-
-
-def _eigvalsh(a: np.ndarray) -> np.ndarray:
-    """``np.linalg.eigvalsh(a)`` for a real symmetric matrix, without its wrapper (~10 µs):
-    the same gufunc; anything but a finite result is redone by the public function (which
-    raises as before)."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            w = _ulinalg.eigvalsh_lo(a, signature="d->d")
-        if _finite(w):
-            return w
-    return np.linalg.eigvalsh(a)
-
-
-def _eigh(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.linalg.eigh(a)`` (eigenvalues, eigenvectors), as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            w, v = _ulinalg.eigh_lo(a, signature="d->dd")
-        if _finite(w) and _finite(v):
-            return w, v
-    w, v = np.linalg.eigh(a)
-    return w, v
-
-
-def _solve(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.solve(a, b)`` for a vector ``b``, as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            x = _ulinalg.solve1(a, b, signature="dd->d")
-        if _finite(x):
-            return x
-    return np.linalg.solve(a, b)
-
-
-def _inv(a: np.ndarray) -> np.ndarray:
-    """``np.linalg.inv(a)``, as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        with np.errstate(all="ignore"):
-            x = _ulinalg.inv(a, signature="d->d")
-        if _finite(x):
-            return x
-    return np.linalg.inv(a)
-
-
-def lstsq_solution(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """``np.linalg.lstsq(a, b, rcond=None)[0]`` for real 2-D ``a`` (m×n, m ≥ n) and ``b`` (m×k),
-    as :func:`_eigvalsh`."""
-    if _ulinalg is not None:
-        m, n = a.shape
-        with np.errstate(all="ignore"):
-            x, _, _, _ = _ulinalg.lstsq(a, b, _EPS * max(m, n), signature="ddd->ddid")
-        if _finite(x):
-            return x
-    return np.linalg.lstsq(a, b, rcond=None)[0]
-
-
-_EPS = float(np.finfo(float).eps)
+# the linear algebra of the estimate (the names the tests of its numbers use)
+_eigvalsh = np.linalg.eigvalsh
+_eigh = np.linalg.eigh
+_solve = np.linalg.solve
+_inv = np.linalg.inv
 
 
 class UnderdeterminedError(ValidationError):
@@ -289,9 +195,7 @@ class CurvatureEstimator:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.flat_curvature) and self.flat_curvature > 0):
-            raise ValidationError(
-                "flat_curvature", f"must be a positive number, got {self.flat_curvature}"
-            )
+            raise ValidationError("flat_curvature", f"must be a positive number, got {self.flat_curvature}")
 
     @property
     def samples(self) -> tuple[CurvatureSample, ...]:
@@ -329,34 +233,20 @@ class CurvatureEstimator:
         m = len(self._samples)
         if m < 2:
             raise UnderdeterminedError(
-                "samples",
-                f"need samples from two independent roll directions, have {m} sample(s)"
+                "samples", f"need samples from two independent roll directions, have {m} sample(s)"
             )
-        # CurvatureSample.rows() of every sample, stacked (vectorised: one array op per term)
-        samples = self._samples
-        U = np.array([s.contact_velocity for s in samples])  # (m, 2)
-        W = np.array([s.omega_xy for s in samples])
-        K = np.array([s.K_f for s in samples])  # (m, 2, 2)
-        A3 = np.zeros((m, 2, 3))
-        A3[:, 0, :2] = U
-        A3[:, 1, 1:] = U
-        A = A3.reshape(2 * m, 3)
-        Ku = K[:, :, 0] * U[:, :1] + K[:, :, 1] * U[:, 1:]  # K_f u, as in rows()
-        zw = np.empty((m, 2))  # = np.stack([-W[:, 1], W[:, 0]], axis=1), without its copies
-        np.negative(W[:, 1], out=zw[:, 0])
-        zw[:, 1] = W[:, 0]
-        b = (zw - Ku).reshape(2 * m)
+        # CurvatureSample.rows() of every sample, stacked
+        rows = [sample.rows() for sample in self._samples]
+        A = np.concatenate([a for a, _ in rows])
+        b = np.concatenate([rhs for _, rhs in rows])
         AtA = A.T @ A
-        scale = float(AtA.trace())  # = np.trace(AtA), without the wrapper
-        # 2-norm condition number of the symmetric AtA from its eigenvalues (np.linalg.cond would
-        # take an SVD through a heavier wrapper)
+        # 2-norm condition number of the symmetric AtA from its eigenvalues
         ev = np.abs(_eigvalsh(AtA))
-        ev_min = float(ev.min())
-        if scale == 0.0 or ev_min == 0.0 or float(ev.max()) / ev_min > 1e12:
+        if np.trace(AtA) == 0.0 or ev.min() == 0.0 or ev.max() / ev.min() > 1e12:
             raise UnderdeterminedError(
                 "samples",
                 "do not determine the curvature form: roll along two independent "
-                "tangent directions (contact velocities are parallel or zero)"
+                "tangent directions (contact velocities are parallel or zero)",
             )
         theta = _solve(AtA, A.T @ b)
         r = b - A @ theta
@@ -364,20 +254,16 @@ class CurvatureEstimator:
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
         cov = s2 * _inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
-        # the scalars as floats (numpy's scalar arithmetic costs µs per operation; the same
-        # IEEE operations in the same order give the same numbers)
-        t0, t1, t2 = theta.tolist()
-        form = np.array([[t0, t1], [t1, t2]])
+        form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
         evals, evecs = _eigh(form)
-        e0, e1 = evals.tolist()
-        ks = (e1, e0)  # k1 >= k2 (eigh's eigenvalues ascend)
-        dirs = evecs[:, ::-1].copy()  # = evecs[:, [1, 0]]
+        ks = (float(evals[1]), float(evals[0]))  # k1 >= k2 (eigh's eigenvalues ascend)
+        dirs = evecs[:, [1, 0]]
         sig = []
-        for vx, vy in dirs.T.tolist():  # the columns
+        for vx, vy in dirs.T:  # the columns
             g = np.array([vx * vx, 2 * vx * vy, vy * vy])
             sig.append(math.sqrt(max(float(g @ cov @ g), 0.0)) if dof > 0 else math.inf)
         gH = np.array([0.5, 0.0, 0.5])
-        H = 0.5 * (t0 + t2)
+        H = float(0.5 * (theta[0] + theta[2]))
         sH = math.sqrt(max(float(gH @ cov @ gH), 0.0)) if dof > 0 else math.inf
         kf = self.flat_curvature
         flat = tuple(abs(k) <= max(kf, 2.0 * s) for k, s in zip(ks, sig, strict=True))
@@ -391,9 +277,9 @@ class CurvatureEstimator:
             principal_directions=dirs,
             radii=(radii[0], radii[1]),
             sigma_curvatures=(sig[0], sig[1]),
-            mean_curvature=float(H),
+            mean_curvature=H,
             sigma_mean_curvature=sH,
-            mean_radius=math.inf if mean_flat else 1.0 / float(H),
+            mean_radius=math.inf if mean_flat else 1.0 / H,
             relative_error=rel,
             rating=max(0.0, 1.0 - rel) if math.isfinite(rel) else 0.0,
             flat=(bool(flat[0]), bool(flat[1])),

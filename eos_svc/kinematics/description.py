@@ -111,14 +111,7 @@ class HandDescription:
         )
         return cls(
             fingers=fingers,
-            wrist_joints=(
-                "wrist_x",
-                "wrist_y",
-                "wrist_z",
-                "wrist_roll",
-                "wrist_pitch",
-                "wrist_yaw",
-            ),
+            wrist_joints=tuple(f"wrist_{j}" for j in ("x", "y", "z", "roll", "pitch", "yaw")),
             opposing_finger="finger3",
             palm_frame="palm",
         )

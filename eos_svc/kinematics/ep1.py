@@ -25,7 +25,6 @@ Procedure (:func:`run_ep1`), from a configuration where the fingertip touches th
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -33,8 +32,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample, lstsq_solution
-from .geometry import tangent_pair
+from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
+from .geometry import tangent_basis
 from .hand import HandModel, HandState, KinematicsError
 from .norms import row_norms
 from .objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
@@ -102,12 +101,10 @@ def contact_frame(normal: np.ndarray) -> np.ndarray:
     ``z = −normal`` (the fingertip's outward normal); ``x`` = world z projected on the
     tangent plane (world y if the normal is within ~25° of vertical); ``y = z × x``.
     """
-    # scalar arithmetic on the 3-vectors (numpy costs µs per call on them; same values)
-    z0, z1, z2 = (-np.asarray(normal, dtype=float)).tolist()
-    nz = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
-    z0, z1, z2 = z0 / nz, z1 / nz, z2 / nz
-    x0, x1, x2, y0, y1, y2 = tangent_pair(z0, z1, z2, prefer=2)
-    return np.array([[x0, y0, z0], [x1, y1, z1], [x2, y2, z2]])
+    z = -np.asarray(normal, dtype=float)
+    z = z / np.linalg.norm(z)
+    x, y = tangent_basis(z, prefer=2)
+    return np.column_stack([x, y, z])
 
 
 def ground_truth_form(obj: SurfaceObject, point: np.ndarray, frame: np.ndarray) -> np.ndarray:
@@ -132,7 +129,7 @@ def place_hand_for_ep1(
         WorkspaceError: the wrist would leave its workspace.
     """
     hand = scene.hand
-    st = _scratch_state(hand, hand.neutral() if q is None else q)
+    st = hand.state(q)
     c = st.tip_position(finger).copy()
     obj = scene.object
     target = c if point is None else np.asarray(point, dtype=float)
@@ -158,33 +155,9 @@ def place_hand_for_ep1(
     return q_new
 
 
-_SCRATCH = threading.local()
-
-
-def _scratch_state(hand: HandModel, q: object) -> HandState:
-    """A :class:`HandState` of ``hand`` at ``q`` (validated) for this thread's temporary use:
-    the same state as ``hand.state(q)`` without its set-up (Pinocchio and geometry data,
-    ~0.1 ms). One per hand per thread (a few hands kept); valid until the next call."""
-    cache: dict[int, HandState] | None = getattr(_SCRATCH, "states", None)
-    if cache is None:
-        cache = _SCRATCH.states = {}
-    st = cache.get(id(hand))
-    if st is not None and st.hand is hand:
-        st.update(q)
-        return st
-    st = hand.state(q)
-    cache[id(hand)] = st
-    while len(cache) > 4:
-        del cache[next(iter(cache))]
-    return st
-
-
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
-    v = np.empty((len(R), 3))  # the three differences, written in place (np.stack's copies spared)
-    np.subtract(R[:, 2, 1], R[:, 1, 2], out=v[:, 0])
-    np.subtract(R[:, 0, 2], R[:, 2, 0], out=v[:, 1])
-    np.subtract(R[:, 1, 0], R[:, 0, 1], out=v[:, 2])
+    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
     s2 = row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
@@ -194,79 +167,38 @@ def _log3(R: np.ndarray) -> np.ndarray:
     return out
 
 
-_ROLLERS = threading.local()
-_ROLLERS_KEEP = 8  # rollers kept per thread (one per hand, finger, dt and solver in use)
-
-
-def _roller(
-    scene: Scene,
-    state: HandState,
-    finger: str,
-    sensor: TactileSensor,
-    axis: np.ndarray,
-    omega: float,
-    dt: float,
-    solver: str,
-) -> RollingQP:
-    """A :class:`RollingQP` for this hand, finger, dt and solver, moved to ``scene``
-    (:meth:`~.rolling.RollingQP.use_scene`) and re-targeted to ``state``, ``axis`` and
-    ``omega``: the same roller as a new one, without its set-up (Pinocchio data, arrays, QP;
-    ~0.4 ms — every plan has a scene of its own, the hand is shared). Cached per thread (a
-    roller is not shared between threads), a few per thread, most recently used last."""
-    cache: dict[tuple[int, str, float, str], RollingQP] | None = getattr(_ROLLERS, "cache", None)
-    if cache is None:
-        cache = _ROLLERS.cache = {}
-    hand = state.hand
-    key = (id(hand), finger, float(dt), solver)
-    rq = cache.pop(key, None)
-    if rq is not None and (rq.hand is not hand or scene.hand is not hand):
-        rq = None  # another hand at a recycled id (or a scene of another hand: a new roller, as ever)
-    if rq is None:
-        rq = RollingQP(
-            state, finger, axis, omega, dt, solver, scene=scene, tactile=sensor, project_axis=False
-        )
-    else:
-        rq.tactile = sensor
-        rq.use_scene(scene)
-        rq.retarget(axis, omega, state=state, project_axis=False)
-    cache[key] = rq
-    while len(cache) > _ROLLERS_KEEP:
-        del cache[next(iter(cache))]
-    return rq
-
-
 def _log_chart(
-    points: np.ndarray,
-    b: np.ndarray,
-    ex: np.ndarray,
-    ey: np.ndarray,
-    r: float,
-    directions: np.ndarray | None = None,
+    points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float, directions: np.ndarray | None
 ) -> np.ndarray:
-    """Geodesic (log-map) coordinates on the tip sphere around unit ``b``, basis ex, ey, m.
-    ``directions``: the points normalised (rows), when the caller has them."""
+    """Geodesic (log-map) coordinates on the tip sphere of radius ``r`` around the unit ``b``, in
+    the tangent basis ex, ey at b, m (``directions``: the points normalised, when known)."""
     d = points / row_norms(points, keepdims=True) if directions is None else directions
     cosang = d @ b
-    v = d - cosang[:, None] * b  # np.outer(cosang, b): the same products
+    v = d - np.outer(cosang, b)
     sin_ang = row_norms(v)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
-    out = np.empty((len(v), 2))  # = np.column_stack([v @ ex, v @ ey])
-    out[:, 0] = v @ ex
-    out[:, 1] = v @ ey
-    return out
+    return np.column_stack([v @ ex, v @ ey])
+
+
+def _chart_at_mean(
+    P: np.ndarray, ex_tip: np.ndarray, r: float, directions: np.ndarray | None = None
+) -> np.ndarray:
+    """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with the
+    frame's x (``ex_tip``, tip frame) projected on the tangent plane at b as the chart's first axis."""
+    b = P.mean(axis=0)
+    b /= np.linalg.norm(b)
+    ex = ex_tip - (ex_tip @ b) * b
+    ex /= np.linalg.norm(ex)
+    ey = np.array((b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]))
+    return _log_chart(P, b, ex, ey, r, directions)  # ey = b × ex
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
-    X = np.empty((len(theta), 3))
-    X[:, 0] = 1.0
-    X[:, 1] = theta
-    X[:, 2] = theta * theta
-    # np.linalg.lstsq's LAPACK call (not scipy's lapack.dgels: with two right-hand sides scipy's
-    # OpenBLAS goes multi-threaded and, on a loaded 2-core machine, takes milliseconds)
-    out: np.ndarray = lstsq_solution(X, c)[1]
+    X = np.column_stack([np.ones_like(theta), theta, theta * theta])
+    out: np.ndarray = np.linalg.lstsq(X, c, rcond=None)[0][1]
     return out
 
 
@@ -285,31 +217,6 @@ def _checked_ep1_arguments(
     if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
         raise EP1Error("directions", "need at least two finite directions (degrees)")
     return dirs
-
-
-def _chart_at_mean(
-    P: np.ndarray, ex_t: tuple[float, float, float], r: float, directions: np.ndarray | None = None
-) -> np.ndarray:
-    """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with
-    the frame's x (``ex_t``, tip frame) projected on the tangent plane at b as the chart's first
-    axis; scalar arithmetic on the 3-vectors. ``directions``: ``P``'s rows normalised, when the
-    caller has them (a row's normalisation does not depend on the other rows)."""
-    ex_t0, ex_t1, ex_t2 = ex_t
-    b0, b1, b2 = (np.add.reduce(P, axis=0) / len(P)).tolist()  # = P.mean(axis=0)
-    nb = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
-    b0, b1, b2 = b0 / nb, b1 / nb, b2 / nb
-    d = ex_t0 * b0 + ex_t1 * b1 + ex_t2 * b2
-    e0, e1, e2 = ex_t0 - d * b0, ex_t1 - d * b1, ex_t2 - d * b2
-    ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-    e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
-    return _log_chart(
-        P,
-        np.array((b0, b1, b2)),
-        np.array((e0, e1, e2)),
-        np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
-        r,
-        directions,
-    )
 
 
 def run_ep1(
@@ -363,63 +270,48 @@ def run_ep1(
     samples: list[CurvatureSample] = []
     slips: list[float] = []
     gaps: list[float] = [abs(ct0.distance)]
-    n_dir = sum(n for _, n, _ in legs)  # steps of one direction
-    # per step of a direction in contact: tactile point, tip rotation and set (0: the outward
-    # half-legs, 1: the sweep back)
-    R_buf = np.empty((n_dir, 3, 3))
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R0.tolist()
-    fx0, fx1, fx2 = F[:, 0].tolist()
-    ex_t0 = r00 * fx0 + r10 * fx1 + r20 * fx2  # R0ᵀ x of the frame (tip frame)
-    ex_t1 = r01 * fx0 + r11 * fx1 + r21 * fx2
-    ex_t2 = r02 * fx0 + r12 * fx1 + r22 * fx2
-    steps = 0
+    ex_tip = R0.T @ F[:, 0]  # the frame's x in the tip frame
+    in_plane = [np.array([math.cos(math.radians(d)), math.sin(math.radians(d))]) for d in dirs]
     rq: RollingQP | None = None
+    steps = 0
     path: list[np.ndarray] = [state.q.copy()] if path_every > 0 else []
-    taken = 0  # steps so far, for the path's sampling
-    for phi_deg in dirs:
-        phi = math.radians(phi_deg)
-        a_xy = np.array([math.cos(phi), math.sin(phi)])
+    for phi_deg, a_xy in zip(dirs, in_plane, strict=True):
         axis = F[:, :2] @ a_xy
-        a_tip = R0.T @ axis
-        points: list[tuple[float, float, float]] = []  # one array of them per direction
-        set_of: list[int] = []
-        i = 0
+        points: list[np.ndarray] = []  # tactile points in contact (tip frame)
+        rotations: list[np.ndarray] = []  # the tip's rotation at each of them
+        set_of: list[int] = []  # 0: the outward half-legs, 1: the sweep back
         for sign, n_steps, k_set in legs:
-            # the axis stays the one tangent at the start (fixed for the whole direction);
-            # one roller for the whole run, re-targeted for every leg
+            # the axis stays the one tangent at the start (fixed for the whole direction)
             if rq is None:
-                rq = _roller(scene, state, finger, tactile_sensor, axis, sign * omega, dt, solver)
+                rq = RollingQP(
+                    state, finger, axis, sign * omega, dt, solver, scene=scene, tactile=tactile_sensor,
+                    project_axis=False,
+                )  # fmt: skip
             else:
                 rq.retarget(axis, sign * omega, project_axis=False)
-            R_view = rq.tip_rotation  # live: the kinematics of the step's reading
-            advance = rq.advance  # = step() without its records (the same roll and readings)
             for _ in range(n_steps):
-                gap, in_contact, px, py, pz, slip = advance()
-                if in_contact:
-                    points.append((px, py, pz))
-                    R_buf[i] = R_view
+                s = rq.step()
+                assert s.reading is not None
+                if s.reading.in_contact:
+                    points.append(s.reading.point_tip)
+                    rotations.append(s.tip_rotation)
                     set_of.append(k_set)
-                    i += 1
-                slips.append(slip)
-                gaps.append(abs(gap))
-                if path_every > 0:
-                    taken += 1
-                    if taken % path_every == 0:
-                        path.append(rq.q)
-            steps += n_steps
-        P_all = np.array(points).reshape(i, 3)  # (0, 3) when nothing was in contact
-        R_all = R_buf[:i]
-        D_all = P_all / row_norms(P_all, keepdims=True)  # the points' directions, once for both sets
-        set_in = np.array(set_of, dtype=int)
+                slips.append(s.slip_speed)
+                gaps.append(abs(s.contact.distance))
+                steps += 1
+                if path_every > 0 and steps % path_every == 0:
+                    path.append(rq.q)
+        P_all = np.array(points).reshape(-1, 3)
+        R_all = np.array(rotations).reshape(-1, 3, 3)
+        sets = np.array(set_of, dtype=int)
         # realized net roll angle of the tip about a (not the commanded ω·t)
-        th_all = _log3(np.matmul(R0.T, R_all)) @ a_tip
+        th_all = _log3(np.matmul(R0.T, R_all)) @ (R0.T @ axis)
         for k in (0, 1):
-            sel = set_in == k
-            P = P_all[sel]
+            P = P_all[sets == k]
             if len(P) < 5:
                 raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            s = _fit_slope(th_all[sel], _chart_at_mean(P, (ex_t0, ex_t1, ex_t2), r, D_all[sel]))
-            samples.append(est.add_sample(a_xy, s, K_f))
+            s_fit = _fit_slope(th_all[sets == k], _chart_at_mean(P, ex_tip, r))
+            samples.append(est.add_sample(a_xy, s_fit, K_f))
     assert rq is not None
     state.update(rq.q)
     max_slip = max(slips)

@@ -6,9 +6,8 @@ axis ``e_k`` projected onto the plane ⟂ ``n`` and normalised — world ``y`` i
 is within ~25° of ``e_k`` (``|n_k| ≥ 0.9``) — and ``t2 = n × t1``, so ``(t1, t2, n)`` is a
 right-handed orthonormal frame.
 
-:func:`tangent_pair` is the scalar form used on hot paths (numpy costs microseconds per call on
-3-vectors); :func:`tangent_basis` returns arrays; :func:`tangent_basis_reference` is the plain
-numpy construction the tests compare both with.
+:func:`tangent_pair` is the scalar form (numpy costs microseconds per call on 3-vectors);
+:func:`tangent_basis` returns arrays.
 """
 
 from __future__ import annotations
@@ -20,7 +19,7 @@ from numpy.typing import ArrayLike
 
 from eos_svc.errors import ValidationError
 
-__all__ = ["tangent_basis", "tangent_basis_reference", "tangent_pair", "unit_vector"]
+__all__ = ["tangent_basis", "tangent_pair", "unit_vector"]
 
 #: |n_k| at or above which the preferred axis e_k is too close to n and world y is used
 NEAR_AXIS = 0.9
@@ -54,16 +53,6 @@ def tangent_basis(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, np.ndarray
     x, y, z = np.asarray(n, dtype=float).reshape(3).tolist()
     t = tangent_pair(x, y, z, prefer)
     return np.array(t[:3]), np.array(t[3:])
-
-
-def tangent_basis_reference(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, np.ndarray]:
-    """The same basis built the plain way with numpy (projection, ``np.cross``): what the tests
-    compare :func:`tangent_pair` and :func:`tangent_basis` with."""
-    nv = np.asarray(n, dtype=float).reshape(3)
-    a = np.eye(3)[prefer] if abs(nv[prefer]) < NEAR_AXIS else np.eye(3)[1]
-    t1 = a - (a @ nv) * nv
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(nv, t1)
 
 
 def unit_vector(name: str, v: object) -> np.ndarray:

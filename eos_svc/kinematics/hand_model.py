@@ -157,9 +157,7 @@ class HandModel:
         limits = self._joint_limits.get(name)
         if limits is None:
             self._check_finger(name)
-            limits = tuple(
-                (int(i), float(self.lower[i]), float(self.upper[i])) for i in self._q_index[name]
-            )
+            limits = tuple((int(i), float(self.lower[i]), float(self.upper[i])) for i in self._q_index[name])
             self._joint_limits[name] = limits
         return limits
 

@@ -19,7 +19,6 @@ if TYPE_CHECKING:
 __all__ = ["HandState", "read_only"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
-_F64 = np.dtype(np.float64)
 
 
 def read_only(array: np.ndarray) -> np.ndarray:
@@ -61,7 +60,7 @@ class HandState:
         self._jac_stale = True
         # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
         # joint id, the joint placement (a live reference into data.oMi), the tip translation
-        # (a live view into data.oMf; never handed out), and a reusable point placement.
+        # (a live read-only view into data.oMf), and a reusable point placement.
         self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
         for name in hand.finger_names:
             fid = hand.tip_frame_id(name)
@@ -70,7 +69,7 @@ class HandState:
                 fid,
                 jid,
                 self.data.oMi[jid],
-                self.data.oMf[fid].translation,
+                read_only(self.data.oMf[fid].translation),
                 pin.SE3.Identity(),
             )
         # live views into data.oMf / the geometry data's oMg, made on first use (see frame_views)
@@ -89,15 +88,7 @@ class HandState:
         placements); the joint Jacobians follow on first use of a Jacobian
         (:meth:`joint_jacobians`), the geometry placements on first use of :attr:`geometry_data`."""
         hand = self.hand
-        if (  # inlined fast path of HandModel.validate_q (this is the hot path)
-            type(q) is np.ndarray
-            and q.dtype is _F64
-            and q.shape == hand._q_shape
-            and math.isfinite(sum(q.tolist()))
-        ):
-            qa = q.copy()
-        else:
-            qa = hand.validate_q(q)
+        qa = hand.validate_q(q)
         model, data = self.model, self.data
         pin.framesForwardKinematics(model, data, qa)  # data.oMi and data.oMf
         # joint Jacobians and geometry placements are computed on first use (most updates only
@@ -149,7 +140,7 @@ class HandState:
     def tip_centre_view(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m, as a live read-only view that
         follows every :meth:`update` (no copy: for loops that read it after each move)."""
-        return read_only(self._tip(finger)[3].view())
+        return self._tip(finger)[3]
 
     def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
         """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they

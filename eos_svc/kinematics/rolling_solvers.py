@@ -1,52 +1,50 @@
-"""The rolling QP's solve paths and its error.
+"""The solver runner of the rolling QP: solves a :class:`qpsolvers.Problem` built by
+:func:`~eos_svc.kinematics.rolling_problem.rolling_problem`.
 
-- :func:`min_norm_within_bounds` — closed form: the minimum-W-norm solution of the equalities
-  (LAPACK ``dgels``), taken when it meets the bounds (then it is the QP's optimum);
-- :func:`cached_osqp` — OSQP, set up once per thread for a problem structure, then updated and
-  warm-started by the caller through the extension object (no wrapper glue per call);
-- :func:`solve_with_backend` — any installed qpsolvers backend, by name.
+:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances:
+the no-slip residual is ≲ 1e-8 m/s). Its one accelerator: the problem has only equalities and box
+bounds and a diagonal ``P``, so the minimum-``P``-norm solution of the equalities
+(:func:`equality_optimum`, one Cholesky solve of a 6×6 system) is the QP's optimum whenever it
+lies within the bounds — then no backend is called. It is what nearly every step of EP1 takes
+(``benchmarks/bench_rolling.py``: with it, one EP1 run takes a few times less than with OSQP every
+step; ``tests/ep1/test_rolling.py`` checks it against qpsolvers within 1e-9 rad/s).
 
-A failed or infeasible QP raises :class:`RollingQPError` carrying a copy of the problem.
+A failed or infeasible QP raises :class:`RollingQPError`, which carries the problem.
 """
 
 from __future__ import annotations
 
-import copy
-import operator
-import threading
+import warnings
 from typing import Any
 
 import numpy as np
-import osqp
 import qpsolvers
-import scipy.sparse as sp
 from scipy.linalg import lapack
 
 from eos_svc.errors import ComputationError
 
-__all__ = [
-    "RollingQPError",
-    "available_solvers",
-    "cached_osqp",
-    "min_norm_within_bounds",
-    "solve_with_backend",
-]
+__all__ = ["BOUND_TOLERANCE", "RollingQPError", "available_solvers", "equality_optimum", "solve_rolling_qp"]
 
-_DGELS = lapack.dgels
-_LE = operator.le
-_OSQP_CACHE = threading.local()
+#: tolerance on the bounds, rad/s or m/s: the closed form is taken when it meets the bounds to it
+#: (OSQP's own tolerance below: its solutions meet the bounds only to about as much)
+BOUND_TOLERANCE = 1e-7
+
+#: settings per backend (the rest: the backend's defaults)
+BACKEND_SETTINGS: dict[str, dict[str, Any]] = {
+    "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "polishing": False, "max_iter": 20000, "raise_error": False},
+}
 
 
 def available_solvers() -> list[str]:
-    """Installed qpsolvers backends usable by the rolling QP (besides its own OSQP path)."""
+    """Installed qpsolvers backends (any of them can solve the rolling QP)."""
     return list(qpsolvers.available_solvers)
 
 
 class RollingQPError(ComputationError):
-    """The rolling QP failed (infeasible, not solved, bad output).
+    """The rolling QP failed (infeasible, not solved).
 
     Attributes:
-        problem: a copy of the :class:`qpsolvers.Problem` that failed.
+        problem: the :class:`qpsolvers.Problem` that failed.
         solver: backend name; ``status``: the backend's status text.
     """
 
@@ -57,113 +55,41 @@ class RollingQPError(ComputationError):
         self.status = status
 
 
-def min_norm_within_bounds(
-    C: np.ndarray,
-    b_ext: np.ndarray,
-    wscale: np.ndarray | None,
-    Cw: np.ndarray,
-    lb_tol: list[float],
-    ub_tol: list[float],
-) -> tuple[np.ndarray, list[float]] | None:
-    """The closed-form solve path: the minimum-W-norm solution of the equalities ``C q̇ = b``
-    (one LAPACK ``dgels``), when it lies within the bounds — it is then the QP's optimum (the
-    bounds are inactive); else None (a bound active, a rank-deficient or over-determined
-    system: the caller asks a QP backend).
-
-    Args:
-        C: the 6×nx equality rows. b_ext: ``b`` followed by ``nx − 6`` ignored entries (dgels
-            wants max(6, nx) rows). wscale: ``W^-1/2`` (diagonal, as a vector) or None for
-            W = I; Cw: a 6×nx buffer for ``C W^-1/2``. lb_tol, ub_tol: the bounds widened by
-            the solver tolerance, as floats.
-
-    Returns:
-        The solution as an array and as floats.
-    """
-    if C.shape[1] < 6:
-        return None  # over-determined equalities: the backend decides
-    if wscale is None:
-        A = C
-    else:
-        A = Cw
-        np.multiply(C, wscale, out=A)
-    _, x, info = _DGELS(A, b_ext)
+def equality_optimum(problem: qpsolvers.Problem, tolerance: float = BOUND_TOLERANCE) -> np.ndarray | None:
+    """``argmin ½ xᵀ P x`` subject to ``A x = b`` (P diagonal), ``x = P⁻¹Aᵀ (A P⁻¹ Aᵀ)⁻¹ b``, when it
+    lies within ``[lb − tolerance, ub + tolerance]``: it is then the optimum of the whole QP (no bound
+    is active). None when a bound would be violated or ``A`` has not full row rank."""
+    A, b, lb, ub = problem.A, problem.b, problem.lb, problem.ub
+    assert A is not None and b is not None and lb is not None and ub is not None
+    A_scaled = A / problem.P.diagonal()  # A P⁻¹
+    _, y, info = lapack.dposv(A_scaled @ A.T, b)
     if info != 0:
-        return None  # rank-deficient
-    # dgels' solution has max(6, nx) = nx rows; x = W^-1/2 z with z the minimum-norm solution
-    if wscale is not None:
-        x = x * wscale
-    xs: list[float] = x.tolist()
-    # Taken when within the bounds to OSQP's own tolerance eps (lb_tol = lb − eps, ub_tol =
-    # ub + eps): OSQP's solutions meet the bounds only to ≈ eps·(1 + |q̇|) too (rolling at the
-    # wrist's velocity limit puts the unconstrained optimum a few 1e-8 rad/s beyond it; OSQP
-    # returns a point within ~1e-6 of the unconstrained optimum there, while clamping exactly
-    # would move the finger by ~1e-3 rad/s — the problem is nearly degenerate in that direction).
-    # lo <= x_i <= hi for every i (False on NaN), the loop in C
-    if all(map(_LE, lb_tol, xs)) and all(map(_LE, xs, ub_tol)):
-        return x, xs
-    return None
+        return None
+    x: np.ndarray = A_scaled.T @ y
+    # the smallest slack to either bound, ≥ −tolerance (False on NaN)
+    return x if np.minimum(x - lb, ub - x).min() >= -tolerance else None
 
 
-def solve_with_backend(problem: qpsolvers.Problem, solver: str) -> tuple[np.ndarray, int]:
-    """The generic solve path: any installed qpsolvers backend on the problem; (x, 0).
+def solve_rolling_qp(
+    problem: qpsolvers.Problem, solver: str = "osqp", closed_form: bool = True
+) -> tuple[np.ndarray, bool]:
+    """The joint velocities that solve ``problem``, and whether the closed form gave them:
+    :func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
+    backend ``solver``.
 
     Raises:
-        RollingQPError: no finite solution (with a copy of the problem).
+        RollingQPError: the bounds are inconsistent or the backend finds no finite solution.
     """
-    sol = qpsolvers.solve_problem(problem, solver=solver)
-    if not sol.found or sol.x is None or not np.all(np.isfinite(sol.x)):
-        raise RollingQPError(
-            "no solution found", copy.deepcopy(problem), solver, str(sol.extras or "not found")
-        )
-    return sol.x, 0
-
-
-def cached_osqp(
-    nx: int,
-    eps: float,
-    check_termination: int,
-    P: np.ndarray,
-    qlin: np.ndarray,
-    Ax: np.ndarray,
-    lower: np.ndarray,
-    upper: np.ndarray,
-) -> tuple[Any, Any]:
-    """The OSQP solve path: an OSQP solver for a rolling QP's structure, set up once per thread
-    and reused; returns (the ``osqp.OSQP`` object, its extension object).
-
-    Every rolling QP with ``nx`` variables has the same sparsity ([C; I], C dense 6×nx;
-    P diagonal), so one set-up serves every roll of every EP1 run; the caller then
-    overwrites all the data (q, l, u, P, A). Thread-local: OSQP objects are not shared
-    between threads (the service plans concurrently).
-    """
-    key = (nx, eps, check_termination)
-    cache: dict = getattr(_OSQP_CACHE, "solvers", None) or {}
-    _OSQP_CACHE.solvers = cache
-    if key not in cache:
-        # column j of [C; I] holds rows 0..5 (C) and 6 + j (the bound row), in this order
-        indices = np.concatenate([np.r_[0:6, 6 + j] for j in range(nx)]).astype(np.int32)
-        A = sp.csc_matrix((Ax.copy(), indices, np.arange(0, 7 * nx + 1, 7)), shape=(6 + nx, nx))
-        s = osqp.OSQP(algebra="builtin")  # naming it skips a per-object import probe (~1 ms)
-        s.setup(
-            sp.csc_matrix(np.triu(P)),
-            qlin,
-            A,
-            lower,
-            upper,
-            eps_abs=eps,
-            eps_rel=eps,
-            eps_prim_inf=1e-12,
-            eps_dual_inf=1e-12,
-            warm_starting=True,
-            polishing=False,
-            verbose=False,
-            max_iter=20000,
-            check_termination=check_termination,
-            scaling=0,  # small, well-scaled problem: no re-scaling on every update
-            adaptive_rho=False,
-            rho=0.05,
-        )
-        # The extension object behind osqp.OSQP: update/solve without the wrapper's
-        # per-call Python glue (np.maximum on l/u, derivative cache, info namespace).
-        cache[key] = (s, s._solver)
-    return cache[key]
+    if closed_form:
+        x = equality_optimum(problem)
+        if x is not None:
+            return x, True
+    if problem.lb is not None and problem.ub is not None and (problem.lb > problem.ub).any():
+        raise RollingQPError("joint limits leave no feasible velocity", problem, solver, "infeasible bounds")
+    with warnings.catch_warnings():  # dense matrices converted for OSQP; OSQP's own status warning
+        warnings.simplefilter("ignore")
+        sol = qpsolvers.solve_problem(problem, solver=solver, **BACKEND_SETTINGS.get(solver, {}))
+    if not sol.found or sol.x is None or not np.isfinite(sol.x).all():
+        status = getattr(sol.extras.get("info"), "status", "not found")
+        raise RollingQPError("no solution found", problem, solver, str(status))
+    return sol.x, False

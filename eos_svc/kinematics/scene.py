@@ -17,8 +17,7 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from ._slots import slot_setters
-from .hand import HandModel, HandState, KinematicsError
+from .hand import HandModel, HandState, KinematicsError, UnknownNameError
 from .objects import SurfaceObject
 
 __all__ = ["Contact", "Scene"]
@@ -41,27 +40,6 @@ class Contact:
     point_tip: np.ndarray
     point_object: np.ndarray
     normal: np.ndarray
-
-
-_new = object.__new__
-_SET_FINGER, _SET_DISTANCE, _SET_POINT_TIP, _SET_POINT_OBJECT, _SET_NORMAL = slot_setters(
-    Contact, "finger", "distance", "point_tip", "point_object", "normal"
-)
-
-
-def _fast_contact(
-    finger: str, distance: float, point_tip: np.ndarray, point_object: np.ndarray,
-    normal: np.ndarray,
-) -> Contact:
-    """Contact(...) without the frozen dataclass __init__ (which costs ~2 µs): fills the slots
-    directly. The instance is still frozen for its users."""
-    c: Contact = _new(Contact)
-    _SET_FINGER(c, finger)
-    _SET_DISTANCE(c, distance)
-    _SET_POINT_TIP(c, point_tip)
-    _SET_POINT_OBJECT(c, point_object)
-    _SET_NORMAL(c, normal)
-    return c
 
 
 class Scene:
@@ -93,21 +71,12 @@ class Scene:
         self._tf_tip = coal.Transform3s()
         self._point = coal.Sphere(1e-9)  # a point probe for point_gap
         self._tf_point = coal.Transform3s()
-        # coal distance functors (object–point probe; object–hand geometry by id, made on first
-        # use): the query coal.distance makes, without its per-call dispatch (≈ 2 µs a query)
-        self._point_distance = coal.ComputeDistance(self._obj_geom, self._point)
-        self._gap_distance: dict[int, coal.ComputeDistance] = {}
-        self._tip_gmodel: pin.GeometryModel | None = None  # built by the first tip_contacts
-        self._tip_model_tried = False
         self.set_object_placement(obj.placement)
         # the hand's collision shapes by geometry id (reading them through the geometry model's
         # vector from Python costs ~3 µs a query)
         self._hand_shapes = [go.geometry for go in hand.collision_model.geometryObjects]
-        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere), and
-        # a coal distance functor object–tip (cheaper per call than coal.distance; it holds
-        # raw pointers to both shapes, which self._tips and self.object keep alive).
+        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere)
         self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
-        self._functors: dict[str, coal.ComputeDistance] = {}
         for name in hand.finger_names:
             gid = hand.tip_geometry_id(name)
             r = hand.tip_radius(name)
@@ -115,44 +84,6 @@ class Scene:
             is_sphere = geom is None or isinstance(geom, coal.Sphere)
             shape = geom if geom is not None else coal.Sphere(r)
             self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
-            self._functors[name] = coal.ComputeDistance(self._obj_geom, shape)
-
-    def _build_tip_model(self) -> None:
-        """Every sphere fingertip against the object in one Pinocchio call: a GeometryModel of
-        the tips and the object (on the universe joint), one (object, tip) collision pair per
-        finger, so that ``pin.computeDistances`` runs all the coal queries (see
-        :meth:`tip_contacts`). Built on first use (≈ 0.2 ms); not when a fingertip is not a
-        sphere."""
-        self._tip_model_tried = True
-        hand = self.hand
-        if not all(self._tips[f][3] for f in hand.finger_names):
-            return
-        gm = pin.GeometryModel()
-        for name in hand.finger_names:
-            fid, _, shape, _ = self._tips[name]
-            gid = hand.tip_geometry_id(name)
-            if gid is not None:
-                go = hand.collision_model.geometryObjects[gid]
-                joint, frame, placement = go.parentJoint, go.parentFrame, go.placement
-            else:  # the tip sphere is centred on the tip frame
-                f = hand.model.frames[fid]
-                joint, frame, placement = f.parentJoint, fid, f.placement
-            gm.addGeometryObject(pin.GeometryObject(f"{name}_tip", joint, frame, placement, shape))
-        self._obj_gid = gm.addGeometryObject(
-            pin.GeometryObject("object", 0, 0, pin.SE3(self.object.placement), self._obj_geom)
-        )
-        for k in range(len(hand.finger_names)):
-            gm.addCollisionPair(pin.CollisionPair(self._obj_gid, k))
-        gd = pin.GeometryData(gm)
-        for req in gd.distanceRequests:
-            req.enable_signed_distance = True
-            req.gjk_tolerance = self._req.gjk_tolerance
-        self._tip_gmodel, self._tip_gdata = gm, gd
-        # per finger: name, radius, and its DistanceResult (a reference into the GeometryData)
-        self._tip_batch = [
-            (name, self._tips[name][1], gd.distanceResults[k])
-            for k, name in enumerate(hand.finger_names)
-        ]
 
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
@@ -162,40 +93,29 @@ class Scene:
             np.asarray(placement.rotation, dtype=float),
             np.asarray(placement.translation, dtype=float),
         )
-        if self._tip_gmodel is not None:
-            self._tip_gmodel.geometryObjects[self._obj_gid].placement = pin.SE3(placement)
 
     def contact(self, state: HandState, finger: str) -> Contact:
         """Closest points between finger ``finger``'s tip and the object."""
-        try:
-            _, r, shape, is_sphere = self._tips[finger]
-        except KeyError:
-            from .hand import UnknownNameError
-
-            raise UnknownNameError(
-                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
-            ) from None
+        if finger not in self._tips:
+            raise UnknownNameError("finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}")
+        _, r, shape, is_sphere = self._tips[finger]
         res = self._res
         res.clear()
         if is_sphere:
-            c = state._tips[finger][3]  # live view of the tip centre (world)
+            c = state.tip_centre_view(finger)  # the tip centre (world)
             if self.exact_tips:
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             self._tf_tip.setTranslation(c)
-            self._functors[finger](self._tf_obj, self._tf_tip, self._req, res)
+            coal.distance(self._obj_geom, self._tf_obj, shape, self._tf_tip, self._req, res)
             d = res.min_distance
             if d < 0.0:  # penetration: coal's EPA / sphere-cylinder depth is approximate
                 return self._analytic_sphere_contact(finger, c.copy(), r)
             # coal's sphere–primitive witnesses and normal (object → tip) are exact for the
             # sphere, box, capsule and cylinder; GJK-accurate (~µm) for the ellipsoid.
-            return _fast_contact(
-                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-            )
+            return Contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None
-        coal.distance(
-            self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res
-        )
+        coal.distance(self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res)
         return Contact(
             finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
         )
@@ -212,41 +132,14 @@ class Scene:
         return Contact(finger, sd - r, c - r * n, p_obj, n)
 
     def tip_contacts(self, state: HandState) -> tuple[Contact, ...]:
-        """:meth:`contact` of every finger, in ``hand.finger_names`` order (world frame, m):
-        signed distance, witness points on the tip and the object, normal object → tip.
-
-        One ``pin.updateGeometryPlacements`` + ``pin.computeDistances`` over (object, tip)
-        collision pairs instead of one coal query per finger: the same coal algorithms, so the
-        same contacts (exactly for sphere, box, cylinder and capsule objects; the ellipsoid's GJK
-        witness within µm), except that the tip sphere sits at its collision geometry's
-        placement, which :class:`HandModel` checks to be the tip frame within 1e-6 m.
-        Penetrating tips take the exact analytic path, as in :meth:`contact`. The first call
-        builds the tips' geometry model (≈ 0.2 ms). With ``exact_tips`` or a non-sphere
-        fingertip it is :meth:`contact` per finger. Every returned array is the contact's own.
+        """:meth:`contact` of every finger, in ``hand.finger_names`` order.
 
         Raises:
             KinematicsError: ``state`` belongs to another hand model.
         """
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
-        gm = self._tip_gmodel
-        if gm is None or self.exact_tips:
-            if not (self._tip_model_tried or self.exact_tips):
-                self._build_tip_model()
-                return self.tip_contacts(state)
-            return tuple(self.contact(state, f) for f in self.hand.finger_names)
-        gd = self._tip_gdata
-        pin.updateGeometryPlacements(self.hand.model, state.data, gm, gd)
-        pin.computeDistances(gm, gd)
-        return tuple(
-            _fast_contact(
-                finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-            )
-            if (d := res.min_distance) >= 0.0
-            # penetration: the exact contact, as in contact()
-            else self._analytic_sphere_contact(finger, state._tips[finger][3].copy(), r)
-            for finger, r, res in self._tip_batch
-        )
+        return tuple(self.contact(state, f) for f in self.hand.finger_names)
 
     def contacts(self, state: HandState) -> dict[str, Contact]:
         """:meth:`contact` for every finger."""
@@ -261,12 +154,11 @@ class Scene:
     def gap(self, state: HandState, gid: int) -> float:
         """Signed distance (m) between hand collision geometry ``gid`` and the object, without
         witness points (the cheap query for guarded motions)."""
-        functor = self._gap_distance.get(gid)
-        if functor is None:
-            functor = self._gap_distance[gid] = coal.ComputeDistance(self._obj_geom, self._hand_shapes[gid])
         res = self._res
         res.clear()
-        functor(self._tf_obj, state.geometry_data.oMg[gid], self._req, res)
+        coal.distance(
+            self._obj_geom, self._tf_obj, self._hand_shapes[gid], state.geometry_data.oMg[gid], self._req, res
+        )
         return float(res.min_distance)
 
     def point_gap(self, point: np.ndarray) -> float:
@@ -274,7 +166,7 @@ class Scene:
         self._tf_point.setTranslation(np.asarray(point, dtype=float))
         res = self._res
         res.clear()
-        self._point_distance(self._tf_obj, self._tf_point, self._req, res)
+        coal.distance(self._obj_geom, self._tf_obj, self._point, self._tf_point, self._req, res)
         return float(res.min_distance)
 
     def _geometry_distance(self, state: HandState, gid: int) -> Contact:

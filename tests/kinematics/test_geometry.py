@@ -6,7 +6,17 @@ import numpy as np
 import pytest
 
 from eos_svc.errors import ValidationError
-from eos_svc.kinematics.geometry import tangent_basis, tangent_basis_reference, tangent_pair
+from eos_svc.kinematics.geometry import NEAR_AXIS, tangent_basis, tangent_pair
+
+
+def tangent_basis_reference(n, prefer: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    """The same basis built the plain way with numpy (projection, ``np.cross``): what the tests
+    compare :func:`tangent_pair` and :func:`tangent_basis` with."""
+    nv = np.asarray(n, dtype=float).reshape(3)
+    a = np.eye(3)[prefer] if abs(nv[prefer]) < NEAR_AXIS else np.eye(3)[1]
+    t1 = a - (a @ nv) * nv
+    t1 /= np.linalg.norm(t1)
+    return t1, np.cross(nv, t1)
 
 
 def _normals(seed: int, count: int) -> np.ndarray:

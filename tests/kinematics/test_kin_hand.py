@@ -29,8 +29,9 @@ from eos_svc.kinematics import (
 RandQ = Callable[..., np.ndarray]
 
 
-def _fd_point_jacobian(hand: HandModel, q: np.ndarray, finger: str, p_world: np.ndarray,
-                       eps: float = 1e-6) -> np.ndarray:
+def _fd_point_jacobian(
+    hand: HandModel, q: np.ndarray, finger: str, p_world: np.ndarray, eps: float = 1e-6
+) -> np.ndarray:
     st = hand.state(q)
     p_local = st.tip_placement(finger).actInv(p_world)
     J = np.zeros((3, hand.nv))
@@ -47,8 +48,7 @@ def _fd_point_jacobian(hand: HandModel, q: np.ndarray, finger: str, p_world: np.
     return J
 
 
-def _fd_angular_jacobian(hand: HandModel, q: np.ndarray, finger: str,
-                         eps: float = 1e-6) -> np.ndarray:
+def _fd_angular_jacobian(hand: HandModel, q: np.ndarray, finger: str, eps: float = 1e-6) -> np.ndarray:
     st = hand.state(q)
     J = np.zeros((3, hand.nv))
     for i in range(hand.nv):
@@ -328,9 +328,7 @@ def test_allegro_second_hand(allegro: HandModel) -> None:
 
 @settings(max_examples=60, deadline=None)
 @given(
-    st_q=hyp_st.lists(
-        hyp_st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=0, max_size=17
-    )
+    st_q=hyp_st.lists(hyp_st.floats(allow_nan=True, allow_infinity=True, width=64), min_size=0, max_size=17)
 )
 def test_validate_q_fuzz(hand: HandModel, st_q: list[float]) -> None:
     """Any list either validates (15 finite numbers) or raises ConfigurationError."""

@@ -16,8 +16,11 @@ def _first_touch(hand: HandModel, scene: Scene, finger: str) -> float | None:
     touches, provided no other part of that finger or the palm touches."""
     st = hand.state()
     idx = hand.finger_q_index(finger)
-    others = [g.name for g in hand.collision_model.geometryObjects
-              if g.name.startswith(finger) and "tip" not in g.name] + ["palm_0"]
+    others = [
+        g.name
+        for g in hand.collision_model.geometryObjects
+        if g.name.startswith(finger) and "tip" not in g.name
+    ] + ["palm_0"]
     for th in np.arange(0.0, 1.8, 0.01):
         q = hand.neutral()
         q[idx] = th

@@ -53,9 +53,7 @@ def _random_placement(rng: np.random.Generator, near: np.ndarray) -> pin.SE3:
 
 
 @pytest.mark.parametrize("shape", list(SHAPES))
-def test_fingertip_distance_and_witnesses(
-    shape: str, hand: HandModel, random_q: RandQ
-) -> None:
+def test_fingertip_distance_and_witnesses(shape: str, hand: HandModel, random_q: RandQ) -> None:
     make, sd = SHAPES[shape]
     obj = make()
     scene = Scene(hand, obj)

@@ -110,33 +110,3 @@ def test_bad_parameters(hand: HandModel) -> None:
     bad = type(con)("finger7", con.distance, con.point_tip, con.point_object, con.normal)
     with pytest.raises(UnknownNameError, match="finger7"):
         TactileSensor().read(st, bad)
-
-
-@pytest.mark.parametrize(("noise", "pitch"), [(0.0, None), (2e-4, None), (2e-4, 5e-4), (0.0, 1e-3)])
-def test_read_is_its_plain_numpy_form_bit_for_bit(hand: HandModel, noise: float, pitch: float | None) -> None:
-    """read (float arithmetic on the 3-vectors) gives read_reference's reading (the plain numpy
-    form), bit for bit, with the same random draws: random poses, fingers, objects and gaps
-    (touching, apart, penetrating) and a degenerate contact at the tip's centre."""
-    rng = np.random.default_rng(11)
-    fast, plain = TactileSensor(noise, pitch, rng=4), TactileSensor(noise, pitch, rng=4)
-    lo, hi = hand.lower.copy(), hand.upper.copy()
-    lo[~np.isfinite(lo)], hi[~np.isfinite(hi)] = -1.0, 1.0
-    for k in range(60):
-        st = hand.state(rng.uniform(lo, hi))
-        finger = hand.finger_names[k % len(hand.finger_names)]
-        c = st.tip_position(finger)
-        d = rng.normal(size=3)
-        d /= np.linalg.norm(d)
-        radius = rng.uniform(0.01, 0.05)
-        gap = rng.choice([0.0, 5e-5, 3e-3, -2e-3])
-        scene = Scene(hand, Sphere(radius, pin.SE3(np.eye(3), c + (0.01 + radius + gap) * d)))
-        contact = scene.contact(st, finger)
-        if k == 59:  # degenerate: the contact point at the tip's centre
-            from dataclasses import replace
-
-            contact = replace(contact, point_tip=c.copy(), distance=0.0)
-        a, b = fast.read(st, contact), plain.read_reference(st, contact)
-        assert a.point_tip.tolist() == b.point_tip.tolist()
-        assert a.normal_tip.tolist() == b.normal_tip.tolist()
-        assert (a.in_contact, a.distance, a.finger) == (b.in_contact, b.distance, b.finger)
-    assert fast.rng.random() == plain.rng.random()  # the same draws consumed

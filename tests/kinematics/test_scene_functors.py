@@ -1,5 +1,6 @@
-"""``Scene.gap`` and ``Scene.point_gap`` query coal through distance functors: the distances of
-``coal.distance`` itself, bit for bit, for every object shape, in any order of queries."""
+"""``Scene.gap`` and ``Scene.point_gap`` give the distances of a fresh ``coal.distance`` query, bit
+for bit, for every object shape, in any order of queries (the scene's reused request, result and
+transforms keep nothing from one query to the next)."""
 
 from __future__ import annotations
 
@@ -46,8 +47,11 @@ def test_functor_gaps_are_coal_distance_bit_for_bit(obj, hand_name, hand):
         q[wrist[:3]] = rng.uniform([-0.05, -0.06, -0.06], [0.1, 0.06, 0.06])
         state.update(q)
         for gid in rng.permutation(n_geoms).tolist():  # any order: no state kept between queries
-            plain = _plain_distance(scene, hand.collision_model.geometryObjects[gid].geometry,
-                                    coal.Transform3s(state.geometry_data.oMg[gid]))
+            plain = _plain_distance(
+                scene,
+                hand.collision_model.geometryObjects[gid].geometry,
+                coal.Transform3s(state.geometry_data.oMg[gid]),
+            )
             assert scene.gap(state, gid) == plain
             signs.add(plain < 0.0)
         for point in rng.uniform([0.0, -0.1, -0.1], [0.25, 0.1, 0.1], (10, 3)):
