@@ -17,9 +17,10 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from eos_svc.objects import SurfaceObject
+
 from ._slots import slot_setters
 from .hand import HandModel, HandState, KinematicsError
-from .objects import SurfaceObject
 
 __all__ = ["Contact", "Scene"]
 
