@@ -11,7 +11,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: run test test-all lint format docs bench clean chromium kernels
+.PHONY: run test test-all lint format docs bench clean chromium
 
 $(STAMP): pyproject.toml setup.py
 	$(PYTHON) -m venv $(VENV)
@@ -22,10 +22,7 @@ $(STAMP): pyproject.toml setup.py
 run: $(STAMP)
 	$(VENV)/bin/eos plan
 
-# kernels: the shape fit's numba kernels compiled once into numba's on-disk cache (≈ 11 s on a new
-# install), so that the services and experiments the tests start load them instead of each
-# compiling them at once
-test: $(STAMP) chromium kernels
+test: $(STAMP) chromium
 	$(PY) -m pytest -q
 
 # Headless Chromium for the 3-D view's browser tests (tests/view): installed with apt-get when
@@ -40,10 +37,7 @@ chromium:
 		echo "chromium is missing and cannot be installed here (needs root and apt-get): the browser tests will be skipped"; \
 	fi
 
-kernels: $(STAMP)
-	$(PY) -c "from eos_svc.shape import kernels; kernels.load()"
-
-test-all: $(STAMP) chromium kernels
+test-all: $(STAMP) chromium
 	$(PY) -m pytest -q -m "slow or not slow"
 
 # lint: ruff's rules, ruff's formatting (checked, not applied: `make format` applies it) and mypy

@@ -1,139 +1,127 @@
 """The shape fit: ``select_class`` on the touches of real plans, this tree against a baseline.
 
-    .venv/bin/python benchmarks/bench_shape.py [--baseline ddccb46] [--all] [--rounds 40]
+    .venv/bin/python benchmarks/bench_shape.py --baseline-tree ../base [--rounds 15] [--kernels]
 
-Runs the default plan (``plan(PlanRequest())``; with ``--all`` also an ellipsoid, a cylinder,
-a capsule and a box plan) and keeps the touches its post_shape fitted last. Then
-``select_class`` on those touches with this tree's ``eos_svc.shape`` and with the package as it
-is at git revision ``--baseline`` (default ``ddccb46``, before the fit's evaluations were fused
-and its kernels thinned), imported in the same process under a private name and timed in
-alternating rounds (the machine's load changes within a run): the median of each and the
-median of the per-round ratios. The two postulates are compared first: class, confidence,
-posteriors and every class's χ², bit for bit. This tree's compiled kernels
-(``eos_svc.shape.compiled``) are warmed up first — compiled, or loaded from numba's on-disk
-cache — and the time that took is printed; nothing compiles inside the timed rounds.
+Plans the grasp experiment's fixed suite (seed 1) and keeps every set of touches post_shape
+fitted. Then times ``select_class`` over all of them, here and in a child process running the
+baseline checkout's own interpreter (``<tree>/.venv/bin/python``), in alternating rounds (the
+machine's load changes within a run): the median of each and the median of the per-round
+ratios. ``--kernels``: the baseline loads its compiled fit kernels first, where it has them.
+The postulates are compared too: the same class on every set of touches, and the largest
+difference in confidence.
 """
 
 from __future__ import annotations
 
 import argparse
-import atexit
-import importlib
-import re
-import shutil
+import pickle
 import statistics
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
-from types import ModuleType
-from typing import Any
-
-import numpy as np
 
 import eos_svc.agents.post_shape as post_shape
-from eos_svc import shape
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.shape import compiled
+from eos_svc.experiments.grasp_suite import fixed_suite
+from eos_svc.shape import Touches, select_class
 
-ROOT = Path(__file__).resolve().parents[1]
-ACROSS = [1.5707963267948966, 0.0, 0.0]  # a cylinder or capsule lying across the approach
-
-#: (label, request JSON): the default plan, then one plan per other class
-PLANS: list[tuple[str, dict[str, Any]]] = [
-    ("default (sphere)", {}),
-    ("ellipsoid", {"seed": 1, "object": {"shape": "ellipsoid", "radii": [0.035, 0.03, 0.025]}}),
-    ("cylinder", {"seed": 3, "object": {"shape": "cylinder", "radius": 0.02, "length": 0.08, "rpy": ACROSS}}),
-    ("capsule", {"seed": 2, "object": {"shape": "capsule", "radius": 0.028, "length": 0.04, "rpy": ACROSS}}),
-    ("box", {"seed": 5, "object": {"shape": "box", "size": [0.05, 0.06, 0.04]}}),
-]
-
-
-def load_shape(rev: str) -> ModuleType:
-    """``eos_svc.shape`` of git revision ``rev``, imported as a private package (its own
-    imports of ``eos_svc.shape`` rewritten to that name)."""
-    listing = subprocess.run(
-        ["git", "-C", str(ROOT), "ls-tree", "--name-only", rev, "eos_svc/shape/"],
-        capture_output=True, text=True, check=True,
-    ).stdout.split()
-    tmp = Path(tempfile.mkdtemp(prefix="eos_baseline_shape_"))
-    atexit.register(shutil.rmtree, tmp, True)
-    name = "eos_baseline_shape_" + re.sub(r"\W", "_", rev)
-    pkg = tmp / name
-    pkg.mkdir()
-    for f in listing:
-        if f.endswith(".py"):
-            text = subprocess.run(
-                ["git", "-C", str(ROOT), "show", f"{rev}:{f}"], capture_output=True, text=True, check=True
-            ).stdout
-            (pkg / Path(f).name).write_text(text.replace("eos_svc.shape", name))
-    sys.path.insert(0, str(tmp))
-    return importlib.import_module(name)
-
-
-def captured_touches(request: dict[str, Any]) -> dict[str, np.ndarray | float]:
-    """The arguments of the Touches post_shape fitted last in the plan of ``request``."""
-    seen: list[shape.Touches] = []
-    original = post_shape.select_class
-
-    def recording(touches: shape.Touches, *args: Any, **kwargs: Any) -> shape.Postulate:
-        seen.append(touches)
-        return original(touches, *args, **kwargs)
-
-    post_shape.select_class = recording  # type: ignore[assignment]
+#: the timing loop, run in this tree and in the baseline's: reads the touches, answers each
+#: "time" line with the seconds one pass over them took, "result" with the postulates
+CHILD = """
+import pickle, sys, time
+if sys.argv[2] == "kernels":
     try:
-        plan(PlanRequest.from_dict({**request, "deadline_s": None}))
+        from eos_svc.shape import kernels
+        kernels.load()
+    except ImportError:
+        pass
+from eos_svc.shape import Touches, select_class
+touches = [Touches(*a) for a in pickle.load(open(sys.argv[1], "rb"))]
+for line in sys.stdin:
+    if line.strip() == "time":
+        t0 = time.perf_counter()
+        for t in touches:
+            select_class(t)
+        print(time.perf_counter() - t0, flush=True)
+    else:
+        print([(p.kind, p.confidence) for p in map(select_class, touches)], flush=True)
+"""
+
+
+def suite_touches() -> list[Touches]:
+    """Every set of touches post_shape fitted while planning the fixed suite (seed 1)."""
+    seen: list[Touches] = []
+    fit = post_shape.select_class
+
+    def keep(touches: Touches) -> object:
+        seen.append(touches)
+        return fit(touches)
+
+    post_shape.select_class = keep  # type: ignore[assignment]
+    try:
+        for item in fixed_suite():
+            plan(PlanRequest(obj=item.spec, seed=1), keep_trace=False)
     finally:
-        post_shape.select_class = original
-    if not seen:
-        raise SystemExit(f"the plan {request} fitted no touches")
-    t = seen[-1]
-    return {"centres": t.centres, "normals": t.normals, "radii": t.radii, "free": t.free,
-            "free_radii": t.free_radii, "tactile_noise": t.tactile_noise,
-            "contact_tolerance": t.contact_tolerance}
+        post_shape.select_class = fit  # type: ignore[assignment]
+    return seen
 
 
-def fingerprint(post: Any) -> tuple[Any, ...]:
-    """What a postulate says, to compare bit for bit."""
-    return (post.kind, post.confidence, tuple(sorted(post.probabilities.items())),
-            tuple((k, f.chi2, f.start, f.theta.tobytes()) for k, f in sorted(post.fits.items())))
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--baseline-tree", type=Path, required=True, help="a checkout with its own .venv")
+    parser.add_argument("--rounds", type=int, default=15)
+    parser.add_argument("--kernels", action="store_true", help="the baseline loads its compiled kernels")
+    args = parser.parse_args()
+    touches = suite_touches()
+    with tempfile.NamedTemporaryFile(suffix=".pkl", delete=False) as f:
+        pickle.dump(
+            [
+                (t.centres, t.normals, t.radii, t.free, t.free_radii, t.tactile_noise, t.contact_tolerance)
+                for t in touches
+            ],
+            f,
+        )
+    tree = args.baseline_tree.resolve()
+    child = subprocess.Popen(
+        [str(tree / ".venv/bin/python"), "-c", CHILD, f.name, "kernels" if args.kernels else "numpy"],
+        cwd=tree,
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
+    )
+    assert child.stdin is not None and child.stdout is not None
 
+    def baseline(command: str) -> str:
+        child.stdin.write(command + "\n")  # type: ignore[union-attr]
+        child.stdin.flush()  # type: ignore[union-attr]
+        return child.stdout.readline()  # type: ignore[union-attr]
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--baseline", default="ddccb46", help="git revision to compare with (ddccb46)")
-    parser.add_argument("--all", action="store_true", help="also the other classes' plans")
-    parser.add_argument("--rounds", type=int, default=40, help="alternating rounds per plan (40)")
-    args = parser.parse_args(argv)
-    t0 = time.perf_counter()
-    compiled.warm_up()
-    print(f"compiled kernels: warm_up {time.perf_counter() - t0:.2f} s (compiled, or loaded from the cache)")
-    old = load_shape(args.baseline)
-    print(f"select_class: this tree against {args.baseline}, {args.rounds} alternating rounds each")
-    print(f"{'plan':18s} {'contacts':>8s} {args.baseline:>10s} {'this tree':>10s} {'ratio':>7s}  postulate")
-    for label, request in PLANS if args.all else PLANS[:1]:
-        kwargs = captured_touches(request)
-        new_touches, old_touches = shape.Touches(**kwargs), old.Touches(**kwargs)
-        new_post, old_post = shape.select_class(new_touches), old.select_class(old_touches)
-        same = "identical" if fingerprint(new_post) == fingerprint(old_post) else "DIFFERS"
-        for _ in range(2):  # warm-up
-            shape.select_class(new_touches)
-            old.select_class(old_touches)
-        before, after, ratios = [], [], []
-        for _ in range(args.rounds):
-            t0 = time.perf_counter()
-            old.select_class(old_touches)
-            t1 = time.perf_counter()
-            shape.select_class(new_touches)
-            t2 = time.perf_counter()
-            before.append(t1 - t0)
-            after.append(t2 - t1)
-            ratios.append((t2 - t1) / (t1 - t0))
-        print(f"{label:18s} {new_touches.count:8d} {statistics.median(before) * 1e3:7.2f} ms "
-              f"{statistics.median(after) * 1e3:7.2f} ms {statistics.median(ratios):6.3f}x  "
-              f"{new_post.kind} ({same})")
-    return 0
+    ours_post = [select_class(t) for t in touches]
+    theirs = eval(baseline("result"))  # a list of (class, confidence) pairs
+    same = sum(p.kind == k for p, (k, _) in zip(ours_post, theirs, strict=True))
+    worst = max(abs(p.confidence - c) for p, (_, c) in zip(ours_post, theirs, strict=True))
+    ours_t, base_t = [], []
+    for _ in range(args.rounds):
+        t0 = time.perf_counter()
+        for t in touches:
+            select_class(t)
+        ours_t.append(time.perf_counter() - t0)
+        base_t.append(float(baseline("time")))
+    child.stdin.close()
+    child.wait()
+    Path(f.name).unlink()
+    ratio = statistics.median(a / b for a, b in zip(ours_t, base_t, strict=True))
+    print(
+        f"{len(touches)} sets of touches from {len(fixed_suite())} plans; same class {same}/{len(touches)}, "
+        f"largest confidence difference {worst:.3f}"
+    )
+    print(
+        f"select_class over all: this tree {1000 * statistics.median(ours_t):.1f} ms, baseline "
+        f"{1000 * statistics.median(base_t):.1f} ms ({'kernels' if args.kernels else 'numpy'}), "
+        f"median ratio {ratio:.2f}"
+    )
 
 
 if __name__ == "__main__":

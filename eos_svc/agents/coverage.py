@@ -43,7 +43,7 @@ import numpy as np
 
 if TYPE_CHECKING:
     from eos_svc.agents.world_parameters import WorldParameters
-    from eos_svc.kinematics import SurfaceObject
+    from eos_svc.objects import SurfaceObject
 
 
 def coverage_spacing(params: WorldParameters) -> float:

@@ -35,8 +35,8 @@ from eos_svc.agents.search import search_move, search_rating
 from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
-from eos_svc.kinematics import SurfaceObject
 from eos_svc.kinematics.norms import vector_norm
+from eos_svc.objects import SurfaceObject
 
 #: finger states that end a finger's part in the grasp
 DONE_STATES = frozenset({"touching", "missed", "link"})

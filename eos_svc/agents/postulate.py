@@ -20,7 +20,7 @@ import numpy as np
 import pinocchio as pin
 
 from eos_svc.agents.request import ObjectSpec
-from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:

@@ -41,18 +41,10 @@ import numpy as np
 from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.sweeps import FingerSweep
 from eos_svc.agents.world_parameters import WorldParameters
-from eos_svc.kinematics import (
-    Box,
-    Capsule,
-    Cylinder,
-    Ellipsoid,
-    HandModel,
-    Scene,
-    Sphere,
-    SurfaceObject,
-)
+from eos_svc.kinematics import HandModel, Scene
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table
 from eos_svc.kinematics.norms import row_norms, vector_norm
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4

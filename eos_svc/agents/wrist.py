@@ -28,7 +28,6 @@ from eos_svc.agents.synthesis import landing
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 
-
 #: the wrist's least opportunistic sub-rating while the hand is short of its grasp position
 WRIST_FLOOR = 0.05
 

@@ -1,4 +1,4 @@
-"""Hand kinematics (Pinocchio), objects and contacts (coal), tactile sensing.
+"""Hand kinematics (Pinocchio), contacts with the objects (coal), tactile sensing.
 
 SI units; world z up; the hand approaches along +x. See ``docs/kinematics.md``.
 """
@@ -18,39 +18,21 @@ from .hand import (
     load_hand,
 )
 from .hands import PreShapedHandModel, allegro_description, allegro_hand, load_composite_hand
-from .objects import (
-    Box,
-    Capsule,
-    CurvatureUndefinedError,
-    Cylinder,
-    Ellipsoid,
-    ObjectSizeError,
-    Sphere,
-    SurfaceObject,
-)
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
 
 __all__ = [
     "HAND3X3_URDF",
-    "Box",
-    "Capsule",
     "ConfigurationError",
     "Contact",
-    "CurvatureUndefinedError",
-    "Cylinder",
-    "Ellipsoid",
     "FingerDescription",
     "HandDescription",
     "HandDescriptionError",
     "HandModel",
     "HandState",
     "KinematicsError",
-    "ObjectSizeError",
     "PreShapedHandModel",
     "Scene",
-    "Sphere",
-    "SurfaceObject",
     "TactileReading",
     "TactileSensor",
     "UnknownNameError",

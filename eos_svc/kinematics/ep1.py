@@ -32,11 +32,12 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
+from eos_svc.objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
+
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
 from .geometry import tangent_basis
 from .hand import HandModel, HandState, KinematicsError
 from .norms import row_norms
-from .objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from .rolling import RollingQP
 from .scene import Scene
 from .tactile import TactileSensor

@@ -17,8 +17,9 @@ import coal
 import numpy as np
 import pinocchio as pin
 
+from eos_svc.objects import SurfaceObject
+
 from .hand import HandModel, HandState, KinematicsError, UnknownNameError
-from .objects import SurfaceObject
 
 __all__ = ["Contact", "Scene"]
 

@@ -1,14 +1,12 @@
-"""Knowing the object by touch: fit primitive classes to sensed contacts and choose one.
+"""Knowing the object by touch: fit the object kinds to sensed contacts and choose one.
 
-- :mod:`~eos_svc.shape.primitives`: signed distance and its gradient for each class
-  (sphere, ellipsoid, cylinder, capsule, box) in the class's own frame, vectorised.
 - :mod:`~eos_svc.shape.touches`: the measurements (fingertip-centre contacts with sensed
   normals, free-space samples) and their noise model.
-- :mod:`~eos_svc.shape.fit`: least-squares fit of one class (scipy.optimize.least_squares).
-- :mod:`~eos_svc.shape.selection`: fit every class, posterior over classes from BIC, the
+- :mod:`~eos_svc.shape.starts`: where each kind's fit starts.
+- :mod:`~eos_svc.shape.fit`: least-squares fit of one kind on its signed distance
+  (scipy.optimize.least_squares; the distances are the kinds' own, :mod:`eos_svc.objects`).
+- :mod:`~eos_svc.shape.selection`: fit every kind, posterior over kinds from BIC, the
   calibrated confidence and the postulated object in the request's JSON form.
-
-Pure numpy/scipy (no Pinocchio, coal or Zenoh): testable offline on synthetic samples.
 """
 
 from eos_svc.shape.fit import ClassFit, fit_class

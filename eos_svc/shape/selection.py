@@ -28,13 +28,16 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import pinocchio as pin
 from scipy import special
 
-from eos_svc.shape.fit import GOOD_FIT, ClassFit, ClassStarts, explains, extent_ratios, fit_class
+from eos_svc.objects import KINDS
+from eos_svc.shape.fit import GOOD_FIT, ClassFit, explains, extent_ratios, fit_class
+from eos_svc.shape.starts import ClassStarts
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
-CLASSES: tuple[str, ...] = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
+CLASSES: tuple[str, ...] = tuple(KINDS)
 #: relative size tolerance the confidence refers to
 SIZE_TOLERANCE = 0.10
 #: normals all within this angle of their mean (rad) → a plane
@@ -93,14 +96,6 @@ class Postulate:
         return out
 
 
-def _rpy(R: np.ndarray) -> list[float]:
-    """Roll, pitch, yaw (rad) of R = Rz(yaw)·Ry(pitch)·Rx(roll) (Pinocchio's convention)."""
-    pitch = math.atan2(-R[2, 0], math.hypot(R[0, 0], R[1, 0]))
-    if abs(math.cos(pitch)) < 1e-9:
-        return [0.0, pitch, math.atan2(-R[0, 1], R[1, 1])]
-    return [math.atan2(R[2, 1], R[2, 2]), pitch, math.atan2(R[1, 0], R[0, 0])]
-
-
 def _signed_permutations() -> list[np.ndarray]:
     """The 24 proper rotations that permute and flip the coordinate axes."""
     out = []
@@ -120,15 +115,17 @@ _SYMMETRIES = _signed_permutations()
 def canonical_pose(
     kind: str, rotation: np.ndarray, sizes: tuple[float, ...]
 ) -> tuple[np.ndarray, tuple[float, ...]]:
-    """The same object with its symmetric description nearest the world axes: a box's or an
-    ellipsoid's axes relabelled (sizes permuted with them) to the rotation closest to the
-    identity; a cylinder's or capsule's axis pointing up (or +x, +y when level), its frame's x
-    axis the world x projected across the axis."""
-    if kind in ("box", "ellipsoid"):
+    """The same object with its symmetric description nearest the world axes: a kind oriented
+    by a rotation (box, ellipsoid) has its axes relabelled (half sizes permuted with them) to
+    the rotation closest to the identity; one oriented by an axis (cylinder, capsule) has its
+    axis pointing up (or +x, +y when level), its frame's x axis the world x projected across
+    the axis."""
+    orientation = KINDS[kind].orientation
+    if orientation == "rotation":
         best = max(_SYMMETRIES, key=lambda P: float(np.trace(rotation @ P)))
         order = [int(np.argmax(np.abs(best[:, c]))) for c in range(3)]
         return rotation @ best, tuple(sizes[i] for i in order)
-    if kind in ("cylinder", "capsule"):
+    if orientation == "axis":
         z = rotation[:, 2].copy()
         level = abs(z[2]) < 1e-6
         if (not level and z[2] < 0.0) or (level and z[int(np.argmax(np.abs(z)))] < 0.0):
@@ -140,25 +137,21 @@ def canonical_pose(
     return np.eye(3), sizes
 
 
+def _rounded(value: Any) -> Any:
+    """Floats (in lists too) rounded to the µm / µrad, without a negative zero."""
+    if isinstance(value, list):
+        return [_rounded(v) for v in value]
+    return round(value, 6) + 0.0 if isinstance(value, float) else value
+
+
 def object_dict(fit: ClassFit) -> dict[str, Any]:
-    """A fitted class as an object in the request's JSON form (sizes as the request takes
-    them: a box's full edges, a cylinder's or capsule's full straight length; the pose in
-    its canonical description, :func:`canonical_pose`)."""
+    """A fitted kind as an object in the request's JSON form (the kind's own
+    :meth:`~eos_svc.objects.base.SurfaceObject.to_dict`, in its canonical pose,
+    :func:`canonical_pose`, rounded to the µm)."""
     g = fit.geometry
-    out: dict[str, Any] = {"shape": g.kind}
-    rotation, s = canonical_pose(g.kind, g.rotation, g.sizes)
-    if g.kind == "sphere":
-        out["radius"] = round(s[0], 6)
-    elif g.kind == "ellipsoid":
-        out["radii"] = [round(v, 6) for v in s]
-    elif g.kind == "box":
-        out["size"] = [round(2.0 * v, 6) for v in s]
-    else:
-        out["radius"] = round(s[0], 6)
-        out["length"] = round(2.0 * s[1], 6)
-    out["position"] = [round(float(v), 6) for v in g.centre]
-    out["rpy"] = [0.0, 0.0, 0.0] if g.kind == "sphere" else [round(v, 6) + 0.0 for v in _rpy(rotation)]
-    return out
+    rotation, half = canonical_pose(g.kind, g.rotation, tuple(g.half_sizes.tolist()))
+    canonical = KINDS[g.kind].from_half_sizes(np.array(half), pin.SE3(rotation, g.centre))
+    return {key: _rounded(value) for key, value in canonical.to_dict().items()}
 
 
 def _within(tolerance: np.ndarray, sigma: np.ndarray) -> float:
@@ -174,7 +167,7 @@ def tolerance_probability(fit: ClassFit, touches: Touches | None = None) -> floa
     touches, times ``1 − r`` per size with ``r`` the likelihood ratio of a size 10 % off with
     one face kept (:func:`~eos_svc.shape.fit.extent_ratios`: a size bounded on one side only
     is not known)."""
-    sizes = np.asarray(fit.geometry.sizes)
+    sizes = fit.geometry.half_sizes
     p_size = _within(np.full(len(sizes), SIZE_TOLERANCE), fit.size_sigmas())
     if touches is not None:
         p_size *= float(np.prod(1.0 - extent_ratios(fit, touches, SIZE_TOLERANCE)))

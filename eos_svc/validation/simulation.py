@@ -30,15 +30,10 @@ from typing import Any
 import numpy as np
 from pydrake.geometry import (
     AddContactMaterial,
-    Box,
-    Capsule,
     CollisionFilterDeclaration,
-    Cylinder,
-    Ellipsoid,
     ProximityProperties,
     RoleAssign,
     Shape,
-    Sphere,
 )
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialForce
@@ -50,10 +45,11 @@ from pydrake.multibody.plant import (
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains, SpatialInertia
+from pydrake.multibody.tree import PdControllerGains, RotationalInertia, SpatialInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
+from eos_svc import objects
 from eos_svc.agents.request import ObjectSpec
 from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
@@ -82,10 +78,6 @@ def vec(values: Sequence[float] | np.ndarray) -> Any:
     return np.asarray(values, dtype=float)
 
 
-#: the local z axis: the axis of Drake's (and coal's) cylinders and capsules
-Z_AXIS = (0.0, 0.0, 1.0)
-
-
 def urdf_effort_limits(urdf: Path) -> dict[str, float]:
     """Every joint's ``<limit effort>`` (N·m or N) in a URDF file, by joint name."""
     out = {}
@@ -97,25 +89,12 @@ def urdf_effort_limits(urdf: Path) -> dict[str, float]:
 
 
 def object_shape(spec: ObjectSpec) -> tuple[Shape, SpatialInertia]:
-    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled later)."""
-    s = spec.size
-    if spec.shape == "sphere":
-        return Sphere(s["radius"]), SpatialInertia.SolidSphereWithMass(1.0, s["radius"])
-    if spec.shape == "ellipsoid":
-        a, b, c = s["radii"]
-        return Ellipsoid(a, b, c), SpatialInertia.SolidEllipsoidWithMass(1.0, a, b, c)
-    if spec.shape == "cylinder":  # Drake's and coal's cylinders: axis local z, full length
-        return (
-            Cylinder(s["radius"], s["length"]),
-            SpatialInertia.SolidCylinderWithMass(1.0, s["radius"], s["length"], vec(Z_AXIS)),
-        )
-    if spec.shape == "capsule":  # length: the straight part, as coal's
-        return (
-            Capsule(s["radius"], s["length"]),
-            SpatialInertia.SolidCapsuleWithMass(1.0, s["radius"], s["length"], vec(Z_AXIS)),
-        )
-    x, y, z = s["size"]
-    return Box(x, y, z), SpatialInertia.SolidBoxWithMass(1.0, x, y, z)
+    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled
+    later), both from the object's kind (:mod:`eos_svc.objects`)."""
+    obj = objects.make(spec.shape, spec.size, spec.position)
+    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
+    inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
+    return obj.drake_shape(), SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
 
 
 def palm_pose(urdf: Path, description: HandDescription, wrist_q: Sequence[float]) -> RigidTransform:

@@ -40,6 +40,7 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
+from eos_svc import objects
 from eos_svc.agents.request import DEFAULT_FRICTION, ObjectSpec
 from eos_svc.kinematics import HandModel
 
@@ -76,20 +77,9 @@ def vec(values: Any) -> Any:
 
 
 def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:
-    """The MeshCat primitive of an object and its pose in the world (the request's convention:
-    box ``size`` full edges, cylinder/capsule ``length`` along the local z axis)."""
-    s = spec.size
-    shape: Shape
-    if spec.shape == "sphere":
-        shape = Sphere(s["radius"])
-    elif spec.shape == "ellipsoid":
-        shape = Ellipsoid(*s["radii"])
-    elif spec.shape == "cylinder":
-        shape = Cylinder(s["radius"], s["length"])
-    elif spec.shape == "capsule":
-        shape = Capsule(s["radius"], s["length"])
-    else:
-        shape = Box(*s["size"])
+    """The MeshCat primitive of an object (its kind's :meth:`~eos_svc.objects.base.SurfaceObject.drake_shape`)
+    and its pose in the world."""
+    shape = objects.make(spec.shape, spec.size, spec.position, spec.rpy).drake_shape()
     pose = RigidTransform(RollPitchYaw(*spec.rpy), vec(spec.position))
     return shape, pose
 

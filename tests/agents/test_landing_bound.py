@@ -12,7 +12,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.planner import default_hand, finger_sweeps
 from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps
-from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 
 def _objects():

@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import (
+from eos_svc.objects import (
     Box,
     Capsule,
     CurvatureUndefinedError,

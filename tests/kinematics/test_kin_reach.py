@@ -8,7 +8,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import HandModel, Scene, Sphere
+from eos_svc.kinematics import HandModel, Scene
+from eos_svc.objects import Sphere
 
 
 def _first_touch(hand: HandModel, scene: Scene, finger: str) -> float | None:

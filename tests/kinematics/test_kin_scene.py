@@ -9,19 +9,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import (
-    Box,
-    Capsule,
-    Cylinder,
-    Ellipsoid,
-    HandModel,
-    KinematicsError,
-    Scene,
-    Sphere,
-    SurfaceObject,
-    UnknownNameError,
-    load_hand,
-)
+from eos_svc.kinematics import HandModel, KinematicsError, Scene, UnknownNameError, load_hand
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
 
 RandQ = Callable[..., np.ndarray]
 

@@ -7,15 +7,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import (
-    HandModel,
-    HandState,
-    KinematicsError,
-    Scene,
-    Sphere,
-    TactileSensor,
-    UnknownNameError,
-)
+from eos_svc.kinematics import HandModel, HandState, KinematicsError, Scene, TactileSensor, UnknownNameError
+from eos_svc.objects import Sphere
 
 
 def _touching(hand: HandModel, gap: float = 0.0) -> tuple[Scene, HandState]:

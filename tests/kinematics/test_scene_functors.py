@@ -9,7 +9,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Scene, Sphere, allegro_hand
+from eos_svc.kinematics import Scene, allegro_hand
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 
 def _objects():

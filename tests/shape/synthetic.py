@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
 from eos_svc.shape import Touches
 
 TIP = 0.01

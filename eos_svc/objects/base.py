@@ -1,0 +1,319 @@
+"""The abstract object kind: a rigid convex primitive at a pose, and what every kind provides.
+
+Local frames follow coal's conventions: every shape is centred at its placement's origin;
+cylinders and capsules have their axis along local z. SI units (m, kg, kg·m²) throughout.
+
+Every kind gives:
+
+- its parameters in the request's JSON form (:meth:`SurfaceObject.from_dict`,
+  :meth:`SurfaceObject.to_dict`) and as the shape fit's half sizes (:attr:`half_sizes`);
+- its signed distance (m, negative inside) and gradient (the unit outward normal at the
+  closest surface point), batched over points (:meth:`local_distance`, the one
+  implementation), point-wise (:meth:`signed_distance`) and the closest surface point;
+- its differential geometry at a surface point (:meth:`principal_curvatures`,
+  :meth:`curvature_form`): the ground truth for EP1's curvature estimate;
+- its extents, its coal shape (:attr:`geometry`), its Drake / MeshCat shape
+  (:meth:`drake_shape`) and its mass properties (:meth:`mass_properties`).
+
+Where the curvature is not defined (box edges and corners, cylinder rims) a
+:class:`CurvatureUndefinedError` is raised.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping
+from typing import Any, ClassVar
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from eos_svc.errors import ValidationError
+
+Array = np.ndarray
+
+#: Points within this distance (m) of a box edge / cylinder rim count as on it.
+EDGE_TOLERANCE = 1e-9
+#: a length below which a direction or distance counts as zero (m)
+TINY = 1e-15
+
+
+class ObjectSizeError(ValidationError):
+    """A non-positive, non-finite or malformed object size (``field`` names it)."""
+
+
+class CurvatureUndefinedError(ValidationError):
+    """The surface is not smooth at the point (edge, corner, rim)."""
+
+
+def positive(field: str, value: object) -> float:
+    """``value`` as a finite length > 0 (m), else :class:`ObjectSizeError` naming ``field``."""
+    if isinstance(value, bool):
+        raise ObjectSizeError(field, f"must be a number, got {value!r}")
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError) as exc:
+        raise ObjectSizeError(field, f"must be a number, got {value!r}") from exc
+    if not (math.isfinite(v) and v > 0.0):
+        raise ObjectSizeError(field, f"must be finite and > 0 m, got {value!r}")
+    return v
+
+
+def positive3(field: str, value: object) -> Array:
+    """``value`` as three finite lengths > 0 (m), else :class:`ObjectSizeError` naming the entry."""
+    if isinstance(value, (str, bytes)):
+        raise ObjectSizeError(field, f"must be a 3-vector, got {value!r}")
+    try:
+        arr = np.array(value, dtype=float).reshape(-1)
+    except (TypeError, ValueError) as exc:
+        raise ObjectSizeError(field, f"must be a 3-vector, got {value!r}") from exc
+    if arr.shape != (3,):
+        raise ObjectSizeError(field, f"must be a 3-vector, got shape {arr.shape}")
+    for i, v in enumerate(arr):
+        if not (math.isfinite(v) and v > 0.0):
+            raise ObjectSizeError(f"{field}[{i}]", f"must be finite and > 0 m, got {v!r}")
+    return arr
+
+
+def vector3(field: str, value: object) -> Array:
+    """``value`` as a finite 3-vector, else :class:`ValidationError` naming ``field``."""
+    try:
+        arr = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        arr = np.empty(0)
+    if arr.shape != (3,) or not np.isfinite(arr).all():
+        raise ValidationError(field, f"must be a finite 3-vector, got {value!r}")
+    return arr
+
+
+def norm(v: Array) -> Array:
+    """Euclidean norm over the last axis."""
+    out: Array = np.sqrt((v * v).sum(axis=-1))
+    return out
+
+
+def unit(v: Array, n: Array, fallback: Array) -> Array:
+    """``v / n`` over the last axis (``n``: the norms, (...,)), ``fallback`` where ``n`` ≈ 0."""
+    n = n[..., None]
+    out: Array = np.where(n > 1e-12, v / np.maximum(n, 1e-12), fallback)
+    return out
+
+
+class SurfaceObject(ABC):
+    """A rigid convex object: a primitive shape at ``placement`` (world ← object)."""
+
+    #: the kind's name in the JSON form (``"shape"``)
+    kind: ClassVar[str] = ""
+    #: the size fields of the JSON form, in order (also the constructor's arguments)
+    size_fields: ClassVar[tuple[str, ...]] = ()
+    #: how many half sizes the shape fit fits (:attr:`half_sizes`)
+    half_size_count: ClassVar[int] = 0
+    #: how the shape fit orients the kind: ``"none"`` (a sphere), ``"rotation"`` (a rotation
+    #: vector about a start orientation) or ``"axis"`` (an axis tilted from a start axis)
+    orientation: ClassVar[str] = "rotation"
+
+    def __init__(self, placement: pin.SE3 | None = None) -> None:
+        if placement is None:
+            placement = pin.SE3.Identity()
+        if not isinstance(placement, pin.SE3):
+            raise ValidationError("placement", f"must be a pinocchio.SE3, got {type(placement)}")
+        self.placement: pin.SE3 = pin.SE3(placement)
+
+    # -- what each kind implements, in its own frame ------------------------------------
+    @property
+    @abstractmethod
+    def half_sizes(self) -> Array:
+        """The sizes as the shape fit takes them (m): radii and half lengths."""
+
+    @classmethod
+    @abstractmethod
+    def from_half_sizes(cls, half: Array, placement: pin.SE3 | None = None) -> SurfaceObject:
+        """The object of half sizes ``half`` (see :attr:`half_sizes`)."""
+
+    @abstractmethod
+    def sizes(self) -> dict[str, Any]:
+        """The size fields of the JSON form (m): ``{field: float or [3 floats]}``."""
+
+    @staticmethod
+    @abstractmethod
+    def local_distance(P: Array, half: Array) -> tuple[Array, Array]:
+        """Signed distance (..., N) and its gradient (..., N, 3) at local points ``P``
+        (..., N, 3) of the instances with half sizes ``half`` (..., 1, s)."""
+
+    @property
+    @abstractmethod
+    def geometry(self) -> coal.ShapeBase:
+        """The coal shape (object frame)."""
+
+    @property
+    @abstractmethod
+    def diameter(self) -> float:
+        """The diameter of the smallest sphere about the centre that contains the object (m)."""
+
+    @abstractmethod
+    def local_half_extent(self, direction: Array) -> float:
+        """Distance from the centre to the surface along the unit local ``direction`` (m)."""
+
+    @abstractmethod
+    def local_bounds(self, R: Array) -> Array:
+        """Half extents (m) along the world axes of the object turned by ``R`` (world ← local)."""
+
+    @abstractmethod
+    def _normal_local(self, s: Array) -> Array:
+        """Unit outward normal at surface point ``s``."""
+
+    @abstractmethod
+    def _shape_matrix_local(self, s: Array, n: Array) -> Array:
+        """3×3 symmetric S with II(u, v) = uᵀ S v for tangent u, v at ``s`` (1/m)."""
+
+    @abstractmethod
+    def drake_shape(self) -> Any:
+        """The pydrake.geometry shape (Drake's validation and the MeshCat drawing)."""
+
+    @property
+    @abstractmethod
+    def volume(self) -> float:
+        """Volume (m³)."""
+
+    @abstractmethod
+    def unit_inertia(self) -> Array:
+        """Inertia about the centre (object frame) of a solid of unit mass (m², i.e. kg·m²/kg)."""
+
+    # -- JSON form ------------------------------------------------------------------------
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any], prefix: str = "object") -> SurfaceObject:
+        """The object of a JSON form ``{"shape": kind, <size fields>, "position", "rpy"}``
+        (position m, rpy rad, both optional: the origin, upright). Errors name the field
+        (``prefix.field``) and the reason."""
+        allowed = {"shape", "position", "rpy", *cls.size_fields}
+        for key in data:
+            if key not in allowed:
+                raise ValidationError(
+                    f"{prefix}.{key}", f"not a field of a {cls.kind} (takes {', '.join(sorted(allowed))})"
+                )
+        sizes = {}
+        for key in cls.size_fields:
+            if key not in data:
+                raise ValidationError(f"{prefix}.{key}", f"is required for a {cls.kind}")
+            sizes[key] = data[key]
+        position = vector3(f"{prefix}.position", data.get("position", (0.0, 0.0, 0.0)))
+        rpy = vector3(f"{prefix}.rpy", data.get("rpy", (0.0, 0.0, 0.0)))
+        placement = pin.SE3(pin.rpy.rpyToMatrix(*rpy), position)
+        try:
+            return cls(**sizes, placement=placement)
+        except ObjectSizeError as exc:
+            raise ObjectSizeError(f"{prefix}.{exc.field}", exc.reason) from None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON form (:meth:`from_dict` reads it back)."""
+        rpy = [0.0, 0.0, 0.0] if self.orientation == "none" else pin.rpy.matrixToRpy(self.rotation).tolist()
+        return {"shape": self.kind, **self.sizes(), "position": self.centre.tolist(), "rpy": rpy}
+
+    # -- frames ---------------------------------------------------------------------------
+    @property
+    def centre(self) -> Array:
+        """The centre (world, m)."""
+        return np.array(self.placement.translation)
+
+    @property
+    def rotation(self) -> Array:
+        """world ← object rotation."""
+        return np.array(self.placement.rotation)
+
+    def to_local(self, p_world: Array) -> Array:
+        """World point(s) (..., 3) → object frame."""
+        M = self.placement
+        out: Array = (np.asarray(p_world, dtype=float) - M.translation) @ M.rotation
+        return out
+
+    def to_world(self, p_local: Array) -> Array:
+        """Object-frame point(s) (..., 3) → world."""
+        M = self.placement
+        out: Array = np.asarray(p_local) @ M.rotation.T + M.translation
+        return out
+
+    # -- distance -------------------------------------------------------------------------
+    def signed_distances(self, points: Array) -> tuple[Array, Array]:
+        """(signed distance (N,) m, outward gradient (N, 3) world) at world ``points`` (N, 3)."""
+        d, g = self.local_distance(self.to_local(points)[None], self.half_sizes[None, None])
+        return d[0], g[0] @ self.placement.rotation.T
+
+    def _local_closest(self, p_world: Array) -> tuple[Array, Array, float]:
+        """(local point, its closest surface point (local), signed distance) of a world point."""
+        p = self.to_local(vector3("p_world", p_world))
+        d, g = self.local_distance(p[None, None], self.half_sizes[None, None])
+        return p, p - d[0, 0] * g[0, 0], float(d[0, 0])
+
+    def signed_distance(self, p_world: Array) -> float:
+        """Signed distance from ``p_world`` to the surface, m (negative inside)."""
+        return self._local_closest(p_world)[2]
+
+    def closest_surface_point(self, p_world: Array) -> Array:
+        """The surface point closest to ``p_world`` (inside or outside), world, m."""
+        return self.to_world(self._local_closest(p_world)[1])
+
+    def closest_point_and_distance(self, p_world: Array) -> tuple[Array, float]:
+        """(closest surface point (world, m), signed distance (m, negative inside)) at once."""
+        _, s, d = self._local_closest(p_world)
+        return self.to_world(s), d
+
+    def surface_normal(self, p_world: Array) -> Array:
+        """Unit outward normal (world) at the surface point closest to ``p_world``."""
+        out: Array = self.placement.rotation @ self._normal_local(self._local_closest(p_world)[1])
+        return out
+
+    # -- extents --------------------------------------------------------------------------
+    def half_extent(self, direction: Array) -> float:
+        """Distance from the centre to the surface along the unit world ``direction`` (m)."""
+        return self.local_half_extent(self.placement.rotation.T @ np.asarray(direction, dtype=float))
+
+    def half_extents(self) -> Array:
+        """Half extents of the object's bounds along the world x, y, z axes (m)."""
+        return self.local_bounds(self.rotation)
+
+    # -- curvature ------------------------------------------------------------------------
+    def _local_form(self, p_world: Array) -> tuple[Array, Array]:
+        s = self._local_closest(p_world)[1]
+        n = self._normal_local(s)
+        return n, self._shape_matrix_local(s, n)
+
+    def principal_curvatures(self, p_world: Array) -> tuple[float, float, Array, Array]:
+        """(k1, k2, d1, d2) at the surface point closest to ``p_world``: principal curvatures
+        k1 ≥ k2 (1/m, positive where the surface bends away from its outward normal) and their
+        unit directions in world axes: the eigenpairs of the shape matrix on the tangent plane
+        (the normal's own eigenvalue pushed below every other)."""
+        n, S = self._local_form(p_world)
+        P = np.eye(3) - np.outer(n, n)
+        shift = 1.0 + float(np.abs(S).sum())
+        w, V = np.linalg.eigh(P @ S @ P - shift * np.outer(n, n))
+        R = self.placement.rotation
+        return float(w[2]), float(w[1]), R @ V[:, 2], R @ V[:, 1]
+
+    def curvature_form(self, p_world: Array, e1: Array, e2: Array) -> Array:
+        """2×2 symmetric second fundamental form II(e_i, e_j) in the tangent basis (e1, e2)
+        (world vectors, projected onto the tangent plane), 1/m."""
+        n, S = self._local_form(p_world)
+        R = self.placement.rotation
+        E = R.T @ np.stack([vector3("e1", e1), vector3("e2", e2)], axis=1)
+        E = E - np.outer(n, n @ E)
+        II = E.T @ S @ E
+        out: Array = 0.5 * (II + II.T)
+        return out
+
+    # -- mass -----------------------------------------------------------------------------
+    def mass_properties(
+        self, density: float | None = None, mass: float | None = None
+    ) -> tuple[float, Array, Array]:
+        """(mass kg, centre of mass (world, m), inertia about it (world axes, kg·m²)) of the
+        solid of uniform ``density`` (kg/m³) or of total ``mass`` (kg): give one."""
+        if (density is None) == (mass is None):
+            raise ValidationError("mass_properties", "give exactly one of density or mass")
+        m = positive("mass", mass) if mass is not None else positive("density", density) * self.volume
+        R = self.rotation
+        return m, self.centre, m * (R @ self.unit_inertia() @ R.T)
+
+    def __repr__(self) -> str:
+        t = self.placement.translation
+        return f"{type(self).__name__}(diameter={self.diameter:.4g} m, at {np.round(t, 4)})"

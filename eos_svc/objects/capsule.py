@@ -1,0 +1,109 @@
+"""The capsule: ``{"shape": "capsule", "radius": r, "length": l}``, a cylinder of radius ``r``
+with a straight part of ``length`` along local z, capped by hemispheres (total length
+``l + 2r``, coal's and Drake's convention)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import coal
+import numpy as np
+import pinocchio as pin
+
+from eos_svc.objects.base import Array, SurfaceObject, norm, positive, unit
+
+_X = np.array([1.0, 0.0, 0.0])
+
+
+class Capsule(SurfaceObject):
+    """Capsule of ``radius`` m about a straight part of ``length`` m along local z."""
+
+    kind = "capsule"
+    size_fields = ("radius", "length")
+    half_size_count = 2
+    orientation = "axis"
+
+    def __init__(self, radius: float, length: float, placement: pin.SE3 | None = None) -> None:
+        super().__init__(placement)
+        self.radius = positive("radius", radius)
+        self.length = positive("length", length)
+        self._geom = coal.Capsule(self.radius, self.length)
+
+    @property
+    def half_sizes(self) -> Array:
+        return np.array([self.radius, 0.5 * self.length])
+
+    @classmethod
+    def from_half_sizes(cls, half: Array, placement: pin.SE3 | None = None) -> Capsule:
+        return cls(float(half[0]), 2.0 * float(half[1]), placement)
+
+    def sizes(self) -> dict[str, Any]:
+        return {"radius": self.radius, "length": self.length}
+
+    @staticmethod
+    def local_distance(P: Array, half: Array) -> tuple[Array, Array]:
+        """The distance to the axis segment minus the radius; the gradient away from the
+        segment's nearest point (+x on the segment itself)."""
+        v = P.copy()
+        v[..., 2] -= np.clip(P[..., 2], -half[..., 1], half[..., 1])
+        n = norm(v)
+        return n - half[..., 0], unit(v, n, _X)
+
+    @property
+    def geometry(self) -> coal.ShapeBase:
+        return self._geom
+
+    @property
+    def diameter(self) -> float:
+        return self.length + 2.0 * self.radius
+
+    def local_half_extent(self, direction: Array) -> float:
+        r, h = self.radius, 0.5 * self.length
+        across, along = math.hypot(direction[0], direction[1]), abs(direction[2])
+        if across * h >= r * along:  # leaves through the side, where |z| ≤ h
+            return r / across
+        # through a cap: |t·d − (0, 0, h)| = r
+        return h * along + math.sqrt(max((h * along) ** 2 - h * h + r * r, 0.0))
+
+    def local_bounds(self, R: Array) -> Array:
+        out: Array = np.abs(R[:, 2]) * 0.5 * self.length + self.radius
+        return out
+
+    def _axis_point(self, p: Array) -> Array:
+        hz = 0.5 * self.length
+        return np.array([0.0, 0.0, min(max(p[2], -hz), hz)])
+
+    def _normal_local(self, s: Array) -> Array:
+        d = s - self._axis_point(s)
+        out: Array = d / np.linalg.norm(d)
+        return out
+
+    def _shape_matrix_local(self, s: Array, n: Array) -> Array:
+        if abs(s[2]) > 0.5 * self.length:  # hemispherical cap
+            return np.eye(3) / self.radius
+        t = np.array([-n[1], n[0], 0.0])
+        out: Array = np.outer(t, t) / self.radius
+        return out
+
+    def drake_shape(self) -> Any:
+        from pydrake.geometry import Capsule as DrakeCapsule
+
+        return DrakeCapsule(self.radius, self.length)
+
+    @property
+    def volume(self) -> float:
+        r = self.radius
+        return math.pi * r * r * self.length + 4.0 / 3.0 * math.pi * r**3
+
+    def unit_inertia(self) -> Array:
+        """The cylinder's and the two hemispheres' (parallel axes: each hemisphere's centre of
+        mass 3r/8 beyond the end of the straight part), in proportion to their volumes."""
+        r, h = self.radius, self.length
+        cylinder = math.pi * r * r * h / self.volume
+        ends = 1.0 - cylinder
+        axial = cylinder * r * r / 2.0 + ends * 0.4 * r * r
+        across = cylinder * (3.0 * r * r + h * h) / 12.0 + ends * (
+            0.4 * r * r + h * h / 4.0 + 3.0 * h * r / 8.0
+        )
+        return np.diag([across, across, axial])
