@@ -59,3 +59,36 @@ def test_eos_batch_runs_a_spec_and_a_rerun_skips_it(tmp_path: Path) -> None:
     assert json.loads(first.stdout)["planned"] == 10
     again = subprocess.run([*command, "--json", "--no-progress"], capture_output=True, text=True, check=True)
     assert (json.loads(again.stdout)["planned"], json.loads(again.stdout)["skipped"]) == (0, 10)
+
+
+@pytest.mark.slow
+def test_a_driver_killed_mid_run_is_resumed_by_a_rerun_without_a_duplicate(tmp_path: Path) -> None:
+    import os
+    import signal
+    import time
+
+    from eos_svc.batch.store import read_manifest, read_rows
+
+    spec = tmp_path / "s.toml"
+    spec.write_text(
+        'seeds = { first = 1, count = 6 }\n[objects]\nsuite = "quick"\n'
+        "[run]\nplans_per_task = 1\nrows_per_file = 2\nflush_seconds = 0.0\n"
+    )
+    out = tmp_path / "o"
+    command = [sys.executable, "-m", "eos_svc.cli", "batch", str(spec), "--out", str(out), "--no-progress"]
+    driver = subprocess.Popen([*command, "--workers", "2"], start_new_session=True)
+    try:
+        deadline = time.monotonic() + 120
+        while len(read_manifest(out)) < 2 and driver.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert driver.poll() is None, "the batch finished before it could be killed"
+        os.killpg(driver.pid, signal.SIGKILL)  # the driver and the local Ray it started
+    finally:
+        driver.wait()
+    done = sum(e["rows"] for e in read_manifest(out))
+    assert 0 < done < 30
+    again = subprocess.run([*command, "--json"], capture_output=True, text=True, check=True)
+    summary = json.loads(again.stdout)
+    assert summary["skipped"] >= done and summary["planned"] + summary["skipped"] == 30
+    keys = read_rows(out).column("key").to_pylist()
+    assert len(keys) == 30 == len(set(keys))
