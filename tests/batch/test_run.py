@@ -48,6 +48,7 @@ def test_the_batch_rows_equal_the_same_plans_run_serially(local_ray: None, tmp_p
         serial = plan(PlanRequest.from_dict(key.request), keep_trace=False)
         assert (row["status"], row["reason"], row["cycles"]) == (serial.status, serial.reason, serial.cycles)
         assert row["epsilon"] == pytest.approx(serial.epsilon, rel=1e-6, abs=1e-9)
+        assert serial.q_final is not None
         np.testing.assert_allclose(row["q_final"], serial.q_final, atol=1e-9)
         assert row["wrist_pose"] == row["q_final"][:6]
         assert row["good_grasp"] == serial.good_grasp and row["seed"] == key.seed
