@@ -87,8 +87,11 @@ def run_batch(
         started = time.perf_counter()
         if todo:  # nothing left to plan: no Ray to start
             with ray_session(address, workers) as cpus:
-                summary.workers = cpus if workers is None or address is None else min(cpus, workers)
-                run_tasks(spec, todo, store, summary, bar, on_rows, concurrency=summary.workers)
+                if address is not None and workers is not None:  # at most `workers` tasks at once
+                    summary.workers, window = float(min(cpus, workers)), workers
+                else:
+                    summary.workers, window = cpus, max(1, int(cpus * TASKS_PER_CPU))
+                run_tasks(spec, todo, store, summary, bar, on_rows, window=window)
         summary.wall_s = time.perf_counter() - started
         if bar is not None:
             bar.close()
@@ -102,13 +105,12 @@ def run_tasks(
     summary: BatchSummary,
     bar: ProgressBar | None,
     on_rows: RowsCallback | None,
-    concurrency: float,
+    window: int,
 ) -> None:
-    """Submit ``todo`` in chunks (a bounded number in flight), collect and commit their rows."""
+    """Submit ``todo`` in chunks (at most ``window`` in flight), collect and commit their rows."""
     task = ray.remote(run_chunk).options(num_cpus=1, max_retries=spec.run.max_retries, retry_exceptions=False)
     waiting = chunks(todo, spec.plans_per_task())
     waiting.reverse()  # popped from the end: submitted in expansion order
-    window = max(1, int(concurrency * TASKS_PER_CPU))
     in_flight: dict[Any, list[PlanKey]] = {}
     buffer: list[dict[str, Any]] = []
     last_write = time.perf_counter()
