@@ -24,6 +24,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "serve": ("eos_svc.cli.serve", "run the planner as a Zenoh service"),
     "client": ("eos_svc.cli.client", "request a plan from a running service"),
     "demo": ("eos_svc.cli.demo", "the domain-free controller on a small example"),
+    "batch": ("eos_svc.cli.batch", "plan a dataset as Ray tasks, rows streamed to Parquet"),
 }
 
 

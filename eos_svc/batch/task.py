@@ -1,0 +1,71 @@
+"""The work of one batch task, as it runs in a worker: plan each key, validate it, make its row.
+
+Plain functions of their arguments, without Ray: :mod:`eos_svc.batch.runner` runs
+:func:`run_chunk` as a Ray task, and the tests run it in-process to compare. A plan that
+admission refuses is a row with status ``refused`` naming the field; any other exception of a
+plan or a validation is caught and written in the row (status ``error``, or
+``validation_reason``), so one bad plan never stops a batch.
+"""
+
+from __future__ import annotations
+
+import os
+import socket
+import time
+from typing import Any
+
+from eos_svc.batch import rows
+from eos_svc.batch.expansion import PlanKey
+from eos_svc.errors import EosError, ValidationError
+
+
+def hand_model(name: str) -> Any:
+    """The hand model ``name`` names (each loaded once per process by its own loader)."""
+    if name == "allegro":
+        from eos_svc.kinematics import allegro_hand
+
+        return allegro_hand()
+    from eos_svc.agents import default_hand
+
+    return default_hand()
+
+
+def run_key(key: PlanKey, worker: str = "") -> dict[str, Any]:
+    """Plan one key (and validate it when asked): its row."""
+    from eos_svc.agents import PlanRequest, plan
+
+    started = time.perf_counter()
+    row = rows.key_columns(key, worker)
+    hand = hand_model(key.hand)
+    try:
+        result = plan(PlanRequest.from_dict(key.request), hand=hand, keep_trace=False)
+    except ValidationError as exc:  # admission: the planner cannot plan this object
+        row.update(rows.empty_columns(rows.REFUSED, f"{exc.field}: {exc.reason}"))
+    except Exception as exc:  # a bug or a failed computation: recorded, the batch goes on
+        row.update(rows.empty_columns(rows.ERROR, f"{type(exc).__name__}: {exc}"))
+    else:
+        row.update(rows.result_columns(result, [int(i) for i in hand.wrist_q_index]))
+        row.update(validated_columns(key, result))
+    row["task_s"] = time.perf_counter() - started
+    return row
+
+
+def validated_columns(key: PlanKey, result: Any) -> dict[str, Any]:
+    """The validation columns of a planned key: not validated, the report, or why it failed."""
+    if not key.validate.enabled:
+        return rows.validation_columns(None, None)
+    if result.q_final is None:
+        return rows.validation_columns(None, "no final grasp to validate")
+    from eos_svc.validation import validate_grasp
+
+    try:
+        report = validate_grasp(result, seconds=key.validate.seconds, directions=key.validate.directions)
+    except EosError as exc:
+        return rows.validation_columns(None, f"{type(exc).__name__}: {exc}")
+    return rows.validation_columns(report, None)
+
+
+def run_chunk(keys: list[PlanKey]) -> list[dict[str, Any]]:
+    """Plan every key of a chunk, in order: their rows (each names this host and process)."""
+    worker = f"{socket.gethostname()}:{os.getpid()}"
+    return [run_key(key, worker) for key in keys]
