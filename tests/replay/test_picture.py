@@ -1,4 +1,4 @@
-"""eos_svc.agents.picture: meshes of every primitive and the guard on missing hand state."""
+"""eos_svc.view.picture: meshes of every primitive and the guard on missing hand state."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import PlanRequest
-from eos_svc.agents.picture import _aabb_mesh, draw_result, scene_solids, shape_mesh
+from eos_svc.view.picture import _aabb_mesh, draw_result, scene_solids, shape_mesh
 
 
 def _vertices(shape):

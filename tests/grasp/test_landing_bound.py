@@ -11,7 +11,7 @@ import pytest
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.planner import default_hand, finger_sweeps
-from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps
+from eos_svc.grasp.synthesis import SweepLandings, rotated_sweep_gaps
 from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 

@@ -12,9 +12,10 @@ from eos_svc.agent import CycleContext, Outcome
 from eos_svc.agents import ObjectSpec, PlanRequest, keys, plan
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
-from eos_svc.agents.postulate import make_object, read_postulate
-from eos_svc.agents.quality import grasp_quality
-from eos_svc.agents.synthesis import (
+from eos_svc.board import Board
+from eos_svc.grasp.postulate import make_object, read_postulate
+from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.synthesis import (
     GraspSynthesis,
     SweepLandings,
     candidate_frames,
@@ -27,7 +28,6 @@ from eos_svc.agents.synthesis import (
     signed_distances,
     sweep_gaps,
 )
-from eos_svc.board import Board
 from eos_svc.kinematics.norms import row_norms, vector_norm
 
 HERE = (0.21, 0.02, -0.015)

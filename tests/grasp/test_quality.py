@@ -1,4 +1,4 @@
-"""Grasp quality (eos_svc.agents.quality) against closed forms and invariances."""
+"""Grasp quality (eos_svc.grasp.quality) against closed forms and invariances."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from eos_svc.agents.quality import (
+from eos_svc.grasp.quality import (
     GraspQuality,
     contacts_quality,
     epsilon_of_wrenches,
@@ -264,7 +264,7 @@ def test_primitive_wrenches_equal_the_per_contact_loop_bit_for_bit():
 
 
 def test_cross_rows_and_rank_equal_numpys_bit_for_bit():
-    from eos_svc.agents.quality import cross_rows
+    from eos_svc.grasp.quality import cross_rows
 
     rng = np.random.default_rng(6)
     for k, m in ((1, 4), (3, 4), (4, 8)):
@@ -280,7 +280,7 @@ def test_cross_rows_and_rank_equal_numpys_bit_for_bit():
 def test_to_dict_is_asdict():
     import dataclasses
 
-    from eos_svc.agents.quality import GraspQuality
+    from eos_svc.grasp.quality import GraspQuality
 
     for q in (
         GraspQuality(True, 0.123, 0.5, 8, 0.03, 3, 6, 6),

@@ -10,8 +10,8 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world, default_hand, parameters_for
-from eos_svc.agents.postulate import make_object
-from eos_svc.agents.synthesis import GraspSynthesis, candidate_frames, palm_turn
+from eos_svc.grasp.postulate import make_object
+from eos_svc.grasp.synthesis import GraspSynthesis, candidate_frames, palm_turn
 
 HERE = (0.21, 0.02, -0.015)
 SPECS = [

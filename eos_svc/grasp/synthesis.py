@@ -14,7 +14,7 @@ closing axis through the centre of mass across the object, as GraspIt's primitiv
 - box: across each pair of opposite faces, approach along the other face normals.
 
 Each candidate is simulated on the *postulated* object (never the true one): every finger's
-closing sweep (:class:`~eos_svc.agents.sweeps.FingerSweep`, fingertip-centre path in the palm
+closing sweep (:class:`~eos_svc.grasp.sweeps.FingerSweep`, fingertip-centre path in the palm
 frame) is run against the object's signed distance until the fingertip touches — its
 *landing*: sweep index, contact point and outward normal. A candidate is kept when the
 wrist can take its pose (joint limits), every fingertip lands from the open hand, the
@@ -23,7 +23,7 @@ smaller than the hand height across the grip (paper §2.1: d/h < 1), and the han
 collision-free on the postulated object at the pre-grasp, along the straight approach with
 the fingers open and at the landing with only the fingertips touching (coal distances).
 The kept candidates are scored by the Ferrari–Canny ε of their predicted contacts on the
-postulated object (:mod:`eos_svc.agents.quality`; ``SCORE_EDGES`` cone edges for speed) and
+postulated object (:mod:`eos_svc.grasp.quality`; ``SCORE_EDGES`` cone edges for speed) and
 the best is chosen; ties (a sphere's symmetric grasps) go to the least wrist rotation.
 
 SI units throughout: metres, radians.
@@ -38,9 +38,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eos_svc.agents.quality import grasp_quality
-from eos_svc.agents.sweeps import FingerSweep
 from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import (
     Box,
     Capsule,

@@ -1,7 +1,7 @@
 """Pictures of a final grasp: the hand's collision geometry, the object, the contacts.
 
     from eos_svc.agents import plan
-    from eos_svc.agents.picture import draw_result
+    from eos_svc.view.picture import draw_result
     draw_result(plan(), "grasp.png")
 
 One figure, four panels: a 3-D view and three orthographic views (top x–y, side x–z,
