@@ -33,8 +33,8 @@ from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object
-from eos_svc.grasp.synthesis import SweepLandings, rotated_sweep_gaps
 from eos_svc.kinematics import SurfaceObject
 from eos_svc.kinematics.norms import vector_norm
 

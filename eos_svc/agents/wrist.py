@@ -22,8 +22,8 @@ from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.grasp.landing import landing
 from eos_svc.grasp.postulate import make_object
-from eos_svc.grasp.synthesis import landing
 
 
 class WristAgent(GraspAgent):

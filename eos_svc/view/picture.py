@@ -9,9 +9,9 @@ front y–z) in millimetres. The hand is drawn from its Pinocchio GeometryModel 
 configuration (palm box, link cylinders, fingertip spheres, each placed by
 ``GeometryData.oMg``), the object from the request's primitive at its pose; every touching
 contact is a red dot with an arrow along the force direction (−outward normal, into the
-object). Orthographic views paint solids back to front (each convex solid's outline is the
-convex hull of its projected surface mesh). Rendering uses matplotlib's Agg canvas directly
-(no global backend is changed).
+object). Every primitive is convex: it is drawn as the convex hull of points on its surface,
+and in the orthographic views as the outline of their projection, painted back to front.
+Rendering uses matplotlib's Agg canvas directly (no global backend is changed).
 """
 
 from __future__ import annotations
@@ -28,10 +28,12 @@ from matplotlib.patches import Polygon
 from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from scipy.spatial import ConvexHull, QhullError
 
-from eos_svc.agents.planner import default_hand, make_object
+from eos_svc.agents.planner import default_hand
 from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
+from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
+from eos_svc.view.scene import touching_contacts
 
 #: mesh resolution (segments around a circle)
 SEGMENTS = 16
@@ -47,79 +49,72 @@ VIEWS = (
     ("side (x-z, from -y)", 0, 2, 1, -1.0),
     ("front (y-z, from +x)", 1, 2, 0, 1.0),
 )
-AXIS_NAMES = "xyz"
 #: contact label offsets (points), one per contact in turn, so coincident projections stay legible
 LABEL_OFFSETS = ((5, 5), (5, -12), (-45, 5), (-45, -12))
+MM = 1000.0  # m -> mm
+
+Solid = tuple[str, list[np.ndarray], str, float]
 
 
-def _sphere_mesh(radii: np.ndarray, z_shift: float = 0.0, hemisphere: int = 0) -> list[np.ndarray]:
-    """Quads of a (possibly scaled) sphere; ``hemisphere`` ±1 keeps only that half (capsule)."""
-    n = SEGMENTS
-    lo, hi = (0.0, np.pi / 2) if hemisphere > 0 else ((np.pi / 2, np.pi) if hemisphere < 0 else (0.0, np.pi))
-    theta = np.linspace(lo, hi, n // 2 + 1)
-    phi = np.linspace(0.0, 2.0 * np.pi, n + 1)
-    st, ct = np.sin(theta), np.cos(theta)
-    grid = (
-        np.stack(
-            [np.outer(st, np.cos(phi)), np.outer(st, np.sin(phi)), np.outer(ct, np.ones_like(phi))], axis=-1
-        )
-        * radii
-    )
-    grid[..., 2] += z_shift
-    return [
-        np.array([grid[i, j], grid[i, j + 1], grid[i + 1, j + 1], grid[i + 1, j]])
-        for i in range(len(theta) - 1)
-        for j in range(n)
-    ]
+def _unit_sphere() -> np.ndarray:
+    """Points on the unit sphere: ``SEGMENTS`` meridians, their parallels and the poles."""
+    theta = np.linspace(0.0, np.pi, SEGMENTS // 2 + 1)[1:-1]
+    phi = np.linspace(0.0, 2.0 * np.pi, SEGMENTS, endpoint=False)
+    ring = np.stack([np.outer(np.sin(theta), np.cos(phi)), np.outer(np.sin(theta), np.sin(phi))], axis=-1)
+    z = np.repeat(np.cos(theta), SEGMENTS)[:, None]
+    return np.vstack([np.hstack([ring.reshape(-1, 2), z]), [[0.0, 0.0, 1.0], [0.0, 0.0, -1.0]]])
 
 
-def _cylinder_mesh(radius: float, half: float, caps: bool = True) -> list[np.ndarray]:
-    phi = np.linspace(0.0, 2.0 * np.pi, SEGMENTS + 1)
-    ring = np.stack([radius * np.cos(phi), radius * np.sin(phi)], axis=1)
-    quads = [
-        np.array([[*ring[j], -half], [*ring[j + 1], -half], [*ring[j + 1], half], [*ring[j], half]])
-        for j in range(SEGMENTS)
-    ]
-    if caps:
-        for z in (-half, half):
-            quads.append(np.column_stack([ring[:-1], np.full(SEGMENTS, z)]))
-    return quads
+def _box(half: np.ndarray) -> np.ndarray:
+    """The 8 corners of a box of half sides ``half`` about the origin."""
+    return np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
 
 
-def _box_mesh(half: np.ndarray) -> list[np.ndarray]:
-    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
-    faces = [(0, 1, 3, 2), (4, 5, 7, 6), (0, 1, 5, 4), (2, 3, 7, 6), (0, 2, 6, 4), (1, 3, 7, 5)]
-    return [corners[list(f)] for f in faces]
-
-
-def shape_mesh(shape: coal.ShapeBase) -> list[np.ndarray]:
-    """Polygons (each (k, 3), local frame) approximating a coal primitive's surface.
+def surface_points(shape: coal.ShapeBase) -> np.ndarray:
+    """Points (local frame, m) on a coal primitive's surface whose convex hull is its drawing.
 
     Raises:
-        TypeError: for a shape other than Sphere, Ellipsoid, Box, Cylinder, Capsule.
+        ContractError (a TypeError): for a shape other than Sphere, Ellipsoid, Box, Cylinder, Capsule.
     """
     if isinstance(shape, coal.Sphere):
-        return _sphere_mesh(np.full(3, shape.radius))
+        return shape.radius * _unit_sphere()
     if isinstance(shape, coal.Ellipsoid):
-        return _sphere_mesh(np.asarray(shape.radii, dtype=float))
+        return np.asarray(shape.radii, dtype=float) * _unit_sphere()
     if isinstance(shape, coal.Box):
-        return _box_mesh(np.asarray(shape.halfSide, dtype=float))
+        return _box(np.asarray(shape.halfSide, dtype=float))
     if isinstance(shape, coal.Capsule):
-        r, h = shape.radius, shape.halfLength
-        ends = _sphere_mesh(np.full(3, r), h, 1) + _sphere_mesh(np.full(3, r), -h, -1)
-        return _cylinder_mesh(r, h, caps=False) + ends
+        ball, h = shape.radius * _unit_sphere(), shape.halfLength
+        return np.vstack([ball[ball[:, 2] >= 0.0] + [0, 0, h], ball[ball[:, 2] <= 0.0] - [0, 0, h]])
     if isinstance(shape, coal.Cylinder):
-        return _cylinder_mesh(shape.radius, shape.halfLength)
+        phi = np.linspace(0.0, 2.0 * np.pi, SEGMENTS, endpoint=False)
+        ring = shape.radius * np.stack([np.cos(phi), np.sin(phi)], axis=1)
+        return np.vstack([np.column_stack([ring, np.full(SEGMENTS, z)]) for z in (-1, 1)]) * [
+            1,
+            1,
+            shape.halfLength,
+        ]
     raise ContractError("shape", f"cannot draw a {type(shape).__name__}")
 
 
-def _placed(polys: list[np.ndarray], rotation: np.ndarray, translation: np.ndarray) -> list[np.ndarray]:
-    return [p @ rotation.T + translation for p in polys]
+def _hull_mesh(points: np.ndarray) -> list[np.ndarray]:
+    """The triangles (each (3, 3)) of the convex hull of ``points``."""
+    return [points[s] for s in ConvexHull(points).simplices]
 
 
-def scene_solids(
-    q: Any, request: PlanRequest, hand: HandModel | None = None
-) -> list[tuple[str, list[np.ndarray], str, float]]:
+def shape_mesh(shape: coal.ShapeBase) -> list[np.ndarray]:
+    """Triangles (each (3, 3), local frame, m) approximating a coal primitive's surface
+    (:func:`surface_points`; the same errors)."""
+    return _hull_mesh(surface_points(shape))
+
+
+def bounding_box_mesh(shape: coal.CollisionGeometry) -> list[np.ndarray]:
+    """The local axis-aligned bounding box of any coal geometry, as triangles."""
+    shape.computeLocalAABB()
+    lo, hi = np.asarray(shape.aabb_local.min_, dtype=float), np.asarray(shape.aabb_local.max_, dtype=float)
+    return _hull_mesh(_box(0.5 * (hi - lo)) + 0.5 * (lo + hi))
+
+
+def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) -> list[Solid]:
     """Every solid to draw: (name, world polygons in m, colour, alpha), object first.
 
     Fingertips are coloured per finger (in the hand's finger order), palms darker; a
@@ -127,40 +122,91 @@ def scene_solids(
     """
     hand = hand or default_hand()
     obj = make_object(request.obj)
-    pl = obj.placement
-    solids = [("object", _placed(shape_mesh(obj.geometry), pl.rotation, pl.translation), OBJECT_COLOUR, 0.35)]
+    placed = obj.placement
+    solids = [
+        (
+            "object",
+            [p @ placed.rotation.T + placed.translation for p in shape_mesh(obj.geometry)],
+            OBJECT_COLOUR,
+            0.35,
+        )
+    ]
     state = hand.state(np.asarray(q, dtype=float))
     tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
     for gid, g in enumerate(hand.collision_model.geometryObjects):
         m = state.geometry_data.oMg[gid]
         if gid in tips:
             colour = TIP_PALETTE[tips[gid] % len(TIP_PALETTE)]
-        elif g.name.startswith("palm"):
-            colour = PALM_COLOUR
         else:
-            colour = HAND_COLOUR
+            colour = PALM_COLOUR if g.name.startswith("palm") else HAND_COLOUR
         try:
             polys = shape_mesh(g.geometry)
         except TypeError:
-            polys = _aabb_mesh(g.geometry)
-        solids.append((g.name, _placed(polys, m.rotation, m.translation), colour, 0.9))
+            polys = bounding_box_mesh(g.geometry)
+        solids.append((g.name, [p @ m.rotation.T + m.translation for p in polys], colour, 0.9))
     return solids
 
 
-def _aabb_mesh(shape: coal.CollisionGeometry) -> list[np.ndarray]:
-    """The local axis-aligned bounding box of any coal geometry, as a box mesh."""
-    shape.computeLocalAABB()
-    box = shape.aabb_local
-    lo, hi = np.asarray(box.min_, dtype=float), np.asarray(box.max_, dtype=float)
-    return [p + 0.5 * (lo + hi) for p in _box_mesh(0.5 * (hi - lo))]
+def _draw_3d(
+    fig: Figure, solids: list[Solid], touches: list, centre: np.ndarray, half: float, arrow: float
+) -> None:
+    ax = fig.add_subplot(2, 2, 1, projection="3d")
+    # the limits first, so that the axes never autoscale: matplotlib 3.11's 3-D autoscaling
+    # (axes3d ``_autoscale_axis``) warned of a float overflow now and then in the test suite
+    for setter, c in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), centre, strict=True):
+        setter(c - half, c + half)
+    ax.set_box_aspect((1, 1, 1))
+    for name, polys, colour, alpha in solids:
+        edge = (0.2, 0.3, 0.5, 0.15) if name == "object" else "none"
+        ax.add_collection3d(
+            Poly3DCollection(
+                [p * MM for p in polys], facecolor=colour, edgecolor=edge, linewidth=0.3, alpha=alpha
+            )
+        )
+    for _finger, p, n in touches:
+        ax.scatter(*(p * MM), color=CONTACT_COLOUR, s=30, depthshade=False)
+        ax.quiver(*(p * MM), *(-n * arrow), color=CONTACT_COLOUR, linewidth=2)
+    ax.set_xlabel("x (mm)")
+    ax.set_ylabel("y (mm)")
+    ax.set_zlabel("z (mm)")
+    ax.view_init(elev=22, azim=-130)
+    ax.set_title("3-D view")
 
 
-def _contacts(contacts: Mapping[str, Mapping[str, Any]]) -> list[tuple[str, np.ndarray, np.ndarray]]:
-    out = []
-    for finger, c in contacts.items():
-        if c.get("touching"):
-            out.append((finger, np.asarray(c["point"], dtype=float), np.asarray(c["normal"], dtype=float)))
-    return out
+def _draw_view(
+    ax: Any, view: tuple, solids: list[Solid], touches: list, centre: np.ndarray, half: float, arrow: float
+) -> None:
+    label, h, v, d, sign = view
+    for name, polys, colour, alpha in sorted(
+        solids, key=lambda s: sign * float(np.mean(np.vstack(s[1])[:, d]))
+    ):
+        pts = np.vstack(polys)[:, [h, v]] * MM
+        try:
+            outline = pts[ConvexHull(pts).vertices]
+        except (QhullError, ValueError):
+            continue
+        edge = "#1f4e79" if name == "object" else "#333333"
+        ax.add_patch(
+            Polygon(
+                outline, closed=True, facecolor=colour, edgecolor=edge, linewidth=0.6, alpha=alpha, zorder=1
+            )
+        )
+    for k, (finger, p, n) in enumerate(touches):
+        pm, f = p * MM, -n * arrow
+        arrowprops = {"arrowstyle": "-|>", "color": CONTACT_COLOUR, "lw": 1.8}
+        ax.annotate(
+            "", xy=(pm[h] + f[h], pm[v] + f[v]), xytext=(pm[h], pm[v]), arrowprops=arrowprops, zorder=3
+        )
+        ax.plot(pm[h], pm[v], "o", color=CONTACT_COLOUR, markersize=5, zorder=4)
+        offset = LABEL_OFFSETS[k % len(LABEL_OFFSETS)]
+        ax.annotate(finger, (pm[h], pm[v]), textcoords="offset points", xytext=offset, fontsize=8, zorder=4)
+    ax.set_xlim(centre[h] - half, centre[h] + half)
+    ax.set_ylim(centre[v] - half, centre[v] + half)
+    ax.set_aspect("equal")
+    ax.grid(True, linewidth=0.3, alpha=0.5)
+    ax.set_xlabel(f"{'xyz'[h]} (mm)")
+    ax.set_ylabel(f"{'xyz'[v]} (mm)")
+    ax.set_title(label)
 
 
 def draw_grasp(
@@ -178,86 +224,16 @@ def draw_grasp(
         the path written.
     """
     solids = scene_solids(q, request, hand)
-    touches = _contacts(contacts)
-    scale = 1000.0  # m -> mm
-    allpts = np.vstack([np.vstack(polys) for _, polys, _, _ in solids]) * scale
+    touches = touching_contacts(contacts)
+    allpts = np.vstack([np.vstack(polys) for _, polys, _, _ in solids]) * MM
     lo, hi = allpts.min(axis=0), allpts.max(axis=0)
     centre, half = 0.5 * (lo + hi), 0.5 * float(np.max(hi - lo)) * 1.05
-    arrow = 0.35 * request.obj.diameter * scale
-
+    arrow = 0.35 * request.obj.diameter * MM
     fig = Figure(figsize=(12, 10), dpi=100)
     FigureCanvasAgg(fig)
-    ax3 = fig.add_subplot(2, 2, 1, projection="3d")
-    # the limits first, so that the axes never autoscale: matplotlib 3.11's 3-D autoscaling
-    # (axes3d ``_autoscale_axis``) warned of a float overflow now and then in the test suite
-    for setter, c in zip((ax3.set_xlim, ax3.set_ylim, ax3.set_zlim), centre, strict=True):
-        setter(c - half, c + half)
-    ax3.set_box_aspect((1, 1, 1))
-    for name, polys, colour, alpha in solids:
-        coll = Poly3DCollection(
-            [p * scale for p in polys],
-            facecolor=colour,
-            edgecolor="none" if name != "object" else (0.2, 0.3, 0.5, 0.15),
-            linewidth=0.3,
-            alpha=alpha,
-        )
-        ax3.add_collection3d(coll)
-    for _finger, p, n in touches:
-        pm = p * scale
-        ax3.scatter(*pm, color=CONTACT_COLOUR, s=30, depthshade=False)
-        ax3.quiver(*pm, *(-n * arrow), color=CONTACT_COLOUR, linewidth=2)
-    ax3.set_xlabel("x (mm)")
-    ax3.set_ylabel("y (mm)")
-    ax3.set_zlabel("z (mm)")
-    ax3.view_init(elev=22, azim=-130)
-    ax3.set_title("3-D view")
-
-    for k, (label, h, v, d, sign) in enumerate(VIEWS):
-        ax = fig.add_subplot(2, 2, k + 2)
-        order = sorted(solids, key=lambda s: sign * float(np.mean(np.vstack(s[1])[:, d])))
-        for name, polys, colour, alpha in order:
-            pts = np.vstack(polys)[:, [h, v]] * scale
-            try:
-                hull = ConvexHull(pts)
-            except (QhullError, ValueError):
-                continue
-            ax.add_patch(
-                Polygon(
-                    pts[hull.vertices],
-                    closed=True,
-                    facecolor=colour,
-                    edgecolor="#333333" if name != "object" else "#1f4e79",
-                    linewidth=0.6,
-                    alpha=alpha,
-                    zorder=1,
-                )
-            )
-        for k_contact, (finger, p, n) in enumerate(touches):
-            pm = p * scale
-            f = -n * arrow
-            ax.annotate(
-                "",
-                xy=(pm[h] + f[h], pm[v] + f[v]),
-                xytext=(pm[h], pm[v]),
-                arrowprops={"arrowstyle": "-|>", "color": CONTACT_COLOUR, "lw": 1.8},
-                zorder=3,
-            )
-            ax.plot(pm[h], pm[v], "o", color=CONTACT_COLOUR, markersize=5, zorder=4)
-            ax.annotate(
-                finger,
-                (pm[h], pm[v]),
-                textcoords="offset points",
-                xytext=LABEL_OFFSETS[k_contact % len(LABEL_OFFSETS)],
-                fontsize=8,
-                zorder=4,
-            )
-        ax.set_xlim(centre[h] - half, centre[h] + half)
-        ax.set_ylim(centre[v] - half, centre[v] + half)
-        ax.set_aspect("equal")
-        ax.grid(True, linewidth=0.3, alpha=0.5)
-        ax.set_xlabel(f"{AXIS_NAMES[h]} (mm)")
-        ax.set_ylabel(f"{AXIS_NAMES[v]} (mm)")
-        ax.set_title(label)
+    _draw_3d(fig, solids, touches, centre, half, arrow)
+    for k, view in enumerate(VIEWS):
+        _draw_view(fig.add_subplot(2, 2, k + 2), view, solids, touches, centre, half, arrow)
     if title:
         fig.suptitle(title, fontsize=11)
     fig.tight_layout()
