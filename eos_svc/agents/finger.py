@@ -29,12 +29,12 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
-from eos_svc.agents.postulate import make_object
 from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.synthesis import SweepLandings, rotated_sweep_gaps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
+from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics.norms import vector_norm
 from eos_svc.objects import SurfaceObject
 

@@ -50,11 +50,9 @@ from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.agents.pose_board import PoseBoard
 from eos_svc.agents.post_shape import PostShapeAgent
-from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.agents.result import PlanResult
-from eos_svc.agents.sweeps import FingerSweep, build_sweeps
 from eos_svc.agents.world import GraspWorld
 from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.agents.world_parts import WorldParts, world_parts
@@ -62,6 +60,8 @@ from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
 from eos_svc.errors import ValidationError
+from eos_svc.grasp.postulate import make_object
+from eos_svc.grasp.sweeps import FingerSweep, build_sweeps
 from eos_svc.kinematics import (
     HAND3X3_URDF,
     HandModel,

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eos_svc.agents.sweeps import FingerSweep
+from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel
 
 

@@ -34,8 +34,8 @@ import numpy as np
 from eos_svc.agents.coverage import SpaceFillingOrder, column_counts, wrist_columns
 from eos_svc.agents.probe_pose import probe_pose
 from eos_svc.agents.probing import ProbeChoice, ProbeOutcome, densify
-from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
 from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.grasp.sweeps import FingerSweep, build_sweeps, finger_link_geometries
 from eos_svc.kinematics import HandModel, HandState, Scene, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table

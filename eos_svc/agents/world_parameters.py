@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eos_svc.agents.sweeps import FingerSweep, build_sweeps
+from eos_svc.grasp.sweeps import FingerSweep, build_sweeps
 from eos_svc.kinematics import HandDescription, HandModel
 
 

@@ -305,7 +305,7 @@ def run(args: argparse.Namespace) -> int:
         if record_file is not None:
             record_file.close()
     if args.picture:
-        from eos_svc.agents.picture import draw_result
+        from eos_svc.view.picture import draw_result
 
         if result.q_final is None:
             fail("--picture: no final hand configuration (the end agent never judged the grasp)", code=1)

@@ -152,7 +152,7 @@ def run(args: argparse.Namespace) -> int:
         code = 0 if verification.identical else 1
         final = final or verification.replayed_result
     if args.picture:
-        from eos_svc.agents.picture import draw_result
+        from eos_svc.view.picture import draw_result
 
         if final is None or final.get("q_final") is None:
             fail("--picture: no final hand configuration in the recording (the end agent never acted)")

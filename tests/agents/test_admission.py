@@ -158,8 +158,8 @@ def test_positions_the_search_cannot_promise_to_find_are_refused(position):
 
 def test_the_findable_shortcut_agrees_with_sampling_every_sweep_line():
     from eos_svc.agents.coverage import findable
-    from eos_svc.agents.postulate import make_object
-    from eos_svc.agents.sweeps import forward_reach
+    from eos_svc.grasp.postulate import make_object
+    from eos_svc.grasp.sweeps import forward_reach
 
     hand = default_hand()
     params = parameters_for(hand)

@@ -150,7 +150,7 @@ def test_object_beyond_every_sweep_is_not_findable():
 def test_forward_reach_of_hand3x3_is_the_default_of_the_rule():
     from eos_svc.agents.coverage import HAND3X3_FORWARD_REACH
     from eos_svc.agents.planner import finger_sweeps
-    from eos_svc.agents.sweeps import forward_reach
+    from eos_svc.grasp.sweeps import forward_reach
 
     hand = default_hand()
     assert forward_reach(hand, finger_sweeps(hand)) == pytest.approx(HAND3X3_FORWARD_REACH, abs=1e-3)

@@ -1,4 +1,4 @@
-"""eos_svc.agents.picture: meshes of every primitive and the guard on missing hand state."""
+"""eos_svc.view.picture: meshes of every primitive and the guard on missing hand state."""
 
 from __future__ import annotations
 
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import PlanRequest
-from eos_svc.agents.picture import _aabb_mesh, draw_result, scene_solids, shape_mesh
+from eos_svc.view.picture import bounding_box_mesh, draw_result, scene_solids, shape_mesh
 
 
 def _vertices(shape):
@@ -60,7 +60,7 @@ def test_draw_result_needs_the_final_configuration(tmp_path):
 
 
 def test_other_geometry_is_drawn_as_its_bounding_box():
-    v = np.vstack(_aabb_mesh(coal.Cone(0.01, 0.04)))
+    v = np.vstack(bounding_box_mesh(coal.Cone(0.01, 0.04)))
     assert np.allclose(v.max(axis=0), [0.01, 0.01, 0.02]) and np.allclose(
         v.min(axis=0), [-0.01, -0.01, -0.02]
     )

@@ -12,22 +12,12 @@ from eos_svc.agent import CycleContext, Outcome
 from eos_svc.agents import ObjectSpec, PlanRequest, keys, plan
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
-from eos_svc.agents.postulate import make_object, read_postulate
-from eos_svc.agents.quality import grasp_quality
-from eos_svc.agents.synthesis import (
-    GraspSynthesis,
-    SweepLandings,
-    candidate_frames,
-    cross3,
-    half_extent,
-    landing,
-    landing_from,
-    rotation_from_rpy,
-    rpy_from_rotation,
-    signed_distances,
-    sweep_gaps,
-)
 from eos_svc.board import Board
+from eos_svc.grasp.frames import rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
+from eos_svc.grasp.postulate import make_object, read_postulate
+from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.synthesis import GraspSynthesis
 from eos_svc.kinematics.norms import row_norms, vector_norm
 
 HERE = (0.21, 0.02, -0.015)
@@ -46,33 +36,6 @@ def contact_arrays(cand, hand):
 
 
 # --- geometry the synthesis rests on ----------------------------------------------------------
-@pytest.mark.parametrize(
-    "spec",
-    [
-        ObjectSpec("sphere", {"radius": 0.03}, HERE),
-        ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, HERE, (0.4, -0.3, 0.9)),
-        ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, HERE, (1.0, 0.2, -0.5)),
-        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
-    ],
-)
-def test_vectorised_signed_distance_matches_the_objects(spec):
-    obj = make_object(spec)
-    pts = np.asarray(HERE) + np.random.default_rng(3).uniform(-0.07, 0.07, (200, 3))
-    exact = np.array([obj.signed_distance(p) for p in pts])
-    assert np.allclose(signed_distances(obj, pts), exact, atol=1e-12)
-
-
-def test_ellipsoid_signed_distance_is_exact_on_the_surface_and_close_near_it():
-    obj = make_object(ObjectSpec("ellipsoid", {"radii": (0.035, 0.03, 0.025)}, HERE, (0.2, 0.1, 0.3)))
-    dirs = np.random.default_rng(4).normal(size=(100, 3))
-    dirs /= np.linalg.norm(dirs, axis=1)[:, None]
-    surface = np.array([obj.closest_surface_point(np.asarray(HERE) + 0.05 * d) for d in dirs])
-    assert np.max(np.abs(signed_distances(obj, surface))) < 1e-9
-    normals = np.array([obj.surface_normal(p) for p in surface])
-    off = surface + 0.01 * normals  # one fingertip radius out: exactly 10 mm away
-    assert np.allclose(signed_distances(obj, off), 0.01, atol=0.001)
-
-
 def test_wrist_angles_round_trip_and_match_the_hand_model():
     hand = default_hand()
     rng = np.random.default_rng(5)
@@ -103,6 +66,34 @@ def test_sphere_landing_matches_the_closed_form():
     assert np.allclose(hit.normal, (hit.point - np.asarray(HERE)) / 0.03, atol=1e-3)
 
 
+def test_wrist_angles_outside_the_joint_limits_are_refused():
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 1.0)) == pytest.approx((0.3, 0.2, 1.0), abs=1e-12)
+    assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 2.0)) is None  # yaw beyond π/2
+
+
+def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
+    # unrotated palm, sphere on the palm's x axis: every start up to the touching sample lands
+    # on the same contact; a finger starting inside the object (touching already) lands nowhere
+    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
+    finger = s.opposing
+    sweep, r = s.sweeps[finger], s.hand.tip_radius(finger)
+    wrist = np.asarray(HERE) - np.array([0.125, 0.0, 0.0])
+    pts, gaps = rotated_sweep_gaps(s.obj, sweep.points, r, wrist)
+    landings = SweepLandings(s.obj, sweep, pts, gaps)
+    first = landings.landing(0)
+    assert first is not None and gaps[first.index] <= 0.0 < gaps[first.index - 1]
+    for start in range(first.index + 1):
+        hit = landings.landing(start)
+        assert hit is not None and hit.index == first.index and np.array_equal(hit.point, first.point)
+    assert landings.landing(first.index + 1) is None  # starts where it already touches
+    assert landings.first_touch(first.index + 1) is None
+    point = np.asarray(HERE) + np.array([0.0, 0.0, 0.03])
+    assert landings.miss_lower_bound(0, r, point) == pytest.approx(float(np.linalg.norm(first.point - point)))
+    far = SweepLandings(s.obj, sweep, pts + np.array([0.0, 0.3, 0.0]), np.full(len(gaps), 0.01))
+    assert far.landing(0) is None and far.miss_lower_bound(0, r, point) == -np.inf
+
+
 @pytest.mark.parametrize(
     "spec",
     [
@@ -111,7 +102,7 @@ def test_sphere_landing_matches_the_closed_form():
     ],
 )
 def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
-    # _clear skips the exact query of a geometry whose lower bound reaches the threshold: the
+    # clear() skips the exact query of a geometry whose lower bound reaches the threshold: the
     # answer must be the one from every geometry's exact gap, near and far from the object
     s = synthesis(spec)
     hand = s.hand
@@ -128,10 +119,10 @@ def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
         q = np.clip(q, hand.lower, hand.upper)
         for threshold in (0.0, 0.0025, 0.01):
             for skip_tips in (False, True):
-                fast = s._clear(q, threshold, skip_tips)
+                fast = s.clearance.clear(q, threshold, skip_tips)
                 state = hand.state(q)
                 exact = all(
-                    s.scene.gap(state, g) >= threshold
+                    s.clearance.scene.gap(state, g) >= threshold
                     for g in range(hand.collision_model.ngeoms)
                     if not (skip_tips and g in tips)
                 )
@@ -140,83 +131,12 @@ def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
     assert answers == {True, False}
 
 
-@pytest.mark.parametrize(
-    "spec",
-    [
-        ObjectSpec("box", {"size": (0.05, 0.05, 0.05)}, HERE, (0.0, 0.0, 0.52)),
-        ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, HERE, (1.0, 0.2, -0.5)),
-        ObjectSpec("ellipsoid", {"radii": (0.02, 0.04, 0.03)}, HERE, (0.3, -0.2, 0.1)),
-    ],
-)
-def test_memoised_extent_and_configuration_equal_the_plain_ones(spec):
-    # half_extent_along memoises half_extent per direction; _configuration reads the hand's
-    # indices once: both must give the plain computation's values bit for bit
-    s = synthesis(spec)
-    hand = s.hand
-    rng = np.random.default_rng(11)
-    for _ in range(3):
-        for _, R in candidate_frames(s.obj):
-            d = R[:, 2]
-            assert s.half_extent_along(d) == half_extent(s.obj, d)
-            assert s.half_extent_along(d.copy()) == half_extent(s.obj, d)
-    centre = np.asarray(HERE)
-    unrotated = (np.eye(3), (0.0, 0.0, 0.0))
-    simulated = (s._simulate("t", *unrotated, centre, 0.08 + k * 0.004, 0.03) for k in range(6))
-    cands = [c for c in simulated if c is not None]
-    assert cands, "no landing to build configurations from"
-    for c in cands:
-        for angles in (None, {f: float(rng.uniform(-0.2, 1.6)) for f in hand.finger_names}):
-            wrist = c.wrist + rng.uniform(-0.02, 0.02, 3)
-            q = hand.neutral()
-            widx = hand.wrist_q_index
-            q[widx[:3]] = wrist
-            q[widx[3:6]] = c.wrist_rpy
-            for f in hand.finger_names:
-                q[hand.finger_q_index(f)] = s.sweeps[f].angles[0] if angles is None else angles[f]
-            plain = np.clip(q, hand.lower, hand.upper)
-            assert np.array_equal(s._configuration(c, wrist, angles), plain)
-
-
 def test_row_norms_are_numpys_bit_for_bit():
     rng = np.random.default_rng(8)
     for scale in (1e-6, 0.03, 10.0):
         for k in (1, 2, 3, 5):
             p = rng.normal(0.0, scale, (rng.integers(1, 300), k))
             assert np.array_equal(row_norms(p), np.linalg.norm(p, axis=1))
-
-
-def test_wrist_angles_check_equals_the_numpy_form():
-    # wrist_rpy's scalar tolerance and limit tests against np.allclose / np.any on random
-    # rotations: representable, perturbed about the 1e-9 tolerance, beyond the joint limits
-    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
-    hand = s.hand
-    widx = hand.wrist_q_index
-    lo, hi = hand.lower[widx[3:6]], hand.upper[widx[3:6]]
-
-    def plain(R):
-        rpy = rpy_from_rotation(R)
-        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
-            return None
-        a = np.asarray(rpy)
-        if np.any(a < lo - 1e-9) or np.any(a > hi + 1e-9):
-            return None
-        return rpy
-
-    rng = np.random.default_rng(9)
-    answers = set()
-    for _ in range(3000):
-        R = rotation_from_rpy(*rng.uniform(-1.3, 1.3) * rng.uniform(0.5, 2.5, 3))
-        R = R + rng.choice([0.0, 1e-10, 1e-9, 2e-9, 1e-6]) * rng.normal(size=(3, 3))
-        assert s.wrist_rpy(R) == plain(R)
-        answers.add(plain(R) is None)
-    assert answers == {True, False}
-
-
-def test_cross3_is_numpys_cross_bit_for_bit():
-    rng = np.random.default_rng(6)
-    for _ in range(2000):
-        a, b = rng.normal(size=3) * rng.uniform(1e-6, 1e3), rng.normal(size=3)
-        assert np.array_equal(cross3(a, b), np.cross(a, b))
 
 
 def test_vector_norm_is_numpys_bit_for_bit():
@@ -228,44 +148,6 @@ def test_vector_norm_is_numpys_bit_for_bit():
             m = rng.normal(0.0, scale, (3, 3))
             assert vector_norm(m[:, 1]) == float(np.linalg.norm(m[:, 1]))  # a strided view
     assert vector_norm(np.zeros(3)) == 0.0
-
-
-@pytest.mark.parametrize("seed", [0, 1, 2])
-def test_sweep_landings_equal_landing_from_for_every_start(seed):
-    # the memo of landings per first touching sample vs the plain landing from each start: the
-    # same answers, bit for bit, on random gap profiles (touching runs anywhere, touching at
-    # the start, never touching) and on real sweeps past a sphere at random palm poses
-    rng = np.random.default_rng(seed)
-    s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
-    hand = s.hand
-    for finger in hand.finger_names:
-        sweep = s.sweeps[finger]
-        n = len(sweep.angles)
-        profiles = []
-        for _ in range(6):
-            palm = np.asarray(HERE) - np.array([0.125, 0.0, 0.0]) + rng.uniform(-0.03, 0.03, 3)
-            profiles.append(sweep_gaps(s.obj, sweep, hand.tip_radius(finger), np.eye(3), palm))
-        for _ in range(6):
-            pts = rng.uniform(-0.1, 0.1, (n, 3)) + np.asarray(HERE)
-            gaps = rng.uniform(-0.01, 0.01, n) * (rng.uniform(size=n) < 0.3)  # zeros touch too
-            gaps[rng.uniform(size=n) < 0.5] = 0.01
-            profiles.append((pts, gaps))
-        profiles.append((profiles[-1][0], np.full(n, 0.01)))  # never touches
-        touched = 0
-        for pts, gaps in profiles:
-            memo = SweepLandings(s.obj, sweep, pts, gaps)
-            for start in [*range(n + 2), *rng.integers(0, n, 10).tolist()]:  # some again, out of order
-                plain = landing_from(s.obj, sweep, pts, gaps, start)
-                fast = memo.landing(start)
-                assert (fast is None) == (plain is None)
-                assert (memo.first_touch(start) is None) == (plain is None)
-                if plain is not None:
-                    touched += 1
-                    assert memo.first_touch(start) == plain.index
-                    assert fast.index == plain.index and fast.angle == plain.angle
-                    assert np.array_equal(fast.point, plain.point)
-                    assert np.array_equal(fast.normal, plain.normal)
-        assert touched > 0
 
 
 # --- candidates per primitive -------------------------------------------------------------------
@@ -332,6 +214,49 @@ def test_ellipsoid_is_grasped_across_a_shorter_axis():
     axes = s.obj.placement.rotation
     along = np.abs(axes.T @ cand.closing)
     assert np.argmax(along) in (0, 2) and np.max(along) == pytest.approx(1.0, abs=1e-9)  # not the longest
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("sphere", {"radius": 0.03}, HERE),
+        ObjectSpec("ellipsoid", {"radii": (0.03, 0.045, 0.022)}, HERE, (0.2, -0.4, 0.6)),
+        ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, HERE),
+        ObjectSpec("capsule", {"radius": 0.02, "length": 0.06}, HERE, (0.5, 0.7, 0.3)),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.0, 0.0, 0.8)),
+    ],
+    ids=lambda spec: spec.shape,
+)
+def test_every_candidate_is_reached_collision_free(spec):
+    # exact coal gaps (no bounds): the hand clear by the clearance at the pre-grasp, clear of
+    # the object along the approach with the fingers open, and only its tips touching at the
+    # landings; the candidates scored and ordered best first
+    s = synthesis(spec)
+    cands = s.candidates()
+    assert cands, s.rejections
+    hand, check = s.hand, s.clearance
+    tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
+
+    def gaps(q, skip_tips=False):
+        state = hand.state(q)
+        return [
+            check.scene.gap(state, g)
+            for g in range(hand.collision_model.ngeoms)
+            if not (skip_tips and g in tips)
+        ]
+
+    for c in cands:
+        assert c.about_centre and c.epsilon > 0.0
+        pre, stand_off = s.pregrasp(c)
+        assert stand_off >= s.params.approach_distance
+        assert np.allclose(pre, c.wrist - stand_off * c.approach)
+        assert min(gaps(check.configuration(c.wrist_rpy, pre))) >= s.params.clearance
+        for t in np.linspace(0.0, 1.0, 5):
+            assert min(gaps(check.configuration(c.wrist_rpy, pre + t * (c.wrist - pre)))) > 0.0
+        landed = {f: hit.angle for f, hit in c.landings.items()}
+        assert min(gaps(check.configuration(c.wrist_rpy, c.wrist, landed), skip_tips=True)) >= 0.0
+    top = max(c.epsilon for c in cands)
+    assert cands[0].epsilon >= 0.95 * top
 
 
 def test_object_larger_than_the_hand_in_every_direction_fails_naming_its_size():

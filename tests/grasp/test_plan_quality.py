@@ -7,8 +7,8 @@ import json
 import pytest
 
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.agents.quality import contacts_quality
 from eos_svc.errors import ValidationError
+from eos_svc.grasp.quality import contacts_quality
 
 
 @pytest.fixture(scope="module")

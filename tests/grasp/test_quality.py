@@ -1,4 +1,4 @@
-"""Grasp quality (eos_svc.agents.quality) against closed forms and invariances."""
+"""Grasp quality (eos_svc.grasp.quality) against closed forms and invariances."""
 
 from __future__ import annotations
 
@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from eos_svc.agents.quality import (
+from eos_svc.grasp.quality import (
     GraspQuality,
     contacts_quality,
     epsilon_of_wrenches,
@@ -79,8 +79,13 @@ def test_seven_frictionless_contacts_on_a_cube_close():
     force closure (7 is the minimum in 3-D); removing any one of them breaks closure."""
     p = np.array(
         [
-            [1.0, -0.5, -0.5], [-1.0, -0.5, 0.5], [-0.5, 1.0, 0.0], [-1.0, -1.0, 0.5],
-            [-1.0, -0.5, 1.0], [0.0, 0.5, -1.0], [0.5, -1.0, 0.5],
+            [1.0, -0.5, -0.5],
+            [-1.0, -0.5, 0.5],
+            [-0.5, 1.0, 0.0],
+            [-1.0, -1.0, 0.5],
+            [-1.0, -0.5, 1.0],
+            [0.0, 0.5, -1.0],
+            [0.5, -1.0, 0.5],
         ]
     )
     n = np.array(
@@ -173,6 +178,7 @@ def test_more_cone_edges_converge():
 def test_torque_scale_default_is_largest_contact_radius():
     p = equator(3, 0.04)
     q = grasp_quality(p, p, [0.0, 0.0, 0.0], 0.5)
+    assert q.to_dict()["torque_scale"] == q.torque_scale
     assert q.torque_scale == pytest.approx(0.04)
     assert q.epsilon == pytest.approx(grasp_quality(p, p, [0.0, 0.0, 0.0], 0.5, torque_scale=0.04).epsilon)
 
@@ -221,7 +227,7 @@ def test_collinear_contacts_with_friction_are_not_closure():
 )
 def test_malformed_inputs_name_the_argument(kwargs, message):
     with pytest.raises(ValueError, match=message):
-        grasp_quality(**kwargs)
+        grasp_quality(**{"centre": None, "mu": 0.5, **kwargs})
 
 
 def test_contacts_quality_uses_touching_fingers_only():
@@ -235,57 +241,3 @@ def test_contacts_quality_uses_touching_fingers_only():
     q = contacts_quality(contacts, [0.0, 0.0, 0.0], 0.03, 0.5)
     assert q.contacts == 2 and not q.force_closure
     assert q.to_dict()["friction"] == 0.5
-
-
-def test_primitive_wrenches_equal_the_per_contact_loop_bit_for_bit():
-    # primitive_wrenches computes the cone's edge angles once for every contact: the wrenches
-    # must be the plain per-contact construction's, bit for bit (ε is compared exactly)
-    from eos_svc.kinematics.geometry import tangent_basis
-
-    rng = np.random.default_rng(5)
-    for _ in range(20):
-        k = int(rng.integers(1, 5))
-        points = rng.normal(size=(k, 3)) * 0.03
-        normals = rng.normal(size=(k, 3))
-        centre = rng.normal(size=3) * 0.01
-        mu = float(rng.uniform(0.1, 1.0))
-        m = int(rng.integers(3, 9))
-        w, scale, edges = primitive_wrenches(points, normals, centre, mu, m, 0.04)
-        n = normals / np.linalg.norm(normals, axis=1)[:, None]
-        forces = np.empty((k, m, 3))
-        for i, ni in enumerate(n):
-            t1, t2 = tangent_basis(ni)
-            theta = 2.0 * np.pi * np.arange(m) / m
-            forces[i] = -ni + mu * (np.cos(theta)[:, None] * t1 + np.sin(theta)[:, None] * t2)
-        torques = np.cross((points - centre)[:, None, :], forces) / 0.04
-        plain = np.concatenate([forces, torques], axis=2).reshape(k * m, 6)
-        assert (scale, edges) == (0.04, m)
-        assert np.array_equal(w, plain)
-
-
-def test_cross_rows_and_rank_equal_numpys_bit_for_bit():
-    from eos_svc.agents.quality import cross_rows
-
-    rng = np.random.default_rng(6)
-    for k, m in ((1, 4), (3, 4), (4, 8)):
-        r = rng.normal(size=(k, 3)) * 0.05
-        f = rng.normal(size=(k, m, 3))
-        assert np.array_equal(cross_rows(r, f), np.cross(r[:, None, :], f))
-    for rank in (2, 5, 6):  # epsilon_of_wrenches' rank is np.linalg.matrix_rank's
-        w = rng.normal(size=(12, rank)) @ rng.normal(size=(rank, 6))
-        size = float(np.max(np.abs(w)))
-        assert epsilon_of_wrenches(w)[1] == np.linalg.matrix_rank(w, tol=1e-9 * max(size, 1.0)) == rank
-
-
-def test_to_dict_is_asdict():
-    import dataclasses
-
-    from eos_svc.agents.quality import GraspQuality
-
-    for q in (
-        GraspQuality(True, 0.123, 0.5, 8, 0.03, 3, 6, 6),
-        GraspQuality(False, 0.0, 0.0, 1, 0.01, 0, 0, 3),
-    ):
-        got = q.to_dict()
-        assert got == dataclasses.asdict(q) and list(got) == list(dataclasses.asdict(q))
-

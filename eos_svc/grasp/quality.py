@@ -41,29 +41,16 @@ in 3-D never are (the torque about the line through them is unresisted), three c
 
 from __future__ import annotations
 
-import functools
-import math
 from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import asdict, dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
-from eos_svc.agents.request import DEFAULT_FRICTION, MAX_FRICTION
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics.geometry import tangent_basis
-
-__all__ = [
-    "DEFAULT_EDGES",
-    "DEFAULT_FRICTION",
-    "GraspQuality",
-    "contacts_quality",
-    "epsilon_of_wrenches",
-    "grasp_quality",
-    "primitive_wrenches",
-]
 
 #: default number of edges of a linearised 3-D friction cone
 DEFAULT_EDGES = 8
@@ -97,16 +84,12 @@ class GraspQuality:
     dimension: int
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly form: the fields in order (all scalars; ``dataclasses.asdict``'s
-        recursive copy cost ≈ 40 µs a plan for the same dict)."""
-        return {name: getattr(self, name) for name in _QUALITY_FIELDS}
-
-
-#: GraspQuality's field names, in order
-_QUALITY_FIELDS = tuple(f.name for f in fields(GraspQuality))
+        """JSON-friendly form: the fields in order."""
+        return asdict(self)
 
 
 def _array(value: ArrayLike, name: str) -> np.ndarray:
+    """``value`` as a float array; :class:`ValidationError` naming ``name`` unless finite numbers."""
     try:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError):
@@ -116,21 +99,11 @@ def _array(value: ArrayLike, name: str) -> np.ndarray:
     return a
 
 
-def check_friction(mu: object, name: str = "friction") -> float:
-    """Validate a Coulomb friction coefficient: a finite number in [0, MAX_FRICTION]."""
-    if isinstance(mu, bool) or not isinstance(mu, (int, float, np.floating, np.integer)):
-        raise ValidationError(name, f"must be a number, got {type(mu).__name__}")
-    v = float(mu)
-    if not (math.isfinite(v) and 0.0 <= v <= MAX_FRICTION):
-        raise ValidationError(name, f"must be in [0, {MAX_FRICTION}], got {v!r}")
-    return v
-
-
 def primitive_wrenches(
     points: ArrayLike,
     normals: ArrayLike,
-    centre: ArrayLike | None = None,
-    mu: float = DEFAULT_FRICTION,
+    centre: ArrayLike | None,
+    mu: float,
     edges: int = DEFAULT_EDGES,
     torque_scale: float | None = None,
 ) -> tuple[np.ndarray, float, int]:
@@ -139,7 +112,7 @@ def primitive_wrenches(
     Args:
         points: (k, 3) or (k, 2) contact points on the object (m).
         normals: same shape: outward surface normals (need not be unit length).
-        centre: torque reference, the object's centre (default: the contacts' centroid).
+        centre: torque reference, the object's centre (None: the contacts' centroid).
         mu: Coulomb friction coefficient (≥ 0).
         edges: edges per linearised 3-D cone (≥ 3; ignored in 2-D).
         torque_scale: characteristic length L (default: the largest ``‖p_i − c‖``, or 1).
@@ -150,63 +123,50 @@ def primitive_wrenches(
     Raises:
         ValueError: naming the malformed argument.
     """
-    p = _array(points, "points")
-    n = _array(normals, "normals")
+    p, n = _array(points, "points"), _array(normals, "normals")
     if p.ndim != 2 or p.shape[1] not in (2, 3):
         raise ValidationError("points", f"must have shape (k, 3) or (k, 2), got {p.shape}")
     if n.shape != p.shape:
         raise ValidationError("normals", f"must have the shape of points {p.shape}, got {n.shape}")
-    dim = p.shape[1]
-    mu = check_friction(mu, "mu")
+    mu = float(_array(mu, "mu"))
+    if mu < 0.0:
+        raise ValidationError("mu", f"must be ≥ 0, got {mu!r}")
     if isinstance(edges, bool) or not isinstance(edges, (int, np.integer)) or edges < 3:
         raise ValidationError("edges", f"must be an integer ≥ 3, got {edges!r}")
     lengths = np.linalg.norm(n, axis=1)
     if np.any(lengths < 1e-12):
         raise ValidationError("normals", "every normal must be non-zero")
     n = n / lengths[:, None]
-    centroid = np.mean(p, axis=0) if len(p) else np.zeros(dim)
-    c = centroid if centre is None else _array(centre, "centre")
+    k, dim = p.shape
+    c = (np.mean(p, axis=0) if k else np.zeros(dim)) if centre is None else _array(centre, "centre")
     if c.shape != (dim,):
         raise ValidationError("centre", f"must have {dim} coordinates, got shape {c.shape}")
     r = p - c
     if torque_scale is None:
-        far = float(np.max(np.linalg.norm(r, axis=1))) if len(r) else 0.0
+        far = float(np.max(np.linalg.norm(r, axis=1))) if k else 0.0
         scale = far if far > 1e-12 else 1.0
     else:
         scale = float(_array(torque_scale, "torque_scale"))
         if scale <= 0.0:
             raise ValidationError("torque_scale", f"must be > 0, got {scale!r}")
     m = 1 if mu == 0.0 else (2 if dim == 2 else int(edges))
-    forces = np.empty((len(p), m, dim))
+    # the cone's edges about each normal: t1, t2 span its tangent plane (t2 = 0 in the plane)
     if dim == 3:
-        # the cone's edge directions, the same for every contact (computed once)
-        theta = 2.0 * np.pi * np.arange(m) / m
-        cos_t, sin_t = np.cos(theta)[:, None], np.sin(theta)[:, None]
-        for i, ni in enumerate(n):
-            if m == 1:
-                forces[i, 0] = -ni
-                continue
-            t1, t2 = tangent_basis(ni)
-            forces[i] = -ni + mu * (cos_t * t1 + sin_t * t2)
-        torques = cross_rows(r, forces) / scale
+        bases = [tangent_basis(ni) for ni in n]
+        t1 = np.array([b[0] for b in bases]).reshape(k, 3)
+        t2 = np.array([b[1] for b in bases]).reshape(k, 3)
     else:
-        t = np.stack([-n[:, 1], n[:, 0]], axis=1)
-        signs = np.array([1.0]) if m == 1 else np.array([1.0, -1.0])
-        forces = -n[:, None, :] + mu * signs[None, :, None] * t[:, None, :]
-        torques = (r[:, None, 0] * forces[..., 1] - r[:, None, 1] * forces[..., 0])[..., None] / scale
-    wrenches = np.concatenate([forces, torques], axis=2).reshape(len(p) * m, 6 if dim == 3 else 3)
+        t1, t2 = np.stack([-n[:, 1], n[:, 0]], axis=1), np.zeros_like(n)
+    theta = 2.0 * np.pi * np.arange(m) / m
+    cos, sin = np.cos(theta)[None, :, None], np.sin(theta)[None, :, None]
+    forces = -n[:, None, :] + mu * (cos * t1[:, None, :] + sin * t2[:, None, :])  # (k, m, dim)
+    arm = r[:, None, :]
+    if dim == 3:
+        torques = np.cross(arm, forces)
+    else:
+        torques = (arm[..., 0] * forces[..., 1] - arm[..., 1] * forces[..., 0])[..., None]
+    wrenches = np.concatenate([forces, torques / scale], axis=2).reshape(k * m, 6 if dim == 3 else 3)
     return wrenches, scale, m
-
-
-def cross_rows(r: np.ndarray, forces: np.ndarray) -> np.ndarray:
-    """``np.cross(r[:, None, :], forces)`` of (k, 3) lever arms and (k, m, 3) forces, bit for
-    bit (numpy forms each component as the same two products and their difference), without
-    its axis shuffling (a tenth of a millisecond per grasp)."""
-    a = r[:, None, :]
-    a0, a1, a2 = a[..., 0], a[..., 1], a[..., 2]
-    b0, b1, b2 = forces[..., 0], forces[..., 1], forces[..., 2]
-    out: np.ndarray = np.stack([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0], axis=-1)
-    return out
 
 
 def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
@@ -219,10 +179,7 @@ def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
     if w.ndim != 2 or len(w) == 0:
         return 0.0, 0
     dim = w.shape[1]
-    size = float(np.max(np.abs(w)))
-    # np.linalg.matrix_rank(w, tol) without its dispatch: singular values above tol
-    tol = 1e-9 * max(size, 1.0)
-    rank = int(np.count_nonzero(np.linalg.svd(w, compute_uv=False) > tol)) if size > 0 else 0
+    rank = int(np.linalg.matrix_rank(w, tol=1e-9 * max(float(np.max(np.abs(w))), 1.0)))
     if rank < dim or len(w) <= dim:
         return 0.0, rank
     try:
@@ -238,57 +195,28 @@ def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
 def grasp_quality(
     points: ArrayLike,
     normals: ArrayLike,
-    centre: ArrayLike | None = None,
-    mu: float = DEFAULT_FRICTION,
+    centre: ArrayLike | None,
+    mu: float,
     edges: int = DEFAULT_EDGES,
     torque_scale: float | None = None,
 ) -> GraspQuality:
     """Force closure and ε of contacts (arguments as :func:`primitive_wrenches`)."""
     w, scale, m = primitive_wrenches(points, normals, centre, mu, edges, torque_scale)
-    dim = 6 if np.shape(points)[1] == 3 else 3
     eps, rank = epsilon_of_wrenches(w)
-    return GraspQuality(
-        force_closure=eps > 0.0,
-        epsilon=eps,
-        friction=float(mu),
-        edges=m,
-        torque_scale=scale,
-        contacts=int(np.shape(points)[0]),
-        rank=rank,
-        dimension=dim,
-    )
+    k, dim = np.shape(points)
+    return GraspQuality(eps > 0.0, eps, float(mu), m, scale, int(k), rank, 6 if dim == 3 else 3)
 
 
 def contacts_quality(
     contacts: Mapping[str, Mapping[str, Any]],
     centre: ArrayLike,
     torque_scale: float,
-    mu: float = DEFAULT_FRICTION,
+    mu: float,
     edges: int = DEFAULT_EDGES,
 ) -> GraspQuality:
     """:func:`grasp_quality` of the *touching* fingertips of a plan's ``contacts`` dict
-    (per finger: ``touching``, ``point`` and outward ``normal`` in the world frame).
-
-    Memoised on its (hashable) inputs: the end agent and the plan result judge the same
-    contacts, and a 6-D hull costs milliseconds.
-    """
-    touching = tuple(
-        (tuple(float(v) for v in c["point"]), tuple(float(v) for v in c["normal"]))
-        for c in contacts.values()
-        if c.get("touching")
-    )
-    centre_key = tuple(float(v) for v in np.asarray(centre, dtype=float).ravel())
-    return _contacts_quality(touching, centre_key, float(torque_scale), float(mu), int(edges))
-
-
-@functools.lru_cache(maxsize=64)
-def _contacts_quality(
-    touching: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...],
-    centre: tuple[float, ...],
-    torque_scale: float,
-    mu: float,
-    edges: int,
-) -> GraspQuality:
-    points = np.array([p for p, _ in touching], dtype=float).reshape(-1, 3)
-    normals = np.array([n for _, n in touching], dtype=float).reshape(-1, 3)
+    (per finger: ``touching``, ``point`` and outward ``normal`` in the world frame)."""
+    touching = [c for c in contacts.values() if c.get("touching")]
+    points = np.array([c["point"] for c in touching], dtype=float).reshape(-1, 3)
+    normals = np.array([c["normal"] for c in touching], dtype=float).reshape(-1, 3)
     return grasp_quality(points, normals, centre, mu, edges, torque_scale)

@@ -1,0 +1,121 @@
+"""Where a closing fingertip lands on an object: its *landing*.
+
+A finger closes along its sweep (:class:`~eos_svc.grasp.sweeps.FingerSweep`: fingertip-centre
+positions in the palm frame, joint angle increasing). With the palm at a pose, each sample's
+*gap* is the object's signed distance at the tip centre less the tip radius; the fingertip
+lands between the last free sample and the first touching one, where the gap, interpolated
+linearly, is zero. The contact is the object's surface point closest to the tip centre there,
+its normal runs from the contact to the tip centre.
+
+SI units: metres, radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.objects import SurfaceObject
+
+
+@dataclass(frozen=True)
+class Landing:
+    """Where a closing fingertip first touches the object.
+
+    Attributes:
+        index: sweep sample at which the tip touches (the finger's angle is ``sweep.angles[index]``).
+        angle: the joint angle of the touch, between samples ``index`` − 1 and ``index`` (rad).
+        point: contact point on the object (world, m).
+        normal: the object's outward unit normal there (world).
+    """
+
+    index: int
+    angle: float
+    point: np.ndarray
+    normal: np.ndarray
+
+    def to_dict(self) -> dict:
+        """JSON form (rounded to µm)."""
+        return {
+            "angle": round(self.angle, 6),
+            "point": np.round(self.point, 6).tolist(),
+            "normal": np.round(self.normal, 6).tolist(),
+        }
+
+
+def rotated_sweep_gaps(
+    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float, origin: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """The sweep's fingertip centres in the world (N, 3) and each one's gap to ``obj`` (m), from
+    the sweep's points turned by the palm's rotation R (``sweep.points @ R.T``) and the palm's
+    ``origin`` (world, m)."""
+    pts = rotated + origin
+    return pts, obj.signed_distances(pts)[0] - tip_radius
+
+
+class SweepLandings:
+    """The landings of one sweep on an object, the palm at one pose, from any start sample.
+
+    A finger between samples ``start`` − 1 and ``start``, not touching, closes from the former:
+    it lands at the first touching sample at or after ``max(0, start − 1)``, unless it already
+    touches there (then there is no landing).
+
+    Args:
+        obj: the object.
+        sweep: the finger's closing sweep.
+        pts: the sweep's fingertip centres at this pose (world, m; :func:`rotated_sweep_gaps`).
+        gaps: their gaps to ``obj`` (m; :func:`rotated_sweep_gaps`).
+    """
+
+    def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
+        self.obj, self.sweep, self.pts, self.gaps = obj, sweep, pts, gaps
+
+    def first_touch(self, start: int) -> int | None:
+        """The touching sample a finger closing from ``start`` lands at (None: it never touches,
+        or already touches where it starts)."""
+        s = max(0, start - 1)
+        hits = np.flatnonzero(self.gaps[s:] <= 0.0)
+        if len(hits) == 0 or hits[0] == 0:
+            return None
+        return s + int(hits[0])
+
+    def landing(self, start: int) -> Landing | None:
+        """Where the finger closing from sample ``start`` lands (None: nowhere)."""
+        k = self.first_touch(start)
+        if k is None:
+            return None
+        a, b = self.gaps[k - 1], self.gaps[k]
+        s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
+        tip = self.pts[k - 1] + s * (self.pts[k] - self.pts[k - 1])
+        point = self.obj.closest_surface_point(tip)
+        # a sphere tip touching a convex object: the contact normal runs from the contact point
+        # to the tip's centre (defined on edges and rims too, where the surface normal is not)
+        out = tip - point
+        length = float(np.linalg.norm(out))
+        normal = out / length if length > 1e-9 else self.obj.surface_normal(tip)
+        angles = self.sweep.angles
+        angle = float(angles[k - 1] + s * (angles[k] - angles[k - 1]))
+        return Landing(k, angle, point, normal)
+
+    def miss_lower_bound(self, start: int, tip_radius: float, point: np.ndarray) -> float:
+        """A lower bound (m) of the distance from the landing from ``start`` to ``point`` (world):
+        the distance itself, −inf when there is no landing (``tip_radius`` is not needed)."""
+        hit = self.landing(start)
+        return -np.inf if hit is None else float(np.linalg.norm(hit.point - point))
+
+
+def landing(
+    obj: SurfaceObject,
+    sweep: FingerSweep,
+    tip_radius: float,
+    rotation: np.ndarray,
+    origin: np.ndarray,
+    start: int = 0,
+) -> Landing | None:
+    """Where ``sweep``'s fingertip (radius ``tip_radius``) first touches ``obj`` when the finger
+    closes from sample ``start``, the palm at (``rotation``, ``origin``) in the world; None when
+    it never does, or already touches there (see :class:`SweepLandings`)."""
+    pts, gaps = rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
+    return SweepLandings(obj, sweep, pts, gaps).landing(start)

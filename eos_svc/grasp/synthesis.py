@@ -1,0 +1,215 @@
+"""Grasp synthesis on a postulated primitive (Miller, Knoop, Christensen, Allen, ICRA 2003).
+
+A *candidate grasp* is a palm orientation (the approach direction and the hand's roll about
+it: :mod:`~eos_svc.grasp.frames`, GraspIt's rules per primitive) and a depth (the object's
+centre on the palm's x axis, that far ahead of the palm). Each candidate is simulated on the
+*postulated* object (never the true one): every finger's closing sweep is run against the
+object's signed distance until the fingertip touches (its landing,
+:mod:`~eos_svc.grasp.landing`). A candidate is kept when the wrist can take its pose (joint
+limits), every fingertip lands from the open hand, the contacts lie about the centre (the end
+agent's Fig. 2 test with a margin), the object is smaller than the hand height across the grip
+(paper §2.1: d/h < 1), and the hand reaches it without collision
+(:mod:`~eos_svc.grasp.clearance`). The kept candidates are scored by the Ferrari–Canny ε of
+their predicted contacts on the postulated object (:mod:`~eos_svc.grasp.quality`) and the best
+is chosen; ties (a sphere's symmetric grasps) go to the least wrist rotation.
+
+SI units throughout: metres, radians.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from eos_svc.grasp.candidate import GraspCandidate, diameter_angle_deg
+from eos_svc.grasp.clearance import HandClearance
+from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.landing import Landing, landing
+from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.kinematics import HandModel
+from eos_svc.objects import Sphere, SurfaceObject
+
+if TYPE_CHECKING:
+    from eos_svc.agents.world_parameters import WorldParameters
+
+#: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
+SCORE_EDGES = 4
+#: depth offsets tried, in order, about the depth that puts the opposing contact under the
+#: centre (m); the best is refined by ±``DEPTH_REFINE``
+DEPTH_OFFSETS = (0.0, -0.004, 0.004, -0.008, 0.008, -0.012, 0.012, -0.016, 0.016, -0.02, 0.02)
+DEPTH_REFINE = 0.002
+#: a depth whose predicted angle across the centre reaches this needs no other depth tried (deg)
+GOOD_ENOUGH_ANGLE_DEG = 172.0
+#: ε within this fraction of the best counts as equal (then the smaller wrist rotation wins)
+EPSILON_TIE = 0.05
+#: collision-free candidates about the centre scored by ε, the least-rotated first
+SCORED = 4
+#: largest object across the grip, as a fraction of the hand height (paper §2.1: d/h < 1)
+MAX_D_OVER_H = 1.0
+
+
+class GraspSynthesis:
+    """Candidate grasps of one hand on one postulated object, checked and scored.
+
+    Args:
+        hand: the hand model.
+        sweeps: its fingers' closing sweeps (palm frame).
+        params: world constants (approach stand-off, clearance).
+        obj: the postulated object.
+        friction: Coulomb μ for ε.
+        vertical_only: the postulate's size is known along the vertical only (grasp across it).
+
+    Attributes:
+        rejections: per reason (in words), how many candidates it rejected.
+    """
+
+    def __init__(
+        self,
+        hand: HandModel,
+        sweeps: dict[str, FingerSweep],
+        params: WorldParameters,
+        obj: SurfaceObject,
+        friction: float,
+        vertical_only: bool = False,
+    ) -> None:
+        self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
+        self.friction = friction
+        self.vertical_only = vertical_only
+        self.opposing = hand.description.opposing_finger
+        self.clearance = HandClearance(hand, sweeps, params, obj)
+        self.rejections: dict[str, int] = {}
+
+    def _reject(self, why: str) -> None:
+        self.rejections[why] = self.rejections.get(why, 0) + 1
+
+    def candidates(self) -> list[GraspCandidate]:
+        """The best candidates, best first.
+
+        Every candidate orientation is simulated at its best depth; of those about the centre,
+        the ``SCORED`` least-rotated that are collision-free (one for a sphere, whose grasps
+        about its diameters are all alike) are scored by ε; the best ε wins, and candidates
+        within ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first.
+        When none about the centre is collision-free, the collision-free one closest to it is
+        returned alone (the best the hand can do; its ``about_centre`` is False)."""
+        simulated = [
+            c
+            for label, R in candidate_frames(self.obj, self.vertical_only)
+            if (c := self._at_best_depth(label, R)) is not None
+        ]
+        about = sorted(
+            (c for c in simulated if c.about_centre), key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label)
+        )
+        wanted = 1 if isinstance(self.obj, Sphere) else SCORED
+        kept: list[GraspCandidate] = []
+        for cand in about:
+            if self._collision_free(cand):
+                kept.append(self._scored(cand))
+                if len(kept) == wanted:
+                    break
+        if not kept:
+            # no grasp about the centre is reachable: the one closest to it, the best the hand
+            # can do (the end agent will judge it)
+            if len(about) < len(simulated):
+                self._reject("contacts not about the centre")
+            rest = sorted((c for c in simulated if not c.about_centre), key=lambda c: (-c.angle_deg, c.turn))
+            return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
+        top = max(c.epsilon for c in kept)
+        kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+        return kept
+
+    def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
+        """The collision-free pre-grasp wrist position (world, m) before ``c`` along its
+        approach and its stand-off (m), or None (:meth:`HandClearance.pregrasp`)."""
+        return self.clearance.pregrasp(c)
+
+    def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
+        """The wrist joint values for palm rotation ``R``, or None outside their limits."""
+        rpy = rpy_from_rotation(R)
+        if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
+            return None
+        widx = self.hand.wrist_q_index[3:6]
+        a = np.asarray(rpy)
+        if np.any(a < self.hand.lower[widx] - 1e-9) or np.any(a > self.hand.upper[widx] + 1e-9):
+            return None
+        return rpy
+
+    def depth_for(self, extent: float) -> float | None:
+        """Depth that puts the opposing fingertip straight under the centre when it touches:
+        the palm-frame x of the opposing sweep's first sample within ``extent`` + r_f of the
+        palm's x axis (None if its sweep never comes that close)."""
+        sweep = self.sweeps[self.opposing]
+        reach = extent + self.hand.tip_radius(self.opposing)
+        inside = np.flatnonzero(np.hypot(sweep.points[:, 1], sweep.points[:, 2]) <= reach)
+        return None if len(inside) == 0 else float(sweep.points[int(inside[0]), 0])
+
+    def _at_best_depth(self, label: str, R: np.ndarray) -> GraspCandidate | None:
+        """The candidate of orientation ``R`` at the depth, among the base depth +
+        ``DEPTH_OFFSETS`` (then refined), whose predicted contacts lie best about the centre
+        (None when it is rejected)."""
+        rpy = self.wrist_rpy(R)
+        if rpy is None:
+            self._reject("wrist rotation out of its limits")
+            return None
+        extent = self.obj.half_extent(R[:, 2])
+        if 2.0 * extent / self.hand.hand_height >= MAX_D_OVER_H:
+            self._reject("larger than the hand height across the grip")
+            return None
+        base = self.depth_for(extent)
+        if base is None:
+            self._reject("too small for the opposing finger's sweep")
+            return None
+        best: GraspCandidate | None = None
+        for offset in DEPTH_OFFSETS:
+            cand = self._simulate(label, R, rpy, base + offset, extent)
+            if cand is not None and (best is None or cand.angle_deg > best.angle_deg):
+                best = cand
+            if best is not None and best.angle_deg >= GOOD_ENOUGH_ANGLE_DEG:
+                return best
+        if best is not None:
+            for step in (-DEPTH_REFINE, DEPTH_REFINE):
+                cand = self._simulate(label, R, rpy, best.depth + step, extent)
+                if cand is not None and cand.angle_deg > best.angle_deg:
+                    best = cand
+        return best
+
+    def _simulate(
+        self, label: str, R: np.ndarray, rpy: tuple[float, float, float], depth: float, extent: float
+    ) -> GraspCandidate | None:
+        """The candidate of orientation ``R`` at ``depth``: where each fingertip lands closing
+        from open (None when the wrist cannot get there or a fingertip misses)."""
+        centre = np.asarray(self.obj.placement.translation, dtype=float)
+        wrist = centre - R[:, 0] * depth
+        widx = self.hand.wrist_q_index[:3]
+        if np.any(wrist < self.hand.lower[widx]) or np.any(wrist > self.hand.upper[widx]):
+            self._reject("wrist position out of its limits")
+            return None
+        landings: dict[str, Landing] = {}
+        for finger in self.hand.finger_names:
+            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
+            if hit is None:
+                self._reject("a fingertip misses the object")
+                return None
+            landings[finger] = hit
+        others = [hit.point for f, hit in landings.items() if f != self.opposing]
+        angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
+        return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
+
+    def _collision_free(self, c: GraspCandidate) -> bool:
+        why = self.clearance.collision(c)
+        if why is not None:
+            self._reject(why)
+        return why is None
+
+    def _scored(self, c: GraspCandidate) -> GraspCandidate:
+        """``c`` with the ε of its predicted contacts (``SCORE_EDGES`` cone edges, torques about
+        the object's centre over its half diameter)."""
+        points = np.array([hit.point for hit in c.landings.values()])
+        normals = np.array([hit.normal for hit in c.landings.values()])
+        obj = self.obj
+        q = grasp_quality(
+            points, normals, obj.placement.translation, self.friction, SCORE_EDGES, 0.5 * obj.diameter
+        )
+        return dataclasses.replace(c, epsilon=q.epsilon)
