@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-import eos_svc.agents.world as world_module
+import eos_svc.world.world as world_module
 from eos_svc.agents import PlanRequest, plan
 
 ROOT = Path(__file__).resolve().parents[1]

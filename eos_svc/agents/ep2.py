@@ -4,7 +4,7 @@ EP1 feels the curvature at one contact (top, then bottom): it cannot tell a box'
 a large cylinder's side, nor give the object's depth or orientation. EP2 (Charlebois, Gupta
 and Payandeh, ICRA 1996: fingers dragged over the surface, "the surface approximated with a
 small number of sampled points") gathers more of it. Here each EP2 action is a round of
-**guarded probes** (:meth:`~eos_svc.agents.world.GraspWorld.guarded_probe`): a fingertip moves
+**guarded probes** (:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves
 in a straight line toward the object and stops at first touch — a contact point (the tip's
 centre, from the kinematics) and a normal (from the tactile reading, with its noise); a
 probe that runs its whole travel touches nothing and tells where the object is *not* (its
@@ -36,9 +36,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
+from eos_svc.schema import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.agents.world import GraspWorld
+from eos_svc.world.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.hand_cache import PerHandCache

@@ -38,25 +38,25 @@ from pathlib import Path
 import numpy as np
 
 from eos_svc.agent import Agent
-from eos_svc.agents import keys
-from eos_svc.agents.admission import check_plannable
+from eos_svc.schema import keys
+from eos_svc.world.admission import check_plannable
 from eos_svc.agents.base import STAGES
-from eos_svc.agents.board_entries import check_entry
+from eos_svc.schema.board_entries import check_entry
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.agents.pose_board import PoseBoard
+from eos_svc.world.pose_board import PoseBoard
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
-from eos_svc.agents.request import ObjectSpec, PlanRequest
-from eos_svc.agents.result import PlanResult
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.schema.result import PlanResult
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps
-from eos_svc.agents.world import GraspWorld
-from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.world.world import GraspWorld
+from eos_svc.world.parameters import WorldParameters
 from eos_svc.agents.world_parts import WorldParts, world_parts
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
@@ -142,7 +142,7 @@ def build_world(
     """The world of one plan: hand at its start pose, the object, seeded randomness.
 
     Args:
-        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` when
+        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` when
             the caller already has).
         parts: lend the hand state and the scene from these (the hand's
             :func:`~eos_svc.agents.world_parts.world_parts`); the caller gives them back when
@@ -151,7 +151,7 @@ def build_world(
 
     Raises:
         ValidationError: the object is out of reach, overlaps the hand or is too large
-            (see :mod:`eos_svc.agents.admission`).
+            (see :mod:`eos_svc.world.admission`).
     """
     hand = hand or default_hand()
     params = params or parameters_for(hand)
@@ -239,18 +239,18 @@ def plan(
         oracle_postulate: grasp_points plans on the request's true object instead of
             post_shape's postulate — for measuring the grasp stage apart from recognition
             only; off by default, never used by the command line or the service.
-        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` only
+        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` only
             when the caller has just run it on this request, hand and parameters, as the
             service does at admission).
         check_board: debug mode: every agent reads and writes the board only through the
             entries it declares (``reads`` / ``writes``), and every value written is checked
-            against its declared type (:mod:`eos_svc.agents.board_entries`); a breach ends the
+            against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
-            :func:`~eos_svc.agents.admission.check_plannable` (object out of reach, overlapping
+            :func:`~eos_svc.world.admission.check_plannable` (object out of reach, overlapping
             the hand, wider than the hand's span). Every planning outcome is a status in the result.
     """
     t0 = time.perf_counter()

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 from eos_svc.kinematics import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
 
 

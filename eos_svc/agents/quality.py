@@ -51,7 +51,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
-from eos_svc.agents.request import DEFAULT_FRICTION, MAX_FRICTION
+from eos_svc.schema.request import DEFAULT_FRICTION, MAX_FRICTION
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics.geometry import tangent_basis
 

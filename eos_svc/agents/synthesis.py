@@ -40,7 +40,7 @@ import numpy as np
 
 from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.sweeps import FingerSweep
-from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.world.parameters import WorldParameters
 from eos_svc.kinematics import (
     Box,
     Capsule,

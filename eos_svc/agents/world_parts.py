@@ -37,7 +37,7 @@ from collections import OrderedDict
 import coal
 
 from eos_svc.agents.postulate import make_object
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 from eos_svc.kinematics import HandModel, HandState, Scene
 from eos_svc.kinematics.hand_cache import PerHandCache
 

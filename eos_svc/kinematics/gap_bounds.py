@@ -2,7 +2,7 @@
 bounding ball (pure geometry, no coal query): the distance from the ball's centre to each
 geometry's primitive (box, segment of a cylinder or capsule, sphere) less the ball's radius.
 A guarded motion asks coal for an exact gap only where a bound cannot decide (see
-:meth:`eos_svc.agents.world.GraspWorld.hand_clear`)."""
+:meth:`eos_svc.world.world.GraspWorld.hand_clear`)."""
 
 from __future__ import annotations
 

@@ -45,7 +45,7 @@ from typing import Any, NamedTuple
 
 import msgspec
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
 from eos_svc.service.ids import ID_PATTERN as ID_PATTERN  # the protocol's names, defined there

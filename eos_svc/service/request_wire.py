@@ -31,7 +31,7 @@ from typing import Annotated, Literal
 
 import msgspec
 
-from eos_svc.agents.request import (
+from eos_svc.schema.request import (
     MAX_CYCLES_LIMIT,
     MAX_DEADLINE_S,
     MAX_FRICTION,

@@ -54,7 +54,7 @@ from pydrake.multibody.tree import PdControllerGains, SpatialInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 

@@ -40,7 +40,7 @@ from pydrake.geometry import (
 )
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
-from eos_svc.agents.request import DEFAULT_FRICTION, ObjectSpec
+from eos_svc.schema.request import DEFAULT_FRICTION, ObjectSpec
 from eos_svc.kinematics import HandModel
 
 #: root of everything this package draws in a MeshCat scene

@@ -7,8 +7,8 @@ import random
 
 import pytest
 
-from eos_svc.agents import admission
-from eos_svc.agents.admission import (
+from eos_svc.world import admission
+from eos_svc.world.admission import (
     VERDICTS_KEPT,
     PlannableCheck,
     check_plannable,
@@ -16,7 +16,7 @@ from eos_svc.agents.admission import (
     plannable_verdict,
 )
 from eos_svc.agents.planner import default_hand, parameters_for
-from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.errors import ValidationError
 
 HAND = default_hand()

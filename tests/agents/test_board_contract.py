@@ -12,8 +12,8 @@ import pytest
 
 from eos_svc import Weights
 from eos_svc.agents import PlanRequest, build_agents, build_world, plan
-from eos_svc.agents import keys as keys_module
-from eos_svc.agents.board_entries import (
+from eos_svc.schema import keys as keys_module
+from eos_svc.schema.board_entries import (
     AFTER_RUN,
     ENTRIES,
     OUTSIDE_WRITERS,

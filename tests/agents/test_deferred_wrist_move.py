@@ -12,7 +12,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world, default_hand
-from eos_svc.agents.world import palm_origin_is_wrist_xyz
+from eos_svc.world.world import palm_origin_is_wrist_xyz
 from eos_svc.kinematics import allegro_hand
 
 OBJECTS = [

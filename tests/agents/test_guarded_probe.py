@@ -16,8 +16,8 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
-from eos_svc.agents.probing import ProbeOutcome, densify
-from eos_svc.agents.world import _probe_floor_after
+from eos_svc.world.probing import ProbeOutcome, densify
+from eos_svc.world.world import _probe_floor_after
 
 OBJECTS = [
     ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.0, 0.0)),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, keys
-from eos_svc.agents.coverage import (
+from eos_svc.world.coverage import (
     SpaceFillingOrder,
     column_counts,
     coverage_spacing,
@@ -148,7 +148,7 @@ def test_object_beyond_every_sweep_is_not_findable():
 
 
 def test_forward_reach_of_hand3x3_is_the_default_of_the_rule():
-    from eos_svc.agents.coverage import HAND3X3_FORWARD_REACH
+    from eos_svc.world.coverage import HAND3X3_FORWARD_REACH
     from eos_svc.agents.planner import finger_sweeps
     from eos_svc.agents.sweeps import forward_reach
 

@@ -10,7 +10,7 @@ import textwrap
 SCRIPT = textwrap.dedent(
     """
     import time
-    from eos_svc.agents.request import PlanRequest
+    from eos_svc.schema.request import PlanRequest
     from eos_svc.service import EosClient, PlanService, free_port, loopback, make_config
     from eos_svc.shape import kernels
 

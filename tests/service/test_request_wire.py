@@ -13,7 +13,7 @@ import random
 
 import pytest
 
-from eos_svc.agents.request import (
+from eos_svc.schema.request import (
     MAX_CYCLES_LIMIT,
     MAX_DEADLINE_S,
     MAX_FRICTION,

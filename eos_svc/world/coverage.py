@@ -28,7 +28,7 @@ the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``c
 0.042 m for hand3x3), so the crossings at the rear cannot bump into it, and its centre lies
 within ``B``'s height range (the upper and lower fingers would otherwise bump into it on every
 sweep). Objects closer to the rear are often found too, but a crossing the fingers cannot make
-may stall the search; the admission check (:mod:`eos_svc.agents.admission`) refuses every
+may stall the search; the admission check (:mod:`eos_svc.world.admission`) refuses every
 object this rule does not promise, and a search that has swept every column twice without
 locating the object ends the run (``failed``) rather than sweeping on.
 """
@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from eos_svc.agents.world_parameters import WorldParameters
+    from eos_svc.world.parameters import WorldParameters
     from eos_svc.kinematics import SurfaceObject
 
 

@@ -31,11 +31,11 @@ from collections.abc import Hashable
 import coal
 import numpy as np
 
-from eos_svc.agents.coverage import centre_in_grasp_box, findable
+from eos_svc.world.coverage import centre_in_grasp_box, findable
 from eos_svc.agents.postulate import make_object
-from eos_svc.agents.request import ObjectSpec, PlanRequest
+from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.agents.sweeps import forward_reach
-from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.world.parameters import WorldParameters
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.hand_cache import PerHandCache

@@ -14,9 +14,9 @@ frame shifted by the wrist's translation, the hand approaching along +x);
 grasp_points turns it to the chosen grasp's orientation. SI units. What depends
 on the hand is derived from it:
 :meth:`WorldParameters.for_hand` (grasp centre, search box, hand bound:
-:mod:`eos_svc.agents.world_parameters`), :func:`~eos_svc.agents.sweeps.build_sweeps`
+:mod:`eos_svc.world.parameters`), :func:`~eos_svc.agents.sweeps.build_sweeps`
 (closing paths), :attr:`GraspWorld.probe` (which finger explores the object's top and bottom,
-and at which angle: :mod:`eos_svc.agents.probing`). The cheap lower bounds on hand–object
+and at which angle: :mod:`eos_svc.world.probing`). The cheap lower bounds on hand–object
 gaps that spare most exact coal queries are :mod:`eos_svc.kinematics.gap_bounds`.
 """
 
@@ -31,11 +31,11 @@ from typing import Any, NamedTuple
 import coal
 import numpy as np
 
-from eos_svc.agents.coverage import SpaceFillingOrder, column_counts, wrist_columns
-from eos_svc.agents.probe_pose import probe_pose
-from eos_svc.agents.probing import ProbeChoice, ProbeOutcome, densify
+from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+from eos_svc.world.probe_pose import probe_pose
+from eos_svc.world.probing import ProbeChoice, ProbeOutcome, densify
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
-from eos_svc.agents.world_parameters import WorldParameters
+from eos_svc.world.parameters import WorldParameters
 from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table
@@ -215,7 +215,7 @@ class GraspWorld:
 
     def search_step(self) -> tuple[str, float, bool]:
         """One search move: a sweep of the next column of the coverage plan in this run's
-        seeded space-filling order (:mod:`eos_svc.agents.coverage`): back to the box's rear
+        seeded space-filling order (:mod:`eos_svc.world.coverage`): back to the box's rear
         (−x), across to the column (y, z), forward through the box (+x), each leg a guarded
         straight move (:meth:`guarded_wrist_move`) that stops where the object enters the
         envelope or short of a contact.

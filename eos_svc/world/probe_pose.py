@@ -1,5 +1,5 @@
 """The hand configuration of a guarded probe (EP2), apart from where the wrist is: what
-:meth:`eos_svc.agents.world.GraspWorld.guarded_probe` sets before every probe, computed once
+:meth:`eos_svc.world.world.GraspWorld.guarded_probe` sets before every probe, computed once
 per hand, probing finger and joint angle (it never changes; a default plan makes ~40 probes
 with two fingers).
 """
