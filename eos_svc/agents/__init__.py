@@ -20,7 +20,17 @@ if TYPE_CHECKING:
 #: the planner's names, imported from :mod:`eos_svc.agents.planner` when first asked for
 _PLANNER = ("DEFAULT_RATINGS", "build_agents", "build_world", "default_hand", "plan")
 
-__all__ = ["ObjectSpec", "PlanRequest", "PlanResult", "keys", *_PLANNER]
+__all__ = [
+    "DEFAULT_RATINGS",
+    "ObjectSpec",
+    "PlanRequest",
+    "PlanResult",
+    "build_agents",
+    "build_world",
+    "default_hand",
+    "keys",
+    "plan",
+]
 
 
 def __getattr__(name: str) -> Any:

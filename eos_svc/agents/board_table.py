@@ -16,9 +16,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from eos_svc.agent import Agent
-from eos_svc.schema.board_entries import AFTER_RUN, ENTRIES, OUTSIDE_WRITERS, Entry, type_name
 from eos_svc.board_access import access_map
 from eos_svc.errors import ValidationError
+from eos_svc.schema.board_entries import AFTER_RUN, ENTRIES, OUTSIDE_WRITERS, Entry, type_name
 
 
 def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES) -> str:

@@ -26,14 +26,14 @@ from __future__ import annotations
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.schema import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.world.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
 from eos_svc.kinematics.hand import KinematicsError
 from eos_svc.kinematics.rolling import RollingQPError
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 #: QP backend EP1 falls back on when OSQP does not converge on a roll
 FALLBACK_SOLVER = "daqp"

@@ -36,12 +36,12 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.schema import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.world.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.hand_cache import PerHandCache
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
 MAX_ROUNDS = 3

@@ -29,9 +29,9 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from scipy.spatial import ConvexHull, QhullError
 
 from eos_svc.agents.planner import default_hand, make_object
-from eos_svc.schema.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import PlanRequest
 
 #: mesh resolution (segments around a circle)
 SEGMENTS = 16

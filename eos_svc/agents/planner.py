@@ -38,25 +38,17 @@ from pathlib import Path
 import numpy as np
 
 from eos_svc.agent import Agent
-from eos_svc.schema import keys
-from eos_svc.world.admission import check_plannable
 from eos_svc.agents.base import STAGES
-from eos_svc.schema.board_entries import check_entry
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.world.pose_board import PoseBoard
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.postulate import make_object
 from eos_svc.agents.recall import RecallAgent
-from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.schema.result import PlanResult
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps
-from eos_svc.world.world import GraspWorld
-from eos_svc.world.parameters import WorldParameters
 from eos_svc.agents.world_parts import WorldParts, world_parts
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
@@ -72,6 +64,14 @@ from eos_svc.kinematics import (
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.hand_cache import PerHandCache
 from eos_svc.records import CycleRecord
+from eos_svc.schema import keys
+from eos_svc.schema.board_entries import check_entry
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.schema.result import PlanResult
+from eos_svc.world.admission import check_plannable
+from eos_svc.world.parameters import WorldParameters
+from eos_svc.world.pose_board import PoseBoard
+from eos_svc.world.world import GraspWorld
 
 CycleCallback = Callable[[CycleRecord], None]
 

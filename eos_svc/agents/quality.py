@@ -51,9 +51,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy.spatial import ConvexHull, QhullError
 
-from eos_svc.schema.request import DEFAULT_FRICTION, MAX_FRICTION
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics.geometry import tangent_basis
+from eos_svc.schema.request import DEFAULT_FRICTION, MAX_FRICTION
 
 __all__ = [
     "DEFAULT_EDGES",

@@ -15,10 +15,10 @@ moves it; the paper allows all four in the search stage.
 from __future__ import annotations
 
 from eos_svc.agent import ActionResult, Outcome
+from eos_svc.board import Board
 from eos_svc.schema import keys
 from eos_svc.world.coverage import column_counts
 from eos_svc.world.world import GraspWorld
-from eos_svc.board import Board
 
 
 def search_rating(board: Board) -> float:

@@ -40,7 +40,6 @@ import numpy as np
 
 from eos_svc.agents.quality import grasp_quality
 from eos_svc.agents.sweeps import FingerSweep
-from eos_svc.world.parameters import WorldParameters
 from eos_svc.kinematics import (
     Box,
     Capsule,
@@ -53,6 +52,7 @@ from eos_svc.kinematics import (
 )
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table
 from eos_svc.kinematics.norms import row_norms, vector_norm
+from eos_svc.world.parameters import WorldParameters
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4

@@ -37,9 +37,9 @@ from collections import OrderedDict
 import coal
 
 from eos_svc.agents.postulate import make_object
-from eos_svc.schema.request import ObjectSpec
 from eos_svc.kinematics import HandModel, HandState, Scene
 from eos_svc.kinematics.hand_cache import PerHandCache
+from eos_svc.schema.request import ObjectSpec
 
 __all__ = ["WorldParts", "world_parts"]
 

@@ -19,8 +19,8 @@ import types
 from dataclasses import dataclass
 from typing import Any, Literal, Union, get_args, get_origin
 
-from eos_svc.schema import keys
 from eos_svc.errors import ContractError
+from eos_svc.schema import keys
 
 if sys.version_info >= (3, 11):
     from typing import NotRequired, TypedDict, get_type_hints, is_typeddict

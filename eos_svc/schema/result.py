@@ -14,8 +14,8 @@ import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from eos_svc.schema import keys
 from eos_svc.records import CycleRecord, RunResult, RunStatus, to_jsonable
+from eos_svc.schema import keys
 
 if TYPE_CHECKING:
     from eos_svc.schema.request import PlanRequest

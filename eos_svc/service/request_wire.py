@@ -31,6 +31,8 @@ from typing import Annotated, Literal
 
 import msgspec
 
+from eos_svc.errors import ValidationError
+from eos_svc.ratings import Weights
 from eos_svc.schema.request import (
     MAX_CYCLES_LIMIT,
     MAX_DEADLINE_S,
@@ -41,8 +43,6 @@ from eos_svc.schema.request import (
     ObjectSpec,
     PlanRequest,
 )
-from eos_svc.errors import ValidationError
-from eos_svc.ratings import Weights
 from eos_svc.service.ids import is_id, is_token
 
 #: an object size (m): > 0 and ≤ MAX_OBJECT_SIZE (ObjectSpec's ``_positive``)

@@ -46,11 +46,11 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.schema.request import PlanRequest
-from eos_svc.schema.result import PlanResult
 from eos_svc.controller import CancelToken
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord
+from eos_svc.schema.request import PlanRequest
+from eos_svc.schema.result import PlanResult
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 from eos_svc.shape import kernels

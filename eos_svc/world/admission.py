@@ -31,14 +31,14 @@ from collections.abc import Hashable
 import coal
 import numpy as np
 
-from eos_svc.world.coverage import centre_in_grasp_box, findable
 from eos_svc.agents.postulate import make_object
-from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.agents.sweeps import forward_reach
-from eos_svc.world.parameters import WorldParameters
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.hand_cache import PerHandCache
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.parameters import WorldParameters
 
 #: joint samples per finger joint when measuring the hand's span (a grid over the joint range)
 SPAN_SAMPLES = 7

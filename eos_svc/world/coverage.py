@@ -42,8 +42,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 if TYPE_CHECKING:
-    from eos_svc.world.parameters import WorldParameters
     from eos_svc.kinematics import SurfaceObject
+    from eos_svc.world.parameters import WorldParameters
 
 
 def coverage_spacing(params: WorldParameters) -> float:

@@ -31,16 +31,16 @@ from typing import Any, NamedTuple
 import coal
 import numpy as np
 
-from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
-from eos_svc.world.probe_pose import probe_pose
-from eos_svc.world.probing import ProbeChoice, ProbeOutcome, densify
 from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometries
-from eos_svc.world.parameters import WorldParameters
 from eos_svc.kinematics import HandModel, HandState, Scene, SurfaceObject, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import BOUND_MARGIN, ball_gap_lower_bounds, hand_bound_table
 from eos_svc.kinematics.hand_cache import PerHandCache
 from eos_svc.kinematics.hand_state import read_only
+from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+from eos_svc.world.parameters import WorldParameters
+from eos_svc.world.probe_pose import probe_pose
+from eos_svc.world.probing import ProbeChoice, ProbeOutcome, densify
 
 
 @dataclass

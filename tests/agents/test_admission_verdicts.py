@@ -7,6 +7,9 @@ import random
 
 import pytest
 
+from eos_svc.agents.planner import default_hand, parameters_for
+from eos_svc.errors import ValidationError
+from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.world import admission
 from eos_svc.world.admission import (
     VERDICTS_KEPT,
@@ -15,9 +18,6 @@ from eos_svc.world.admission import (
     default_check,
     plannable_verdict,
 )
-from eos_svc.agents.planner import default_hand, parameters_for
-from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.errors import ValidationError
 
 HAND = default_hand()
 PARAMS = parameters_for(HAND)

@@ -12,8 +12,8 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world, default_hand
-from eos_svc.world.world import palm_origin_is_wrist_xyz
 from eos_svc.kinematics import allegro_hand
+from eos_svc.world.world import palm_origin_is_wrist_xyz
 
 OBJECTS = [
     ObjectSpec("sphere", {"radius": 0.03}, (0.12, 0.0, 0.0)),

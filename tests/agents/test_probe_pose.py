@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.world.probe_pose import probe_pose
 from eos_svc.kinematics import HandModel, UnknownNameError, allegro_hand
+from eos_svc.world.probe_pose import probe_pose
 
 
 def _plain(hand: HandModel, q: np.ndarray, finger: str, angle: float) -> np.ndarray:
