@@ -15,112 +15,36 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
 * **size** (the size field that sets the object's smallest width): two fingertips can touch
   opposite sides of an object only if its smallest width is at most the hand's *span*, the
   largest distance between the surfaces of two fingertips over the fingers' joint ranges
-  (:func:`hand_span`). Wider in every direction: no grasp exists.
+  (:func:`~eos_svc.world.hand_context.hand_span`). Wider in every direction: no grasp exists.
 """
 
 from __future__ import annotations
 
-import functools
-import itertools
 import math
-import struct
-import threading
-from collections import OrderedDict
-from collections.abc import Hashable
+from collections.abc import Callable
 
 import coal
 import numpy as np
 
 from eos_svc.agents.postulate import make_object
-from eos_svc.agents.sweeps import forward_reach
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
-from eos_svc.kinematics.hand_cache import PerHandCache
 from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
 from eos_svc.world.parameters import WorldParameters
 
-#: joint samples per finger joint when measuring the hand's span (a grid over the joint range)
-SPAN_SAMPLES = 7
-
-#: per hand: its span, neutral geometry and forward reach (see _hand_data)
-_PER_HAND: PerHandCache[tuple[HandModel, float, list[_Geometry], float]] = PerHandCache(keep=8)
-
-
-class _Geometry:
-    """One hand collision geometry at the start configuration, with its bounding sphere (world)."""
-
-    __slots__ = ("centre", "centre_xyz", "name", "radius", "shape", "transform")
-
-    def __init__(self, name: str, shape: coal.ShapeBase, transform: coal.Transform3s) -> None:
-        shape.computeLocalAABB()
-        self.name = name
-        self.shape = shape
-        self.transform = transform
-        self.centre = transform.transform(np.asarray(shape.aabb_center, dtype=float))
-        self.radius = float(shape.aabb_radius)
-        self.centre_xyz = (float(self.centre[0]), float(self.centre[1]), float(self.centre[2]))
+__all__ = [
+    "check_default",
+    "check_plannable",
+    "default_check",
+    "hand_span",
+    "plannable_verdict",
+    "smallest_width",
+]
 
 
-def hand_span(hand: HandModel) -> float:
-    """Largest distance between the surfaces of two fingertips, over each finger's joint range (m).
-
-    Every finger's joints are sampled on a grid of :data:`SPAN_SAMPLES` values per joint
-    (wrist at the origin); the span is the largest centre distance of two different fingers'
-    tips minus both tip radii. An object wider than this in every direction cannot be touched
-    on opposite sides by two fingertips.
-    """
-    return _hand_data(hand)[1]
-
-
-def _hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], float]:
-    """(hand, span, its collision geometries at the start configuration, its forward reach),
-    built once per hand."""
-    return _PER_HAND.get((hand,), lambda: _build_hand_data(hand))
-
-
-def _build_hand_data(hand: HandModel) -> tuple[HandModel, float, list[_Geometry], float]:
-    from eos_svc.agents import planner  # planner imports this module: resolve at call time
-
-    reach = forward_reach(hand, planner.finger_sweeps(hand))
-    return hand, _measure_span(hand), _neutral_placements(hand), reach
-
-
-def _measure_span(hand: HandModel) -> float:
-    state = hand.state(hand.neutral())
-    tips: dict[str, np.ndarray] = {}
-    for finger in hand.finger_names:
-        limits = hand.finger_joint_limits(finger)
-        grids = [np.linspace(lo, hi, SPAN_SAMPLES) for _idx, lo, hi in limits]
-        points = []
-        for values in itertools.product(*grids):
-            q = hand.neutral()
-            for (idx, _lo, _hi), v in zip(limits, values, strict=True):
-                q[idx] = v
-            state.update(q)
-            points.append(state.tip_position(finger).copy())
-        tips[finger] = np.asarray(points)
-    span = 0.0
-    for a, b in itertools.combinations(hand.finger_names, 2):
-        pa, pb = tips[a], tips[b]
-        d = np.sqrt(((pa[:, None, :] - pb[None, :, :]) ** 2).sum(axis=2)).max()
-        span = max(span, float(d) - hand.tip_radius(a) - hand.tip_radius(b))
-    return span
-
-
-def _neutral_placements(hand: HandModel) -> list[_Geometry]:
-    state = hand.state(hand.neutral())
-    out = []
-    for gid, go in enumerate(hand.collision_model.geometryObjects):
-        m = state.geometry_data.oMg[gid]
-        out.append(
-            _Geometry(go.name, go.geometry, coal.Transform3s(np.array(m.rotation), np.array(m.translation)))
-        )
-    return out
-
-
-@functools.lru_cache(maxsize=16)
-def _swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
+def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
     """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
     lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
     hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
@@ -152,127 +76,58 @@ def _distance(
     return res
 
 
-#: verdicts kept per (hand, world parameters) pair (most recently used kept)
-VERDICTS_KEPT = 256
-
-
-class _Verdicts:
-    """The last :data:`VERDICTS_KEPT` verdicts of one (hand, parameters) pair, by object: ``()``
-    (plannable) or the refusal's ``(field, reason)``. Thread-safe; least recently used dropped
-    first."""
-
-    __slots__ = ("_entries", "_lock")
-
-    def __init__(self) -> None:
-        self._entries: OrderedDict[Hashable, tuple[str, ...]] = OrderedDict()
-        self._lock = threading.Lock()
-
-    def get(self, key: Hashable) -> tuple[str, ...] | None:
-        """The verdict kept for ``key``, or ``None`` when there is none."""
-        with self._lock:
-            try:
-                self._entries.move_to_end(key)
-            except KeyError:
-                return None
-            return self._entries[key]
-
-    def put(self, key: Hashable, verdict: tuple[str, ...]) -> None:
-        with self._lock:
-            self._entries[key] = verdict
-            while len(self._entries) > VERDICTS_KEPT:
-                self._entries.popitem(last=False)
-
-    def __len__(self) -> int:
-        return len(self._entries)
-
-
-#: per (hand, parameters) pair (owners compared by identity): its verdicts
-_VERDICTS: PerHandCache[_Verdicts] = PerHandCache(keep=8)
-
-
-_pack_pose = struct.Struct("6d").pack
-
-
-def _object_key(spec: ObjectSpec) -> Hashable:
-    """Everything of an object the verdict depends on (shape, size, pose), hashable; the pose as
-    its 48 bytes, so that -0.0 and 0.0 (equal floats, written differently in a reason) differ."""
-    return (spec.shape, tuple(spec.size.items()), _pack_pose(*spec.position, *spec.rpy))
-
-
 def check_plannable(
-    request: PlanRequest, hand: HandModel | None = None, params: WorldParameters | None = None
+    request: PlanRequest,
+    hand: HandModel | None = None,
+    params: WorldParameters | None = None,
+    *,
+    context: HandContext | None = None,
 ) -> None:
     """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
 
-    The verdict depends only on the object, the hand and the parameters: the last
-    :data:`VERDICTS_KEPT` of each (hand, parameters) pair are kept, so an object asked for again
-    (the same object, another seed) is answered without the geometric queries, bit for bit as
-    they answer.
-
     Args:
         request: a validated plan request.
-        hand: the hand (default: hand3x3, cached).
-        params: world constants (default: ``WorldParameters.for_hand(hand)``).
+        hand: the hand (default: hand3x3); ignored when ``context`` is given.
+        params: world constants (default: the context's, ``WorldParameters.for_hand(hand)``).
+        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for` ``(hand)``:
+            give it when planning many requests with another hand).
 
     Raises:
         ValidationError: ``object.position`` when the object is out of reach or overlaps the
             hand at its start configuration; the size field when it is wider than the hand's
             span in every direction.
     """
-    PlannableCheck(hand, params)(request)
+    context = context_for(hand) if context is None else context
+    verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
+    if verdict:
+        field, reason = verdict
+        raise ValidationError(field, reason)
 
 
-class PlannableCheck:
-    """:func:`check_plannable` with the hand and its parameters resolved once: call it with a
-    request. What the service runs at admission (:func:`default_check`): a kept verdict costs a
-    key and a dictionary lookup.
-
-    Args:
-        hand: the hand (default: hand3x3, cached).
-        params: world constants (default: ``WorldParameters.for_hand(hand)``).
-    """
-
-    __slots__ = ("_verdicts", "hand", "params")
-
-    def __init__(self, hand: HandModel | None = None, params: WorldParameters | None = None) -> None:
-        from eos_svc.agents import planner  # planner imports this module: resolve at call time
-
-        self.hand = hand or planner.default_hand()
-        self.params = params or planner.parameters_for(self.hand)
-        self._verdicts = _VERDICTS.get((self.hand, self.params), _Verdicts)
-
-    def __call__(self, request: PlanRequest) -> None:
-        """Raise :class:`ValidationError` if the planner cannot plan ``request``."""
-        spec = request.obj
-        key = _object_key(spec)
-        verdict = self._verdicts.get(key)
-        if verdict is None:
-            verdict = plannable_verdict(spec, self.hand, self.params)
-            self._verdicts.put(key, verdict)
-        if verdict:
-            field, reason = verdict
-            raise ValidationError(field, reason)
+def check_default(request: PlanRequest) -> None:
+    """:func:`check_plannable` on the default hand (hand3x3) and its parameters."""
+    check_plannable(request, context=default_context())
 
 
-@functools.cache
-def default_check() -> PlannableCheck:
-    """The admission check of the default hand (hand3x3) and its parameters, one per process."""
-    return PlannableCheck()
+def default_check() -> Callable[[PlanRequest], None]:
+    """The admission check of the default hand: :func:`check_default` (one function, so a caller
+    can tell it from another check by identity)."""
+    return check_default
 
 
-def plannable_verdict(spec: ObjectSpec, hand: HandModel, params: WorldParameters) -> tuple[str, ...]:
-    """The admission verdict on ``spec`` computed afresh (no kept verdicts): ``()`` when the
-    planner can plan it, else the refusal's ``(field, reason)`` (see :func:`check_plannable`)."""
+def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]:
+    """The admission verdict on ``spec``: ``()`` when the planner can plan it, else the refusal's
+    ``(field, reason)`` (see :func:`check_plannable`)."""
     try:
-        _check_object(spec, hand, params)
+        _check_object(spec, context)
     except ValidationError as exc:
         return exc.field, exc.reason
     return ()
 
 
-def _check_object(spec: ObjectSpec, hand: HandModel, params: WorldParameters) -> None:
+def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     """The three tests of the module doc; raises the refusal."""
-    _, span, geometries, reach_ahead = _hand_data(hand)
+    params, span, reach_ahead = context.params, context.span, context.forward_reach
 
     width, size_field = smallest_width(spec)
     if width > span:
@@ -286,7 +141,7 @@ def _check_object(spec: ObjectSpec, hand: HandModel, params: WorldParameters) ->
     # centre's distance to it and at least that minus the bounding radius: coal only in between.
     centre = spec.position
     radius = 0.5 * _diameter(spec)
-    lo, hi = _swept_box(params)
+    lo, hi = swept_box(params)
     outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
     centre_gap = math.sqrt(sum(d * d for d in outside))
     shape: coal.ShapeBase | None = None
@@ -316,8 +171,8 @@ def _check_object(spec: ObjectSpec, hand: HandModel, params: WorldParameters) ->
     # Overlap: only the hand geometries whose bounding spheres come within clearance of the object's.
     cx, cy, cz = centre
     reach = radius + params.clearance
-    for g in geometries:
-        gx, gy, gz = g.centre_xyz
+    for g in context.neutral_geometries:
+        gx, gy, gz = g.centre
         if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
             continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
         if shape is None or tf_obj is None:

@@ -35,7 +35,6 @@ locating the object ends the run (``failed``) rather than sweeping on.
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import TYPE_CHECKING
 
@@ -60,18 +59,13 @@ def column_counts(params: WorldParameters) -> tuple[int, int]:
     return ny, nz
 
 
-@functools.lru_cache(maxsize=16)
-def _columns(lo: tuple[float, ...], hi: tuple[float, ...], counts: tuple[int, int]) -> np.ndarray:
+def wrist_columns(params: WorldParameters) -> np.ndarray:
+    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m."""
+    lo, hi = params.search_box_lo, params.search_box_hi
+    counts = column_counts(params)
     ys = np.linspace(lo[1], hi[1], counts[0]) if counts[0] > 1 else np.array([0.5 * (lo[1] + hi[1])])
     zs = np.linspace(lo[2], hi[2], counts[1]) if counts[1] > 1 else np.array([0.5 * (lo[2] + hi[2])])
-    grid = np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
-    grid.setflags(write=False)
-    return grid
-
-
-def wrist_columns(params: WorldParameters) -> np.ndarray:
-    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m (read-only)."""
-    return _columns(tuple(params.search_box_lo), tuple(params.search_box_hi), column_counts(params))
+    return np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
 
 
 def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
@@ -157,7 +151,6 @@ class SpaceFillingOrder:
         queue.insert(0, queue.pop(index))
 
 
-@functools.lru_cache(maxsize=16)
 def _lattice(ny: int, nz: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple[float, ...], ...]]:
     """The column indices of an ny × nz lattice, row by row, and their distances (in
     lattice steps: square roots of exact integers, as numpy's norm gives them)."""
@@ -169,7 +162,7 @@ def _lattice(ny: int, nz: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple
 
 
 #: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
-#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.sweeps.forward_reach``
+#: 0.13 m) plus the tip radius; another hand's is its context's ``forward_reach``
 HAND3X3_FORWARD_REACH = 0.14
 
 

@@ -1,4 +1,4 @@
-"""GraspWorld.guarded_probe's shortcut gives the plain conservative advancement's outcome.
+"""guarded_probe's shortcut gives the plain conservative advancement's outcome.
 
 The probe skips the exact queries of the hand's other geometries while a lower bound of their
 gap (the hand's clearance at the start, then the last exact value less the distance moved,
@@ -16,8 +16,8 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
+from eos_svc.world.probe_motion import _probe_floor_after
 from eos_svc.world.probing import ProbeOutcome, densify
-from eos_svc.world.world import _probe_floor_after
 
 OBJECTS = [
     ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.0, 0.0)),
@@ -76,7 +76,10 @@ def plain_guarded_probe(world, finger, start, direction, travel, angle, queries=
             queries.append(1)
         if other < 1e-5:
             return ProbeOutcome(
-                "blocked", finger, free=densify(np.array(free)), travelled=travelled,
+                "blocked",
+                finger,
+                free=densify(np.array(free)),
+                travelled=travelled,
                 why="another part of the hand would touch first",
             )
         step = min(travel - travelled, tip_gap - 0.5 * tol, other)
@@ -118,13 +121,13 @@ def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
     events = set()
     fast_queries: list[int] = []
     plain_queries: list[int] = []
-    min_gap = fast_world._min_gap
+    min_gap = fast_world.min_gap
 
     def counted(ids, best):
         fast_queries.append(1)
         return min_gap(ids, best)
 
-    plain_min_gap = plain_world._min_gap
+    plain_min_gap = plain_world.min_gap
     plain_exact_clearance = plain_world.exact_clearance
     far = []
 
@@ -140,8 +143,8 @@ def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
         return plain_min_gap(ids, best)
 
     # the probes' queries of the other geometries, and the clearance's (exact_clearance)
-    fast_world._min_gap = counted
-    plain_world._min_gap = plain_counted
+    fast_world.min_gap = counted
+    plain_world.min_gap = plain_counted
     for probe in random_probes(fast_world, np.random.default_rng(7), 40):
         fast = fast_world.guarded_probe(*probe)
         plain = plain_guarded_probe(plain_world, *probe, queries=plain_queries)
