@@ -98,8 +98,10 @@ class SpaceFillingOrder:
 
     __slots__ = ("_distances", "_jitter", "_left", "_nearest", "_points", "_queue")
 
-    def __init__(self, counts: tuple[int, int], rng: np.random.Generator) -> None:
-        points, distances = _lattice(*counts)
+    def __init__(
+        self, counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
+    ) -> None:
+        points, distances = lattice if lattice is not None else lattice_of(*counts)
         self._points = points
         self._distances = distances
         self._jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
@@ -151,7 +153,11 @@ class SpaceFillingOrder:
         queue.insert(0, queue.pop(index))
 
 
-def _lattice(ny: int, nz: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple[float, ...], ...]]:
+#: a lattice's column indices and their distances (see :func:`lattice_of`)
+Lattice = tuple[tuple[tuple[int, int], ...], tuple[tuple[float, ...], ...]]
+
+
+def lattice_of(ny: int, nz: int) -> Lattice:
     """The column indices of an ny × nz lattice, row by row, and their distances (in
     lattice steps: square roots of exact integers, as numpy's norm gives them)."""
     points = tuple((i, j) for i in range(ny) for j in range(nz))

@@ -26,6 +26,7 @@ from eos_svc.agents.sweeps import FingerSweep, build_sweeps, finger_link_geometr
 from eos_svc.kinematics import HAND3X3_URDF, HandModel, load_hand
 from eos_svc.kinematics.gap_bounds import hand_bound_table
 from eos_svc.kinematics.hand_state import read_only
+from eos_svc.world.coverage import Lattice, column_counts, lattice_of
 from eos_svc.world.parameters import WorldParameters, derive_hand_fields, is_hand3x3
 from eos_svc.world.probe_pose import ProbePose
 from eos_svc.world.probing import ProbeChoice
@@ -65,6 +66,7 @@ class HandContext:
         span: the largest distance between two fingertips' surfaces over the joint ranges (m).
         neutral_geometries: the collision geometries at the start configuration.
         forward_reach: how far ahead of the wrist the fingers reach (m).
+        lattice: the search's column lattice and its distances (from ``params``; ≈ 0.2 ms).
     """
 
     hand: HandModel
@@ -81,6 +83,7 @@ class HandContext:
     span: float
     neutral_geometries: tuple[PlacedGeometry, ...]
     forward_reach: float
+    lattice: Lattice
 
     @classmethod
     def build(cls, hand: HandModel, params: WorldParameters | None = None) -> HandContext:
@@ -107,11 +110,14 @@ class HandContext:
             span=hand_span(hand),
             neutral_geometries=neutral_geometries(hand),
             forward_reach=forward_reach(hand, sweeps),
+            lattice=lattice_of(*column_counts(params)),
         )
 
     def with_params(self, params: WorldParameters) -> HandContext:
         """The same hand with other world constants (nothing here derives from them)."""
-        return self if params == self.params else dataclasses.replace(self, params=params)
+        if params == self.params:
+            return self
+        return dataclasses.replace(self, params=params, lattice=lattice_of(*column_counts(params)))
 
     def probe_pose(self, finger: str, angle: float) -> ProbePose:
         """The :class:`ProbePose` of ``finger`` at ``angle`` rad (kept for EP2's, else built)."""

@@ -25,10 +25,10 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
     """
     p = world.params
     if world.search_order is None:
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng)
+        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
         world.search_columns = wrist_columns(p)
     if not world.search_order:  # every column swept: sweep them again
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng)
+        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
     j, k = world.search_order.take()
     y, z = (float(v) for v in world.search_columns[j, k])
     x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
