@@ -56,9 +56,10 @@ def main(argv: list[str]) -> int:
     for w in problems:
         print(f"pdoc warning: {w.message}", file=sys.stderr)
     pages = len(list(out.rglob("*.html"))) - 1  # one per module, and the index
-    print(f"API reference of {pages} modules: {out / 'index.html'}" + (
-        f"; {len(problems)} warning(s)" if problems else ", no warnings"
-    ))
+    print(
+        f"API reference of {pages} modules: {out / 'index.html'}"
+        + (f"; {len(problems)} warning(s)" if problems else ", no warnings")
+    )
     return 1 if problems else 0
 
 

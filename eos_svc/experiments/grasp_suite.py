@@ -13,7 +13,6 @@ The held-back suite draws other sizes, orientations and positions from a seeded 
 (seed :data:`HELD_BACK_SEED`), so a goal can be checked on objects nobody tuned on.
 """
 
-
 import math
 from typing import NamedTuple
 
