@@ -3,7 +3,7 @@
 The probe skips the exact queries of the hand's other geometries while a lower bound of their
 gap (the hand's clearance at the start, then the last exact value less the distance moved,
 ``_probe_floor_after``) already fixes the step. Checked against the plain loop (every other
-geometry queried at every sub-step, kept here as the reference) bit for bit, and the bound
+geometry queried at every sub-step, kept here as the reference) within 1e-9 m, and the bound
 against coal, for every object shape.
 """
 
@@ -92,11 +92,19 @@ def plain_guarded_probe(world, finger, start, direction, travel, angle, queries=
     return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
 
 
-def _bits(out: ProbeOutcome) -> tuple:
-    def h(x):
-        return None if x is None else [float(v).hex() for v in np.asarray(x).ravel()]
+#: how far the shortcut's outcome may lie from the plain loop's (m; unit normals: 1e-9)
+TOLERANCE = 1e-9
 
-    return out.event, out.why, h(out.centre), h(out.normal), h(out.free), float(out.travelled).hex()
+
+def assert_same_outcome(fast: ProbeOutcome, plain: ProbeOutcome) -> None:
+    """The same event and reason; centre, normal, free path and travel within :data:`TOLERANCE`."""
+    assert (fast.event, fast.why) == (plain.event, plain.why)
+    for name in ("centre", "normal", "free"):
+        a, b = getattr(fast, name), getattr(plain, name)
+        assert (a is None) == (b is None), name
+        if a is not None:
+            np.testing.assert_allclose(a, b, rtol=0.0, atol=TOLERANCE, err_msg=name)
+    assert fast.travelled == pytest.approx(plain.travelled, rel=0.0, abs=TOLERANCE)
 
 
 def random_probes(world, rng, n):
@@ -115,7 +123,7 @@ def random_probes(world, rng, n):
 
 
 @pytest.mark.parametrize("spec", OBJECTS, ids=lambda s: s.shape)
-def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
+def test_guarded_probe_is_the_plain_advancement(spec):
     fast_world = build_world(PlanRequest(obj=spec, seed=3))
     plain_world = build_world(PlanRequest(obj=spec, seed=3))
     events = set()
@@ -148,8 +156,8 @@ def test_guarded_probe_is_the_plain_advancement_bit_for_bit(spec):
     for probe in random_probes(fast_world, np.random.default_rng(7), 40):
         fast = fast_world.guarded_probe(*probe)
         plain = plain_guarded_probe(plain_world, *probe, queries=plain_queries)
-        assert _bits(fast) == _bits(plain)
-        np.testing.assert_array_equal(fast_world.state.q, plain_world.state.q)
+        assert_same_outcome(fast, plain)
+        np.testing.assert_allclose(fast_world.state.q, plain_world.state.q, rtol=0.0, atol=TOLERANCE)
         events.add(fast.event)
     assert {"touched", "missed"} <= events  # the probes exercise the paths that matter
     assert any(far) and not all(far)  # starts where exact_clearance is exact, and where it is the plain bound
