@@ -27,10 +27,10 @@ this tree's fit on its numpy reference throughout (a one-shot process's state).
     .venv/bin/python benchmarks/bench_plan.py --short
 
 times a 1-cycle plan (the shape of a service's small request) back to back and after 4 ms
-asleep (a process between requests: cold caches), with the plan's hand state and scene lent
-from the hand's spares (:mod:`eos_svc.agents.world_parts`, what ``plan`` does) against new ones
-built for every plan (the spares switched off: ``keep = 0``), in alternating blocks in this
-process; medians and the ratio.
+asleep (a process between requests: cold caches), on the default hand's kept context (what
+``plan(request)`` uses) and on a context built for every plan (``plan(request,
+context=HandContext.build(hand))``: what a caller pays that does not keep one), in alternating
+blocks in this process; medians and the ratio.
 
 Every process that times plans loads the fit's compiled kernels first where its tree has them
 (``eos_svc.shape.kernels.load()``): the state of a long-lived process — the service, the
@@ -55,10 +55,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 from _harness import ScriptChild, export_revision, table
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
-from eos_svc.agents.planner import default_hand, ratio_sphere_request
-from eos_svc.agents.world_parts import world_parts
+from eos_svc.agents.planner import ratio_sphere_request
 from eos_svc.cli.plan import format_cycle
 from eos_svc.shape import kernels
+from eos_svc.world.hand_context import HandContext, default_context
 
 REPEATS = 15
 
@@ -110,7 +110,9 @@ NUMPY_FIT = """
 from eos_svc.shape import kernels
 kernels.LOAD_AFTER = 10**12  # never loaded in the background either
 """
-BASELINE_SCRIPT = LOAD_KERNELS + """
+BASELINE_SCRIPT = (
+    LOAD_KERNELS
+    + """
 import statistics, time
 from eos_svc.agents import PlanRequest, plan
 plan(PlanRequest())
@@ -119,7 +121,10 @@ for _ in range({repeats}):
     t0 = time.perf_counter(); plan(PlanRequest()); samples.append(time.perf_counter() - t0)
 print(*samples)
 """
-SUITE_SCRIPT = LOAD_KERNELS + """
+)
+SUITE_SCRIPT = (
+    LOAD_KERNELS
+    + """
 import time
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.experiments.grasp_suite import fixed_suite
@@ -132,6 +137,7 @@ for seed in {seeds}:
         samples.append(time.perf_counter() - t0)
 print(*samples)
 """
+)
 #: a long-lived child planning on command (``--suite``): request index in, wall seconds out
 PAIRED_CHILD = """
 import json, sys, time
@@ -270,28 +276,23 @@ SHORT_BLOCK = 40
 
 
 def short_plans(rounds: int = SHORT_ROUNDS, block: int = SHORT_BLOCK) -> dict[tuple[str, str], float]:
-    """Median 1-cycle plan time (s) by (parts, timing): parts ``lent`` or ``new``, timing
-    ``back to back`` or ``after 4 ms asleep``; alternating blocks of ``block`` plans."""
-    hand = default_hand()
-    parts = world_parts(hand)
-    kept = parts.keep
+    """Median 1-cycle plan time (s) by (context, timing): context ``kept`` (the default one) or
+    ``built`` (a new one per plan), timing ``back to back`` or ``after 4 ms asleep``; alternating
+    blocks of ``block`` plans."""
+    hand = default_context().hand
     request = PlanRequest(seed=3, max_cycles=1)
     samples: dict[tuple[str, str], list[float]] = {}
-    try:
-        for _ in range(rounds):
-            for mode, keep in (("new", 0), ("lent", kept)):
-                parts.keep = keep
-                plan(request, keep_trace=False, check=False)  # gives back (lent) or not (new)
-                for timing, nap in (("back to back", 0.0), ("after 4 ms asleep", 0.004)):
-                    times = samples.setdefault((mode, timing), [])
-                    for _ in range(block):
-                        if nap:
-                            time.sleep(nap)
-                        t0 = time.perf_counter()
-                        plan(request, keep_trace=False, check=False)
-                        times.append(time.perf_counter() - t0)
-    finally:
-        parts.keep = kept
+    for _ in range(rounds):
+        for mode in ("built", "kept"):
+            for timing, nap in (("back to back", 0.0), ("after 4 ms asleep", 0.004)):
+                times = samples.setdefault((mode, timing), [])
+                for _ in range(block if mode == "kept" else max(1, block // 8)):
+                    if nap:
+                        time.sleep(nap)
+                    t0 = time.perf_counter()
+                    context = default_context() if mode == "kept" else HandContext.build(hand)
+                    plan(request, keep_trace=False, check=False, context=context)
+                    times.append(time.perf_counter() - t0)
     return {k: statistics.median(v) for k, v in samples.items()}
 
 
@@ -313,8 +314,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--short",
         action="store_true",
-        help="only time a 1-cycle plan back to back and after idling, with the plan's state and "
-        "scene lent from the hand's spares vs built new (alternating, this process)",
+        help="only time a 1-cycle plan back to back and after idling, on the default hand's kept "
+        "context vs a context built for every plan (alternating, this process)",
     )
     args = parser.parse_args(argv)
     if args.short:
@@ -322,13 +323,13 @@ def main(argv: list[str] | None = None) -> int:
         medians = short_plans()
         print(
             f"1-cycle plan (seed 3), medians of {SHORT_ROUNDS} alternating blocks of {SHORT_BLOCK} plans "
-            "each: the plan's hand state and scene lent (spares) vs built new"
+            "each: the default hand's kept context vs a context built for every plan"
         )
         for timing in ("back to back", "after 4 ms asleep"):
-            lent, new = medians[("lent", timing)], medians[("new", timing)]
+            kept, built = medians[("kept", timing)], medians[("built", timing)]
             print(
-                f"  {timing:<18} lent {lent * 1e3:6.3f} ms   new {new * 1e3:6.3f} ms   "
-                f"lent / new {lent / new:.2f}x"
+                f"  {timing:<18} kept {kept * 1e3:6.3f} ms   built {built * 1e3:6.3f} ms   "
+                f"built - kept {(built - kept) * 1e3:.2f} ms"
             )
         return 0
     if args.suite:

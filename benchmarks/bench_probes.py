@@ -1,27 +1,23 @@
-"""EP2's guarded probes: the default plan's probes replayed with today's ``guarded_probe`` and
-with the one of an earlier git revision, interleaved in the same run.
+"""EP2's guarded probes: the default plan's probes replayed with today's ``guarded_probe`` (its
+shortcut: the other geometries' exact gaps skipped while a lower bound fixes the step) and with
+the plain conservative advancement (every other geometry queried at every sub-step: the reference
+of ``tests/agents/test_guarded_probe.py``), interleaved in the same run.
 
-    .venv/bin/python benchmarks/bench_probes.py [--baseline ddccb46] [--rounds 40]
+    .venv/bin/python benchmarks/bench_probes.py [--rounds 40]
 
 The default plan (``PlanRequest()``) is planned once and every ``GraspWorld.guarded_probe`` call
 it makes is recorded (world and arguments; a probe sets the whole configuration it moves from, so
-a replay does the same work). The revision's ``guarded_probe`` is read from
-``git show REV:eos_svc/agents/world.py`` and defined in today's ``world`` module namespace: it runs
-on today's world (today's ``_min_gap``, scene, sensor), so the ratio is the probe's own change.
-Each round replays all probes with one version, then the other (the machine is shared: only
-same-run ratios mean much); the outcomes of both are checked equal, bit for bit. Prints the median
-time per replay (all probes), the ratio, and the exact gap queries of the other geometries
-(``_min_gap`` calls) per replay.
+a replay does the same work). Each round replays all probes with one version, then the other (the
+machine is shared: only same-run ratios mean much); the outcomes of both are compared. Prints the
+median time per replay (all probes), the ratio, and the exact gap queries of the other geometries
+(``min_gap`` calls) per replay.
 """
 
 from __future__ import annotations
 
 import argparse
-import ast
 import statistics
-import subprocess
 import sys
-import textwrap
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -29,26 +25,19 @@ from typing import Any
 
 import numpy as np
 
-import eos_svc.agents.world as world_module
+import eos_svc.world.world as world_module
 from eos_svc.agents import PlanRequest, plan
+from eos_svc.world import probe_motion
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def guarded_probe_at(rev: str) -> Callable[..., Any]:
-    """``GraspWorld.guarded_probe`` as written at git revision ``rev``, bound to today's module."""
-    show = ["git", "-C", str(ROOT), "show", f"{rev}:eos_svc/agents/world.py"]
-    src = subprocess.run(show, capture_output=True, text=True, check=True).stdout
-    tree = ast.parse(src)
-    cls = next((n for n in tree.body if isinstance(n, ast.ClassDef) and n.name == "GraspWorld"), None)
-    fn = None if cls is None else next(
-        (n for n in cls.body if isinstance(n, ast.FunctionDef) and n.name == "guarded_probe"), None
-    )
-    if fn is None:
-        raise SystemExit(f"--baseline {rev}: that revision has no GraspWorld.guarded_probe (EP2 came later)")
-    namespace = dict(vars(world_module))
-    exec(textwrap.dedent(ast.get_source_segment(src, fn) or ""), namespace)  # the repository's own code
-    probe: Callable[..., Any] = namespace["guarded_probe"]
+def plain_probe() -> Callable[..., Any]:
+    """The plain conservative advancement of ``tests/agents/test_guarded_probe.py``."""
+    sys.path.insert(0, str(ROOT / "tests" / "agents"))
+    from test_guarded_probe import plain_guarded_probe
+
+    probe: Callable[..., Any] = plain_guarded_probe
     return probe
 
 
@@ -82,15 +71,12 @@ def _bits(out: Any) -> tuple[Any, ...]:
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument(
-        "--baseline", default="ddccb46", help="git revision whose guarded_probe to compare with (ddccb46)"
-    )
     parser.add_argument("--rounds", type=int, default=40, help="interleaved rounds (each replays all probes)")
     args = parser.parse_args(argv)
     calls, q0 = recorded_probes()
     versions = {
-        "current": world_module.GraspWorld.guarded_probe,
-        f"baseline {args.baseline}": guarded_probe_at(args.baseline),
+        "current": probe_motion.guarded_probe,
+        "plain": plain_probe(),
     }
     # each version's checked replay starts from the same hand configuration and the same state of
     # the sensor's generator (a touch draws its tactile noise)
@@ -98,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     start = {k: sensor.rng.bit_generator.state for k, sensor in sensors.items()}
     queries = {name: 0 for name in versions}
     outcomes: dict[str, list[Any]] = {}
-    min_gap = world_module.GraspWorld._min_gap
+    min_gap = world_module.GraspWorld.min_gap
     for name, probe in versions.items():  # untimed: outcomes and the gap queries they take
         count = [0]
 
@@ -106,7 +92,7 @@ def main(argv: list[str] | None = None) -> int:
             count[0] += 1
             return min_gap(self, ids, best)
 
-        world_module.GraspWorld._min_gap = counted  # type: ignore[method-assign]
+        world_module.GraspWorld.min_gap = counted  # type: ignore[method-assign]
         for k, sensor in sensors.items():
             sensor.rng.bit_generator.state = start[k]
         for w in {id(w): w for w, _ in calls}.values():
@@ -114,7 +100,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             outcomes[name] = [_bits(probe(w, *a)) for w, a in calls]
         finally:
-            world_module.GraspWorld._min_gap = min_gap  # type: ignore[method-assign]
+            world_module.GraspWorld.min_gap = min_gap  # type: ignore[method-assign]
         queries[name] = count[0]
     names = list(versions)
     same = outcomes[names[0]] == outcomes[names[1]]

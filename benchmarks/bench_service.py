@@ -74,7 +74,7 @@ from typing import Any
 import zenoh
 
 from eos_svc.agents.planner import plan
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
 from eos_svc.service import protocol as proto
 from eos_svc.service.reliability import Server, start_servers, stop_servers
@@ -581,7 +581,7 @@ def probe_server(port: int, out: str) -> None:
     _timed(srv, "_encode", "json0", "json1")
     _timed(srv._GoalWatchers, "watched", "watch0", "watch1")
 
-    from eos_svc.agents.result import PlanResult
+    from eos_svc.schema.result import PlanResult
 
     _timed(PlanResult, "to_dict", "to_dict0", "to_dict1")  # the service calls to_dict(jsonable=False)
 

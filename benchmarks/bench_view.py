@@ -30,10 +30,10 @@ from _harness import table
 
 from eos_svc.agents import PlanRequest, keys, plan
 from eos_svc.agents.planner import build_world, ratio_sphere_request
-from eos_svc.agents.pose_board import PoseBoard
 from eos_svc.board import Board
 from eos_svc.view import write_result_html
 from eos_svc.view.live import LiveView
+from eos_svc.world.pose_board import PoseBoard
 
 REPEATS = 15
 PAGES = 5

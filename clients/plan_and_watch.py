@@ -16,7 +16,7 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import EosClient, RequestError, ServiceUnavailableError
 
 

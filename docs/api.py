@@ -38,7 +38,7 @@ def public_modules() -> list[str]:
 #: pdoc finds a class's fields in its source; a TypedDict in the functional form (needed when a
 #: key is a Python keyword, as the board's ``shape["class"]``) has none, so pdoc says it assumes
 #: the fields are declared where the class is — which they are. Only these warnings are dropped.
-FUNCTIONAL_TYPEDDICTS = ("eos_svc.agents.board_entries.ShapeEntry.",)
+FUNCTIONAL_TYPEDDICTS = ("eos_svc.schema.board_entries.ShapeEntry.",)
 
 
 def _benign(w: warnings.WarningMessage) -> bool:
@@ -56,9 +56,10 @@ def main(argv: list[str]) -> int:
     for w in problems:
         print(f"pdoc warning: {w.message}", file=sys.stderr)
     pages = len(list(out.rglob("*.html"))) - 1  # one per module, and the index
-    print(f"API reference of {pages} modules: {out / 'index.html'}" + (
-        f"; {len(problems)} warning(s)" if problems else ", no warnings"
-    ))
+    print(
+        f"API reference of {pages} modules: {out / 'index.html'}"
+        + (f"; {len(problems)} warning(s)" if problems else ", no warnings")
+    )
     return 1 if problems else 0
 
 

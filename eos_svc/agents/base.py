@@ -7,9 +7,9 @@ from collections.abc import Callable, Iterable
 from typing import Any
 
 from eos_svc.agent import Agent, CycleContext
-from eos_svc.agents import keys
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 SEARCH, INFO, GRASP = "search", "information", "grasping"
 STAGES = (SEARCH, INFO, GRASP)

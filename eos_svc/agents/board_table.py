@@ -1,6 +1,6 @@
 """The table of the grasp planner's board entries: type, meaning, who writes and reads each.
 
-Generated from the declarations — :data:`~eos_svc.agents.board_entries.ENTRIES` and the agents'
+Generated from the declarations — :data:`~eos_svc.schema.board_entries.ENTRIES` and the agents'
 ``reads`` / ``writes`` — into ``docs/planner.md``, between two marker lines:
 
     python -m eos_svc.agents.board_table docs/planner.md   # rewrite the table there
@@ -16,9 +16,9 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 
 from eos_svc.agent import Agent
-from eos_svc.agents.board_entries import AFTER_RUN, ENTRIES, OUTSIDE_WRITERS, Entry, type_name
 from eos_svc.board_access import access_map
 from eos_svc.errors import ValidationError
+from eos_svc.schema.board_entries import AFTER_RUN, ENTRIES, OUTSIDE_WRITERS, Entry, type_name
 
 
 def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES) -> str:
@@ -48,7 +48,7 @@ def planner_access_table() -> str:
     """:func:`access_table` for the default planner's agents (hand3x3, with ``recall``)."""
     from eos_svc.agents.memory import GraspMemory
     from eos_svc.agents.planner import build_agents, build_world
-    from eos_svc.agents.request import PlanRequest
+    from eos_svc.schema.request import PlanRequest
 
     world = build_world(PlanRequest())
     return access_table(build_agents(world, memory=GraspMemory(":memory:")))

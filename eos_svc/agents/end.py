@@ -19,13 +19,13 @@ import math
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, GraspAgent
 from eos_svc.agents.finger import DONE_STATES
-from eos_svc.agents.request import DEFAULT_FRICTION
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.grasp.quality import DEFAULT_EDGES, contacts_quality
+from eos_svc.schema import keys
+from eos_svc.schema.request import DEFAULT_FRICTION
+from eos_svc.world.world import GraspWorld
 
 #: smallest angle (deg) between the opposing contact and the others' midpoint for a good grasp
 GOOD_GRASP_ANGLE_DEG = 150.0

@@ -5,7 +5,7 @@ tangent directions (``eos_svc.kinematics.ep1.run_ep1``), and adds the samples to
 that side's curvature estimator, so repeated EP1 runs sharpen one estimate.
 
 Where it touches: the object is explored from **above** by an upper finger
-(finger1 for hand3x3; :class:`~eos_svc.agents.probing.ProbeChoice` picks it for
+(finger1 for hand3x3; :class:`~eos_svc.world.probing.ProbeChoice` picks it for
 any hand) — the hand lowers it onto the object's top, at the point found by
 moving 1 cm inside the surface point nearest the hand (proximity) and straight
 up — and, when post_shape asks for it (to size the object), from **below** by
@@ -26,14 +26,14 @@ from __future__ import annotations
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
 from eos_svc.kinematics.hand import KinematicsError
 from eos_svc.kinematics.rolling import RollingQPError
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 #: QP backend EP1 falls back on when OSQP does not converge on a roll
 FALLBACK_SOLVER = "daqp"

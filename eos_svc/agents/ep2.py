@@ -4,7 +4,7 @@ EP1 feels the curvature at one contact (top, then bottom): it cannot tell a box'
 a large cylinder's side, nor give the object's depth or orientation. EP2 (Charlebois, Gupta
 and Payandeh, ICRA 1996: fingers dragged over the surface, "the surface approximated with a
 small number of sampled points") gathers more of it. Here each EP2 action is a round of
-**guarded probes** (:meth:`~eos_svc.agents.world.GraspWorld.guarded_probe`): a fingertip moves
+**guarded probes** (:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves
 in a straight line toward the object and stops at first touch — a contact point (the tip's
 centre, from the kinematics) and a normal (from the tactile reading, with its noise); a
 probe that runs its whole travel touches nothing and tells where the object is *not* (its
@@ -36,12 +36,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
-from eos_svc.kinematics import HandModel
-from eos_svc.kinematics.hand_cache import PerHandCache
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
 MAX_ROUNDS = 3
@@ -91,23 +89,6 @@ def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
     return centre, np.array([half, half, half])
 
 
-#: per hand: its side fingers (a HandState at neutral to find them costs ≈ 0.1 ms: once per hand)
-_SIDE_FINGERS: PerHandCache[dict[int, str]] = PerHandCache(keep=8)
-
-
-def side_fingers(hand: HandModel) -> dict[int, str]:
-    """The upper finger that leads a probe along +y (its tip's y largest at neutral) and along −y
-    (smallest), keyed ``+1`` and ``-1``; derived once per hand (a new dict each call)."""
-
-    def build() -> dict[int, str]:
-        upper = [f for f in hand.finger_names if f != hand.description.opposing_finger]
-        state = hand.state(hand.neutral())
-        y = {f: float(state.tip_position(f)[1]) for f in upper}
-        return {+1: max(upper, key=lambda f: y[f]), -1: min(upper, key=lambda f: y[f])}
-
-    return dict(_SIDE_FINGERS.get((hand,), build))
-
-
 class EP2Agent(GraspAgent):
     """Probes the object's front, sides, top and bottom with guarded fingertip moves."""
 
@@ -117,7 +98,7 @@ class EP2Agent(GraspAgent):
     def __init__(self, default: float, world: GraspWorld) -> None:
         super().__init__("ep2", (INFO,), default, world)
         self.rounds = 0
-        self.side_fingers = side_fingers(world.hand)
+        self.side_fingers = world.context.side_fingers
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)

@@ -27,16 +27,16 @@ from operator import itemgetter
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics.norms import vector_norm
 from eos_svc.objects import SurfaceObject
+from eos_svc.schema import keys
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.world.world import GraspWorld
 
 #: finger states that end a finger's part in the grasp
 DONE_STATES = frozenset({"touching", "missed", "link"})

@@ -24,14 +24,14 @@ from __future__ import annotations
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.agents.request import ObjectSpec
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
+from eos_svc.schema import keys
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.world.world import GraspWorld
 
 #: the reason synthesis gives for a grip wider than the hand height
 TOO_LARGE = "larger than the hand height across the grip"

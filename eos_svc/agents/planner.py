@@ -22,56 +22,53 @@ end            grasping                  0.2
 Another hand (``plan(request, hand=allegro_hand())``) brings its own finger agents, one per
 finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
 extra finger (:func:`finger_ratings`); its world parameters are derived from it
-(:meth:`WorldParameters.for_hand`).
+(:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
+:class:`~eos_svc.world.hand_context.HandContext` (give ``plan`` one to keep: ``plan(request,
+context=HandContext.build(hand))``).
 
 The same request with the same seed gives the same cycles and result.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import time
 from collections.abc import Callable
-from pathlib import Path
 
 import numpy as np
 
 from eos_svc.agent import Agent
-from eos_svc.agents import keys
-from eos_svc.agents.admission import check_plannable
 from eos_svc.agents.base import STAGES
-from eos_svc.agents.board_entries import check_entry
 from eos_svc.agents.end import EndAgent, grasp_geometry
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.agents.pose_board import PoseBoard
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.recall import RecallAgent
-from eos_svc.agents.request import ObjectSpec, PlanRequest
-from eos_svc.agents.result import PlanResult
-from eos_svc.agents.world import GraspWorld
-from eos_svc.agents.world_parameters import WorldParameters
-from eos_svc.agents.world_parts import WorldParts, world_parts
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
-from eos_svc.grasp.sweeps import FingerSweep, build_sweeps
+from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import (
-    HAND3X3_URDF,
     HandModel,
     Scene,
     TactileSensor,
-    load_hand,
 )
 from eos_svc.kinematics.curvature import CurvatureEstimator
-from eos_svc.kinematics.hand_cache import PerHandCache
 from eos_svc.records import CycleRecord
+from eos_svc.schema import keys
+from eos_svc.schema.board_entries import check_entry
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.schema.result import PlanResult
+from eos_svc.world.admission import check_plannable
+from eos_svc.world.hand_context import HandContext, context_for, default_context
+from eos_svc.world.parameters import WorldParameters
+from eos_svc.world.pose_board import PoseBoard
+from eos_svc.world.world import GraspWorld
 
 CycleCallback = Callable[[CycleRecord], None]
 
@@ -107,28 +104,19 @@ def finger_ratings(finger_names: tuple[str, ...] | list[str]) -> dict[str, float
     return out
 
 
-@functools.lru_cache(maxsize=4)
-def default_hand(urdf: str = str(HAND3X3_URDF)) -> HandModel:
-    """The hand3x3 model, loaded once per process."""
-    return load_hand(Path(urdf))
-
-
-#: per hand: its sweeps and parameters
-_PER_HAND: PerHandCache[tuple[HandModel, dict[str, FingerSweep], WorldParameters]] = PerHandCache(keep=8)
-
-
-def _derived(hand: HandModel) -> tuple[HandModel, dict[str, FingerSweep], WorldParameters]:
-    return _PER_HAND.get((hand,), lambda: (hand, build_sweeps(hand), WorldParameters.for_hand(hand)))
+def default_hand() -> HandModel:
+    """The hand3x3 model (``urdf/hand3x3.urdf``): the default context's hand."""
+    return default_context().hand
 
 
 def finger_sweeps(hand: HandModel) -> dict[str, FingerSweep]:
-    """Each finger's closing sweep (palm frame), derived once per hand."""
-    return _derived(hand)[1]
+    """Each finger's closing sweep (palm frame): ``context_for(hand).sweeps``."""
+    return context_for(hand).sweeps
 
 
 def parameters_for(hand: HandModel) -> WorldParameters:
-    """``WorldParameters.for_hand(hand)``, derived once per hand."""
-    return _derived(hand)[2]
+    """``WorldParameters.for_hand(hand)``: ``context_for(hand).params``."""
+    return context_for(hand).params
 
 
 def build_world(
@@ -137,47 +125,37 @@ def build_world(
     params: WorldParameters | None = None,
     *,
     check: bool = True,
-    parts: WorldParts | None = None,
+    context: HandContext | None = None,
 ) -> GraspWorld:
     """The world of one plan: hand at its start pose, the object, seeded randomness.
 
     Args:
-        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` when
+        hand, params: the hand and the world's constants (defaults: hand3x3, the hand's own);
+            ignored when ``context`` is given.
+        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` when
             the caller already has).
-        parts: lend the hand state and the scene from these (the hand's
-            :func:`~eos_svc.agents.world_parts.world_parts`); the caller gives them back when
-            it is done with the world (:meth:`~eos_svc.agents.world_parts.WorldParts.give_back`).
-            Default: new ones.
+        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for`).
 
     Raises:
         ValidationError: the object is out of reach, overlaps the hand or is too large
-            (see :mod:`eos_svc.agents.admission`).
+            (see :mod:`eos_svc.world.admission`).
     """
-    hand = hand or default_hand()
-    params = params or parameters_for(hand)
+    context = context if context is not None else context_for(hand, params)
     if check:
-        check_plannable(request, hand, params)
-    if parts is not None:
-        if parts.hand is not hand:
-            raise ValueError("parts: they belong to another hand than the world's")
-        state, scene = parts.lend(request.obj)
-    else:
-        state, scene = hand.state(hand.neutral()), Scene(hand, make_object(request.obj))
+        check_plannable(request, context=context)
+    hand = context.hand
     # SeedSequence(seed).spawn(2)'s two children, made directly (the sensor's generator is made
     # only if it takes a noisy reading)
     search_seed = np.random.SeedSequence(request.seed, spawn_key=(0,))
     sensor_seed = np.random.SeedSequence(request.seed, spawn_key=(1,))
-    world = GraspWorld(
-        hand=hand,
-        scene=scene,
-        state=state,
+    return GraspWorld(
+        context=context,
+        scene=Scene(hand, make_object(request.obj)),
+        state=hand.state(hand.neutral()),
         sensor=TactileSensor(noise_std=request.tactile_noise, rng=sensor_seed),
         rng=np.random.default_rng(search_seed),
-        params=params,
         estimator=CurvatureEstimator(),
-        sweeps=finger_sweeps(hand),
     )
-    return world
 
 
 def build_agents(
@@ -216,6 +194,7 @@ def plan(
     cancel: CancelToken | None = None,
     hand: HandModel | None = None,
     params: WorldParameters | None = None,
+    context: HandContext | None = None,
     keep_trace: bool = True,
     memory: GraspMemory | None = None,
     oracle_postulate: bool = False,
@@ -228,10 +207,14 @@ def plan(
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: ``urdf/hand3x3.urdf``, cached), e.g.
-            :func:`eos_svc.kinematics.allegro_hand`.
+        hand: the hand model (default: ``urdf/hand3x3.urdf``), e.g.
+            :func:`eos_svc.kinematics.allegro_hand`; its context is built for this plan (≈ 30 ms)
+            unless it is the default hand or ``context`` is given.
         params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
             for hand3x3, hand-dependent fields derived for another hand).
+        context: the hand's context (:class:`~eos_svc.world.hand_context.HandContext`), built
+            once by a caller that plans many times with a hand of its own; ``hand`` is then
+            ignored.
         keep_trace: keep every cycle record in the result.
         memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
             plan reaches grasping, records how it went (give the request a learned weight
@@ -239,28 +222,24 @@ def plan(
         oracle_postulate: grasp_points plans on the request's true object instead of
             post_shape's postulate — for measuring the grasp stage apart from recognition
             only; off by default, never used by the command line or the service.
-        check: run :func:`~eos_svc.agents.admission.check_plannable` first (``False`` only
+        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` only
             when the caller has just run it on this request, hand and parameters, as the
             service does at admission).
         check_board: debug mode: every agent reads and writes the board only through the
             entries it declares (``reads`` / ``writes``), and every value written is checked
-            against its declared type (:mod:`eos_svc.agents.board_entries`); a breach ends the
+            against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
-            :func:`~eos_svc.agents.admission.check_plannable` (object out of reach, overlapping
+            :func:`~eos_svc.world.admission.check_plannable` (object out of reach, overlapping
             the hand, wider than the hand's span). Every planning outcome is a status in the result.
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
-    hand = hand or default_hand()
-    params = params or parameters_for(hand)
-    if check:
-        check_plannable(request, hand, params)
-    parts = world_parts(hand)  # the state and scene of an earlier plan (same object), if any
-    world = build_world(request, hand, params, check=False, parts=parts)
+    context = context if context is not None else context_for(hand, params)
+    world = build_world(request, check=check, context=context)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
@@ -308,7 +287,6 @@ def plan(
         q_final=tuple(float(x) for x in world.state.q),
         wall_time_s=time.perf_counter() - t0,
     )
-    parts.give_back(request.obj, world.state, world.scene)  # the plan ended normally: reusable
     return result
 
 

@@ -38,12 +38,12 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import INFO, GraspAgent
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.selection import MIN_CONTACTS
+from eos_svc.world.world import GraspWorld
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15

@@ -14,13 +14,13 @@ from __future__ import annotations
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, GraspAgent
 from eos_svc.agents.memory import GraspMemory, RememberedGrasp
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
-RECALLED = "recalled"  #: board entry: the memory key recall applied
+RECALLED = keys.RECALLED  #: board entry: the memory key recall applied
 
 
 class RecallAgent(GraspAgent):

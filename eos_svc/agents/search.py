@@ -3,7 +3,7 @@
 The paper's search picks a random direction and step each move; a random walk revisits
 places and has a long tail. Here each move goes straight to the next point of a coverage
 lattice over the workspace, visited once each in a seeded space-filling order
-(:mod:`eos_svc.agents.coverage`, which also states which objects the search is guaranteed
+(:mod:`eos_svc.world.coverage`, which also states which objects the search is guaranteed
 to find). The object is *located* when its surface comes within the hand's envelope
 (``WorldParameters.envelope_radius`` of the grasp centre, between the fingers) — a
 proximity sense of the palm, active all along a move (the move stops there), documented in
@@ -15,10 +15,10 @@ moves it; the paper allows all four in the search stage.
 from __future__ import annotations
 
 from eos_svc.agent import ActionResult, Outcome
-from eos_svc.agents import keys
-from eos_svc.agents.coverage import column_counts
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
+from eos_svc.schema import keys
+from eos_svc.world.coverage import column_counts
+from eos_svc.world.world import GraspWorld
 
 
 def search_rating(board: Board) -> float:
@@ -28,7 +28,7 @@ def search_rating(board: Board) -> float:
 
 def search_move_limit(world: GraspWorld) -> int:
     """Sweeps after which the search gives up: every column of the coverage lattice twice
-    (:func:`eos_svc.agents.coverage.column_counts`)."""
+    (:func:`eos_svc.world.coverage.column_counts`)."""
     ny, nz = column_counts(world.params)
     return 2 * ny * nz
 

@@ -19,14 +19,14 @@ from __future__ import annotations
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
-from eos_svc.agents import keys
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.search import search_move, search_rating
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board
 from eos_svc.grasp.landing import landing
 from eos_svc.grasp.postulate import make_object
+from eos_svc.schema import keys
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.world.world import GraspWorld
 
 #: the wrist's least opportunistic sub-rating while the hand is short of its grasp position
 WRIST_FLOOR = 0.05

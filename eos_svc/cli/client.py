@@ -119,8 +119,8 @@ def run(args: argparse.Namespace) -> int:
 
     request: Any = None
     if args.action == "plan":
-        from eos_svc.agents.request import PlanRequest
         from eos_svc.cli.plan import FIELD_OPTIONS
+        from eos_svc.schema.request import PlanRequest
 
         try:
             if args.goal_id is not None:

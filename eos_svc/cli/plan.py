@@ -242,7 +242,7 @@ def chosen_hand(args: argparse.Namespace) -> Any:
 def admit(request: Any, hand: Any) -> None:
     """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
     overlapping the hand, wider than its span (:func:`eos_svc.agents.admission.check_plannable`)."""
-    from eos_svc.agents.admission import check_plannable
+    from eos_svc.world.admission import check_plannable
 
     try:
         check_plannable(request, hand)

@@ -74,7 +74,7 @@ def verify(recording: Recording) -> Verification:
         ValidationError: the recorded request is not valid (any more).
     """
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
-    from eos_svc.agents.pose_board import view_entries_as_recorded
+    from eos_svc.world.pose_board import view_entries_as_recorded
 
     request = PlanRequest.from_dict(recording.request)
     hand = resolve_hand(recording.hand)

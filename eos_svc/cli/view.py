@@ -172,7 +172,7 @@ def write_recording_html(
 ) -> None:
     """``eos replay FILE --html``: the recorded cycles; a recording made before the hand's
     configuration was recorded is planned again (same request, seed and hand) for it."""
-    from eos_svc.agents.pose_board import has_hand_q
+    from eos_svc.world.pose_board import has_hand_q
 
     cycles = recording.cycles
     if cycles and not has_hand_q(cycles):

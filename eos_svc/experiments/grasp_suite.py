@@ -21,7 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.request import DEFAULT_OBJECT, ObjectSpec
+from eos_svc.schema.request import DEFAULT_OBJECT, ObjectSpec
 
 #: sphere diameters of the fixed suite, as d/h
 SPHERE_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
@@ -172,7 +172,7 @@ def random_draw(
     from scipy.spatial.transform import Rotation
 
     if span is None:
-        from eos_svc.agents.admission import hand_span
+        from eos_svc.world.admission import hand_span
 
         span = hand_span(default_hand())
     lo, hi = sizes

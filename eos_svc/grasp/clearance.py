@@ -20,7 +20,7 @@ from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_tabl
 from eos_svc.objects import SurfaceObject
 
 if TYPE_CHECKING:
-    from eos_svc.agents.world_parameters import WorldParameters
+    from eos_svc.world.parameters import WorldParameters
 
 #: approach-path samples checked for collisions between pre-grasp and grasp
 APPROACH_SAMPLES = 4

@@ -19,8 +19,8 @@ from typing import Any
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from eos_svc.schema.request import ObjectSpec
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:

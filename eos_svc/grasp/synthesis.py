@@ -33,7 +33,7 @@ from eos_svc.kinematics import HandModel
 from eos_svc.objects import Sphere, SurfaceObject
 
 if TYPE_CHECKING:
-    from eos_svc.agents.world_parameters import WorldParameters
+    from eos_svc.world.parameters import WorldParameters
 
 #: cone edges of the ε that ranks candidates (the end agent judges with 8; 4 is ~10× faster)
 SCORE_EDGES = 4

@@ -31,8 +31,8 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import EosError
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 

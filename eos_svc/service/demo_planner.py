@@ -12,11 +12,11 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from eos_svc.agents.request import PlanRequest
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
 from eos_svc.demo import STAGES, Bisect, Done, Scan, Secant, Widen, default_problem
 from eos_svc.records import CycleRecord
+from eos_svc.schema.request import PlanRequest
 
 
 def root_plan(

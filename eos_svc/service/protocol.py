@@ -45,9 +45,9 @@ from typing import Any, NamedTuple
 
 import msgspec
 
-from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service.ids import ID_PATTERN as ID_PATTERN  # the protocol's names, defined there
 from eos_svc.service.ids import TOKEN_PATTERN as TOKEN_PATTERN
 from eos_svc.service.ids import is_id, is_token

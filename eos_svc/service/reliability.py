@@ -32,8 +32,8 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ComputationError, ValidationError
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError

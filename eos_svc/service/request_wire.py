@@ -31,7 +31,9 @@ from typing import Annotated, Literal
 
 import msgspec
 
-from eos_svc.agents.request import (
+from eos_svc.errors import ValidationError
+from eos_svc.ratings import Weights
+from eos_svc.schema.request import (
     MAX_CYCLES_LIMIT,
     MAX_DEADLINE_S,
     MAX_FRICTION,
@@ -41,8 +43,6 @@ from eos_svc.agents.request import (
     ObjectSpec,
     PlanRequest,
 )
-from eos_svc.errors import ValidationError
-from eos_svc.ratings import Weights
 from eos_svc.service.ids import is_id, is_token
 
 #: an object size (m): > 0 and ≤ MAX_OBJECT_SIZE (ObjectSpec's ``_positive``)

@@ -46,11 +46,11 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
-from eos_svc.agents.result import PlanResult
 from eos_svc.controller import CancelToken
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.records import CycleRecord
+from eos_svc.schema.request import PlanRequest
+from eos_svc.schema.result import PlanResult
 from eos_svc.service import protocol as proto
 from eos_svc.service.session import direct_callback
 from eos_svc.shape import kernels
@@ -81,7 +81,7 @@ def default_planner() -> Planner:
 def default_admission() -> Admission:
     """The grasp planner's admission check (:func:`eos_svc.agents.admission.check_plannable` on
     the default hand, resolved once: :func:`~eos_svc.agents.admission.default_check`)."""
-    from eos_svc.agents.admission import default_check  # lazy: Pinocchio and coal load here
+    from eos_svc.world.admission import default_check  # lazy: Pinocchio and coal load here
 
     return default_check()
 

@@ -13,8 +13,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from eos_svc.agents.request import MAX_FRICTION, SHAPE_SIZE_FIELDS, ObjectSpec
 from eos_svc.errors import ValidationError
+from eos_svc.schema.request import MAX_FRICTION, SHAPE_SIZE_FIELDS, ObjectSpec
 from eos_svc.validation.report import DIRECTIONS
 
 

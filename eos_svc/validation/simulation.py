@@ -50,9 +50,9 @@ from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
 from eos_svc import objects
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
+from eos_svc.schema.request import ObjectSpec
 
 #: name of the object's body and model instance in the plant
 #: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles

@@ -34,7 +34,7 @@ from eos_svc.validation.simulation import (
 )
 
 if TYPE_CHECKING:
-    from eos_svc.agents.result import PlanResult
+    from eos_svc.schema.result import PlanResult
 
 #: standard gravity (m/s²): the load is the object's weight
 GRAVITY = 9.81

@@ -24,11 +24,11 @@ from typing import Any
 
 from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
 
-from eos_svc.agents import keys
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
+from eos_svc.schema import keys
+from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.view.replay_html import animate_hand, quiet_drake
 from eos_svc.view.scene import (
     CONTACTS,

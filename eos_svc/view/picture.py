@@ -29,10 +29,10 @@ from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 from scipy.spatial import ConvexHull, QhullError
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.request import PlanRequest
 from eos_svc.errors import ContractError, ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import PlanRequest
 from eos_svc.view.scene import touching_contacts
 
 #: mesh resolution (segments around a circle)

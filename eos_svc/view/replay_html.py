@@ -30,8 +30,8 @@ from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
 from pydrake.math import RigidTransform
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.view.scene import (
     CONTACTS,
     OBJECT,

@@ -41,8 +41,8 @@ from pydrake.geometry import (
 from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 
 from eos_svc import objects
-from eos_svc.agents.request import DEFAULT_FRICTION, ObjectSpec
 from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import DEFAULT_FRICTION, ObjectSpec
 
 #: root of everything this package draws in a MeshCat scene
 ROOT = "/eos"

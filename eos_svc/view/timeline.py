@@ -18,7 +18,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
-from eos_svc.agents import keys
+from eos_svc.schema import keys
 
 #: animation frames per second
 FPS = 16

@@ -9,10 +9,10 @@ import sys
 import numpy as np
 import pytest
 
-from eos_svc.agents.admission import check_plannable, hand_span, smallest_width
 from eos_svc.agents.planner import default_hand, finger_sweeps, parameters_for, plan
-from eos_svc.agents.request import ObjectSpec, PlanRequest
 from eos_svc.errors import ValidationError
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.world.admission import check_plannable, hand_span, smallest_width
 
 PARAMS = parameters_for(default_hand())
 #: the box the grasp centre sweeps (world, m) and the envelope radius
@@ -157,9 +157,9 @@ def test_positions_the_search_cannot_promise_to_find_are_refused(position):
 
 
 def test_the_findable_shortcut_agrees_with_sampling_every_sweep_line():
-    from eos_svc.agents.coverage import findable
     from eos_svc.grasp.postulate import make_object
     from eos_svc.grasp.sweeps import forward_reach
+    from eos_svc.world.coverage import findable
 
     hand = default_hand()
     params = parameters_for(hand)

@@ -14,9 +14,9 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, build_agents, build_world, plan
 from eos_svc.agents.planner import DEFAULT_RATINGS, default_hand, finger_ratings
-from eos_svc.agents.world_parameters import WorldParameters
 from eos_svc.kinematics import allegro_hand
 from eos_svc.kinematics.hands import ALLEGRO_PRESHAPE, allegro_urdf_path
+from eos_svc.world.parameters import WorldParameters
 
 SPHERE = ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.02, -0.015))
 

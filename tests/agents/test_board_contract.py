@@ -12,19 +12,19 @@ import pytest
 
 from eos_svc import Weights
 from eos_svc.agents import PlanRequest, build_agents, build_world, plan
-from eos_svc.agents import keys as keys_module
-from eos_svc.agents.board_entries import (
+from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_table, update_table
+from eos_svc.agents.memory import GraspMemory
+from eos_svc.board_access import access_map, undeclared_entries
+from eos_svc.errors import ContractError, ValidationError
+from eos_svc.kinematics import allegro_hand
+from eos_svc.schema import keys as keys_module
+from eos_svc.schema.board_entries import (
     AFTER_RUN,
     ENTRIES,
     OUTSIDE_WRITERS,
     ShapeEntry,
     check_entry,
 )
-from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_table, update_table
-from eos_svc.agents.memory import GraspMemory
-from eos_svc.board_access import access_map, undeclared_entries
-from eos_svc.errors import ContractError, ValidationError
-from eos_svc.kinematics import allegro_hand
 
 ROOT = Path(__file__).resolve().parents[2]
 ACROSS = [1.5707963267948966, 0.0, 0.0]  # a cylinder or capsule lying across the approach

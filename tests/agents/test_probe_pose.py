@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.agents.probe_pose import probe_pose
 from eos_svc.kinematics import HandModel, UnknownNameError, allegro_hand
+from eos_svc.world.probe_pose import ProbePose
 
 
 def _plain(hand: HandModel, q: np.ndarray, finger: str, angle: float) -> np.ndarray:
@@ -32,10 +32,9 @@ def test_probe_pose_equals_the_plain_assignments(which: str) -> None:
         finger = hand.finger_names[int(rng.integers(len(hand.finger_names)))]
         angle = float(rng.uniform(-0.3, 0.8))
         got = q.copy()
-        pose = probe_pose(hand, finger, angle)
+        pose = ProbePose.build(hand, finger, angle)
         pose.apply(got)
         assert got.tobytes() == _plain(hand, q, finger, angle).tobytes()
-        assert probe_pose(hand, finger, angle) is pose  # kept
         xyz = hand.wrist_q_index[:3]
         assert pose.wrist_xyz == xyz.tolist()
         assert pose.wrist_lo == hand.lower[xyz].tolist() and pose.wrist_hi == hand.upper[xyz].tolist()
@@ -43,4 +42,4 @@ def test_probe_pose_equals_the_plain_assignments(which: str) -> None:
         n = len(hand.collision_model.geometryObjects)
         assert pose.others == [g for g in range(n) if g != tip]
     with pytest.raises(UnknownNameError):
-        probe_pose(hand, "thumb9", 0.0)
+        ProbePose.build(hand, "thumb9", 0.0)

@@ -9,7 +9,10 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, keys
-from eos_svc.agents.coverage import (
+from eos_svc.agents.planner import build_world, default_hand, make_object, parameters_for
+from eos_svc.agents.search import search_move
+from eos_svc.board import Board
+from eos_svc.world.coverage import (
     SpaceFillingOrder,
     column_counts,
     coverage_spacing,
@@ -17,9 +20,6 @@ from eos_svc.agents.coverage import (
     space_filling_order,
     wrist_columns,
 )
-from eos_svc.agents.planner import build_world, default_hand, make_object, parameters_for
-from eos_svc.agents.search import search_move
-from eos_svc.board import Board
 
 
 def search_length(spec: ObjectSpec, seed: int, limit: int = 200) -> int:
@@ -148,9 +148,9 @@ def test_object_beyond_every_sweep_is_not_findable():
 
 
 def test_forward_reach_of_hand3x3_is_the_default_of_the_rule():
-    from eos_svc.agents.coverage import HAND3X3_FORWARD_REACH
     from eos_svc.agents.planner import finger_sweeps
     from eos_svc.grasp.sweeps import forward_reach
+    from eos_svc.world.coverage import HAND3X3_FORWARD_REACH
 
     hand = default_hand()
     assert forward_reach(hand, finger_sweeps(hand)) == pytest.approx(HAND3X3_FORWARD_REACH, abs=1e-3)

@@ -7,8 +7,8 @@ from __future__ import annotations
 import pytest
 
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.agents.wrist import WRIST_FLOOR
+from eos_svc.schema.request import ObjectSpec
 
 #: objects of a random draw that stalled with the wrist rated 1 − d/h = 0 (d/h > 1)
 WIDE = [

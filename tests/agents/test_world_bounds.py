@@ -1,8 +1,8 @@
 """The grasp world's shortcuts give the answers of the exact queries they avoid.
 
-``GraspWorld._lower_bounds`` must never exceed a geometry's exact gap (coal), for every
-hand geometry kind and object shape; ``hand_clear``, ``_closing_clear`` and
-``FingerSweep.last_within`` must agree with ``hand_clearance``, ``_closing_gap`` and
+``GraspWorld.lower_bounds`` must never exceed a geometry's exact gap (coal), for every
+hand geometry kind and object shape; ``hand_clear``, ``closing_clear`` and
+``FingerSweep.last_within`` must agree with ``hand_clearance``, ``closing_gap`` and
 ``FingerSweep.reaches``.
 """
 
@@ -14,6 +14,7 @@ import pytest
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
 from eos_svc.kinematics import allegro_hand
+from eos_svc.world.finger_closing import closing_clear, closing_gap
 
 OBJECTS = [
     ObjectSpec("sphere", {"radius": 0.03}, (0.12, 0.0, 0.0)),
@@ -50,7 +51,7 @@ def test_lower_bounds_never_exceed_the_exact_gaps(spec, hand_name):
     checked = 0
     for q in random_poses(world, rng, 40):
         world.set_q(q)
-        for lower, gid in world._lower_bounds(range(n_geoms)):
+        for lower, gid in world.lower_bounds(range(n_geoms)):
             gap = world.scene.gap(world.state, gid)
             # coal's depth of a deep penetration is approximate (e.g. a sphere well inside a
             # cylinder: not the least separating translation), beyond what any bound from
@@ -74,9 +75,9 @@ def test_shortcuts_agree_with_the_exact_answers(spec):
             assert fast == (world.hand_clearance() >= threshold)
         for finger in world.hand.finger_names:
             world.set_q(q)
-            fast = world._closing_clear(finger)
+            fast = closing_clear(world, finger)
             world.set_q(q)
-            assert fast == (world._closing_gap(finger) > 0.0)
+            assert fast == (closing_gap(world, finger) > 0.0)
 
 
 def test_last_within_answers_reaches_for_every_angle():

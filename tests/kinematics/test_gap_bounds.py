@@ -47,12 +47,10 @@ def test_bounds_never_exceed_the_exact_gap_and_are_tight_for_a_sphere():
     assert near > 50  # many poses close to contact, where a loose bound would show
 
 
-def test_hand_bound_table_is_shape_bound_of_every_geometry_once_per_hand():
-    # the per-hand table (shared by every plan's world and grasp synthesis) is the plain list
+def test_hand_bound_table_is_shape_bound_of_every_geometry():
     from eos_svc.agents.planner import default_hand
     from eos_svc.kinematics import allegro_hand
 
     for hand in (default_hand(), allegro_hand()):
         table = hand_bound_table(hand)
         assert table == [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
-        assert hand_bound_table(hand) is table  # computed once, then shared

@@ -18,7 +18,7 @@ import pytest
 import zenoh
 
 from eos_svc.agents.planner import plan
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient
 from eos_svc.service.server import PlanService

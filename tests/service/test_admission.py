@@ -9,7 +9,7 @@ import os
 
 import pytest
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import slowed
 

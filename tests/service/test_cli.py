@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service.session import loopback, make_config
 
 ROOT = Path(__file__).resolve().parents[2]

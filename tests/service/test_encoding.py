@@ -14,10 +14,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from eos_svc.agent import Outcome
-from eos_svc.agents.request import PlanRequest
 from eos_svc.board import BoardChange
 from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord, to_jsonable
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan
 from tests.service.threads import run_in_threads
@@ -268,7 +268,7 @@ def test_plan_results_encoded_as_held_are_their_to_dict_json():
     import dataclasses
 
     from eos_svc.agents.planner import plan
-    from eos_svc.agents.request import ObjectSpec
+    from eos_svc.schema.request import ObjectSpec
 
     here = PlanRequest().obj.position
     requests = [

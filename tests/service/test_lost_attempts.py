@@ -12,7 +12,7 @@ from typing import Any
 import pytest
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import ServiceUnavailableError, loopback, make_config
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan

@@ -8,7 +8,7 @@ import json
 import pytest
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from tests.service.waiting import wait_until
 

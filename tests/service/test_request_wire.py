@@ -13,7 +13,8 @@ import random
 
 import pytest
 
-from eos_svc.agents.request import (
+from eos_svc.ratings import Weights
+from eos_svc.schema.request import (
     MAX_CYCLES_LIMIT,
     MAX_DEADLINE_S,
     MAX_FRICTION,
@@ -23,7 +24,6 @@ from eos_svc.agents.request import (
     ObjectSpec,
     PlanRequest,
 )
-from eos_svc.ratings import Weights
 from eos_svc.service import protocol as proto
 from eos_svc.service.request_wire import decode_fast
 

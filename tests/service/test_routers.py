@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 import zenoh
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service.client import EosClient
 from eos_svc.service.server import PlanService
 from eos_svc.service.session import free_port

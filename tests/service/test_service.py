@@ -10,7 +10,7 @@ from typing import Any
 
 import pytest
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import PlanOutcome, ServiceUnavailableError
 from eos_svc.service.demo_planner import slowed

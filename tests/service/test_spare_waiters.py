@@ -7,7 +7,7 @@ import time
 
 import pytest
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import _END, _Waiter
 from eos_svc.service.demo_planner import root_plan

@@ -9,7 +9,7 @@ from typing import Any
 
 import pytest
 
-from eos_svc.agents.request import PlanRequest
+from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from tests.service.waiting import wait_until
 

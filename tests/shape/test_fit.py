@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents.planner import make_object
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 from eos_svc.shape import Touches, fit_class, select_class
 from eos_svc.shape.selection import object_dict
 from tests.shape.synthetic import TIP, objects, touches_on

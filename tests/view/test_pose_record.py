@@ -10,10 +10,10 @@ import pytest
 from eos_svc.agents import PlanRequest, keys, plan
 from eos_svc.agents.base import STAGES
 from eos_svc.agents.planner import build_agents, build_world
-from eos_svc.agents.pose_board import PoseBoard
-from eos_svc.agents.request import ObjectSpec
 from eos_svc.board import Board
 from eos_svc.controller import Controller
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.world.pose_board import PoseBoard
 
 
 def _written(record, key):

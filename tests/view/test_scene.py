@@ -7,7 +7,7 @@ import pytest
 
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.agents.planner import default_hand, make_object
-from eos_svc.agents.request import ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 from eos_svc.view.replay_html import plan_scene
 from eos_svc.view.scene import CONTACTS, OBJECT, HandDrawing, object_shape, touching_contacts
 

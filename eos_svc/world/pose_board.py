@@ -13,9 +13,9 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from eos_svc.agents import keys
-from eos_svc.agents.world import GraspWorld
 from eos_svc.board import Board, BoardChange
+from eos_svc.schema import keys
+from eos_svc.world.world import GraspWorld
 
 #: decimals kept of every joint value in ``keys.HAND_Q`` (0.1 µm, 0.1 µrad)
 Q_DECIMALS = 7

@@ -28,22 +28,21 @@ the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``c
 0.042 m for hand3x3), so the crossings at the rear cannot bump into it, and its centre lies
 within ``B``'s height range (the upper and lower fingers would otherwise bump into it on every
 sweep). Objects closer to the rear are often found too, but a crossing the fingers cannot make
-may stall the search; the admission check (:mod:`eos_svc.agents.admission`) refuses every
+may stall the search; the admission check (:mod:`eos_svc.world.admission`) refuses every
 object this rule does not promise, and a search that has swept every column twice without
 locating the object ends the run (``failed``) rather than sweeping on.
 """
 
 from __future__ import annotations
 
-import functools
 import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 if TYPE_CHECKING:
-    from eos_svc.agents.world_parameters import WorldParameters
     from eos_svc.objects import SurfaceObject
+    from eos_svc.world.parameters import WorldParameters
 
 
 def coverage_spacing(params: WorldParameters) -> float:
@@ -60,18 +59,13 @@ def column_counts(params: WorldParameters) -> tuple[int, int]:
     return ny, nz
 
 
-@functools.lru_cache(maxsize=16)
-def _columns(lo: tuple[float, ...], hi: tuple[float, ...], counts: tuple[int, int]) -> np.ndarray:
+def wrist_columns(params: WorldParameters) -> np.ndarray:
+    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m."""
+    lo, hi = params.search_box_lo, params.search_box_hi
+    counts = column_counts(params)
     ys = np.linspace(lo[1], hi[1], counts[0]) if counts[0] > 1 else np.array([0.5 * (lo[1] + hi[1])])
     zs = np.linspace(lo[2], hi[2], counts[1]) if counts[1] > 1 else np.array([0.5 * (lo[2] + hi[2])])
-    grid = np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
-    grid.setflags(write=False)
-    return grid
-
-
-def wrist_columns(params: WorldParameters) -> np.ndarray:
-    """The (y, z) wrist positions of the columns, shape (ny, nz, 2), m (read-only)."""
-    return _columns(tuple(params.search_box_lo), tuple(params.search_box_hi), column_counts(params))
+    return np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
 
 
 def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
@@ -104,8 +98,10 @@ class SpaceFillingOrder:
 
     __slots__ = ("_distances", "_jitter", "_left", "_nearest", "_points", "_queue")
 
-    def __init__(self, counts: tuple[int, int], rng: np.random.Generator) -> None:
-        points, distances = _lattice(*counts)
+    def __init__(
+        self, counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
+    ) -> None:
+        points, distances = lattice if lattice is not None else lattice_of(*counts)
         self._points = points
         self._distances = distances
         self._jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
@@ -157,8 +153,11 @@ class SpaceFillingOrder:
         queue.insert(0, queue.pop(index))
 
 
-@functools.lru_cache(maxsize=16)
-def _lattice(ny: int, nz: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple[float, ...], ...]]:
+#: a lattice's column indices and their distances (see :func:`lattice_of`)
+Lattice = tuple[tuple[tuple[int, int], ...], tuple[tuple[float, ...], ...]]
+
+
+def lattice_of(ny: int, nz: int) -> Lattice:
     """The column indices of an ny × nz lattice, row by row, and their distances (in
     lattice steps: square roots of exact integers, as numpy's norm gives them)."""
     points = tuple((i, j) for i in range(ny) for j in range(nz))
@@ -169,7 +168,7 @@ def _lattice(ny: int, nz: int) -> tuple[tuple[tuple[int, int], ...], tuple[tuple
 
 
 #: hand3x3's forward reach from the wrist (m): its fingertips' farthest x (straight fingers at
-#: 0.13 m) plus the tip radius; another hand's is ``eos_svc.agents.sweeps.forward_reach``
+#: 0.13 m) plus the tip radius; another hand's is its context's ``forward_reach``
 HAND3X3_FORWARD_REACH = 0.14
 
 

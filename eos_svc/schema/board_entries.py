@@ -2,7 +2,7 @@
 
 The entries stay plain JSON-able values (dicts, lists, numbers) — the form the cycle records
 and the wire carry — and their shapes are declared here as ``TypedDict``s. :data:`ENTRIES`
-maps every entry name (:mod:`eos_svc.agents.keys`) to its type and meaning; which agent reads
+maps every entry name (:mod:`eos_svc.schema.keys`) to its type and meaning; which agent reads
 and writes which entry is declared on the agents themselves (``reads`` / ``writes``, see
 :class:`eos_svc.agent.Agent`) and tabulated by :mod:`eos_svc.agents.board_table` (the table in
 ``docs/planner.md``).
@@ -19,9 +19,8 @@ import types
 from dataclasses import dataclass
 from typing import Any, Literal, Union, get_args, get_origin
 
-from eos_svc.agents import keys
-from eos_svc.agents.recall import RECALLED
 from eos_svc.errors import ContractError
+from eos_svc.schema import keys
 
 if sys.version_info >= (3, 11):
     from typing import NotRequired, TypedDict, get_type_hints, is_typeddict
@@ -205,7 +204,7 @@ ENTRIES: dict[str, Entry] = {
     keys.FINGER_ANGLE: Entry(dict[str, float], "finger -> its joints' angle (rad)"),
     keys.OUTCOME: Entry(OutcomeEntry, "the end agent's verdict"),
     keys.FRICTION: Entry(float, "Coulomb μ of the fingertip contacts (the request's)"),
-    RECALLED: Entry(str, "the grasp-memory key recall applied"),
+    keys.RECALLED: Entry(str, "the grasp-memory key recall applied"),
 }
 
 #: entries written by others than the agents: entry -> who (the planner before the first cycle,
@@ -232,7 +231,7 @@ def check_entry(key: str, value: Any) -> None:
     entry = ENTRIES.get(key)
     if entry is None:
         raise ContractError(
-            f"board.{key}", "no type is declared for this entry in eos_svc.agents.board_entries"
+            f"board.{key}", "no type is declared for this entry in eos_svc.schema.board_entries"
         )
     _check(value, entry.type, f"board.{key}")
 

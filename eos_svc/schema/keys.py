@@ -2,7 +2,7 @@
 
 Keeping them in one place documents what the agents know and lets tests and
 clients read the board without guessing strings. Each entry's type, and which agent
-reads and writes it: :mod:`eos_svc.agents.board_entries`.
+reads and writes it: :mod:`eos_svc.schema.board_entries`.
 """
 
 from __future__ import annotations
@@ -31,4 +31,5 @@ OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict
 FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the request; read by end)
 Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)
 HAND_Q = "hand_q"  #: tuple: the hand's configuration after the cycle (rad/m, 1e-7; written by PoseBoard)
+RECALLED = "recalled"  #: str: the grasp-memory key recall applied
 HAND_PATH = "hand_path"  #: list of q: the hand's path during an EP1 roll (sampled; for viewers)

@@ -14,11 +14,11 @@ import json
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
-from eos_svc.agents import keys
 from eos_svc.records import CycleRecord, RunResult, RunStatus, to_jsonable
+from eos_svc.schema import keys
 
 if TYPE_CHECKING:
-    from eos_svc.agents.request import PlanRequest
+    from eos_svc.schema.request import PlanRequest
 
 #: core run status -> plan status (a completed run is ``success`` only with a good grasp)
 PLAN_STATUS: dict[RunStatus, str] = {

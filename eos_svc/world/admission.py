@@ -1,0 +1,223 @@
+"""Admission: refuse, before any planning, the objects the grasp planner cannot plan for.
+
+:func:`check_plannable` is called first by :func:`eos_svc.agents.plan`, by ``eos plan`` and by
+the Zenoh service at admission, so a request the planner would refuse is refused at the edge
+with a :class:`~eos_svc.errors.ValidationError` naming the field and the reason. Three tests,
+each a real geometric query on the hand's model (coal distances, Pinocchio kinematics):
+
+* **reach** (``object.position``): the search moves the wrist inside the axis-aligned box
+  [``search_box_lo``, ``search_box_hi``] (world, m) without turning it, so the grasp centre
+  sweeps that box shifted by ``grasp_centre``. The object is *located* when its surface comes
+  within ``envelope_radius`` of the grasp centre; if the coal distance between the object and
+  the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
+* **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
+  object must clear every hand collision geometry by ``clearance`` (coal distances).
+* **size** (the size field that sets the object's smallest width): two fingertips can touch
+  opposite sides of an object only if its smallest width is at most the hand's *span*, the
+  largest distance between the surfaces of two fingertips over the fingers' joint ranges
+  (:func:`~eos_svc.world.hand_context.hand_span`). Wider in every direction: no grasp exists.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import coal
+import numpy as np
+
+from eos_svc.errors import ValidationError
+from eos_svc.grasp.postulate import make_object
+from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import ObjectSpec, PlanRequest
+from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
+from eos_svc.world.parameters import WorldParameters
+
+__all__ = [
+    "check_default",
+    "check_plannable",
+    "default_check",
+    "hand_span",
+    "plannable_verdict",
+    "smallest_width",
+]
+
+
+def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
+    """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
+    return lo, hi
+
+
+def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
+    """The object's smallest width (m) and the size field that sets it (``object.<field>``)."""
+    s = spec.size
+    if spec.shape in ("sphere", "capsule"):
+        return 2.0 * s["radius"], "object.radius"
+    if spec.shape == "ellipsoid":
+        return 2.0 * min(s["radii"]), "object.radii"
+    if spec.shape == "cylinder":
+        if s["length"] < 2.0 * s["radius"]:
+            return s["length"], "object.length"
+        return 2.0 * s["radius"], "object.radius"
+    return min(s["size"]), "object.size"
+
+
+def _distance(
+    a: coal.ShapeBase, ta: coal.Transform3s, b: coal.ShapeBase, tb: coal.Transform3s
+) -> coal.DistanceResult:
+    """coal's signed distance between two placed shapes (a fresh result: callers run in parallel)."""
+    req = coal.DistanceRequest()
+    req.enable_signed_distance = True
+    res = coal.DistanceResult()
+    coal.distance(a, ta, b, tb, req, res)
+    return res
+
+
+def check_plannable(
+    request: PlanRequest,
+    hand: HandModel | None = None,
+    params: WorldParameters | None = None,
+    *,
+    context: HandContext | None = None,
+) -> None:
+    """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
+
+    Args:
+        request: a validated plan request.
+        hand: the hand (default: hand3x3); ignored when ``context`` is given.
+        params: world constants (default: the context's, ``WorldParameters.for_hand(hand)``).
+        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for` ``(hand)``:
+            give it when planning many requests with another hand).
+
+    Raises:
+        ValidationError: ``object.position`` when the object is out of reach or overlaps the
+            hand at its start configuration; the size field when it is wider than the hand's
+            span in every direction.
+    """
+    context = context_for(hand) if context is None else context
+    verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
+    if verdict:
+        field, reason = verdict
+        raise ValidationError(field, reason)
+
+
+def check_default(request: PlanRequest) -> None:
+    """:func:`check_plannable` on the default hand (hand3x3) and its parameters."""
+    check_plannable(request, context=default_context())
+
+
+def default_check() -> Callable[[PlanRequest], None]:
+    """The admission check of the default hand: :func:`check_default` (one function, so a caller
+    can tell it from another check by identity)."""
+    return check_default
+
+
+def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]:
+    """The admission verdict on ``spec``: ``()`` when the planner can plan it, else the refusal's
+    ``(field, reason)`` (see :func:`check_plannable`)."""
+    try:
+        _check_object(spec, context)
+    except ValidationError as exc:
+        return exc.field, exc.reason
+    return ()
+
+
+def _check_object(spec: ObjectSpec, context: HandContext) -> None:
+    """The three tests of the module doc; raises the refusal."""
+    params, span, reach_ahead = context.params, context.span, context.forward_reach
+
+    width, size_field = smallest_width(spec)
+    if width > span:
+        raise ValidationError(
+            size_field,
+            f"the {spec.shape}'s smallest width {width:.3f} m exceeds the hand's span {span:.3f} m "
+            "(widest opening between two fingertips): no grasp exists",
+        )
+
+    # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
+    # centre's distance to it and at least that minus the bounding radius: coal only in between.
+    centre = spec.position
+    radius = 0.5 * _diameter(spec)
+    lo, hi = swept_box(params)
+    outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
+    centre_gap = math.sqrt(sum(d * d for d in outside))
+    shape: coal.ShapeBase | None = None
+    tf_obj: coal.Transform3s | None = None
+    if centre_gap > params.envelope_radius:
+        gap, axis = centre_gap - radius, max(range(3), key=outside.__getitem__)
+        if gap <= params.envelope_radius:  # undecided by the bounds: the exact distance
+            shape, tf_obj = _coal_object(spec)
+            res = _distance(
+                shape,
+                tf_obj,
+                coal.Box(*(np.subtract(hi, lo))),
+                coal.Transform3s(np.eye(3), 0.5 * np.add(lo, hi)),
+            )
+            gap = float(res.min_distance)
+            separation = np.abs(np.asarray(res.getNearestPoint1()) - np.asarray(res.getNearestPoint2()))
+            axis = int(np.argmax(separation))
+        if gap > params.envelope_radius:
+            pos = ", ".join(f"{v:.3f}" for v in centre)
+            raise ValidationError(
+                f"object.position[{axis}]",  # the axis it is farthest out along
+                f"out of reach: the object at [{pos}] m stays ≥ {gap:.3f} m from every grasp-centre "
+                f"position the search can reach ([{lo[0]:.3f}, {hi[0]:.3f}] x [{lo[1]:.3f}, {hi[1]:.3f}] "
+                f"x [{lo[2]:.3f}, {hi[2]:.3f}] m), more than the envelope radius {params.envelope_radius} m",
+            )
+
+    # Overlap: only the hand geometries whose bounding spheres come within clearance of the object's.
+    cx, cy, cz = centre
+    reach = radius + params.clearance
+    for g in context.neutral_geometries:
+        gx, gy, gz = g.centre
+        if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
+            continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
+        if shape is None or tf_obj is None:
+            shape, tf_obj = _coal_object(spec)
+        d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)
+        if d < params.clearance:
+            raise ValidationError(
+                "object.position",
+                f"the object overlaps the hand at its start configuration ({g.name}: "
+                f"distance {d * 1000:.1f} mm < clearance {params.clearance * 1000:.1f} mm); "
+                "place it in front of the open hand",
+            )
+
+    # Findable: the search sweeps a lattice of columns and guarantees to locate only objects that
+    # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
+    rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
+    surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
+    if not surely and not findable(make_object(spec), params, reach_ahead):
+        pos = ", ".join(f"{v:.3f}" for v in centre)
+        raise ValidationError(
+            "object.position",
+            f"the search cannot be sure to find the object at [{pos}] m: it must come within "
+            f"{params.envelope_radius} m of a sweep line and lie wholly ahead of x = "
+            f"{rear_limit:.3f} m "
+            "(what the fingers reach from the rear of the search box)",
+        )
+
+
+def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
+    """The object's coal shape and placement (as :func:`eos_svc.agents.postulate.make_object` builds)."""
+    obj = make_object(spec)
+    return obj.geometry, coal.Transform3s(
+        np.array(obj.placement.rotation), np.array(obj.placement.translation)
+    )
+
+
+def _diameter(spec: ObjectSpec) -> float:
+    """Diameter of the smallest sphere about the object's centre that contains it (m)."""
+    s = spec.size
+    if spec.shape == "sphere":
+        return 2.0 * s["radius"]
+    if spec.shape == "ellipsoid":
+        return 2.0 * max(s["radii"])
+    if spec.shape == "cylinder":
+        return 2.0 * math.hypot(s["radius"], 0.5 * s["length"])
+    if spec.shape == "capsule":
+        return 2.0 * s["radius"] + s["length"]
+    return float(np.linalg.norm(s["size"]))

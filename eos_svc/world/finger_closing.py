@@ -1,0 +1,100 @@
+"""A finger's guarded closing step: close by a joint increment, stop at first touch (regula falsi
+on the closing gap), and tell a fingertip's touch from a link's."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+from eos_svc.kinematics.gap_bounds import BOUND_MARGIN
+
+if TYPE_CHECKING:
+    from eos_svc.world.world import GraspWorld
+
+
+def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[str, float]:
+    """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
+
+    Returns:
+        (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
+        object; the step was cut at the contact by regula falsi), ``"link"`` (another part
+        of the finger touched first: not a precision grip) or ``"limit"`` (the joint
+        limit was reached without touching).
+    """
+    tol = world.params.contact_tolerance
+    idx = world.context.finger_q[finger]
+    q0 = world.state.q
+    f0 = world.memo.get(("closing", finger))  # the closing gap at q0, when known
+    q1, at_limit = world.state.close_finger(finger, dtheta)
+    world.set_q(q1)
+    if closing_clear(world, finger):
+        return ("limit" if at_limit else "moved"), world.finger_angle(finger)
+    f1 = closing_gap(world, finger)
+    if f0 is None:  # the closing gap at the start of the step (the bracket's other end)
+        world.set_q(q0)
+        f0 = closing_gap(world, finger)
+    # First touch inside the step: regula falsi (Illinois) on the step fraction for the
+    # closing gap, converging to a tip within [tol/2, tol] of the object (or a link just
+    # touching), a handful of distance queries instead of a long bisection.
+    a, fa, b, fb = 0.0, f0, 1.0, f1
+    side = 0
+    s_ok = 0.0
+    for _ in range(40):
+        frac = b - fb * (b - a) / (fb - fa) if fb != fa else 0.5 * (a + b)
+        q = q0.copy()
+        q[idx] = q0[idx] + frac * (q1[idx] - q0[idx])
+        world.set_q(q)
+        fs = closing_gap(world, finger)
+        if fs >= 0.0:
+            s_ok = frac
+            if fs <= 0.5 * tol:
+                break
+            a, fa = frac, fs
+            if side == 1:
+                fb *= 0.5
+            side = 1
+        else:
+            b, fb = frac, fs
+            if side == -1:
+                fa *= 0.5
+            side = -1
+        if b - a < 1e-9:
+            break
+    q = q0.copy()
+    q[idx] = q0[idx] + s_ok * (q1[idx] - q0[idx])
+    world.set_q(q)
+    event = "touched" if world.tip_distance(finger) <= tol else "link"
+    return event, world.finger_angle(finger)
+
+
+def closing_gap(world: GraspWorld, finger: str) -> float:
+    """How far ``finger`` may still close before something touches (m): the tip's
+    distance beyond half the contact tolerance, or a link's distance, whichever is less
+    (memoised per hand pose)."""
+    memo = world.memo
+    key = ("closing", finger)
+    value = memo.get(key)
+    if value is None:
+        tip = world.tip_distance(finger) - 0.5 * world.params.contact_tolerance
+        value = memo[key] = world.min_gap(world.context.links[finger], tip)
+    return value
+
+
+def closing_clear(world: GraspWorld, finger: str) -> bool:
+    """``_closing_gap(finger) > 0``, proved without collision queries when the tip's and
+    the links' lower bounds allow (the tip's: its centre's distance to the object's
+    bounding ball, less its radius), else from the exact closing gap."""
+    value = world.memo.get(("closing", finger))
+    if value is None:
+        tip = world.context.tip_bound.get(finger)
+        if tip is not None:
+            tx, ty, tz = world.state.frame_views(tip[0])[0].tolist()
+            ox, oy, oz = world.obj_centre
+            dx, dy, dz = tx - ox, ty - oy, tz - oz
+            lower = math.sqrt(dx * dx + dy * dy + dz * dz) - tip[1] - world.obj_radius - BOUND_MARGIN
+            if lower > 0.5 * world.params.contact_tolerance and all(
+                bound > 0.0 for bound, _ in world.lower_bounds(world.context.links[finger])
+            ):
+                return True
+        value = closing_gap(world, finger)
+    return bool(value > 0.0)

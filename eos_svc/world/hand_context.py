@@ -1,0 +1,202 @@
+"""What a plan derives from its hand alone, built once per hand and passed explicitly.
+
+A :class:`HandContext` holds the hand model and everything the world, the agents and the
+admission check derive from it and never change: the fingers' closing sweeps, the world's
+parameters, the gap-bound table of its geometries, which finger probes where (and the probe
+poses), the side fingers of EP2, the sphere tips, the hand's span, its collision geometries at
+the start configuration and its forward reach. It is immutable: build it once
+(:meth:`HandContext.build`, ≈ 25 ms for hand3x3, most of it the span) and share it between
+plans and threads. The process's default hand has one kept context (:func:`default_context`):
+loading hand3x3 and building its context costs about a third of a default plan.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import itertools
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import coal
+import numpy as np
+
+from eos_svc.grasp.sweeps import FingerSweep, build_sweeps, finger_link_geometries, forward_reach
+from eos_svc.kinematics import HAND3X3_URDF, HandModel, load_hand
+from eos_svc.kinematics.gap_bounds import hand_bound_table
+from eos_svc.kinematics.hand_state import read_only
+from eos_svc.world.coverage import Lattice, column_counts, lattice_of
+from eos_svc.world.parameters import WorldParameters, derive_hand_fields, is_hand3x3
+from eos_svc.world.probe_pose import ProbePose
+from eos_svc.world.probing import ProbeChoice
+
+#: joint samples per finger joint when measuring the hand's span (a grid over the joint range)
+SPAN_SAMPLES = 7
+
+
+@dataclass(frozen=True)
+class PlacedGeometry:
+    """One hand collision geometry at the start configuration, with its bounding ball (world, m)."""
+
+    name: str
+    shape: coal.ShapeBase
+    transform: coal.Transform3s
+    centre: tuple[float, float, float]
+    radius: float
+
+
+@dataclass(frozen=True)
+class HandContext:
+    """A hand and what is derived from it once (read-only; shared by every plan of the hand).
+
+    Attributes:
+        hand: the hand model.
+        sweeps: each finger's closing sweep (palm frame).
+        params: the world's constants for this hand (:meth:`WorldParameters.for_hand`).
+        bounds: per collision geometry, how to bound its gap to a ball from below
+            (:func:`~eos_svc.kinematics.gap_bounds.shape_bound`).
+        links: per finger, its link geometries (what stops a closing finger as "link").
+        probe: which finger explores the object's top and bottom, at which angle.
+        probe_poses: the probe pose of every (finger, angle) EP2 probes with.
+        angle_q: per finger, the q index of its first joint (its angle).
+        finger_q: per finger, its joints' q indices (read-only).
+        tip_bound: per finger with a sphere tip, its tip frame id and radius (m).
+        side_fingers: the upper finger leading a probe along +y (key ``+1``) and along −y (``-1``).
+        span: the largest distance between two fingertips' surfaces over the joint ranges (m).
+        neutral_geometries: the collision geometries at the start configuration.
+        forward_reach: how far ahead of the wrist the fingers reach (m).
+        lattice: the search's column lattice and its distances (from ``params``; ≈ 0.2 ms).
+    """
+
+    hand: HandModel
+    sweeps: dict[str, FingerSweep]
+    params: WorldParameters
+    bounds: list[tuple[int, Any, Any, float]]
+    links: dict[str, list[int]]
+    probe: ProbeChoice
+    probe_poses: dict[tuple[str, float], ProbePose]
+    angle_q: dict[str, int]
+    finger_q: dict[str, np.ndarray]
+    tip_bound: dict[str, tuple[int, float]]
+    side_fingers: dict[int, str]
+    span: float
+    neutral_geometries: tuple[PlacedGeometry, ...]
+    forward_reach: float
+    lattice: Lattice
+
+    @classmethod
+    def build(cls, hand: HandModel, params: WorldParameters | None = None) -> HandContext:
+        """The context of ``hand`` (``params`` default: :meth:`WorldParameters.for_hand`)."""
+        sweeps = build_sweeps(hand)
+        if params is None:
+            fields = {} if is_hand3x3(hand) else derive_hand_fields(hand, sweeps)
+            params = WorldParameters(**fields)  # type: ignore[arg-type]
+        probe = ProbeChoice.for_hand(hand, sweeps)
+        sides = side_fingers(hand)
+        angles = {(f, probe.angles.get(f, 0.0)) for f in (probe.top, probe.bottom, *sides.values())}
+        return cls(
+            hand=hand,
+            sweeps=sweeps,
+            params=params,
+            bounds=hand_bound_table(hand),
+            links=finger_link_geometries(hand),
+            probe=probe,
+            probe_poses={(f, a): ProbePose.build(hand, f, a) for f, a in angles},
+            angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
+            finger_q={f: read_only(hand.finger_q_index(f)) for f in hand.finger_names},
+            tip_bound=sphere_tips(hand),
+            side_fingers=sides,
+            span=hand_span(hand),
+            neutral_geometries=neutral_geometries(hand),
+            forward_reach=forward_reach(hand, sweeps),
+            lattice=lattice_of(*column_counts(params)),
+        )
+
+    def with_params(self, params: WorldParameters) -> HandContext:
+        """The same hand with other world constants (nothing here derives from them)."""
+        if params == self.params:
+            return self
+        return dataclasses.replace(self, params=params, lattice=lattice_of(*column_counts(params)))
+
+    def probe_pose(self, finger: str, angle: float) -> ProbePose:
+        """The :class:`ProbePose` of ``finger`` at ``angle`` rad (kept for EP2's, else built)."""
+        pose = self.probe_poses.get((finger, float(angle)))
+        return pose if pose is not None else ProbePose.build(self.hand, finger, angle)
+
+
+@functools.cache
+def default_context() -> HandContext:
+    """The context of hand3x3 (``urdf/hand3x3.urdf``), built once per process."""
+    return HandContext.build(load_hand(Path(HAND3X3_URDF)))
+
+
+def context_for(hand: HandModel | None = None, params: WorldParameters | None = None) -> HandContext:
+    """The default context for ``None`` or the default hand, else a new one for ``hand``; with
+    ``params`` when given."""
+    default = default_context()
+    context = default if hand is None or hand is default.hand else HandContext.build(hand, params)
+    return context if params is None else context.with_params(params)
+
+
+def side_fingers(hand: HandModel) -> dict[int, str]:
+    """The upper finger whose tip lies farthest along +y at neutral (key ``+1``) and along −y (``-1``)."""
+    upper = [f for f in hand.finger_names if f != hand.description.opposing_finger]
+    state = hand.state(hand.neutral())
+    y = {f: float(state.tip_position(f)[1]) for f in upper}
+    return {+1: max(upper, key=lambda f: y[f]), -1: min(upper, key=lambda f: y[f])}
+
+
+def sphere_tips(hand: HandModel) -> dict[str, tuple[int, float]]:
+    """Per finger whose tip is a sphere (no tip geometry, or a coal sphere): its tip frame id and
+    radius (m)."""
+    geometries = hand.collision_model.geometryObjects
+    tips: dict[str, tuple[int, float]] = {}
+    for f in hand.finger_names:
+        gid = hand.tip_geometry_id(f)
+        if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
+            tips[f] = (hand.tip_frame_id(f), float(hand.tip_radius(f)))
+    return tips
+
+
+def hand_span(hand: HandModel) -> float:
+    """Largest distance between the surfaces of two fingertips, over each finger's joint range (m).
+
+    Every finger's joints are sampled on a grid of :data:`SPAN_SAMPLES` values per joint (wrist
+    at the origin); the span is the largest centre distance of two different fingers' tips
+    minus both tip radii. An object wider than this in every direction cannot be touched on
+    opposite sides by two fingertips.
+    """
+    state = hand.state(hand.neutral())
+    tips: dict[str, np.ndarray] = {}
+    for finger in hand.finger_names:
+        limits = hand.finger_joint_limits(finger)
+        grids = [np.linspace(lo, hi, SPAN_SAMPLES) for _idx, lo, hi in limits]
+        points = []
+        for values in itertools.product(*grids):
+            q = hand.neutral()
+            for (idx, _lo, _hi), v in zip(limits, values, strict=True):
+                q[idx] = v
+            state.update(q)
+            points.append(state.tip_position(finger).copy())
+        tips[finger] = np.asarray(points)
+    span = 0.0
+    for a, b in itertools.combinations(hand.finger_names, 2):
+        pa, pb = tips[a], tips[b]
+        d = np.sqrt(((pa[:, None, :] - pb[None, :, :]) ** 2).sum(axis=2)).max()
+        span = max(span, float(d) - hand.tip_radius(a) - hand.tip_radius(b))
+    return span
+
+
+def neutral_geometries(hand: HandModel) -> tuple[PlacedGeometry, ...]:
+    """Every collision geometry of ``hand`` placed at its start configuration (``hand.neutral()``)."""
+    state = hand.state(hand.neutral())
+    out = []
+    for gid, go in enumerate(hand.collision_model.geometryObjects):
+        m = state.geometry_data.oMg[gid]
+        transform = coal.Transform3s(np.array(m.rotation), np.array(m.translation))
+        shape = go.geometry
+        shape.computeLocalAABB()
+        x, y, z = transform.transform(np.asarray(shape.aabb_center, dtype=float)).tolist()
+        out.append(PlacedGeometry(go.name, shape, transform, (x, y, z), float(shape.aabb_radius)))
+    return tuple(out)

@@ -1,0 +1,142 @@
+"""EP2's guarded probe: a fingertip moved in a straight line until it touches the object (world, m)."""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from eos_svc.world.probing import ProbeOutcome, densify
+
+if TYPE_CHECKING:
+    from eos_svc.world.world import GraspWorld
+
+
+def guarded_probe(
+    world: GraspWorld, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+) -> ProbeOutcome:
+    """Move ``finger``'s tip in a straight line from ``start`` along ``direction`` (world,
+    m) for at most ``travel`` m, stopping at first touch (EP2's guarded move).
+
+    The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
+    ``angle`` and every other finger opened, so that the tip's centre is at ``start``
+    (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
+    there). Conservative advancement: each sub-step is at most the tip's gap beyond half
+    the contact tolerance and the other geometries' gap beyond half the contact tolerance
+    (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
+    above the face its tip touches), so only the tip can touch, and it never pushes the
+    object. The start's clearance is taken as the other geometries' exact minimum and the
+    tip's exact gap (the first sub-step's bound of the others, exact); after that the others'
+    exact gaps are queried only when their lower bound (the last exact value less the
+    distance moved: :func:`_probe_floor_after`) does not already fix the sub-step (the same
+    steps as querying them every sub-step).
+
+    Returns:
+        the outcome: touched (tip centre, sensed normal), missed or blocked (another part
+        of the hand would touch first, or the wrist's limits), the last two with the
+        tip-centre samples of the free path.
+    """
+    p = world.params
+    hand = world.hand
+    d = np.asarray(direction, dtype=float)
+    d = d / math.sqrt(d.dot(d))  # = d / np.linalg.norm(d) (sqrt of the dot product)
+    pose = world.context.probe_pose(finger, angle)  # wrist rotation 0, the fingers set
+    q = world.state.q
+    pose.apply(q)
+    world.set_q(q)
+    state = world.state
+    offset = state.tip_position(finger) - world.wrist_position()
+    xyz = world.wrist_xyz_q
+    lo, hi = pose.wrist_lo, pose.wrist_hi
+    start = np.asarray(start, dtype=float)
+    tip_gid = hand.tip_geometry_id(finger)
+    others = pose.others
+    for back in (0.0, 0.02, 0.04, 0.06):
+        wrist = start - back * d - offset
+        wx, wy, wz = wrist.tolist()  # np.any(wrist < lo) or np.any(wrist > hi), in floats
+        if wx < lo[0] or wy < lo[1] or wz < lo[2] or wx > hi[0] or wy > hi[1] or wz > hi[2]:
+            return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
+        q[xyz] = wrist
+        world.set_q(q)
+        # The hand's clearance as the other geometries' exact minimum and the tip's exact
+        # gap: their minimum is exact_clearance's exact value (the same gaps), and where
+        # exact_clearance takes its plain bound (gap − hand_bound > clearance + 5 mm) the
+        # exact minimum is above the threshold too — the same decision; the first sub-step
+        # below then has ``other`` without a query.
+        others_gap = world.min_gap(others, math.inf)
+        clearance = others_gap if tip_gid is None else min(world.scene.gap(state, tip_gid), others_gap)
+        if clearance >= p.clearance:
+            travel += back
+            break
+    else:
+        return ProbeOutcome("blocked", finger, why="no clear start")
+    tol = p.contact_tolerance
+    half_tol = 0.5 * tol
+    # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
+    # in floats (the same products and sums numpy's would be), written item by item
+    w0, w1, w2 = q[xyz].tolist()
+    d0, d1, d2 = d.tolist()
+    i0, i1, i2 = pose.wrist_xyz
+    travelled = 0.0
+    tip = state.tip_centre_view(finger)  # live view of the tip centre (world)
+    free = [tip.copy()]
+    contact_of = world.scene.contact
+    # ``other`` at the start pose (exact), then a lower bound of it (_probe_floor_after)
+    floor = others_gap - half_tol
+    exact = True  # floor is the exact ``other`` of the current pose
+    for _ in range(300):
+        contact = contact_of(state, finger)  # = tip_distance's query (the pose is new)
+        tip_gap = float(contact.distance)
+        if tip_gap <= tol:
+            reading = world.sensor.read(state, contact)
+            M = state.data.oMf[hand.tip_frame_id(finger)]
+            normal = -(M.rotation @ reading.normal_tip)
+            return ProbeOutcome(
+                "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
+            )
+        room = travel - travelled
+        tip_room = tip_gap - half_tol
+        need = room if room <= tip_room else tip_room  # = min(room, tip_room)
+        if floor >= need and floor >= 1e-5:
+            # the other geometries can neither block nor limit this step (their gap, less
+            # half the tolerance, is ≥ floor ≥ need): the step min(room, tip_room, other)
+            # is need, without their exact queries
+            step = need
+        else:
+            other = floor if exact else world.min_gap(others, math.inf) - half_tol
+            if other < 1e-5:
+                return ProbeOutcome(
+                    "blocked",
+                    finger,
+                    free=densify(np.array(free)),
+                    travelled=travelled,
+                    why="another part of the hand would touch first",
+                )
+            step = min(room, tip_room, other)
+            floor = other
+        travelled += step
+        q[i0], q[i1], q[i2] = w0 + d0 * travelled, w1 + d1 * travelled, w2 + d2 * travelled
+        world.set_q(q)
+        free.append(tip.copy())
+        if travelled >= travel - 1e-12:
+            break
+        floor = _probe_floor_after(floor, step)
+        exact = False
+    return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
+
+
+#: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all
+#: (m): coal's distances are exact to ~1e-15 m for primitives and to its GJK tolerance (1e-8 m,
+#: relative) for curved shapes; the wrist's translation is exact to ~1e-16 m
+_PROBE_FLOOR_SLACK = (1e-6, 1e-7)
+
+
+def _probe_floor_after(floor: float, step: float) -> float:
+    """A lower bound of every hand geometry's gap to the object (m, less a constant) after a
+    pure wrist translation by ``step`` m from a pose where it was ``floor``: a translation
+    changes each distance by at most its length (less the slack of the distance queries'
+    accuracy, :data:`_PROBE_FLOOR_SLACK`). :meth:`GraspWorld.guarded_probe` skips the exact
+    queries of the other geometries while this bound alone fixes its step."""
+    per_metre, constant = _PROBE_FLOOR_SLACK
+    return floor - step * (1.0 + per_metre) - constant

@@ -1,0 +1,62 @@
+"""The hand configuration of a guarded probe (EP2), apart from where the wrist is: what
+:func:`eos_svc.world.probe_motion.guarded_probe` sets before every probe (the hand's context
+keeps EP2's: :attr:`eos_svc.world.hand_context.HandContext.probe_poses`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.kinematics import HandModel
+
+
+@dataclass(frozen=True)
+class ProbePose:
+    """What a probe of ``finger`` at joint angle ``angle`` sets and checks.
+
+    Attributes:
+        indices: q indices of the wrist's roll, pitch and yaw joints, then every finger's joints.
+        values: their values (rad): wrist rotation 0, the probing finger's joints at the angle,
+            every other finger open (its lower limits).
+        wrist_xyz: q indices of the wrist's x, y, z joints (a list of ints).
+        wrist_lo, wrist_hi: their limits (m), as floats.
+        others: collision geometry ids other than the probing finger's tip.
+    """
+
+    indices: np.ndarray
+    values: np.ndarray
+    wrist_xyz: list[int]
+    wrist_lo: list[float]
+    wrist_hi: list[float]
+    others: list[int]
+
+    def apply(self, q: np.ndarray) -> None:
+        """Set the probe's configuration in ``q`` (in place; the wrist's x, y, z untouched):
+        the same values as the joint-by-joint assignments, in one indexed write."""
+        q[self.indices] = self.values
+
+    @classmethod
+    def build(cls, hand: HandModel, finger: str, angle: float) -> ProbePose:
+        """The pose of a probe of ``finger`` at joint angle ``angle`` (rad) on ``hand``."""
+        wq = hand.wrist_q_index
+        parts_i = [np.asarray(wq[3:6], dtype=np.intp)]
+        parts_v = [np.zeros(len(wq[3:6]))]
+        for f in hand.finger_names:
+            idx = np.asarray(hand.finger_q_index(f), dtype=np.intp)
+            parts_i.append(idx)
+            parts_v.append(np.full(len(idx), angle) if f == finger else hand.lower[idx].copy())
+        xyz = wq[:3]
+        tip_gid = hand.tip_geometry_id(finger)
+        n_geoms = len(hand.collision_model.geometryObjects)
+        indices, values = np.concatenate(parts_i), np.concatenate(parts_v)
+        indices.flags.writeable = values.flags.writeable = False  # shared by every plan's probes
+        return cls(
+            indices=indices,
+            values=values,
+            wrist_xyz=[int(i) for i in xyz],
+            wrist_lo=hand.lower[xyz].tolist(),
+            wrist_hi=hand.upper[xyz].tolist(),
+            others=[g for g in range(n_geoms) if g != tip_gid],
+        )

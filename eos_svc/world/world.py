@@ -1,0 +1,262 @@
+"""The simulated hand and its world, as the grasp agents see and move it.
+
+:class:`GraspWorld` holds the hand's context (:class:`~eos_svc.world.hand_context.HandContext`:
+the hand and what is derived from it), the scene (coal), the hand's state (Pinocchio), the
+tactile sensor and the run's random generator. It answers the agents' questions (where the
+wrist is, how far the object is, whether the hand is clear) and offers the few guarded motions
+they make: the search's sweeps and the wrist's steps (:mod:`eos_svc.world.wrist_motion`), EP2's
+guarded probes (:mod:`eos_svc.world.probe_motion`) and a finger closing step that stops at first
+touch (:mod:`eos_svc.world.finger_closing`). Agents keep what they *know* on the board; the world
+is what they act on.
+
+Conventions (hand3x3 and every hand the planner takes): world z up; the palm frame's x axis is
+the approach direction and its z axis the closing direction (the opposing finger below, the
+others above). The wrist keeps its rotation at zero in the search and while EP1 explores (the
+palm frame is then the world frame shifted by the wrist's translation, the hand approaching
+along +x); grasp_points turns it to the chosen grasp's orientation. SI units.
+
+Hand–object gaps are exact coal distances; the cheap lower bounds of
+:mod:`eos_svc.kinematics.gap_bounds` (each at most the exact gap, tested against coal) spare the
+exact queries that cannot change a minimum or a decision.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import math
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.kinematics import HandModel, HandState, Scene, TactileSensor
+from eos_svc.kinematics.curvature import CurvatureEstimator
+from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds
+from eos_svc.objects import SurfaceObject
+from eos_svc.world import finger_closing, probe_motion, wrist_motion
+from eos_svc.world.coverage import SpaceFillingOrder
+from eos_svc.world.hand_context import HandContext
+from eos_svc.world.parameters import WorldParameters
+from eos_svc.world.probing import ProbeChoice, ProbeOutcome
+
+
+@dataclass
+class GraspWorld:
+    """The hand, the object and the run's randomness; guarded motions for the agents.
+
+    ``memo`` keeps values derived from the current hand pose (gaps, clearances); every move
+    clears it (:meth:`set_q`, :meth:`direct_motion`)."""
+
+    context: HandContext
+    scene: Scene
+    state: HandState
+    sensor: TactileSensor
+    rng: np.random.Generator
+    estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+
+    def __post_init__(self) -> None:
+        self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
+        self.grasp_centre_palm = np.asarray(self.params.grasp_centre, dtype=float)
+        self.version = 0  # bumped on every move
+        self.memo: dict[object, Any] = {}
+        # the object's bounding ball (centre, m; radius, m) for the gaps' lower bounds: the
+        # object is fixed for a world's lifetime (a plan never moves it)
+        self.obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
+        self.obj_radius = 0.5 * float(self.scene.object.diameter)
+        # the search's lattice order, drawn from rng at the first search move (see search_step)
+        self.search_order: SpaceFillingOrder | None = None
+        self.search_columns = np.empty((0, 0, 2))
+
+    # --- what the world is made of ---------------------------------------------------
+    @property
+    def hand(self) -> HandModel:
+        """The hand model."""
+        return self.context.hand
+
+    @property
+    def params(self) -> WorldParameters:
+        """The world's constants."""
+        return self.context.params
+
+    @property
+    def sweeps(self) -> dict[str, FingerSweep]:
+        """Each finger's closing sweep (palm frame)."""
+        return self.context.sweeps
+
+    @property
+    def probe(self) -> ProbeChoice:
+        """Which finger explores the object's top and bottom, and at which angle."""
+        return self.context.probe
+
+    @property
+    def obj(self) -> SurfaceObject:
+        """The object."""
+        return self.scene.object
+
+    # --- reading the world -------------------------------------------------------------
+    def wrist_position(self) -> np.ndarray:
+        """World position of the wrist (= palm origin), m."""
+        return self.state.q[self.wrist_xyz_q]
+
+    def grasp_centre_world(self) -> np.ndarray:
+        """World position of the grasp centre between the fingers, m."""
+        translation, rotation = self.palm_views()  # the wrist may be turned
+        out: np.ndarray = translation + rotation @ self.grasp_centre_palm
+        return out
+
+    def palm_views(self) -> tuple[np.ndarray, np.ndarray]:
+        """Live views of the palm frame's world translation (m) and rotation in the current
+        state (do not modify them; copy what must outlive a move)."""
+        return self.state.frame_views(self.hand.palm_frame_id)
+
+    def object_gap_to_grasp_centre(self) -> float:
+        """Distance from the grasp centre to the object surface, m (negative inside)."""
+        value = self.memo.get("gap")
+        if value is None:
+            value = self.memo["gap"] = self.scene.point_gap(self.grasp_centre_world())
+        return value
+
+    def located(self) -> bool:
+        """The object is in the hand's envelope (see :class:`WorldParameters`)."""
+        return self.object_gap_to_grasp_centre() <= self.params.envelope_radius
+
+    def tip_distance(self, finger: str) -> float:
+        """Signed fingertip–object distance, m."""
+        value = self.memo.get(finger)
+        if value is None:
+            value = self.memo[finger] = float(self.scene.contact(self.state, finger).distance)
+        return value
+
+    def touching(self, finger: str) -> bool:
+        """Whether ``finger``'s tip touches the object."""
+        return self.tip_distance(finger) <= self.params.contact_tolerance
+
+    def finger_angle(self, finger: str) -> float:
+        """The finger's (common) joint angle, rad (its first joint)."""
+        return self.q_list()[self.context.angle_q[finger]]
+
+    def q_list(self) -> list[float]:
+        """The hand's configuration as a list of floats (do not modify)."""
+        value = self.memo.get("q")
+        if value is None:
+            value = self.memo["q"] = self.state.q.tolist()
+        return value
+
+    def wrist_xyz(self) -> tuple[float, float, float]:
+        """:meth:`wrist_position` as a tuple of floats."""
+        x, y, z = self.wrist_position().tolist()
+        return x, y, z
+
+    # --- clearance -----------------------------------------------------------------------
+    def hand_clearance(self) -> float:
+        """Smallest distance between any hand geometry and the object, m.
+
+        When the object is farther from the grasp centre than ``hand_bound`` no hand geometry
+        can be near it; the lower bound (gap − hand_bound) is returned without a collision query.
+        """
+        value = self.memo.get("clearance")
+        if value is None:
+            gap = self.object_gap_to_grasp_centre()
+            if gap > self.params.hand_bound + self.params.clearance:
+                value = gap - self.params.hand_bound
+            else:
+                value = self.min_gap(range(len(self.context.bounds)), math.inf)
+            self.memo["clearance"] = value
+        return value
+
+    def hand_clear(self, threshold: float) -> bool:
+        """``hand_clearance() >= threshold``, without the exact collision queries when the
+        geometries' lower bounds already reach ``threshold``."""
+        value = self.memo.get("clearance")
+        if value is None:
+            gap = self.object_gap_to_grasp_centre()
+            if gap <= self.params.hand_bound + self.params.clearance:  # the exact case
+                bounds = self.lower_bounds(range(len(self.context.bounds)))
+                if min(bounds)[0] >= threshold:  # every exact gap ≥ its bound ≥ threshold
+                    return True
+                value = self.memo["clearance"] = self.min_of(bounds, math.inf)
+            else:
+                value = self.hand_clearance()
+        return bool(value >= threshold)
+
+    def exact_clearance(self) -> float:
+        """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
+        bound (the plain lower bound ``gap − hand_bound`` beyond that), m."""
+        gap = self.object_gap_to_grasp_centre()
+        if gap - self.params.hand_bound > self.params.clearance + 5e-3:
+            return gap - self.params.hand_bound
+        value = self.memo.get("exact_clearance")
+        if value is None:
+            value = self.memo["exact_clearance"] = self.min_gap(range(len(self.context.bounds)), math.inf)
+        return value
+
+    def min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
+        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
+        query of a geometry whose lower bound already reaches the minimum (its gap is ≥ its
+        bound ≥ the minimum, so the result is the min over every geometry)."""
+        return self.min_of(self.lower_bounds(geometry_ids), best)
+
+    def min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
+        """:meth:`min_gap` from the geometries' ``(lower bound, id)`` (sorted in place)."""
+        bounds.sort()
+        for lower, gid in bounds:
+            if lower >= best:
+                break
+            best = min(best, self.scene.gap(self.state, gid))
+        return best
+
+    def lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
+        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` to the
+        object's bounding ball (m)."""
+        state = self.state
+        state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
+        views = state.geometry_views()  # live views of every geometry's placement
+        return ball_gap_lower_bounds(
+            self.context.bounds, views, geometry_ids, self.obj_centre, self.obj_radius
+        )
+
+    # --- moving it -------------------------------------------------------------------------
+    def set_q(self, q: np.ndarray) -> None:
+        """Move the hand to ``q`` (validated by the hand model)."""
+        self.state.update(q)
+        self.sync()
+
+    def sync(self) -> None:
+        """Forget memoised values after ``state`` was moved directly (prefer
+        :meth:`direct_motion`, which cannot forget to)."""
+        self.version += 1
+        self.memo.clear()
+
+    @contextlib.contextmanager
+    def direct_motion(self) -> Iterator[HandState]:
+        """``with world.direct_motion() as state:`` — move ``state`` directly inside (e.g. EP1's
+        rolling QP integrates it); on leaving, normally or by an exception, the world forgets
+        what it had memoised about the old pose."""
+        try:
+            yield self.state
+        finally:
+            self.sync()
+
+    def search_step(self) -> tuple[str, float, bool]:
+        """One search move (:func:`eos_svc.world.wrist_motion.search_step`)."""
+        return wrist_motion.search_step(self)
+
+    def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> tuple[float, bool]:
+        """A guarded straight wrist move (:func:`eos_svc.world.wrist_motion.guarded_wrist_move`)."""
+        return wrist_motion.guarded_wrist_move(self, target, stop_when_located)
+
+    def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
+        """A guarded wrist step (:func:`eos_svc.world.wrist_motion.step_wrist_toward`)."""
+        return wrist_motion.step_wrist_toward(self, target, step)
+
+    def guarded_probe(
+        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+    ) -> ProbeOutcome:
+        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
+        return probe_motion.guarded_probe(self, finger, start, direction, travel, angle)
+
+    def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
+        """A finger's closing step (:func:`eos_svc.world.finger_closing.close_finger_step`)."""
+        return finger_closing.close_finger_step(self, finger, dtheta)

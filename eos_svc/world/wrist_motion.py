@@ -1,0 +1,146 @@
+"""The wrist's guarded motions: the search's sweeps over the coverage lattice, a straight guarded
+move, and the grasp stage's step toward a target that stops short of touching (world, m)."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+
+if TYPE_CHECKING:
+    from eos_svc.world.world import GraspWorld
+
+
+def search_step(world: GraspWorld) -> tuple[str, float, bool]:
+    """One search move: a sweep of the next column of the coverage plan in this run's seeded
+    space-filling order (:mod:`eos_svc.world.coverage`): back to the box's rear (−x), across to
+    the column (y, z), forward through the box (+x), each leg a guarded straight move
+    (:func:`guarded_wrist_move`) that stops where the object enters the envelope or short of a
+    contact.
+
+    Returns:
+        (label of the column "(j, k)", length moved in m, blocked flag).
+    """
+    p = world.params
+    if world.search_order is None:
+        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
+        world.search_columns = wrist_columns(p)
+    if not world.search_order:  # every column swept: sweep them again
+        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
+    j, k = world.search_order.take()
+    y, z = (float(v) for v in world.search_columns[j, k])
+    x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
+    moved = 0.0
+    for leg in ((x_lo, *world.wrist_xyz()[1:]), (x_lo, y, z), (x_hi, y, z)):
+        length, blocked = guarded_wrist_move(world, np.array(leg), stop_when_located=True)
+        moved += length
+        if world.located():
+            return f"({j}, {k})", moved, False
+        if blocked:
+            _bumped(world)
+            return f"({j}, {k})", moved, True
+    return f"({j}, {k})", moved, False
+
+
+def _bumped(world: GraspWorld) -> None:
+    """After a bump: sweep next the column that puts the grasp centre's line nearest the point of
+    the object the hand bumped into (the object is there)."""
+    if not world.search_order:
+        return
+    order = world.search_order.pending()
+    witness = np.asarray(world.scene.min_distance(world.state).point_object)
+    cols = world.search_columns
+    want = witness[1:] - np.asarray(world.params.grasp_centre)[1:]
+    n = min(range(len(order)), key=lambda i: float(np.sum((cols[order[i]] - want) ** 2)))
+    world.search_order.move_to_front(n)
+
+
+def guarded_wrist_move(
+    world: GraspWorld, target: np.ndarray, stop_when_located: bool = False
+) -> tuple[float, bool]:
+    """Translate the wrist in a straight line toward ``target`` (world, m), guarded.
+
+    Conservative advancement: each sub-step is at most the hand's clearance beyond
+    ``params.clearance`` (a translation changes every hand–object distance by at most its
+    length, so no sub-step can bring the hand closer than that) and, with
+    ``stop_when_located``, at most the grasp centre's gap beyond the envelope (floored at
+    0.5 mm). Stops when the object is located, when the hand is within 0.1 mm of the clearance
+    (blocked) or at the target.
+
+    Returns:
+        (length moved in m, blocked flag).
+    """
+    p = world.params
+    xyz = world.wrist_xyz_q
+    start = world.wrist_position().copy()
+    delta = np.asarray(target, dtype=float) - start
+    length = float(np.linalg.norm(delta))
+    if length < 1e-12:
+        return 0.0, False
+    unit = delta / length
+    q = world.state.q
+    travelled = 0.0
+    for _ in range(500):
+        if stop_when_located and world.located():
+            return travelled, False
+        clearance = world.exact_clearance()
+        room = clearance - p.clearance
+        if room < 1e-4:
+            # touching distance: go on only if the move leads away from the object
+            trial = min(1e-3, length - travelled)
+            q[xyz] = start + unit * (travelled + trial)
+            world.set_q(q)
+            if world.exact_clearance() <= clearance:
+                q[xyz] = start + unit * travelled
+                world.set_q(q)
+                return travelled, True
+            step = trial
+        else:
+            step = min(length - travelled, room)
+        if stop_when_located:
+            step = min(step, max(world.object_gap_to_grasp_centre() - p.envelope_radius, 5e-4))
+        travelled += step
+        q[xyz] = start + unit * travelled
+        world.set_q(q)
+        if travelled >= length - 1e-12:
+            return travelled, False
+    return travelled, True
+
+
+def step_wrist_toward(world: GraspWorld, target: np.ndarray, step: float) -> tuple[float, bool]:
+    """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
+
+    Stops short (by bisection) where any hand geometry would come within half the contact
+    tolerance of the object, so the hand never pushes the object.
+
+    Returns:
+        (distance left to the target in m, stopped-by-contact flag).
+    """
+    xyz = world.wrist_xyz_q
+    threshold = 0.5 * world.params.contact_tolerance
+    start = world.wrist_position().copy()
+    delta = np.asarray(target, dtype=float) - start
+    dist = float(np.linalg.norm(delta))
+    if dist < 1e-9:
+        return 0.0, False
+    move = min(step, dist)
+    q = world.state.q.copy()
+
+    def clear_at(fraction: float) -> bool:
+        q[xyz] = start + delta * (fraction * move / dist)
+        world.set_q(q)
+        return world.hand_clear(threshold)
+
+    if clear_at(1.0):
+        return dist - move, False
+    lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
+    for _ in range(30):
+        mid = 0.5 * (lo + hi)
+        if clear_at(mid):
+            lo = mid
+        else:
+            hi = mid
+    clear_at(lo)
+    return dist - lo * move, True
