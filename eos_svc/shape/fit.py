@@ -33,6 +33,7 @@ from scipy.optimize import least_squares, leastsq
 
 from eos_svc.objects import KINDS, SurfaceObject
 from eos_svc.objects.base import norm
+from eos_svc.shape import kernels
 from eos_svc.shape.starts import ClassStarts
 from eos_svc.shape.touches import Touches
 
@@ -134,7 +135,36 @@ class FitData:
 def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors: per contact the tip centre's distance
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
-    ``min(sd(f) − r, 0)/σ_d``."""
+    ``min(sd(f) − r, 0)/σ_d``. Computed by the compiled loop once it is loaded in this process
+    (:mod:`eos_svc.shape.kernels`, the one place that chooses), else by
+    :func:`numpy_residuals`; the two agree to rounding."""
+    compiled = kernels.compiled_residuals()
+    if compiled is None:
+        return numpy_residuals(thetas, kind, r0, data)
+    thetas = np.ascontiguousarray(thetas, dtype=float)
+    r0s = np.empty((len(thetas), 3, 3))
+    r0s[:] = r0
+    out: np.ndarray = compiled(
+        kernels.KIND_CODES[kind],
+        SIZE_INDEX[kind][0],
+        thetas,
+        r0s,
+        LOG_SIZE_RANGE,
+        data.points,
+        data.count,
+        data.radii,
+        data.normals,
+        data.free_radii,
+        data.gap_offset,
+        data.sigma_distance,
+        data.sigma_normal,
+    )
+    return out
+
+
+def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+    """:func:`whitened_residuals` in numpy, with the kinds' own distances
+    (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`): the plain version."""
     centres, rotations, half = batch_geometry(kind, thetas, r0)
     local = (data.points[None] - centres[:, None]) @ rotations
     d, g = KINDS[kind].local_distance(local, half[:, None, :])
