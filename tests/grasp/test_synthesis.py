@@ -13,7 +13,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys, plan
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
 from eos_svc.board import Board
-from eos_svc.grasp.frames import rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
@@ -401,3 +401,15 @@ def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
     new = board[keys.TARGET]
     assert new["repredicted"] and new["contacts"] != target["contacts"]
     assert all(f.in_reach(board) and f.landing_miss(board) < 1e-5 for f in fingers)  # µm rounding
+
+
+def test_palm_frame_is_a_rotation_approaching_along_x_closing_along_z():
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        approach, closing = rng.normal(size=3), rng.normal(size=3)
+        R = frame(approach, closing)
+        np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-12)
+        assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-12)
+        np.testing.assert_allclose(R[:, 0], approach / np.linalg.norm(approach), atol=1e-12)
+        # z: the closing direction made orthogonal to x, on its side
+        assert R[:, 2] @ closing == pytest.approx(np.linalg.norm(closing - (closing @ R[:, 0]) * R[:, 0]))
