@@ -13,6 +13,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys, plan
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
 from eos_svc.board import Board
+from eos_svc.grasp.candidate import diameter_angle_deg
 from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
@@ -413,3 +414,14 @@ def test_palm_frame_is_a_rotation_approaching_along_x_closing_along_z():
         np.testing.assert_allclose(R[:, 0], approach / np.linalg.norm(approach), atol=1e-12)
         # z: the closing direction made orthogonal to x, on its side
         assert R[:, 2] @ closing == pytest.approx(np.linalg.norm(closing - (closing @ R[:, 0]) * R[:, 0]))
+
+
+def test_diameter_angle_closed_forms():
+    c = np.array([0.2, 0.0, 0.1])
+
+    def at(x: float, y: float) -> np.ndarray:
+        return c + np.array([x, y, 0.0])
+
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(-0.03, 0.01), at(-0.03, -0.01)]) == pytest.approx(180.0)
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.0, 0.02), at(0.0, 0.04)]) == pytest.approx(90.0)
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.01, 0.01)]) == pytest.approx(45.0)
