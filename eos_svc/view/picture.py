@@ -88,11 +88,7 @@ def surface_points(shape: coal.ShapeBase) -> np.ndarray:
     if isinstance(shape, coal.Cylinder):
         phi = np.linspace(0.0, 2.0 * np.pi, SEGMENTS, endpoint=False)
         ring = shape.radius * np.stack([np.cos(phi), np.sin(phi)], axis=1)
-        return np.vstack([np.column_stack([ring, np.full(SEGMENTS, z)]) for z in (-1, 1)]) * [
-            1,
-            1,
-            shape.halfLength,
-        ]
+        return np.vstack([np.column_stack([ring, np.full(SEGMENTS, z * shape.halfLength)]) for z in (-1, 1)])
     raise ContractError("shape", f"cannot draw a {type(shape).__name__}")
 
 

@@ -18,15 +18,13 @@ from __future__ import annotations
 
 import html
 import json
-import logging
 from collections.abc import Iterable, Mapping, Sequence
-from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
-from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
+from pydrake.geometry import Meshcat, MeshcatAnimation
 from pydrake.math import RigidTransform
 
 from eos_svc.agents.planner import default_hand
@@ -41,6 +39,8 @@ from eos_svc.view.scene import (
     HandDrawing,
     add_contacts,
     add_object,
+    new_meshcat,
+    play_once,
     postulated_object,
     set_camera,
 )
@@ -48,29 +48,6 @@ from eos_svc.view.timeline import Timeline, build_timeline
 
 #: two poses closer than this (max |entry| of the 4×4 difference) are the same keyframe
 POSE_EPS = 1e-9
-
-
-@contextmanager
-def quiet_drake() -> Any:
-    """Silence Drake's INFO log lines (e.g. "Meshcat listening ...") for a moment."""
-    logger = logging.getLogger("drake")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        yield
-    finally:
-        logger.setLevel(level)
-
-
-def export_meshcat() -> Meshcat:
-    """A MeshCat instance used only to build a page (its server on localhost, on an ephemeral
-    port: it never takes one of the 7000–7099 a live view would use)."""
-    params = MeshcatParams()
-    params.host = "localhost"
-    params.port = 0
-    params.show_stats_plot = False
-    with quiet_drake():
-        return Meshcat(params)
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -174,7 +151,7 @@ def plan_scene(
     hand = hand or default_hand()
     drawing = HandDrawing(hand)
     timeline = build_timeline(records, hand.neutral())
-    meshcat = export_meshcat()
+    meshcat = new_meshcat(port=0)  # never one of the ports a live view would use
     drawing.add_to(meshcat)
     drawing.pose_in(meshcat, timeline.keyframes[0][1])
     add_object(meshcat, OBJECT, req.obj, OBJECT_RGBA)
@@ -188,13 +165,8 @@ def plan_scene(
     if drawn:
         anim.SetProperty(0, CONTACTS, "visible", False)
         anim.SetProperty(verdict[0] if verdict else timeline.frames, CONTACTS, "visible", True)
-    anim.set_autoplay(True)
-    anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
-    anim.set_clamp_when_finished(True)
-    meshcat.SetAnimation(anim)
+    play_once(meshcat, anim, autoplay=True)
     set_camera(meshcat, req.obj.position)
-    meshcat.SetProperty("/Grid", "visible", False)
-    meshcat.SetProperty("/Axes", "visible", False)
     info = {
         "title": _result_text(req, result),
         "duration": timeline.duration_s,

@@ -20,6 +20,7 @@ Colours follow :mod:`eos_svc.agents.picture` (the PNG of the final grasp).
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -33,7 +34,9 @@ from pydrake.geometry import (
     Cylinder,
     Ellipsoid,
     Meshcat,
+    MeshcatAnimation,
     MeshcatCone,
+    MeshcatParams,
     Rgba,
     Shape,
     Sphere,
@@ -69,6 +72,35 @@ CONE_RGBA = Rgba(0.839, 0.153, 0.157, 0.35)
 CONTACT_DOT = 0.0025
 NORMAL_LENGTH = 0.03
 CONE_HEIGHT = 0.02
+
+
+def new_meshcat(host: str = "localhost", port: int | None = None) -> Meshcat:
+    """A MeshCat server without its stats plot, grid or axes; ``port`` None: Drake's choice (the
+    first free one of 7000–7099), 0: an ephemeral port (for building a page only). Drake's
+    "Meshcat listening" log line is silenced."""
+    params = MeshcatParams()
+    params.host = host
+    params.show_stats_plot = False
+    if port is not None:
+        params.port = port
+    drake_log = logging.getLogger("drake")
+    level = drake_log.level
+    drake_log.setLevel(logging.WARNING)
+    try:
+        meshcat = Meshcat(params)
+    finally:
+        drake_log.setLevel(level)
+    meshcat.SetProperty("/Grid", "visible", False)
+    meshcat.SetProperty("/Axes", "visible", False)
+    return meshcat
+
+
+def play_once(meshcat: Meshcat, anim: MeshcatAnimation, autoplay: bool) -> None:
+    """Set ``anim`` as the page's animation, played once and held at its end."""
+    anim.set_autoplay(autoplay)
+    anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
+    anim.set_clamp_when_finished(True)
+    meshcat.SetAnimation(anim)
 
 
 def vec(values: Any) -> Any:
