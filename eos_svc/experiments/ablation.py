@@ -148,6 +148,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"wrote {args.out}/ablation.json, ablation_sweep.csv, ablation.png")
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -148,6 +148,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"wrote {args.out}/learning.json, learning.csv, learning.png, memory.sqlite")
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -149,6 +149,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"wrote {args.out}/ratio.json, ratio.csv, ratio_runs.csv, ratio.png")
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -146,6 +146,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(f"wrote {args.out}/shapes.json, shapes.csv, shapes.png")
     return 0
 
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

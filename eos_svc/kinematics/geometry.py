@@ -29,18 +29,13 @@ def tangent_pair(
 ) -> tuple[float, float, float, float, float, float]:
     """``t1`` and ``t2`` (six floats) of the unit normal ``(nx, ny, nz)``; ``prefer`` is the
     index of the preferred world axis (0 = x, 2 = z)."""
-    if prefer == 0:
-        if abs(nx) < NEAR_AXIS:
-            tx, ty, tz = 1.0 - nx * nx, -nx * ny, -nx * nz
-        else:
-            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
-    elif prefer == 2:
-        if abs(nz) < NEAR_AXIS:
-            tx, ty, tz = -nz * nx, -nz * ny, 1.0 - nz * nz
-        else:
-            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
-    else:
+    if prefer not in (0, 2):
         raise ValidationError("prefer", f"must be 0 (world x) or 2 (world z), got {prefer!r}")
+    n = (nx, ny, nz)
+    k = prefer if abs(n[prefer]) < NEAR_AXIS else 1
+    t = [-n[k] * c for c in n]  # e_k − n_k n
+    t[k] += 1.0
+    tx, ty, tz = t
     s = 1.0 / math.sqrt(tx * tx + ty * ty + tz * tz)
     tx, ty, tz = tx * s, ty * s, tz * s
     return tx, ty, tz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx

@@ -1,12 +1,9 @@
 """Screenshots of a view in headless Chromium, offline (for the tests and the README picture).
 
-    screenshot("file:///tmp/plan.html#cycle=70", "shot.png")
-    # or: python -m eos_svc.view.browser "file:///tmp/plan.html#cycle=70" shot.png
+    python -m eos_svc.view.browser "file:///tmp/plan.html#cycle=70" shot.png
 
-Chromium runs headless with software WebGL (SwiftShader), a fresh profile, no background
-traffic and no network at all: every host name resolves to nothing and the proxy is a closed
-port, so a page that needed the network would show nothing. ``--virtual-time-budget`` lets the
-page's timers run (the scene loads, the animation is positioned) before the picture is taken.
+Chromium runs headless with software WebGL, a fresh profile and no network (every host name
+resolves to nothing); ``--virtual-time-budget`` lets the page's timers run before the shot.
 """
 
 from __future__ import annotations

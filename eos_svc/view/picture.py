@@ -4,14 +4,10 @@
     from eos_svc.view.picture import draw_result
     draw_result(plan(), "grasp.png")
 
-One figure, four panels: a 3-D view and three orthographic views (top x–y, side x–z,
-front y–z) in millimetres. The hand is drawn from its Pinocchio GeometryModel at the final
-configuration (palm box, link cylinders, fingertip spheres, each placed by
-``GeometryData.oMg``), the object from the request's primitive at its pose; every touching
-contact is a red dot with an arrow along the force direction (−outward normal, into the
-object). Every primitive is convex: it is drawn as the convex hull of points on its surface,
-and in the orthographic views as the outline of their projection, painted back to front.
-Rendering uses matplotlib's Agg canvas directly (no global backend is changed).
+One figure: a 3-D view and three orthographic views (top x–y, side x–z, front y–z) in mm. Every
+primitive is convex: drawn as the convex hull of points on its surface, in the orthographic views
+as the outline of their projection, back to front. Each touching contact is a red dot with an
+arrow along the force direction (into the object). Uses matplotlib's Agg canvas directly.
 """
 
 from __future__ import annotations

@@ -1,21 +1,8 @@
-"""What a plan's 3-D view draws, in Drake's MeshCat: the hand, the object, the postulate, contacts.
-
-Shared by the replay file (:mod:`eos_svc.view.replay_html`) and the live view
-(:mod:`eos_svc.view.live`). Every solid is a MeshCat primitive placed in the world frame (z up,
-metres):
-
-- the hand: every collision geometry of its Pinocchio GeometryModel (palm box, link cylinders,
-  fingertip spheres), placed by ``GeometryData.oMg`` at a configuration q
-  (:meth:`HandDrawing.poses`); a geometry that is not a primitive is drawn as its local
-  bounding box;
-- the object (ground truth) from the request's primitive at its pose, translucent blue;
-- the postulated object (post_shape's ``object``, when the postulate carries one) translucent
-  yellow over it;
-- each touching contact of the final grasp: a red dot at the contact point, a red line along
-  the contact force's direction (−outward normal, into the object) and the Coulomb friction
-  cone about it (half-angle atan μ, apex at the contact), translucent red.
-
-Colours follow :mod:`eos_svc.agents.picture` (the PNG of the final grasp).
+"""What a plan's 3-D view draws in Drake's MeshCat (world frame, z up, metres): the hand's
+collision geometries at a configuration, the object, the postulated object and the contacts
+with their force lines and friction cones (``docs/view.md``, "What is drawn"). Shared by the
+replay page (:mod:`eos_svc.view.replay_html`) and the live view (:mod:`eos_svc.view.live`);
+colours as in :mod:`eos_svc.view.picture`.
 """
 
 from __future__ import annotations

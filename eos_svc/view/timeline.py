@@ -1,14 +1,10 @@
 """A plan's cycles as an animation timeline: where the hand is at which frame, what each cycle did.
 
-Built from cycle records in their JSON form (:meth:`CycleRecord.to_dict`, as in a record file
-or the service's cycle stream), which carry the hand's configuration after every cycle that
-moved it (board entry ``hand_q``, written by :class:`~eos_svc.agents.pose_board.PoseBoard`) and
-the sampled path of every EP1 roll (``hand_path``). Each cycle gets at least
-:data:`CYCLE_FRAMES` frames; a move that turns joints is split into keyframes of at most
-:data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel (interpolated in joint
-space, so the bodies follow the kinematics between keyframes; a pure wrist translation needs no
-split), an EP1 roll adds one keyframe per sample. The page interpolates each body's pose
-linearly between keyframes.
+Built from cycle records in their JSON form, which carry the hand's configuration after every
+cycle that moved it (``hand_q``) and the sampled path of every EP1 roll (``hand_path``). Each
+cycle gets at least :data:`CYCLE_FRAMES` frames; a move that turns joints is split into
+keyframes of at most :data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel
+(interpolated in joint space), an EP1 roll adds one keyframe per sample.
 """
 
 from __future__ import annotations
