@@ -46,11 +46,6 @@ class BoardClient(Board):
         self._writes = frozenset(agent.writes)
         self._check = entry_check
 
-    @property
-    def agent(self) -> str:
-        """The name of the agent this client serves."""
-        return self._name
-
     def _readable(self, key: str) -> None:
         if key not in self._reads:
             raise BoardAccessError.undeclared(self._name, key, "read", self._reads)

@@ -20,9 +20,6 @@ from typing import Any
 from eos_svc.cli.common import fail, int_at_least, positive_float
 from eos_svc.errors import ValidationError
 
-#: validate_grasp argument -> command-line option, for error messages
-OPTION_NAMES = {"seconds": "--seconds", "mass": "--mass", "directions": "--directions"}
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
@@ -97,7 +94,8 @@ def validate_or_fail(result: Any, **options: Any) -> Any:
     try:
         return validate_grasp(result, **options)
     except ValidationError as exc:
-        fail(f"{OPTION_NAMES.get(exc.field, exc.field)}: {exc.reason}")
+        option = f"--{exc.field}" if exc.field in ("seconds", "mass", "directions") else exc.field
+        fail(f"{option}: {exc.reason}")
         raise  # unreachable
     except SimulationError as exc:
         fail(f"validation: {exc}", code=1)

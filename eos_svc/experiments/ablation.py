@@ -147,4 +147,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(report(data))
     print(f"wrote {args.out}/ablation.json, ablation_sweep.csv, ablation.png")
     return 0
-

@@ -151,10 +151,6 @@ def run_noisy(
     return rows
 
 
-def _fmt(x: float) -> str:
-    return f"{x:8.3f}"
-
-
 def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise_std: float = 2e-4) -> str:
     """The two Markdown tables."""
     out = [
@@ -172,8 +168,8 @@ def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise
             else f"{r.curvature_error:.3g} 1/m"
         )
         out.append(
-            f"| {r.case} | {_fmt(r.k_est[0])} | {_fmt(r.k_est[1])} | {_fmt(r.k_true[0])} | "
-            f"{_fmt(r.k_true[1])} | {rerr} | {cerr} | {'yes' if r.flat else 'no'} | "
+            f"| {r.case} | {r.k_est[0]:8.3f} | {r.k_est[1]:8.3f} | {r.k_true[0]:8.3f} | "
+            f"{r.k_true[1]:8.3f} | {rerr} | {cerr} | {'yes' if r.flat else 'no'} | "
             f"{r.max_slip:.1e} | {r.max_gap:.1e} | {'PASS' if r.ok else 'FAIL'} |"
         )
     if noisy:

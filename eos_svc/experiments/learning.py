@@ -147,4 +147,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(report(data))
     print(f"wrote {args.out}/learning.json, learning.csv, learning.png, memory.sqlite")
     return 0
-

@@ -148,4 +148,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(report(data))
     print(f"wrote {args.out}/ratio.json, ratio.csv, ratio_runs.csv, ratio.png")
     return 0
-

@@ -341,4 +341,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         "recognition_calibration.png, recognition_search.png"
     )
     return 0
-

@@ -145,4 +145,3 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(report(data))
     print(f"wrote {args.out}/shapes.json, shapes.csv, shapes.png")
     return 0
-
