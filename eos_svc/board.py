@@ -61,6 +61,10 @@ class Board(Mapping[str, Any]):
     def __len__(self) -> int:
         return len(self._entries)
 
+    def get(self, key: str, default: Any = None) -> Any:
+        """The entry ``key``, or ``default`` when it does not exist."""
+        return self._entries.get(key, default)
+
     # --- writes --------------------------------------------------------------
     def set(self, key: str, value: Any) -> None:
         """Write entry ``key``; recorded as a change when inside a cycle."""

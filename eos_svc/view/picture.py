@@ -29,16 +29,10 @@ from eos_svc.errors import ContractError, ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import PlanRequest
-from eos_svc.view.scene import touching_contacts
+from eos_svc.view.scene import CONTACT_COLOUR, OBJECT_COLOUR, hand_colours, touching_contacts
 
 #: mesh resolution (segments around a circle)
 SEGMENTS = 16
-#: colours
-OBJECT_COLOUR = "#4c9be8"
-HAND_COLOUR = "#9a9a9a"
-PALM_COLOUR = "#6d6d6d"
-TIP_PALETTE = ("#e8a33c", "#58b85c", "#b565c9", "#e377c2", "#17becf")
-CONTACT_COLOUR = "#d62728"
 #: orthographic views: (title, horizontal axis, vertical axis, depth axis, depth sign toward viewer)
 VIEWS = (
     ("top (x-y, from +z)", 0, 1, 2, 1.0),
@@ -124,13 +118,9 @@ def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) ->
         )
     ]
     state = hand.state(np.asarray(q, dtype=float))
-    tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
-    for gid, g in enumerate(hand.collision_model.geometryObjects):
+    geometries = hand.collision_model.geometryObjects
+    for gid, (g, colour) in enumerate(zip(geometries, hand_colours(hand), strict=True)):
         m = state.geometry_data.oMg[gid]
-        if gid in tips:
-            colour = TIP_PALETTE[tips[gid] % len(TIP_PALETTE)]
-        else:
-            colour = PALM_COLOUR if g.name.startswith("palm") else HAND_COLOUR
         try:
             polys = shape_mesh(g.geometry)
         except TypeError:

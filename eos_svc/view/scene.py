@@ -41,20 +41,24 @@ OBJECT = f"{ROOT}/object"
 POSTULATE = f"{ROOT}/postulate"
 CONTACTS = f"{ROOT}/contacts"
 
-#: colours (RGBA, 0..1); the fingertips per finger in the hand's order
-OBJECT_RGBA = Rgba(0.298, 0.608, 0.910, 0.45)
+#: colours, shared with the PNG pictures (:mod:`eos_svc.view.picture`); tips in finger order
+OBJECT_COLOUR = "#4c9be8"
+LINK_COLOUR = "#9a9a9a"
+PALM_COLOUR = "#6d6d6d"
+TIP_COLOURS = ("#e8a33c", "#58b85c", "#b565c9", "#e377c2", "#17becf")
+CONTACT_COLOUR = "#d62728"
+
+
+def rgba(colour: str, alpha: float = 1.0) -> Rgba:
+    """MeshCat's colour of ``#rrggbb`` with opacity ``alpha``."""
+    r, g, b = (int(colour[i : i + 2], 16) / 255.0 for i in (1, 3, 5))
+    return Rgba(r, g, b, alpha)
+
+
+OBJECT_RGBA = rgba(OBJECT_COLOUR, 0.45)
 POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.2)
-LINK_RGBA = Rgba(0.60, 0.60, 0.62, 1.0)
-PALM_RGBA = Rgba(0.43, 0.43, 0.45, 1.0)
-TIP_RGBAS = (
-    Rgba(0.910, 0.639, 0.235, 1.0),  # orange
-    Rgba(0.345, 0.722, 0.361, 1.0),  # green
-    Rgba(0.710, 0.396, 0.788, 1.0),  # purple
-    Rgba(0.890, 0.467, 0.761, 1.0),
-    Rgba(0.090, 0.745, 0.812, 1.0),
-)
-CONTACT_RGBA = Rgba(0.839, 0.153, 0.157, 1.0)
-CONE_RGBA = Rgba(0.839, 0.153, 0.157, 0.35)
+CONTACT_RGBA = rgba(CONTACT_COLOUR)
+CONE_RGBA = rgba(CONTACT_COLOUR, 0.35)
 #: drawn size of a contact: dot radius, normal line length, friction cone height (m)
 CONTACT_DOT = 0.0025
 NORMAL_LENGTH = 0.03
@@ -136,6 +140,20 @@ def _coal_shape(geometry: Any) -> tuple[Shape, RigidTransform]:
     return Box(*(hi - lo)), RigidTransform(vec(0.5 * (lo + hi)))
 
 
+def hand_colours(hand: HandModel) -> list[str]:
+    """The colour of every collision geometry of ``hand`` (id order): its finger's tip colour,
+    the palm's, or the links'."""
+    tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
+    return [
+        TIP_COLOURS[tips[gid] % len(TIP_COLOURS)]
+        if gid in tips
+        else PALM_COLOUR
+        if g.name.startswith("palm")
+        else LINK_COLOUR
+        for gid, g in enumerate(hand.collision_model.geometryObjects)
+    ]
+
+
 @dataclass(frozen=True)
 class HandPart:
     """One drawn hand geometry: its scene path, primitive, offset in its frame, colour."""
@@ -155,17 +173,10 @@ class HandDrawing:
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
-        tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
         parts = []
-        for gid, g in enumerate(hand.collision_model.geometryObjects):
-            if gid in tips:
-                rgba = TIP_RGBAS[tips[gid] % len(TIP_RGBAS)]
-            elif g.name.startswith("palm"):
-                rgba = PALM_RGBA
-            else:
-                rgba = LINK_RGBA
+        for g, colour in zip(hand.collision_model.geometryObjects, hand_colours(hand), strict=True):
             shape, offset = _coal_shape(g.geometry)
-            parts.append(HandPart(f"{HAND}/{g.name}", shape, offset, rgba))
+            parts.append(HandPart(f"{HAND}/{g.name}", shape, offset, rgba(colour)))
         self.parts: tuple[HandPart, ...] = tuple(parts)
         self._state = hand.state(hand.neutral())
 
