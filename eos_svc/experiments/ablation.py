@@ -11,7 +11,6 @@
 
 from __future__ import annotations
 
-import argparse
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
@@ -132,17 +131,12 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment ablation [options]``."""
     parser = experiment_parser("ablation", __doc__, "results/ablation")
     parser.add_argument("--seeds", type=int, default=20, help="seeds per condition (20)")
     parser.add_argument("--sweep-points", type=int, default=11, help="default weights in the sweep (11)")
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment ablation [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     data = run(args.seeds, args.sweep_points, args.out)
     print(report(data))
     print(f"wrote {args.out}/ablation.json, ablation_sweep.csv, ablation.png")

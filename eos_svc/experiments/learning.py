@@ -11,7 +11,6 @@ repeats are compared.
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 from collections.abc import Sequence
@@ -132,17 +131,12 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment learning [options]``."""
     parser = experiment_parser("learning", __doc__, "results/learning")
     parser.add_argument("--repeats", type=int, default=3, help="times each object appears (3)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment learning [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     data = run(args.repeats, args.seed, args.out)
     print(report(data))
     print(f"wrote {args.out}/learning.json, learning.csv, learning.png, memory.sqlite")

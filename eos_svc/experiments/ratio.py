@@ -9,7 +9,6 @@ good-grasp rate (contacts about the diameter) is reported beside it.
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Sequence
 from itertools import pairwise
 from pathlib import Path
@@ -133,17 +132,12 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment ratio [options]``."""
     parser = experiment_parser("ratio", __doc__, "results/ratio")
     parser.add_argument("--seeds", type=int, default=10, help="seeds per ratio (10)")
     parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment ratio [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     data = run(tuple(args.ratios), args.seeds, args.out)
     print(report(data))
     print(f"wrote {args.out}/ratio.json, ratio.csv, ratio_runs.csv, ratio.png")

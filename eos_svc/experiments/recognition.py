@@ -21,7 +21,6 @@ around the default, yaw and tilt), so they are not the ones the planner was tune
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import math
 from collections.abc import Sequence
@@ -316,8 +315,8 @@ def report(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment recognition [options]``."""
     parser = experiment_parser("recognition", __doc__, "results/recognition")
     parser.add_argument("--seeds", type=int, default=3, help="seeds per object and noise (3)")
     parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
@@ -325,12 +324,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--quick", action="store_true", help="one size, one seed, default noise, 10 search seeds"
     )
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment recognition [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     if args.quick:
         data = run(seeds=1, sizes=1, noises=(2e-4,), search_seeds=10, out=args.out)
     else:
