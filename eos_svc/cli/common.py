@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from typing import NoReturn
 
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import Weights
@@ -79,10 +80,9 @@ def weights_from_args(args: argparse.Namespace) -> Weights:
         return Weights(args.w_default, args.w_opportunistic, args.w_learned)
     except ValidationError as exc:
         fail(f"--w-*: {exc}")
-        raise  # unreachable
 
 
-def fail(message: str, code: int = 2) -> None:
+def fail(message: str, code: int = 2) -> NoReturn:
     """Print ``eos: error: message`` to stderr and exit with ``code``."""
     print(f"eos: error: {message}", file=sys.stderr)
     raise SystemExit(code)

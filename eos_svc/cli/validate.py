@@ -58,10 +58,8 @@ def read_result(path: str) -> dict[str, Any]:
         recording = read_recording(path)
     except RecordFileError as exc:
         fail(f"FILE: {path!r} is neither a plan result (eos plan --json) nor a record file: {exc}")
-        raise  # unreachable
     if recording.result is None:
         fail(f"FILE: {path!r} has no result line (the recorded run was interrupted)")
-    assert recording.result is not None
     if recording.hand != "hand3x3":
         fail(f"FILE: the record's hand is {recording.hand!r}; the Drake validation models hand3x3 only")
     return recording.result
@@ -96,10 +94,8 @@ def validate_or_fail(result: Any, **options: Any) -> Any:
     except ValidationError as exc:
         option = f"--{exc.field}" if exc.field in ("seconds", "mass", "directions") else exc.field
         fail(f"{option}: {exc.reason}")
-        raise  # unreachable
     except SimulationError as exc:
         fail(f"validation: {exc}", code=1)
-        raise  # unreachable
 
 
 def run(args: argparse.Namespace) -> int:
