@@ -12,16 +12,23 @@ repeats are compared.
 from __future__ import annotations
 
 import math
-import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from eos_svc.agents import ObjectSpec, PlanRequest, plan
+from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
 from eos_svc.ratings import Weights
 
 ACROSS = (math.pi / 2, 0.0, 0.0)
@@ -51,30 +58,23 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     for suffix in ("", "-wal", "-shm"):
         Path(str(db) + suffix).unlink(missing_ok=True)
     memory = GraspMemory(db)
-    seen: set[str] = set()
-    rows: list[dict[str, Any]] = []
     names = stream(repeats, seed)
-    for i, name in enumerate(names):
-        request_seed = seed * 1000 + i
-        base = plan(PlanRequest(obj=OBJECTS[name], seed=request_seed, weights=WITHOUT), keep_trace=True)
-        learned = plan(PlanRequest(obj=OBJECTS[name], seed=request_seed, weights=WITH), memory=memory)
-        rows.append(
-            {
-                "index": i,
-                "object": name,
-                "repeat": name in seen,
-                "grasp_cycles_without": base.cycles_per_stage.get("grasping", 0),
-                "grasp_cycles_with": learned.cycles_per_stage.get("grasping", 0),
-                "status_without": base.status,
-                "status_with": learned.status,
-                "recalled": "recall" in learned.agents_run(),
-            }
-        )
-        seen.add(name)
-        if not quiet:
-            print(f"\rlearning stream: {i + 1}/{len(names)}   ", end="", flush=True, file=sys.stderr)
-    if not quiet:
-        print(file=sys.stderr)
+    requests = [PlanRequest(obj=OBJECTS[name], seed=seed * 1000 + i) for i, name in enumerate(names)]
+    base = run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
+    learned = run_plans([replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory)
+    rows: list[dict[str, Any]] = [
+        {
+            "index": i,
+            "object": name,
+            "repeat": name in names[:i],
+            "grasp_cycles_without": without.cycles_per_stage.get("grasping", 0),
+            "grasp_cycles_with": with_.cycles_per_stage.get("grasping", 0),
+            "status_without": without.status,
+            "status_with": with_.status,
+            "recalled": "recall" in with_.agents_run(),
+        }
+        for i, (name, without, with_) in enumerate(zip(names, base, learned, strict=True))
+    ]
     memory.close()
 
     def mean(key: str, repeat: bool) -> float:

@@ -180,11 +180,6 @@ class HandDrawing:
         self.parts: tuple[HandPart, ...] = tuple(parts)
         self._state = hand.state(hand.neutral())
 
-    @property
-    def nq(self) -> int:
-        """Length of a configuration of this hand."""
-        return int(self.hand.model.nq)
-
     def poses(self, q: Sequence[float] | np.ndarray) -> list[RigidTransform]:
         """World pose of every part at configuration ``q`` (in :attr:`parts` order)."""
         state = self._state
@@ -238,18 +233,6 @@ def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.
     return out
 
 
-def friction_or_default(friction: object) -> float:
-    """``friction`` when it is a positive finite number, else the request's default μ."""
-    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
-    value = float(friction) if number else math.nan  # type: ignore[arg-type]
-    return value if math.isfinite(value) and value > 0 else DEFAULT_FRICTION
-
-
-def _frame_along(axis: np.ndarray) -> RotationMatrix:
-    """A rotation whose z axis is the unit vector ``axis``."""
-    return RotationMatrix.MakeFromOneVector(vec(axis), 2)
-
-
 def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: object) -> list[str]:
     """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`;
     the cone's μ is ``friction`` (the request's default when it is not a positive number).
@@ -257,7 +240,10 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
     Returns:
         the scene paths drawn, one per contact (each a folder).
     """
-    mu = friction_or_default(friction)
+    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
+    mu = float(friction) if number else math.nan  # type: ignore[arg-type]
+    if not (math.isfinite(mu) and mu > 0):
+        mu = DEFAULT_FRICTION
     paths = []
     for finger, point, normal in touching_contacts(contacts):
         path = f"{CONTACTS}/{finger}"
@@ -272,7 +258,9 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
         )
         radius = mu * CONE_HEIGHT
         meshcat.SetObject(f"{path}/cone", MeshcatCone(CONE_HEIGHT, radius, radius), CONE_RGBA)
-        meshcat.SetTransform(f"{path}/cone", RigidTransform(_frame_along(inward), vec(point)))
+        meshcat.SetTransform(
+            f"{path}/cone", RigidTransform(RotationMatrix.MakeFromOneVector(vec(inward), 2), vec(point))
+        )
         paths.append(path)
     return paths
 
