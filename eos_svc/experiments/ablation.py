@@ -19,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import PlanRequest
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -134,8 +135,8 @@ def report(data: dict) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment ablation [options]``."""
     parser = experiment_parser("ablation", __doc__, "results/ablation")
-    parser.add_argument("--seeds", type=int, default=20, help="seeds per condition (20)")
-    parser.add_argument("--sweep-points", type=int, default=11, help="default weights in the sweep (11)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=20, help="seeds per condition (20)")
+    parser.add_argument("--sweep-points", type=int_at_least(1), default=11, help="weights in the sweep (11)")
     args = parser.parse_args(argv)
     data = run(args.seeds, args.sweep_points, args.out)
     print(report(data))

@@ -21,6 +21,7 @@ import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.memory import GraspMemory
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -134,7 +135,7 @@ def report(data: dict) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment learning [options]``."""
     parser = experiment_parser("learning", __doc__, "results/learning")
-    parser.add_argument("--repeats", type=int, default=3, help="times each object appears (3)")
+    parser.add_argument("--repeats", type=int_at_least(1), default=3, help="times each object appears (3)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
     args = parser.parse_args(argv)
     data = run(args.repeats, args.seed, args.out)

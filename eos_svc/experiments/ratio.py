@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from eos_svc.agents.planner import ratio_sphere_request
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -135,7 +136,7 @@ def report(data: dict) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment ratio [options]``."""
     parser = experiment_parser("ratio", __doc__, "results/ratio")
-    parser.add_argument("--seeds", type=int, default=10, help="seeds per ratio (10)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds per ratio (10)")
     parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
     args = parser.parse_args(argv)
     data = run(tuple(args.ratios), args.seeds, args.out)

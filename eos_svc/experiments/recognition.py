@@ -33,6 +33,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys
 from eos_svc.agents.planner import build_world, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -318,9 +319,11 @@ def report(data: dict[str, Any]) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment recognition [options]``."""
     parser = experiment_parser("recognition", __doc__, "results/recognition")
-    parser.add_argument("--seeds", type=int, default=3, help="seeds per object and noise (3)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=3, help="seeds per object and noise (3)")
     parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
-    parser.add_argument("--search-seeds", type=int, default=100, help="seeds of the search-length run (100)")
+    parser.add_argument(
+        "--search-seeds", type=int_at_least(1), default=100, help="seeds of the search run (100)"
+    )
     parser.add_argument(
         "--quick", action="store_true", help="one size, one seed, default noise, 10 search seeds"
     )

@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -128,7 +129,7 @@ def report(data: dict) -> str:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment shapes [options]``."""
     parser = experiment_parser("shapes", __doc__, "results/shapes")
-    parser.add_argument("--seeds", type=int, default=5, help="seeds per object (5)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=5, help="seeds per object (5)")
     parser.add_argument(
         "--oracle",
         action="store_true",
