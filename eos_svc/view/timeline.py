@@ -120,7 +120,7 @@ def changes_of(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 class TimelineBuilder:
-    """Builds a :class:`Timeline` cycle by cycle (the live view feeds it as cycles arrive).
+    """Builds a :class:`Timeline` cycle by cycle.
 
     Args:
         q0: the hand's configuration before the first cycle.
