@@ -69,11 +69,8 @@ def run(
             }
         )
     valid = [(row["ratio"], row["mean_grasp_cycles"]) for row in rows if row["mean_grasp_cycles"] is not None]
-    xs = np.array([x for x, _ in valid], dtype=float)
-    ys = np.array([y for _, y in valid], dtype=float)
-    slope = float(np.polyfit(xs, ys, 1)[0]) if len(valid) >= 2 else None
-    means = [m for _, m in valid]
-    falling = all(b <= a for a, b in pairwise(means)) if means else False
+    slope = float(np.polyfit(*np.array(valid, dtype=float).T, 1)[0]) if len(valid) >= 2 else None
+    falling = all(b <= a for (_, a), (_, b) in pairwise(valid)) if valid else False
     data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
     write_json(out / "ratio.json", data)
     write_csv(out / "ratio.csv", rows)
