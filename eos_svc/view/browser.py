@@ -53,7 +53,7 @@ def find_chromium() -> str | None:
 
 def screenshot_command(
     url: str,
-    png: str | Path,
+    png: str | Path | None,
     profile: str | Path,
     *,
     size: tuple[int, int] = (1024, 768),
@@ -61,7 +61,8 @@ def screenshot_command(
     offline: bool = True,
     chromium: str | None = None,
 ) -> list[str]:
-    """The Chromium command line that writes a screenshot of ``url`` to ``png``."""
+    """The Chromium command line that writes a screenshot of ``url`` to ``png`` (None: that prints
+    the page's DOM instead)."""
     exe = chromium or find_chromium()
     if exe is None:
         raise BrowserError(f"no Chromium found (tried {', '.join(CHROMIUM_NAMES)}); apt-get install chromium")
@@ -72,7 +73,7 @@ def screenshot_command(
         f"--user-data-dir={profile}",
         f"--window-size={size[0]},{size[1]}",
         f"--virtual-time-budget={budget_ms}",
-        f"--screenshot={png}",
+        "--dump-dom" if png is None else f"--screenshot={png}",
         url,
     ]
 
@@ -91,9 +92,7 @@ def dump_dom(url: str, *, budget_ms: int = 8000, offline: bool = True, timeout_s
         BrowserError: no Chromium, or it printed nothing.
     """
     with tempfile.TemporaryDirectory(prefix="eos-chromium-", ignore_cleanup_errors=True) as profile:
-        cmd = screenshot_command(url, "unused.png", profile, budget_ms=budget_ms, offline=offline)
-        cmd = [c for c in cmd if not c.startswith("--screenshot=")]
-        cmd.insert(-1, "--dump-dom")
+        cmd = screenshot_command(url, None, profile, budget_ms=budget_ms, offline=offline)
         proc = _run(cmd, url, timeout_s)
     if not proc.stdout.strip():
         raise BrowserError(f"Chromium printed no DOM (exit {proc.returncode}): {proc.stderr[-500:]}")
