@@ -69,7 +69,8 @@ def run(
             }
         )
     valid = [(row["ratio"], row["mean_grasp_cycles"]) for row in rows if row["mean_grasp_cycles"] is not None]
-    slope = float(np.polyfit(*np.array(valid, dtype=float).T, 1)[0]) if len(valid) >= 2 else None
+    xs, ys = np.array(valid, dtype=float).reshape(-1, 2).T
+    slope = float(np.polyfit(xs, ys, 1)[0]) if len(valid) >= 2 else None
     falling = all(b <= a for (_, a), (_, b) in pairwise(valid)) if valid else False
     data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
     write_json(out / "ratio.json", data)
