@@ -2,7 +2,7 @@
 collision geometries at a configuration, the object, the postulated object and the contacts
 with their force lines and friction cones (``docs/view.md``, "What is drawn"). Shared by the
 replay page (:mod:`eos_svc.view.replay_html`) and the live view (:mod:`eos_svc.view.live`);
-colours as in :mod:`eos_svc.view.picture`.
+its colours also paint the PNG pictures (:mod:`eos_svc.view.picture`).
 """
 
 from __future__ import annotations
