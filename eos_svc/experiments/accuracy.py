@@ -176,7 +176,7 @@ def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise
     if noisy:
         out += [
             "",
-            f"With tactile noise (sigma = 0.2 mm), EP1 repeated until rating >= target; "
+            f"With tactile noise (sigma = {noise_std * 1000:g} mm), EP1 repeated until rating >= target; "
             f"{noisy[0].seeds} seeds per sphere",
             "",
             "| R | median radius err | max radius err | median EP1 runs | median steps "
