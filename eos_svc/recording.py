@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -27,24 +28,6 @@ from eos_svc.board import BoardChange
 from eos_svc.errors import EosError
 from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord
-
-__all__ = [
-    "DEFAULT_HAND",
-    "MARK",
-    "RECORD_SCHEMA",
-    "TIMING_FIELDS",
-    "RecordFileError",
-    "Recording",
-    "Verification",
-    "compare_run",
-    "cycle_line",
-    "first_difference",
-    "header_line",
-    "normalise",
-    "read_recording",
-    "record_from_dict",
-    "result_line",
-]
 
 #: version of the record file layout (header / cycles / result)
 RECORD_SCHEMA = 1
@@ -56,7 +39,6 @@ TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
 DEFAULT_HAND = "hand3x3"
 
 
-# --- writing ----------------------------------------------------------------------------------
 def header_line(request: Any, hand: str = DEFAULT_HAND) -> str:
     """The header line of a record file for ``request`` (a PlanRequest) planned with ``hand``."""
     return json.dumps(
@@ -75,25 +57,18 @@ def result_line(result: Any) -> str:
     return json.dumps({MARK: "result", "result": result.to_dict()}, allow_nan=False)
 
 
-# --- reading -------------------------------------------------------------------------------
 class RecordFileError(EosError, ValueError):
     """A record file that cannot be replayed (the message says where and why)."""
 
 
+@dataclass
 class Recording:
     """A parsed record file: the request, the cycle dicts, the result dict (or None), the hand."""
 
-    def __init__(
-        self,
-        request: dict[str, Any],
-        cycles: list[dict[str, Any]],
-        result: dict[str, Any] | None,
-        hand: str = DEFAULT_HAND,
-    ):
-        self.request = request
-        self.cycles = cycles
-        self.result = result
-        self.hand = hand
+    request: dict[str, Any]
+    cycles: list[dict[str, Any]]
+    result: dict[str, Any] | None
+    hand: str = DEFAULT_HAND
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -175,7 +150,6 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
     )
 
 
-# --- comparing -----------------------------------------------------------------------------
 def normalise(value: Any) -> Any:
     """The JSON value as it would be read back from a record file (tuples become lists)."""
     return json.loads(json.dumps(value, allow_nan=False))
@@ -208,13 +182,13 @@ def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str,
     return None
 
 
+@dataclass
 class Verification:
     """Outcome of a comparison: ``divergences`` lists (where, path, recorded, replayed)."""
 
-    def __init__(self) -> None:
-        self.divergences: list[tuple[str, str, Any, Any]] = []
-        self.cycles_compared = 0
-        self.replayed_result: dict[str, Any] | None = None
+    replayed_result: dict[str, Any]
+    divergences: list[tuple[str, str, Any, Any]] = field(default_factory=list)
+    cycles_compared: int = 0
 
     @property
     def identical(self) -> bool:
@@ -227,8 +201,7 @@ def compare_run(
 ) -> Verification:
     """Compare a re-run (its cycle dicts and result dict, as :func:`normalise` gives them) with
     ``recording``, cycle by cycle and then the result."""
-    out = Verification()
-    out.replayed_result = replayed_result
+    out = Verification(replayed_result)
     for recorded, again in zip(recording.cycles, replayed_cycles, strict=False):
         out.cycles_compared += 1
         diff = first_difference(recorded, again)

@@ -117,16 +117,16 @@ def run(args: argparse.Namespace) -> int:
     from eos_svc.service import protocol as proto
     from eos_svc.service.client import EosClient, ServiceUnavailableError
 
+    if getattr(args, "goal_id", None) is not None:
+        try:
+            proto.check_id(args.goal_id, "goal_id")
+        except ValidationError as exc:
+            fail(f"{'GOAL_ID' if args.action == 'cancel' else '--goal-id'}: {exc.reason}")
     request: Any = None
     if args.action == "plan":
         from eos_svc.cli.plan import FIELD_OPTIONS
         from eos_svc.schema.request import PlanRequest
 
-        try:
-            if args.goal_id is not None:
-                proto.check_id(args.goal_id, "goal_id")
-        except ValidationError as exc:
-            fail(f"--goal-id: {exc.reason}")
         if args.request is not None:
             try:
                 with open(args.request, encoding="utf-8") as fh:
@@ -140,11 +140,6 @@ def run(args: argparse.Namespace) -> int:
                 request = PlanRequest.from_dict(request_dict(args))
             except ValidationError as exc:
                 fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
-    if args.action == "cancel":
-        try:
-            proto.check_id(args.goal_id, "goal_id")
-        except ValidationError as exc:
-            fail(f"GOAL_ID: {exc.reason}")
     token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
     if token is not None and not proto.is_token(token):
         fail(

@@ -20,9 +20,6 @@ from typing import Any
 from eos_svc.cli.common import fail, int_at_least, positive_float
 from eos_svc.errors import ValidationError
 
-#: validate_grasp argument -> command-line option, for error messages
-OPTION_NAMES = {"seconds": "--seconds", "mass": "--mass", "directions": "--directions"}
-
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
@@ -61,10 +58,8 @@ def read_result(path: str) -> dict[str, Any]:
         recording = read_recording(path)
     except RecordFileError as exc:
         fail(f"FILE: {path!r} is neither a plan result (eos plan --json) nor a record file: {exc}")
-        raise  # unreachable
     if recording.result is None:
         fail(f"FILE: {path!r} has no result line (the recorded run was interrupted)")
-    assert recording.result is not None
     if recording.hand != "hand3x3":
         fail(f"FILE: the record's hand is {recording.hand!r}; the Drake validation models hand3x3 only")
     return recording.result
@@ -97,11 +92,10 @@ def validate_or_fail(result: Any, **options: Any) -> Any:
     try:
         return validate_grasp(result, **options)
     except ValidationError as exc:
-        fail(f"{OPTION_NAMES.get(exc.field, exc.field)}: {exc.reason}")
-        raise  # unreachable
+        option = f"--{exc.field}" if exc.field in ("seconds", "mass", "directions") else exc.field
+        fail(f"{option}: {exc.reason}")
     except SimulationError as exc:
         fail(f"validation: {exc}", code=1)
-        raise  # unreachable
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,17 +1,9 @@
-"""Rolling a sphere fingertip on the object without sliding (EP1's motion): a small differential-IK
-loop in the manner of pink — measure, formulate, solve, integrate.
-
-Each :meth:`RollingQP.step`
-
-1. computes the kinematics at the current ``q`` (Pinocchio: the tip's placement, its Jacobian
-   over the active joints — the wrist, then the rolling finger — and ``J̇ q̇`` at the last q̇);
-2. measures the contact with coal (:class:`~.tip_contact.SphereTipProbe`) and reads the tactile
-   sensor;
-3. builds the QP of :mod:`~.rolling_problem` (a :class:`qpsolvers.Problem`, kept as
-   :attr:`RollingQP.problem`) and solves it with :func:`~.rolling_solvers.solve_rolling_qp`;
-4. integrates ``q ← q + q̇ dt`` (the other fingers keep still).
-
-A failed or infeasible QP raises :class:`RollingQPError` carrying the problem.
+"""Rolling a sphere fingertip on the object without sliding (EP1's motion), a differential-IK
+loop in the manner of pink. Each :meth:`RollingQP.step` computes the tip's placement, Jacobian
+(wrist, then the rolling finger) and ``J̇ q̇`` with Pinocchio, measures the contact with coal,
+reads the tactile sensor, builds the QP of :mod:`~.rolling_problem`, solves it with
+:func:`~.rolling_solvers.solve_rolling_qp` and integrates ``q ← q + q̇ dt`` (the other fingers
+keep still). A failed QP raises :class:`RollingQPError` carrying the problem.
 """
 
 from __future__ import annotations
@@ -67,23 +59,20 @@ class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
     Args:
-        state: the hand state at the start of the roll; the roller steps on Pinocchio data of
-            its own and brings ``state`` up to its configuration when :attr:`state` is read.
+        state: the hand state at the start; the roller steps on Pinocchio data of its own and
+            brings ``state`` up to date when :attr:`state` is read.
         finger: the rolling finger (its tip must be a sphere).
-        axis: world rolling axis (unit after normalisation; tangent to the object at the
-            contact — its normal component is removed unless ``project_axis`` is False).
+        axis: world rolling axis, tangent at the contact (its normal component is removed
+            unless ``project_axis`` is False: EP1 keeps one axis over several legs).
         omega: rolling rate about ``axis``, rad/s (sign gives the direction).
         dt: time step, s (> 0).
         solver: the qpsolvers backend for steps with an active bound (``available_solvers()``).
-        scene: the hand and the object (required; keyword).
+        scene: the hand and the object (keyword).
         tactile: optional sensor; each step then carries a reading of its contact.
         weights: diagonal of W over the active joints (wrist then finger), default 1.
         gap_gain: β of the gap correction, in (0, 1].
-        project_axis: remove the axis' component along the current contact normal (default);
-            False keeps the given axis as it is (EP1 keeps one axis over several legs).
         second_order: targets of the step's average velocity (see :mod:`~.rolling_problem`).
-        closed_form: solve in closed form when no bound is active (see :mod:`~.rolling_solvers`);
-            False: the backend at every step.
+        closed_form: the closed form when no bound is active (see :mod:`~.rolling_solvers`).
 
     :meth:`retarget` starts another roll with the same roller (EP1 rolls six legs with one).
     """
@@ -125,8 +114,7 @@ class RollingQP:
         self.solver, self.dt, self.gap_gain = solver, float(dt), float(gap_gain)
         self.second_order, self.closed_form = bool(second_order), bool(closed_form)
         self.radius = hand.tip_radius(finger)
-        #: the active joints' indices in q and q̇ (the same: the hand model's finger and wrist joints
-        #: are 1-DoF, so q + q̇ dt is exact)
+        #: the active joints' indices in q and q̇ (the same: every joint is 1-DoF)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
         self.box = JointBox(
@@ -138,8 +126,7 @@ class RollingQP:
         self.weights = w
         self._cost = np.diag(w)
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
-        # the roller's own Pinocchio data (the kinematics of its steps); live views of the tip's
-        # world translation and rotation in it, which follow every step
+        # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
         self._data = hand.model.createData()
         tip = self._data.oMf[self._fid]

@@ -43,13 +43,6 @@ class JointBox:
     upper: np.ndarray
     velocity: np.ndarray
 
-    def velocity_bounds(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds on q̇ for one step of ``dt`` s from ``q``: the velocity limits, tightened so that
-        ``q + q̇ dt`` stays within the position limits."""
-        lb = np.maximum(-self.velocity, (self.lower - q) / dt)
-        ub = np.minimum(self.velocity, (self.upper - q) / dt)
-        return lb, ub
-
 
 def contact_rows(normal: np.ndarray, radius: float) -> np.ndarray:
     """The 6×6 ``M`` of the module docstring: ``M [v; ω]`` is (t₁·v_p, t₂·v_p, n·v_p, ω) for the tip
@@ -98,5 +91,7 @@ def rolling_problem(
     target = np.array((0.0, 0.0, -gap_gain * contact.distance / dt, wx, wy, wz))
     if drift is not None:
         target -= (0.5 * dt) * (M @ drift)
-    lb, ub = box.velocity_bounds(q, dt)
+    # the velocity limits, tightened so that q + q̇ dt stays within the position limits
+    lb = np.maximum(-box.velocity, (box.lower - q) / dt)
+    ub = np.minimum(box.velocity, (box.upper - q) / dt)
     return qpsolvers.Problem(cost, np.zeros(len(q)), A=M @ jacobian, b=target, lb=lb, ub=ub)

@@ -1,15 +1,9 @@
-"""The solver runner of the rolling QP: solves a :class:`qpsolvers.Problem` built by
-:func:`~eos_svc.kinematics.rolling_problem.rolling_problem`.
+"""The solver of the rolling QP (:func:`~eos_svc.kinematics.rolling_problem.rolling_problem`).
 
-:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances:
-the no-slip residual is ≲ 1e-8 m/s). Its one accelerator: the problem has only equalities and box
-bounds and a diagonal ``P``, so the minimum-``P``-norm solution of the equalities
-(:func:`equality_optimum`, one Cholesky solve of a 6×6 system) is the QP's optimum whenever it
-lies within the bounds — then no backend is called. It is what nearly every step of EP1 takes
-(``benchmarks/bench_rolling.py``: with it, one EP1 run takes a few times less than with OSQP every
-step; ``tests/ep1/test_rolling.py`` checks it against qpsolvers within 1e-9 rad/s).
-
-A failed or infeasible QP raises :class:`RollingQPError`, which carries the problem.
+:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances).
+The problem has only equalities, box bounds and a diagonal ``P``, so the minimum-``P``-norm
+solution of the equalities (:func:`equality_optimum`) is the QP's optimum whenever it lies within
+the bounds: then no backend is called. A failed or infeasible QP raises :class:`RollingQPError`.
 """
 
 from __future__ import annotations
@@ -25,8 +19,7 @@ from eos_svc.errors import ComputationError
 
 __all__ = ["BOUND_TOLERANCE", "RollingQPError", "available_solvers", "equality_optimum", "solve_rolling_qp"]
 
-#: tolerance on the bounds, rad/s or m/s: the closed form is taken when it meets the bounds to it
-#: (OSQP's own tolerance below: its solutions meet the bounds only to about as much)
+#: tolerance on the bounds, rad/s or m/s, of the closed form (OSQP's own tolerance below)
 BOUND_TOLERANCE = 1e-7
 
 #: settings per backend (the rest: the backend's defaults)
