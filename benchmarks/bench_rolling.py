@@ -90,8 +90,8 @@ def osqp_every_step(run: Callable[[], Any]) -> Callable[[], Any]:
     rolling: Any = kin_now.rolling
     solve = rolling.solve_rolling_qp
 
-    def backend_only(problem: Any, solver: str, closed_form: bool) -> Any:
-        return solve(problem, solver, False)
+    def backend_only(qp: Any, solver: str, closed_form: bool) -> Any:
+        return solve(qp, solver, False)
 
     def without_closed_form() -> Any:
         rolling.solve_rolling_qp = backend_only

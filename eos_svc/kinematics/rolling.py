@@ -1,9 +1,11 @@
 """Rolling a sphere fingertip on the object without sliding (EP1's motion), a differential-IK
 loop in the manner of pink. Each :meth:`RollingQP.step` computes the tip's placement, Jacobian
 (wrist, then the rolling finger) and ``J̇ q̇`` with Pinocchio, measures the contact with coal,
-reads the tactile sensor, builds the QP of :mod:`~.rolling_problem`, solves it with
-:func:`~.rolling_solvers.solve_rolling_qp` and integrates ``q ← q + q̇ dt`` (the other fingers
-keep still). A failed QP raises :class:`RollingQPError` carrying the problem.
+reads the tactile sensor, builds the QP of :mod:`~.rolling_problem` (plain arrays), solves it with
+:func:`~.rolling_solvers.solve_rolling_qp` (in closed form unless a bound is active) and integrates
+``q ← q + q̇ dt`` (the other fingers keep still). The step's QP as a :class:`qpsolvers.Problem`
+(:attr:`RollingQP.problem`, :meth:`RollingQP.build`) is made only when asked for or when a backend
+solves it. A failed QP raises :class:`RollingQPError` carrying the problem.
 """
 
 from __future__ import annotations
@@ -18,7 +20,7 @@ import qpsolvers
 
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
-from .rolling_problem import JointBox, rolling_problem
+from .rolling_problem import JointBox, StepQP, step_qp
 from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -124,7 +126,6 @@ class RollingQP:
         if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
         self.weights = w
-        self._cost = np.diag(w)
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
         # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
@@ -134,8 +135,7 @@ class RollingQP:
         self._state = state
         self._qdot = np.zeros(hand.nv)
         self._zero = np.zeros(hand.nv)
-        #: the QP of the last step (or of :meth:`build`)
-        self.problem: qpsolvers.Problem | None = None
+        self._qp: StepQP | None = None  # the QP of the last step (or of build)
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
     def retarget(
@@ -187,11 +187,17 @@ class RollingQP:
         drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
         return jacobian, drift
 
-    def _build(self) -> tuple[qpsolvers.Problem, Contact]:
+    @property
+    def problem(self) -> qpsolvers.Problem | None:
+        """The QP of the last step (or of :meth:`build`) as a :class:`qpsolvers.Problem` (a new one
+        on each read; None before the first step)."""
+        return None if self._qp is None else self._qp.problem()
+
+    def _build(self) -> tuple[StepQP, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
         jacobian, drift = self._kinematics()
         contact = self._probe.measure(self._centre)
-        problem = rolling_problem(
+        qp = step_qp(
             jacobian,
             drift if self.second_order else None,
             contact,
@@ -199,26 +205,26 @@ class RollingQP:
             self._omega_axis,
             self._q[self.active],
             self.box,
-            self._cost,
+            self.weights,
             self.dt,
             self.gap_gain,
         )
-        self.problem = problem
-        return problem, contact
+        self._qp = qp
+        return qp, contact
 
     def build(self) -> qpsolvers.Problem:
         """The QP of the next step at the current q, without solving it (pink's ``build_ik``)."""
-        return self._build()[0]
+        return self._build()[0].problem()
 
     def step(self) -> RollingStep:
         """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
-        problem, contact = self._build()
+        qp, contact = self._build()
         rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
-        x, closed = solve_rolling_qp(problem, self.solver, self.closed_form)
+        x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
         self._qdot[self.active] = x
         self._q[self.active] += x * self.dt
-        e0, e1, e2, e3, e4, e5 = (problem.A @ x - problem.b).tolist()
+        e0, e1, e2, e3, e4, e5 = (qp.A @ x - qp.b).tolist()
         return RollingStep(
             contact,
             reading,
