@@ -30,7 +30,7 @@ from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.board import Board
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
-from eos_svc.kinematics.hand import KinematicsError
+from eos_svc.kinematics.hand import HandState, KinematicsError
 from eos_svc.kinematics.rolling import RollingQPError
 from eos_svc.schema import keys
 from eos_svc.world.world import GraspWorld
@@ -66,6 +66,8 @@ class EP1Agent(GraspAgent):
         self.solver = solver
         self.side: str | None = None
         self.estimators: dict[str, CurvatureEstimator] = {}
+        #: the hand state :meth:`_place` computes in (made on the first placement, then re-used)
+        self._scratch: HandState | None = None
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -102,7 +104,9 @@ class EP1Agent(GraspAgent):
         direction = inward / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
         inside = near + 0.01 * direction
         aim = inside + np.array([0.0, 0.0, sign * PROBE_REACH])
-        world.set_q(place_hand_for_ep1(world.scene, finger, q=q, point=aim))
+        if self._scratch is None or self._scratch.hand is not hand:
+            self._scratch = hand.state()
+        world.set_q(place_hand_for_ep1(world.scene, finger, q=q, point=aim, scratch=self._scratch))
         return near, direction
 
     def _roll(self, finger: str, estimator: CurvatureEstimator, solver: str) -> EP1Result:

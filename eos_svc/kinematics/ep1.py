@@ -117,19 +117,29 @@ def place_hand_for_ep1(
     finger: str = "finger1",
     q: np.ndarray | None = None,
     point: np.ndarray | None = None,
+    *,
+    scratch: HandState | None = None,
 ) -> np.ndarray:
     """A configuration where ``finger``'s tip touches the object with zero gap.
 
     Translates the wrist (x, y, z) of ``q`` (default: neutral) so the fingertip sphere
     centre sits at ``s + r_f n``, with ``s`` the object's surface point closest to ``point``
     (default: closest to the fingertip centre) and ``n`` its outward normal (on an edge or a
-    corner, the direction from ``s`` to ``point``).
+    corner, the direction from ``s`` to ``point``). ``scratch``: a state of the scene's hand to
+    compute in (it is moved; a caller placing often keeps one), default a new one.
 
     Raises:
         WorkspaceError: the wrist would leave its workspace.
+        KinematicsError: ``scratch`` belongs to another hand.
     """
     hand = scene.hand
-    st = hand.state(q)
+    if scratch is None:
+        st = hand.state(q)
+    elif scratch.hand is not hand:
+        raise KinematicsError("scratch", "belongs to another hand model than the scene")
+    else:
+        st = scratch
+        st.update(hand.neutral() if q is None else q)
     c = st.tip_position(finger).copy()
     obj = scene.object
     target = c if point is None else np.asarray(point, dtype=float)
