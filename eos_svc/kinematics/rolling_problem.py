@@ -65,7 +65,9 @@ class StepQP:
 
     __slots__ = ("A", "b", "lb", "ub", "weights")
 
-    def __init__(self, weights: np.ndarray, A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray) -> None:
+    def __init__(
+        self, weights: np.ndarray, A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray
+    ) -> None:
         self.weights, self.A, self.b, self.lb, self.ub = weights, A, b, lb, ub
 
     def problem(self) -> qpsolvers.Problem:

@@ -11,7 +11,6 @@ import pytest
 from eos_svc.cli import main as eos_main
 from eos_svc.kinematics import TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
-from eos_svc.kinematics.hand import KinematicsError
 from eos_svc.kinematics.ep1 import (
     EP1Error,
     ep1_scene,
@@ -20,6 +19,7 @@ from eos_svc.kinematics.ep1 import (
     repeat_ep1,
     run_ep1,
 )
+from eos_svc.kinematics.hand import KinematicsError
 
 
 def _start(shape, size, finger="finger1"):
