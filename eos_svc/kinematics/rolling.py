@@ -157,7 +157,7 @@ class RollingQP:
         a = unit_vector("axis", axis)
         if project_axis:
             a = a - (a @ n) * n
-        norm = float(np.linalg.norm(a))
+        norm = math.sqrt(float(a @ a))  # np.linalg.norm's own arithmetic, without its checks
         if norm < 1e-6 or abs(a @ n) > 0.5 * norm:
             raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
         self.axis = a / norm

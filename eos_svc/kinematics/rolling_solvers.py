@@ -61,7 +61,7 @@ def equality_optimum(qp: StepQP, tolerance: float = BOUND_TOLERANCE) -> np.ndarr
         return None
     x: np.ndarray = A_scaled.T @ y
     # the smallest slack to either bound, ≥ −tolerance (False on NaN)
-    return x if np.minimum(x - qp.lb, qp.ub - x).min() >= -tolerance else None
+    return x if np.minimum.reduce(np.minimum(x - qp.lb, qp.ub - x)) >= -tolerance else None
 
 
 def solve_rolling_qp(qp: StepQP, solver: str = "osqp", closed_form: bool = True) -> tuple[np.ndarray, bool]:

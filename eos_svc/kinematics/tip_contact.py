@@ -56,7 +56,8 @@ class SphereTipProbe:
         dist = float(self._distance(self._tf_obj, self._tf_tip, self._request, res))
         p_obj = res.getNearestPoint1()
         d = centre - p_obj
-        norm = math.sqrt(float(np.sum(d * d)))
+        dx, dy, dz = d.tolist()
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)  # np.sum(d * d)'s arithmetic, without its wrapper
         # the tip centre outside the object: the normal through it (exact); else coal's
         normal = d / norm if norm > 1e-12 and dist > -0.5 * self.radius else np.array(res.normal)
         return Contact(self.finger, dist, centre - self.radius * normal, p_obj, normal)
