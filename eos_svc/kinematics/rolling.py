@@ -223,7 +223,7 @@ class RollingQP:
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
         self._qdot[self.active] = x
-        self._q[self.active] += x * self.dt
+        self._q += self._qdot * self.dt  # the other joints' q̇ is 0
         e0, e1, e2, e3, e4, e5 = (qp.A @ x - qp.b).tolist()
         return RollingStep(
             contact,
