@@ -36,7 +36,8 @@ from eos_svc.errors import ComputationError, ValidationError
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
+from eos_svc.service.client import EosClient
+from eos_svc.service.plan_attempt import PlanOutcome
 from eos_svc.service.session import direct_callback, free_port, loopback, make_config
 
 
@@ -58,10 +59,13 @@ def start_servers(
     queue: int = 16,
     lease_ms: int | None = None,
     cycle_delay: float | None = None,
+    join: Server | None = None,
+    first_index: int = 0,
 ) -> list[Server]:
-    """Start ``n`` service processes on loopback; the first listens, the others also connect to it."""
+    """Start ``n`` service processes on loopback, ``inst-<first_index>``, ...; each listens, and
+    connects to ``join`` (default: the first one started here)."""
     servers: list[Server] = []
-    for i in range(n):
+    for i in range(first_index, first_index + n):
         port = free_port()
         cmd = [
             sys.executable,
@@ -81,8 +85,9 @@ def start_servers(
             "--log-level",
             "warning",
         ]
-        if servers:
-            cmd += ["--connect", loopback(servers[0].port)]
+        hub = join or (servers[0] if servers else None)
+        if hub is not None:
+            cmd += ["--connect", loopback(hub.port)]
         if lease_ms is not None:
             cmd += ["--lease-ms", str(lease_ms)]
         if cycle_delay is not None:
@@ -159,32 +164,6 @@ class Report:
         )
         probe.detail = "; ".join(notes)
         return probe
-
-    def print(self) -> None:
-        """Human-readable counts."""
-        print(f"== reliability {self.mode}: {'OK' if self.ok else 'FAILED'} in {self.wall_s:.1f} s")
-        if self.event:
-            print(f"   event: {self.event}")
-        print(
-            f"   requests {self.requested}, answered {self.answered} (exactly once each: "
-            f"{self.answered == self.requested and not self.failed}), retried on another instance "
-            f"{self.retried}"
-        )
-        print(f"   statuses {dict(self.statuses)}")
-        print(
-            f"   cycles received by clients {self.cycles_received}, "
-            f"incomplete streams {len(self.incomplete)}; "
-            f"observer saw {self.observer_cycles} cycles, gaps {len(self.observer_gaps)}"
-        )
-        for name, st in self.server_stats.items():
-            print(f"   {name}: {st if st is not None else 'killed (no stats)'}")
-        for what, items in (
-            ("failed", self.failed),
-            ("incomplete", self.incomplete),
-            ("gaps", self.observer_gaps),
-        ):
-            if items:
-                print(f"   {what}: {items[:10]}{' ...' if len(items) > 10 else ''}")
 
 
 class Observer:
@@ -326,7 +305,7 @@ def run_abuse(
     inst-1 (every cycle slowed to 20 ms) runs the goal a stranger tries to cancel.
     """
     servers = start_servers(1, planner=planner)
-    servers += _start_more(servers[0], planner)
+    servers += start_servers(1, planner=planner, cycle_delay=0.02, join=servers[0], first_index=1)
     endpoints = [loopback(s.port) for s in servers]
     rows: list[abuse.Probe] = []
     owner = EosClient.open(make_config(connect=endpoints))
@@ -364,23 +343,6 @@ def run_abuse(
     if servers[0].stats is not None:
         rows[-1].detail += f"; {servers[0].instance}: {servers[0].stats}"
     return rows
-
-
-def _start_more(first: Server, planner: str) -> list[Server]:
-    """A second instance connected to ``first``, every cycle slowed to 20 ms (long goals to cancel)."""
-    port = free_port()
-    cmd = [
-        sys.executable, "-m", "eos_svc.cli", "serve", "--listen", loopback(port), "--connect",
-        loopback(first.port), "--instance", "inst-1", "--planner", planner, "--cycle-delay", "0.02",
-        "--log-level", "warning",
-    ]  # fmt: skip
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    line = proc.stdout.readline()
-    if "serving" not in line:
-        proc.kill()
-        raise ServiceUnavailableError(f"eos serve did not start: {line}")
-    return [Server(port, proc, "inst-1")]
 
 
 def print_table(rows: list[abuse.Probe]) -> None:

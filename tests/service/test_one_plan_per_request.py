@@ -19,7 +19,7 @@ def three(port, services, clients, grasp_planner):
     svcs += [services(connect=(port,), planner=grasp_planner, instance=i) for i in ("inst-a", "inst-c")]
     client = clients(port)
     client.wait_for_instances(3)
-    wait_until(lambda: all(len(s._peers) >= 3 for s in svcs), 5)  # they see each other
+    wait_until(lambda: all(len(s._peers._peers) >= 3 for s in svcs), 5)  # they see each other
     return svcs, client
 
 

@@ -10,7 +10,7 @@ from eos_svc.service.reliability import RSS_BOUND_MB, print_table, run, run_abus
 
 def test_quick_load_every_request_answered_once_nothing_lost():
     report = run("load", instances=2, clients=3, plans=6, planner="root", time_limit_s=30)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
     assert report.answered == 18 and report.cycles_received == report.observer_cycles > 0
     assert all(
@@ -21,7 +21,7 @@ def test_quick_load_every_request_answered_once_nothing_lost():
 
 def test_quick_fault_sigkill_one_instance_mid_load():
     report = run("fault", instances=2, clients=3, plans=6, planner="root", time_limit_s=30, cycle_delay=0.003)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
     assert report.answered == 18
     assert report.server_stats["inst-1"] is None  # killed
@@ -31,7 +31,7 @@ def test_quick_fault_sigkill_one_instance_mid_load():
 @pytest.mark.parametrize("mode", ["load", "fault", "freeze"])
 def test_full_reliability_runs_with_the_grasp_planner(mode):
     report = run(mode, instances=2, clients=4, plans=15, planner="grasp", time_limit_s=120)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
 
 
