@@ -78,11 +78,8 @@ def _vector3(value: object, name: str) -> tuple[float, float, float]:
 
 
 def _integer(value: object, name: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
+    if isinstance(value, bool) or not isinstance(value, int):  # 1e5 or 5.0 too: integers are integers
+        raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
     if not lo <= value <= hi:
         raise ValidationError(name, f"must be in [{lo}, {hi}], got {value}")
     return value

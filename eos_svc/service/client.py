@@ -19,7 +19,6 @@ called :meth:`EosClient.plan`.
 from __future__ import annotations
 
 import contextlib
-import itertools
 import secrets
 import time
 from collections.abc import Callable, Mapping
@@ -41,6 +40,15 @@ from eos_svc.service.plan_attempt import (
 from eos_svc.service.session import direct_callback
 from eos_svc.service.wire_json import loads_strict
 
+#: tries with a fresh goal id when the service refuses the one drawn as a duplicate
+_DUPLICATE_RETRIES = 3
+
+
+def new_goal_id() -> str:
+    """A fresh goal id: ``g-`` and 96 random bits from the OS's CSPRNG (24 hex digits), so no one
+    who has seen this client's other goal ids can guess it (ids are public, see ``P/goal/*``)."""
+    return f"g-{secrets.token_hex(12)}"
+
 
 class EosClient:
     """Client of the EOS planning service on an open Zenoh session.
@@ -50,7 +58,6 @@ class EosClient:
             the client opened it, see :meth:`open`).
         namespace: the service's namespace, if any.
         timeout_margin_s: added to the request's deadline to time out a plan query (s).
-        status_grace_s: how long to wait for the final status message after the reply (s).
     """
 
     def __init__(
@@ -59,15 +66,10 @@ class EosClient:
         *,
         namespace: str | None = None,
         timeout_margin_s: float = 10.0,
-        status_grace_s: float = 2.0,
     ) -> None:
         self.session = session
         self.prefix = proto.prefix(namespace)
         self.timeout_margin_s = timeout_margin_s
-        self.status_grace_s = status_grace_s
-        # default goal ids: a random prefix per client and a counter
-        self._goal_prefix = f"g-{secrets.token_hex(6)}-"
-        self._goal_numbers = itertools.count(1)
         self._owns_session = False
         self._tokens: dict[str, str] = {}  # goal id -> cancel token, while the plan is in flight
         #: whether watch() was called: this session may hold goal subscribers of its own, so its
@@ -125,7 +127,8 @@ class EosClient:
 
         Args:
             request: the plan request (default: ``PlanRequest()``); a mapping is sent as is.
-            goal_id: the goal id (default: ``g-<random hex of this client>-<n>``, n = 1, 2, ...).
+            goal_id: the goal id (default: a fresh random one, :func:`new_goal_id`, unguessable; a
+                ``duplicate_goal`` refusal of it is retried with another, up to 3 times).
             on_cycle: called with every cycle message, in order, in this thread.
             instance: ask this instance only (no spreading, no retry elsewhere).
             watch: subscribe to the goal's cycles and status (needed for ``on_cycle``). The
@@ -149,9 +152,8 @@ class EosClient:
             ServiceUnavailableError: no instance answered.
         """
         req = PlanRequest() if request is None else request
-        if goal_id is None:
-            goal_id = f"{self._goal_prefix}{next(self._goal_numbers)}"
-        else:
+        chosen = goal_id is None
+        if goal_id is not None:
             proto.check_id(goal_id, "goal_id")
         if instance is not None:
             proto.check_id(instance, "instance")  # one instance, never a wildcard
@@ -164,12 +166,20 @@ class EosClient:
         if timeout is None:
             deadline = req.deadline_s if isinstance(req, PlanRequest) else req.get("deadline_s", 10.0)
             timeout = (deadline if isinstance(deadline, (int, float)) else 60.0) + self.timeout_margin_s
-        payload = proto.encode_request(goal_id, req, cancel_token, None if self._watching else watch)
-        self._tokens[goal_id] = cancel_token
-        try:
-            return self._plan(goal_id, payload, on_cycle, instance, watch, timeout, max_attempts)
-        finally:
-            self._tokens.pop(goal_id, None)
+        hint = None if self._watching else watch
+        for _ in range(_DUPLICATE_RETRIES if chosen else 1):
+            goal = new_goal_id() if chosen else str(goal_id)
+            payload = proto.encode_request(goal, req, cancel_token, hint)
+            self._tokens[goal] = cancel_token
+            try:
+                return self._plan(goal, payload, on_cycle, instance, watch, timeout, max_attempts)
+            except proto.RequestError as err:
+                if not (chosen and err.code == proto.E_DUPLICATE):
+                    raise
+                refusal = err  # someone holds the id this client drew: draw another
+            finally:
+                self._tokens.pop(goal, None)
+        raise refusal
 
     def _plan(
         self,
@@ -199,7 +209,7 @@ class EosClient:
                 raise ServiceUnavailableError(last_error)
             try:
                 one = Attempt(self.session, self.prefix, iid, goal_id, payload, on_cycle, watch, timeout)
-                outcome = one.run(self._instances, self.status_grace_s)
+                outcome = one.run(self._instances)
             except InstanceLostError as lost:
                 last_error = f"instance {iid}: {lost}"
                 (timed_out if isinstance(lost, NoReplyInTimeError) else exclude).add(iid)

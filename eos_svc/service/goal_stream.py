@@ -18,7 +18,8 @@ from eos_svc.service.goal_watchers import GoalWatchers
 from eos_svc.service.wire_json import encode_result
 
 _JSON = zenoh.Encoding.APPLICATION_JSON
-_BLOCK = zenoh.CongestionControl.BLOCK
+#: a message a watcher's full queue cannot take is dropped for that watcher alone, never waited for
+_DROP = zenoh.CongestionControl.DROP
 
 
 class GoalStream:
@@ -76,11 +77,11 @@ class GoalStream:
     def done(self, message: bytes, always: bool = False) -> None:
         """Publish the ``done`` status (``message``: its JSON) while watched, or ``always``."""
         if always or self.watched:
-            self._session.put(self._status_key, message, encoding=_JSON, congestion_control=_BLOCK)
+            self._session.put(self._status_key, message, encoding=_JSON, congestion_control=_DROP)
 
     def done_message(self, **fields: Any) -> bytes:
         """The JSON of the ``done`` status with ``fields`` (``status``, ``cycles``, ``result``)."""
         return encode_result({**self.head, "state": proto.STATE_DONE, **fields})
 
     def _put(self, key: str, message: dict[str, Any]) -> None:
-        self._session.put(key, encode_result(message), encoding=_JSON, congestion_control=_BLOCK)
+        self._session.put(key, encode_result(message), encoding=_JSON, congestion_control=_DROP)

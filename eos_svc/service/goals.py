@@ -35,12 +35,26 @@ class Goal:
 
 @dataclass
 class ServiceStats:
-    """Counters of one instance (all since start)."""
+    """Counters of one instance (all since start).
 
+    Every query it receives (plan or cancel) is counted in ``received`` and ends in exactly one
+    of ``replied_ok``, ``replied_err`` or ``left_to_peers``: once no query is in flight,
+    ``received == replied_ok + replied_err + left_to_peers`` (:meth:`consistent`).
+    """
+
+    #: queries received: plan and cancel (a watcher's sync is a cancel query)
     received: int = 0
+    #: of those, cancel queries
+    cancels: int = 0
+    #: answered with a reply: a plan's result, a cancel's ``found`` answer
     replied_ok: int = 0
+    #: answered with an error reply
     replied_err: int = 0
+    #: plan queries on a key naming several instances, answered by another one (dropped here)
+    left_to_peers: int = 0
+    #: of the error replies, ``busy``
     busy: int = 0
+    #: plans that ended ``cancelled``
     cancelled: int = 0
     #: cycles numbered for publication (sent or, with nobody watching, skipped)
     cycles_published: int = 0
@@ -55,6 +69,11 @@ class ServiceStats:
         with self._lock:
             for name, n in counts.items():
                 setattr(self, name, getattr(self, name) + n)
+
+    def consistent(self) -> bool:
+        """Whether every query received has ended in exactly one way (when none is in flight)."""
+        with self._lock:
+            return self.received == self.replied_ok + self.replied_err + self.left_to_peers
 
     def to_dict(self) -> dict[str, int]:
         """JSON form."""

@@ -41,7 +41,8 @@ class PlanOutcome:
         instance: the instance that answered.
         result: the plan result (``status``, ``reason``, ``cycles``, ``seed``, ...).
         cycles: the cycle messages of the answering attempt, in order (empty when not watched).
-        final_status: the goal's final ``done`` status message (``None`` when not watched or lost).
+        final_status: the goal's ``done`` status message: the reply, which is the message the
+            goal's status key carries (``None`` when not watched).
         attempts: instances asked (1 when the first answered).
         gaps: sequence numbers found missing or out of order in the cycle stream (should be empty).
         round_trip_s: seconds from the first request to the answer.
@@ -95,11 +96,10 @@ class NoReplyInTimeError(InstanceLostError):
 class _Stream:
     """The cycle messages of one attempt, in arrival order, and the sequence numbers found missing."""
 
-    __slots__ = ("cycles", "events", "gaps", "iid", "lock")
+    __slots__ = ("cycles", "gaps", "iid", "lock")
 
-    def __init__(self, iid: str, events: queue.SimpleQueue[Any]) -> None:
+    def __init__(self, iid: str) -> None:
         self.iid = iid
-        self.events = events
         self.cycles: list[dict[str, Any]] = []
         self.gaps: list[int] = []
         self.lock = threading.Lock()
@@ -122,11 +122,8 @@ class _Stream:
 
     def on_sample(self, sample: zenoh.Sample) -> None:
         """Zenoh callback when there is no ``on_cycle``: cycles are parsed and kept right here, in
-        Zenoh's thread (pure Python, never blocks), so the waiting thread is woken only for the
-        final status, not once per cycle."""
-        msg = self.accept(sample.payload.to_bytes())
-        if msg is not None and "seq" not in msg and msg.get("state") == proto.STATE_DONE:
-            self.events.put(("final", msg))
+        Zenoh's thread (pure Python, never blocks), so the waiting thread is woken only by the reply."""
+        self.accept(sample.payload.to_bytes())
 
 
 @dataclass
@@ -153,9 +150,8 @@ class Attempt:
     watch: bool
     timeout: float
 
-    def run(self, instances: LiveInstances, status_grace_s: float) -> PlanOutcome:
-        """Send the query and wait for its outcome (and the final status up to ``status_grace_s``
-        seconds after the reply).
+    def run(self, instances: LiveInstances) -> PlanOutcome:
+        """Send the query and wait for its outcome.
 
         Raises:
             RequestError: the instance refused the request.
@@ -164,7 +160,7 @@ class Attempt:
         events: queue.SimpleQueue[Any] = queue.SimpleQueue()
         handler = direct_callback(events.put, functools.partial(events.put, _END))
         cancellation = zenoh.CancellationToken()
-        stream = _Stream(self.iid, events) if self.watch else None
+        stream = _Stream(self.iid) if self.watch else None
         sub = None
         wid = -1
         try:
@@ -185,7 +181,7 @@ class Attempt:
             # tracked while the query travels (off its path): a token withdrawn before this
             # goes unseen here, but the query then ends without a reply — lost all the same
             wid = instances.track(self.iid, events)
-            return self._collect(events, stream, status_grace_s)
+            return self._collect(events, stream)
         except InstanceLostError:
             cancellation.cancel()
             raise
@@ -195,68 +191,33 @@ class Attempt:
             if wid >= 0:
                 instances.untrack(wid)
 
-    def _collect(
-        self, events: queue.SimpleQueue[Any], stream: _Stream | None, status_grace_s: float
-    ) -> PlanOutcome:
-        iid, on_cycle, watch, timeout = self.iid, self.on_cycle, self.watch, self.timeout
-        final: dict[str, Any] | None = None
-        reply: dict[str, Any] | None = None
-        error: proto.RequestError | None = None
-        ended = False
-        end_at = time.monotonic() + timeout + 1.0
-        grace_at: float | None = None
+    def _collect(self, events: queue.SimpleQueue[Any], stream: _Stream | None) -> PlanOutcome:
+        """Wait for the reply (the goal's ``done`` status) or an error reply, running ``on_cycle``
+        for every cycle that comes before it (the cycles travel ahead of the reply on the link)."""
+        end_at = time.monotonic() + self.timeout + 1.0
         while True:
-            if (reply is not None or error is not None) and (
-                not watch or final is not None or error is not None
-            ):
-                break
-            now = time.monotonic()
-            limit = grace_at if grace_at is not None else end_at
-            if now >= limit:
-                break
             try:
-                event = events.get(timeout=limit - now)
+                event = events.get(timeout=max(0.0, end_at - time.monotonic()))
             except queue.Empty:
-                break
-            if type(event) is tuple:
-                kind, item = event
-            elif event is _END:
-                kind, item = "end", None
-            else:  # a zenoh.Reply
-                kind, item = "reply", event
+                raise InstanceLostError("no reply before the timeout") from None
+            if event is _END:
+                raise InstanceLostError("query ended without a reply (instance gone or timed out)")
+            kind, item = event if type(event) is tuple else ("reply", event)
+            if kind == "lost":
+                raise InstanceLostError("liveliness token withdrawn")
             if kind == "sample" and stream is not None:  # with on_cycle: parsed in the thread of plan()
                 msg = stream.accept(item.payload.to_bytes())
-                if msg is None:
-                    continue
-                if "seq" in msg:
-                    if on_cycle is not None:
-                        on_cycle(msg)
-                elif msg.get("state") == proto.STATE_DONE:
-                    final = msg
-            elif kind == "final":
-                final = item
+                if msg is not None and "seq" in msg and self.on_cycle is not None:
+                    self.on_cycle(msg)
             elif kind == "reply":
                 ok = item.ok  # read once: every read makes a new Sample object in Zenoh's binding
                 if ok is not None:
-                    reply = loads_strict(ok.payload.to_bytes())
-                elif _zenoh_timeout(item.err):  # Zenoh's, not the instance's
-                    if reply is None and error is None:  # it never answered: try another
-                        raise NoReplyInTimeError(f"no reply within the query's timeout ({timeout:g} s)")
-                    continue  # the answer came; the query timed out waiting for its end
-                else:
-                    error = proto.error_from_payload(item.err.payload.to_bytes())
-                grace_at = time.monotonic() + status_grace_s
-            elif kind == "end":
-                ended = True
-                if reply is None and error is None:
-                    raise InstanceLostError("query ended without a reply (instance gone or timed out)")
-            elif kind == "lost" and reply is None and error is None:
-                raise InstanceLostError("liveliness token withdrawn")
-        if error is not None:
-            raise error
-        if reply is None:
-            raise InstanceLostError("no reply before the timeout" if not ended else "no reply")
-        result = reply.get("result", {})
+                    return self._outcome(loads_strict(ok.payload.to_bytes()), stream)
+                if _zenoh_timeout(item.err):  # Zenoh's, not the instance's: it never answered
+                    raise NoReplyInTimeError(f"no reply within the query's timeout ({self.timeout:g} s)")
+                raise proto.error_from_payload(item.err.payload.to_bytes())
+
+    def _outcome(self, reply: dict[str, Any], stream: _Stream | None) -> PlanOutcome:
         cycles: list[dict[str, Any]] = []
         gaps: list[int] = []
         if stream is not None:
@@ -264,9 +225,9 @@ class Attempt:
                 cycles, gaps = list(stream.cycles), list(stream.gaps)
         return PlanOutcome(
             goal_id=self.goal_id,
-            instance=str(reply.get("instance", iid)),
-            result=result,
+            instance=str(reply.get("instance", self.iid)),
+            result=reply.get("result", {}),
             cycles=cycles,
-            final_status=final,
+            final_status=reply if self.watch else None,
             gaps=gaps,
         )

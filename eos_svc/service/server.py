@@ -28,6 +28,7 @@ answers is only dropped).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import inspect
 import logging
@@ -42,7 +43,7 @@ from typing import Any
 import zenoh
 
 from eos_svc.errors import ContractError, ValidationError
-from eos_svc.schema.request import PlanRequest
+from eos_svc.schema.request import MAX_DEADLINE_S, PlanRequest
 from eos_svc.schema.result import PlanResult
 from eos_svc.service import protocol as proto
 from eos_svc.service.goal_stream import GoalStream
@@ -50,7 +51,7 @@ from eos_svc.service.goal_watchers import GoalWatchers
 from eos_svc.service.goals import Goal, GoalTable, ServiceStats
 from eos_svc.service.peers import PeerInstances
 from eos_svc.service.session import direct_callback
-from eos_svc.service.wire_json import dumps, encode_result
+from eos_svc.service.wire_json import dumps
 from eos_svc.shape import kernels
 
 log = logging.getLogger(__name__)
@@ -61,6 +62,9 @@ _JSON = zenoh.Encoding.APPLICATION_JSON
 _Item = tuple[str, zenoh.Query | None, proto.RequestError | None]
 #: the item that asks the dispatcher to refresh the goal watchers' flag (GoalWatchers.refresh)
 _REFRESH: _Item = ("refresh", None, None)
+
+#: the deadline of a goal whose request gives none (s): every goal ends
+DEFAULT_MAX_DEADLINE_S = 600.0
 
 #: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
 Planner = Callable[..., Any]
@@ -103,6 +107,7 @@ class PlanService:
         workers: threads running plans concurrently (≥ 1).
         queue_size: accepted plans waiting for a worker before ``busy`` (≥ 0).
         max_request_bytes: largest request payload accepted (bytes).
+        max_deadline_s: the deadline of a goal whose request gives none or a longer one (s).
         admission: called with every decoded request before it is queued; a
             ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
             Default: :func:`~eos_svc.world.admission.check_plannable` when the planner is
@@ -119,12 +124,19 @@ class PlanService:
         workers: int = 2,
         queue_size: int = 16,
         max_request_bytes: int = proto.MAX_REQUEST_BYTES,
+        max_deadline_s: float = DEFAULT_MAX_DEADLINE_S,
         admission: Admission | None = None,
     ) -> None:
         if workers < 1:
             raise proto.RequestError(proto.E_INVALID, "workers", f"must be ≥ 1, got {workers}")
         if queue_size < 0:
             raise proto.RequestError(proto.E_INVALID, "queue_size", f"must be ≥ 0, got {queue_size}")
+        if not 0 < max_deadline_s <= MAX_DEADLINE_S:
+            raise proto.RequestError(
+                proto.E_INVALID,
+                "max_deadline_s",
+                f"must be in (0, {MAX_DEADLINE_S:g}] s, got {max_deadline_s}",
+            )
         self.session = session
         self.prefix = proto.prefix(namespace)
         self.instance = (
@@ -136,6 +148,7 @@ class PlanService:
         self.workers = workers
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
+        self.max_deadline_s = max_deadline_s
         self.stats = ServiceStats()
         self._inbox: queue.SimpleQueue[_Item | None] = queue.SimpleQueue()
         # bounded by admission: at most workers + queue_size goals active (running or waiting)
@@ -262,6 +275,7 @@ class PlanService:
             self._inbox.put(("error", query, refusal))
 
     def _on_cancel(self, query: zenoh.Query) -> None:
+        self.stats.add(received=1, cancels=1)
         self._inbox.put(("cancel", query, None))  # never blocks, never calls Zenoh
 
     # ------------------------------------------------------------------ admission
@@ -320,6 +334,7 @@ class PlanService:
                 continue
             try:
                 if kind == "wildcard" and refusal is None:  # another instance answers it
+                    self.stats.add(left_to_peers=1)
                     query.drop()
                 elif refusal is not None:
                     self._reply_err(query, refusal)
@@ -375,6 +390,7 @@ class PlanService:
                 return
             goal.cancel.cancel("cancelled by client")
         answer = {"schema": proto.SCHEMA_VERSION, "goal_id": goal_id, "instance": self.instance}
+        self.stats.add(replied_ok=1)
         try:
             query.reply(query.key_expr, dumps({**answer, "found": goal is not None}))
         finally:
@@ -413,22 +429,24 @@ class PlanService:
                     raise self._unavailable(goal_id) from None
                 raise
             stream = GoalStream(self.session, self.prefix, self.instance, goal_id, self._watched, watched)
+            request = self._bounded(goal.request)
+            stream.running(request.to_dict())  # on every path a worker takes: running, then done
             if goal.cancel.cancelled:  # cancelled while queued: no cycle ran
                 result: dict[str, Any] = {
                     "status": "cancelled",
                     "reason": goal.cancel.reason,
                     "cycles": 0,
-                    "seed": goal.request.seed,
+                    "seed": request.seed,
                 }
             else:
-                stream.running(goal.request.to_dict())
-                result = self._plan(goal, stream)
+                result = self._plan(goal, request, stream)
                 if self._stopping:
                     raise self._unavailable(goal_id)
             result.setdefault("cycles_published", stream.seq)
-            stream.done(
-                stream.done_message(status=result.get("status"), cycles=result.get("cycles"), result=result)
+            done = stream.done_message(
+                status=result.get("status"), cycles=result.get("cycles"), result=result
             )
+            stream.done(done)
             answered = True
             # counted first: the client may read the stats as soon as it has the reply
             self.stats.add(
@@ -437,8 +455,7 @@ class PlanService:
                 cycles_published=stream.seq,
                 cycles_sent=stream.sent,
             )
-            reply = encode_result({**stream.head, "result": result})
-            query.reply(self._plan_key, reply, encoding=_JSON)
+            query.reply(self._plan_key, done, encoding=_JSON)  # the reply is the done status
             query.drop()
         except proto.RequestError as err:
             if not answered:
@@ -472,12 +489,16 @@ class PlanService:
         except Exception:
             log.debug("status publication failed", exc_info=True)
 
-    def _plan(self, goal: Goal, stream: GoalStream) -> dict[str, Any]:
+    def _bounded(self, request: PlanRequest) -> PlanRequest:
+        """``request`` with a deadline of at most :attr:`max_deadline_s` (also when it gives none)."""
+        if request.deadline_s is not None and request.deadline_s <= self.max_deadline_s:
+            return request
+        return dataclasses.replace(request, deadline_s=self.max_deadline_s)
+
+    def _plan(self, goal: Goal, request: PlanRequest, stream: GoalStream) -> dict[str, Any]:
         """Run the planner, publishing every cycle while watched; the result's JSON form."""
         assert self._planner is not None
-        outcome = self._planner(
-            goal.request, on_cycle=stream.cycle, cancel=goal.cancel, **self._planner_kwargs
-        )
+        outcome = self._planner(request, on_cycle=stream.cycle, cancel=goal.cancel, **self._planner_kwargs)
         if type(outcome) is PlanResult:  # its members as held: encoded once, by msgspec, as is
             result = outcome.to_dict(jsonable=False)
         else:
