@@ -77,7 +77,7 @@ from eos_svc.agents.planner import plan
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
 from eos_svc.service import protocol as proto
-from eos_svc.service.reliability import Server, start_servers, stop_servers
+from eos_svc.service.serve_processes import Server, start_servers, stop_servers
 from eos_svc.service.session import direct_callback
 from eos_svc.service.wire_json import encode_result
 from eos_svc.shape import kernels
@@ -236,8 +236,12 @@ def echo_round_trip(
 
 def plan_reply_bytes(instance: str, result: dict[str, Any]) -> int:
     """Bytes of the service's reply to a plan whose result is ``result`` (what the echo sends)."""
-    head = b'{"schema":1,"goal_id":"g-000000000000-1","instance":"%s","result":' % instance.encode()
-    return len(head + encode_result(result) + b"}")
+    done = {"schema": 1, "goal_id": "g-" + "0" * 24, "instance": instance, "state": "done"}
+    return len(
+        encode_result(
+            {**done, "status": result.get("status"), "cycles": result.get("cycles"), "result": result}
+        )
+    )
 
 
 def request_bytes(request: PlanRequest) -> bytes:

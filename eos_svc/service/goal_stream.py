@@ -4,6 +4,10 @@ Every message starts with ``{"schema", "goal_id", "instance"}``. A message is bu
 while someone watches (:class:`~eos_svc.service.goal_watchers.GoalWatchers`): from the start when
 the goal is watched then, otherwise from the moment a watcher comes; cycles are numbered all the
 same, so a watcher that comes in the middle gets the rest, numbered from where the plan is.
+
+Every message is put with ``CongestionControl.DROP``: a subscriber whose queue is full (one that
+does not drain) loses it alone, at once, and no plan waits for it; what it lost shows as gaps in
+``seq``. The requester gets the ``done`` status as its reply, which Zenoh sends reliably.
 """
 
 from __future__ import annotations

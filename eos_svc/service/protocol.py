@@ -17,12 +17,12 @@ key expression                     Zenoh entity               message
 ``P/cancel/<goal_id>``             queryable ``P/cancel/*``   request: :func:`encode_cancel` (the goal's
                                                               ``cancel_token``); reply: ``{"goal_id",
                                                               "instance", "found"}`` or ``forbidden``
-``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
+``P/goal/<goal_id>/cycle``         publication (DROP)         ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
-``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
+``P/goal/<goal_id>/status``        publication (DROP)         ``{"schema", "goal_id", "instance", "state",
                                                               ...}`` — ``running`` with the ``request``,
                                                               then ``done`` with ``status``, ``cycles``
-                                                              and ``result``
+                                                              and ``result`` (also the plan's reply)
 =================================  =========================  ==========================================
 
 This module is pure (no Zenoh import) so the decoder can be fuzzed alone.

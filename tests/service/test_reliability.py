@@ -6,6 +6,7 @@ import pytest
 
 from eos_svc.service import protocol as proto
 from eos_svc.service.reliability import RSS_BOUND_MB, print_table, run, run_abuse
+from eos_svc.service.slow_watcher import run_slow_watcher
 
 
 def test_quick_load_every_request_answered_once_nothing_lost():
@@ -42,7 +43,10 @@ def _check_abuse(rows, big: int, mutated: int) -> None:
     assert by_name[str(big)].codes == {proto.E_TOO_LARGE: big}
     mutants = by_name[str(mutated)]
     assert mutants.answered_once == mutated and mutants.codes[proto.E_INTERNAL] == 0
-    assert f"bound +{RSS_BOUND_MB:.0f}" in rows[-1].detail
+    memory = next(r for r in rows if r.name.startswith("memory"))
+    assert f"bound +{RSS_BOUND_MB:.0f}" in memory.detail
+    assert by_name["counters of every instance"].ok
+    assert by_name["squatter holds the guessed next 3 goal ids"].codes[proto.E_DUPLICATE] == 0
 
 
 def test_quick_abuse_memory_stays_bounded_and_every_probe_gets_its_answer():
@@ -53,3 +57,10 @@ def test_quick_abuse_memory_stays_bounded_and_every_probe_gets_its_answer():
 @pytest.mark.slow
 def test_full_abuse_100_big_payloads_and_10000_mutated_requests():
     _check_abuse(run_abuse(big=100, mutated=10_000), 100, 10_000)
+
+
+@pytest.mark.slow
+def test_a_slow_watcher_for_20_s_leaves_the_others_p99_within_1_5x():
+    row = run_slow_watcher(window_s=20.0, clients=4, planner="grasp")
+    print_table([row])
+    assert row.ok, row.detail
