@@ -613,7 +613,7 @@ def probe_server(port: int, out: str) -> None:
             super()._run(job)
             _stamp("worker_end")
 
-    from eos_svc.service.server import default_admission
+    from eos_svc.service.planners import default_admission
 
     check = default_admission()
 

@@ -144,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.server import PlanService, default_admission, default_planner
+    from eos_svc.service.planners import default_admission, default_planner
+    from eos_svc.service.server import PlanService
 
     try:
         if args.namespace is not None:

@@ -30,14 +30,12 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import inspect
 import logging
 import os
 import queue
 import secrets
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import zenoh
@@ -50,6 +48,14 @@ from eos_svc.service.goal_stream import GoalStream
 from eos_svc.service.goal_watchers import GoalWatchers
 from eos_svc.service.goals import Goal, GoalTable, ServiceStats
 from eos_svc.service.peers import PeerInstances
+from eos_svc.service.planners import (
+    Admission,
+    Planner,
+    default_admission,
+    default_planner,
+    is_grasp_planner,
+    planner_options,
+)
 from eos_svc.service.session import direct_callback
 from eos_svc.service.wire_json import dumps
 from eos_svc.shape import kernels
@@ -65,33 +71,6 @@ _REFRESH: _Item = ("refresh", None, None)
 
 #: the deadline of a goal whose request gives none (s): every goal ends
 DEFAULT_MAX_DEADLINE_S = 600.0
-
-#: a planner as the service calls it (the signature of ``eos_svc.agents.planner.plan``)
-Planner = Callable[..., Any]
-#: admission check of a decoded request: raises ValidationError(field, reason) to refuse it
-Admission = Callable[[PlanRequest], None]
-
-
-def default_planner() -> Planner:
-    """The grasp planner, imported only when first needed."""
-    from eos_svc.agents.planner import plan  # lazy: Pinocchio and coal load here
-
-    return plan
-
-
-def default_admission() -> Admission:
-    """The grasp planner's admission check (:func:`eos_svc.world.admission.check_plannable` on
-    the default hand, resolved once: :func:`~eos_svc.world.admission.default_check`)."""
-    from eos_svc.world.admission import default_check  # lazy: Pinocchio and coal load here
-
-    return default_check()
-
-
-def _is_grasp_planner(planner: Planner | None) -> bool:
-    return planner is None or (
-        getattr(planner, "__module__", None) == "eos_svc.agents.planner"
-        and getattr(planner, "__name__", "") == "plan"
-    )
 
 
 class PlanService:
@@ -144,7 +123,7 @@ class PlanService:
         )
         self._planner = planner
         self._admission: Admission | None = admission
-        self._default_admission = admission is None and _is_grasp_planner(planner)
+        self._default_admission = admission is None and is_grasp_planner(planner)
         self.workers = workers
         self.queue_size = queue_size
         self.max_request_bytes = max_request_bytes
@@ -181,19 +160,11 @@ class PlanService:
         if self._default_admission:
             self._admission = default_admission()
             self._admission(PlanRequest())  # loads the hand, measures its span: now, not on a request
-        if _is_grasp_planner(self._planner):
+        if is_grasp_planner(self._planner):
             # the shape fit's compiled kernels, loaded in the background while the service
             # already answers (its fits run their numpy reference until then: the same results)
             kernels.load_in_background()
-        try:
-            accepted = set(inspect.signature(self._planner).parameters)
-        except (TypeError, ValueError):
-            accepted = set()
-        # the grasp planner can skip keeping its trace (the service streams every cycle instead)
-        # and its own admission check when the service has just run the same one
-        self._planner_kwargs = {"keep_trace": False} if "keep_trace" in accepted else {}
-        if "check" in accepted and self._admission is not None and self._admission is default_admission():
-            self._planner_kwargs["check"] = False
+        self._planner_kwargs = planner_options(self._planner, self._admission)
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
