@@ -31,9 +31,9 @@ _BOM = b"\xef\xbb\xbf"
 class DuplicateKeyError(ValidationError):
     """An object of the message has the same key twice (RFC 8259: names SHOULD be unique)."""
 
-    def __init__(self, key: str) -> None:
-        super().__init__(key, "duplicate key in an object")
-        self.key = key  #: the repeated key
+    def __init__(self, field: str, reason: str = "duplicate key in an object") -> None:
+        super().__init__(field, reason)
+        self.key = field  #: the repeated key
 
 
 class HugeIntegerError(ValidationError):
