@@ -115,7 +115,9 @@ def run(args: argparse.Namespace) -> int:
         fail("ACTION: choose one of list, plan, cancel, watch")
     conf = session_config(args, serving=False)
     from eos_svc.service import protocol as proto
-    from eos_svc.service.client import EosClient, ServiceUnavailableError
+    from eos_svc.service.client import EosClient
+    from eos_svc.service.instances import ServiceUnavailableError
+    from eos_svc.service.wire_json import loads_strict
 
     if getattr(args, "goal_id", None) is not None:
         try:
@@ -130,7 +132,7 @@ def run(args: argparse.Namespace) -> int:
         if args.request is not None:
             try:
                 with open(args.request, encoding="utf-8") as fh:
-                    request = proto.loads_strict(fh.read())
+                    request = loads_strict(fh.read())
             except OSError as exc:
                 fail(f"--request: cannot read {args.request!r}: {exc.strerror}")
             except ValueError as exc:

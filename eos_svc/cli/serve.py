@@ -113,6 +113,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="largest request accepted (default 65536)",
     )
     s.add_argument(
+        "--max-deadline",
+        type=positive_float,
+        default=600.0,
+        metavar="S",
+        help="deadline of a plan whose request gives none or a longer one (s; default 600, at most 3600)",
+    )
+    s.add_argument(
         "--planner",
         choices=("grasp", "root"),
         default="grasp",
@@ -137,7 +144,8 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.server import PlanService, default_admission, default_planner
+    from eos_svc.service.planners import default_admission, default_planner
+    from eos_svc.service.server import PlanService
 
     try:
         if args.namespace is not None:
@@ -146,6 +154,8 @@ def run(args: argparse.Namespace) -> int:
             proto.check_id(args.instance, "instance")
     except ValidationError as exc:
         fail(f"--{exc.field}: {exc.reason}")
+    if args.max_deadline > 3600:
+        fail(f"--max-deadline: must be at most 3600 s, got {args.max_deadline:g}")
     planner = root_plan if args.planner == "root" else default_planner()
     if args.cycle_delay is not None:
         planner = slowed(planner, args.cycle_delay)
@@ -162,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             queue_size=args.queue,
             max_request_bytes=args.max_request_bytes,
+            max_deadline_s=args.max_deadline,
             admission=default_admission() if args.planner == "grasp" else None,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config

@@ -78,11 +78,8 @@ def _vector3(value: object, name: str) -> tuple[float, float, float]:
 
 
 def _integer(value: object, name: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
+    if isinstance(value, bool) or not isinstance(value, int):  # 1e5 or 5.0 too: integers are integers
+        raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
     if not lo <= value <= hi:
         raise ValidationError(name, f"must be in [{lo}, {hi}], got {value}")
     return value
@@ -142,23 +139,6 @@ class ObjectSpec:
                 raise ValidationError(f"object.position[{i}]", f"must be within ±{MAX_POSITION} m, got {v}")
         object.__setattr__(self, "position", position)
         object.__setattr__(self, "rpy", _vector3(self.rpy, "object.rpy"))
-
-    @classmethod
-    def from_checked(
-        cls,
-        shape: str,
-        size: dict[str, Any],
-        position: tuple[float, float, float],
-        rpy: tuple[float, float, float],
-    ) -> ObjectSpec:
-        """Build from values already checked exactly as ``__post_init__`` checks them, without
-        checking them again: ``size`` holds the shape's size fields in :data:`SHAPE_SIZE_FIELDS`
-        order (floats; tuples of 3 floats for :data:`VECTOR_SIZE_FIELDS`), all floats finite and
-        within the bounds. For a decoder that enforced those constraints itself (the service's
-        typed wire decoder, :mod:`eos_svc.service.request_wire`); anyone else: the constructor."""
-        spec = object.__new__(cls)
-        spec.__dict__.update(shape=shape, size=size, position=position, rpy=rpy)  # frozen: no setattr
-        return spec
 
     @property
     def diameter(self) -> float:
@@ -249,32 +229,6 @@ class PlanRequest:
         if not 0.0 <= mu <= MAX_FRICTION:
             raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
         object.__setattr__(self, "friction", mu)
-
-    @classmethod
-    def from_checked(
-        cls,
-        obj: ObjectSpec,
-        weights: Weights,
-        seed: int,
-        tactile_noise: float,
-        max_cycles: int,
-        deadline_s: float | None,
-        friction: float,
-    ) -> PlanRequest:
-        """Build from values already checked exactly as ``__post_init__`` checks them (ints for
-        ``seed`` and ``max_cycles``, floats otherwise, all within their bounds), without checking
-        them again; see :meth:`ObjectSpec.from_checked`."""
-        request = object.__new__(cls)
-        request.__dict__.update(
-            obj=obj,
-            weights=weights,
-            seed=seed,
-            tactile_noise=tactile_noise,
-            max_cycles=max_cycles,
-            deadline_s=deadline_s,
-            friction=friction,
-        )
-        return request
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
