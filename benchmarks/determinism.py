@@ -44,20 +44,27 @@ CASES: list[tuple[str, dict[str, Any], str]] = [
         "hand3x3",
     ),
     *[
-        (f"ellipsoid seed {s}", {"seed": s, "object": {"shape": "ellipsoid", "radii": [0.035, 0.03, 0.025]}},
-         "hand3x3")
+        (
+            f"ellipsoid seed {s}",
+            {"seed": s, "object": {"shape": "ellipsoid", "radii": [0.035, 0.03, 0.025]}},
+            "hand3x3",
+        )
         for s in (1, 2)
     ],
     *[
-        (f"cylinder seed {s}",
-         {"seed": s, "object": {"shape": "cylinder", "radius": 0.02, "length": 0.08, "rpy": ACROSS}},
-         "hand3x3")
+        (
+            f"cylinder seed {s}",
+            {"seed": s, "object": {"shape": "cylinder", "radius": 0.02, "length": 0.08, "rpy": ACROSS}},
+            "hand3x3",
+        )
         for s in (1, 3)
     ],
     *[
-        (f"capsule seed {s}",
-         {"seed": s, "object": {"shape": "capsule", "radius": 0.028, "length": 0.04, "rpy": ACROSS}},
-         "hand3x3")
+        (
+            f"capsule seed {s}",
+            {"seed": s, "object": {"shape": "capsule", "radius": 0.028, "length": 0.04, "rpy": ACROSS}},
+            "hand3x3",
+        )
         for s in (2, 4)
     ],
     *[
@@ -75,13 +82,12 @@ def run_cases() -> list[dict[str, Any]]:
     """Every case planned with the ``eos_svc`` importable now (no deadline: cycle counts must not
     depend on the machine's load)."""
     from eos_svc.agents import PlanRequest, plan
-    from eos_svc.kinematics import allegro_hand
 
     hands: dict[str, Any] = {"hand3x3": None}
     out = []
     for label, data, hand_name in CASES:
         if hand_name not in hands:
-            hands[hand_name] = allegro_hand()
+            hands[hand_name] = named_hand(hand_name)
         request = PlanRequest.from_dict({**data, "deadline_s": None})
         result = plan(request, hand=hands[hand_name])
         d = result.to_dict()
@@ -98,6 +104,18 @@ def run_cases() -> list[dict[str, Any]]:
             }
         )
     return out
+
+
+def named_hand(name: str) -> Any:
+    """The hand ``name`` from its description (``eos_svc.hands``), or, in a baseline older than
+    the descriptions, from the function that assembled the Allegro."""
+    try:
+        from eos_svc.hands import load_hand_named
+    except ImportError:  # a baseline before eos_svc.hands
+        from eos_svc.kinematics import allegro_hand  # type: ignore[attr-defined]
+
+        return allegro_hand()
+    return load_hand_named(name)
 
 
 def _hex(value: Any) -> Any:
@@ -193,16 +211,25 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print(p)
     if exact and not problems:
-        print(f"{len(exact)} plan(s) differ only in the digits of round-off-size numbers (< 1e-11) "
-              "in the cycles' words, e.g. the first:\n" + exact[0])
+        print(
+            f"{len(exact)} plan(s) differ only in the digits of round-off-size numbers (< 1e-11) "
+            "in the cycles' words, e.g. the first:\n" + exact[0]
+        )
     print(
         f"{len(after)} plans, {total} cycles: "
-        + ("identical cycle for cycle" if not exact else
-           "identical cycle for cycle up to round-off digits" if not problems else
-           f"{len(problems)} plan(s) differ")
-        + ("; q_final and ε identical bit for bit" if not bits else
-           f"; q_final/ε bits differ in {len(bits)} plan(s), "
-           f"by at most {largest_bit_change(before, after):.1e}")
+        + (
+            "identical cycle for cycle"
+            if not exact
+            else "identical cycle for cycle up to round-off digits"
+            if not problems
+            else f"{len(problems)} plan(s) differ"
+        )
+        + (
+            "; q_final and ε identical bit for bit"
+            if not bits
+            else f"; q_final/ε bits differ in {len(bits)} plan(s), "
+            f"by at most {largest_bit_change(before, after):.1e}"
+        )
     )
     return 1 if problems else 0
 

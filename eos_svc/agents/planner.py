@@ -19,7 +19,7 @@ grasp_points   information               0.6
 end            grasping                  0.2
 =============  ========================  =======
 
-Another hand (``plan(request, hand=allegro_hand())``) brings its own finger agents, one per
+Another hand (``plan(request, hand=load_hand_named("allegro"))``) brings its own finger agents, one per
 finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
 extra finger (:func:`finger_ratings`); its world parameters are derived from it
 (:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
@@ -208,8 +208,8 @@ def plan(
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
         hand: the hand model (default: ``urdf/hand3x3.urdf``), e.g.
-            :func:`eos_svc.kinematics.allegro_hand`; its context is built for this plan (≈ 30 ms)
-            unless it is the default hand or ``context`` is given.
+            ``load_hand_named("allegro")`` (:mod:`eos_svc.hands`); its context is built for this
+            plan (≈ 30 ms) unless it is the default hand or ``context`` is given.
         params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
             for hand3x3, hand-dependent fields derived for another hand).
         context: the hand's context (:class:`~eos_svc.world.hand_context.HandContext`), built

@@ -22,9 +22,9 @@ from eos_svc.errors import EosError, ValidationError
 def hand_model(name: str) -> Any:
     """The hand model ``name`` names (each loaded once per process by its own loader)."""
     if name == "allegro":
-        from eos_svc.kinematics import allegro_hand
+        from eos_svc.hands import load_hand_named
 
-        return allegro_hand()
+        return load_hand_named("allegro")
     from eos_svc.agents import default_hand
 
     return default_hand()

@@ -233,9 +233,9 @@ def format_result(result: Any) -> str:
 def chosen_hand(args: argparse.Namespace) -> Any:
     """The hand ``--hand`` names: ``None`` for hand3x3 (the planner's default), else its model."""
     if getattr(args, "hand", "hand3x3") == "allegro":
-        from eos_svc.kinematics import allegro_hand
+        from eos_svc.hands import load_hand_named
 
-        return allegro_hand()
+        return load_hand_named("allegro")
     return None
 
 

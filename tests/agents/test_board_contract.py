@@ -16,7 +16,7 @@ from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_ta
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.board_access import access_map, undeclared_entries
 from eos_svc.errors import ContractError, ValidationError
-from eos_svc.kinematics import allegro_hand
+from eos_svc.hands import load_hand_named
 from eos_svc.schema import keys as keys_module
 from eos_svc.schema.board_entries import (
     AFTER_RUN,
@@ -101,7 +101,7 @@ def test_checked_plans_reach_every_writer(tmp_path):
 
 
 def test_checked_allegro_plan_runs_the_same_cycles():
-    hand = allegro_hand()
+    hand = load_hand_named("allegro")
     request = PlanRequest.from_dict({"seed": 2, "object": {"shape": "sphere", "radius": 0.032}})
     checked = plan(request, hand=hand, check_board=True)
     _same_plan(checked, plan(request, hand=hand))

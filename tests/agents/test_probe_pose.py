@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.kinematics import HandModel, UnknownNameError, allegro_hand
+from eos_svc.hands import load_hand_named
+from eos_svc.kinematics import HandModel, UnknownNameError
 from eos_svc.world.probe_pose import ProbePose
 
 
@@ -25,7 +26,7 @@ def _plain(hand: HandModel, q: np.ndarray, finger: str, angle: float) -> np.ndar
 
 @pytest.mark.parametrize("which", ["hand3x3", "allegro"])
 def test_probe_pose_equals_the_plain_assignments(which: str) -> None:
-    hand = default_hand() if which == "hand3x3" else allegro_hand()
+    hand = default_hand() if which == "hand3x3" else load_hand_named("allegro")
     rng = np.random.default_rng(3)
     for _ in range(20):
         q = hand.lower + (hand.upper - hand.lower) * rng.random(hand.nq)

@@ -175,9 +175,9 @@ def test_another_hands_result_is_refused_saying_the_validation_is_for_hand3x3():
     # a real Allegro plan's JSON result: its q_final has the Allegro's joints, and the refusal
     # says why (the Drake model is hand3x3's), not only the count
     from eos_svc.agents import PlanRequest, plan
-    from eos_svc.kinematics import allegro_hand
+    from eos_svc.hands import load_hand_named
 
-    data = plan(PlanRequest(), hand=allegro_hand()).to_dict()
+    data = plan(PlanRequest(), hand=load_hand_named("allegro")).to_dict()
     with pytest.raises(ValidationError) as info:
         validate_grasp(data)
     assert info.value.field == "q_final"
