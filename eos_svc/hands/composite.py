@@ -10,7 +10,8 @@ What the builder changes, always in a copy of the text (the installed files are 
   so that every finger joint closes toward +q (the planner's convention: a finger closes by
   adding the same increment to each of its joints); its coordinate is the URDF's negated;
 - ``<mimic>`` and ``<transmission>`` elements are dropped (each finger is its own agent);
-- effort and velocity limits named in ``[limits]`` replace the URDF's;
+- limits named in ``[limits]`` (lower, upper, effort, velocity) replace the URDF's, before
+  any reversal (they are in the URDF's convention);
 - ``[collision]``: the collision elements of the ``replace`` links are removed, the ``add``
   primitives attached;
 - an added fingertip (``tip.link``) becomes a link ``<finger>_tip_sphere`` fixed to that link
@@ -205,12 +206,6 @@ def _edit(robot: ET.Element, spec: HandSpec) -> None:
     for joint in joints.values():
         for mimic in joint.findall("mimic"):
             joint.remove(mimic)
-    for i, finger in enumerate(spec.fingers):
-        for k, (name, closing) in enumerate(zip(finger.joints, finger.closing, strict=True)):
-            if name not in joints:
-                raise HandDescriptionError(f"fingers[{i}].joints[{k}]", f"joint {name!r} is not in the URDF")
-            if closing == -1:
-                _flip(joints[name], f"fingers[{i}].closing[{k}]")
     for name, values in spec.limits.items():
         if name not in joints:
             raise HandDescriptionError(f"limits.{name}", f"joint {name!r} is not in the URDF")
@@ -219,6 +214,12 @@ def _edit(robot: ET.Element, spec: HandSpec) -> None:
             limit = ET.SubElement(joints[name], "limit")
         for key, value in values.items():
             limit.set(key, _fmt(value))
+    for i, finger in enumerate(spec.fingers):
+        for k, (name, closing) in enumerate(zip(finger.joints, finger.closing, strict=True)):
+            if name not in joints:
+                raise HandDescriptionError(f"fingers[{i}].joints[{k}]", f"joint {name!r} is not in the URDF")
+            if closing == -1:
+                _flip(joints[name], f"fingers[{i}].closing[{k}]")
     for k, name in enumerate(spec.collision_replace):
         if name not in links:
             raise HandDescriptionError(f"collision.replace[{k}]", f"link {name!r} is not in the URDF")

@@ -413,9 +413,13 @@ def parse_hand(data: Mapping[str, Any], source: Path | None = None) -> HandSpec:
     for joint, table in _table(data, "limits", "limits").items():
         where = f"limits.{joint}"
         if not isinstance(table, Mapping):
-            raise _fail(where, "must be a table of effort and/or velocity")
-        _unknown(table, ("effort", "velocity"), where)
-        limits[joint] = {k: _number(v, f"{where}.{k}", positive=True) for k, v in table.items()}
+            raise _fail(where, "must be a table of lower, upper, effort, velocity")
+        _unknown(table, ("lower", "upper", "effort", "velocity"), where)
+        limits[joint] = {
+            k: _number(v, f"{where}.{k}", positive=k in ("effort", "velocity")) for k, v in table.items()
+        }
+        if limits[joint].get("lower", -math.inf) >= limits[joint].get("upper", math.inf):
+            raise _fail(where, "lower must be < upper")
     collision = _table(data, "collision", "collision")
     _unknown(collision, ("replace", "add"), "collision")
     replace = _names(collision["replace"], "collision.replace") if "replace" in collision else ()
