@@ -9,6 +9,8 @@ What the builder changes, always in a copy of the text (the installed files are 
 - a finger joint whose closing direction is −1 has its axis reversed and its limits mirrored,
   so that every finger joint closes toward +q (the planner's convention: a finger closes by
   adding the same increment to each of its joints); its coordinate is the URDF's negated;
+- a part's links and joints outside its ``root_link``'s subtree are dropped (a hand taken off
+  the arm it is shipped with);
 - ``<mimic>`` and ``<transmission>`` elements are dropped (each finger is its own agent);
 - limits named in ``[limits]`` (lower, upper, effort, velocity) replace the URDF's, before
   any reversal (they are in the URDF's convention);
@@ -72,6 +74,31 @@ def _read(part: PartSpec, where: str) -> tuple[ET.Element, Path, list[Path]]:
     except (OSError, ET.ParseError) as exc:
         raise HandDescriptionError(_key(where, "urdf"), f"cannot read {path}: {exc}") from exc
     return root, path, dirs
+
+
+def _subtree(root: ET.Element, root_link: str) -> None:
+    """Keep only ``root_link`` and what hangs from it (a hand taken off its arm)."""
+    children: dict[str, list[str]] = {}
+    for joint in root.iter("joint"):
+        parent, child = joint.find("parent"), joint.find("child")
+        if parent is not None and child is not None:
+            children.setdefault(parent.get("link", ""), []).append(child.get("link", ""))
+    keep, todo = set(), [root_link]
+    while todo:
+        link = todo.pop()
+        keep.add(link)
+        todo.extend(children.get(link, []))
+    for element in list(root):
+        if element.tag == "link" and element.get("name") not in keep:
+            root.remove(element)
+        elif element.tag == "joint":
+            child = element.find("child")
+            if child is None or child.get("link") not in keep or element.get("type") == "floating":
+                root.remove(element)
+            else:
+                parent = element.find("parent")
+                if parent is None or parent.get("link") not in keep:
+                    root.remove(element)
 
 
 def _prefixed(root: ET.Element, prefix: str) -> None:
@@ -185,6 +212,7 @@ def compose_urdf(spec: HandSpec) -> ComposedUrdf:
             dirs += [d for d in part_dirs if d not in dirs]
             _prefixed(root, part.prefix)
             body.append(_mount(part, root, wheres[i]))
+            _subtree(root, part.prefix + part.root_link)
             for element in list(root):
                 if element.tag == "material":
                     materials.setdefault(element.get("name", ""), element)

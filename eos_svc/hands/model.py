@@ -22,8 +22,9 @@ __all__ = ["DescribedHand"]
 class DescribedHand(HandModel):
     """A :class:`HandModel` made from a :class:`~eos_svc.hands.spec.HandSpec`.
 
-    Its neutral configuration holds the description's pre-shape (joints that are neither wrist
-    nor finger joints keep a fixed value; the planner never moves them). Every finger joint
+    Its neutral configuration holds the description's pre-shape (given in the URDF's
+    convention): joints that are neither wrist nor finger joints keep that value all along (the
+    planner never moves them); a finger joint starts there (a gripper that starts open). Every finger joint
     closes toward +q (joints whose closing direction is −1 were reversed in the URDF text).
 
     Attributes:
@@ -33,7 +34,7 @@ class DescribedHand(HandModel):
         package_dirs: where ``package://`` URIs of the text resolve.
         world_overrides: the description's ``[world]`` parameters.
         drake: the description's ``[drake]`` settings (kp, kd, squeeze).
-        preshape: pre-shape joint values in the model's convention (rad or m).
+        preshape: pre-shape joint values as the description gives them (URDF convention; rad or m).
     """
 
     def __init__(
@@ -48,13 +49,14 @@ class DescribedHand(HandModel):
         load_warnings: str = "",
     ) -> None:
         q = np.array(pin.neutral(model), dtype=float)
-        moved = set(description.wrist_joints) | {j for f in description.fingers for j in f.joints}
-        for name, value in spec.preshape.items():
+        reversed_joints = {j for f in spec.fingers for j, c in zip(f.joints, f.closing, strict=True) if c < 0}
+        for name, urdf_value in spec.preshape.items():
             where = f"preshape.{name}"
             if not model.existJointName(name):
                 raise HandDescriptionError(where, f"joint {name!r} is not in the URDF")
-            if name in moved:
-                raise HandDescriptionError(where, "a wrist or finger joint cannot be pre-shaped")
+            if name in description.wrist_joints:
+                raise HandDescriptionError(where, "a wrist joint cannot be pre-shaped")
+            value = -urdf_value if name in reversed_joints else urdf_value
             joint = model.joints[model.getJointId(name)]
             if joint.nq != 1:
                 raise HandDescriptionError(where, f"joint {name!r} is not a 1-DoF joint")

@@ -51,6 +51,7 @@ WORLD_KEYS = {
     "wrist_step": 0,
     "clearance": 0,
     "landing_tolerance": 0,
+    "contact_patch_radius": 0,
 }
 #: the Drake validation's physical settings a description may set
 DRAKE_KEYS = ("kp", "kd", "squeeze")

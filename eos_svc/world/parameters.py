@@ -42,6 +42,9 @@ class WorldParameters:
             of the contact grasp_points chose for it, on the postulated object (m).
         hand_bound: radius of a ball about the grasp centre that contains the whole hand at
             any finger angle (m); objects farther away need no collision query.
+        contact_patch_radius: radius of the fingertips' contact patch for the grasp quality
+            (m): 0 for hard point contacts (sphere tips); > 0 for soft pads, which also resist
+            a torque about the contact normal (:mod:`eos_svc.grasp.quality`).
     """
 
     search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
@@ -60,6 +63,7 @@ class WorldParameters:
     confidence_threshold: float = 0.6
     landing_tolerance: float = 0.002
     hand_bound: float = 0.2
+    contact_patch_radius: float = 0.0
 
     @classmethod
     def for_hand(
