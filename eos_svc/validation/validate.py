@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from eos_svc.errors import ValidationError
-from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription
+from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription, HandModel
+from eos_svc.validation.drake_hand import drake_urdf, model_joint_names
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
 from eos_svc.validation.simulation import (
@@ -70,6 +71,9 @@ def validate_grasp(
     stop_distance: float = 0.05,
     urdf: str | Path = HAND3X3_URDF,
     description: HandDescription | None = None,
+    hand: HandModel | None = None,
+    _joint_names: Sequence[str] | None = None,
+    _package_dirs: Sequence[Path] = (),
 ) -> GraspValidation:
     """Simulate a plan's final grasp in Drake and say whether it holds the object.
 
@@ -88,15 +92,44 @@ def validate_grasp(
         contact_stiffness: point-contact stiffness (N/m).
         time_step: discrete step of the plant (s).
         stop_distance: a direction stops early once the object is this far away (m).
-        urdf, description: the hand (default hand3x3).
+        urdf, description: the hand (default hand3x3), when ``hand`` is not given.
+        hand: the hand model the plan used: its URDF (a described hand's composite text), its
+            description, its joints in the model's order; a described hand's ``[drake]``
+            settings replace the defaults of ``kp``, ``kd`` and ``squeeze``.
 
     Raises:
         ValidationError: naming the bad field of ``result`` or the bad argument.
         SimulationError: Drake failed while simulating (an :class:`~eos_svc.errors.EosError`).
     """
     t_start = time.perf_counter()
+    if hand is not None:
+        with drake_urdf(hand) as (path, package_dirs):
+            settings = {**getattr(hand, "drake", {})}
+            return validate_grasp(
+                result,
+                directions=directions,
+                seconds=seconds,
+                mass=mass,
+                squeeze=settings.get("squeeze", squeeze) if squeeze == DEFAULT_SQUEEZE else squeeze,
+                kp=settings.get("kp", kp) if kp == DEFAULT_KP else kp,
+                kd=settings.get("kd", kd) if kd == DEFAULT_KD else kd,
+                settle_seconds=settle_seconds,
+                hold_tolerance=hold_tolerance,
+                min_parts=min_parts,
+                contact_stiffness=contact_stiffness,
+                time_step=time_step,
+                stop_distance=stop_distance,
+                urdf=path,
+                description=hand.description,
+                _joint_names=model_joint_names(hand),
+                _package_dirs=package_dirs,
+            )
     description = description or HandDescription.hand3x3()
-    joints = len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers)
+    joints = (
+        len(_joint_names)
+        if _joint_names is not None
+        else (len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers))
+    )
     setup = grasp_setup(result, joints)
     names = load_directions(directions)
     seconds = _positive(seconds, "seconds", MAX_SECONDS)
@@ -122,6 +155,8 @@ def validate_grasp(
             setup.q_final,
             setup.obj,
             friction=setup.friction,
+            joint_names=_joint_names,
+            package_dirs=_package_dirs,
             mass=mass,
             squeeze=float(squeeze),
             kp=kp,

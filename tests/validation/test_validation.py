@@ -181,4 +181,4 @@ def test_another_hands_result_is_refused_saying_the_validation_is_for_hand3x3():
     with pytest.raises(ValidationError) as info:
         validate_grasp(data)
     assert info.value.field == "q_final"
-    assert "hand3x3 only" in info.value.reason and "allegro" in info.value.reason
+    assert "--hand NAME" in info.value.reason and "allegro" in info.value.reason
