@@ -42,8 +42,8 @@ from eos_svc.experiments.grasp_suite import (
 )
 from eos_svc.kinematics import HandModel
 from eos_svc.validation import SimulationError, validate_grasp
-from eos_svc.world.hand_context import HandContext
 from eos_svc.validation.validate import MAX_SECONDS
+from eos_svc.world.hand_context import HandContext
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98

@@ -1,8 +1,9 @@
 """Other hands: the planner with the Allegro hand of example-robot-data.
 
 The Allegro URDF is found from the installed example-robot-data distribution and put on the
-planner's six wrist joints (``eos_svc.hands.load_hand_named("allegro")``); the planner takes its
-fingers, sweeps, probe fingers and world parameters from the hand.
+planner's six wrist joints (its description ``eos_svc/hands/data/allegro.toml``, loaded by the
+``eos_load_hand`` fixture of ``eos_svc.testing.pytest_plugin``); the planner takes its fingers,
+sweeps, probe fingers and world parameters from the hand.
 """
 
 from __future__ import annotations
@@ -14,15 +15,14 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, build_agents, build_world, plan
 from eos_svc.agents.planner import DEFAULT_RATINGS, default_hand, finger_ratings
-from eos_svc.hands import load_hand_named
 from eos_svc.world.parameters import WorldParameters
 
 SPHERE = ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.02, -0.015))
 
 
 @pytest.fixture(scope="module")
-def hand():
-    return load_hand_named("allegro")
+def hand(eos_load_hand):
+    return eos_load_hand("allegro")
 
 
 @pytest.fixture(scope="module")
