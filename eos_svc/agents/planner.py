@@ -53,6 +53,7 @@ from eos_svc.controller import CancelToken, Controller
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.hands import DEFAULT_HAND, load_hand_named
 from eos_svc.kinematics import (
     HandModel,
     Scene,
@@ -207,7 +208,7 @@ def plan(
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: ``urdf/hand3x3.urdf``), e.g.
+        hand: the hand model (default: the hand ``request.hand`` names, else hand3x3), e.g.
             ``load_hand_named("allegro")`` (:mod:`eos_svc.hands`); its context is built for this
             plan (≈ 30 ms) unless it is the default hand or ``context`` is given.
         params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
@@ -238,6 +239,8 @@ def plan(
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
+    if context is None and hand is None and request.hand not in (None, DEFAULT_HAND):
+        hand = load_hand_named(request.hand)  # the registered hand the request names
     context = context if context is not None else context_for(hand, params)
     world = build_world(request, check=check, context=context)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)

@@ -12,6 +12,7 @@ import logging
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -126,6 +127,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="S",
         help="sleep S seconds in every cycle (testing cancellation and failover)",
     )
+    s.add_argument(
+        "--hand",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="register a hand description file (repeatable); requests name a hand by its "
+        "name (field hand), any registered one (eos hands) or these",
+    )
     s.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default="info")
 
 
@@ -137,7 +146,7 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.server import PlanService, default_admission, default_planner
+    from eos_svc.service.server import PlanService
 
     try:
         if args.namespace is not None:
@@ -146,7 +155,23 @@ def run(args: argparse.Namespace) -> int:
             proto.check_id(args.instance, "instance")
     except ValidationError as exc:
         fail(f"--{exc.field}: {exc.reason}")
-    planner = root_plan if args.planner == "root" else default_planner()
+    admission = None
+    planner: Callable[..., Any]
+    if args.planner == "grasp":
+        from eos_svc.service.hands import ServedHands
+        from eos_svc.shape import kernels
+
+        try:
+            hands = ServedHands(args.hand)
+        except ValidationError as exc:
+            fail(f"--hand: {exc.field}: {exc.reason}")
+        planner, admission = hands.plan, hands.admit
+        kernels.load_in_background()  # the shape fit's compiled kernels (as for the default planner)
+        print(f"eos serve: hands {', '.join(hands.names)}", flush=True)
+    else:
+        if args.hand:
+            fail("--hand: only the grasp planner has hands (--planner grasp)")
+        planner = root_plan
     if args.cycle_delay is not None:
         planner = slowed(planner, args.cycle_delay)
     sys.setswitchinterval(0.001)  # hand the GIL to Zenoh's callback threads sooner while a plan runs
@@ -162,7 +187,7 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             queue_size=args.queue,
             max_request_bytes=args.max_request_bytes,
-            admission=default_admission() if args.planner == "grasp" else None,
+            admission=admission,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config
         fail(f"cannot start the Zenoh session: {exc}", code=1)

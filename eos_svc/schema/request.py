@@ -16,6 +16,7 @@ JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -209,6 +210,10 @@ class ObjectSpec:
         return out
 
 
+#: a hand name a request may give (the registered hands' names are of this form)
+_HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+
 @dataclass(frozen=True)
 class PlanRequest:
     """A grasp-plan request.
@@ -222,6 +227,8 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        hand: the name of a registered hand to plan with (``eos hands``; a service plans
+            with the hands it registered), or ``None`` for the planner's default hand.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -231,8 +238,13 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    hand: str | None = None
 
     def __post_init__(self) -> None:
+        if self.hand is not None and not (isinstance(self.hand, str) and _HAND_NAME.fullmatch(self.hand)):
+            raise ValidationError(
+                "hand", f"must be a hand name of 1-64 characters A-Z a-z 0-9 _ . -, got {self.hand!r}"
+            )
         if not isinstance(self.obj, ObjectSpec):
             raise ValidationError("object", f"must be an ObjectSpec, got {type(self.obj).__name__}")
         if not isinstance(self.weights, Weights):
@@ -273,6 +285,7 @@ class PlanRequest:
             max_cycles=max_cycles,
             deadline_s=deadline_s,
             friction=friction,
+            hand=None,
         )
         return request
 
@@ -286,21 +299,23 @@ class PlanRequest:
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
-            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+            data,
+            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "hand"},
+            "",
         )
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
+        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "hand"):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (round-trips through :meth:`from_dict`)."""
-        return {
+        """JSON form (round-trips through :meth:`from_dict`; ``hand`` only when one is named)."""
+        out = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -309,3 +324,6 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.hand is not None:
+            out["hand"] = self.hand
+        return out
