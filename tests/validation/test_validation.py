@@ -167,8 +167,15 @@ def test_cli_exit_1_when_dropped_and_2_on_bad_files(tmp_path, good_plan, capsys)
         code, out, err = eos(capsys, "validate", str(path))
         assert code == 2, (name, out, err)
         assert message in err and "Traceback" not in err
-    code, _, err = eos(capsys, "plan", "--hand", "allegro", "--validate")
-    assert code == 2 and "--validate" in err
+    code, _, err = eos(capsys, "plan", "--hand", "no_such_hand.toml", "--validate")
+    assert code == 2 and "--hand: no_such_hand.toml: file: cannot read" in err
+
+
+def test_another_hands_plan_is_validated_with_that_hand(capsys):
+    # the Drake model is built from the hand's description (here the Allegro's composite URDF)
+    code, out, _ = eos(capsys, "plan", "--hand", "allegro", "--validate", "--quiet")
+    assert code == 0 and "validation (Drake): HELD" in out
+    assert "touching index, middle, ring, thumb" in out
 
 
 def test_another_hands_result_is_refused_saying_the_validation_is_for_hand3x3():
