@@ -60,9 +60,9 @@ def validate_grasp(
     directions: int | Sequence[str] = 6,
     seconds: float = 1.5,
     mass: float = DEFAULT_MASS,
-    squeeze: float = DEFAULT_SQUEEZE,
-    kp: float = DEFAULT_KP,
-    kd: float = DEFAULT_KD,
+    squeeze: float | None = None,
+    kp: float | None = None,
+    kd: float | None = None,
     settle_seconds: float = 0.3,
     hold_tolerance: float = 0.01,
     min_parts: int = 2,
@@ -72,8 +72,6 @@ def validate_grasp(
     urdf: str | Path = HAND3X3_URDF,
     description: HandDescription | None = None,
     hand: HandModel | None = None,
-    _joint_names: Sequence[str] | None = None,
-    _package_dirs: Sequence[Path] = (),
 ) -> GraspValidation:
     """Simulate a plan's final grasp in Drake and say whether it holds the object.
 
@@ -83,9 +81,12 @@ def validate_grasp(
         directions: how many of +x, -x, +y, -y, +z, -z (in that order), or a list of them.
         seconds: load time per direction (s).
         mass: object mass (kg); the load is ``mass · 9.81`` N.
-        squeeze: added to every planned finger angle as the PD target (rad, closing).
-        kp, kd: PD gains of every finger joint (N·m/rad, N·m·s/rad); torques are clipped at
-            the URDF's effort limit.
+        squeeze: added to every planned finger joint as the PD target (rad, or m for a
+            prismatic joint; closing); default: the hand's ``[drake] squeeze``, else
+            :data:`DEFAULT_SQUEEZE`.
+        kp, kd: PD gains of every finger joint (N·m/rad, N·m·s/rad; N/m, N·s/m for a
+            prismatic one); torques are clipped at the URDF's effort limit; default: the
+            hand's ``[drake]`` values, else :data:`DEFAULT_KP`, :data:`DEFAULT_KD`.
         settle_seconds: squeeze time before the loads (s).
         hold_tolerance: largest displacement that still counts as held (m).
         min_parts: fewest hand parts (palm or fingers) that must touch the object at the end.
@@ -94,40 +95,63 @@ def validate_grasp(
         stop_distance: a direction stops early once the object is this far away (m).
         urdf, description: the hand (default hand3x3), when ``hand`` is not given.
         hand: the hand model the plan used: its URDF (a described hand's composite text), its
-            description, its joints in the model's order; a described hand's ``[drake]``
-            settings replace the defaults of ``kp``, ``kd`` and ``squeeze``.
+            description and its joints in the model's order.
 
     Raises:
         ValidationError: naming the bad field of ``result`` or the bad argument.
         SimulationError: Drake failed while simulating (an :class:`~eos_svc.errors.EosError`).
     """
     t_start = time.perf_counter()
-    if hand is not None:
-        with drake_urdf(hand) as (path, package_dirs):
-            settings = {**getattr(hand, "drake", {})}
-            return validate_grasp(
-                result,
-                directions=directions,
-                seconds=seconds,
-                mass=mass,
-                squeeze=settings.get("squeeze", squeeze) if squeeze == DEFAULT_SQUEEZE else squeeze,
-                kp=settings.get("kp", kp) if kp == DEFAULT_KP else kp,
-                kd=settings.get("kd", kd) if kd == DEFAULT_KD else kd,
-                settle_seconds=settle_seconds,
-                hold_tolerance=hold_tolerance,
-                min_parts=min_parts,
-                contact_stiffness=contact_stiffness,
-                time_step=time_step,
-                stop_distance=stop_distance,
-                urdf=path,
-                description=hand.description,
-                _joint_names=model_joint_names(hand),
-                _package_dirs=package_dirs,
-            )
-    description = description or HandDescription.hand3x3()
+    settings = dict(getattr(hand, "drake", {})) if hand is not None else {}
+    options: dict[str, Any] = {
+        "directions": directions,
+        "seconds": seconds,
+        "mass": mass,
+        "squeeze": settings.get("squeeze", DEFAULT_SQUEEZE) if squeeze is None else squeeze,
+        "kp": settings.get("kp", DEFAULT_KP) if kp is None else kp,
+        "kd": settings.get("kd", DEFAULT_KD) if kd is None else kd,
+        "settle_seconds": settle_seconds,
+        "hold_tolerance": hold_tolerance,
+        "min_parts": min_parts,
+        "contact_stiffness": contact_stiffness,
+        "time_step": time_step,
+        "stop_distance": stop_distance,
+    }
+    if hand is None:
+        return _validate(
+            result, t_start, Path(urdf), description or HandDescription.hand3x3(), None, (), **options
+        )
+    with drake_urdf(hand) as (path, package_dirs):
+        return _validate(
+            result, t_start, path, hand.description, model_joint_names(hand), package_dirs, **options
+        )
+
+
+def _validate(
+    result: PlanResult | Mapping[str, Any],
+    t_start: float,
+    urdf: Path,
+    description: HandDescription,
+    joint_names: Sequence[str] | None,
+    package_dirs: Sequence[Path],
+    *,
+    directions: int | Sequence[str],
+    seconds: float,
+    mass: float,
+    squeeze: float,
+    kp: float,
+    kd: float,
+    settle_seconds: float,
+    hold_tolerance: float,
+    min_parts: int,
+    contact_stiffness: float,
+    time_step: float,
+    stop_distance: float,
+) -> GraspValidation:
+    """:func:`validate_grasp` once the hand's URDF file, description and joints are known."""
     joints = (
-        len(_joint_names)
-        if _joint_names is not None
+        len(joint_names)
+        if joint_names is not None
         else (len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers))
     )
     setup = grasp_setup(result, joints)
@@ -155,8 +179,8 @@ def validate_grasp(
             setup.q_final,
             setup.obj,
             friction=setup.friction,
-            joint_names=_joint_names,
-            package_dirs=_package_dirs,
+            joint_names=joint_names,
+            package_dirs=package_dirs,
             mass=mass,
             squeeze=float(squeeze),
             kp=kp,
