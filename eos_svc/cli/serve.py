@@ -156,6 +156,7 @@ def run(args: argparse.Namespace) -> int:
     except ValidationError as exc:
         fail(f"--{exc.field}: {exc.reason}")
     admission = None
+    served = ""
     planner: Callable[..., Any]
     if args.planner == "grasp":
         from eos_svc.service.hands import ServedHands
@@ -167,7 +168,7 @@ def run(args: argparse.Namespace) -> int:
             fail(f"--hand: {exc.field}: {exc.reason}")
         planner, admission = hands.plan, hands.admit
         kernels.load_in_background()  # the shape fit's compiled kernels (as for the default planner)
-        print(f"eos serve: hands {', '.join(hands.names)}", flush=True)
+        served = f"; hands {', '.join(hands.names)}"
     else:
         if args.hand:
             fail("--hand: only the grasp planner has hands (--planner grasp)")
@@ -193,7 +194,7 @@ def run(args: argparse.Namespace) -> int:
         fail(f"cannot start the Zenoh session: {exc}", code=1)
     print(
         f"eos serve: instance {service.instance} serving under {service.prefix} "
-        f"({args.workers} worker(s), queue {args.queue}); Ctrl-C to stop",
+        f"({args.workers} worker(s), queue {args.queue}{served}); Ctrl-C to stop",
         flush=True,
     )
     try:
