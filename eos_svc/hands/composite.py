@@ -196,7 +196,7 @@ def compose_urdf(spec: HandSpec) -> ComposedUrdf:
     Raises:
         HandDescriptionError: naming the key whose file, link or joint is missing.
     """
-    wheres = [f"parts[{i}]" if len(spec.parts) > 1 else "" for i in range(len(spec.parts))]
+    wheres = [part.where for part in spec.parts]
     first_root, first_path, dirs = _read(spec.parts[0], wheres[0])
     if not _needs_rewrite(spec):
         return ComposedUrdf(ET.tostring(first_root, encoding="unicode"), dirs, first_path, unchanged=True)

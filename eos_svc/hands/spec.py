@@ -88,6 +88,7 @@ class PartSpec:
     prefix: str = ""
     xyz: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    where: str = ""  # its key in the description: "parts[1]", or "" for the top-level keys
 
 
 @dataclass(frozen=True)
@@ -245,6 +246,7 @@ def _part(data: Mapping[str, Any], where: str, base_dir: Path | None) -> PartSpe
         prefix=prefix,
         xyz=_vector(mount.get("xyz", [0, 0, 0]), key("mount.xyz")),  # type: ignore[arg-type]
         rpy=_vector(mount.get("rpy", [0, 0, 0]), key("mount.rpy")),  # type: ignore[arg-type]
+        where=where,
     )
 
 
