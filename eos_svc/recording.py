@@ -5,7 +5,8 @@ A record file is JSON lines:
 
 - line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
   — the plan request in its JSON form (``PlanRequest.to_dict()``) and the hand's name
-  (``hand3x3``, the default, or a ``<name>_hand()`` factory of ``eos_svc.kinematics``);
+  (``hand3x3``, the default, a registered hand's name — ``eos hands`` — or the path of the
+  hand description file it was planned with);
 - one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
 - last line, the result: ``{"eos_record": "result", "result": {...}}`` —
   ``PlanResult.to_dict()`` without the trace (absent when the run was interrupted).

@@ -19,7 +19,7 @@ grasp_points   information               0.6
 end            grasping                  0.2
 =============  ========================  =======
 
-Another hand (``plan(request, hand=allegro_hand())``) brings its own finger agents, one per
+Another hand (``plan(request, hand=load_hand_named("allegro"))``) brings its own finger agents, one per
 finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
 extra finger (:func:`finger_ratings`); its world parameters are derived from it
 (:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
@@ -53,6 +53,7 @@ from eos_svc.controller import CancelToken, Controller
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.hands import DEFAULT_HAND, load_hand_named
 from eos_svc.kinematics import (
     HandModel,
     Scene,
@@ -207,9 +208,9 @@ def plan(
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: ``urdf/hand3x3.urdf``), e.g.
-            :func:`eos_svc.kinematics.allegro_hand`; its context is built for this plan (≈ 30 ms)
-            unless it is the default hand or ``context`` is given.
+        hand: the hand model (default: the hand ``request.hand`` names, else hand3x3), e.g.
+            ``load_hand_named("allegro")`` (:mod:`eos_svc.hands`); its context is built for this
+            plan (≈ 30 ms) unless it is the default hand or ``context`` is given.
         params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
             for hand3x3, hand-dependent fields derived for another hand).
         context: the hand's context (:class:`~eos_svc.world.hand_context.HandContext`), built
@@ -238,6 +239,8 @@ def plan(
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
+    if context is None and hand is None and request.hand not in (None, DEFAULT_HAND):
+        hand = load_hand_named(request.hand)  # the registered hand the request names
     context = context if context is not None else context_for(hand, params)
     world = build_world(request, check=check, context=context)
     agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)

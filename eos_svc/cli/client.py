@@ -51,6 +51,8 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
     out = plan_request_dict(args)
     if out.get("friction") is None:
         out.pop("friction", None)
+    if getattr(args, "hand", None) is not None:
+        out["hand"] = args.hand
     return out
 
 
@@ -82,6 +84,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
+    g.add_argument(
+        "--hand",
+        default=None,
+        metavar="NAME",
+        help="the hand to plan with: one the service has (eos hands; eos serve --hand FILE) (its default)",
+    )
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
     g.add_argument(

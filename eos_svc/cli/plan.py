@@ -6,7 +6,8 @@ eos plan --json                           # the result as JSON (no trace)
 eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
 eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
 eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
-eos plan --hand allegro                   # the Allegro hand of example-robot-data
+eos plan --hand allegro                   # a registered hand (eos hands), or a description file
+eos plan --hand my_hand.toml
 eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
 eos plan --html plan.html                 # the plan animated in 3-D, one self-contained page
 eos plan --view                           # a live 3-D view on localhost (URL on stderr)
@@ -21,11 +22,9 @@ from typing import IO, Any
 
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.cli.hands import add_hand_argument, chosen_hand
 from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord
-
-#: hands ``--hand`` accepts
-HANDS = ("hand3x3", "allegro")
 
 #: request field -> command-line option, for error messages
 FIELD_OPTIONS = {
@@ -84,12 +83,7 @@ def add_request_arguments(
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = add_request_arguments(parser)
-    g.add_argument(
-        "--hand",
-        choices=HANDS,
-        default="hand3x3",
-        help="the hand: hand3x3 (urdf/hand3x3.urdf) or allegro (example-robot-data's) (hand3x3)",
-    )
+    add_hand_argument(g)
     g.add_argument(
         "--memory",
         metavar="DB",
@@ -121,24 +115,19 @@ def add_validate_argument(group: argparse._ArgumentGroup) -> None:
     group.add_argument(
         "--validate",
         action="store_true",
-        help="simulate the final grasp in Drake (hand3x3 only) and add the verdict to the result; "
+        help="simulate the final grasp in Drake (with the plan's hand) and add the verdict to the result; "
         "the exit status still follows the plan",
     )
 
 
-def check_validate_option(args: argparse.Namespace) -> None:
-    """Before planning: ``--validate`` needs hand3x3 (exit 2 otherwise)."""
-    if getattr(args, "validate", False) and getattr(args, "hand", "hand3x3") != "hand3x3":
-        fail("--validate: the Drake validation models hand3x3 only")
-
-
-def validated(result: Any, args: argparse.Namespace) -> Any:
-    """The result with its Drake validation when ``--validate`` was given (exit 2 on a bad case)."""
+def validated(result: Any, args: argparse.Namespace, hand: Any = None) -> Any:
+    """The result with its Drake validation (of the plan's ``hand``; ``None``: the default hand)
+    when ``--validate`` was given (exit 2 on a bad case)."""
     if not getattr(args, "validate", False):
         return result
     from eos_svc.cli.validate import validate_or_fail
 
-    return result.with_validation(validate_or_fail(result))
+    return result.with_validation(validate_or_fail(result, hand=hand))
 
 
 def request_dict(args: argparse.Namespace) -> dict[str, Any]:
@@ -230,15 +219,6 @@ def format_result(result: Any) -> str:
     return "\n".join(lines)
 
 
-def chosen_hand(args: argparse.Namespace) -> Any:
-    """The hand ``--hand`` names: ``None`` for hand3x3 (the planner's default), else its model."""
-    if getattr(args, "hand", "hand3x3") == "allegro":
-        from eos_svc.kinematics import allegro_hand
-
-        return allegro_hand()
-    return None
-
-
 def admit(request: Any, hand: Any) -> None:
     """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
     overlapping the hand, wider than its span (:func:`eos_svc.agents.admission.check_plannable`)."""
@@ -258,7 +238,6 @@ def run(args: argparse.Namespace) -> int:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
         fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
-    check_validate_option(args)
     hand = chosen_hand(args)
     admit(request, hand)
     record_file: IO[str] | None = None
@@ -313,7 +292,7 @@ def run(args: argparse.Namespace) -> int:
             draw_result(result, args.picture, hand=hand)
         except OSError as exc:
             fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
-    result = validated(result, args)
+    result = validated(result, args, hand)
     if getattr(args, "html", None):  # --html FILE
         records = [r.to_dict() for r in result.trace]
         view_options.write_html(args.html, request, records, result.to_dict(), hand)

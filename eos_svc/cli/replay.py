@@ -35,20 +35,21 @@ from eos_svc.recording import (
 
 
 def resolve_hand(name: str) -> Any:
-    """The hand model called ``name``: ``None`` (the planner's default) for ``hand3x3``, else
-    the result of :mod:`eos_svc.kinematics`' ``<name>_hand()``.
+    """The hand called ``name``: ``None`` (the planner's default) for ``hand3x3``, else the
+    registered hand of that name or the description file at that path (``eos hands``).
 
     Raises:
-        RecordFileError: no such hand.
+        RecordFileError: no such hand, or its description is bad.
     """
     if name == DEFAULT_HAND:
         return None
-    import eos_svc.kinematics as kinematics
+    from eos_svc.errors import ValidationError
+    from eos_svc.hands import HandRegistry
 
-    factory = getattr(kinematics, f"{name}_hand", None) if name.isidentifier() else None
-    if not callable(factory):
-        raise RecordFileError(f"unknown hand {name!r}")
-    return factory()
+    try:
+        return HandRegistry().build(name)
+    except ValidationError as exc:
+        raise RecordFileError(f"unknown hand {name!r}: {exc}") from None
 
 
 def verify(recording: Recording, hand: Any = DEFAULT_HAND) -> Verification:

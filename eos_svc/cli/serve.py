@@ -12,6 +12,7 @@ import logging
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -133,6 +134,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="S",
         help="sleep S seconds in every cycle (testing cancellation and failover)",
     )
+    s.add_argument(
+        "--hand",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="register a hand description file (repeatable); requests name a hand by its "
+        "name (field hand), any registered one (eos hands) or these",
+    )
     s.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default="info")
 
 
@@ -144,7 +153,6 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.planners import default_admission, default_planner
     from eos_svc.service.server import PlanService
 
     try:
@@ -156,7 +164,24 @@ def run(args: argparse.Namespace) -> int:
         fail(f"--{exc.field}: {exc.reason}")
     if args.max_deadline > 3600:
         fail(f"--max-deadline: must be at most 3600 s, got {args.max_deadline:g}")
-    planner = root_plan if args.planner == "root" else default_planner()
+    admission = None
+    served = ""
+    planner: Callable[..., Any]
+    if args.planner == "grasp":
+        from eos_svc.service.hands import ServedHands
+        from eos_svc.shape import kernels
+
+        try:
+            hands = ServedHands(args.hand)
+        except ValidationError as exc:
+            fail(f"--hand: {exc.field}: {exc.reason}")
+        planner, admission = hands.plan, hands.admit
+        kernels.load_in_background()  # the shape fit's compiled kernels (as for the default planner)
+        served = f"; hands {', '.join(hands.names)}"
+    else:
+        if args.hand:
+            fail("--hand: only the grasp planner has hands (--planner grasp)")
+        planner = root_plan
     if args.cycle_delay is not None:
         planner = slowed(planner, args.cycle_delay)
     sys.setswitchinterval(0.001)  # hand the GIL to Zenoh's callback threads sooner while a plan runs
@@ -173,13 +198,13 @@ def run(args: argparse.Namespace) -> int:
             queue_size=args.queue,
             max_request_bytes=args.max_request_bytes,
             max_deadline_s=args.max_deadline,
-            admission=default_admission() if args.planner == "grasp" else None,
+            admission=admission,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config
         fail(f"cannot start the Zenoh session: {exc}", code=1)
     print(
         f"eos serve: instance {service.instance} serving under {service.prefix} "
-        f"({args.workers} worker(s), queue {args.queue}); Ctrl-C to stop",
+        f"({args.workers} worker(s), queue {args.queue}{served}); Ctrl-C to stop",
         flush=True,
     )
     try:

@@ -12,6 +12,8 @@ good grasps are held ≥ 98 %).
     eos experiment grasps --quick --seeds 1    # one object per class
     eos experiment grasps --random 40 --draw-seed 3 [--sizes 0.15 0.5] [--no-validate]
                                                # a random draw: any class, size, pose
+    eos experiment grasps --hand trifinger     # another hand (eos hands) or a description file:
+                                               # the same objects; those it cannot span are refused
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ import numpy as np
 
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
+from eos_svc.cli.hands import add_hand_argument, chosen_hand
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
@@ -37,21 +40,27 @@ from eos_svc.experiments.grasp_suite import (
     quick_suite,
     random_draw,
 )
+from eos_svc.kinematics import HandModel
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
+from eos_svc.world.hand_context import HandContext
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
 
 
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None
+    obj: SuiteObject | DrawnObject,
+    seed: int,
+    validation: dict[str, Any] | None,
+    context: HandContext | None = None,
 ) -> dict[str, Any]:
-    """One run: plan the object with ``seed``, validate the final grasp (unless ``validation``
-    is None: then ``held`` is None); a flat row."""
+    """One run: plan the object with ``seed`` (with the hand of ``context``; default hand3x3),
+    validate the final grasp with that hand (unless ``validation`` is None: then ``held`` is
+    None); a flat row."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
-        result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
+        result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False, context=context)
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
             **row,
@@ -72,7 +81,8 @@ def plan_and_validate(
             "plan_time_s": result.wall_time_s,
         }
     try:
-        check = validate_grasp(result, **validation)
+        hand = None if context is None else context.hand
+        check = validate_grasp(result, **validation, hand=hand)
     except SimulationError as exc:  # counted as not held, and said so
         return {
             **row,
@@ -184,11 +194,13 @@ def run(
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
     validate: bool = True,
+    hand: HandModel | None = None,
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
     drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
-    ``name``.png into ``out``."""
+    ``name``.png into ``out``. ``hand``: plan and validate with this hand (default hand3x3)."""
     objects = list(fixed_suite() if objects is None else objects)
+    context = None if hand is None else HandContext.build(hand)
     checks = dict(validation or {}) if validate else None
     jobs = [
         (obj, seed)
@@ -198,7 +210,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks))
+        runs.append(plan_and_validate(obj, seed, checks, context))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -214,6 +226,7 @@ def run(
     rows, totals = summarise(objects, runs)
     data = {
         "suite": name,
+        "hand": "hand3x3" if hand is None else getattr(hand, "name", str(hand)),
         "seeds": seeds,
         "validation": checks,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
@@ -328,6 +341,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="the random draw's widths as fractions of the hand's span (0.15 0.5)",
     )
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
+    add_hand_argument(parser)
     parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
@@ -356,8 +370,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
+    hand = chosen_hand(args)
+    if hand is not None:
+        name = f"{name}_{hand.name}"
     data = run(
-        objects, seeds, args.out, name, validation={"seconds": args.seconds}, validate=not args.no_validate
+        objects,
+        seeds,
+        args.out,
+        name,
+        validation={"seconds": args.seconds},
+        validate=not args.no_validate,
+        hand=hand,
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")

@@ -210,6 +210,12 @@ class GraspSynthesis:
         normals = np.array([hit.normal for hit in c.landings.values()])
         obj = self.obj
         q = grasp_quality(
-            points, normals, obj.placement.translation, self.friction, SCORE_EDGES, 0.5 * obj.diameter
+            points,
+            normals,
+            obj.placement.translation,
+            self.friction,
+            SCORE_EDGES,
+            0.5 * obj.diameter,
+            self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)

@@ -54,8 +54,9 @@ def _q_final(value: Any, joints: int) -> tuple[float, ...]:
     if len(value) != joints:
         raise ValidationError(
             "q_final",
-            f"must have {joints} joint values (wrist then fingers), got {len(value)}: the validation "
-            "models hand3x3 only — is this another hand's plan (e.g. --hand allegro)?",
+            f"must have {joints} joint values (wrist then fingers), got {len(value)}: is this another "
+            "hand's plan (e.g. --hand allegro)? Validate it with its hand (validate_grasp(..., hand=...), "
+            "eos validate --hand NAME)",
         )
     out = []
     for i, v in enumerate(value):

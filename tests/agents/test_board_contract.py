@@ -16,7 +16,6 @@ from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_ta
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.board_access import access_map, undeclared_entries
 from eos_svc.errors import ContractError, ValidationError
-from eos_svc.kinematics import allegro_hand
 from eos_svc.schema import keys as keys_module
 from eos_svc.schema.board_entries import (
     AFTER_RUN,
@@ -100,8 +99,8 @@ def test_checked_plans_reach_every_writer(tmp_path):
     assert written - set(OUTSIDE_WRITERS) == declared
 
 
-def test_checked_allegro_plan_runs_the_same_cycles():
-    hand = allegro_hand()
+def test_checked_allegro_plan_runs_the_same_cycles(eos_load_hand):
+    hand = eos_load_hand("allegro")
     request = PlanRequest.from_dict({"seed": 2, "object": {"shape": "sphere", "radius": 0.032}})
     checked = plan(request, hand=hand, check_board=True)
     _same_plan(checked, plan(request, hand=hand))
