@@ -343,7 +343,7 @@ _last_vector: list[tuple[Any, str]] = [((), "")]
 
 #: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)
 _RATING_HEAD: dict[str, str] = {}
-_ELIGIBLE = {True: ',"eligible":true}', False: ',"eligible":false}'}
+_ELIGIBLE = {True: ',"eligible":true', False: ',"eligible":false'}
 #: (the last Weights seen, its JSON) in one slot: read and replaced whole, so workers running
 #: plans with different weights never pair one's Weights with the other's JSON
 _last_weights: list[tuple[Any, str]] = [(None, "")]
@@ -383,7 +383,16 @@ def cycle_record_json(record: CycleRecord) -> str:
             + (fj(le) if type(le) is float else vj(le))
             + ',"total":'
             + (fj(tot) if type(tot) is float else vj(tot))
-            + (_ELIGIBLE[el] if type(el) is bool else ',"eligible":' + vj(el) + "}")
+            + (_ELIGIBLE[el] if type(el) is bool else ',"eligible":' + vj(el))
+            + (
+                ',"where":'
+                + vj(r.where)
+                + ',"latency_s":'
+                + vj(r.latency_s)
+                + ',"skipped":'
+                + vj(r.skipped)
+                + "}"
+            )
         )
     outcome = record.outcome
     changes = [
