@@ -253,6 +253,7 @@ class Controller:
                             )
                     except AgentUnavailableError as exc:  # rule 5: rated 0, skipped, the reason recorded
                         why = f"unavailable: {exc}"
+                        log.unavailable(name, seq, why)
                         latency = clock() - started
                         rows.append(
                             new_tuple(AgentRating, (name, default, 0.0, 0.0, 0.0, False, where, latency, why))
@@ -297,6 +298,7 @@ class Controller:
             except AgentUnavailableError as exc:  # rule 5: the action did not run; the plan carries on
                 changes = board.end_cycle()
                 detail = f"agent {name!r} unavailable: {exc}; its action did not run"
+                log.unavailable(name, seq, f"unavailable: {exc}")
                 broken = emit((seq, stage, stage_cycle, tuple(rows), weights, name, None, detail, changes))
                 if broken:
                     return log.result(RunStatus.ERROR, broken, seq, per_stage, completed, stage)
@@ -414,7 +416,7 @@ class _CycleLog:
     """A run's records: builds each cycle's record, keeps the trace, calls the callbacks, and
     makes the final :class:`RunResult`."""
 
-    __slots__ = ("callbacks", "clock", "keep", "t0", "trace")
+    __slots__ = ("callbacks", "clock", "keep", "missing", "t0", "trace")
 
     def __init__(self, callbacks: list[CycleCallback], keep: bool, clock: Callable[[], float]) -> None:
         self.callbacks = callbacks
@@ -422,6 +424,16 @@ class _CycleLog:
         self.clock = clock
         self.trace: list[CycleRecord] = []
         self.t0 = clock()
+        #: per agent that was unavailable: [first cycle, cycles, first reason] (rule 5)
+        self.missing: dict[str, list] = {}
+
+    def unavailable(self, name: str, seq: int, why: str) -> None:
+        """Note that agent ``name`` was unavailable in cycle ``seq`` (the run's reason says so)."""
+        seen = self.missing.get(name)
+        if seen is None:
+            self.missing[name] = [seq, 1, why]
+        else:
+            seen[1] += 1
 
     def emit(self, fields: tuple) -> str | None:
         """Record a cycle; returns an error text if a callback raised."""
@@ -444,7 +456,9 @@ class _CycleLog:
         completed: list[str],
         stage: str,
     ) -> RunResult:
-        """The run's result."""
+        """The run's result (its reason followed by the agents that were unavailable, if any)."""
+        for name, (first, count, why) in self.missing.items():
+            reason += f"; agent {name!r} was unavailable in {count} cycle(s) from cycle {first} ({why})"
         return RunResult(
             status=status,
             reason=reason,

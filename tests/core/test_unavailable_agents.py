@@ -39,7 +39,7 @@ def test_unavailable_agent_rates_zero_is_skipped_and_the_run_carries_on() -> Non
     controller = Controller([Step("step", ["s"], 0.5), Flaky("flaky", ["s"], 0.9)], ["s"], Weights(0.5, 0.5))
     result = controller.run(Board())
     assert result.status == "completed"
-    assert result.reason == "three steps"
+    assert result.reason.startswith("three steps; agent 'flaky' was unavailable in 5 cycle(s) from cycle 1")
     first, second = result.trace[0], result.trace[1]
     row = first.rating_of("flaky")
     assert (row.opportunistic, row.total, row.eligible) == (0.0, 0.0, False)
