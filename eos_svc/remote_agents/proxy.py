@@ -112,7 +112,7 @@ class RemoteAgent(Agent):
         while (left := give_up - time.monotonic()) > 0.0:
             for reply in session.get(key, timeout=left):
                 if reply.ok is not None:
-                    description = json.loads(reply.ok.payload.to_bytes())
+                    description = wire.loads(reply.ok.payload.to_bytes())
                     if not isinstance(description, dict) or description.get("schema") != wire.SCHEMA:
                         raise ValidationError(
                             "describe", f"agent {name!r} does not speak schema {wire.SCHEMA}"
@@ -185,7 +185,7 @@ class RemoteAgent(Agent):
                     break
                 raise AgentUnavailableError(f"misbehaving: its {part} failed: {_reason(raw)}")
             try:
-                data = json.loads(reply.ok.payload.to_bytes())
+                data = wire.loads(reply.ok.payload.to_bytes())
             except (ValueError, UnicodeDecodeError):
                 raise AgentUnavailableError(f"misbehaving: its {part} reply is not JSON") from None
             if not isinstance(data, dict):

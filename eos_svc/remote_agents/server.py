@@ -123,7 +123,7 @@ class AgentServer:
         if part == "describe":
             return wire.dumps(self.describe())
         payload = query.payload
-        data = json.loads(payload.to_bytes() if payload is not None else b"null")
+        data = wire.loads(payload.to_bytes() if payload is not None else b"null")
         if not isinstance(data, dict) or data.get("schema") != wire.SCHEMA:
             raise ValueError(f"a query of schema {wire.SCHEMA} is expected")
         ctx = wire.ctx_from_json(data["ctx"])

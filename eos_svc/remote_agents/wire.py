@@ -15,10 +15,11 @@ are JSON (:func:`eos_svc.records.to_jsonable`).
 
 from __future__ import annotations
 
-import json
 import re
 from collections.abc import Mapping
 from typing import Any
+
+import msgspec
 
 from eos_svc.agent import CycleContext
 from eos_svc.board import BoardChange
@@ -55,8 +56,21 @@ def agent_key(pfx: str, name: str, part: str) -> str:
 
 
 def dumps(value: Any) -> bytes:
-    """Strict JSON bytes of ``value`` (board values made JSON first)."""
-    return json.dumps(to_jsonable(value), allow_nan=False, separators=(",", ":")).encode()
+    """Strict JSON bytes of ``value`` (msgspec; what it cannot encode, e.g. a NumPy array, made
+    JSON by :func:`eos_svc.records.to_jsonable`; non-finite floats become ``null``)."""
+    return _encode(value)
+
+
+def loads(raw: bytes) -> Any:
+    """The JSON value of ``raw`` (raises ``ValueError`` when it is not JSON)."""
+    try:
+        return _decode(raw)
+    except msgspec.DecodeError as exc:
+        raise ValueError(str(exc)) from None
+
+
+_encode = msgspec.json.Encoder(enc_hook=to_jsonable).encode
+_decode = msgspec.json.Decoder().decode
 
 
 def ctx_to_json(ctx: CycleContext) -> dict[str, Any]:
