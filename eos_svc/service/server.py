@@ -40,7 +40,7 @@ import queue
 import secrets
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -303,6 +303,9 @@ class PlanService:
             ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
             Default: :func:`~eos_svc.agents.admission.check_plannable` when the planner is
             the grasp planner, none otherwise.
+        plugins: the plug-in agents this instance offers, by the name requests give them
+            (``PlanRequest.agents``; see :mod:`eos_svc.service.plugins`); a request naming another
+            is refused. Default: none.
     """
 
     def __init__(
@@ -316,6 +319,7 @@ class PlanService:
         queue_size: int = 16,
         max_request_bytes: int = proto.MAX_REQUEST_BYTES,
         admission: Admission | None = None,
+        plugins: Mapping[str, Any] | None = None,
     ) -> None:
         if workers < 1:
             raise proto.RequestError(proto.E_INVALID, "workers", f"must be ≥ 1, got {workers}")
@@ -345,6 +349,7 @@ class PlanService:
         self._owns_session = False
         self._started = False
         self._planner_kwargs: dict[str, Any] = {}
+        self.plugins: dict[str, Any] = dict(plugins or {})  # requests name only these
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -377,6 +382,8 @@ class PlanService:
         self._planner_kwargs = {"keep_trace": False} if "keep_trace" in accepted else {}
         if "check" in accepted and self._admission is not None and self._admission is default_admission():
             self._planner_kwargs["check"] = False
+        if "offered" in accepted:  # a request's plug-in names pick from this instance's only
+            self._planner_kwargs["offered"] = self.plugins
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
