@@ -50,9 +50,10 @@ from eos_svc.world.world import GraspWorld
 DEFAULT_RATING = 0.65
 #: closing axes sampled by default
 DEFAULT_SAMPLES = 12
-#: relative margin by which its best ε must beat the stock synthesis's to count as better
-#: (numerical noise between two routes to the same grasp is not better)
-BETTER_BY = 1e-6
+#: relative margin by which its best ε must beat the stock synthesis's to count as better: 1 %
+#: (two routes to the same grasp, or to an equivalent one, differ by less; the stock rule itself
+#: counts grasps within 5 % of the best ε as equal)
+BETTER_BY = 0.01
 
 
 def hemisphere_axes(samples: int) -> list[np.ndarray]:
