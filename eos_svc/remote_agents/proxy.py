@@ -15,7 +15,8 @@ that cycle, the reason in the cycle record (controller rule 5):
   type (``entry_check``) — the writes are checked, all of them, before any is applied.
 
 An agent whose *action* failed sits out the rest of the plan (a plan's first cycle, ``seq``
-1, brings it back), so a broken action cannot be chosen cycle after cycle.
+1, brings it back), so a broken action cannot be chosen cycle after cycle. A proxy serves one
+plan at a time (plans run one after another may share it; concurrent plans each need their own).
 """
 
 from __future__ import annotations

@@ -227,3 +227,24 @@ def test_sampled_agent_checks_its_settings() -> None:
     with pytest.raises(ValidationError) as err:
         SampledGraspPointsAgent(world, samples=0)
     assert err.value.field == "agents.sampled_grasp_points.samples"
+
+
+def test_the_plugins_experiment_on_two_objects(tmp_path: Path) -> None:
+    from eos_svc.experiments import plugins as experiment
+
+    rows = []
+    for spec in (TILTED, BOX):
+        request = PlanRequest(obj=spec, seed=1)
+        base = plan(request)
+        rows += [experiment.one("x", request, base, config) for config in experiment.CONFIGS]
+    for config in experiment.CONFIGS:
+        summary = experiment.summarize([r for r in rows if r["config"] == config])
+        assert summary["choice_follows_comparison"] == summary["compared"] == 2
+        assert summary["passed_over_same_eps"] == summary["passed_over"]
+    tilted = next(
+        r
+        for r in rows
+        if r["config"] == "sampled+primitive" and r["predicted_eps_plugin"] and r["plugin_better"]
+    )
+    assert tilted["chosen"] == "sampled_grasp_points" and tilted["eps"] > tilted["eps_without"]
+    assert experiment.plot(rows, tmp_path / "p.png").stat().st_size > 0
