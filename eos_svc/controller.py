@@ -221,6 +221,7 @@ class Controller:
 
             # --- rate ---------------------------------------------------------
             rows: list[AgentRating] = []
+            started = clock()
             best: Agent | None = None
             best_view = board
             best_total = -1.0
@@ -237,7 +238,6 @@ class Controller:
                     view,
                     where,
                 ) in table:
-                    started = clock()
                     opp = hints.get(name, 0.0) if hints else 0.0  # rule 1
                     try:
                         if has_pre:
@@ -254,7 +254,8 @@ class Controller:
                     except AgentUnavailableError as exc:  # rule 5: rated 0, skipped, the reason recorded
                         why = f"unavailable: {exc}"
                         log.unavailable(name, seq, why)
-                        latency = clock() - started
+                        now = clock()
+                        latency, started = now - started, now
                         rows.append(
                             new_tuple(AgentRating, (name, default, 0.0, 0.0, 0.0, False, where, latency, why))
                         )
@@ -262,7 +263,8 @@ class Controller:
                     variable = opp * wo + learned * wl
                     total = weighted_default + variable
                     eligible = always or variable > 0.0 or name not in acted
-                    latency = clock() - started
+                    now = clock()  # one clock read per agent: its end is the next one's start
+                    latency, started = now - started, now
                     skipped = None if eligible else REPEAT_SKIP
                     rows.append(
                         new_tuple(
