@@ -85,3 +85,37 @@ def test_eos_serve_refuses_a_bad_agent_spec() -> None:
     )
     assert proc.returncode == 2
     assert "--agent: cannot import module 'nope.nowhere'" in proc.stderr
+
+
+def test_eos_serve_offers_the_plugins_it_is_given() -> None:
+    port = free_port()
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "eos_svc.cli",
+            "serve",
+            "--agent",
+            f"sampled={SPEC}",
+            "--listen",
+            loopback(port),
+        ],
+        stdout=subprocess.PIPE,
+        text=True,
+        env={"PYTHONPATH": str(ROOT), "PATH": "/usr/bin:/bin"},
+    )
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert "plug-ins offered: sampled" in line, line
+        client = EosClient.open(make_config(connect=[loopback(port)]))
+        try:
+            client.wait_for_instances(1, timeout=10.0)
+            outcome = client.plan(PlanRequest(obj=TILTED, seed=1, agents=("sampled",)))
+        finally:
+            client.close()
+        assert outcome.status == "success"
+        assert "sampled_grasp_points" in [msg["record"]["chosen"] for msg in outcome.cycles]
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)
