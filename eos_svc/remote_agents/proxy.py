@@ -14,9 +14,11 @@ that cycle, the reason in the cycle record (controller rule 5):
   [0, 1], an unknown outcome, or a board write outside its declared ``writes`` or of the wrong
   type (``entry_check``) — the writes are checked, all of them, before any is applied.
 
-An agent whose *action* failed sits out the rest of the plan (a plan's first cycle, ``seq``
-1, brings it back), so a broken action cannot be chosen cycle after cycle. A proxy serves one
-plan at a time (plans run one after another may share it; concurrent plans each need their own).
+An agent whose *action* failed, or whose rating came late in :data:`LATE_LIMIT` cycles in a
+row, sits out the rest of the plan (a plan's first cycle, ``seq`` 1, brings it back), so a broken
+action cannot be chosen cycle after cycle nor a frozen process cost the deadline every cycle.
+A proxy serves one plan at a time (plans run one after another may share it; concurrent plans
+each need their own).
 """
 
 from __future__ import annotations
@@ -39,6 +41,9 @@ from eos_svc.schema.board_entries import check_entry
 EntryCheck = Callable[[str, Any], None]
 #: the default wait for a remote agent's reply each cycle (s)
 DEFAULT_TIMEOUT_S = 0.05
+#: ratings late in this many cycles in a row bench the agent for the rest of the plan (a frozen
+#: process holds its liveliness token until its lease ends: 10 s by default)
+LATE_LIMIT = 3
 
 
 class RemoteAgent(Agent):
@@ -85,6 +90,7 @@ class RemoteAgent(Agent):
         self._act_key = wire.agent_key(pfx, name, "act")
         self._alive = True
         self._benched: str | None = None  # why it sits out the rest of the plan
+        self._late = 0  # cycles in a row its rating came late
         self._token = session.liveliness().declare_subscriber(
             wire.agent_key(pfx, name, wire.ALIVE), history=True
         )
@@ -135,11 +141,18 @@ class RemoteAgent(Agent):
     # --- the agent contract ------------------------------------------------------------
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         if ctx.seq == 1:
-            self._benched = None  # a new plan
+            self._benched, self._late = None, 0  # a new plan
         self._check_alive()
         if self._benched is not None:
             raise AgentUnavailableError(self._benched)
-        data = self._ask(self._rate_key, board, ctx)
+        try:
+            data = self._ask(self._rate_key, board, ctx)
+        except AgentUnavailableError as exc:
+            self._late = self._late + 1 if str(exc).startswith("late") else 0
+            if self._late >= LATE_LIMIT:
+                self._benched = f"late in {LATE_LIMIT} cycles in a row; it sits out the rest of the plan"
+            raise
+        self._late = 0
         rating = data.get("rating")
         if rating is None:
             return None

@@ -171,6 +171,9 @@ def test_misbehaving_remote_agents_rate_zero_and_write_nothing(
         assert all("sits out the rest of the plan" in r.rating_of("odd").skipped for r in later)
     else:
         assert "odd" not in result.agents_run()
+    if mode == "slow":  # late three cycles in a row: benched, no more waits
+        assert skips[:3] == [f"unavailable: {words}"] * 3
+        assert all("late in 3 cycles in a row" in s for s in skips[3:]) and len(skips) > 3
 
 
 def test_connecting_to_nobody_and_bad_names(hub) -> None:
