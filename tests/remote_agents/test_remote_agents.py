@@ -7,6 +7,7 @@ grasp planner.
 from __future__ import annotations
 
 import os
+import signal
 import subprocess
 import sys
 import threading
@@ -183,3 +184,28 @@ def test_connecting_to_nobody_and_bad_names(hub) -> None:
     with pytest.raises(ValidationError) as err:
         RemoteAgent.connect(session, "a/*")
     assert err.value.field == "name"
+
+
+def test_a_remote_agent_frozen_mid_plan(hub, remote_process) -> None:
+    session, _ = hub
+    proxy = RemoteAgent.connect(session, "remote_post_shape", connect_timeout_s=5.0)
+    frozen: dict[str, int] = {}
+
+    def freeze_after_its_first_action(record) -> None:
+        if record.chosen == "remote_post_shape" and not frozen:
+            remote_process.send_signal(signal.SIGSTOP)  # alive to Zenoh (its lease runs), silent
+            frozen["seq"] = record.seq
+
+    try:
+        result = run_in_thread(
+            request=PlanRequest(seed=1), agents=[proxy], on_cycle=freeze_after_its_first_action
+        )
+    finally:
+        remote_process.send_signal(signal.SIGCONT)
+    assert frozen and result.status == "success"
+    info = [r for r in result.trace if r.seq > frozen["seq"] and r.stage == "information"]
+    after = [r.rating_of("remote_post_shape").skipped for r in info]
+    after = [s for s in after if s is not None]
+    assert after[:3] == ["unavailable: late: no rate reply within 50 ms"] * 3
+    assert after[3:] and all("late in 3 cycles in a row" in s for s in after[3:])
+    proxy.close()
