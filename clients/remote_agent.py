@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import signal
 import threading
+import time
 from collections.abc import Callable
 
 import zenoh
@@ -57,7 +58,11 @@ def main(
         signal.signal(sig, lambda *_: stop.set())
     with zenoh.open(conf) as session, AgentServer(session, agent, name=name, namespace=namespace) as server:
         print(f"serving agent {server.name} under {server.prefix}/agent/{server.name}", flush=True)
-        stop.wait(duration_s)
+        end = None if duration_s is None else time.monotonic() + duration_s
+        # short waits: a signal the kernel hands to one of Zenoh's threads must not leave the
+        # main thread asleep in one long wait
+        while not stop.wait(0.2) and (end is None or time.monotonic() < end):
+            pass
         print(f"stopped after {server.served} queries", flush=True)
     return 0
 
