@@ -80,3 +80,13 @@ def test_records_written_before_the_new_fields_still_compare_equal() -> None:
     }
     assert first_difference(old, new) is None
     assert first_difference(new, {**new, "ratings": [{**new["ratings"][0], "where": "remote"}]}) is not None
+
+
+def test_the_plan_trace_marks_remote_agents_and_says_why_they_were_skipped() -> None:
+    from eos_svc.cli.plan import format_cycle
+
+    controller = Controller([Step("step", ["s"], 0.5), Flaky("flaky", ["s"], 0.9)], ["s"], Weights(0.5, 0.5))
+    first = controller.run(Board()).trace[0]
+    text = format_cycle(first)
+    assert "flaky@remote=0.00·" in text and "step=0.50" in text
+    assert "flaky skipped: unavailable: no reply within 5 ms" in text
