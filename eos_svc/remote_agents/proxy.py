@@ -124,6 +124,11 @@ class RemoteAgent(Agent):
                         raise ValidationError(
                             "describe", f"agent {name!r} does not speak schema {wire.SCHEMA}"
                         )
+                    if description.get("name") != name:
+                        raise ValidationError(
+                            "describe.name",
+                            f"the agent served as {name!r} says it is {description.get('name')!r}",
+                        )
                     return cls(
                         session,
                         description,
