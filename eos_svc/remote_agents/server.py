@@ -58,8 +58,10 @@ class AgentServer:
         self._entities: list[Any] = []
         self._worker = threading.Thread(target=self._serve, name=f"eos-agent-{self.name}", daemon=True)
         self._worker.start()
-        for part in wire.PARTS:
-            key = wire.agent_key(self.prefix, self.name, part)
+        #: this agent's keys -> the part each serves (a query on another key, e.g. a wildcard
+        #: over several agents, is refused: it must name exactly one)
+        self._parts = {wire.agent_key(self.prefix, self.name, part): part for part in wire.PARTS}
+        for key in self._parts:
             self._entities.append(
                 session.declare_queryable(key, direct_callback(self._inbox.put), complete=True)
             )
@@ -119,7 +121,9 @@ class AgentServer:
 
     def _answer(self, query: zenoh.Query) -> bytes:
         """The reply's JSON bytes for one query (raises on anything wrong)."""
-        part = str(query.key_expr).rsplit("/", 1)[-1]
+        part = self._parts.get(str(query.key_expr))
+        if part is None:
+            raise ValueError(f"a query must name exactly one agent's key, e.g. {next(iter(self._parts))}")
         if part == "describe":
             return wire.dumps(self.describe())
         payload = query.payload
@@ -137,7 +141,7 @@ class AgentServer:
             result = self.agent.act(board, ctx)
             changes = board.end_cycle()
             return wire.dumps(self._act_reply(result, changes))
-        raise ValueError(f"no such part {part!r}")
+        raise AssertionError(part)  # pragma: no cover - _parts holds the three parts only
 
     @staticmethod
     def _act_reply(result: ActionResult, changes: tuple) -> dict[str, Any]:
