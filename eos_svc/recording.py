@@ -12,7 +12,8 @@ A record file is JSON lines:
   ``PlanResult.to_dict()`` without the trace (absent when the run was interrupted).
 
 Two runs are compared cycle by cycle and then by their results, ignoring only wall-clock fields
-(``elapsed_s``, ``wall_time_s``): :func:`compare_run` gives every divergence with the cycle, the
+(``elapsed_s``, ``wall_time_s``, ``latency_s``), and the fields added since a record was
+written (:data:`ADDED_FIELDS`): :func:`compare_run` gives every divergence with the cycle, the
 field path and both values.
 """
 
@@ -35,7 +36,10 @@ RECORD_SCHEMA = 1
 #: the key marking the header and result lines (cycle lines never have it)
 MARK = "eos_record"
 #: fields that measure wall-clock time: never compared
-TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
+TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "latency_s"})
+#: fields added to the cycle record since its first form: a record written before them lacks
+#: them, and a replay that has them does not diverge for that alone
+ADDED_FIELDS = frozenset({"where", "skipped"})
 #: the planner's default hand
 DEFAULT_HAND = "hand3x3"
 
@@ -139,6 +143,9 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
                 r["learned"],
                 r["total"],
                 r.get("eligible", True),
+                r.get("where", "local"),
+                r.get("latency_s", 0.0),
+                r.get("skipped"),
             )
             for r in data["ratings"]
         ),
@@ -158,10 +165,11 @@ def normalise(value: Any) -> Any:
 
 def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str, Any, Any] | None:
     """The first differing field between two JSON values, as (dotted path, recorded, replayed),
-    ignoring :data:`TIMING_FIELDS`; ``None`` when they agree exactly."""
+    ignoring :data:`TIMING_FIELDS` (and :data:`ADDED_FIELDS` a recorded value lacks); ``None``
+    when they agree exactly."""
     if isinstance(recorded, dict) and isinstance(replayed, dict):
         for key in list(recorded) + [k for k in replayed if k not in recorded]:
-            if key in TIMING_FIELDS:
+            if key in TIMING_FIELDS or (key in ADDED_FIELDS and key not in recorded):
                 continue
             where = f"{path}.{key}" if path else str(key)
             if key not in recorded or key not in replayed:

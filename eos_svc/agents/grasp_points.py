@@ -57,13 +57,17 @@ class GraspPointsAgent(GraspAgent):
         oracle: plan on this object instead of post_shape's postulate — the true object, for
             measuring the grasp stage apart from recognition only (``plan(...,
             oracle_postulate=True)``); never the planner's default.
+        name: the agent's name (a subclass with another sampler takes its own, see
+            :meth:`choose_candidates`).
     """
 
     reads = frozenset({keys.SHAPE, keys.TARGET, keys.FRICTION})
     writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})
 
-    def __init__(self, default: float, world: GraspWorld, oracle: ObjectSpec | None = None) -> None:
-        super().__init__("grasp_points", (INFO,), default, world)
+    def __init__(
+        self, default: float, world: GraspWorld, oracle: ObjectSpec | None = None, name: str = "grasp_points"
+    ) -> None:
+        super().__init__(name, (INFO,), default, world)
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
@@ -100,20 +104,12 @@ class GraspPointsAgent(GraspAgent):
                 f"cannot choose grasp points on a {shape['class']} of unknown size from EP1 alone",
                 succeeded=False,
             )
-        world = self.world
-        hand = world.hand
+        hand = self.world.hand
         spec = postulate.spec
-        synthesis = GraspSynthesis(
-            hand,
-            world.sweeps,
-            world.params,
-            make_object(spec),
-            float(board.get(keys.FRICTION, 0.5)),
-            vertical_only=postulate.vertical_only,
-        )
+        synthesis = self.synthesis(board, postulate)
         note = postulate.words()
         note = f" ({note})" if note else ""
-        candidates = synthesis.candidates()
+        candidates = self.choose_candidates(synthesis, spec)
         if not candidates:
             return self._no_grasp(spec, synthesis, note)
         for cand in candidates:
@@ -138,6 +134,24 @@ class GraspPointsAgent(GraspAgent):
             f"wrist turned to roll {roll:.0f}°, pitch {pitch:.0f}°, yaw {yaw:.0f}°, hand placed "
             f"{stand_off * 1000:.0f} mm before the grasp, open",
         )
+
+    def synthesis(self, board: Board, postulate: Postulate) -> GraspSynthesis:
+        """Grasp synthesis of this world's hand on the postulated object, at the board's μ."""
+        world = self.world
+        return GraspSynthesis(
+            world.hand,
+            world.sweeps,
+            world.params,
+            make_object(postulate.spec),
+            float(board.get(keys.FRICTION, 0.5)),
+            vertical_only=postulate.vertical_only,
+        )
+
+    def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:
+        """The candidate grasps on the postulated object ``spec``, best first: the stock
+        synthesis's (:meth:`GraspSynthesis.candidates`). A grasp agent with another sampler
+        overrides this (``eos_svc.agents.plugins.sampled_grasp_points``)."""
+        return synthesis.candidates()
 
     def _no_grasp(self, spec: ObjectSpec, synthesis: GraspSynthesis, note: str) -> ActionResult:
         """End the run: why no candidate was kept."""

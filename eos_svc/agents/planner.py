@@ -31,9 +31,10 @@ The same request with the same seed gives the same cycles and result.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
+from eos_svc.agents.plugins.loading import PluginSpec, plugin_agents, plugin_entries, requested_plugins
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.wrist import WristAgent
@@ -201,6 +203,8 @@ def plan(
     oracle_postulate: bool = False,
     check: bool = True,
     check_board: bool = False,
+    agents: Sequence[PluginSpec] = (),
+    offered: Mapping[str, PluginSpec] | None = None,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -231,9 +235,17 @@ def plan(
             against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
+        agents: plug-in agents added to this plan after the request's own (``request.agents``):
+            factories called with the plan's world, ``Agent`` instances, or names (an
+            ``eos_svc.agents`` entry point, or ``module:attr``); each checked against the
+            plug-in contract (:mod:`eos_svc.agents.plugins.loading`) and placed, in order,
+            just before ``end``.
+        offered: the plug-ins the request's names may pick (name -> plug-in), as a service
+            instance offers them; ``None``: any installed entry point or ``module:attr``.
 
     Raises:
-        ValidationError: a request the planner cannot plan, refused before any cycle by
+        ValidationError: a plug-in that cannot be resolved or breaks the contract (naming
+            ``agents[i]``); a request the planner cannot plan, refused before any cycle by
             :func:`~eos_svc.world.admission.check_plannable` (object out of reach, overlapping
             the hand, wider than the hand's span). Every planning outcome is a status in the result.
     """
@@ -243,11 +255,18 @@ def plan(
         hand = load_hand_named(request.hand)  # the registered hand the request names
     context = context if context is not None else context_for(hand, params)
     world = build_world(request, check=check, context=context)
-    agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    team = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    wanted = [*requested_plugins(request.agents, offered), *agents]
+    extra = plugin_agents(world, wanted, team, STAGES) if wanted else []
+    team[-1:-1] = extra  # plug-ins join just before end (ties go to the built-in agents)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
+    entry_check = None
+    if check_board:
+        own = plugin_entries(extra)
+        entry_check = functools.partial(check_entry, extra=own) if own else check_entry
     controller = Controller(
-        agents,
+        team,
         STAGES,
         request.weights,
         max_cycles=request.max_cycles,
@@ -255,7 +274,7 @@ def plan(
         keep_trace=keep_trace,
         callbacks=[on_cycle] if on_cycle is not None else [],
         check_access=check_board,
-        entry_check=check_entry if check_board else None,
+        entry_check=entry_check,
     )
     board = PoseBoard(world, {keys.FRICTION: request.friction})  # records the hand's q per cycle
     run = controller.run(board, cancel=cancel)

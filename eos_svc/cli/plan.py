@@ -24,7 +24,7 @@ from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
 from eos_svc.cli.hands import add_hand_argument, chosen_hand
 from eos_svc.errors import ValidationError
-from eos_svc.records import CycleRecord
+from eos_svc.records import REPEAT_SKIP, CycleRecord
 
 #: request field -> command-line option, for error messages
 FIELD_OPTIONS = {
@@ -40,6 +40,7 @@ FIELD_OPTIONS = {
     "tactile_noise": "--noise",
     "max_cycles": "--max-cycles",
     "deadline_s": "--deadline",
+    "agents": "--agent",
     "friction": "--friction",
 }
 
@@ -77,6 +78,14 @@ def add_request_arguments(
         metavar="MU",
         help="Coulomb friction μ at the fingertips, for the grasp quality "
         + ("(the request's default when omitted)" if friction_default is None else f"({friction_default})"),
+    )
+    g.add_argument(
+        "--agent",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="add a plug-in agent, repeatable: an eos_svc.agents entry point or module:attr "
+        "(a service takes only those its instance offers, see eos serve --agent)",
     )
     return g
 
@@ -151,16 +160,26 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "max_cycles": args.max_cycles,
         "deadline_s": args.deadline,
         "friction": args.friction,
+        **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
     }
 
 
 def format_cycle(record: CycleRecord) -> str:
-    """Two readable lines per cycle: stage and every total (``·`` = not eligible), then the
-    chosen agent, its outcome and what it did."""
-    ratings = " ".join(f"{r.name}={r.total:.2f}{'' if r.eligible else '·'}" for r in record.ratings)
+    """Two readable lines per cycle: stage and every total (``·`` = not eligible, ``@remote`` =
+    a remote agent), a line per agent skipped as unavailable, then the chosen agent, its
+    outcome and what it did."""
+    ratings = " ".join(
+        f"{r.name}{'' if r.where == 'local' else '@' + r.where}={r.total:.2f}{'' if r.eligible else '·'}"
+        for r in record.ratings
+    )
     chosen = record.chosen or "-"
     outcome = f" [{record.outcome.value}]" if record.outcome is not None else ""
-    return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}{outcome}: {record.detail}"
+    skips = "".join(
+        f"\n     {r.name} skipped: {r.skipped}"
+        for r in record.ratings
+        if r.skipped and r.skipped != REPEAT_SKIP
+    )
+    return f"{record.seq:4d} {record.stage:<11} {ratings}{skips}\n     -> {chosen}{outcome}: {record.detail}"
 
 
 def _postulate_lines(shape: dict[str, Any]) -> list[str]:

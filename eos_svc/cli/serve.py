@@ -142,6 +142,14 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="register a hand description file (repeatable); requests name a hand by its "
         "name (field hand), any registered one (eos hands) or these",
     )
+    s.add_argument(
+        "--agent",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="offer a plug-in agent, repeatable: NAME=module:attr, module:attr or an eos_svc.agents "
+        "entry point; requests name it in their 'agents' field (grasp planner only)",
+    )
     s.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default="info")
 
 
@@ -182,6 +190,16 @@ def run(args: argparse.Namespace) -> int:
         if args.hand:
             fail("--hand: only the grasp planner has hands (--planner grasp)")
         planner = root_plan
+    plugins: dict[str, Any] = {}
+    if args.agent:
+        if args.planner != "grasp":
+            fail("--agent: plug-in agents join the grasp planner only (--planner grasp)")
+        from eos_svc.service.plugins import offered_plugins
+
+        try:
+            plugins = offered_plugins(args.agent)
+        except ValidationError as exc:
+            fail(f"{exc.field}: {exc.reason}")
     if args.cycle_delay is not None:
         planner = slowed(planner, args.cycle_delay)
     sys.setswitchinterval(0.001)  # hand the GIL to Zenoh's callback threads sooner while a plan runs
@@ -199,12 +217,15 @@ def run(args: argparse.Namespace) -> int:
             max_request_bytes=args.max_request_bytes,
             max_deadline_s=args.max_deadline,
             admission=admission,
+            plugins=plugins,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config
         fail(f"cannot start the Zenoh session: {exc}", code=1)
     print(
         f"eos serve: instance {service.instance} serving under {service.prefix} "
-        f"({args.workers} worker(s), queue {args.queue}{served}); Ctrl-C to stop",
+        f"({args.workers} worker(s), queue {args.queue}{served})"
+        + (f"; plug-ins offered: {', '.join(plugins)}" if plugins else "")
+        + "; Ctrl-C to stop",
         flush=True,
     )
     try:

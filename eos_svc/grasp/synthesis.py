@@ -19,6 +19,7 @@ SI units throughout: metres, radians.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -118,6 +119,20 @@ class GraspSynthesis:
             return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
         top = max(c.epsilon for c in kept)
         kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+        return kept
+
+    def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
+        """Another sampler's orientations, checked and scored as :meth:`candidates` checks them:
+        each ``(label, palm rotation)`` simulated at its best depth, kept when its contacts lie
+        about the centre and the hand reaches it collision-free, scored by ε; best ε first (no
+        preference for little wrist rotation). The hook for grasp agents with a sampler of
+        their own (``docs/extending.md``)."""
+        kept = []
+        for label, R in frames:
+            cand = self._at_best_depth(label, R)
+            if cand is not None and cand.about_centre and self._collision_free(cand):
+                kept.append(self._scored(cand))
+        kept.sort(key=lambda c: (-c.epsilon, c.turn))
         return kept
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:

@@ -16,6 +16,7 @@ present, no undeclared field, and each field of the declared type (``float`` acc
 import functools
 import sys
 import types
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, Union, get_args, get_origin
 
@@ -220,15 +221,18 @@ _ALIASES: dict[str, Any] = {"FingerState": FingerState}
 
 
 # --- the runtime check --------------------------------------------------------------------
-def check_entry(key: str, value: Any) -> None:
-    """Check ``value`` against entry ``key``'s declared type.
+def check_entry(key: str, value: Any, extra: Mapping[str, Entry] | None = None) -> None:
+    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES`, or in
+    ``extra``: the entries plug-in agents declare for themselves).
 
     Raises:
         ContractError: ``field`` names the entry (``board.shape``) or the part at fault
             (``board.shape.confidence``), ``reason`` says what is wrong; also for an entry
-            that :data:`ENTRIES` does not declare.
+            that neither declares.
     """
     entry = ENTRIES.get(key)
+    if entry is None and extra:
+        entry = extra.get(key)
     if entry is None:
         raise ContractError(
             f"board.{key}", "no type is declared for this entry in eos_svc.schema.board_entries"

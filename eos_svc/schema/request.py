@@ -44,6 +44,11 @@ MAX_TACTILE_NOISE = 0.01
 DEFAULT_FRICTION = 0.5
 MAX_FRICTION = 10.0
 
+#: most plug-in agents a request may name
+MAX_PLUGINS = 16
+#: longest plug-in name accepted (characters)
+MAX_PLUGIN_NAME = 200
+
 DEFAULT_OBJECT: dict[str, Any] = {"shape": "sphere", "radius": 0.03, "position": [0.21, 0.02, -0.015]}
 
 
@@ -90,6 +95,22 @@ def _check_keys(data: Mapping[str, Any], allowed: set[str], prefix: str) -> None
         if key not in allowed:
             where = f"{prefix}.{key}" if prefix else str(key)
             raise ValidationError(where, f"unknown field (allowed: {', '.join(sorted(allowed))})")
+
+
+def _plugin_names(value: object) -> tuple[str, ...]:
+    """The request's plug-in names, checked: a list of distinct non-empty strings."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise ValidationError("agents", f"must be a list of plug-in names, got {type(value).__name__}")
+    if len(value) > MAX_PLUGINS:
+        raise ValidationError("agents", f"names at most {MAX_PLUGINS} plug-ins, got {len(value)}")
+    for i, name in enumerate(value):
+        if not isinstance(name, str) or not name or len(name) > MAX_PLUGIN_NAME:
+            raise ValidationError(
+                f"agents[{i}]", f"must be a plug-in name of 1 to {MAX_PLUGIN_NAME} characters"
+            )
+        if name in value[:i]:
+            raise ValidationError(f"agents[{i}]", f"plug-in {name!r} is named twice")
+    return tuple(value)
 
 
 @dataclass(frozen=True)
@@ -202,6 +223,9 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
+            point or ``module:attr``; a service instance takes only those it offers); at most
+            :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -211,6 +235,7 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    agents: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, ObjectSpec):
@@ -229,6 +254,8 @@ class PlanRequest:
         if not 0.0 <= mu <= MAX_FRICTION:
             raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
         object.__setattr__(self, "friction", mu)
+        if self.agents:
+            object.__setattr__(self, "agents", _plugin_names(self.agents))
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
@@ -240,21 +267,23 @@ class PlanRequest:
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
-            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+            data,
+            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "agents"},
+            "",
         )
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
+        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "agents"):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (round-trips through :meth:`from_dict`)."""
-        return {
+        out: dict[str, Any] = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -263,3 +292,6 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.agents:
+            out["agents"] = list(self.agents)
+        return out

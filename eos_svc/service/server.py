@@ -36,6 +36,7 @@ import queue
 import secrets
 import threading
 import time
+from collections.abc import Mapping
 from typing import Any
 
 import zenoh
@@ -91,6 +92,9 @@ class PlanService:
             ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
             Default: :func:`~eos_svc.world.admission.check_plannable` when the planner is
             the grasp planner, none otherwise.
+        plugins: the plug-in agents this instance offers, by the name requests give them
+            (``PlanRequest.agents``; see :mod:`eos_svc.service.plugins`); a request naming another
+            is refused. Default: none.
     """
 
     def __init__(
@@ -105,6 +109,7 @@ class PlanService:
         max_request_bytes: int = proto.MAX_REQUEST_BYTES,
         max_deadline_s: float = DEFAULT_MAX_DEADLINE_S,
         admission: Admission | None = None,
+        plugins: Mapping[str, Any] | None = None,
     ) -> None:
         if workers < 1:
             raise proto.RequestError(proto.E_INVALID, "workers", f"must be ≥ 1, got {workers}")
@@ -141,6 +146,7 @@ class PlanService:
         self._owns_session = False
         self._started = False
         self._planner_kwargs: dict[str, Any] = {}
+        self.plugins: dict[str, Any] = dict(plugins or {})  # requests name only these
 
     # ------------------------------------------------------------------ lifecycle
     @classmethod
@@ -165,6 +171,8 @@ class PlanService:
             # already answers (its fits run their numpy reference until then: the same results)
             kernels.load_in_background()
         self._planner_kwargs = planner_options(self._planner, self._admission)
+        if "offered" in inspect.signature(self._planner).parameters:  # a request's plug-in names pick from this instance's only
+            self._planner_kwargs["offered"] = self.plugins
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))

@@ -56,6 +56,8 @@ def _cycles(result) -> list[dict]:
     for record in result.trace:
         d = record.to_dict()
         d.pop("elapsed_s")
+        for row in d["ratings"]:
+            row.pop("latency_s")  # wall-clock, as elapsed_s
         out.append(d)
     return out
 

@@ -88,6 +88,9 @@ def test_the_wheel_carries_the_urdf_every_module_and_data_file(wheel: Path):
     assert any(f.endswith(".py") for f in files)
     assert files <= names, sorted(files - names)  # every module and every data file
     assert not any(n.startswith(("urdf/", "tests/", "benchmarks/")) for n in names)
+    # the worked plug-in agent, nameable by an installed eos_svc (docs/extending.md)
+    entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
+    assert "[eos_svc.agents]\nsampled_grasp_points = " in zipfile.ZipFile(wheel).read(entry_points).decode()
 
 
 def test_installed_package_loads_its_urdf_through_importlib_resources(wheel: Path, tmp_path: Path):
