@@ -37,10 +37,13 @@ def is_grasp_planner(planner: Planner | None) -> bool:
     )
 
 
-def planner_options(planner: Planner, admission: Admission | None) -> dict[str, Any]:
+def planner_options(
+    planner: Planner, admission: Admission | None, offered: dict[str, Any] | None = None
+) -> dict[str, Any]:
     """The keyword arguments the service passes its planner: the grasp planner keeps no trace
-    (the service streams every cycle instead) and skips its own admission check when the service
-    has just run the same one."""
+    (the service streams every cycle instead), skips its own admission check when the service
+    has just run the same one, and takes a request's plug-in names from ``offered`` (this
+    instance's plug-ins) only."""
     try:
         accepted = set(inspect.signature(planner).parameters)
     except (TypeError, ValueError):
@@ -48,4 +51,6 @@ def planner_options(planner: Planner, admission: Admission | None) -> dict[str, 
     options: dict[str, Any] = {"keep_trace": False} if "keep_trace" in accepted else {}
     if "check" in accepted and admission is not None and admission is default_admission():
         options["check"] = False
+    if "offered" in accepted:
+        options["offered"] = dict(offered or {})
     return options

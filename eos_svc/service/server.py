@@ -170,9 +170,7 @@ class PlanService:
             # the shape fit's compiled kernels, loaded in the background while the service
             # already answers (its fits run their numpy reference until then: the same results)
             kernels.load_in_background()
-        self._planner_kwargs = planner_options(self._planner, self._admission)
-        if "offered" in inspect.signature(self._planner).parameters:  # a request's plug-in names pick from this instance's only
-            self._planner_kwargs["offered"] = self.plugins
+        self._planner_kwargs = planner_options(self._planner, self._admission, self.plugins)
         self._started = True
         # replies go out on the queryable's own key (the query's may be a wildcard), built once
         self._plan_key = zenoh.KeyExpr(proto.plan_key(self.prefix, self.instance))
