@@ -42,6 +42,11 @@ from eos_svc.validation.validate import MAX_SECONDS
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
+#: the goal: share of the admitted objects (those that fit between the fingertips along some
+#: axis, :func:`~eos_svc.world.fingertip_fit.fit_refusal`) that end in a good grasp
+GOOD_GOAL = 0.95
+#: words in a size refusal (admission's fit rule) that tell it from a position refusal
+TOO_LARGE = "fits between the fingertips along no axis"
 
 
 def plan_and_validate(
@@ -135,9 +140,11 @@ def summarise(
         )
     done = [r for r in runs if r["status"] != "rejected"]
     refused: dict[str, int] = {}
+    refused_why = {"too large": 0, "position": 0}
     for r in runs:
         if r["status"] == "rejected":
             refused[r["refused_field"]] = refused.get(r["refused_field"], 0) + 1
+            refused_why["too large" if TOO_LARGE in r["reason"] else "position"] += 1
     failures = [
         {"object": r["object"], "seed": r["seed"], "status": r["status"], "reason": r["reason"]}
         for r in done
@@ -155,6 +162,9 @@ def summarise(
         "runs": len(done),
         "rejected": len(runs) - len(done),
         "refused_by_field": refused,
+        "refused_by_reason": refused_why,
+        "good_goal": GOOD_GOAL,
+        "good_goal_met": (_rate([r["good_grasp"] for r in done]) or 0.0) >= GOOD_GOAL if done else None,
         "validated": len(validated),
         "confusion": confusion,
         "success_rate": _rate([r["status"] == "success" for r in done]),
@@ -269,9 +279,11 @@ def report(data: dict) -> str:
     t = data["totals"]
     c = t["confusion"]
     refused = ", ".join(f"{field} {n}" for field, n in sorted(t["refused_by_field"].items())) or "none"
+    why = ", ".join(f"{k} {n}" for k, n in t["refused_by_reason"].items())
     lines.append(
-        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}); "
-        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])}, "
+        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}; {why}); "
+        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])} of the admitted "
+        f"(goal {GOOD_GOAL:.0%}, met: {t['good_goal_met']}), "
         f"success without a good grasp: {t['success_without_good_grasp']}"
     )
     if t["validated"]:

@@ -6,7 +6,7 @@ import csv
 import json
 
 from eos_svc.experiments import grasps
-from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite
+from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite, random_draw
 
 
 def test_suites_cover_every_class_and_differ():
@@ -103,3 +103,33 @@ def test_random_draw_sizes_are_checked(capsys):
         grasps.main(["--random", "2", "--sizes", "0.5", "0.2"])
     assert exc.value.code == 2
     assert "--sizes: LO must be ≤ HI" in capsys.readouterr().err
+
+
+def test_random_draw_counts_the_fit_rule(tmp_path):
+    # large objects: the refusals for size are exactly those the fit rule refuses
+    from eos_svc.world.fingertip_fit import fit_refusal
+    from eos_svc.world.hand_context import default_context
+
+    code = grasps.main(
+        [
+            "--random",
+            "6",
+            "--draw-seed",
+            "4",
+            "--sizes",
+            "0.7",
+            "1.0",
+            "--no-validate",
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert code == 0
+    data = json.loads((tmp_path / "grasps_random.json").read_text())
+    ctx = default_context()
+    too_large = [
+        o for o in random_draw(6, 4, (0.7, 1.0)) if fit_refusal(o.spec, ctx.opening, ctx.params.clearance)
+    ]
+    assert too_large  # objects this large mostly do not fit
+    assert data["totals"]["refused_by_reason"]["too large"] == len(too_large)
+    assert data["totals"]["good_goal"] == grasps.GOOD_GOAL
