@@ -31,12 +31,13 @@ the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and aft
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterator
 
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.probe_plan import Probe, targeted_probes
 from eos_svc.board import Board
 from eos_svc.schema import keys
 from eos_svc.world.world import GraspWorld
@@ -52,19 +53,8 @@ STANDOFF = 0.03
 SLIDE_STEP = 0.003
 #: most steps of one slide
 SLIDE_STEPS = 30
-
-
-@dataclass(frozen=True)
-class Probe:
-    """One planned guarded probe: which face, finger (at joint ``angle``, rad), start of the
-    tip centre and direction (world), travel (m)."""
-
-    face: str
-    finger: str
-    start: np.ndarray
-    direction: np.ndarray
-    travel: float
-    angle: float
+#: most steps of a slide toward an open face
+MAX_SLIDE_STEPS = 90
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
@@ -148,6 +138,19 @@ class EP2Agent(GraspAgent):
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
         return probes
 
+    def _with_fallback(
+        self,
+        planned: list[Probe],
+        estimate: tuple[np.ndarray, np.ndarray],
+        targeted: bool,
+        counts: dict[str, int],
+    ) -> Iterator[Probe]:
+        """The ``planned`` probes, then, when they were aimed at open faces and none touched
+        (``counts`` is filled as they run), this round's probes of the whole surface."""
+        yield from planned
+        if targeted and not counts:
+            yield from self.plan_round(*estimate)
+
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
         return {
             "face": face,
@@ -158,8 +161,24 @@ class EP2Agent(GraspAgent):
             "radius": self.world.hand.tip_radius(finger),
         }
 
+    def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
+        """(horizontal axis, most steps) of each slide of this round: :meth:`slide_axes` with
+        SLIDE_STEPS each; once a fit leaves faces open, toward each open face with a
+        horizontal normal only, far enough to pass it by its fitted size."""
+        if not faces:
+            return [(axis, SLIDE_STEPS) for axis in self.slide_axes(board)]
+        out = []
+        for face in faces:
+            n = np.asarray(face["normal"], dtype=float)
+            h = np.array([n[0], n[1], 0.0])
+            norm = float(np.linalg.norm(h))
+            if norm > 0.5:
+                steps = min(MAX_SLIDE_STEPS, SLIDE_STEPS + int(4.0 * float(face["half"]) / SLIDE_STEP))
+                out.append((h / norm, steps))
+        return out
+
     def slide(
-        self, start: np.ndarray, axis: np.ndarray
+        self, start: np.ndarray, axis: np.ndarray, steps: int = SLIDE_STEPS
     ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
         """Drag the top finger over the top from the tip centre ``start`` along the horizontal
         ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
@@ -174,7 +193,7 @@ class EP2Agent(GraspAgent):
         beyond: list[np.ndarray] = []
         last: tuple[np.ndarray, np.ndarray] | None = None
         z = float(start[2])
-        for k in range(1, SLIDE_STEPS + 1):
+        for k in range(1, steps + 1):
             p = start + axis * (k * SLIDE_STEP)
             p[2] = z + 0.002
             outcome = world.guarded_probe(
@@ -231,7 +250,11 @@ class EP2Agent(GraspAgent):
         free = list(board.get(keys.EP2_FREE, []))
         counts: dict[str, int] = {}
         missed = blocked = 0
-        for probe in self.plan_round(*estimate):
+        faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
+        # active touch: once a fit leaves faces open, the round probes those faces first, and
+        # the whole surface only when none of them is felt
+        planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
+        for probe in self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts):
             outcome = world.guarded_probe(
                 probe.finger, probe.start, probe.direction, probe.travel, probe.angle
             )
@@ -258,9 +281,17 @@ class EP2Agent(GraspAgent):
             if side == "top"
         ]
         if tops:
-            start = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
-            for axis in self.slide_axes(board):
-                slid, beyond = self.slide(start, axis)
+            highest = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            for axis, steps in self.slide_plan(board, faces):
+                # toward an open face: on from the top touch farthest that way
+                start = (
+                    highest
+                    if steps == SLIDE_STEPS
+                    else np.asarray(
+                        max(tops, key=lambda t: float(np.dot(t["centre"], axis)))["centre"], dtype=float
+                    )
+                )
+                slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
                     touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
