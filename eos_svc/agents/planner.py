@@ -283,6 +283,8 @@ def plan(
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
+        touches=len(board.get(keys.EP1_CONTACT, {})) + len(board.get(keys.EP2_TOUCHES, [])),
+        probes=world.probes + int(board.get(keys.EP1_RUNS, 0)),
         hand_height=world.hand.hand_height,
         q_final=tuple(float(x) for x in world.state.q),
         wall_time_s=time.perf_counter() - t0,

@@ -17,6 +17,7 @@ good grasps are held ≥ 98 %).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Sequence
@@ -37,6 +38,9 @@ from eos_svc.experiments.grasp_suite import (
     quick_suite,
     random_draw,
 )
+from eos_svc.experiments.recognition import surface_error
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.result import PlanResult
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
 
@@ -49,14 +53,36 @@ GOOD_GOAL = 0.95
 TOO_LARGE = "fits between the fingertips along no axis"
 
 
+def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
+    """What the plan knew of the object: the postulated class, whether it is right, its
+    confidence, the shape error (:func:`~eos_svc.experiments.recognition.surface_error`: RMS
+    distance of the true surface to the postulated one over the true half extent), and the
+    touches and probes it took."""
+    shape = result.shape or {}
+    guess = shape.get("class", "none")
+    error = surface_error(spec, shape.get("object"), np.random.default_rng(result.seed))
+    return {
+        "postulate": guess,
+        "class_right": guess == spec.shape,
+        "confidence": float(shape.get("confidence", 0.0)),
+        "shape_error": error if math.isfinite(error) else None,
+        "touches": result.touches,
+        "probes": result.probes,
+    }
+
+
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None
+    obj: SuiteObject | DrawnObject,
+    seed: int,
+    validation: dict[str, Any] | None,
+    options: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """One run: plan the object with ``seed``, validate the final grasp (unless ``validation``
-    is None: then ``held`` is None); a flat row."""
+    """One run: plan the object with ``seed`` (and the request ``options``, e.g.
+    ``tactile_noise``), validate the final grasp (unless ``validation`` is None: then ``held``
+    is None); a flat row."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
-        result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
+        result = plan(PlanRequest(obj=obj.spec, seed=seed, **(options or {})), keep_trace=False)
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
             **row,
@@ -66,6 +92,7 @@ def plan_and_validate(
             "good_grasp": None,
             "held": None,
         }
+    row.update(recognition(obj.spec, result))
     if validation is None:
         return {
             **row,
@@ -178,12 +205,31 @@ def summarise(
         if validated
         else None,
         "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
+        **recognition_totals(done),
         "median_validation_time_s": float(np.median([r["validation_time_s"] for r in validated]))
         if validated
         else None,
         "failures": failures,
     }
     return rows, totals
+
+
+def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
+    """Over the admitted runs: class right, the shape error's median and 90th percentile,
+    wrong classes held with confidence ≥ 0.9, and the touches and probes per plan (medians, max)."""
+    if not done:
+        return {}
+    errors = [r["shape_error"] for r in done if r["shape_error"] is not None]
+    return {
+        "class_right_rate": _rate([r["class_right"] for r in done]),
+        "shape_error_median": float(np.median(errors)) if errors else None,
+        "shape_error_p90": float(np.percentile(errors, 90)) if errors else None,
+        "confident_wrong": sum(not r["class_right"] and r["confidence"] >= 0.9 for r in done),
+        "touches_median": float(np.median([r["touches"] for r in done])),
+        "touches_max": max(r["touches"] for r in done),
+        "probes_median": float(np.median([r["probes"] for r in done])),
+        "probes_max": max(r["probes"] for r in done),
+    }
 
 
 def run(
@@ -194,10 +240,11 @@ def run(
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
     validate: bool = True,
+    options: dict[str, Any] | None = None,
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
-    drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
-    ``name``.png into ``out``."""
+    drawn object once, with its own seed — with the request ``options`` (e.g. ``tactile_noise``);
+    write ``name``.json, .csv, ``name``_runs.csv and ``name``.png into ``out``."""
     objects = list(fixed_suite() if objects is None else objects)
     checks = dict(validation or {}) if validate else None
     jobs = [
@@ -208,7 +255,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks))
+        runs.append(plan_and_validate(obj, seed, checks, options))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -225,6 +272,7 @@ def run(
     data = {
         "suite": name,
         "seeds": seeds,
+        "options": dict(options or {}),
         "validation": checks,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
         "rows": rows,
@@ -298,6 +346,14 @@ def report(data: dict) -> str:
         ]
     if t["runs"]:
         lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
+        p90 = t["shape_error_p90"]
+        lines.append(
+            f"recognition: class right {_pct(t['class_right_rate'])}, shape error p90 "
+            f"{'-' if p90 is None else f'{p90:.1%}'}, "
+            f"wrong class at confidence >= 0.9: {t['confident_wrong']}; "
+            f"per plan: touches median {t['touches_median']:.0f} (max {t['touches_max']}), "
+            f"probes median {t['probes_median']:.0f} (max {t['probes_max']})"
+        )
     if t["failures"]:
         lines.append(f"not a good grasp ({len(t['failures'])}):")
         lines += [f"  {f['object']} seed {f['seed']}: {f['status']} — {f['reason']}" for f in t["failures"]]
@@ -341,6 +397,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
     parser.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the requests' tactile noise (standard deviation, m; default 0.0002)",
+    )
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -368,8 +431,21 @@ def main(argv: Sequence[str] | None = None) -> int:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
+    options: dict[str, Any] = {}
+    if args.noise is not None:
+        options["tactile_noise"] = args.noise
+    try:  # the request checks every option, naming the field
+        PlanRequest(**options)
+    except ValidationError as exc:
+        parser.error(f"argument --noise: {exc.reason}")
     data = run(
-        objects, seeds, args.out, name, validation={"seconds": args.seconds}, validate=not args.no_validate
+        objects,
+        seeds,
+        args.out,
+        name,
+        validation={"seconds": args.seconds},
+        validate=not args.no_validate,
+        options=options,
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")

@@ -215,7 +215,16 @@ ENTRIES: dict[str, Entry] = {
 OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up", keys.HAND_Q: "PoseBoard, every cycle"}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
-    {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
+    {
+        keys.OUTCOME,
+        keys.SHAPE,
+        keys.CURVATURE,
+        keys.D_OVER_H,
+        keys.EP1_RUNS,
+        keys.TARGET,
+        keys.EP1_CONTACT,
+        keys.EP2_TOUCHES,
+    }
 )
 
 #: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)

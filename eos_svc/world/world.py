@@ -60,6 +60,7 @@ class GraspWorld:
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
         self.grasp_centre_palm = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move
+        self.probes = 0  # guarded probes run so far (EP2's straight moves, touched or not)
         self.memo: dict[object, Any] = {}
         # the object's bounding ball (centre, m; radius, m) for the gaps' lower bounds: the
         # object is fixed for a world's lifetime (a plan never moves it)
@@ -254,7 +255,9 @@ class GraspWorld:
     def guarded_probe(
         self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
     ) -> ProbeOutcome:
-        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
+        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`),
+        counted in :attr:`probes`."""
+        self.probes += 1
         return probe_motion.guarded_probe(self, finger, start, direction, travel, angle)
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:

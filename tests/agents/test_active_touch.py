@@ -56,3 +56,13 @@ def test_a_long_box_is_known_and_grasped_with_its_back_felt():
     assert any("open" in d for d in details)
     size = sorted(result.shape["object"]["size"])
     assert size[-1] == pytest.approx(0.2, rel=0.03)
+
+
+def test_the_result_counts_touches_and_probes():
+    spec = ObjectSpec("box", {"size": [0.2, 0.06, 0.06]}, (0.27, 0.0, 0.0))
+    result = plan(PlanRequest(obj=spec, seed=2))
+    # the touches the postulate rests on, as post_shape counted them
+    assert result.touches == result.shape["evidence"]["contacts"]
+    rounds = [c.detail for c in result.trace if c.chosen == "ep2"]
+    assert result.probes >= result.touches and result.probes > len(rounds)
+    assert result.to_dict()["touches"] == result.touches

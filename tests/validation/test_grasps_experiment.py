@@ -5,6 +5,8 @@ from __future__ import annotations
 import csv
 import json
 
+import numpy as np
+
 from eos_svc.experiments import grasps
 from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite, random_draw
 
@@ -94,6 +96,12 @@ def test_random_draw_experiment_lists_failures_and_refusals(tmp_path, capsys):
         assert f"{f['object']} seed {f['seed']}: {f['status']}" in out
     assert totals["success_without_good_grasp"] == 0
     assert "refused by admission" in out
+    # recognition and the touches and probes of every admitted plan
+    admitted = [r for r in data["runs"] if r["status"] != "rejected"]
+    assert totals["touches_median"] == np.median([r["touches"] for r in admitted])
+    assert all(r["probes"] >= r["touches"] - 2 for r in admitted)  # EP1's two contacts: its runs
+    assert totals["class_right_rate"] == np.mean([r["class_right"] for r in admitted])
+    assert "touches median" in out and "shape error p90" in out
 
 
 def test_random_draw_sizes_are_checked(capsys):
