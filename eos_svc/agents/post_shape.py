@@ -102,6 +102,7 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
         free[:, 3],
         tactile_noise=world.sensor.noise_std,
         contact_tolerance=world.params.contact_tolerance,
+        kinematic_sigma=world.encoders.position_sigma,
     )
 
 

@@ -404,6 +404,20 @@ def build_parser() -> argparse.ArgumentParser:
         help="the requests' tactile noise (standard deviation, m; default 0.0002)",
     )
     parser.add_argument(
+        "--encoder-noise",
+        type=float,
+        default=None,
+        metavar="RAD",
+        help="the simulated hand's joint-encoder noise (standard deviation, rad; default 0)",
+    )
+    parser.add_argument(
+        "--link-error",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the simulated hand's link-length calibration error (standard deviation, m; default 0)",
+    )
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -432,12 +446,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
     options: dict[str, Any] = {}
-    if args.noise is not None:
-        options["tactile_noise"] = args.noise
+    flags = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error"}
+    for key, flag in flags.items():
+        value = getattr(args, flag[2:].replace("-", "_"))
+        if value is not None:
+            options[key] = value
     try:  # the request checks every option, naming the field
         PlanRequest(**options)
     except ValidationError as exc:
-        parser.error(f"argument --noise: {exc.reason}")
+        parser.error(f"argument {flags[exc.field]}: {exc.reason}")
     data = run(
         objects,
         seeds,

@@ -43,6 +43,10 @@ MAX_TACTILE_NOISE = 0.01
 #: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
 DEFAULT_FRICTION = 0.5
 MAX_FRICTION = 10.0
+#: largest joint-encoder noise σ a request may ask for (rad)
+MAX_ENCODER_NOISE = 0.05
+#: largest link-length calibration error σ a request may ask for (m)
+MAX_LINK_ERROR = 0.005
 
 DEFAULT_OBJECT: dict[str, Any] = {"shape": "sphere", "radius": 0.03, "position": [0.21, 0.02, -0.015]}
 
@@ -222,6 +226,10 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        encoder_noise: standard deviation of every finger joint encoder's reading (rad), in
+            [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
+        link_error: standard deviation of every finger link's length calibration error (m),
+            in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -231,6 +239,8 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    encoder_noise: float = 0.0
+    link_error: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, ObjectSpec):
@@ -249,6 +259,14 @@ class PlanRequest:
         if not 0.0 <= mu <= MAX_FRICTION:
             raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
         object.__setattr__(self, "friction", mu)
+        for name, limit, unit in (
+            ("encoder_noise", MAX_ENCODER_NOISE, "rad"),
+            ("link_error", MAX_LINK_ERROR, "m"),
+        ):
+            value = _number(getattr(self, name), name)
+            if not 0.0 <= value <= limit:
+                raise ValidationError(name, f"must be in [0, {limit}] {unit}, got {value}")
+            object.__setattr__(self, name, value)
 
     @classmethod
     def from_checked(
@@ -273,6 +291,8 @@ class PlanRequest:
             max_cycles=max_cycles,
             deadline_s=deadline_s,
             friction=friction,
+            encoder_noise=0.0,
+            link_error=0.0,
         )
         return request
 
@@ -286,21 +306,42 @@ class PlanRequest:
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
-            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+            data,
+            {
+                "object",
+                "weights",
+                "seed",
+                "tactile_noise",
+                "max_cycles",
+                "deadline_s",
+                "friction",
+                "encoder_noise",
+                "link_error",
+            },
+            "",
         )
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
+        for key in (
+            "seed",
+            "tactile_noise",
+            "max_cycles",
+            "deadline_s",
+            "friction",
+            "encoder_noise",
+            "link_error",
+        ):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (round-trips through :meth:`from_dict`)."""
-        return {
+        """JSON form (round-trips through :meth:`from_dict`); ``encoder_noise`` and
+        ``link_error`` only when not 0 (the exact kinematics, their default)."""
+        out: dict[str, Any] = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -309,3 +350,8 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.encoder_noise:
+            out["encoder_noise"] = self.encoder_noise
+        if self.link_error:
+            out["link_error"] = self.link_error
+        return out

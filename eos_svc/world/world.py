@@ -38,6 +38,7 @@ from eos_svc.objects import SurfaceObject
 from eos_svc.world import finger_closing, probe_motion, wrist_motion
 from eos_svc.world.coverage import SpaceFillingOrder
 from eos_svc.world.hand_context import HandContext
+from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probing import ProbeChoice, ProbeOutcome
 
@@ -55,8 +56,11 @@ class GraspWorld:
     sensor: TactileSensor
     rng: np.random.Generator
     estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+    sensing: JointSensing | None = None  # the joint encoders' and links' errors (None: exact)
 
     def __post_init__(self) -> None:
+        # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
+        self.encoders: JointSensing = self.sensing if self.sensing is not None else JointSensing(self.hand)
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
         self.grasp_centre_palm = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move
