@@ -43,12 +43,15 @@ from eos_svc.schema.request import ObjectSpec
 from eos_svc.schema.result import PlanResult
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
+from eos_svc.world.parameters import WorldParameters
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
 #: the goal: share of the admitted objects (those that fit between the fingertips along some
 #: axis, :func:`~eos_svc.world.fingertip_fit.fit_refusal`) that end in a good grasp
 GOOD_GOAL = 0.95
+#: the postulate's confidence the grasp stage needs (the world's default threshold, 60 %)
+CONFIDENCE_RULE = WorldParameters().confidence_threshold
 #: words in a size refusal (admission's fit rule) that tell it from a position refusal
 TOO_LARGE = "fits between the fingertips along no axis"
 
@@ -68,6 +71,8 @@ def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
         "shape_error": error if math.isfinite(error) else None,
         "touches": result.touches,
         "probes": result.probes,
+        "grasped_unsure": "grasping" in result.cycles_per_stage
+        and float(shape.get("confidence", 0.0)) < CONFIDENCE_RULE,
     }
 
 
@@ -225,6 +230,7 @@ def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
         "shape_error_median": float(np.median(errors)) if errors else None,
         "shape_error_p90": float(np.percentile(errors, 90)) if errors else None,
         "confident_wrong": sum(not r["class_right"] and r["confidence"] >= 0.9 for r in done),
+        "grasped_unsure": sum(r["grasped_unsure"] for r in done),
         "touches_median": float(np.median([r["touches"] for r in done])),
         "touches_max": max(r["touches"] for r in done),
         "probes_median": float(np.median([r["probes"] for r in done])),
@@ -350,7 +356,8 @@ def report(data: dict) -> str:
         lines.append(
             f"recognition: class right {_pct(t['class_right_rate'])}, shape error p90 "
             f"{'-' if p90 is None else f'{p90:.1%}'}, "
-            f"wrong class at confidence >= 0.9: {t['confident_wrong']}; "
+            f"wrong class at confidence >= 0.9: {t['confident_wrong']}, "
+            f"grasping entered below the {CONFIDENCE_RULE:.0%} rule: {t['grasped_unsure']}; "
             f"per plan: touches median {t['touches_median']:.0f} (max {t['touches_max']}), "
             f"probes median {t['probes_median']:.0f} (max {t['probes_max']})"
         )

@@ -66,3 +66,21 @@ def test_the_result_counts_touches_and_probes():
     rounds = [c.detail for c in result.trace if c.chosen == "ep2"]
     assert result.probes >= result.touches and result.probes > len(rounds)
     assert result.to_dict()["touches"] == result.touches
+
+
+def test_an_unsure_postulate_says_why():
+    from eos_svc.agents.grasp_points import unsure
+
+    shape = {
+        "class": "box",
+        "confidence": 0.05,
+        "evidence": {"contacts": 30, "classes": {"box": 1.0}, "fit_rms": 0.8},
+        "open_faces": [{"centre": [0.3, 0, 0], "normal": [1.0, 0.0, 0.0], "half": 0.05, "delta_chi2": 0.0}],
+    }
+    why = unsure(shape, 0.6)
+    assert "box postulated from 30 contacts is 5% sure (the grasp needs 60%)" in why
+    assert "no touch bounds its face toward [+1.00, +0.00, +0.00]" in why
+    shape["open_faces"] = []
+    shape["evidence"]["classes"] = {"box": 0.55, "cylinder": 0.45}
+    assert "fit a box (55%) and a cylinder (45%) alike" in unsure(shape, 0.6)
+    assert unsure(None, 0.6) == ""
