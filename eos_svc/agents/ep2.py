@@ -18,8 +18,15 @@ probes of the front (+x), of both sides (±y), of the top (−z) and of the bott
 object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
 the fingertip dragged over the surface, until it drops over an edge (the last contact is on
 the edge: the object's extent that way), a link would touch first (a curved top past its
-apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
-repeated rounds feel new places.
+apex) or nothing is felt; a slide keeps the contact of every :data:`SLIDE_KEEP`-th step and
+its last. Later rounds shift the probe offsets by the run's generator, so repeated rounds
+feel new places.
+
+**Active touch**: once post_shape's fit leaves faces no touch bounds (``open_faces`` of the
+postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone — straight onto
+each, a finger hooked round the object for a face turned away from the hand
+(:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
+whole surface again only when none of them is felt.
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
@@ -53,6 +60,8 @@ STANDOFF = 0.03
 SLIDE_STEP = 0.003
 #: most steps of one slide
 SLIDE_STEPS = 30
+#: a slide keeps the contact of every this many steps (and its last, on the edge)
+SLIDE_KEEP = 6
 #: most steps of a slide toward an open face
 MAX_SLIDE_STEPS = 90
 
@@ -130,10 +139,10 @@ class EP2Agent(GraspAgent):
                 probes.append(Probe("side", finger, start, sign * ey, travel, straight.get(finger, 0.0)))
         # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
         # bottom: along +z with the opposing finger
-        for dx, dy in ((-f(0.6) * hx, 0.0), (-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
+        for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in (-f(0.6) * hx, -f(0.25) * hx):
+        for dx in (-f(0.4) * hx,):
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
         return probes
@@ -204,8 +213,8 @@ class EP2Agent(GraspAgent):
                 break
             assert outcome.centre is not None and outcome.normal is not None
             last = (outcome.centre, outcome.normal)
-            if k % 3 == 0:
-                out.append(last)  # every third step (and the last, below)
+            if k % SLIDE_KEEP == 0:
+                out.append(last)  # every SLIDE_KEEP-th step (and the last, below)
                 last = None
             if z - float(outcome.centre[2]) > SLIDE_STEP:
                 break  # dropped over an edge
@@ -254,7 +263,10 @@ class EP2Agent(GraspAgent):
         # active touch: once a fit leaves faces open, the round probes those faces first, and
         # the whole surface only when none of them is felt
         planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
+        answered: set[int] = set()  # groups of alternatives already answered by a touch
         for probe in self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts):
+            if probe.group in answered:
+                continue
             outcome = world.guarded_probe(
                 probe.finger, probe.start, probe.direction, probe.travel, probe.angle
             )
@@ -262,6 +274,8 @@ class EP2Agent(GraspAgent):
                 assert outcome.centre is not None and outcome.normal is not None
                 touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
                 counts[probe.face] = counts.get(probe.face, 0) + 1
+                if probe.group >= 0:
+                    answered.add(probe.group)
             else:
                 if outcome.free is not None:
                     r = world.hand.tip_radius(probe.finger)

@@ -8,7 +8,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import build_world
-from eos_svc.agents.probe_plan import HOOK_ANGLE, targeted_probes
+from eos_svc.agents.probe_plan import HOOK_ANGLE, HOOK_ANGLES, REACH_FRACTIONS, targeted_probes
 
 
 @pytest.mark.parametrize("finger", ["finger1", "finger3"])
@@ -35,14 +35,23 @@ def test_probes_of_open_faces_start_beyond_and_move_inward():
         {"centre": [0.3, 0.0, 0.0], "normal": [1.0, 0.0, 0.0], "half": 0.05, "delta_chi2": 0.0},
         {"centre": [0.25, 0.03, 0.0], "normal": [0.0, 1.0, 0.0], "half": 0.03, "delta_chi2": 0.0},
     ]
-    back, side = targeted_probes(world, faces, 0.03)
+    probes = targeted_probes(world, faces, 0.03)
+    # the first of each face's group: from beyond the fitted face by twice its half size and
+    # the stand-off, moving inward past it
+    back = next(p for p in probes if p.group == 0)
+    side = next(p for p in probes if p.group == 1)
     assert back.angle == HOOK_ANGLE and side.angle == world.probe.angles[side.finger]
     for probe, face in zip((back, side), faces, strict=True):
         n = np.asarray(face["normal"])
         assert np.allclose(probe.direction, -n)
-        # from beyond the fitted face by twice its half size and the stand-off, back past it
         assert float((probe.start - face["centre"]) @ n) == pytest.approx(max(0.05, 2 * face["half"]) + 0.03)
         assert probe.travel > float((probe.start - face["centre"]) @ n)
+    # the alternatives of a face: the other finger, a deeper hook, nearer starts, off-centre points
+    alternatives = [p for p in probes if p.group == 0]
+    assert {p.finger for p in alternatives} == {"finger1", "finger3"}
+    assert {p.angle for p in alternatives} == set(HOOK_ANGLES)
+    # 5 points per reach; reaches 0.1 m, then 0.05 m (the least) twice
+    assert len({tuple(np.round(p.start, 6)) for p in alternatives}) == 2 * 5 < len(REACH_FRACTIONS) * 5
     out = world.guarded_probe(back.finger, back.start, back.direction, back.travel, back.angle)
     assert out.event == "touched" and out.centre[0] == pytest.approx(0.35 + 0.01, abs=2e-4)
 
