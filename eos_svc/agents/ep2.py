@@ -50,7 +50,7 @@ from eos_svc.schema import keys
 from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
-MAX_ROUNDS = 3
+MAX_ROUNDS = 5
 #: lowest opportunistic sub-rating while post_shape asks for the surface
 RATING_FLOOR = 0.05
 #: how far outside the estimated surface a probe starts (m)
