@@ -165,7 +165,7 @@ class EP1Agent(GraspAgent):
         est = result.estimate
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
         reading = world.sensor.read(world.state, world.scene.contact(world.state, finger))
-        tip = world.state.data.oMf[world.hand.tip_frame_id(finger)]
+        tip = world.encoders.tip_frame(world.state, finger)  # as the joint encoders report it
         point = tip.translation + tip.rotation @ reading.point_tip
         normal = -(tip.rotation @ reading.normal_tip)
         summary = est.to_dict()

@@ -18,8 +18,15 @@ probes of the front (+x), of both sides (±y), of the top (−z) and of the bott
 object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
 the fingertip dragged over the surface, until it drops over an edge (the last contact is on
 the edge: the object's extent that way), a link would touch first (a curved top past its
-apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
-repeated rounds feel new places.
+apex) or nothing is felt; a slide keeps the contact of every :data:`SLIDE_KEEP`-th step and
+its last. Later rounds shift the probe offsets by the run's generator, so repeated rounds
+feel new places.
+
+**Active touch**: once post_shape's fit leaves faces no touch bounds (``open_faces`` of the
+postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone — straight onto
+each, a finger hooked round the object for a face turned away from the hand
+(:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
+whole surface again only when none of them is felt.
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
@@ -31,18 +38,19 @@ the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and aft
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Iterator
 
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.probe_plan import Probe, targeted_probes
 from eos_svc.board import Board
 from eos_svc.schema import keys
 from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
-MAX_ROUNDS = 3
+MAX_ROUNDS = 5
 #: lowest opportunistic sub-rating while post_shape asks for the surface
 RATING_FLOOR = 0.05
 #: how far outside the estimated surface a probe starts (m)
@@ -52,19 +60,10 @@ STANDOFF = 0.03
 SLIDE_STEP = 0.003
 #: most steps of one slide
 SLIDE_STEPS = 30
-
-
-@dataclass(frozen=True)
-class Probe:
-    """One planned guarded probe: which face, finger (at joint ``angle``, rad), start of the
-    tip centre and direction (world), travel (m)."""
-
-    face: str
-    finger: str
-    start: np.ndarray
-    direction: np.ndarray
-    travel: float
-    angle: float
+#: a slide keeps the contact of every this many steps (and its last, on the edge)
+SLIDE_KEEP = 6
+#: most steps of a slide toward an open face
+MAX_SLIDE_STEPS = 90
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
@@ -140,13 +139,26 @@ class EP2Agent(GraspAgent):
                 probes.append(Probe("side", finger, start, sign * ey, travel, straight.get(finger, 0.0)))
         # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
         # bottom: along +z with the opposing finger
-        for dx, dy in ((-f(0.6) * hx, 0.0), (-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
+        for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in (-f(0.6) * hx, -f(0.25) * hx):
+        for dx in (-f(0.4) * hx,):
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
         return probes
+
+    def _with_fallback(
+        self,
+        planned: list[Probe],
+        estimate: tuple[np.ndarray, np.ndarray],
+        targeted: bool,
+        counts: dict[str, int],
+    ) -> Iterator[Probe]:
+        """The ``planned`` probes, then, when they were aimed at open faces and none touched
+        (``counts`` is filled as they run), this round's probes of the whole surface."""
+        yield from planned
+        if targeted and not counts:
+            yield from self.plan_round(*estimate)
 
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
         return {
@@ -158,8 +170,24 @@ class EP2Agent(GraspAgent):
             "radius": self.world.hand.tip_radius(finger),
         }
 
+    def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
+        """(horizontal axis, most steps) of each slide of this round: :meth:`slide_axes` with
+        SLIDE_STEPS each; once a fit leaves faces open, toward each open face with a
+        horizontal normal only, far enough to pass it by its fitted size."""
+        if not faces:
+            return [(axis, SLIDE_STEPS) for axis in self.slide_axes(board)]
+        out = []
+        for face in faces:
+            n = np.asarray(face["normal"], dtype=float)
+            h = np.array([n[0], n[1], 0.0])
+            norm = float(np.linalg.norm(h))
+            if norm > 0.5:
+                steps = min(MAX_SLIDE_STEPS, SLIDE_STEPS + int(4.0 * float(face["half"]) / SLIDE_STEP))
+                out.append((h / norm, steps))
+        return out
+
     def slide(
-        self, start: np.ndarray, axis: np.ndarray
+        self, start: np.ndarray, axis: np.ndarray, steps: int = SLIDE_STEPS
     ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
         """Drag the top finger over the top from the tip centre ``start`` along the horizontal
         ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
@@ -174,7 +202,7 @@ class EP2Agent(GraspAgent):
         beyond: list[np.ndarray] = []
         last: tuple[np.ndarray, np.ndarray] | None = None
         z = float(start[2])
-        for k in range(1, SLIDE_STEPS + 1):
+        for k in range(1, steps + 1):
             p = start + axis * (k * SLIDE_STEP)
             p[2] = z + 0.002
             outcome = world.guarded_probe(
@@ -185,8 +213,8 @@ class EP2Agent(GraspAgent):
                 break
             assert outcome.centre is not None and outcome.normal is not None
             last = (outcome.centre, outcome.normal)
-            if k % 3 == 0:
-                out.append(last)  # every third step (and the last, below)
+            if k % SLIDE_KEEP == 0:
+                out.append(last)  # every SLIDE_KEEP-th step (and the last, below)
                 last = None
             if z - float(outcome.centre[2]) > SLIDE_STEP:
                 break  # dropped over an edge
@@ -231,7 +259,14 @@ class EP2Agent(GraspAgent):
         free = list(board.get(keys.EP2_FREE, []))
         counts: dict[str, int] = {}
         missed = blocked = 0
-        for probe in self.plan_round(*estimate):
+        faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
+        # active touch: once a fit leaves faces open, the round probes those faces first, and
+        # the whole surface only when none of them is felt
+        planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
+        answered: set[int] = set()  # groups of alternatives already answered by a touch
+        for probe in self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts):
+            if probe.group in answered:
+                continue
             outcome = world.guarded_probe(
                 probe.finger, probe.start, probe.direction, probe.travel, probe.angle
             )
@@ -239,6 +274,8 @@ class EP2Agent(GraspAgent):
                 assert outcome.centre is not None and outcome.normal is not None
                 touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
                 counts[probe.face] = counts.get(probe.face, 0) + 1
+                if probe.group >= 0:
+                    answered.add(probe.group)
             else:
                 if outcome.free is not None:
                     r = world.hand.tip_radius(probe.finger)
@@ -258,9 +295,17 @@ class EP2Agent(GraspAgent):
             if side == "top"
         ]
         if tops:
-            start = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
-            for axis in self.slide_axes(board):
-                slid, beyond = self.slide(start, axis)
+            highest = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            for axis, steps in self.slide_plan(board, faces):
+                # toward an open face: on from the top touch farthest that way
+                start = (
+                    highest
+                    if steps == SLIDE_STEPS
+                    else np.asarray(
+                        max(tops, key=lambda t: float(np.dot(t["centre"], axis)))["centre"], dtype=float
+                    )
+                )
+                slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
                     touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1

@@ -92,7 +92,8 @@ class GraspPointsAgent(GraspAgent):
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         shape = self.confident_shape(board)
         if shape is None:
-            return ActionResult(Outcome.CANNOT_ACT, "no shape postulated with enough confidence yet")
+            why = unsure(board.get(keys.SHAPE), self.world.params.confidence_threshold)
+            return ActionResult(Outcome.CANNOT_ACT, f"no shape postulated with enough confidence yet{why}")
         try:
             postulate = self.postulate(shape)
         except ValidationError as exc:
@@ -210,3 +211,28 @@ class GraspPointsAgent(GraspAgent):
             "pose_assumed_upright": not postulate.pose_known,
             "postulate": postulate.source,
         }
+
+
+def unsure(shape: dict | None, threshold: float) -> str:
+    """Why post_shape's postulate is not trusted, in words (empty before there is one): its
+    confidence against the rule, and what keeps it low — faces no touch bounds, classes that
+    explain the touches alike, or touches no class fits."""
+    if shape is None:
+        return ""
+    evidence = shape.get("evidence") or {}
+    out = (
+        f": the {shape['class']} postulated from {evidence.get('contacts', '?')} contacts is "
+        f"{shape['confidence']:.0%} sure (the grasp needs {threshold:.0%})"
+    )
+    faces = shape.get("open_faces") or []
+    classes = list((evidence.get("classes") or {}).items())
+    if faces:
+        normals = "; ".join("[" + ", ".join(f"{v:+.2f}" for v in f["normal"]) + "]" for f in faces)
+        return out + f"; no touch bounds its face{'s' if len(faces) > 1 else ''} toward {normals}"
+    if len(classes) > 1 and classes[1][1] > 0.2:
+        (a, pa), (b, pb) = classes[0], classes[1]
+        return out + f"; the touches fit a {a} ({pa:.0%}) and a {b} ({pb:.0%}) alike"
+    rms = evidence.get("fit_rms")
+    if rms is not None and rms > 2.0:
+        return out + f"; no class fits the touches (whitened residual rms {rms:.1f})"
+    return out + "; its size or centre is not known to 10 %"

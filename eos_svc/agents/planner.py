@@ -69,6 +69,7 @@ from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.schema.result import PlanResult
 from eos_svc.world.admission import check_plannable
 from eos_svc.world.hand_context import HandContext, context_for, default_context
+from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.pose_board import PoseBoard
 from eos_svc.world.world import GraspWorld
@@ -151,6 +152,9 @@ def build_world(
     # only if it takes a noisy reading)
     search_seed = np.random.SeedSequence(request.seed, spawn_key=(0,))
     sensor_seed = np.random.SeedSequence(request.seed, spawn_key=(1,))
+    # the joint encoders' noise and the links' calibration error draw from a third child (only
+    # when asked for: the default plan draws nothing more)
+    sensing_seed = np.random.SeedSequence(request.seed, spawn_key=(2,))
     return GraspWorld(
         context=context,
         scene=Scene(hand, make_object(request.obj)),
@@ -158,6 +162,7 @@ def build_world(
         sensor=TactileSensor(noise_std=request.tactile_noise, rng=sensor_seed),
         rng=np.random.default_rng(search_seed),
         estimator=CurvatureEstimator(),
+        sensing=JointSensing.build(hand, request.encoder_noise, request.link_error, sensing_seed),
     )
 
 
@@ -305,6 +310,8 @@ def plan(
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
+        touches=len(board.get(keys.EP1_CONTACT, {})) + len(board.get(keys.EP2_TOUCHES, [])),
+        probes=world.probes + int(board.get(keys.EP1_RUNS, 0)),
         hand_height=world.hand.hand_height,
         q_final=tuple(float(x) for x in world.state.q),
         wall_time_s=time.perf_counter() - t0,

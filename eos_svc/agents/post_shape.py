@@ -42,6 +42,7 @@ from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.board import Board
 from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
+from eos_svc.shape.open_faces import open_faces
 from eos_svc.shape.selection import MIN_CONTACTS
 from eos_svc.world.world import GraspWorld
 
@@ -101,6 +102,7 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
         free[:, 3],
         tactile_noise=world.sensor.noise_std,
         contact_tolerance=world.params.contact_tolerance,
+        kinematic_sigma=world.encoders.position_sigma,
     )
 
 
@@ -157,8 +159,11 @@ class PostShapeAgent(GraspAgent):
                 "free_samples": len(touches.free),
             },
             "bounds": None,
+            "open_faces": [],
         }
         if fit is not None:
+            if post.confidence < threshold:  # what EP2 should feel next: the faces no touch bounds
+                shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)

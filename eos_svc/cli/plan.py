@@ -42,6 +42,8 @@ FIELD_OPTIONS = {
     "deadline_s": "--deadline",
     "agents": "--agent",
     "friction": "--friction",
+    "encoder_noise": "--encoder-noise",
+    "link_error": "--link-error",
 }
 
 
@@ -69,6 +71,15 @@ def add_request_arguments(
     g = parser.add_argument_group("run")
     g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
+    g.add_argument(
+        "--encoder-noise",
+        type=finite_float,
+        default=0.0,
+        help="joint-encoder noise std of the simulated hand, rad (0)",
+    )
+    g.add_argument(
+        "--link-error", type=finite_float, default=0.0, help="link-length calibration error std, m (0)"
+    )
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
     g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
     g.add_argument(
@@ -161,6 +172,8 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "deadline_s": args.deadline,
         "friction": args.friction,
         **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
+        **({"encoder_noise": args.encoder_noise} if args.encoder_noise else {}),
+        **({"link_error": args.link_error} if args.link_error else {}),
     }
 
 
@@ -218,7 +231,8 @@ def format_result(result: Any) -> str:
         size = "size unknown" if half is None else f"half-height {half * 1000:.2f} mm"
         confidence = s["confidence"]
         lines.append(
-            f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs})"
+            f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs}; "
+            f"{result.touches} touches, {result.probes} probes)"
         )
         lines.extend(_postulate_lines(s))
     truth = result.ground_truth

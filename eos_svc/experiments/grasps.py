@@ -19,6 +19,7 @@ good grasps are held ≥ 98 %).
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Sequence
@@ -40,13 +41,44 @@ from eos_svc.experiments.grasp_suite import (
     quick_suite,
     random_draw,
 )
+from eos_svc.experiments.recognition import surface_error
 from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.result import PlanResult
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
 from eos_svc.world.hand_context import HandContext
+from eos_svc.world.parameters import WorldParameters
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
+#: the goal: share of the admitted objects (those that fit between the fingertips along some
+#: axis, :func:`~eos_svc.world.fingertip_fit.fit_refusal`) that end in a good grasp
+GOOD_GOAL = 0.95
+#: the postulate's confidence the grasp stage needs (the world's default threshold, 60 %)
+CONFIDENCE_RULE = WorldParameters().confidence_threshold
+#: words in a size refusal (admission's fit rule) that tell it from a position refusal
+TOO_LARGE = "fits between the fingertips along no axis"
+
+
+def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
+    """What the plan knew of the object: the postulated class, whether it is right, its
+    confidence, the shape error (:func:`~eos_svc.experiments.recognition.surface_error`: RMS
+    distance of the true surface to the postulated one over the true half extent), and the
+    touches and probes it took."""
+    shape = result.shape or {}
+    guess = shape.get("class", "none")
+    error = surface_error(spec, shape.get("object"), np.random.default_rng(result.seed))
+    return {
+        "postulate": guess,
+        "class_right": guess == spec.shape,
+        "confidence": float(shape.get("confidence", 0.0)),
+        "shape_error": error if math.isfinite(error) else None,
+        "touches": result.touches,
+        "probes": result.probes,
+        "grasped_unsure": "grasping" in result.cycles_per_stage
+        and float(shape.get("confidence", 0.0)) < CONFIDENCE_RULE,
+    }
 
 
 def plan_and_validate(
@@ -54,13 +86,16 @@ def plan_and_validate(
     seed: int,
     validation: dict[str, Any] | None,
     context: HandContext | None = None,
+    options: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
-    """One run: plan the object with ``seed`` (with the hand of ``context``; default hand3x3),
-    validate the final grasp with that hand (unless ``validation`` is None: then ``held`` is
-    None); a flat row."""
+    """One run: plan the object with ``seed`` (with the hand of ``context``, default hand3x3, and
+    the request ``options``, e.g. ``tactile_noise``), validate the final grasp with that hand
+    (unless ``validation`` is None: then ``held`` is None); a flat row."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
-        result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False, context=context)
+        result = plan(
+            PlanRequest(obj=obj.spec, seed=seed, **(options or {})), keep_trace=False, context=context
+        )
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
             **row,
@@ -70,6 +105,7 @@ def plan_and_validate(
             "good_grasp": None,
             "held": None,
         }
+    row.update(recognition(obj.spec, result))
     if validation is None:
         return {
             **row,
@@ -145,9 +181,11 @@ def summarise(
         )
     done = [r for r in runs if r["status"] != "rejected"]
     refused: dict[str, int] = {}
+    refused_why = {"too large": 0, "position": 0}
     for r in runs:
         if r["status"] == "rejected":
             refused[r["refused_field"]] = refused.get(r["refused_field"], 0) + 1
+            refused_why["too large" if TOO_LARGE in r["reason"] else "position"] += 1
     failures = [
         {"object": r["object"], "seed": r["seed"], "status": r["status"], "reason": r["reason"]}
         for r in done
@@ -165,6 +203,9 @@ def summarise(
         "runs": len(done),
         "rejected": len(runs) - len(done),
         "refused_by_field": refused,
+        "refused_by_reason": refused_why,
+        "good_goal": GOOD_GOAL,
+        "good_goal_met": (_rate([r["good_grasp"] for r in done]) or 0.0) >= GOOD_GOAL if done else None,
         "validated": len(validated),
         "confusion": confusion,
         "success_rate": _rate([r["status"] == "success" for r in done]),
@@ -178,12 +219,32 @@ def summarise(
         if validated
         else None,
         "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
+        **recognition_totals(done),
         "median_validation_time_s": float(np.median([r["validation_time_s"] for r in validated]))
         if validated
         else None,
         "failures": failures,
     }
     return rows, totals
+
+
+def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
+    """Over the admitted runs: class right, the shape error's median and 90th percentile,
+    wrong classes held with confidence ≥ 0.9, and the touches and probes per plan (medians, max)."""
+    if not done:
+        return {}
+    errors = [r["shape_error"] for r in done if r["shape_error"] is not None]
+    return {
+        "class_right_rate": _rate([r["class_right"] for r in done]),
+        "shape_error_median": float(np.median(errors)) if errors else None,
+        "shape_error_p90": float(np.percentile(errors, 90)) if errors else None,
+        "confident_wrong": sum(not r["class_right"] and r["confidence"] >= 0.9 for r in done),
+        "grasped_unsure": sum(r["grasped_unsure"] for r in done),
+        "touches_median": float(np.median([r["touches"] for r in done])),
+        "touches_max": max(r["touches"] for r in done),
+        "probes_median": float(np.median([r["probes"] for r in done])),
+        "probes_max": max(r["probes"] for r in done),
+    }
 
 
 def run(
@@ -195,10 +256,12 @@ def run(
     validation: dict[str, Any] | None = None,
     validate: bool = True,
     hand: HandModel | None = None,
+    options: dict[str, Any] | None = None,
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
-    drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
-    ``name``.png into ``out``. ``hand``: plan and validate with this hand (default hand3x3)."""
+    drawn object once, with its own seed — with the request ``options`` (e.g. ``tactile_noise``);
+    write ``name``.json, .csv, ``name``_runs.csv and ``name``.png into ``out``. ``hand``: plan
+    and validate with this hand (default hand3x3)."""
     objects = list(fixed_suite() if objects is None else objects)
     context = None if hand is None else HandContext.build(hand)
     checks = dict(validation or {}) if validate else None
@@ -210,7 +273,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks, context))
+        runs.append(plan_and_validate(obj, seed, checks, context, options))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -228,6 +291,7 @@ def run(
         "suite": name,
         "hand": "hand3x3" if hand is None else getattr(hand, "name", str(hand)),
         "seeds": seeds,
+        "options": dict(options or {}),
         "validation": checks,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
         "rows": rows,
@@ -282,9 +346,11 @@ def report(data: dict) -> str:
     t = data["totals"]
     c = t["confusion"]
     refused = ", ".join(f"{field} {n}" for field, n in sorted(t["refused_by_field"].items())) or "none"
+    why = ", ".join(f"{k} {n}" for k, n in t["refused_by_reason"].items())
     lines.append(
-        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}); "
-        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])}, "
+        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}; {why}); "
+        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])} of the admitted "
+        f"(goal {GOOD_GOAL:.0%}, met: {t['good_goal_met']}), "
         f"success without a good grasp: {t['success_without_good_grasp']}"
     )
     if t["validated"]:
@@ -299,6 +365,15 @@ def report(data: dict) -> str:
         ]
     if t["runs"]:
         lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
+        p90 = t["shape_error_p90"]
+        lines.append(
+            f"recognition: class right {_pct(t['class_right_rate'])}, shape error p90 "
+            f"{'-' if p90 is None else f'{p90:.1%}'}, "
+            f"wrong class at confidence >= 0.9: {t['confident_wrong']}, "
+            f"grasping entered below the {CONFIDENCE_RULE:.0%} rule: {t['grasped_unsure']}; "
+            f"per plan: touches median {t['touches_median']:.0f} (max {t['touches_max']}), "
+            f"probes median {t['probes_median']:.0f} (max {t['probes_max']})"
+        )
     if t["failures"]:
         lines.append(f"not a good grasp ({len(t['failures'])}):")
         lines += [f"  {f['object']} seed {f['seed']}: {f['status']} — {f['reason']}" for f in t["failures"]]
@@ -343,6 +418,27 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
     add_hand_argument(parser)
     parser.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the requests' tactile noise (standard deviation, m; default 0.0002)",
+    )
+    parser.add_argument(
+        "--encoder-noise",
+        type=float,
+        default=None,
+        metavar="RAD",
+        help="the simulated hand's joint-encoder noise (standard deviation, rad; default 0)",
+    )
+    parser.add_argument(
+        "--link-error",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the simulated hand's link-length calibration error (standard deviation, m; default 0)",
+    )
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -373,6 +469,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     hand = chosen_hand(args)
     if hand is not None:
         name = f"{name}_{hand.name}"
+    options: dict[str, Any] = {}
+    flags = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error"}
+    for key, flag in flags.items():
+        value = getattr(args, flag[2:].replace("-", "_"))
+        if value is not None:
+            options[key] = value
+    try:  # the request checks every option, naming the field
+        PlanRequest(**options)
+    except ValidationError as exc:
+        parser.error(f"argument {flags[exc.field]}: {exc.reason}")
     data = run(
         objects,
         seeds,
@@ -381,6 +487,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         validation={"seconds": args.seconds},
         validate=not args.no_validate,
         hand=hand,
+        options=options,
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")

@@ -87,6 +87,7 @@ ShapeEntry = TypedDict(
         "pose_known": NotRequired[bool],
         "evidence": NotRequired[dict[str, Any]],
         "bounds": NotRequired[list[Vector] | None],
+        "open_faces": NotRequired[list[dict[str, Any]]],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -97,7 +98,9 @@ half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (w
 ``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
 e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
 JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
-postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
+postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``open_faces`` (the
+fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` size and
+``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`).
 """
 
 
@@ -213,7 +216,16 @@ ENTRIES: dict[str, Entry] = {
 OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up", keys.HAND_Q: "PoseBoard, every cycle"}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
-    {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
+    {
+        keys.OUTCOME,
+        keys.SHAPE,
+        keys.CURVATURE,
+        keys.D_OVER_H,
+        keys.EP1_RUNS,
+        keys.TARGET,
+        keys.EP1_CONTACT,
+        keys.EP2_TOUCHES,
+    }
 )
 
 #: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)

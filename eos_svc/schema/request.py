@@ -43,6 +43,10 @@ MAX_TACTILE_NOISE = 0.01
 #: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
 DEFAULT_FRICTION = 0.5
 MAX_FRICTION = 10.0
+#: largest joint-encoder noise σ a request may ask for (rad)
+MAX_ENCODER_NOISE = 0.05
+#: largest link-length calibration error σ a request may ask for (m)
+MAX_LINK_ERROR = 0.005
 
 #: most plug-in agents a request may name
 MAX_PLUGINS = 16
@@ -226,6 +230,10 @@ class PlanRequest:
         agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
             point or ``module:attr``; a service instance takes only those it offers); at most
             :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
+        encoder_noise: standard deviation of every finger joint encoder's reading (rad), in
+            [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
+        link_error: standard deviation of every finger link's length calibration error (m),
+            in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -236,6 +244,8 @@ class PlanRequest:
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
     agents: tuple[str, ...] = ()
+    encoder_noise: float = 0.0
+    link_error: float = 0.0
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, ObjectSpec):
@@ -256,6 +266,14 @@ class PlanRequest:
         object.__setattr__(self, "friction", mu)
         if self.agents:
             object.__setattr__(self, "agents", _plugin_names(self.agents))
+        for name, limit, unit in (
+            ("encoder_noise", MAX_ENCODER_NOISE, "rad"),
+            ("link_error", MAX_LINK_ERROR, "m"),
+        ):
+            value = _number(getattr(self, name), name)
+            if not 0.0 <= value <= limit:
+                raise ValidationError(name, f"must be in [0, {limit}] {unit}, got {value}")
+            object.__setattr__(self, name, value)
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
@@ -268,7 +286,18 @@ class PlanRequest:
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
             data,
-            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "agents"},
+            {
+                "object",
+                "weights",
+                "seed",
+                "tactile_noise",
+                "max_cycles",
+                "deadline_s",
+                "friction",
+                "encoder_noise",
+                "link_error",
+                "agents",
+            },
             "",
         )
         kwargs: dict[str, Any] = {}
@@ -276,13 +305,23 @@ class PlanRequest:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "agents"):
+        for key in (
+            "seed",
+            "tactile_noise",
+            "max_cycles",
+            "deadline_s",
+            "friction",
+            "encoder_noise",
+            "link_error",
+            "agents",
+        ):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (round-trips through :meth:`from_dict`)."""
+        """JSON form (round-trips through :meth:`from_dict`); ``encoder_noise`` and
+        ``link_error`` only when not 0 (the exact kinematics, their default)."""
         out: dict[str, Any] = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
@@ -294,4 +333,8 @@ class PlanRequest:
         }
         if self.agents:
             out["agents"] = list(self.agents)
+        if self.encoder_noise:
+            out["encoder_noise"] = self.encoder_noise
+        if self.link_error:
+            out["link_error"] = self.link_error
         return out

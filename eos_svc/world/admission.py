@@ -12,10 +12,14 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
   the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
 * **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
   object must clear every hand collision geometry by ``clearance`` (coal distances).
-* **size** (the size field that sets the object's smallest width): two fingertips can touch
-  opposite sides of an object only if its smallest width is at most the hand's *span*, the
-  largest distance between the surfaces of two fingertips over the fingers' joint ranges
-  (:func:`~eos_svc.world.hand_context.hand_span`). Wider in every direction: no grasp exists.
+* **size** (the size field of the object's thinnest grip): the object must fit between this
+  hand's fingertips along some axis — its width there below the widest opening at which every
+  finger still reaches a contact (across flat faces, the tip before its links; across curved
+  ones, the tips' reach and the planner's d/h < 1 rule), with room behind the contacts before
+  the palm. One rule, :func:`~eos_svc.world.fingertip_fit.fit_refusal`, on the hand's
+  :class:`~eos_svc.world.fingertip_fit.FingertipOpening`; not the hand's *span* (the largest
+  distance between two fingertips, :func:`~eos_svc.world.hand_context.hand_span`), which
+  fingers opened that wide no longer close on.
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.fingertip_fit import fit_refusal
 from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
 from eos_svc.world.parameters import WorldParameters
 
@@ -94,8 +99,8 @@ def check_plannable(
 
     Raises:
         ValidationError: ``object.position`` when the object is out of reach or overlaps the
-            hand at its start configuration; the size field when it is wider than the hand's
-            span in every direction.
+            hand at its start configuration; the size field when it fits between the
+            fingertips along no axis.
     """
     context = context_for(hand) if context is None else context
     verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
@@ -127,15 +132,11 @@ def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]
 
 def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     """The three tests of the module doc; raises the refusal."""
-    params, span, reach_ahead = context.params, context.span, context.forward_reach
+    params, reach_ahead = context.params, context.forward_reach
 
-    width, size_field = smallest_width(spec)
-    if width > span:
-        raise ValidationError(
-            size_field,
-            f"the {spec.shape}'s smallest width {width:.3f} m exceeds the hand's span {span:.3f} m "
-            "(widest opening between two fingertips): no grasp exists",
-        )
+    too_large = fit_refusal(spec, context.opening, params.clearance)
+    if too_large is not None:
+        raise ValidationError(*too_large)
 
     # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
     # centre's distance to it and at least that minus the bounding radius: coal only in between.

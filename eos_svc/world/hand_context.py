@@ -27,6 +27,7 @@ from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.gap_bounds import hand_bound_table
 from eos_svc.kinematics.hand_state import read_only
 from eos_svc.world.coverage import Lattice, column_counts, lattice_of
+from eos_svc.world.fingertip_fit import FingertipOpening
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probe_pose import ProbePose
 from eos_svc.world.probing import ProbeChoice
@@ -67,6 +68,9 @@ class HandContext:
         neutral_geometries: the collision geometries at the start configuration.
         forward_reach: how far ahead of the wrist the fingers reach (m).
         lattice: the search's column lattice and its distances (from ``params``; ≈ 0.2 ms).
+        opening: the widest openings between the fingertips at which every finger still
+            reaches a contact, and the room behind the contacts (what admission's size rule
+            asks: :func:`~eos_svc.world.fingertip_fit.fit_refusal`).
     """
 
     hand: HandModel
@@ -84,6 +88,7 @@ class HandContext:
     neutral_geometries: tuple[PlacedGeometry, ...]
     forward_reach: float
     lattice: Lattice
+    opening: FingertipOpening
 
     @classmethod
     def build(cls, hand: HandModel, params: WorldParameters | None = None) -> HandContext:
@@ -92,6 +97,7 @@ class HandContext:
         if params is None:
             params = WorldParameters.for_hand(hand, sweeps)
         probe = ProbeChoice.for_hand(hand, sweeps)
+        links = finger_link_geometries(hand)
         sides = side_fingers(hand)
         angles = {(f, probe.angles.get(f, 0.0)) for f in (probe.top, probe.bottom, *sides.values())}
         return cls(
@@ -99,7 +105,7 @@ class HandContext:
             sweeps=sweeps,
             params=params,
             bounds=hand_bound_table(hand),
-            links=finger_link_geometries(hand),
+            links=links,
             probe=probe,
             probe_poses={(f, a): ProbePose.build(hand, f, a) for f, a in angles},
             angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
@@ -110,6 +116,7 @@ class HandContext:
             neutral_geometries=neutral_geometries(hand),
             forward_reach=forward_reach(hand, sweeps),
             lattice=lattice_of(*column_counts(params)),
+            opening=FingertipOpening.build(hand, sweeps, links),
         )
 
     def with_params(self, params: WorldParameters) -> HandContext:

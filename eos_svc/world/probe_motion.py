@@ -90,7 +90,7 @@ def guarded_probe(
         tip_gap = float(contact.distance)
         if tip_gap <= tol:
             reading = world.sensor.read(state, contact)
-            M = state.data.oMf[hand.tip_frame_id(finger)]
+            M = world.encoders.tip_frame(state, finger)  # as the joint encoders report it
             normal = -(M.rotation @ reading.normal_tip)
             return ProbeOutcome(
                 "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
@@ -109,7 +109,7 @@ def guarded_probe(
                 return ProbeOutcome(
                     "blocked",
                     finger,
-                    free=densify(np.array(free)),
+                    free=densify(_reported(world, finger, np.array(free))),
                     travelled=travelled,
                     why="another part of the hand would touch first",
                 )
@@ -123,7 +123,23 @@ def guarded_probe(
             break
         floor = _probe_floor_after(floor, step)
         exact = False
-    return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
+    return ProbeOutcome(
+        "missed", finger, free=densify(_reported(world, finger, np.array(free))), travelled=travelled
+    )
+
+
+def _reported(world: GraspWorld, finger: str, path: np.ndarray) -> np.ndarray:
+    """A probe's true tip-centre path (N, 3) as the hand reports it: shifted by the report's
+    error at the probe's end (the finger's joints hold still during a probe, the wrist is known;
+    :class:`~eos_svc.world.joint_sensing.JointSensing`). The path itself when exact."""
+    if world.encoders.exact:
+        return path
+    state = world.state
+    offset = (
+        world.encoders.tip_frame(state, finger).translation
+        - state.data.oMf[world.hand.tip_frame_id(finger)].translation
+    )
+    return path + offset
 
 
 #: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all

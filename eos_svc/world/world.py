@@ -38,6 +38,7 @@ from eos_svc.objects import SurfaceObject
 from eos_svc.world import finger_closing, probe_motion, wrist_motion
 from eos_svc.world.coverage import SpaceFillingOrder
 from eos_svc.world.hand_context import HandContext
+from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probing import ProbeChoice, ProbeOutcome
 
@@ -55,11 +56,15 @@ class GraspWorld:
     sensor: TactileSensor
     rng: np.random.Generator
     estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+    sensing: JointSensing | None = None  # the joint encoders' and links' errors (None: exact)
 
     def __post_init__(self) -> None:
+        # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
+        self.encoders: JointSensing = self.sensing if self.sensing is not None else JointSensing(self.hand)
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
         self.grasp_centre_palm = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move
+        self.probes = 0  # guarded probes run so far (EP2's straight moves, touched or not)
         self.memo: dict[object, Any] = {}
         # the object's bounding ball (centre, m; radius, m) for the gaps' lower bounds: the
         # object is fixed for a world's lifetime (a plan never moves it)
@@ -254,7 +259,9 @@ class GraspWorld:
     def guarded_probe(
         self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
     ) -> ProbeOutcome:
-        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
+        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`),
+        counted in :attr:`probes`."""
+        self.probes += 1
         return probe_motion.guarded_probe(self, finger, start, direction, travel, angle)
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
