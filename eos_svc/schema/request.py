@@ -16,6 +16,7 @@ JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -214,6 +215,10 @@ class ObjectSpec:
         return out
 
 
+#: a hand name a request may give (the registered hands' names are of this form)
+_HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+
 @dataclass(frozen=True)
 class PlanRequest:
     """A grasp-plan request.
@@ -234,6 +239,8 @@ class PlanRequest:
             [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
         link_error: standard deviation of every finger link's length calibration error (m),
             in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
+        hand: the name of a registered hand to plan with (``eos hands``; a service plans
+            with the hands it registered), or ``None`` for the planner's default hand.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -246,8 +253,13 @@ class PlanRequest:
     agents: tuple[str, ...] = ()
     encoder_noise: float = 0.0
     link_error: float = 0.0
+    hand: str | None = None
 
     def __post_init__(self) -> None:
+        if self.hand is not None and not (isinstance(self.hand, str) and _HAND_NAME.fullmatch(self.hand)):
+            raise ValidationError(
+                "hand", f"must be a hand name of 1-64 characters A-Z a-z 0-9 _ . -, got {self.hand!r}"
+            )
         if not isinstance(self.obj, ObjectSpec):
             raise ValidationError("object", f"must be an ObjectSpec, got {type(self.obj).__name__}")
         if not isinstance(self.weights, Weights):
@@ -297,6 +309,7 @@ class PlanRequest:
                 "encoder_noise",
                 "link_error",
                 "agents",
+                "hand",
             },
             "",
         )
@@ -314,6 +327,7 @@ class PlanRequest:
             "encoder_noise",
             "link_error",
             "agents",
+            "hand",
         ):
             if key in data:
                 kwargs[key] = data[key]
@@ -337,4 +351,6 @@ class PlanRequest:
             out["encoder_noise"] = self.encoder_noise
         if self.link_error:
             out["link_error"] = self.link_error
+        if self.hand is not None:
+            out["hand"] = self.hand
         return out

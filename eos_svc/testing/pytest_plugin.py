@@ -10,7 +10,7 @@ without installing loads it with ``pytest_plugins = ["eos_svc.testing.pytest_plu
 - ``eos_hand_context`` — that hand's :class:`~eos_svc.world.hand_context.HandContext`;
 - ``eos_load_hand`` — a function: name or description file → hand, each built once per session;
 - ``eos_scene_request`` — a plan request for ``eos_hand``: a sphere of diameter 0.5 × the
-  hand's height in front of it (an object every registered hand spans);
+  hand's height (at most 0.8 × its fingertips' widest convex reach) in front of it;
 - ``eos_world`` — a fresh :class:`~eos_svc.world.world.GraspWorld` of that request (the world
   the agents act in: hand at its start pose, the object, seeded randomness).
 
@@ -80,12 +80,14 @@ def eos_hand_context(eos_hand: Any) -> Any:
 
 
 @pytest.fixture
-def eos_scene_request(eos_hand: Any) -> Any:
-    """A plan request for ``eos_hand``: a sphere of diameter 0.5 × its hand height at the
-    default object position, seed 1."""
+def eos_scene_request(eos_hand: Any, eos_hand_context: Any) -> Any:
+    """A plan request for ``eos_hand``: a sphere of diameter 0.5 × its hand height (at most
+    0.8 × the widest convex width all its fingertips reach) at the default object position,
+    seed 1."""
     from eos_svc.agents.planner import ratio_sphere_request
 
-    return ratio_sphere_request(SCENE_D_OVER_H, seed=1, hand=eos_hand)
+    reach = 0.8 * eos_hand_context.opening.curved / eos_hand.hand_height
+    return ratio_sphere_request(min(SCENE_D_OVER_H, reach), seed=1, hand=eos_hand)
 
 
 @pytest.fixture

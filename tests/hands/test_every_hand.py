@@ -43,9 +43,12 @@ def test_closing_brings_each_tip_nearer_the_grasp_centre(eos_hand, eos_hand_cont
         assert half < start, finger
 
 
-def test_the_scene_world_holds_the_hand_and_the_object(eos_world, eos_hand, eos_scene_request):
+def test_the_scene_world_holds_the_hand_and_the_object(
+    eos_world, eos_hand, eos_hand_context, eos_scene_request
+):
     assert eos_world.hand is eos_hand
-    assert eos_world.obj.diameter == pytest.approx(0.5 * eos_hand.hand_height)
+    reach = 0.8 * eos_hand_context.opening.curved
+    assert eos_world.obj.diameter == pytest.approx(min(0.5 * eos_hand.hand_height, reach))
     assert np.array_equal(eos_world.state.q, eos_hand.neutral())
     assert eos_scene_request.obj.shape == "sphere"
 
