@@ -88,13 +88,15 @@ def urdf_effort_limits(urdf: Path) -> dict[str, float]:
     return out
 
 
-def object_shape(spec: ObjectSpec) -> tuple[Shape, SpatialInertia]:
-    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled
-    later), both from the object's kind (:mod:`eos_svc.objects`)."""
+def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
+    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
+    and the unit-mass solid inertia about its centre (scaled later), both from the object's
+    kind (:mod:`eos_svc.objects`)."""
     obj = objects.make(spec.shape, spec.size, spec.position)
     _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
     inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    return obj.drake_shape(), SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    return obj.drake_collision_shapes(), unit
 
 
 def palm_pose(urdf: Path, description: HandDescription, wrist_q: Sequence[float]) -> RigidTransform:
@@ -180,11 +182,14 @@ class GraspSimulation:
             friction=CoulombFriction(friction, friction),
             properties=material,
         )
-        shape, unit_inertia = object_shape(obj)
+        shapes, unit_inertia = object_shapes(obj)
         instance = plant.AddModelInstance(OBJECT_NAME)
         inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody(OBJECT_NAME, instance, inertia)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, OBJECT_NAME, material)
+        for i, shape in enumerate(shapes):
+            plant.RegisterCollisionGeometry(
+                body, RigidTransform(), shape, OBJECT_NAME if i == 0 else f"{OBJECT_NAME}_{i}", material
+            )
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
         plant.Finalize()
 

@@ -52,17 +52,10 @@ def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
 
 
 def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
-    """The object's smallest width (m) and the size field that sets it (``object.<field>``)."""
-    s = spec.size
-    if spec.shape in ("sphere", "capsule"):
-        return 2.0 * s["radius"], "object.radius"
-    if spec.shape == "ellipsoid":
-        return 2.0 * min(s["radii"]), "object.radii"
-    if spec.shape == "cylinder":
-        if s["length"] < 2.0 * s["radius"]:
-            return s["length"], "object.length"
-        return 2.0 * s["radius"], "object.radius"
-    return min(s["size"]), "object.size"
+    """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
+    kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
+    width, size_field = make_object(spec).smallest_width()
+    return width, f"object.{size_field}"
 
 
 def _distance(
@@ -211,13 +204,4 @@ def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
 
 def _diameter(spec: ObjectSpec) -> float:
     """Diameter of the smallest sphere about the object's centre that contains it (m)."""
-    s = spec.size
-    if spec.shape == "sphere":
-        return 2.0 * s["radius"]
-    if spec.shape == "ellipsoid":
-        return 2.0 * max(s["radii"])
-    if spec.shape == "cylinder":
-        return 2.0 * math.hypot(s["radius"], 0.5 * s["length"])
-    if spec.shape == "capsule":
-        return 2.0 * s["radius"] + s["length"]
-    return float(np.linalg.norm(s["size"]))
+    return make_object(spec).diameter
