@@ -17,13 +17,20 @@ from dataclasses import dataclass
 from typing import Any
 
 from eos_svc import objects
-from eos_svc.objects import SurfaceObject
+from eos_svc.objects import ObjectSizeError, SurfaceObject
 from eos_svc.schema.request import ObjectSpec
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:
-    """The kinematics object for a validated :class:`ObjectSpec` (its kind from the registry)."""
-    return objects.make(spec.shape, spec.size, spec.position, spec.rpy)
+    """The kinematics object for a validated :class:`ObjectSpec` (its kind from the registry).
+
+    Raises:
+        ValidationError: ``object.<field>`` when the object cannot be built (a mesh file that
+            cannot be read, a flat mesh)."""
+    try:
+        return objects.make(spec.shape, spec.size, spec.position, spec.rpy)
+    except ObjectSizeError as exc:
+        raise ObjectSizeError(f"object.{exc.field}", exc.reason) from None
 
 
 @dataclass(frozen=True)

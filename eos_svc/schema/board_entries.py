@@ -86,6 +86,7 @@ ShapeEntry = TypedDict(
         "pose_known": NotRequired[bool],
         "evidence": NotRequired[dict[str, Any]],
         "bounds": NotRequired[list[Vector] | None],
+        "approximate": NotRequired[bool],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -96,7 +97,8 @@ half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (w
 ``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
 e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
 JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
-postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
+postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``approximate`` (True: the
+convex hull of the touches, no primitive explaining them).
 """
 
 

@@ -55,6 +55,8 @@ class GraspWorld:
     sensor: TactileSensor
     rng: np.random.Generator
     estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+    #: the support surface's height (world z, m) the object rests on, or None (no table)
+    table_height: float | None = None
 
     def __post_init__(self) -> None:
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices

@@ -42,8 +42,11 @@ def plain_chart_at_mean(P, ex_t, r):
     ne = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
     e0, e1, e2 = e0 / ne, e1 / ne, e2 / ne
     return plain_log_chart(
-        P, np.array((b0, b1, b2)), np.array((e0, e1, e2)),
-        np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)), r,
+        P,
+        np.array((b0, b1, b2)),
+        np.array((e0, e1, e2)),
+        np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0)),
+        r,
     )
 
 
