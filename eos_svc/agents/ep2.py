@@ -19,7 +19,9 @@ object's own horizontal axes once it has an orientation): short guarded probes e
 the fingertip dragged over the surface, until it drops over an edge (the last contact is on
 the edge: the object's extent that way), a link would touch first (a curved top past its
 apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
-repeated rounds feel new places.
+repeated rounds feel new places. When the object rests on a table there is no bottom probe,
+and every probe is the opposing finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`:
+the hand's lowest part, so the rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
@@ -112,7 +114,8 @@ class EP2Agent(GraspAgent):
         """The probes of this round around the estimate (see the module docstring)."""
         world = self.world
         probe = world.probe
-        top, bottom = probe.finger("top"), probe.finger("bottom")
+        top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
+        front = world.probe_finger("front")
         straight = probe.angles
         rng = world.rng
         f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
@@ -129,11 +132,11 @@ class EP2Agent(GraspAgent):
             (-f(0.5) * hy, 0.0),
         ):
             start = np.array([cx - hx - STANDOFF, cy + dy, cz + dz])
-            probes.append(Probe("front", top, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[top]))
+            probes.append(Probe("front", front, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[front]))
         # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
         # front of the widest section (the links trail the tip toward −x)
         for sign in (+1, -1):
-            finger = self.side_fingers[sign]
+            finger = self.side_fingers[sign] if world.table is None else front
             for dx in (-f(0.25) * hx, -f(0.6) * hx):
                 start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
                 travel = 2.0 * hy + 2.0 * STANDOFF
@@ -143,7 +146,7 @@ class EP2Agent(GraspAgent):
         for dx, dy in ((-f(0.6) * hx, 0.0), (-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in (-f(0.6) * hx, -f(0.25) * hx):
+        for dx in () if world.table is not None else (-f(0.6) * hx, -f(0.25) * hx):  # none under a table
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
         return probes
@@ -168,7 +171,7 @@ class EP2Agent(GraspAgent):
         the free tip path of the probe that ended the slide (nothing felt, or a link would
         have touched first: the surface does not go on at that height)."""
         world = self.world
-        finger = world.probe.finger("top")
+        finger = world.probe_finger("top")
         angle = world.probe.angles[finger]
         out: list[tuple[np.ndarray, np.ndarray]] = []
         beyond: list[np.ndarray] = []
@@ -262,9 +265,9 @@ class EP2Agent(GraspAgent):
             for axis in self.slide_axes(board):
                 slid, beyond = self.slide(start, axis)
                 for centre, normal in slid:
-                    touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
+                    touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
-                r = world.hand.tip_radius(world.probe.finger("top"))
+                r = world.hand.tip_radius(world.probe_finger("top"))
                 free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)
         self.rounds += 1
         board.set(keys.EP2_TOUCHES, touches)

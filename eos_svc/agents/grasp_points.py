@@ -115,6 +115,7 @@ class GraspPointsAgent(GraspAgent):
             make_object(spec),
             float(board.get(keys.FRICTION, 0.5)),
             vertical_only=postulate.vertical_only,
+            table_height=world.table_height,
         )
         note = postulate.words()
         note = f" ({note})" if note else ""

@@ -155,6 +155,7 @@ def build_world(
         sensor=TactileSensor(noise_std=request.tactile_noise, rng=sensor_seed),
         rng=np.random.default_rng(search_seed),
         estimator=CurvatureEstimator(),
+        table_height=None if request.table is None else request.table.height,
     )
 
 

@@ -128,7 +128,10 @@ class PostShapeAgent(GraspAgent):
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         new = (
-            ctx.changed(keys.CURVATURE) or ctx.changed(keys.CURVATURE_BOTTOM) or ctx.changed(keys.EP2_TOUCHES)
+            ctx.changed(keys.CURVATURE)
+            or ctx.changed(keys.CURVATURE_BOTTOM)
+            or ctx.changed(keys.EP2_TOUCHES)
+            or ctx.changed(keys.EP1_CONTACT)  # on a table, the bottom is the table's plane
         )
         return 1.0 if new else 0.0
 

@@ -279,6 +279,36 @@ class ObjectSpec:
 
 
 @dataclass(frozen=True)
+class Table:
+    """A horizontal support surface under the object: its top at world z = ``height`` (m).
+
+    The planner knows it: no hand motion below it, no probe from under it, no grasp whose hand
+    would touch it; the Drake validation welds a box there."""
+
+    height: float
+
+    def __post_init__(self) -> None:
+        z = _number(self.height, "table.height")
+        if abs(z) > MAX_POSITION:
+            raise ValidationError("table.height", f"must be within ±{MAX_POSITION} m, got {z}")
+        object.__setattr__(self, "height", z)
+
+    @classmethod
+    def from_dict(cls, data: object) -> Table:
+        """Validate and build from ``{"height": z}``."""
+        if not isinstance(data, Mapping):
+            raise ValidationError("table", f'must be an object {{"height": z}}, got {type(data).__name__}')
+        _check_keys(data, {"height"}, "table")
+        if "height" not in data:
+            raise ValidationError("table.height", "is required")
+        return cls(data["height"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {"height": self.height}
+
+
+@dataclass(frozen=True)
 class PlanRequest:
     """A grasp-plan request.
 
@@ -291,6 +321,8 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        table: the support surface the object rests on (``"table": {"height": z}``), or
+            ``None`` (the default, the paper's scene: the object floats, no support).
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -300,8 +332,11 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    table: Table | None = None
 
     def __post_init__(self) -> None:
+        if self.table is not None and not isinstance(self.table, Table):
+            raise ValidationError("table", f"must be a Table or None, got {type(self.table).__name__}")
         if not isinstance(self.obj, ObjectSpec):
             raise ValidationError("object", f"must be an ObjectSpec, got {type(self.obj).__name__}")
         if not isinstance(self.weights, Weights):
@@ -329,6 +364,7 @@ class PlanRequest:
         max_cycles: int,
         deadline_s: float | None,
         friction: float,
+        table: Table | None = None,
     ) -> PlanRequest:
         """Build from values already checked exactly as ``__post_init__`` checks them (ints for
         ``seed`` and ``max_cycles``, floats otherwise, all within their bounds), without checking
@@ -342,6 +378,7 @@ class PlanRequest:
             max_cycles=max_cycles,
             deadline_s=deadline_s,
             friction=friction,
+            table=table,
         )
         return request
 
@@ -355,8 +392,12 @@ class PlanRequest:
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
-            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+            data,
+            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "table"},
+            "",
         )
+        if data.get("table") is not None:
+            kwargs_table = Table.from_dict(data["table"])
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
@@ -365,11 +406,13 @@ class PlanRequest:
         for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
             if key in data:
                 kwargs[key] = data[key]
+        if data.get("table") is not None:
+            kwargs["table"] = kwargs_table
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (round-trips through :meth:`from_dict`)."""
-        return {
+        out = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -378,3 +421,6 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.table is not None:  # absent in the paper's scene: the JSON form stays as it was
+            out["table"] = self.table.to_dict()
+        return out

@@ -16,6 +16,9 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
   opposite sides of an object only if its smallest width is at most the hand's *span*, the
   largest distance between the surfaces of two fingertips over the fingers' joint ranges
   (:func:`~eos_svc.world.hand_context.hand_span`). Wider in every direction: no grasp exists.
+
+With a table (``request.table``), a fourth: **on the table** (``object.position[2]``): the
+object may not reach into it (:func:`check_on_table`).
 """
 
 from __future__ import annotations
@@ -95,6 +98,25 @@ def check_plannable(
     if verdict:
         field, reason = verdict
         raise ValidationError(field, reason)
+    if request.table is not None:
+        check_on_table(request.obj, request.table.height)
+
+
+#: how far an object may reach into the table (m): resting on it, within rounding
+TABLE_TOLERANCE = 1e-3
+
+
+def check_on_table(spec: ObjectSpec, height: float) -> None:
+    """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
+    :data:`TABLE_TOLERANCE` (its lowest point from its kind's exact bounds)."""
+    obj = make_object(spec)
+    lowest = float(obj.centre[2] - obj.half_extents()[2])
+    if lowest < height - TABLE_TOLERANCE:
+        raise ValidationError(
+            "object.position[2]",
+            f"the object reaches {1000 * (height - lowest):.1f} mm into the table (its lowest point "
+            f"z = {lowest:.4f} m, the table's top z = {height:.4f} m): place it on the table",
+        )
 
 
 def check_default(request: PlanRequest) -> None:
