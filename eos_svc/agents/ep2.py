@@ -33,6 +33,7 @@ the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and aft
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,6 +55,9 @@ STANDOFF = 0.03
 SLIDE_STEP = 0.003
 #: most steps of one slide
 SLIDE_STEPS = 30
+#: on a table: how far back from the front face the scan from above reaches (m), in how many rows
+SCAN_DEPTH = 0.16
+SCAN_ROWS = 7
 
 
 @dataclass(frozen=True)
@@ -149,7 +153,32 @@ class EP2Agent(GraspAgent):
         for dx in () if world.table is not None else (-f(0.6) * hx, -f(0.25) * hx):  # none under a table
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
+        if world.table is not None:
+            probes += self.table_scan(centre, half, f)
         return probes
+
+    def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
+        """On a table, probes straight down from above on a grid from the front face back
+        :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
+        is (a height map), and where nothing stands down to the table — the back the front,
+        side and top probes cannot reach."""
+        world = self.world
+        finger = world.probe_finger("top")
+        cx, cy, cz = centre.tolist()
+        hx, hy, hz = half.tolist()
+        depth = max(SCAN_DEPTH, 4.0 * hx)
+        top = cz + hz + STANDOFF
+        travel = top - float(world.table_height)  # type: ignore[arg-type]
+        out = []
+        for x in np.linspace(cx - hx, cx - hx + depth, SCAN_ROWS)[1:]:
+            for dy in (-f(0.5) * hy, 0.0, f(0.5) * hy):
+                start = np.array([x, cy + dy, top])
+                out.append(
+                    Probe(
+                        "top", finger, start, np.array([0.0, 0.0, -1.0]), travel, world.probe.angles[finger]
+                    )
+                )
+        return out
 
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
         return {

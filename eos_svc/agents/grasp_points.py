@@ -31,7 +31,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.schema import keys
-from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.request import MESH, ObjectSpec
 from eos_svc.world.world import GraspWorld
 
 #: the reason synthesis gives for a grip wider than the hand height
@@ -40,6 +40,9 @@ TOO_LARGE = "larger than the hand height across the grip"
 
 def size_words(spec: ObjectSpec) -> str:
     """The postulated size in the request's field names, mm (e.g. ``size [70, 35, 45] mm``)."""
+    if spec.shape == MESH:  # a mesh: its extents
+        obj = make_object(spec)
+        return f"extents [{', '.join(f'{2000 * v:.0f}' for v in obj.half_extents())}] mm"
     parts = []
     for key, value in spec.size.items():
         if isinstance(value, tuple):

@@ -321,6 +321,11 @@ class SurfaceObject(ABC):
         """Half extents of the object's bounds along the world x, y, z axes (m)."""
         return self.local_bounds(self.rotation)
 
+    def depth_below_centre(self) -> float:
+        """How far the object reaches below its centre (world −z, m): its lowest point is at
+        ``centre[2] − depth_below_centre()`` (a centred primitive: its vertical half extent)."""
+        return float(self.half_extents()[2])
+
     # -- curvature ------------------------------------------------------------------------
     def _local_form(self, p_world: Array) -> tuple[Array, Array]:
         s = self._local_closest(p_world)[1]

@@ -240,6 +240,10 @@ class Mesh(SurfaceObject):
         out: Array = np.abs(np.asarray(self.hull.vertices) @ R.T).max(axis=0)
         return out
 
+    def depth_below_centre(self) -> float:
+        """The lowest hull vertex's depth below the centre of mass (world −z, m)."""
+        return float(-(np.asarray(self.hull.vertices) @ self.rotation.T)[:, 2].min())
+
     def principal_axes(self) -> Array:
         """The solid's principal axes of inertia (columns, object frame), least inertia first."""
         _, V = np.linalg.eigh(self.unit_inertia())

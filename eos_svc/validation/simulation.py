@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from pydrake.geometry import (
     AddContactMaterial,
+    Box,
     CollisionFilterDeclaration,
     ProximityProperties,
     RoleAssign,
@@ -65,6 +66,10 @@ DEFAULT_CONTACT_STIFFNESS = 2e4
 DEFAULT_TIME_STEP = 1e-3
 
 OBJECT_NAME = "object"
+#: the table's geometry name, side (m) and thickness (m): a slab whose top is the table's height
+TABLE_NAME = "table"
+TABLE_SIDE = 2.0
+TABLE_THICKNESS = 0.1
 #: name of the hand part made of the palm and every hand body outside the fingers
 PALM_PART = "palm"
 
@@ -126,6 +131,8 @@ class GraspSimulation:
         kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
         contact_stiffness: point-contact stiffness of every geometry (N/m).
         time_step: the discrete plant's step (s).
+        table_height: the table's top (world z, m): a box welded to the world under it, in
+            contact with the hand and the object like them (None: no table).
     """
 
     def __init__(
@@ -142,6 +149,7 @@ class GraspSimulation:
         kd: float = DEFAULT_KD,
         contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
         time_step: float = DEFAULT_TIME_STEP,
+        table_height: float | None = None,
     ) -> None:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]
@@ -190,6 +198,10 @@ class GraspSimulation:
             plant.RegisterCollisionGeometry(
                 body, RigidTransform(), shape, OBJECT_NAME if i == 0 else f"{OBJECT_NAME}_{i}", material
             )
+        if table_height is not None:
+            top = RigidTransform(vec((0.0, 0.0, table_height - 0.5 * TABLE_THICKNESS)))
+            table = Box(TABLE_SIDE, TABLE_SIDE, TABLE_THICKNESS)
+            plant.RegisterCollisionGeometry(plant.world_body(), top, table, TABLE_NAME, material)
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
         plant.Finalize()
 

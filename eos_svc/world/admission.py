@@ -108,9 +108,10 @@ TABLE_TOLERANCE = 1e-3
 
 def check_on_table(spec: ObjectSpec, height: float) -> None:
     """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
-    :data:`TABLE_TOLERANCE` (its lowest point from its kind's exact bounds)."""
+    :data:`TABLE_TOLERANCE` (its lowest point:
+    :meth:`~eos_svc.objects.base.SurfaceObject.depth_below_centre`)."""
     obj = make_object(spec)
-    lowest = float(obj.centre[2] - obj.half_extents()[2])
+    lowest = float(obj.centre[2] - obj.depth_below_centre())
     if lowest < height - TABLE_TOLERANCE:
         raise ValidationError(
             "object.position[2]",
