@@ -161,7 +161,7 @@ class EP2Agent(GraspAgent):
         """On a table, probes straight down from above on a grid from the front face back
         :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
         is (a height map), and where nothing stands down to the table — the back the front,
-        side and top probes cannot reach."""
+        side and top probes cannot reach. The finger is opened to its limit, its tip lowest."""
         world = self.world
         finger = world.probe_finger("top")
         cx, cy, cz = centre.tolist()
@@ -169,15 +169,13 @@ class EP2Agent(GraspAgent):
         depth = max(SCAN_DEPTH, 4.0 * hx)
         top = cz + hz + STANDOFF
         travel = top - float(world.table_height)  # type: ignore[arg-type]
+        # the opposing finger opened to its limit: its tip below its links, which rise behind it
+        opened = float(world.hand.lower[world.hand.finger_q_index(finger)].max())
         out = []
         for x in np.linspace(cx - hx, cx - hx + depth, SCAN_ROWS)[1:]:
             for dy in (-f(0.5) * hy, 0.0, f(0.5) * hy):
                 start = np.array([x, cy + dy, top])
-                out.append(
-                    Probe(
-                        "top", finger, start, np.array([0.0, 0.0, -1.0]), travel, world.probe.angles[finger]
-                    )
-                )
+                out.append(Probe("top", finger, start, np.array([0.0, 0.0, -1.0]), travel, opened))
         return out
 
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
