@@ -34,7 +34,7 @@ from eos_svc.schema.request import ObjectSpec, Table
 #: the thinnest extent's range (m): what the hand can span across a grip
 THIN_MIN, THIN_MAX = 0.04, 0.10
 #: the longest extent allowed (m)
-LONGEST_MAX = 0.25
+LONGEST_MAX = 0.16
 #: the table's height (world z, m) and where the object's centre of mass stands over it (x, y, m)
 TABLE_HEIGHT = -0.05
 PLACE = (0.21, 0.02)

@@ -129,8 +129,11 @@ class Mesh(SurfaceObject):
         else:
             V, F = _arrays(vertices, faces)
         mesh = trimesh.Trimesh(V * self.scale, F, process=True)
-        hull = mesh.convex_hull
-        if hull.volume <= 0.0:
+        try:
+            hull = mesh.convex_hull
+        except Exception:  # qhull refuses fewer than 4 points off a plane
+            hull = None
+        if hull is None or not hull.volume > 0.0:
             raise ObjectSizeError("vertices", "the mesh is flat: its convex hull has no volume")
         self.closed = bool(mesh.is_watertight and mesh.is_volume)
         solid = mesh if self.closed else hull
