@@ -90,9 +90,9 @@ def resting(label: str, file: Path, thin: float | None, rng: np.random.Generator
     if np.linalg.det(R) < 0.0:
         R[2] *= -1.0
     lowest = float((np.asarray(unit.hull.vertices) @ R.T)[:, 2].min()) * scale
-    rpy = pin.rpy.matrixToRpy(R)
+    roll, pitch, yaw = (float(a) for a in pin.rpy.matrixToRpy(R))
     position = (PLACE[0], PLACE[1], TABLE_HEIGHT - lowest + 1e-5)
-    spec = ObjectSpec("mesh", {"file": str(file), "scale": scale}, position, tuple(float(a) for a in rpy))
+    spec = ObjectSpec("mesh", {"file": str(file), "scale": scale}, position, (roll, pitch, yaw))
     return WorldObject(label, spec, Table(TABLE_HEIGHT))
 
 

@@ -164,7 +164,7 @@ def _shape(**fields) -> dict:
 
 def test_entry_check_accepts_the_declared_forms():
     check_entry(keys_module.SHAPE, _shape())
-    # the postulate's optional object fields: object, pose_known, evidence, bounds, approximate (the convex hull of the touches)
+    # the optional fields: object, pose_known, evidence, bounds, approximate (the hull of the touches)
     obj = {"shape": "sphere", "radius": 0.03, "position": [0.2, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
     check_entry(keys_module.SHAPE, _shape(object=obj, pose_known=True, evidence={"contacts": 5}, bounds=None))
     assert ShapeEntry.__optional_keys__ == {"object", "pose_known", "evidence", "bounds", "approximate"}

@@ -46,9 +46,9 @@ def test_a_box_mesh_measures_as_the_box_primitive():
     assert mesh.diameter == pytest.approx(box.diameter)
     assert mesh.smallest_width() == (pytest.approx(0.03), "scale")
     assert mesh.volume == pytest.approx(float(np.prod(SIZE)))
-    m, c, J = mesh.mass_properties(mass=0.1)
+    mass, c, J = mesh.mass_properties(mass=0.1)
     _, c_box, J_box = box.mass_properties(mass=0.1)
-    assert np.allclose(c, c_box) and np.allclose(J, J_box, atol=1e-12)
+    assert mass == 0.1 and np.allclose(c, c_box) and np.allclose(J, J_box, atol=1e-12)
 
 
 def test_the_signed_distance_gradient_is_the_finite_difference():
