@@ -194,6 +194,11 @@ class SurfaceObject(ABC):
     def drake_shape(self) -> Any:
         """The pydrake.geometry shape (Drake's validation and the MeshCat drawing)."""
 
+    def triangles(self) -> Array | None:
+        """The surface's triangles (F, 3, 3), object frame, m, when the kind is made of them
+        (a mesh: the flat pictures draw them), else None (a primitive: drawn from its coal shape)."""
+        return None
+
     def drake_collision_shapes(self) -> list[Any]:
         """The pydrake.geometry shapes Drake's contact engine takes, in the object frame
         (default: :meth:`drake_shape`; a mesh: its convex pieces)."""

@@ -289,6 +289,9 @@ class Mesh(SurfaceObject):
         )
         return [(np.asarray(v), np.asarray(f)) for v, f in coacd.run_coacd(m, **DECOMPOSITION)]
 
+    def triangles(self) -> Array | None:
+        return self._triangles.copy()
+
     def drake_collision_shapes(self) -> list[Any]:
         from pydrake.geometry import Convex
 

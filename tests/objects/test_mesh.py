@@ -13,8 +13,8 @@ import trimesh
 
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
-from eos_svc.objects import Box, Mesh, ObjectSizeError
-from eos_svc.schema.request import MAX_MESH_VERTICES, ObjectSpec
+from eos_svc.objects import FITTED_KINDS, KINDS, Box, Mesh, ObjectSizeError
+from eos_svc.schema.request import MAX_MESH_VERTICES, MESH, MESH_FIELDS, SHAPE_SIZE_FIELDS, ObjectSpec
 from eos_svc.shape.hull import APPROXIMATE_CAP, hull_postulate
 from eos_svc.shape.touches import Touches
 
@@ -163,3 +163,20 @@ def test_the_hull_of_touches_on_a_box_is_the_box_with_a_capped_confidence():
         float(np.prod(SIZE)), rel=0.1
     )
     assert math.isclose(tabled.centre[2], 0.0, abs_tol=2e-3)
+
+
+def test_the_request_schema_lists_the_registry_kinds_fields():
+    """The schema stays free of coal and Pinocchio (the clients import it): its size fields are
+    the registry's, kind by kind."""
+    assert {k: c.size_fields for k, c in FITTED_KINDS.items()} == SHAPE_SIZE_FIELDS
+    assert Mesh.size_fields == MESH_FIELDS and set(KINDS) == {*SHAPE_SIZE_FIELDS, MESH}
+
+
+def test_a_mesh_is_drawn_from_its_triangles(tmp_path):
+    from eos_svc.agents.planner import default_hand
+    from eos_svc.schema.request import PlanRequest
+    from eos_svc.view.picture import scene_solids
+
+    spec = ObjectSpec("mesh", inline(box_mesh()), (0.21, 0.02, 0.0))
+    solids = scene_solids(default_hand().neutral(), PlanRequest(obj=spec))
+    assert solids[0][0] == "object" and len(solids[0][1]) == 12
