@@ -11,7 +11,8 @@ moved to its **centre of mass** (the solid's, when the mesh is closed; else its 
 
 - signed distance: the distance to the nearest triangle (coal, ``BVHModelOBBRSS``), negative
   inside, inside meaning a generalised winding number above ½ (Jacobson, Kavan, Sorkine-Hornung,
-  SIGGRAPH 2013: exact for closed meshes, robust for open ones); its gradient points from the
+  SIGGRAPH 2013: exact for closed meshes, robust for open ones; for a convex one, inside every
+  face's plane); its gradient points from the
   nearest surface point to the point (the nearest triangle's normal on the surface);
 - curvature: zero on every face (a polygon mesh is flat between its edges);
 - coal shape: the mesh as a ``BVHModelOBBRSS``;
@@ -136,6 +137,8 @@ class Mesh(SurfaceObject):
         if hull is None or not hull.volume > 0.0:
             raise ObjectSizeError("vertices", "the mesh is flat: its convex hull has no volume")
         self.closed = bool(mesh.is_watertight and mesh.is_volume)
+        #: closed and convex (the convex hull of touches): inside is inside every face's plane
+        self.convex = bool(self.closed and mesh.is_convex)
         solid = mesh if self.closed else hull
         com = np.asarray(solid.center_mass, dtype=float)
         mesh.apply_translation(-com)
@@ -208,7 +211,10 @@ class Mesh(SurfaceObject):
         module doc)."""
         P = np.asarray(P, dtype=float).reshape(-1, 3)
         d, g = np.empty(len(P)), np.empty((len(P), 3))
-        inside = winding_numbers(P, self._triangles) > 0.5
+        if self.convex:  # inside every face's plane
+            inside = (P @ self._hull_normals.T - self._hull_offsets).max(axis=1) < 0.0
+        else:
+            inside = winding_numbers(P, self._triangles) > 0.5
         for i, p in enumerate(P):
             s, dist, face = self.nearest(p)
             sign = -1.0 if inside[i] else 1.0
