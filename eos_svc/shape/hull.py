@@ -46,10 +46,11 @@ def hull_postulate(touches: Touches, table_height: float | None = None) -> HullP
     """The convex hull of the touches' surface points (and their projections onto the table at
     ``table_height``, m, when there is one), or None when they span no volume."""
     points = touches.surface_points
-    if table_height is not None:
-        below = points.copy()
-        below[:, 2] = table_height
-        points = np.vstack([points, below])
+    if table_height is not None:  # the unseen lower half: the seen upper half mirrored
+        middle = 0.5 * (table_height + float(points[:, 2].max()))
+        mirrored = points.copy()
+        mirrored[:, 2] = np.maximum(2.0 * middle - points[:, 2], table_height)
+        points = np.vstack([points, mirrored])
     if len(points) < MIN_POINTS:
         return None
     try:
