@@ -19,9 +19,10 @@ Two sources, in the order the information stage gathers them:
    least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
    P(class right and size within tolerance). Below 60 % post_shape asks EP2 again.
 3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
-   the convex hull of the touches (:mod:`eos_svc.shape.hull`), ``approximate``, its
-   confidence capped at 50 %; EP2 is asked while it has rounds left, then grasp_points plans
-   on the hull as it is, and the end agent counts a success only with a good grasp.
+   once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
+   ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
+   end agent counts a success only with a good grasp. (Before that, the best primitive is
+   postulated as always, asking EP2 for more.)
 
 The postulate (board entry ``keys.SHAPE``) keeps ``class``, ``confidence``,
 ``grasp_radius`` (the vertical half extent, what the grasp closes on), ``diameter``,
@@ -153,7 +154,12 @@ class PostShapeAgent(GraspAgent):
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
         post = select_class(touches)
-        if post.best is not None and fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS:
+        ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
+        if (
+            ep2_done
+            and post.best is not None
+            and fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
+        ):
             hull = hull_postulate(touches, self.world.table_height)
             if hull is not None:
                 return self._from_hull(board, curvature, touches, post.kind, hull)
@@ -198,18 +204,17 @@ class PostShapeAgent(GraspAgent):
     def _from_hull(
         self, board: Board, curvature: dict, touches: Touches, best: str, hull: HullPostulate
     ) -> ActionResult:
-        """The approximate postulate (:mod:`eos_svc.shape.hull`): EP2 asked for more of the
-        surface while it has rounds left, then grasp_points plans on it as it is."""
+        """The approximate postulate (:mod:`eos_svc.shape.hull`), once EP2 has felt all it
+        will: grasp_points plans on it as it is."""
         radius = classify(curvature)[1]
         half, centre = hull.half_extents, hull.centre
-        rounds_left = int(board.get(keys.EP2_RUNS, 0)) < EP2_ROUNDS
         shape: dict[str, Any] = {
             "class": HULL,
             "confidence": round(hull.confidence, 6),
             "grasp_radius": round(float(half[2]), 6),
             "diameter": round(2.0 * float(half[2]), 6),
             "centre": np.round(centre, 6).tolist(),
-            "needs": "surface" if rounds_left else None,
+            "needs": None,
             "principal_curvatures": curvature["principal_curvatures"],
             "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": hull.object,
@@ -224,12 +229,11 @@ class PostShapeAgent(GraspAgent):
             "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
         }
         self._write(board, shape)
-        ask = "; asks EP2 for more of the surface" if rounds_left else ""
         return ActionResult(
             Outcome.PROGRESS,
             f"no class explains the {touches.count} contacts (best: a {best}): the convex hull of the "
             f"touches, approximate ({hull.on_hull:.0%} of the touches on it), confidence "
-            f"{hull.confidence:.0%}{ask}",
+            f"{hull.confidence:.0%}",
         )
 
     def _from_ep1(self, board: Board, curvature: dict, contacts: dict) -> ActionResult:
