@@ -19,8 +19,6 @@ resting on a table:
   :data:`TABLE_HEIGHT`.
 """
 
-from __future__ import annotations
-
 from pathlib import Path
 from typing import NamedTuple
 
