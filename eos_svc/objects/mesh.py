@@ -25,6 +25,7 @@ moved to its **centre of mass** (the solid's, when the mesh is closed; else its 
 from __future__ import annotations
 
 import math
+import multiprocessing
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -284,16 +285,27 @@ class Mesh(SurfaceObject):
 
     def convex_pieces(self) -> list[tuple[Array, Array]]:
         """The convex pieces (vertices, faces) Drake's contact takes: CoACD's decomposition when
-        ``coacd`` is installed, else the convex hull alone."""
+        ``coacd`` is installed, else — or when CoACD fails on the mesh — the convex hull alone.
+        CoACD runs in a forked child process: it can crash on some meshes (a segmentation fault
+        in CoACD 1.0.14 on pybullet's random object 515), which must not take the caller down."""
+        hull = [(np.asarray(self.hull.vertices), np.asarray(self.hull.faces))]
         try:
-            import coacd
+            import coacd  # noqa: F401 -- installed? (the child imports it again)
         except ImportError:
-            return [(np.asarray(self.hull.vertices), np.asarray(self.hull.faces))]
-        coacd.set_log_level("error")
-        m = coacd.Mesh(
-            np.asarray(self.mesh.vertices, dtype=float), np.asarray(self.mesh.faces, dtype=np.int32)
+            return hull
+        context = multiprocessing.get_context("fork")
+        receiver, sender = context.Pipe(duplex=False)
+        child = context.Process(
+            target=_decompose, args=(np.asarray(self.mesh.vertices), np.asarray(self.mesh.faces), sender)
         )
-        return [(np.asarray(v), np.asarray(f)) for v, f in coacd.run_coacd(m, **DECOMPOSITION)]
+        child.start()
+        sender.close()
+        try:
+            pieces: list[tuple[Array, Array]] = receiver.recv()
+        except EOFError:  # the child died without an answer
+            pieces = hull
+        child.join()
+        return pieces or hull
 
     def triangles(self) -> Array | None:
         return self._triangles.copy()
@@ -311,6 +323,16 @@ class Mesh(SurfaceObject):
         """trimesh's inertia of the solid (unit density) about its centre of mass, over its mass."""
         out: Array = np.asarray(self._solid.moment_inertia, dtype=float) / float(self._solid.mass)
         return out
+
+
+def _decompose(vertices: Array, faces: Array, sender: Any) -> None:
+    """CoACD's convex pieces of the mesh, sent through ``sender`` (a forked child's work)."""
+    import coacd
+
+    coacd.set_log_level("error")
+    mesh = coacd.Mesh(np.asarray(vertices, dtype=float), np.asarray(faces, dtype=np.int32))
+    sender.send([(np.asarray(v), np.asarray(f)) for v, f in coacd.run_coacd(mesh, **DECOMPOSITION)])
+    sender.close()
 
 
 def _arrays(vertices: Any, faces: Any) -> tuple[Array, Array]:
