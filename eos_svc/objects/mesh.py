@@ -131,11 +131,13 @@ class Mesh(SurfaceObject):
         else:
             V, F = _arrays(vertices, faces)
         mesh = trimesh.Trimesh(V * self.scale, F, process=True)
-        try:
-            hull = mesh.convex_hull
-        except Exception:  # qhull refuses fewer than 4 points off a plane
-            hull = None
-        if hull is None or not hull.volume > 0.0:
+        with np.errstate(invalid="ignore", divide="ignore"):  # a flat hull's centre of mass is 0/0
+            try:
+                hull = mesh.convex_hull
+            except Exception:  # qhull refuses fewer than 4 points off a plane
+                hull = None
+            flat = hull is None or not hull.volume > 0.0
+        if flat:
             raise ObjectSizeError("vertices", "the mesh is flat: its convex hull has no volume")
         self.closed = bool(mesh.is_watertight and mesh.is_volume)
         #: closed and convex (the convex hull of touches): inside is inside every face's plane
