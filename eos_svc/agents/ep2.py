@@ -27,6 +27,9 @@ postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone �
 each, a finger hooked round the object for a face turned away from the hand
 (:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
 whole surface again only when none of them is felt.
+When the object rests on a table there is no bottom probe, and every probe is the opposing
+finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
+rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
@@ -38,7 +41,7 @@ the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and aft
 
 from __future__ import annotations
 
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
@@ -64,6 +67,9 @@ SLIDE_STEPS = 30
 SLIDE_KEEP = 6
 #: most steps of a slide toward an open face
 MAX_SLIDE_STEPS = 90
+#: on a table: how far back from the front face the scan from above reaches (m), in how many rows
+SCAN_DEPTH = 0.16
+SCAN_ROWS = 7
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
@@ -111,7 +117,8 @@ class EP2Agent(GraspAgent):
         """The probes of this round around the estimate (see the module docstring)."""
         world = self.world
         probe = world.probe
-        top, bottom = probe.finger("top"), probe.finger("bottom")
+        top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
+        front = world.probe_finger("front")
         straight = probe.angles
         rng = world.rng
         f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
@@ -128,11 +135,11 @@ class EP2Agent(GraspAgent):
             (-f(0.5) * hy, 0.0),
         ):
             start = np.array([cx - hx - STANDOFF, cy + dy, cz + dz])
-            probes.append(Probe("front", top, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[top]))
+            probes.append(Probe("front", front, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[front]))
         # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
         # front of the widest section (the links trail the tip toward −x)
         for sign in (+1, -1):
-            finger = self.side_fingers[sign]
+            finger = self.side_fingers[sign] if world.table is None else front
             for dx in (-f(0.25) * hx, -f(0.6) * hx):
                 start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
                 travel = 2.0 * hy + 2.0 * STANDOFF
@@ -142,9 +149,11 @@ class EP2Agent(GraspAgent):
         for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in (-f(0.4) * hx,):
+        for dx in () if world.table is not None else (-f(0.4) * hx,):  # none under a table
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
+        if world.table is not None:
+            probes += self.table_scan(centre, half, f)
         return probes
 
     def _with_fallback(
@@ -159,6 +168,27 @@ class EP2Agent(GraspAgent):
         yield from planned
         if targeted and not counts:
             yield from self.plan_round(*estimate)
+
+    def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
+        """On a table, probes straight down from above on a grid from the front face back
+        :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
+        is (a height map), and where nothing stands down to the table — the back the front,
+        side and top probes cannot reach. The finger is opened to its limit, its tip lowest."""
+        world = self.world
+        finger = world.probe_finger("top")
+        cx, cy, cz = centre.tolist()
+        hx, hy, hz = half.tolist()
+        depth = max(SCAN_DEPTH, 4.0 * hx)
+        top = cz + hz + STANDOFF
+        travel = top - float(world.table_height)  # type: ignore[arg-type]
+        # the opposing finger opened to its limit: its tip below its links, which rise behind it
+        opened = float(world.hand.lower[world.hand.finger_q_index(finger)].max())
+        out = []
+        for x in np.linspace(cx - hx, cx - hx + depth, SCAN_ROWS)[1:]:
+            for dy in (-f(0.5) * hy, 0.0, f(0.5) * hy):
+                start = np.array([x, cy + dy, top])
+                out.append(Probe("top", finger, start, np.array([0.0, 0.0, -1.0]), travel, opened))
+        return out
 
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
         return {
@@ -196,7 +226,7 @@ class EP2Agent(GraspAgent):
         the free tip path of the probe that ended the slide (nothing felt, or a link would
         have touched first: the surface does not go on at that height)."""
         world = self.world
-        finger = world.probe.finger("top")
+        finger = world.probe_finger("top")
         angle = world.probe.angles[finger]
         out: list[tuple[np.ndarray, np.ndarray]] = []
         beyond: list[np.ndarray] = []
@@ -307,9 +337,9 @@ class EP2Agent(GraspAgent):
                 )
                 slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
-                    touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
+                    touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
-                r = world.hand.tip_radius(world.probe.finger("top"))
+                r = world.hand.tip_radius(world.probe_finger("top"))
                 free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)
         self.rounds += 1
         board.set(keys.EP2_TOUCHES, touches)

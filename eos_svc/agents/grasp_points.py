@@ -14,9 +14,10 @@ every finger, the postulated object — and completes the information stage. Whe
 assumed (no ``object``, or ``pose_known`` false) the cycle record says "pose assumed upright".
 
 Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no target exists
-yet; 0 otherwise. No candidate because the object is larger than the hand height across
-every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as failed, naming the postulated
-size; so does no collision-free candidate at all.
+yet — or 60 % for an approximate postulate (the convex hull of the touches) once EP2 has no
+rounds left, planned on as it is; 0 otherwise. No candidate because the object is larger
+than the hand height across every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as
+failed, naming the postulated size; so does no collision-free candidate at all.
 """
 
 from __future__ import annotations
@@ -30,7 +31,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.schema import keys
-from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.request import MESH, ObjectSpec
 from eos_svc.world.world import GraspWorld
 
 #: the reason synthesis gives for a grip wider than the hand height
@@ -39,6 +40,9 @@ TOO_LARGE = "larger than the hand height across the grip"
 
 def size_words(spec: ObjectSpec) -> str:
     """The postulated size in the request's field names, mm (e.g. ``size [70, 35, 45] mm``)."""
+    if spec.shape == MESH:  # a mesh: its extents
+        obj = make_object(spec)
+        return f"extents [{', '.join(f'{2000 * v:.0f}' for v in obj.half_extents())}] mm"
     parts = []
     for key, value in spec.size.items():
         if isinstance(value, tuple):
@@ -71,9 +75,13 @@ class GraspPointsAgent(GraspAgent):
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it is confident enough, else None."""
+        """post_shape's postulate if it is confident enough (or approximate, with nothing more to
+        ask EP2 for), else None."""
         shape = board.get(keys.SHAPE)
-        if shape is None or shape["confidence"] < self.world.params.confidence_threshold:
+        if shape is None:
+            return None
+        final_approximation = bool(shape.get("approximate")) and shape["needs"] is None
+        if shape["confidence"] < self.world.params.confidence_threshold and not final_approximation:
             return None
         return shape
 
@@ -81,7 +89,7 @@ class GraspPointsAgent(GraspAgent):
         shape = self.confident_shape(board)
         if shape is None or keys.TARGET in board:
             return 0.0
-        return float(shape["confidence"])
+        return max(float(shape["confidence"]), self.world.params.confidence_threshold)
 
     def postulate(self, shape: dict) -> Postulate | None:
         """The object to plan on (the oracle's when given)."""
@@ -146,6 +154,7 @@ class GraspPointsAgent(GraspAgent):
             make_object(postulate.spec),
             float(board.get(keys.FRICTION, 0.5)),
             vertical_only=postulate.vertical_only,
+            table_height=world.table_height,
         )
 
     def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:

@@ -163,6 +163,7 @@ def build_world(
         rng=np.random.default_rng(search_seed),
         estimator=CurvatureEstimator(),
         sensing=JointSensing.build(hand, request.encoder_noise, request.link_error, sensing_seed),
+        table_height=None if request.table is None else request.table.height,
     )
 
 

@@ -50,7 +50,14 @@ FIELD_OPTIONS = {
 def add_object_arguments(parser: argparse.ArgumentParser) -> None:
     """Options choosing the object (shared with other commands)."""
     g = parser.add_argument_group("object (SI units: m, rad)")
-    g.add_argument("--shape", default="sphere", help="sphere, ellipsoid, cylinder, box or capsule (sphere)")
+    g.add_argument(
+        "--shape", default="sphere", help="sphere, ellipsoid, cylinder, box, capsule or mesh (sphere)"
+    )
+    g.add_argument("--file", help="mesh: an OBJ, STL or PLY file")
+    g.add_argument("--scale", type=positive_float, help="mesh: the file's units in metres (1)")
+    g.add_argument(
+        "--table", type=finite_float, metavar="Z", help="a table under the object, its top at height Z (m)"
+    )
     g.add_argument("--radius", type=positive_float, help="sphere/cylinder/capsule radius (0.03 for a sphere)")
     g.add_argument(
         "--radii", type=positive_float, nargs=3, metavar=("A", "B", "C"), help="ellipsoid semi-axes"
@@ -155,7 +162,7 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
     obj: dict[str, Any] = {"shape": args.shape}
     if args.shape == "sphere" and args.radius is None:
         obj["radius"] = 0.03
-    for name in ("radius", "radii", "length", "size", "position", "rpy"):
+    for name in ("radius", "radii", "length", "size", "file", "scale", "position", "rpy"):
         value = getattr(args, name)
         if value is not None:
             obj[name] = value
@@ -174,6 +181,7 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
         **({"encoder_noise": args.encoder_noise} if args.encoder_noise else {}),
         **({"link_error": args.link_error} if args.link_error else {}),
+        **({} if args.table is None else {"table": {"height": args.table}}),
     }
 
 
@@ -201,10 +209,13 @@ def _postulate_lines(shape: dict[str, Any]) -> list[str]:
     if obj is None:
         return []
     sizes = {k: v for k, v in obj.items() if k not in ("shape", "position", "rpy")}
-    fmt = ", ".join(
-        f"{k} {[round(x * 1000, 1) for x in v] if isinstance(v, list) else round(v * 1000, 1)} mm"
-        for k, v in sizes.items()
-    )
+    if obj.get("shape") == "mesh":  # the convex hull of the touches: its size in vertices and faces
+        fmt = f"{len(obj.get('vertices', []))} vertices, {len(obj.get('faces', []))} faces"
+    else:
+        fmt = ", ".join(
+            f"{k} {[round(x * 1000, 1) for x in v] if isinstance(v, list) else round(v * 1000, 1)} mm"
+            for k, v in sizes.items()
+        )
     pos = [round(x * 1000, 1) for x in obj["position"]]
     pose = (
         "rpy " + str([round(x, 3) + 0.0 for x in obj["rpy"]])

@@ -14,6 +14,13 @@ good grasps are held ≥ 98 %).
                                                # a random draw: any class, size, pose
     eos experiment grasps --hand trifinger     # another hand (eos hands) or a description file:
                                                # the same objects; those it cannot span are refused
+    eos experiment grasps --objects pybullet-random --ids 500-539 --table --seeds 1
+                                               # pybullet's random meshes, resting on a table
+    eos experiment grasps --objects pybullet-named --table --seeds 3   # the mug, duck and teddy
+
+The pybullet objects (``pip install 'eos_svc[objects]'``) are read from the installed package
+and scaled and placed as :mod:`eos_svc.experiments.pybullet_objects` says; ``--table`` puts
+the table under them (without it they float where they would rest).
 """
 
 from __future__ import annotations
@@ -41,6 +48,7 @@ from eos_svc.experiments.grasp_suite import (
     quick_suite,
     random_draw,
 )
+from eos_svc.experiments.pybullet_objects import WorldObject, named_objects, parse_ids, random_objects
 from eos_svc.experiments.recognition import surface_error
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import ObjectSpec
@@ -82,7 +90,7 @@ def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
 
 
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject,
+    obj: SuiteObject | DrawnObject | WorldObject,
     seed: int,
     validation: dict[str, Any] | None,
     context: HandContext | None = None,
@@ -94,7 +102,9 @@ def plan_and_validate(
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
         result = plan(
-            PlanRequest(obj=obj.spec, seed=seed, **(options or {})), keep_trace=False, context=context
+            PlanRequest(obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **(options or {})),
+            keep_trace=False,
+            context=context,
         )
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
@@ -155,7 +165,7 @@ def _rate(values: list[bool | None]) -> float | None:
 
 
 def summarise(
-    objects: Sequence[SuiteObject | DrawnObject], runs: list[dict[str, Any]]
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject], runs: list[dict[str, Any]]
 ) -> tuple[list[dict], dict]:
     """Per-object rows and the totals: confusion counts of good_grasp against held (when the
     runs were validated), refusals counted by the field admission named, and every admitted run
@@ -248,7 +258,7 @@ def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def run(
-    objects: Sequence[SuiteObject | DrawnObject] | None = None,
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject] | None = None,
     seeds: int = 5,
     out: Path = Path("results/grasps"),
     name: str = "grasps",
@@ -415,6 +425,13 @@ def build_parser() -> argparse.ArgumentParser:
         metavar=("LO", "HI"),
         help="the random draw's widths as fractions of the hand's span (0.15 0.5)",
     )
+    parser.add_argument(
+        "--objects",
+        choices=("pybullet-random", "pybullet-named"),
+        help="pybullet's meshes instead: its random objects (--ids) or the mug, duck and teddy",
+    )
+    parser.add_argument("--ids", default="0-9", help="the random objects' ids, A-B (0-9)")
+    parser.add_argument("--table", action="store_true", help="the pybullet objects rest on a table")
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
     add_hand_argument(parser)
     parser.add_argument(
@@ -444,6 +461,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _pybullet(which: str, ids: str, table: bool) -> tuple[list[WorldObject], str]:
+    """The pybullet objects asked for (on their table, or floating without ``table``)."""
+    if which == "pybullet-named":
+        objects, name = named_objects(), "grasps_pybullet_named"
+    else:
+        span = parse_ids(ids)
+        objects, left = random_objects(span)
+        name = f"grasps_pybullet_{span.start}_{span.stop - 1}"
+        print(
+            f"pybullet random objects {ids}: {len(objects)} the hand can span, left out {left}",
+            file=sys.stderr,
+        )
+    if not table:
+        return [o._replace(table=None) for o in objects], name
+    return objects, name + "_table"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment grasps [options]``."""
     parser = build_parser()
@@ -454,8 +488,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if lo > hi:
         parser.error(f"argument --sizes: LO must be ≤ HI, got {lo:g} {hi:g}")
     seeds = args.seeds or (2 if args.quick else 5)
-    objects: Sequence[SuiteObject | DrawnObject]
-    if args.random is not None:
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject]
+    if args.objects is not None:
+        try:
+            objects, name = _pybullet(args.objects, args.ids, args.table)
+        except ValidationError as exc:
+            parser.error(f"argument --{exc.field}: {exc.reason}")
+    elif args.random is not None:
         objects, name = random_draw(args.random, args.draw_seed, (lo, hi)), "grasps_random"
         print(
             f"random draw: {args.random} objects, draw seed {args.draw_seed}, "

@@ -62,6 +62,8 @@ class GraspSynthesis:
         obj: the postulated object.
         friction: Coulomb μ for ε.
         vertical_only: the postulate's size is known along the vertical only (grasp across it).
+        table_height: the table under the object (world z, m), or None: candidates whose hand
+            would touch it are rejected (:class:`~eos_svc.grasp.clearance.HandClearance`).
 
     Attributes:
         rejections: per reason (in words), how many candidates it rejected.
@@ -75,12 +77,13 @@ class GraspSynthesis:
         obj: SurfaceObject,
         friction: float,
         vertical_only: bool = False,
+        table_height: float | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
         self.friction = friction
         self.vertical_only = vertical_only
         self.opposing = hand.description.opposing_finger
-        self.clearance = HandClearance(hand, sweeps, params, obj)
+        self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
 
     def _reject(self, why: str) -> None:

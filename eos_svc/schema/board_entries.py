@@ -88,6 +88,7 @@ ShapeEntry = TypedDict(
         "evidence": NotRequired[dict[str, Any]],
         "bounds": NotRequired[list[Vector] | None],
         "open_faces": NotRequired[list[dict[str, Any]]],
+        "approximate": NotRequired[bool],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -100,7 +101,8 @@ e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in 
 JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
 postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``open_faces`` (the
 fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` size and
-``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`).
+``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`)
+and ``approximate`` (True: the convex hull of the touches, no primitive explaining them).
 """
 
 

@@ -347,6 +347,13 @@ def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MA
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
         raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
+    if "file" in request.obj.size:  # a mesh: the service reads no file of its host's
+        raise RequestError(
+            E_INVALID,
+            "object.file",
+            "the service reads no files: send the mesh inline (vertices, faces)",
+            goal_id,
+        )
     return Envelope(goal_id, request, token, watch)
 
 

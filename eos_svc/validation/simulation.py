@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from pydrake.geometry import (
     AddContactMaterial,
+    Box,
     CollisionFilterDeclaration,
     ProximityProperties,
     RoleAssign,
@@ -67,6 +68,10 @@ DEFAULT_CONTACT_STIFFNESS = 2e4
 DEFAULT_TIME_STEP = 1e-3
 
 OBJECT_NAME = "object"
+#: the table's geometry name, side (m) and thickness (m): a slab whose top is the table's height
+TABLE_NAME = "table"
+TABLE_SIDE = 2.0
+TABLE_THICKNESS = 0.1
 #: name of the hand part made of the palm and every hand body outside the fingers
 PALM_PART = "palm"
 
@@ -90,13 +95,15 @@ def urdf_effort_limits(urdf: Path) -> dict[str, float]:
     return out
 
 
-def object_shape(spec: ObjectSpec) -> tuple[Shape, SpatialInertia]:
-    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled
-    later), both from the object's kind (:mod:`eos_svc.objects`)."""
+def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
+    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
+    and the unit-mass solid inertia about its centre (scaled later), both from the object's
+    kind (:mod:`eos_svc.objects`)."""
     obj = objects.make(spec.shape, spec.size, spec.position)
     _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
     inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    return obj.drake_shape(), SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    return obj.drake_collision_shapes(), unit
 
 
 def hand_parser(plant: MultibodyPlant, package_dirs: Sequence[Path] = ()) -> Parser:
@@ -146,6 +153,8 @@ class GraspSimulation:
         kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
         contact_stiffness: point-contact stiffness of every geometry (N/m).
         time_step: the discrete plant's step (s).
+        table_height: the table's top (world z, m): a box welded to the world under it, in
+            contact with the hand and the object like them (None: no table).
     """
 
     def __init__(
@@ -164,6 +173,7 @@ class GraspSimulation:
         kd: float = DEFAULT_KD,
         contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
         time_step: float = DEFAULT_TIME_STEP,
+        table_height: float | None = None,
     ) -> None:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]
@@ -207,11 +217,18 @@ class GraspSimulation:
             friction=CoulombFriction(friction, friction),
             properties=material,
         )
-        shape, unit_inertia = object_shape(obj)
+        shapes, unit_inertia = object_shapes(obj)
         instance = plant.AddModelInstance(OBJECT_NAME)
         inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody(OBJECT_NAME, instance, inertia)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, OBJECT_NAME, material)
+        for i, shape in enumerate(shapes):
+            plant.RegisterCollisionGeometry(
+                body, RigidTransform(), shape, OBJECT_NAME if i == 0 else f"{OBJECT_NAME}_{i}", material
+            )
+        if table_height is not None:
+            top = RigidTransform(vec((0.0, 0.0, table_height - 0.5 * TABLE_THICKNESS)))
+            table = Box(TABLE_SIDE, TABLE_SIDE, TABLE_THICKNESS)
+            plant.RegisterCollisionGeometry(plant.world_body(), top, table, TABLE_NAME, material)
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
         plant.Finalize()
 

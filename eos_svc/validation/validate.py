@@ -187,6 +187,7 @@ def _validate(
             kd=kd,
             contact_stiffness=contact_stiffness,
             time_step=time_step,
+            table_height=setup.table_height,
         )
         settled = sim.settle(settle_seconds)
         settle_touching = sim.touching()

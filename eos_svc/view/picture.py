@@ -109,10 +109,12 @@ def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) ->
     hand = hand or default_hand()
     obj = make_object(request.obj)
     placed = obj.placement
+    own = obj.triangles()
+    surface = shape_mesh(obj.geometry) if own is None else list(own)
     solids = [
         (
             "object",
-            [p @ placed.rotation.T + placed.translation for p in shape_mesh(obj.geometry)],
+            [p @ placed.rotation.T + placed.translation for p in surface],
             OBJECT_COLOUR,
             0.35,
         )

@@ -20,6 +20,9 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
   :class:`~eos_svc.world.fingertip_fit.FingertipOpening`; not the hand's *span* (the largest
   distance between two fingertips, :func:`~eos_svc.world.hand_context.hand_span`), which
   fingers opened that wide no longer close on.
+
+With a table (``request.table``), a fourth: **on the table** (``object.position[2]``): the
+object may not reach into it (:func:`check_on_table`).
 """
 
 from __future__ import annotations
@@ -57,17 +60,10 @@ def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
 
 
 def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
-    """The object's smallest width (m) and the size field that sets it (``object.<field>``)."""
-    s = spec.size
-    if spec.shape in ("sphere", "capsule"):
-        return 2.0 * s["radius"], "object.radius"
-    if spec.shape == "ellipsoid":
-        return 2.0 * min(s["radii"]), "object.radii"
-    if spec.shape == "cylinder":
-        if s["length"] < 2.0 * s["radius"]:
-            return s["length"], "object.length"
-        return 2.0 * s["radius"], "object.radius"
-    return min(s["size"]), "object.size"
+    """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
+    kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
+    width, size_field = make_object(spec).smallest_width()
+    return width, f"object.{size_field}"
 
 
 def _distance(
@@ -107,6 +103,26 @@ def check_plannable(
     if verdict:
         field, reason = verdict
         raise ValidationError(field, reason)
+    if request.table is not None:
+        check_on_table(request.obj, request.table.height)
+
+
+#: how far an object may reach into the table (m): resting on it, within rounding
+TABLE_TOLERANCE = 1e-3
+
+
+def check_on_table(spec: ObjectSpec, height: float) -> None:
+    """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
+    :data:`TABLE_TOLERANCE` (its lowest point:
+    :meth:`~eos_svc.objects.base.SurfaceObject.depth_below_centre`)."""
+    obj = make_object(spec)
+    lowest = float(obj.centre[2] - obj.depth_below_centre())
+    if lowest < height - TABLE_TOLERANCE:
+        raise ValidationError(
+            "object.position[2]",
+            f"the object reaches {1000 * (height - lowest):.1f} mm into the table (its lowest point "
+            f"z = {lowest:.4f} m, the table's top z = {height:.4f} m): place it on the table",
+        )
 
 
 def check_default(request: PlanRequest) -> None:
@@ -212,13 +228,4 @@ def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
 
 def _diameter(spec: ObjectSpec) -> float:
     """Diameter of the smallest sphere about the object's centre that contains it (m)."""
-    s = spec.size
-    if spec.shape == "sphere":
-        return 2.0 * s["radius"]
-    if spec.shape == "ellipsoid":
-        return 2.0 * max(s["radii"])
-    if spec.shape == "cylinder":
-        return 2.0 * math.hypot(s["radius"], 0.5 * s["length"])
-    if spec.shape == "capsule":
-        return 2.0 * s["radius"] + s["length"]
-    return float(np.linalg.norm(s["size"]))
+    return make_object(spec).diameter

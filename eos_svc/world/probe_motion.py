@@ -22,8 +22,10 @@ def guarded_probe(
     The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
     ``angle`` and every other finger opened, so that the tip's centre is at ``start``
     (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
-    there). Conservative advancement: each sub-step is at most the tip's gap beyond half
-    the contact tolerance and the other geometries' gap beyond half the contact tolerance
+    there). With a table, a probe whose hand would start within ``clearance`` of it (a probe
+    from below) is blocked, and a downward travel is cut where the hand would reach it.
+    Conservative advancement: each sub-step is at most the tip's gap beyond half the contact
+    tolerance and the other geometries' gap beyond half the contact tolerance
     (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
     above the face its tip touches), so only the tip can touch, and it never pushes the
     object. The start's clearance is taken as the other geometries' exact minimum and the
@@ -71,6 +73,12 @@ def guarded_probe(
             break
     else:
         return ProbeOutcome("blocked", finger, why="no clear start")
+    if world.table is not None:  # the table: no start under or at it, no travel into it
+        table_room = world.table_gap() - p.clearance
+        if table_room < 0.0:
+            return ProbeOutcome("blocked", finger, why="the hand would be under or at the table")
+        if d[2] < 0.0:
+            travel = min(travel, table_room / -d[2])
     tol = p.contact_tolerance
     half_tol = 0.5 * tol
     # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled

@@ -41,6 +41,7 @@ from eos_svc.world.hand_context import HandContext
 from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probing import ProbeChoice, ProbeOutcome
+from eos_svc.world.table import hand_table_gap, table_shape
 
 
 @dataclass
@@ -57,6 +58,8 @@ class GraspWorld:
     rng: np.random.Generator
     estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
     sensing: JointSensing | None = None  # the joint encoders' and links' errors (None: exact)
+    #: the support surface's height (world z, m) the object rests on, or None (no table)
+    table_height: float | None = None
 
     def __post_init__(self) -> None:
         # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
@@ -73,6 +76,7 @@ class GraspWorld:
         # the search's lattice order, drawn from rng at the first search move (see search_step)
         self.search_order: SpaceFillingOrder | None = None
         self.search_columns = np.empty((0, 0, 2))
+        self.table = None if self.table_height is None else table_shape(self.table_height)
 
     # --- what the world is made of ---------------------------------------------------
     @property
@@ -169,6 +173,25 @@ class GraspWorld:
             else:
                 value = self.min_gap(range(len(self.context.bounds)), math.inf)
             self.memo["clearance"] = value
+        return value
+
+    def probe_finger(self, face: str) -> str:
+        """The finger that explores ``face`` ("top", "bottom", "front" or "side"; a side probe
+        along ±y is led by ``context.side_fingers``): :attr:`probe`'s choice, except on a table,
+        where every probe is the opposing finger's — the hand's lowest part, it keeps the rest
+        of the hand above the probed place."""
+        if self.table is not None or face == "bottom":
+            return self.probe.bottom
+        return self.probe.top
+
+    def table_gap(self) -> float:
+        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf``
+        without one (memoised per hand pose)."""
+        if self.table is None:
+            return math.inf
+        value = self.memo.get("table_gap")
+        if value is None:
+            value = self.memo["table_gap"] = hand_table_gap(self.state, self.table)
         return value
 
     def hand_clear(self, threshold: float) -> bool:
