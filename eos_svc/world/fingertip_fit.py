@@ -197,9 +197,25 @@ def grip_axes(spec: ObjectSpec) -> list[GripAxis]:
     if spec.shape == "capsule":
         r, length = s["radius"], s["length"]
         return [GripAxis(2.0 * r, "curved", (r, 0.5 * length + r), "object.radius")]
+    if spec.shape == "mesh":
+        return _mesh_grip_axes(spec)
     sizes = list(s["size"])
     return [
         GripAxis(sizes[i], "flat", tuple(0.5 * sizes[j] for j in range(3) if j != i), "object.size")
+        for i in range(3)
+    ]
+
+
+def _mesh_grip_axes(spec: ObjectSpec) -> list[GripAxis]:
+    """A mesh gripped as a box across its principal axes (the grasp synthesis' rule for a mesh):
+    its convex hull's extents along them, flat faces (the conservative opening)."""
+    from eos_svc.grasp.postulate import make_object
+
+    obj = make_object(spec)
+    V = np.asarray(obj.hull.vertices) @ obj.principal_axes()  # type: ignore[attr-defined]
+    sizes = (V.max(axis=0) - V.min(axis=0)).tolist()
+    return [
+        GripAxis(sizes[i], "flat", tuple(0.5 * sizes[j] for j in range(3) if j != i), "object.scale")
         for i in range(3)
     ]
 
