@@ -70,11 +70,18 @@ class ServedHands:
         cancel: Any = None,
         keep_trace: bool = True,
         check: bool = False,
+        offered: dict[str, Any] | None = None,
     ) -> Any:
         """:func:`~eos_svc.agents.planner.plan` with the hand ``request`` names (``check``: run
         the admission check again; off by default: the service has run :meth:`admit` on this
-        request before queueing it)."""
+        request before queueing it; ``offered``: the plug-ins this instance offers)."""
         context = self.context(request)
         return plan(
-            request, on_cycle=on_cycle, cancel=cancel, keep_trace=keep_trace, check=check, context=context
+            request,
+            on_cycle=on_cycle,
+            cancel=cancel,
+            keep_trace=keep_trace,
+            check=check,
+            context=context,
+            offered=offered,
         )
