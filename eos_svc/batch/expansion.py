@@ -31,7 +31,7 @@ class PlanKey:
         key: stable id (hex), see :func:`plan_id`.
         label: the object's label (suite label, ``draw S:i class`` or the explicit label).
         condition: index of the condition combination (0-based, in expansion order).
-        hand: ``hand3x3`` or ``allegro``.
+        hand: a registered hand's name (``eos hands``).
         seed: the request's seed.
         request: the request in its JSON form (:meth:`PlanRequest.to_dict`).
         world: the world the plan runs in.
