@@ -38,8 +38,8 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
 MAX_ROUNDS = 3
@@ -95,7 +95,7 @@ class EP2Agent(GraspAgent):
     reads = frozenset({keys.SHAPE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE})
     writes = frozenset({keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS})
 
-    def __init__(self, default: float, world: GraspWorld) -> None:
+    def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("ep2", (INFO,), default, world)
         self.rounds = 0
         self.side_fingers = world.context.side_fingers

@@ -39,7 +39,7 @@ import numpy as np
 
 from eos_svc.agent import Agent
 from eos_svc.agents.base import STAGES
-from eos_svc.agents.end import EndAgent, grasp_geometry
+from eos_svc.agents.end import EndAgent
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
@@ -50,6 +50,8 @@ from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
+from eos_svc.drivers.kinematic import KinematicDriver
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
@@ -159,7 +161,7 @@ def build_world(
 
 
 def build_agents(
-    world: GraspWorld,
+    world: HandDriver | GraspWorld,
     ratings: dict[str, float] | None = None,
     solver: str = "osqp",
     memory: GraspMemory | None = None,
@@ -171,7 +173,12 @@ def build_agents(
     post_shape's postulate (measurement only).
 
     One finger agent per finger of the world's hand, in the hand's order, named after the
-    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents)."""
+    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents).
+
+    The agents get the world's hand driver only (a :class:`GraspWorld` is wrapped in its
+    :class:`~eos_svc.drivers.kinematic.KinematicDriver`): they never hold the true object."""
+    if isinstance(world, GraspWorld):
+        world = KinematicDriver(world)
     fingers = world.hand.finger_names
     r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
@@ -240,7 +247,8 @@ def plan(
     request = request if request is not None else PlanRequest()
     context = context if context is not None else context_for(hand, params)
     world = build_world(request, check=check, context=context)
-    agents = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    driver = KinematicDriver(world)  # all the agents get: the world stays the planner's
+    agents = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
     controller = Controller(
@@ -259,10 +267,10 @@ def plan(
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"
     if verdict is None:  # nobody judged: report the final contacts and their quality only
-        verdict = grasp_geometry(world, request.friction)
+        verdict = driver.judge_grip(request.friction)
     good = judged and bool(verdict["good"])
     if memory is not None:
-        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), good)
+        remember(memory, driver, board, run.cycles_per_stage.get("grasping", 0), good)
     obj = world.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / world.hand.hand_height
@@ -290,7 +298,7 @@ def plan(
     return result
 
 
-def remember(memory: GraspMemory, world: GraspWorld, board: Board, grasp_cycles: int, success: bool) -> None:
+def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:
     """Record a plan that reached grasping: one try for its key, and the grasp if it worked."""
     shape, dh = board.get(keys.SHAPE), board.get(keys.D_OVER_H)
     if shape is None or dh is None or shape.get("centre") is None or keys.TARGET not in board:

@@ -154,7 +154,7 @@ class FingertipContact(TypedDict):
 
 
 class OutcomeEntry(TypedDict):
-    """The end agent's verdict (:func:`eos_svc.agents.end.grasp_geometry`): contacts per finger,
+    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`): contacts per finger,
     whether all touch, the grip is good and about the diameter, the angle across the centre
     (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
     hand configuration judged."""
