@@ -52,6 +52,7 @@ from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.drivers.protocol import HandDriver
+from eos_svc.drivers.worlds import check_world, make_driver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
@@ -207,6 +208,7 @@ def plan(
     oracle_postulate: bool = False,
     check: bool = True,
     check_board: bool = False,
+    world: str = "kinematic",
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -237,6 +239,10 @@ def plan(
             against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
+        world: where the hand acts (:mod:`eos_svc.drivers.worlds`): ``"kinematic"`` (exact, the
+            object fixed: the paper's experiments) or ``"drake"`` (the object a free body on a
+            table under gravity; the grasp must pass the lift test; the result's ``world``
+            entry says how far the object moved and how fast the simulation ran).
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
@@ -246,8 +252,9 @@ def plan(
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
     context = context if context is not None else context_for(hand, params)
-    world = build_world(request, check=check, context=context)
-    driver = KinematicDriver(world)  # all the agents get: the world stays the planner's
+    check_world(world)
+    model = build_world(request, check=check, context=context)
+    driver = make_driver(world, model, request)  # all the agents get: the world stays the planner's
     agents = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
@@ -262,7 +269,7 @@ def plan(
         check_access=check_board,
         entry_check=check_entry if check_board else None,
     )
-    board = PoseBoard(world, {keys.FRICTION: request.friction})  # records the hand's q per cycle
+    board = PoseBoard(model, {keys.FRICTION: request.friction})  # records the hand's q per cycle
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"
@@ -271,9 +278,9 @@ def plan(
     good = judged and bool(verdict["good"])
     if memory is not None:
         remember(memory, driver, board, run.cycles_per_stage.get("grasping", 0), good)
-    obj = world.obj
+    obj = model.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
-    truth["d_over_h"] = obj.diameter / world.hand.hand_height
+    truth["d_over_h"] = obj.diameter / model.hand.hand_height
     if request.obj.shape == "sphere":
         truth["radius"] = request.obj.size["radius"]
     shape = board.get(keys.SHAPE)
@@ -291,9 +298,10 @@ def plan(
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
-        hand_height=world.hand.hand_height,
-        q_final=tuple(float(x) for x in world.state.q),
+        hand_height=model.hand.hand_height,
+        q_final=tuple(float(x) for x in model.state.q),
         wall_time_s=time.perf_counter() - t0,
+        world=driver.report(),
     )
     return result
 

@@ -21,6 +21,7 @@ from typing import IO, Any
 
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.records import CycleRecord
 
@@ -70,7 +71,9 @@ def add_request_arguments(
     g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
-    g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    g.add_argument(
+        "--deadline", type=positive_float, help="wall-clock budget, s (10; 600 with --world drake)"
+    )
     g.add_argument(
         "--friction",
         type=finite_float,
@@ -89,6 +92,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         choices=HANDS,
         default="hand3x3",
         help="the hand: hand3x3 (urdf/hand3x3.urdf) or allegro (example-robot-data's) (hand3x3)",
+    )
+    g.add_argument(
+        "--world",
+        choices=WORLDS,
+        default="kinematic",
+        help="where the hand acts: kinematic (exact, the object fixed) or drake (the object a free "
+        "body on a table under gravity; success needs the lift test) (kinematic)",
     )
     g.add_argument(
         "--memory",
@@ -160,9 +170,24 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
-        "deadline_s": args.deadline,
+        "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
         "friction": args.friction,
     }
+
+
+def default_deadline(args: argparse.Namespace) -> float:
+    """The wall-clock budget when ``--deadline`` is not given: 10 s, 600 s in the Drake world."""
+    return 600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0
+
+
+def format_world(world: dict) -> str:
+    """The Drake world's figures in one line."""
+    lift = world.get("lift") or {}
+    held = "held" if lift.get("held") else f"not held ({lift.get('why', 'no lift test')})"
+    return (
+        f"drake world: object moved {world['object_moved_mm']:.1f} mm; lift test: {held}; "
+        f"{world['simulated_s']:.1f} s simulated, real-time factor {world['real_time_factor']}"
+    )
 
 
 def format_cycle(record: CycleRecord) -> str:
@@ -222,6 +247,8 @@ def format_result(result: Any) -> str:
         closure = "force closure" if getattr(result, "force_closure", False) else "no force closure"
         eps = result.epsilon
         lines.append(f"quality: {closure} at μ = {result.friction:g}, ε = {eps:.3f} (Ferrari-Canny)")
+    if result.world is not None:
+        lines.append(format_world(result.world))
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
     if getattr(result, "validation", None):
         from eos_svc.cli.validate import format_validation
@@ -295,6 +322,7 @@ def run(args: argparse.Namespace) -> int:
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
+            world=getattr(args, "world", "kinematic"),
             check=False,  # admit() has just run check_plannable on this request and hand
         )
         if record_file is not None:

@@ -228,6 +228,10 @@ class KinematicDriver:
                 path_every=path_every,
             )
 
+    def report(self) -> dict[str, Any] | None:
+        """The world's figures for the plan result: none for the kinematic world."""
+        return None
+
     # --- the referee -----------------------------------------------------------------------------
     def judge_grip(self, friction: float) -> dict[str, Any]:
         """The grip judged on the true object (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`)."""
