@@ -55,6 +55,9 @@ class PlantSettings:
         finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad).
         contact_stiffness: point-contact stiffness, N/m.
         table_size: the table box's x, y extent and thickness, m.
+        hand_touches_table: whether the hand collides with the table (off by default: the
+            planner plans no table avoidance and EP1 feels a resting object's bottom, which a
+            table would hide).
     """
 
     mass: float = 0.1
@@ -67,6 +70,7 @@ class PlantSettings:
     finger_kd: float = 0.05
     contact_stiffness: float = 2e4
     table_size: tuple[float, float, float] = (0.6, 0.6, 0.04)
+    hand_touches_table: bool = False
 
 
 class DrakeHandPlant:
@@ -126,7 +130,8 @@ class DrakeHandPlant:
         hand_set = plant.CollectRegisteredGeometries(hand_bodies)
         manager = scene_graph.collision_filter_manager()
         manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
-        manager.Apply(CollisionFilterDeclaration().ExcludeBetween(hand_set, GeometrySet(table)))
+        if not s.hand_touches_table:
+            manager.Apply(CollisionFilterDeclaration().ExcludeBetween(hand_set, GeometrySet(table)))
         self.plant, self.model, self.body = plant, model, body
         self.tip_bodies = {
             f: plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body()

@@ -71,7 +71,7 @@ class DrakeSettings:
     joint_speed: float = 1.0
     chunk: float = 0.005
     stop_force: float = 2.0
-    touch_force: float = 0.3
+    touch_force: float = 0.05
     press_limit: float = 0.003
 
 

@@ -12,6 +12,11 @@ good grasps are held ≥ 98 %).
     eos experiment grasps --quick --seeds 1    # one object per class
     eos experiment grasps --random 40 --draw-seed 3 [--sizes 0.15 0.5] [--no-validate]
                                                # a random draw: any class, size, pose
+    eos experiment grasps --world drake        # plans in the Drake world: held = its lift test
+
+In the Drake world (:mod:`eos_svc.drivers.drake_world`) every plan runs against the simulated
+object on its table and ends with the lift test; ``held`` is that test's verdict (no separate
+validation), and each run also records how far the object moved (mm) and the real-time factor.
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ import numpy as np
 
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
+from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
@@ -42,16 +48,23 @@ from eos_svc.validation.validate import MAX_SECONDS
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
+#: a Drake-world plan's wall-clock budget, s (the simulation runs at about real time)
+DRAKE_DEADLINE_S = 600.0
 
 
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None
+    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None, world: str = "kinematic"
 ) -> dict[str, Any]:
     """One run: plan the object with ``seed``, validate the final grasp (unless ``validation``
-    is None: then ``held`` is None); a flat row."""
+    is None: then ``held`` is None); a flat row. In the Drake world ``held`` is the plan's own
+    lift test."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
-        result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
+        if world == "drake":
+            request = PlanRequest(obj=obj.spec, seed=seed, deadline_s=DRAKE_DEADLINE_S)
+            result = plan(request, keep_trace=False, world="drake")
+        else:
+            result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
             **row,
@@ -60,6 +73,20 @@ def plan_and_validate(
             "refused_field": exc.field,
             "good_grasp": None,
             "held": None,
+        }
+    if result.world is not None:
+        lift = result.world.get("lift") or {}
+        return {
+            **row,
+            "status": result.status,
+            "reason": result.reason,
+            "good_grasp": bool(result.good_grasp),
+            "held": bool(lift.get("held", False)),
+            "epsilon": result.epsilon,
+            "plan_time_s": result.wall_time_s,
+            "object_moved_mm": result.world["object_moved_mm"],
+            "lift": lift.get("why", "no lift test"),
+            "real_time_factor": result.world["real_time_factor"],
         }
     if validation is None:
         return {
@@ -184,6 +211,7 @@ def run(
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
     validate: bool = True,
+    world: str = "kinematic",
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
     drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
@@ -198,7 +226,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks))
+        runs.append(plan_and_validate(obj, seed, checks, world))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -329,6 +357,12 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
     parser.add_argument(
+        "--world",
+        choices=WORLDS,
+        default="kinematic",
+        help="where the plans run: kinematic, or drake (held = the plan's own lift test) (kinematic)",
+    )
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -356,8 +390,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
+    if args.world == "drake":
+        name += "_drake"
+    validation = {"seconds": args.seconds}
     data = run(
-        objects, seeds, args.out, name, validation={"seconds": args.seconds}, validate=not args.no_validate
+        objects, seeds, args.out, name, validation=validation, validate=not args.no_validate, world=args.world
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")
