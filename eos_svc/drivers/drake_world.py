@@ -150,7 +150,7 @@ class DrakeDriver(KinematicDriver):
         duration = max(float(np.linalg.norm(delta[xyz])) / speed, turn / s.joint_speed)
         if duration < 1e-9:
             return False
-        velocity = delta / duration
+        duration *= 1.5  # a smoothstep profile: its peak speed is 1.5 times its mean
         steps = max(1, int(np.ceil(duration / s.chunk)))
         stopped = False
 
@@ -158,9 +158,10 @@ class DrakeDriver(KinematicDriver):
             nonlocal stopped
             t0 = plant.time()
             for k in range(1, steps + 1):
-                frac = k / steps
-                plant.command_moving(q_from + frac * delta, velocity if k < steps else np.zeros_like(delta))
-                plant.advance_to(t0 + frac * duration)
+                tau = k / steps  # smoothstep 3τ² − 2τ³: starts and stops at rest, no overshoot kick
+                along, rate = (3 - 2 * tau) * tau * tau, 6 * tau * (1 - tau) / duration
+                plant.command_moving(q_from + along * delta, rate * delta)
+                plant.advance_to(t0 + tau * duration)
                 if self._pushing() > s.stop_force:
                     plant.command(plant.hand_q())
                     stopped = True
