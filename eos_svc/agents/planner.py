@@ -208,7 +208,8 @@ def plan(
     oracle_postulate: bool = False,
     check: bool = True,
     check_board: bool = False,
-    world: str = "kinematic",
+    world: str | None = None,
+    driver: HandDriver | None = None,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -239,10 +240,14 @@ def plan(
             against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
-        world: where the hand acts (:mod:`eos_svc.drivers.worlds`): ``"kinematic"`` (exact, the
-            object fixed: the paper's experiments) or ``"drake"`` (the object a free body on a
+        world: where the hand acts (default: the request's ``world``; see
+            :mod:`eos_svc.drivers.worlds`): ``"kinematic"`` (exact, the object fixed: the
+            paper's experiments) or ``"drake"`` (the object a free body on a
             table under gravity; the grasp must pass the lift test; the result's ``world``
             entry says how far the object moved and how fast the simulation ran).
+        driver: a hand driver of the caller's (e.g. a :class:`~eos_svc.drivers.zenoh_driver.ZenohDriver`
+            of a hand served elsewhere) instead of a world built here for the request;
+            ``world`` is then the served world's.
 
     Raises:
         ValidationError: a request the planner cannot plan, refused before any cycle by
@@ -252,9 +257,10 @@ def plan(
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
     context = context if context is not None else context_for(hand, params)
-    check_world(world)
+    world = check_world(request.world if world is None else world)
     model = build_world(request, check=check, context=context)
-    driver = make_driver(world, model, request)  # all the agents get: the world stays the planner's
+    if driver is None:  # all the agents get: the world stays the planner's
+        driver = make_driver(world, model, request)
     agents = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
@@ -269,7 +275,7 @@ def plan(
         check_access=check_board,
         entry_check=check_entry if check_board else None,
     )
-    board = PoseBoard(model, {keys.FRICTION: request.friction})  # records the hand's q per cycle
+    board = PoseBoard(driver, {keys.FRICTION: request.friction})  # records the hand's q per cycle
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"
@@ -299,9 +305,9 @@ def plan(
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
         hand_height=model.hand.hand_height,
-        q_final=tuple(float(x) for x in model.state.q),
+        q_final=tuple(float(x) for x in driver.joint_positions()),
         wall_time_s=time.perf_counter() - t0,
-        world=driver.report(),
+        world=getattr(driver, "report", lambda: None)(),
     )
     return result
 

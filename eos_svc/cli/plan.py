@@ -172,6 +172,7 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "max_cycles": args.max_cycles,
         "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
         "friction": args.friction,
+        **({"world": args.world} if getattr(args, "world", "kinematic") != "kinematic" else {}),
     }
 
 
@@ -247,8 +248,9 @@ def format_result(result: Any) -> str:
         closure = "force closure" if getattr(result, "force_closure", False) else "no force closure"
         eps = result.epsilon
         lines.append(f"quality: {closure} at μ = {result.friction:g}, ε = {eps:.3f} (Ferrari-Canny)")
-    if result.world is not None:
-        lines.append(format_world(result.world))
+    world = getattr(result, "world", None)  # a replayed recording's result may have none
+    if world is not None:
+        lines.append(format_world(world))
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
     if getattr(result, "validation", None):
         from eos_svc.cli.validate import format_validation
@@ -322,7 +324,6 @@ def run(args: argparse.Namespace) -> int:
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
-            world=getattr(args, "world", "kinematic"),
             check=False,  # admit() has just run check_plannable on this request and hand
         )
         if record_file is not None:

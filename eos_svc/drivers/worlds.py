@@ -6,13 +6,11 @@ from typing import TYPE_CHECKING
 
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.errors import ValidationError
+from eos_svc.schema.request import WORLDS
 
 if TYPE_CHECKING:
     from eos_svc.schema.request import PlanRequest
     from eos_svc.world.world import GraspWorld
-
-#: the world names ``plan(world=...)``, ``eos plan --world`` and the service accept
-WORLDS = ("kinematic", "drake")
 
 
 def check_world(name: object) -> str:

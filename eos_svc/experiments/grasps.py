@@ -178,6 +178,8 @@ def summarise(
         "not_good_dropped": sum(not r["good_grasp"] and not r["held"] for r in validated),
     }
     good = confusion["good_held"] + confusion["good_dropped"]
+    timed = [r["validation_time_s"] for r in validated if "validation_time_s" in r]  # not in Drake's
+    moved = [r["object_moved_mm"] for r in done if "object_moved_mm" in r]  # the Drake world's
     totals = {
         "runs": len(done),
         "rejected": len(runs) - len(done),
@@ -195,9 +197,8 @@ def summarise(
         if validated
         else None,
         "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
-        "median_validation_time_s": float(np.median([r["validation_time_s"] for r in validated]))
-        if validated
-        else None,
+        "median_validation_time_s": float(np.median(timed)) if timed else None,
+        "median_object_moved_mm": float(np.median(moved)) if moved else None,
         "failures": failures,
     }
     return rows, totals
@@ -310,8 +311,15 @@ def report(data: dict) -> str:
             f"  good       {c['good_held']:>8} {c['good_dropped']:>8}",
             f"  not good   {c['not_good_held']:>8} {c['not_good_dropped']:>8}",
             f"good grasps held: {_pct(t['held_given_good'])} (goal {HELD_GOAL:.0%}, met: {t['goal_met']}); "
-            f"agreement {_pct(t['agreement'])}; median validation {t['median_validation_time_s']:.1f} s",
+            f"agreement {_pct(t['agreement'])}"
+            + (
+                f"; median validation {t['median_validation_time_s']:.1f} s"
+                if t["median_validation_time_s"] is not None
+                else "; held = the Drake world's lift test"
+            ),
         ]
+    if t.get("median_object_moved_mm") is not None:
+        lines.append(f"median object displacement in the Drake world: {t['median_object_moved_mm']:.1f} mm")
     if t["runs"]:
         lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
     if t["failures"]:

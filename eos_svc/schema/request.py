@@ -39,6 +39,8 @@ MAX_OBJECT_SIZE = 1.0
 MAX_POSITION = 10.0
 MAX_CYCLES_LIMIT = 100_000
 MAX_DEADLINE_S = 3600.0
+#: the worlds a plan can run in (:mod:`eos_svc.drivers.worlds`)
+WORLDS = ("kinematic", "drake")
 MAX_TACTILE_NOISE = 0.01
 #: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
 DEFAULT_FRICTION = 0.5
@@ -222,6 +224,9 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        world: where the hand acts, one of :data:`WORLDS`: ``"kinematic"`` (exact, the object
+            fixed) or ``"drake"`` (the object a free body on a table; success needs the lift
+            test). The JSON form carries it only when it is not ``"kinematic"``.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -231,6 +236,7 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    world: str = "kinematic"
 
     def __post_init__(self) -> None:
         if not isinstance(self.obj, ObjectSpec):
@@ -249,6 +255,8 @@ class PlanRequest:
         if not 0.0 <= mu <= MAX_FRICTION:
             raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
         object.__setattr__(self, "friction", mu)
+        if self.world not in WORLDS:
+            raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
 
     @classmethod
     def from_checked(
@@ -286,21 +294,23 @@ class PlanRequest:
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
-            data, {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction"}, ""
+            data,
+            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "world"},
+            "",
         )
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction"):
+        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "world"):
             if key in data:
                 kwargs[key] = data[key]
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
         """JSON form (round-trips through :meth:`from_dict`)."""
-        return {
+        out = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -309,3 +319,6 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.world != "kinematic":
+            out["world"] = self.world
+        return out

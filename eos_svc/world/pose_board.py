@@ -14,29 +14,29 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from eos_svc.board import Board, BoardChange
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 #: decimals kept of every joint value in ``keys.HAND_Q`` (0.1 µm, 0.1 µrad)
 Q_DECIMALS = 7
 
 
-def hand_q(world: GraspWorld) -> tuple[float, ...]:
-    """The world's hand configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
-    return tuple(world.state.q.round(Q_DECIMALS).tolist())
+def hand_q(world: HandDriver) -> tuple[float, ...]:
+    """The hand's configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
+    return tuple(world.joint_positions().round(Q_DECIMALS).tolist())
 
 
 class PoseBoard(Board):
     """A board that records the hand's configuration at the end of every cycle that moved it.
 
     Args:
-        world: the world whose hand is recorded.
+        world: the driver of the hand recorded.
         entries: initial entries (set up by the caller, not recorded as changes).
     """
 
     __slots__ = ("_world",)
 
-    def __init__(self, world: GraspWorld, entries: Mapping[str, Any] | None = None) -> None:
+    def __init__(self, world: HandDriver, entries: Mapping[str, Any] | None = None) -> None:
         super().__init__({**(entries or {}), keys.HAND_Q: hand_q(world)})
         self._world = world
 

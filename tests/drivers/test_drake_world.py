@@ -80,3 +80,12 @@ def test_a_drake_plan_succeeds_only_when_the_lift_test_held() -> None:
     lift = result.world["lift"]
     assert (result.status == "success") == bool(lift is not None and lift["held"])
     assert result.world["simulated_s"] > 0 and result.world["object_moved_mm"] >= 0.0
+
+
+def test_the_request_carries_its_world_and_the_kinematic_form_is_unchanged() -> None:
+    assert PlanRequest.from_dict({"world": "drake"}).world == "drake"
+    assert "world" not in PlanRequest().to_dict()  # the kinematic world's JSON form as before
+    assert PlanRequest(world="drake").to_dict()["world"] == "drake"
+    with pytest.raises(ValidationError) as err:
+        PlanRequest.from_dict({"world": "mujoco"})
+    assert err.value.field == "world"
