@@ -44,20 +44,27 @@ CASES: list[tuple[str, dict[str, Any], str]] = [
         "hand3x3",
     ),
     *[
-        (f"ellipsoid seed {s}", {"seed": s, "object": {"shape": "ellipsoid", "radii": [0.035, 0.03, 0.025]}},
-         "hand3x3")
+        (
+            f"ellipsoid seed {s}",
+            {"seed": s, "object": {"shape": "ellipsoid", "radii": [0.035, 0.03, 0.025]}},
+            "hand3x3",
+        )
         for s in (1, 2)
     ],
     *[
-        (f"cylinder seed {s}",
-         {"seed": s, "object": {"shape": "cylinder", "radius": 0.02, "length": 0.08, "rpy": ACROSS}},
-         "hand3x3")
+        (
+            f"cylinder seed {s}",
+            {"seed": s, "object": {"shape": "cylinder", "radius": 0.02, "length": 0.08, "rpy": ACROSS}},
+            "hand3x3",
+        )
         for s in (1, 3)
     ],
     *[
-        (f"capsule seed {s}",
-         {"seed": s, "object": {"shape": "capsule", "radius": 0.028, "length": 0.04, "rpy": ACROSS}},
-         "hand3x3")
+        (
+            f"capsule seed {s}",
+            {"seed": s, "object": {"shape": "capsule", "radius": 0.028, "length": 0.04, "rpy": ACROSS}},
+            "hand3x3",
+        )
         for s in (2, 4)
     ],
     *[
@@ -193,16 +200,25 @@ def main(argv: list[str] | None = None) -> int:
     for p in problems:
         print(p)
     if exact and not problems:
-        print(f"{len(exact)} plan(s) differ only in the digits of round-off-size numbers (< 1e-11) "
-              "in the cycles' words, e.g. the first:\n" + exact[0])
+        print(
+            f"{len(exact)} plan(s) differ only in the digits of round-off-size numbers (< 1e-11) "
+            "in the cycles' words, e.g. the first:\n" + exact[0]
+        )
     print(
         f"{len(after)} plans, {total} cycles: "
-        + ("identical cycle for cycle" if not exact else
-           "identical cycle for cycle up to round-off digits" if not problems else
-           f"{len(problems)} plan(s) differ")
-        + ("; q_final and ε identical bit for bit" if not bits else
-           f"; q_final/ε bits differ in {len(bits)} plan(s), "
-           f"by at most {largest_bit_change(before, after):.1e}")
+        + (
+            "identical cycle for cycle"
+            if not exact
+            else "identical cycle for cycle up to round-off digits"
+            if not problems
+            else f"{len(problems)} plan(s) differ"
+        )
+        + (
+            "; q_final and ε identical bit for bit"
+            if not bits
+            else f"; q_final/ε bits differ in {len(bits)} plan(s), "
+            f"by at most {largest_bit_change(before, after):.1e}"
+        )
     )
     return 1 if problems else 0
 

@@ -33,7 +33,6 @@ from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object
-from eos_svc.kinematics.norms import vector_norm
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
@@ -97,7 +96,7 @@ class FingerAgent(GraspAgent):
             hit = landings.landing(start)
             assert hit is not None  # k is its first touching sample
             chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-            miss = self._miss_memo[k] = vector_norm(hit.point - chosen)
+            miss = self._miss_memo[k] = float(np.linalg.norm(hit.point - chosen))
         return miss
 
     def _landings(self, board: Board) -> tuple[SweepLandings, int, dict] | None:

@@ -57,13 +57,6 @@ DEFAULT_FLAT_CURVATURE = 1.0
 Array = NDArray[np.float64]
 
 
-# the linear algebra of the estimate (the names the tests of its numbers use)
-_eigvalsh = np.linalg.eigvalsh
-_eigh = np.linalg.eigh
-_solve = np.linalg.solve
-_inv = np.linalg.inv
-
-
 class UnderdeterminedError(ValidationError):
     """The samples do not determine the curvature form (roll along two directions);
     ``field`` is ``"samples"``."""
@@ -241,21 +234,21 @@ class CurvatureEstimator:
         b = np.concatenate([rhs for _, rhs in rows])
         AtA = A.T @ A
         # 2-norm condition number of the symmetric AtA from its eigenvalues
-        ev = np.abs(_eigvalsh(AtA))
+        ev = np.abs(np.linalg.eigvalsh(AtA))
         if np.trace(AtA) == 0.0 or ev.min() == 0.0 or ev.max() / ev.min() > 1e12:
             raise UnderdeterminedError(
                 "samples",
                 "do not determine the curvature form: roll along two independent "
                 "tangent directions (contact velocities are parallel or zero)",
             )
-        theta = _solve(AtA, A.T @ b)
+        theta = np.linalg.solve(AtA, A.T @ b)
         r = b - A @ theta
         dof = 2 * m - 3
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
-        cov = s2 * _inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
+        cov = s2 * np.linalg.inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
         form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
-        evals, evecs = _eigh(form)
+        evals, evecs = np.linalg.eigh(form)
         ks = (float(evals[1]), float(evals[0]))  # k1 >= k2 (eigh's eigenvalues ascend)
         dirs = evecs[:, [1, 0]]
         sig = []

@@ -37,7 +37,6 @@ from eos_svc.objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, S
 from .curvature import CurvatureEstimate, CurvatureEstimator, CurvatureSample
 from .geometry import tangent_basis
 from .hand import HandModel, HandState, KinematicsError
-from .norms import row_norms
 from .rolling import RollingQP
 from .scene import Scene
 from .tactile import TactileSensor
@@ -159,7 +158,7 @@ def place_hand_for_ep1(
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
     v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = row_norms(v)  # 2 sin θ
+    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -173,10 +172,10 @@ def _log_chart(
 ) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere of radius ``r`` around the unit ``b``, in
     the tangent basis ex, ey at b, m (``directions``: the points normalised, when known)."""
-    d = points / row_norms(points, keepdims=True) if directions is None else directions
+    d = points / np.linalg.norm(points, axis=1, keepdims=True) if directions is None else directions
     cosang = d @ b
     v = d - np.outer(cosang, b)
-    sin_ang = row_norms(v)
+    sin_ang = np.linalg.norm(v, axis=1)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]

@@ -117,4 +117,3 @@ def test_a_broken_agent_contract_is_reported_with_its_class():
 class _Nop(Agent):
     def act(self, board, ctx):
         return ActionResult(Outcome.FINISHED, succeeded=True)
-

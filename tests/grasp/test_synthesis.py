@@ -19,7 +19,6 @@ from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
 from eos_svc.grasp.synthesis import GraspSynthesis
-from eos_svc.kinematics.norms import row_norms, vector_norm
 
 HERE = (0.21, 0.02, -0.015)
 
@@ -130,25 +129,6 @@ def test_clearance_check_with_bounds_equals_every_exact_gap(spec):
                 assert fast == exact
                 answers.add(fast)
     assert answers == {True, False}
-
-
-def test_row_norms_are_numpys_bit_for_bit():
-    rng = np.random.default_rng(8)
-    for scale in (1e-6, 0.03, 10.0):
-        for k in (1, 2, 3, 5):
-            p = rng.normal(0.0, scale, (rng.integers(1, 300), k))
-            assert np.array_equal(row_norms(p), np.linalg.norm(p, axis=1))
-
-
-def test_vector_norm_is_numpys_bit_for_bit():
-    rng = np.random.default_rng(5)
-    for scale in (1e-9, 1e-3, 0.05, 1.0, 1e3):
-        for _ in range(300):
-            v = rng.normal(0.0, scale, rng.integers(1, 7)) - rng.normal(0.0, scale)  # a fresh array
-            assert vector_norm(v) == float(np.linalg.norm(v))
-            m = rng.normal(0.0, scale, (3, 3))
-            assert vector_norm(m[:, 1]) == float(np.linalg.norm(m[:, 1]))  # a strided view
-    assert vector_norm(np.zeros(3)) == 0.0
 
 
 # --- candidates per primitive -------------------------------------------------------------------

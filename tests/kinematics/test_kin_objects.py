@@ -107,8 +107,15 @@ def _height(g: Implicit, s: np.ndarray, n: np.ndarray, t: np.ndarray, span: floa
     return 0.5 * (lo + hi)
 
 
-def _numeric_form(g: Implicit, s: np.ndarray, n: np.ndarray, e1: np.ndarray, e2: np.ndarray,
-                  hs: float = 3e-4, span: float = 0.01) -> np.ndarray:
+def _numeric_form(
+    g: Implicit,
+    s: np.ndarray,
+    n: np.ndarray,
+    e1: np.ndarray,
+    e2: np.ndarray,
+    hs: float = 3e-4,
+    span: float = 0.01,
+) -> np.ndarray:
     """-Hessian of the surface height over the tangent plane (central differences)."""
 
     def f(a: float, b: float) -> float:

@@ -1,0 +1,45 @@
+"""EP1's tactile chart against closed forms: rotation vectors against Pinocchio's ``log3`` and
+the log chart's geodesic coordinates on the tip sphere (arc length r·angle, in the tangent basis)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pinocchio as pin
+import pytest
+
+from eos_svc.kinematics.ep1 import _chart_at_mean, _log3
+
+
+@pytest.mark.parametrize("spread", [1e-9, 0.05, 0.4, 2.5])
+def test_rotation_vectors_are_pinocchios_log3(spread: float) -> None:
+    rng = np.random.default_rng(3)
+    vectors = rng.normal(size=(20, 3)) * spread
+    R = np.array([pin.exp3(v) for v in vectors])
+    expected = np.array([pin.log3(r) for r in R])
+    assert np.allclose(_log3(R), expected, atol=1e-12)
+
+
+def test_chart_coordinates_are_geodesic_arcs_on_the_tip() -> None:
+    """A point at angle a from the chart's centre along the tangent direction t lands at r·a·t."""
+    r = 0.01
+    rng = np.random.default_rng(11)
+    for _ in range(20):
+        b = rng.normal(size=3)
+        b /= np.linalg.norm(b)
+        ex_tip = rng.normal(size=3)
+        ex = ex_tip - (ex_tip @ b) * b
+        ex /= np.linalg.norm(ex)
+        ey = np.cross(b, ex)
+        angles = rng.uniform(0.0, 0.6, 4)
+        headings = rng.uniform(-math.pi, math.pi, 4)
+        # points symmetric about b so that their mean direction is b itself
+        pts, want = [], []
+        for a, h in zip(angles, headings, strict=True):
+            for sign in (1.0, -1.0):
+                t = sign * (math.cos(h) * ex + math.sin(h) * ey)
+                pts.append(r * (math.cos(a) * b + math.sin(a) * t))
+                want.append(r * a * np.array([t @ ex, t @ ey]))
+        got = _chart_at_mean(np.array(pts), ex_tip, r)
+        assert np.allclose(got, np.array(want), atol=1e-12)
