@@ -101,10 +101,10 @@ class DrakeDriver(KinematicDriver):
         self._plant.simulator.Initialize()
         self._sim_wall = 0.0
         self._timed(lambda: self._plant.advance(0.2))  # the object settles on the table
-        self._sync()
-        self._start = np.array(self._plant.object_pose().translation())
+        self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
         self._lift: dict[str, Any] | None = None
+        self._sync()
 
     # --- time ---------------------------------------------------------------------------------
     def clock(self) -> float:
@@ -127,8 +127,7 @@ class DrakeDriver(KinematicDriver):
         world.obj_centre = tuple(float(x) for x in pose.translation())
         hand = world.hand
         world.set_q(np.clip(self._plant.hand_q(), hand.lower, hand.upper))
-        moved = float(np.linalg.norm(pose.translation() - self._start)) if hasattr(self, "_start") else 0.0
-        self._moved_max = max(getattr(self, "_moved_max", 0.0), moved)
+        self._moved_max = max(self._moved_max, float(np.linalg.norm(pose.translation() - self._start)))
 
     def object_moved(self) -> float:
         """How far the object's centre is from where it rested at the start, m."""
