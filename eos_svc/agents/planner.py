@@ -275,7 +275,8 @@ def plan(
         check_access=check_board,
         entry_check=check_entry if check_board else None,
     )
-    board = PoseBoard(driver, {keys.FRICTION: request.friction})  # records the hand's q per cycle
+    # records the hand's q per cycle (and in the Drake world the object's pose, for viewers)
+    board = PoseBoard(driver, {keys.FRICTION: request.friction}, getattr(driver, "object_pose", None))
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"

@@ -129,6 +129,13 @@ class DrakeDriver(KinematicDriver):
         world.set_q(np.clip(self._plant.hand_q(), hand.lower, hand.upper))
         self._moved_max = max(self._moved_max, float(np.linalg.norm(pose.translation() - self._start)))
 
+    def object_pose(self) -> list[float]:
+        """The object's pose for viewers: x, y, z (m), quaternion w, x, y, z (rounded to 1e-7)."""
+        pose = self._plant.object_pose()
+        q = pose.rotation().ToQuaternion()
+        values = [*pose.translation(), q.w(), q.x(), q.y(), q.z()]
+        return [round(float(v), 7) for v in values]
+
     def object_moved(self) -> float:
         """How far the object's centre is from where it rested at the start, m."""
         return float(np.linalg.norm(self._plant.object_pose().translation() - self._start))

@@ -191,6 +191,10 @@ ENTRIES: dict[str, Entry] = {
     ),
     keys.EP2_RUNS: Entry(int, "EP2 rounds so far"),
     keys.HAND_Q: Entry(list[float], "the hand's configuration after the cycle (m, rad)"),
+    keys.OBJECT_POSE: Entry(
+        list[float],
+        "a moving world's object pose after the cycle: x, y, z (m), quaternion w, x, y, z (viewers)",
+    ),
     keys.HAND_PATH: Entry(
         list[list[float]], "the hand's configurations during an EP1 roll, sampled (for viewers)"
     ),
@@ -209,7 +213,11 @@ ENTRIES: dict[str, Entry] = {
 
 #: entries written by others than the agents: entry -> who (the planner before the first cycle,
 #: from the request)
-OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up", keys.HAND_Q: "PoseBoard, every cycle"}
+OUTSIDE_WRITERS: dict[str, str] = {
+    keys.FRICTION: "plan set-up",
+    keys.HAND_Q: "PoseBoard, every cycle",
+    keys.OBJECT_POSE: "PoseBoard, every cycle of a world whose object moves (Drake)",
+}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
     {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}

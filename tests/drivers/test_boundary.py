@@ -129,3 +129,11 @@ def test_the_reachability_walk_finds_a_world_handed_to_an_agent() -> None:
     found = held_world_parts(agent)
     assert any(path.endswith("world.scene") for path in found)
     assert any(path.endswith(".obj") for path in found)
+
+
+def test_no_agent_reads_the_moving_object_pose_the_viewers_get() -> None:
+    from eos_svc.schema import keys
+
+    agents = build_agents(build_world(PlanRequest(seed=1)), memory=GraspMemory(":memory:"))
+    assert all(keys.OBJECT_POSE not in agent.reads for agent in agents)
+    assert all("OBJECT_POSE" not in path.read_text() for path in agent_sources())

@@ -89,3 +89,22 @@ def test_the_request_carries_its_world_and_the_kinematic_form_is_unchanged() -> 
     with pytest.raises(ValidationError) as err:
         PlanRequest.from_dict({"world": "mujoco"})
     assert err.value.field == "world"
+
+
+def test_a_drake_plan_records_the_object_pose_and_the_view_moves_the_object() -> None:
+    from pydrake.geometry import MeshcatAnimation
+
+    from eos_svc.schema import keys
+    from eos_svc.view.replay_html import _animate_object, plan_scene
+
+    request = PlanRequest(seed=1, max_cycles=3, world="drake", deadline_s=600)
+    result = plan(request)
+    records = [r.to_dict() for r in result.trace]
+    poses = [c["new"] for r in records for c in r["changes"] if c["key"] == keys.OBJECT_POSE]
+    assert poses and all(len(p) == 7 for p in poses)
+    assert abs(poses[-1][2] - request.obj.position[2]) < 1e-3  # still resting on the table
+    scene = plan_scene(request, records, result.to_dict())
+    assert scene.timeline.frames > 0
+    assert _animate_object(MeshcatAnimation(scene.timeline.fps), scene.timeline, records) == len(poses)
+    kinematic = plan(PlanRequest(seed=1, max_cycles=3))
+    assert not any(c.key == keys.OBJECT_POSE for r in kinematic.trace for c in r.changes)
