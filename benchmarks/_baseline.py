@@ -40,6 +40,8 @@ def load_kinematics(rev: str) -> ModuleType:
             text = subprocess.run(
                 ["git", "-C", str(ROOT), "show", f"{rev}:{f}"], capture_output=True, check=True
             ).stdout
+            # its absolute imports of its own package point at the private copy
+            text = re.sub(rb"\beos_svc\.kinematics\b", name.encode(), text)
             (pkg / Path(f).name).write_bytes(text)
             subs.append(Path(f).stem)
     # hand.py finds the URDF at parents[2] / "urdf" of its own file

@@ -1,12 +1,15 @@
 """The shape fit: ``select_class`` on the touches of real plans, this tree against a baseline.
 
-    .venv/bin/python benchmarks/bench_shape.py --baseline-tree ../base [--rounds 15] [--kernels]
+    .venv/bin/python benchmarks/bench_shape.py --baseline-tree ../base [--rounds 15] [--kernels] [--compiled]
+    .venv/bin/python benchmarks/bench_shape.py --baseline-tree . --compiled   # compiled vs numpy here
 
 Plans the grasp experiment's fixed suite (seed 1) and keeps every set of touches post_shape
 fitted. Then times ``select_class`` over all of them, here and in a child process running the
 baseline checkout's own interpreter (``<tree>/.venv/bin/python``), in alternating rounds (the
 machine's load changes within a run): the median of each and the median of the per-round
-ratios. ``--kernels``: the baseline loads its compiled fit kernels first, where it has them.
+ratios. ``--kernels``: the baseline loads its compiled fit kernels first, where it has them;
+``--compiled``: this tree does (:func:`eos_svc.shape.kernels.load`), else it fits in numpy.
+``--python``: the baseline's interpreter (default ``<tree>/.venv/bin/python``, else this one).
 The postulates are compared too: the same class on every set of touches, and the largest
 difference in confidence.
 """
@@ -25,7 +28,7 @@ from pathlib import Path
 import eos_svc.agents.post_shape as post_shape
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.experiments.grasp_suite import fixed_suite
-from eos_svc.shape import Touches, select_class
+from eos_svc.shape import Touches, kernels, select_class
 
 #: the timing loop, run in this tree and in the baseline's: reads the touches, answers each
 #: "time" line with the seconds one pass over them took, "result" with the postulates
@@ -73,7 +76,11 @@ def main() -> None:
     parser.add_argument("--baseline-tree", type=Path, required=True, help="a checkout with its own .venv")
     parser.add_argument("--rounds", type=int, default=15)
     parser.add_argument("--kernels", action="store_true", help="the baseline loads its compiled kernels")
+    parser.add_argument("--compiled", action="store_true", help="this tree loads its compiled residuals")
+    parser.add_argument("--python", type=Path, help="the baseline's interpreter")
     args = parser.parse_args()
+    if args.compiled and not kernels.load():
+        raise SystemExit("--compiled: numba is not installed (the fast extra)")
     touches = suite_touches()
     with tempfile.NamedTemporaryFile(suffix=".pkl", delete=False) as f:
         pickle.dump(
@@ -84,8 +91,10 @@ def main() -> None:
             f,
         )
     tree = args.baseline_tree.resolve()
+    own = tree / ".venv/bin/python"
+    python = args.python or (own if own.exists() else Path(sys.executable))
     child = subprocess.Popen(
-        [str(tree / ".venv/bin/python"), "-c", CHILD, f.name, "kernels" if args.kernels else "numpy"],
+        [str(python), "-c", CHILD, f.name, "kernels" if args.kernels else "numpy"],
         cwd=tree,
         stdin=subprocess.PIPE,
         stdout=subprocess.PIPE,
@@ -118,7 +127,8 @@ def main() -> None:
         f"largest confidence difference {worst:.3f}"
     )
     print(
-        f"select_class over all: this tree {1000 * statistics.median(ours_t):.1f} ms, baseline "
+        f"select_class over all: this tree {1000 * statistics.median(ours_t):.1f} ms "
+        f"({'compiled' if args.compiled else 'numpy'}), baseline "
         f"{1000 * statistics.median(base_t):.1f} ms ({'kernels' if args.kernels else 'numpy'}), "
         f"median ratio {ratio:.2f}"
     )

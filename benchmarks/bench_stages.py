@@ -2,6 +2,7 @@
 
     .venv/bin/python benchmarks/bench_stages.py --baseline ddccb46
     .venv/bin/python benchmarks/bench_stages.py --baseline ddccb46 --suite   # + the quick grasp suite
+    .venv/bin/python benchmarks/bench_stages.py --baseline a69a74f --suite --cold-memo
 
 For each request (the default plan; with ``--suite`` also every object of the quick grasp suite,
 seed 1) the plan's CPU time per part — the search stage, each information agent (ep1,
@@ -12,7 +13,11 @@ its load changes within a run, and only ratios measured side by side mean much).
 time with the process's CPU clock (``time.process_time`` stands in for the controller's clock
 there), which another process's load disturbs far less than the wall clock. Reported per
 part: the median and the lower quartile of each side and their ratios, and the median of the
-plan-by-plan ratios (``paired``).
+plan-by-plan ratios (``paired``). Each child plans the same requests over and over: a
+baseline that memoised results across plans (a69a74f's grasp-quality ``lru_cache``) answers
+the grasping stage's 6-D hull from its memo there, which a new request never does;
+``--cold-memo`` forgets that memo before each plan. The fit's compiled residuals are loaded
+in both children (:func:`eos_svc.shape.kernels.load`), as a long-lived process has them.
 """
 
 from __future__ import annotations
@@ -35,11 +40,20 @@ try:  # the fit's compiled kernels, as a long-lived process has them (where the 
 except ImportError:
     pass
 from eos_svc.agents import PlanRequest, plan
-requests = [PlanRequest.from_dict(r) for r in json.loads(sys.argv[1])]
+given = json.loads(sys.argv[1])
+requests = [PlanRequest.from_dict(r) for r in given["requests"]]
+forget = lambda: None
+if given["cold_memo"]:
+    try:  # a revision that memoised grasp qualities across plans (a69a74f: an lru_cache)
+        from eos_svc.agents.quality import _contacts_quality
+        forget = _contacts_quality.cache_clear
+    except ImportError:
+        pass
 for request in requests:
     plan(request)  # warm-up
 print("ready", flush=True)
 for line in sys.stdin:  # one plan per line: the index of its request
+    forget()
     t0 = time.process_time()
     result = plan(requests[int(line)])
     parts = {"total": time.process_time() - t0}
@@ -56,8 +70,8 @@ class Child(ScriptChild):
     """A fresh interpreter importing ``eos_svc`` from ``tree`` that plans one of ``requests`` per
     :meth:`plan` call and answers its CPU seconds per part."""
 
-    def __init__(self, tree: str, requests: list[dict]) -> None:
-        super().__init__(tree, CHILD, json.dumps(requests))
+    def __init__(self, tree: str, requests: list[dict], cold_memo: bool = False) -> None:
+        super().__init__(tree, CHILD, json.dumps({"requests": requests, "cold_memo": cold_memo}))
 
     def plan(self, index: int) -> dict[str, float]:
         """CPU seconds per part of one plan of request ``index``."""
@@ -77,6 +91,12 @@ def main(argv: list[str] | None = None) -> int:
     )
     parser.add_argument("--plans", type=int, default=20, help="plans per request and side (20)")
     parser.add_argument("--suite", action="store_true", help="also the quick grasp suite's objects")
+    parser.add_argument(
+        "--cold-memo",
+        action="store_true",
+        help="forget a baseline's memo of grasp qualities before each plan (a69a74f kept one across "
+        "plans: repeating the same request hit it, a new request does not)",
+    )
     args = parser.parse_args(argv)
     labels = ["default plan"]
     requests: list[dict] = [{}]
@@ -89,7 +109,7 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory(prefix="eos_stages_") as tmp:
         if not export_revision(args.baseline, tmp):
             raise RuntimeError(f"git archive of {args.baseline} failed")
-        mine, base = Child(str(ROOT), requests), Child(tmp, requests)
+        mine, base = Child(str(ROOT), requests, args.cold_memo), Child(tmp, requests, args.cold_memo)
         samples: dict[str, list[list[dict[str, float]]]] = {
             side: [[] for _ in requests] for side in ("this tree", args.baseline)
         }

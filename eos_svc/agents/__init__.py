@@ -1,8 +1,9 @@
 """The grasp planner of the paper: eight agents, three stages (search, information, grasping).
 
 ``plan(request)`` runs one plan; :class:`PlanRequest` says what to grasp; the result is a
-:class:`PlanResult`. Importing this package loads Pinocchio and coal; the request, the result and the board's keys live in :mod:`eos_svc.schema`, the world the
-agents act in in :mod:`eos_svc.world`.
+:class:`PlanResult`. Importing this package loads Pinocchio and coal; the request, the result
+and the board's keys live in :mod:`eos_svc.schema`, the world the agents act in in
+:mod:`eos_svc.world`.
 """
 
 from __future__ import annotations
@@ -23,4 +24,3 @@ __all__ = [
     "keys",
     "plan",
 ]
-

@@ -66,6 +66,6 @@ def diameter_angle_deg(centre: np.ndarray, opposing: np.ndarray, others: list[np
     """Angle (deg) between the opposing contact and the others' midpoint, seen from ``centre``
     (the end agent's Fig. 2 test)."""
     u = opposing - centre
-    v = np.mean(others, axis=0) - centre
-    cos = float(u @ v / max(float(np.linalg.norm(u) * np.linalg.norm(v)), 1e-12))
+    v = sum(others) / len(others) - centre
+    cos = float(u @ v) / max(math.sqrt(float(u @ u) * float(v @ v)), 1e-12)
     return math.degrees(math.acos(max(-1.0, min(1.0, cos))))

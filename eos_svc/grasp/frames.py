@@ -55,10 +55,12 @@ def palm_turn(R: np.ndarray) -> float:
 
 def frame(approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
     """Palm rotation with x = ``approach`` and z = ``closing`` (orthonormalised), y = z × x."""
-    x = approach / np.linalg.norm(approach)
-    z = closing - (closing @ x) * x
-    z /= np.linalg.norm(z)
-    return np.column_stack([x, np.cross(z, x), z])
+    x = approach / math.sqrt(float(approach @ approach))
+    z = closing - float(closing @ x) * x
+    z /= math.sqrt(float(z @ z))
+    (x0, x1, x2), (z0, z1, z2) = x.tolist(), z.tolist()
+    y = [z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0]  # z × x
+    return np.array([[x0, y[0], z0], [x1, y[1], z1], [x2, y[2], z2]])
 
 
 def _unit_perp(v: np.ndarray, axis: np.ndarray) -> np.ndarray | None:

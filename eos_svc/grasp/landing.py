@@ -12,6 +12,8 @@ SI units: metres, radians.
 
 from __future__ import annotations
 
+import math
+from bisect import bisect_left
 from dataclasses import dataclass
 
 import numpy as np
@@ -60,7 +62,9 @@ class SweepLandings:
 
     A finger between samples ``start`` − 1 and ``start``, not touching, closes from the former:
     it lands at the first touching sample at or after ``max(0, start − 1)``, unless it already
-    touches there (then there is no landing).
+    touches there (then there is no landing). The landing depends on ``start`` only through
+    that sample, so a finger closing step by step asks for the same landing again: it is found
+    once per touching sample.
 
     Args:
         obj: the object.
@@ -71,39 +75,64 @@ class SweepLandings:
 
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
         self.obj, self.sweep, self.pts, self.gaps = obj, sweep, pts, gaps
+        #: the touching samples (gap ≤ 0), increasing
+        self.touching: list[int] = np.flatnonzero(gaps <= 0.0).tolist()
+        self._by_sample: dict[int, Landing] = {}
 
     def first_touch(self, start: int) -> int | None:
         """The touching sample a finger closing from ``start`` lands at (None: it never touches,
         or already touches where it starts)."""
         s = max(0, start - 1)
-        hits = np.flatnonzero(self.gaps[s:] <= 0.0)
-        if len(hits) == 0 or hits[0] == 0:
+        i = bisect_left(self.touching, s)
+        if i == len(self.touching) or self.touching[i] == s:
             return None
-        return s + int(hits[0])
+        return self.touching[i]
+
+    def _between(self, k: int) -> tuple[float, np.ndarray]:
+        """(fraction s of the way from sample ``k`` − 1 to ``k`` where the gap, interpolated
+        linearly, is zero; the tip centre there (world, m))."""
+        a, b = float(self.gaps[k - 1]), float(self.gaps[k])
+        s = a / (a - b) if a != b else 1.0
+        return s, self.pts[k - 1] + s * (self.pts[k] - self.pts[k - 1])
 
     def landing(self, start: int) -> Landing | None:
         """Where the finger closing from sample ``start`` lands (None: nowhere)."""
         k = self.first_touch(start)
         if k is None:
             return None
-        a, b = self.gaps[k - 1], self.gaps[k]
-        s = a / (a - b) if a != b else 1.0  # the touching point between samples k-1 and k
-        tip = self.pts[k - 1] + s * (self.pts[k] - self.pts[k - 1])
-        point = self.obj.closest_surface_point(tip)
-        # a sphere tip touching a convex object: the contact normal runs from the contact point
-        # to the tip's centre (defined on edges and rims too, where the surface normal is not)
-        out = tip - point
-        length = float(np.linalg.norm(out))
-        normal = out / length if length > 1e-9 else self.obj.surface_normal(tip)
-        angles = self.sweep.angles
-        angle = float(angles[k - 1] + s * (angles[k] - angles[k - 1]))
-        return Landing(k, angle, point, normal)
+        if k not in self._by_sample:
+            s, tip = self._between(k)
+            point = self.obj.closest_surface_point(tip)
+            # a sphere tip touching a convex object: the contact normal runs from the contact
+            # point to the tip's centre (defined on edges and rims too, where the surface
+            # normal is not)
+            out = tip - point
+            length = math.sqrt(float(out @ out))
+            normal = out / length if length > 1e-9 else self.obj.surface_normal(tip)
+            angles = self.sweep.angles
+            angle = float(angles[k - 1] + s * (angles[k] - angles[k - 1]))
+            self._by_sample[k] = Landing(k, angle, point, normal)
+        return self._by_sample[k]
 
     def miss_lower_bound(self, start: int, tip_radius: float, point: np.ndarray) -> float:
-        """A lower bound (m) of the distance from the landing from ``start`` to ``point`` (world):
-        the distance itself, −inf when there is no landing (``tip_radius`` is not needed)."""
-        hit = self.landing(start)
-        return -np.inf if hit is None else float(np.linalg.norm(hit.point - point))
+        """A lower bound (m) of the distance from the landing from ``start`` to ``point`` (world),
+        without the object's closest point: −inf when there is no landing.
+
+        The landing's contact is the surface point closest to the touching tip centre, ``|sd(tip)|``
+        from it; the signed distance is 1-Lipschitz and known at the bracketing samples (their
+        gap + ``tip_radius``), so ``|sd(tip)| ≤ |gap(k−1) + r| + s·seg`` and ``≤ |gap(k) + r| +
+        (1 − s)·seg`` (``seg`` the samples' spacing, ``s`` the tip's fraction of it), and the contact is at
+        least ``|tip − point|`` less that from ``point`` (less 1e-9 m for round-off)."""
+        k = self.first_touch(start)
+        if k is None:
+            return -math.inf
+        s, tip = self._between(k)
+        step = self.pts[k] - self.pts[k - 1]
+        seg = math.sqrt(float(step @ step))
+        a, b = float(self.gaps[k - 1]) + tip_radius, float(self.gaps[k]) + tip_radius
+        reach = min(abs(a) + s * seg, abs(b) + (1.0 - s) * seg)
+        off = tip - point
+        return math.sqrt(float(off @ off)) - reach - 1e-9
 
 
 def landing(

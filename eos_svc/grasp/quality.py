@@ -161,8 +161,12 @@ def primitive_wrenches(
     cos, sin = np.cos(theta)[None, :, None], np.sin(theta)[None, :, None]
     forces = -n[:, None, :] + mu * (cos * t1[:, None, :] + sin * t2[:, None, :])  # (k, m, dim)
     arm = r[:, None, :]
-    if dim == 3:
-        torques = np.cross(arm, forces)
+    if dim == 3:  # arm × force, component by component (np.cross's axis handling costs more)
+        (ax, ay, az), (fx, fy, fz) = (
+            np.moveaxis(np.broadcast_to(arm, forces.shape), -1, 0),
+            np.moveaxis(forces, -1, 0),
+        )
+        torques = np.stack([ay * fz - az * fy, az * fx - ax * fz, ax * fy - ay * fx], axis=-1)
     else:
         torques = (arm[..., 0] * forces[..., 1] - arm[..., 1] * forces[..., 0])[..., None]
     wrenches = np.concatenate([forces, torques / scale], axis=2).reshape(k * m, 6 if dim == 3 else 3)

@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import partial
+from functools import cached_property, partial
 
 import numpy as np
 import pinocchio as pin
@@ -33,6 +33,7 @@ from scipy.optimize import least_squares, leastsq
 
 from eos_svc.objects import KINDS, SurfaceObject
 from eos_svc.objects.base import norm
+from eos_svc.shape import kernels
 from eos_svc.shape.starts import ClassStarts
 from eos_svc.shape.touches import Touches
 
@@ -134,7 +135,36 @@ class FitData:
 def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors: per contact the tip centre's distance
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
-    ``min(sd(f) − r, 0)/σ_d``."""
+    ``min(sd(f) − r, 0)/σ_d``. Computed by the compiled loop once it is loaded in this process
+    (:mod:`eos_svc.shape.kernels`, the one place that chooses), else by
+    :func:`numpy_residuals`; the two agree to rounding."""
+    compiled = kernels.compiled_residuals()
+    if compiled is None or kind not in kernels.KIND_CODES:
+        return numpy_residuals(thetas, kind, r0, data)
+    thetas = np.ascontiguousarray(thetas, dtype=float)
+    r0s = np.empty((len(thetas), 3, 3))
+    r0s[:] = r0
+    out: np.ndarray = compiled(
+        kernels.KIND_CODES[kind],
+        SIZE_INDEX[kind][0],
+        thetas,
+        r0s,
+        LOG_SIZE_RANGE,
+        data.points,
+        data.count,
+        data.radii,
+        data.normals,
+        data.free_radii,
+        data.gap_offset,
+        data.sigma_distance,
+        data.sigma_normal,
+    )
+    return out
+
+
+def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+    """:func:`whitened_residuals` in numpy, with the kinds' own distances
+    (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`): the plain version."""
     centres, rotations, half = batch_geometry(kind, thetas, r0)
     local = (data.points[None] - centres[:, None]) @ rotations
     d, g = KINDS[kind].local_distance(local, half[:, None, :])
@@ -180,7 +210,9 @@ class Problem:
         key = theta.tobytes()
         if key not in self.known:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-            R = whitened_residuals(np.vstack([theta, theta + np.diag(h)]), self.kind, self.r0, self.data)
+            thetas = np.repeat(theta[None], len(theta) + 1, axis=0)  # θ, then θ + h_i e_i
+            thetas[1:][np.diag_indices(len(theta))] += h
+            R = whitened_residuals(thetas, self.kind, self.r0, self.data)
             self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
         return self.known[key]
 
@@ -199,7 +231,6 @@ class ClassFit:
 
     Attributes:
         kind: the kind.
-        geometry: the fitted object.
         chi2: Σ of the squared whitened residuals at the optimum.
         n_params: k.
         covariance: (k, k) covariance of the parameters.
@@ -208,13 +239,17 @@ class ClassFit:
     """
 
     kind: str
-    geometry: SurfaceObject
     chi2: float
     n_params: int
     covariance: np.ndarray = field(repr=False)
     theta: np.ndarray = field(repr=False)
     r0: np.ndarray = field(repr=False)
     start: int = 0
+
+    @cached_property
+    def geometry(self) -> SurfaceObject:
+        """The fitted object (made when first asked for: a selection needs the chosen kind's)."""
+        return object_from(self.kind, self.theta, self.r0)
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""
@@ -318,7 +353,7 @@ def fit_class(
     # a direction no residual constrains (e.g. a length at its bound) gets a variance of
     # 1/RIDGE, not pinv's 0
     cov = np.linalg.inv(J.T @ J + RIDGE * np.eye(k)) * max(1.0, chi2 / max(m - k, 1))
-    return ClassFit(kind, object_from(kind, theta, r0), chi2, k, cov, theta, r0, index)
+    return ClassFit(kind, chi2, k, cov, theta, r0, index)
 
 
 def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.ndarray:

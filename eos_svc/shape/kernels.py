@@ -1,15 +1,58 @@
-"""Nothing to load: the shape fit runs one numpy version and has no compiled kernels.
+"""The one seam that chooses how the fit's residuals are computed: numpy (the default) or the
+compiled loop of :mod:`eos_svc.shape.compiled` once it is loaded in this process.
 
-Kept only while the service (``service/server.py``) and ``eos experiment`` still call
-:func:`load` / :func:`load_in_background`; both do nothing. Remove with those calls.
+The compiled residuals need numba (the optional ``fast`` extra, which ``dev`` includes).
+Loading them takes ≈ 1 s from numba's on-disk cache (≈ 10 s to compile on a new install) —
+more than one plan's whole fit — so nothing loads them implicitly: a process that keeps
+planning loads them once, before its first plan (:func:`load`: ``eos experiment``, the
+benchmarks) or while it starts serving (:func:`load_in_background`: the service). Until then,
+and wherever numba is missing, the fit runs in numpy. Both give the same residuals to rounding
+(``tests/shape/test_compiled.py``), so the choice changes how fast a fit runs, not what it
+finds.
 """
 
 from __future__ import annotations
 
+import threading
+from collections.abc import Callable
+from typing import Any
 
-def load() -> None:
-    """Nothing to load."""
+#: each kind's code in the compiled loop
+KIND_CODES = {"sphere": 0, "ellipsoid": 1, "box": 2, "cylinder": 3, "capsule": 4}
+#: the compiled residuals once loaded in this process (the state of numba's JIT, which is per
+#: process anyway); None: the fit runs in numpy
+_loaded: list[Callable[..., Any]] = []
+_lock = threading.Lock()
 
 
-def load_in_background() -> None:
-    """Nothing to load."""
+def compiled_residuals() -> Callable[..., Any] | None:
+    """:func:`eos_svc.shape.compiled.residuals` if :func:`load` has run in this process, else None."""
+    return _loaded[0] if _loaded else None
+
+
+def load() -> bool:
+    """Load (compiling on first use) the compiled residuals now; False when numba is missing
+    (the fit stays on numpy)."""
+    with _lock:
+        if _loaded:
+            return True
+        try:
+            from eos_svc.shape import compiled  # numba: imported here, never with the package
+        except ImportError:
+            return False
+        compiled.warm_up()
+        _loaded.append(compiled.residuals)
+        return True
+
+
+def load_in_background() -> threading.Thread:
+    """:func:`load` in a thread (the fit switches to the compiled residuals when it is done)."""
+    thread = threading.Thread(target=load, name="eos-shape-kernels", daemon=False)
+    thread.start()
+    return thread
+
+
+def unload() -> None:
+    """Go back to the numpy residuals in this process (tests comparing the two)."""
+    with _lock:
+        _loaded.clear()

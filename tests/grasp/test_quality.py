@@ -241,3 +241,12 @@ def test_contacts_quality_uses_touching_fingers_only():
     q = contacts_quality(contacts, [0.0, 0.0, 0.0], 0.03, 0.5)
     assert q.contacts == 2 and not q.force_closure
     assert q.to_dict()["friction"] == 0.5
+
+
+def test_primitive_wrench_torques_are_arm_cross_force():
+    """Every primitive wrench's torque is (p − c) × f / L, against numpy's cross product."""
+    rng = np.random.default_rng(4)
+    p, n = rng.normal(size=(3, 3)) * 0.03, rng.normal(size=(3, 3))
+    w, scale, m = primitive_wrenches(p, n, [0.01, 0.0, -0.02], 0.4, edges=6)
+    arms = np.repeat(p - np.array([0.01, 0.0, -0.02]), m, axis=0)
+    np.testing.assert_allclose(w[:, 3:], np.cross(arms, w[:, :3]) / scale, atol=1e-15)

@@ -14,7 +14,8 @@ from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.grasp.frames import rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.candidate import diameter_angle_deg
+from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
@@ -89,9 +90,45 @@ def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
     assert landings.landing(first.index + 1) is None  # starts where it already touches
     assert landings.first_touch(first.index + 1) is None
     point = np.asarray(HERE) + np.array([0.0, 0.0, 0.03])
-    assert landings.miss_lower_bound(0, r, point) == pytest.approx(float(np.linalg.norm(first.point - point)))
+    exact = float(np.linalg.norm(first.point - point))
+    seg = float(np.linalg.norm(pts[first.index] - pts[first.index - 1]))
+    assert exact - 2.0 * seg <= landings.miss_lower_bound(0, r, point) <= exact
     far = SweepLandings(s.obj, sweep, pts + np.array([0.0, 0.3, 0.0]), np.full(len(gaps), 0.01))
     assert far.landing(0) is None and far.miss_lower_bound(0, r, point) == -np.inf
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("ellipsoid", {"radii": (0.04, 0.025, 0.03)}, HERE, (0.4, -0.3, 0.9)),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
+        ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, HERE, (1.2, 0.1, 0.4)),
+    ],
+)
+def test_miss_lower_bound_never_exceeds_the_landings_miss(spec):
+    """Without the closest point, the bound (the signed distance's Lipschitz bound between the
+    bracketing samples) is at most the landing's true distance to any point, for random palm
+    poses, starts and points."""
+    s = synthesis(spec)
+    rng = np.random.default_rng(7)
+    checked = 0
+    for _ in range(60):
+        finger = s.hand.finger_names[int(rng.integers(len(s.hand.finger_names)))]
+        sweep, r = s.sweeps[finger], s.hand.tip_radius(finger)
+        R = rotation_from_rpy(*rng.uniform(-0.6, 0.6, 3))
+        wrist = np.asarray(HERE) - R[:, 0] * 0.125 + rng.normal(0.0, 0.01, 3)
+        pts, gaps = rotated_sweep_gaps(s.obj, sweep.points @ R.T, r, wrist)
+        landings = SweepLandings(s.obj, sweep, pts, gaps)
+        start = int(rng.integers(len(gaps)))
+        hit = landings.landing(start)
+        point = np.asarray(HERE) + rng.normal(0.0, 0.03, 3)
+        bound = landings.miss_lower_bound(start, r, point)
+        if hit is None:
+            assert bound == -np.inf
+            continue
+        checked += 1
+        assert bound <= float(np.linalg.norm(hit.point - point))
+    assert checked >= 10
 
 
 @pytest.mark.parametrize(
@@ -367,3 +404,26 @@ def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
     new = board[keys.TARGET]
     assert new["repredicted"] and new["contacts"] != target["contacts"]
     assert all(f.in_reach(board) and f.landing_miss(board) < 1e-5 for f in fingers)  # µm rounding
+
+
+def test_palm_frame_is_a_rotation_approaching_along_x_closing_along_z():
+    rng = np.random.default_rng(9)
+    for _ in range(20):
+        approach, closing = rng.normal(size=3), rng.normal(size=3)
+        R = frame(approach, closing)
+        np.testing.assert_allclose(R.T @ R, np.eye(3), atol=1e-12)
+        assert np.linalg.det(R) == pytest.approx(1.0, abs=1e-12)
+        np.testing.assert_allclose(R[:, 0], approach / np.linalg.norm(approach), atol=1e-12)
+        # z: the closing direction made orthogonal to x, on its side
+        assert R[:, 2] @ closing == pytest.approx(np.linalg.norm(closing - (closing @ R[:, 0]) * R[:, 0]))
+
+
+def test_diameter_angle_closed_forms():
+    c = np.array([0.2, 0.0, 0.1])
+
+    def at(x: float, y: float) -> np.ndarray:
+        return c + np.array([x, y, 0.0])
+
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(-0.03, 0.01), at(-0.03, -0.01)]) == pytest.approx(180.0)
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.0, 0.02), at(0.0, 0.04)]) == pytest.approx(90.0)
+    assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.01, 0.01)]) == pytest.approx(45.0)
