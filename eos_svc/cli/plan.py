@@ -185,8 +185,11 @@ def format_world(world: dict) -> str:
     """The Drake world's figures in one line."""
     lift = world.get("lift") or {}
     held = "held" if lift.get("held") else f"not held ({lift.get('why', 'no lift test')})"
+    moved = ""
+    if world.get("moved_past_relocation_limit"):
+        moved = " (past 2 mm: not re-located, the plan assumed it still)"
     return (
-        f"drake world: object moved {world['object_moved_mm']:.1f} mm; lift test: {held}; "
+        f"drake world: object moved {world['object_moved_mm']:.1f} mm{moved}; lift test: {held}; "
         f"{world['simulated_s']:.1f} s simulated, real-time factor {world['real_time_factor']}"
     )
 

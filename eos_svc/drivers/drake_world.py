@@ -51,6 +51,10 @@ if TYPE_CHECKING:
     from eos_svc.world.world import GraspWorld
 
 
+#: how far the object may move during a plan before it would have to be re-located, m
+RELOCATE_AFTER = 0.002
+
+
 @dataclass(frozen=True)
 class DrakeSettings:
     """How the Drake world executes guarded motions (SI).
@@ -321,9 +325,13 @@ class DrakeDriver(KinematicDriver):
     def report(self) -> dict[str, Any]:
         """The Drake world's figures for the plan result."""
         sim = self._plant.time()
+        moved = self.object_moved()
         return {
             "name": "drake",
-            "object_moved_mm": round(1000.0 * self.object_moved(), 3),
+            "object_moved_mm": round(1000.0 * moved, 3),
+            # the planner assumes the object it explores stays put: past RELOCATE_AFTER it says so
+            # (it does not re-locate the object yet)
+            "moved_past_relocation_limit": bool(moved > RELOCATE_AFTER),
             "object_moved_max_mm": round(1000.0 * self._moved_max, 3),
             "lift": self._lift,
             "simulated_s": round(sim, 4),
