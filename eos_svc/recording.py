@@ -50,8 +50,9 @@ __all__ = [
 RECORD_SCHEMA = 1
 #: the key marking the header and result lines (cycle lines never have it)
 MARK = "eos_record"
-#: fields that measure wall-clock time: never compared
-TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s"})
+#: fields that measure wall-clock time: never compared (a simulated world's own wall time and
+#: real-time factor among them)
+TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "simulation_wall_s", "real_time_factor"})
 #: the planner's default hand
 DEFAULT_HAND = "hand3x3"
 

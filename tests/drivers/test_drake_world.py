@@ -109,3 +109,12 @@ def test_a_drake_plan_records_the_object_pose_and_the_view_moves_the_object() ->
     assert _animate_object(MeshcatAnimation(scene.timeline.fps), scene.timeline, records) == len(poses)
     kinematic = plan(PlanRequest(seed=1, max_cycles=3))
     assert not any(c.key == keys.OBJECT_POSE for r in kinematic.trace for c in r.changes)
+
+
+def test_a_drake_plan_replays_cycle_for_cycle(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from eos_svc.cli import main
+
+    record = tmp_path / "drake.jsonl"
+    base = ["plan", "--world", "drake", "--max-cycles", "7", "--quiet", "--record", str(record)]
+    assert main(base) == 1  # 7 cycles cannot grasp: a cycle limit, exit 1
+    assert main(["replay", "--quiet", str(record)]) == 0  # deterministic: the same cycles and result
