@@ -77,8 +77,9 @@ from eos_svc.agents.planner import plan
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
 from eos_svc.service import protocol as proto
-from eos_svc.service.reliability import Server, start_servers, stop_servers
+from eos_svc.service.serve_processes import Server, start_servers, stop_servers
 from eos_svc.service.session import direct_callback
+from eos_svc.service.wire_json import encode_result
 from eos_svc.shape import kernels
 
 
@@ -235,8 +236,12 @@ def echo_round_trip(
 
 def plan_reply_bytes(instance: str, result: dict[str, Any]) -> int:
     """Bytes of the service's reply to a plan whose result is ``result`` (what the echo sends)."""
-    head = b'{"schema":1,"goal_id":"g-000000000000-1","instance":"%s","result":' % instance.encode()
-    return len(head + proto.encode_result(result) + b"}")
+    done = {"schema": 1, "goal_id": "g-" + "0" * 24, "instance": instance, "state": "done"}
+    return len(
+        encode_result(
+            {**done, "status": result.get("status"), "cycles": result.get("cycles"), "result": result}
+        )
+    )
 
 
 def request_bytes(request: PlanRequest) -> bytes:
@@ -575,11 +580,12 @@ def probe_server(port: int, out: str) -> None:
     """``--probe-server``: a one-worker grasp service with timestamps on every step."""
     from eos_svc.service import protocol as proto
     from eos_svc.service import server as srv
+    from eos_svc.service.goal_watchers import GoalWatchers
 
     sys.setswitchinterval(0.001)  # as eos serve
     _timed(proto, "decode_envelope", "decode0", "decode1")
-    _timed(srv, "_encode", "json0", "json1")
-    _timed(srv._GoalWatchers, "watched", "watch0", "watch1")
+    _timed(srv, "encode_result", "json0", "json1")
+    _timed(GoalWatchers, "watched", "watch0", "watch1")
 
     from eos_svc.schema.result import PlanResult
 
@@ -607,7 +613,7 @@ def probe_server(port: int, out: str) -> None:
             super()._run(job)
             _stamp("worker_end")
 
-    from eos_svc.service.server import default_admission
+    from eos_svc.service.planners import default_admission
 
     check = default_admission()
 
@@ -757,7 +763,7 @@ def _echo_steps(
 def breakdown(n: int) -> None:
     """Time the steps of ``n`` 1-cycle requests (no stream), interleaved with in-process plans;
     then the steps a bare and a planning get->reply share with them, timed the same way."""
-    from eos_svc.service import client as cli
+    from eos_svc.service import plan_attempt as cli
     from eos_svc.service import protocol as proto
 
     out = _stamps_file("eos-probe-")
@@ -767,7 +773,7 @@ def breakdown(n: int) -> None:
     )
     assert proc.stdout is not None and "probe ready" in proc.stdout.readline()
     _timed(proto, "encode_request", "encode0", "encode1")
-    _timed(proto, "loads_message", "loads0", "loads1")
+    _timed(cli, "loads_strict", "loads0", "loads1")
     direct = cli.direct_callback
 
     def stamped_callback(cb: Any, drop: Any = None) -> Any:

@@ -82,13 +82,12 @@ def run_cases() -> list[dict[str, Any]]:
     """Every case planned with the ``eos_svc`` importable now (no deadline: cycle counts must not
     depend on the machine's load)."""
     from eos_svc.agents import PlanRequest, plan
-    from eos_svc.kinematics import allegro_hand
 
     hands: dict[str, Any] = {"hand3x3": None}
     out = []
     for label, data, hand_name in CASES:
         if hand_name not in hands:
-            hands[hand_name] = allegro_hand()
+            hands[hand_name] = named_hand(hand_name)
         request = PlanRequest.from_dict({**data, "deadline_s": None})
         result = plan(request, hand=hands[hand_name])
         d = result.to_dict()
@@ -105,6 +104,18 @@ def run_cases() -> list[dict[str, Any]]:
             }
         )
     return out
+
+
+def named_hand(name: str) -> Any:
+    """The hand ``name`` from its description (``eos_svc.hands``), or, in a baseline older than
+    the descriptions, from the function that assembled the Allegro."""
+    try:
+        from eos_svc.hands import load_hand_named
+    except ImportError:  # a baseline before eos_svc.hands
+        from eos_svc.kinematics import allegro_hand  # type: ignore[attr-defined]
+
+        return allegro_hand()
+    return load_hand_named(name)
 
 
 def _hex(value: Any) -> Any:

@@ -12,7 +12,7 @@ from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
 from eos_svc.board import Board, BoardChange
 from eos_svc.board_access import BoardClient
 from eos_svc.controller import CancelToken, Controller, CycleCallback, RepeatPolicy
-from eos_svc.errors import BoardAccessError, EosError, ValidationError
+from eos_svc.errors import AgentUnavailableError, BoardAccessError, EosError, ValidationError
 from eos_svc.ratings import Weights, check_probability
 from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus, to_jsonable
 
@@ -22,6 +22,7 @@ __all__ = [
     "ActionResult",
     "Agent",
     "AgentRating",
+    "AgentUnavailableError",
     "Board",
     "BoardAccessError",
     "BoardChange",

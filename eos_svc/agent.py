@@ -115,6 +115,9 @@ class Agent(ABC):
 
     __slots__ = ("_default", "_learned", "name", "stages")
 
+    #: where the agent runs: ``"local"`` (in the controller's process) or ``"remote"`` (its
+    #: test and action answered by another process); the cycle records carry it
+    location: ClassVar[str] = "local"
     #: board entries this agent reads (a write needs :attr:`writes`; reading one back needs both)
     reads: ClassVar[frozenset[str]] = frozenset()
     #: board entries this agent writes or deletes
@@ -149,7 +152,9 @@ class Agent(ABC):
 
         Return ``None`` for "no opinion" (keeps what the previous action set,
         else 0). Called every cycle, a stage's first included (``ctx.stage_cycle``
-        is then 0 and ``ctx.events`` empty).
+        is then 0 and ``ctx.events`` empty). Raise
+        :class:`~eos_svc.errors.AgentUnavailableError` when the agent cannot rate itself this cycle
+        (it is then skipped, rated 0, the reason in the record).
         """
         return None
 

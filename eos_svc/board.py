@@ -61,9 +61,6 @@ class Board(Mapping[str, Any]):
     def __len__(self) -> int:
         return len(self._entries)
 
-    def __contains__(self, key: object) -> bool:
-        return key in self._entries
-
     def get(self, key: str, default: Any = None) -> Any:
         """The entry ``key``, or ``default`` when it does not exist."""
         return self._entries.get(key, default)
@@ -73,9 +70,8 @@ class Board(Mapping[str, Any]):
         """Write entry ``key``; recorded as a change when inside a cycle."""
         if not isinstance(key, str) or not key:
             raise ContractError("key", f"a board key must be a non-empty str, got {key!r}")
-        entries = self._entries
-        old = entries.get(key, _MISSING)
-        entries[key] = value
+        old = self._entries.get(key, _MISSING)
+        self._entries[key] = value
         if self._changes is not None:
             self._record(key, old, value)
 
@@ -97,20 +93,16 @@ class Board(Mapping[str, Any]):
     # --- cycle bookkeeping (called by the controller) --------------------------
     def begin_cycle(self) -> None:
         """Start recording changes."""
-        self._changes = _EMPTY  # dicts are made on the first write only
+        self._changes = {}
+        self._first_old = {}
 
     def end_cycle(self) -> tuple[BoardChange, ...]:
         """Stop recording; return what changed since :meth:`begin_cycle`."""
-        changes = self._changes
+        changes = self._changes or {}
         self._changes = None
-        if not changes:
-            return ()
         return tuple(changes.values())
 
     def _record(self, key: str, old: Any, new: Any) -> None:
-        if self._changes is _EMPTY:
-            self._changes = {}
-            self._first_old = {}
         changes = self._changes
         assert changes is not None
         first_old = self._first_old.setdefault(key, old)
@@ -126,9 +118,6 @@ class Board(Mapping[str, Any]):
             created=created,
             removed=removed,
         )
-
-
-_EMPTY: dict[str, BoardChange] = {}  # shared sentinel: "recording, nothing written yet"
 
 
 def _same(a: Any, b: Any) -> bool:

@@ -1,16 +1,11 @@
 """Checked board access: each agent sees the board through a client limited to what it declares.
 
-An agent declares the entries it reads and writes (:attr:`eos_svc.agent.Agent.reads`,
-:attr:`~eos_svc.agent.Agent.writes`), as py_trees' blackboard clients register their keys
-with READ / WRITE access. In the controller's debug mode (``Controller(...,
-check_access=True)``) every agent gets a :class:`BoardClient` instead of the board: reading an
-entry not in ``reads`` or writing one not in ``writes`` raises
-:class:`~eos_svc.errors.BoardAccessError` naming the agent and the entry, and an optional
-``entry_check`` validates every value written (:class:`~eos_svc.errors.BoardEntryError`).
-The controller turns either into a run ending with status ``error`` whose reason says so.
-Off by default: then agents get the board itself and nothing is checked.
-
-:func:`access_map` lists, per entry, who writes and who reads it (the documentation's table).
+In the controller's debug mode (``Controller(..., check_access=True)``) every agent gets a
+:class:`BoardClient` instead of the board, as py_trees' blackboard clients: reading an entry not
+in the agent's ``reads`` or writing one not in its ``writes`` raises
+:class:`~eos_svc.errors.BoardAccessError`, and an optional ``entry_check`` validates every value
+written (:class:`~eos_svc.errors.BoardEntryError`); the run then ends with status ``error``.
+:func:`access_map` lists, per entry, who writes and who reads it.
 """
 
 from __future__ import annotations
@@ -50,11 +45,6 @@ class BoardClient(Board):
         self._reads = frozenset(agent.reads)
         self._writes = frozenset(agent.writes)
         self._check = entry_check
-
-    @property
-    def agent(self) -> str:
-        """The name of the agent this client serves."""
-        return self._name
 
     def _readable(self, key: str) -> None:
         if key not in self._reads:

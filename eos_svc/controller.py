@@ -36,6 +36,12 @@ Rules the paper leaves open, fixed here (and visible in every cycle record):
    ``error`` naming the agent and the entry (rule 3). ``entry_check`` validates every value
    written as well. Off by default (agents get the board itself); the choices are the same
    either way.
+5. **Unavailable agents.** An agent whose precondition test raises
+   :class:`~eos_svc.errors.AgentUnavailableError` (a remote agent late, gone or answering nonsense)
+   rates 0 and is skipped in that cycle, its record row saying why (``skipped``); one whose
+   action raises it is recorded as chosen with no outcome, the reason in the cycle's detail,
+   nothing else changes, and the next cycle rates again. Every row also says where the agent
+   runs (``where``) and how long its rating took (``latency_s``).
 """
 
 from __future__ import annotations
@@ -50,9 +56,9 @@ from typing import Any
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome
 from eos_svc.board import Board
 from eos_svc.board_access import EntryCheck, clients_for
-from eos_svc.errors import ContractError, ValidationError
+from eos_svc.errors import AgentUnavailableError, ContractError, ValidationError
 from eos_svc.ratings import Weights, check_probability
-from eos_svc.records import AgentRating, CycleRecord, RunResult, RunStatus
+from eos_svc.records import REPEAT_SKIP, AgentRating, CycleRecord, RunResult, RunStatus
 
 CycleCallback = Callable[[CycleRecord], None]
 
@@ -215,26 +221,57 @@ class Controller:
 
             # --- rate ---------------------------------------------------------
             rows: list[AgentRating] = []
+            started = clock()
             best: Agent | None = None
             best_view = board
             best_total = -1.0
             name = ""
             try:
-                for agent, name, default, weighted_default, has_pre, has_learned, learned, view in table:
+                for (
+                    agent,
+                    name,
+                    default,
+                    weighted_default,
+                    has_pre,
+                    has_learned,
+                    learned,
+                    view,
+                    where,
+                ) in table:
                     opp = hints.get(name, 0.0) if hints else 0.0  # rule 1
-                    if has_pre:
-                        own = agent.opportunistic(view, ctx)
-                        if own is not None:
-                            if own.__class__ is not float or not 0.0 <= own <= 1.0:
-                                own = check_probability(own, f"agents.{name}.opportunistic")
-                            if own > opp:
-                                opp = own
-                    if has_learned:
-                        learned = check_probability(agent.learned_rating(view, ctx), f"agents.{name}.learned")
+                    try:
+                        if has_pre:
+                            own = agent.opportunistic(view, ctx)
+                            if own is not None:
+                                if own.__class__ is not float or not 0.0 <= own <= 1.0:
+                                    own = check_probability(own, f"agents.{name}.opportunistic")
+                                if own > opp:
+                                    opp = own
+                        if has_learned:
+                            learned = check_probability(
+                                agent.learned_rating(view, ctx), f"agents.{name}.learned"
+                            )
+                    except AgentUnavailableError as exc:  # rule 5: rated 0, skipped, the reason recorded
+                        why = f"unavailable: {exc}"
+                        log.unavailable(name, seq, why)
+                        now = clock()
+                        latency, started = now - started, now
+                        rows.append(
+                            new_tuple(AgentRating, (name, default, 0.0, 0.0, 0.0, False, where, latency, why))
+                        )
+                        continue
                     variable = opp * wo + learned * wl
                     total = weighted_default + variable
                     eligible = always or variable > 0.0 or name not in acted
-                    rows.append(new_tuple(AgentRating, (name, default, opp, learned, total, eligible)))
+                    now = clock()  # one clock read per agent: its end is the next one's start
+                    latency, started = now - started, now
+                    skipped = None if eligible else REPEAT_SKIP
+                    rows.append(
+                        new_tuple(
+                            AgentRating,
+                            (name, default, opp, learned, total, eligible, where, latency, skipped),
+                        )
+                    )
                     if eligible and total > best_total:
                         best = agent
                         best_total = total
@@ -260,6 +297,14 @@ class Controller:
                         f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
                     )
                 new_hints = _checked_hints(name, result.ratings) if result.ratings else {}
+            except AgentUnavailableError as exc:  # rule 5: the action did not run; the plan carries on
+                changes = board.end_cycle()
+                detail = f"agent {name!r} unavailable: {exc}; its action did not run"
+                log.unavailable(name, seq, f"unavailable: {exc}")
+                broken = emit((seq, stage, stage_cycle, tuple(rows), weights, name, None, detail, changes))
+                if broken:
+                    return log.result(RunStatus.ERROR, broken, seq, per_stage, completed, stage)
+                continue
             except Exception as exc:
                 changes = board.end_cycle()
                 reason = f"agent {name!r} raised {type(exc).__name__}: {exc}"
@@ -295,14 +340,25 @@ class Controller:
     def _stage_tables(self, board: Board) -> dict[str, tuple[tuple, ...]]:
         """Per stage, per allowed agent, what does not change during a run: (agent, name,
         default, weighted default, has a precondition test, has a learned hook, learned, the
-        board as the agent sees it — the board itself, or its client in debug mode)."""
+        board as the agent sees it — the board itself, or its client in debug mode —, where it
+        runs)."""
         wd = self.weights.default
         views: dict[str, Any] = {}
         if self.check_access:
             views = clients_for(board, self.agents, self.entry_check)
         return {
             stage: tuple(
-                (a, a.name, a._default, a._default * wd, pre, lea, a._learned, views.get(a.name, board))
+                (
+                    a,
+                    a.name,
+                    a._default,
+                    a._default * wd,
+                    pre,
+                    lea,
+                    a._learned,
+                    views.get(a.name, board),
+                    a.location,
+                )
                 for a, pre, lea in rows
             )
             for stage, rows in self._by_stage.items()
@@ -362,7 +418,7 @@ class _CycleLog:
     """A run's records: builds each cycle's record, keeps the trace, calls the callbacks, and
     makes the final :class:`RunResult`."""
 
-    __slots__ = ("callbacks", "clock", "keep", "t0", "trace")
+    __slots__ = ("callbacks", "clock", "keep", "missing", "t0", "trace")
 
     def __init__(self, callbacks: list[CycleCallback], keep: bool, clock: Callable[[], float]) -> None:
         self.callbacks = callbacks
@@ -370,6 +426,16 @@ class _CycleLog:
         self.clock = clock
         self.trace: list[CycleRecord] = []
         self.t0 = clock()
+        #: per agent that was unavailable: [first cycle, cycles, first reason] (rule 5)
+        self.missing: dict[str, list] = {}
+
+    def unavailable(self, name: str, seq: int, why: str) -> None:
+        """Note that agent ``name`` was unavailable in cycle ``seq`` (the run's reason says so)."""
+        seen = self.missing.get(name)
+        if seen is None:
+            self.missing[name] = [seq, 1, why]
+        else:
+            seen[1] += 1
 
     def emit(self, fields: tuple) -> str | None:
         """Record a cycle; returns an error text if a callback raised."""
@@ -392,7 +458,9 @@ class _CycleLog:
         completed: list[str],
         stage: str,
     ) -> RunResult:
-        """The run's result."""
+        """The run's result (its reason followed by the agents that were unavailable, if any)."""
+        for name, (first, count, why) in self.missing.items():
+            reason += f"; agent {name!r} was unavailable in {count} cycle(s) from cycle {first} ({why})"
         return RunResult(
             status=status,
             reason=reason,

@@ -100,3 +100,10 @@ class NotFoundError(FieldError, KeyError):
 
 class ComputationError(EosError, RuntimeError):
     """A computation that failed on acceptable input (a solver, a subprocess)."""
+
+
+class AgentUnavailableError(EosError):
+    """An agent that cannot take part in this cycle — a remote agent late, gone or answering
+    nonsense. Raised from its precondition test, the agent rates 0 for the cycle and is skipped
+    (the record says why); raised from its action, the cycle records that the action did not
+    run and the plan carries on. Any other exception from an agent ends the run as ``error``."""

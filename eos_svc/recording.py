@@ -5,13 +5,15 @@ A record file is JSON lines:
 
 - line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
   — the plan request in its JSON form (``PlanRequest.to_dict()``) and the hand's name
-  (``hand3x3``, the default, or a ``<name>_hand()`` factory of ``eos_svc.kinematics``);
+  (``hand3x3``, the default, a registered hand's name — ``eos hands`` — or the path of the
+  hand description file it was planned with);
 - one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
 - last line, the result: ``{"eos_record": "result", "result": {...}}`` —
   ``PlanResult.to_dict()`` without the trace (absent when the run was interrupted).
 
 Two runs are compared cycle by cycle and then by their results, ignoring only wall-clock fields
-(``elapsed_s``, ``wall_time_s``): :func:`compare_run` gives every divergence with the cycle, the
+(``elapsed_s``, ``wall_time_s``, ``latency_s``), and the fields added since a record was
+written (:data:`ADDED_FIELDS`): :func:`compare_run` gives every divergence with the cycle, the
 field path and both values.
 """
 
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Sequence
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -28,36 +31,20 @@ from eos_svc.errors import EosError
 from eos_svc.ratings import Weights
 from eos_svc.records import AgentRating, CycleRecord
 
-__all__ = [
-    "DEFAULT_HAND",
-    "MARK",
-    "RECORD_SCHEMA",
-    "TIMING_FIELDS",
-    "RecordFileError",
-    "Recording",
-    "Verification",
-    "compare_run",
-    "cycle_line",
-    "first_difference",
-    "header_line",
-    "normalise",
-    "read_recording",
-    "record_from_dict",
-    "result_line",
-]
-
 #: version of the record file layout (header / cycles / result)
 RECORD_SCHEMA = 1
 #: the key marking the header and result lines (cycle lines never have it)
 MARK = "eos_record"
 #: fields that measure wall-clock time: never compared (a simulated world's own wall time and
 #: real-time factor among them)
-TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "simulation_wall_s", "real_time_factor"})
+TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "latency_s", "simulation_wall_s", "real_time_factor"})
+#: fields added to the cycle record since its first form: a record written before them lacks
+#: them, and a replay that has them does not diverge for that alone
+ADDED_FIELDS = frozenset({"where", "skipped"})
 #: the planner's default hand
 DEFAULT_HAND = "hand3x3"
 
 
-# --- writing ----------------------------------------------------------------------------------
 def header_line(request: Any, hand: str = DEFAULT_HAND) -> str:
     """The header line of a record file for ``request`` (a PlanRequest) planned with ``hand``."""
     return json.dumps(
@@ -76,25 +63,18 @@ def result_line(result: Any) -> str:
     return json.dumps({MARK: "result", "result": result.to_dict()}, allow_nan=False)
 
 
-# --- reading -------------------------------------------------------------------------------
 class RecordFileError(EosError, ValueError):
     """A record file that cannot be replayed (the message says where and why)."""
 
 
+@dataclass
 class Recording:
     """A parsed record file: the request, the cycle dicts, the result dict (or None), the hand."""
 
-    def __init__(
-        self,
-        request: dict[str, Any],
-        cycles: list[dict[str, Any]],
-        result: dict[str, Any] | None,
-        hand: str = DEFAULT_HAND,
-    ):
-        self.request = request
-        self.cycles = cycles
-        self.result = result
-        self.hand = hand
+    request: dict[str, Any]
+    cycles: list[dict[str, Any]]
+    result: dict[str, Any] | None
+    hand: str = DEFAULT_HAND
 
 
 def read_recording(path: str | Path) -> Recording:
@@ -164,6 +144,9 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
                 r["learned"],
                 r["total"],
                 r.get("eligible", True),
+                r.get("where", "local"),
+                r.get("latency_s", 0.0),
+                r.get("skipped"),
             )
             for r in data["ratings"]
         ),
@@ -176,7 +159,6 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
     )
 
 
-# --- comparing -----------------------------------------------------------------------------
 def normalise(value: Any) -> Any:
     """The JSON value as it would be read back from a record file (tuples become lists)."""
     return json.loads(json.dumps(value, allow_nan=False))
@@ -184,10 +166,11 @@ def normalise(value: Any) -> Any:
 
 def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str, Any, Any] | None:
     """The first differing field between two JSON values, as (dotted path, recorded, replayed),
-    ignoring :data:`TIMING_FIELDS`; ``None`` when they agree exactly."""
+    ignoring :data:`TIMING_FIELDS` (and :data:`ADDED_FIELDS` a recorded value lacks); ``None``
+    when they agree exactly."""
     if isinstance(recorded, dict) and isinstance(replayed, dict):
         for key in list(recorded) + [k for k in replayed if k not in recorded]:
-            if key in TIMING_FIELDS:
+            if key in TIMING_FIELDS or (key in ADDED_FIELDS and key not in recorded):
                 continue
             where = f"{path}.{key}" if path else str(key)
             if key not in recorded or key not in replayed:
@@ -209,13 +192,13 @@ def first_difference(recorded: Any, replayed: Any, path: str = "") -> tuple[str,
     return None
 
 
+@dataclass
 class Verification:
     """Outcome of a comparison: ``divergences`` lists (where, path, recorded, replayed)."""
 
-    def __init__(self) -> None:
-        self.divergences: list[tuple[str, str, Any, Any]] = []
-        self.cycles_compared = 0
-        self.replayed_result: dict[str, Any] | None = None
+    replayed_result: dict[str, Any]
+    divergences: list[tuple[str, str, Any, Any]] = field(default_factory=list)
+    cycles_compared: int = 0
 
     @property
     def identical(self) -> bool:
@@ -228,8 +211,7 @@ def compare_run(
 ) -> Verification:
     """Compare a re-run (its cycle dicts and result dict, as :func:`normalise` gives them) with
     ``recording``, cycle by cycle and then the result."""
-    out = Verification()
-    out.replayed_result = replayed_result
+    out = Verification(replayed_result)
     for recorded, again in zip(recording.cycles, replayed_cycles, strict=False):
         out.cycles_compared += 1
         diff = first_difference(recorded, again)

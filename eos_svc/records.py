@@ -34,8 +34,11 @@ class RunStatus(str, Enum):
 class AgentRating(NamedTuple):
     """One agent's ratings in one cycle (a named tuple: cheap to build every cycle).
 
-    ``eligible`` is false for an agent the repeat rule excludes (see
-    :class:`~eos_svc.controller.RepeatPolicy`).
+    ``eligible`` is false for an agent that may not be chosen in this cycle; ``skipped`` says
+    why: the repeat rule (:data:`REPEAT_SKIP`, see :class:`~eos_svc.controller.RepeatPolicy`) or
+    the agent being unavailable (``"unavailable: ..."``: a remote agent late, gone or answering
+    nonsense; it then rates 0). ``where`` is the agent's :attr:`~eos_svc.agent.Agent.location`
+    (``"local"`` or ``"remote"``), ``latency_s`` the seconds its rating took this cycle.
     """
 
     name: str
@@ -44,6 +47,13 @@ class AgentRating(NamedTuple):
     learned: float
     total: float
     eligible: bool = True
+    where: str = "local"
+    latency_s: float = 0.0
+    skipped: str | None = None
+
+
+#: why an agent is not eligible under the repeat rule (``AgentRating.skipped``)
+REPEAT_SKIP = "acted in this stage and not asked again (repeat rule)"
 
 
 class CycleRecord(NamedTuple):
@@ -96,6 +106,9 @@ class CycleRecord(NamedTuple):
                     "learned": r.learned,
                     "total": r.total,
                     "eligible": r.eligible,
+                    "where": r.where,
+                    "latency_s": r.latency_s,
+                    "skipped": r.skipped,
                 }
                 for r in self.ratings
             ],

@@ -9,9 +9,11 @@ Where it touches: the object is explored from **above** by an upper finger
 any hand) — the hand lowers it onto the object's top, at the point found by
 moving 1 cm inside the surface point nearest the hand (proximity) and straight
 up — and, when post_shape asks for it (to size the object), from **below** by
-the opposing finger. The probing finger is set to its probe angle (straight,
-0, for hand3x3); the other fingers are opened while exploring so they stay
-clear of the object. The sensed contact point and normal of each side
+the opposing finger — unless the object rests on a table: its bottom is then the table's
+plane under the top contact, recorded without a probe from under it; and on a table the
+top is felt by the opposing finger too (the hand's lowest part, the rest of the hand above).
+The probing finger is set to its probe angle (straight, 0, for hand3x3); the other fingers
+are opened while exploring so they stay clear of the object. The sensed contact point and normal of each side
 go on the board (``keys.EP1_CONTACT``).
 
 Opportunistic sub-rating: after post_shape has pondered a new estimate and asks
@@ -66,6 +68,7 @@ class EP1Agent(GraspAgent):
         self.solver = solver
         self.side: str | None = None
         self.estimators: dict[str, CurvatureEstimator] = {}
+        #: the hand state :meth:`_place` computes in (made on the first placement, then re-used)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -77,7 +80,7 @@ class EP1Agent(GraspAgent):
         return max(RATING_FLOOR, min(1.0, rating))
 
     def _finger_for(self, side: str) -> str:
-        return self.world.probe.finger(side)
+        return self.world.probe_finger(side)
 
     def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
         """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
@@ -118,11 +121,31 @@ class EP1Agent(GraspAgent):
             path_every=PATH_EVERY,
         )
 
+    def _table_bottom(self, board: Board, finger: str) -> ActionResult:
+        """On a table the bottom cannot be felt (no probe from under it) and need not be: the
+        object rests on the table, so its bottom is the table's plane under the top contact
+        (normal −z), recorded as the bottom contact."""
+        contacts = dict(board.get(keys.EP1_CONTACT, {}))
+        top = contacts.get("top")
+        if top is None:
+            return ActionResult(Outcome.CANNOT_ACT, "no top contact yet to place the bottom under")
+        height = float(self.world.table_height)  # type: ignore[arg-type]
+        point = [top["point"][0], top["point"][1], round(height, 6)]
+        contacts["bottom"] = {"finger": finger, "point": point, "normal": [0.0, 0.0, -1.0]}
+        board.set(keys.EP1_CONTACT, contacts)
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"the object rests on the table: its bottom is the table's plane z = {height:.3f} m "
+            "(no probe from under the table)",
+        )
+
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         world = self.world
         shape = board.get(keys.SHAPE)
         side = "bottom" if shape is not None and shape.get("needs") == "bottom" else "top"
         finger = self._finger_for(side)
+        if side == "bottom" and world.table_height is not None:
+            return self._table_bottom(board, finger)
         moved = ""
         if self.side != side or not world.touching(finger):
             try:

@@ -18,8 +18,18 @@ probes of the front (+x), of both sides (±y), of the top (−z) and of the bott
 object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
 the fingertip dragged over the surface, until it drops over an edge (the last contact is on
 the edge: the object's extent that way), a link would touch first (a curved top past its
-apex) or nothing is felt. Later rounds shift the probe offsets by the run's generator, so
-repeated rounds feel new places.
+apex) or nothing is felt; a slide keeps the contact of every :data:`SLIDE_KEEP`-th step and
+its last. Later rounds shift the probe offsets by the run's generator, so repeated rounds
+feel new places.
+
+**Active touch**: once post_shape's fit leaves faces no touch bounds (``open_faces`` of the
+postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone — straight onto
+each, a finger hooked round the object for a face turned away from the hand
+(:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
+whole surface again only when none of them is felt.
+When the object rests on a table there is no bottom probe, and every probe is the opposing
+finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
+rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
@@ -31,18 +41,19 @@ the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and aft
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable, Iterator
 
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.probe_plan import Probe, targeted_probes
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 
 #: most EP2 rounds in one plan
-MAX_ROUNDS = 3
+MAX_ROUNDS = 5
 #: lowest opportunistic sub-rating while post_shape asks for the surface
 RATING_FLOOR = 0.05
 #: how far outside the estimated surface a probe starts (m)
@@ -52,19 +63,13 @@ STANDOFF = 0.03
 SLIDE_STEP = 0.003
 #: most steps of one slide
 SLIDE_STEPS = 30
-
-
-@dataclass(frozen=True)
-class Probe:
-    """One planned guarded probe: which face, finger (at joint ``angle``, rad), start of the
-    tip centre and direction (world), travel (m)."""
-
-    face: str
-    finger: str
-    start: np.ndarray
-    direction: np.ndarray
-    travel: float
-    angle: float
+#: a slide keeps the contact of every this many steps (and its last, on the edge)
+SLIDE_KEEP = 6
+#: most steps of a slide toward an open face
+MAX_SLIDE_STEPS = 90
+#: on a table: how far back from the front face the scan from above reaches (m), in how many rows
+SCAN_DEPTH = 0.16
+SCAN_ROWS = 7
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
@@ -112,7 +117,8 @@ class EP2Agent(GraspAgent):
         """The probes of this round around the estimate (see the module docstring)."""
         world = self.world
         probe = world.probe
-        top, bottom = probe.finger("top"), probe.finger("bottom")
+        top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
+        front = world.probe_finger("front")
         straight = probe.angles
         rng = world.rng
         f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
@@ -129,24 +135,60 @@ class EP2Agent(GraspAgent):
             (-f(0.5) * hy, 0.0),
         ):
             start = np.array([cx - hx - STANDOFF, cy + dy, cz + dz])
-            probes.append(Probe("front", top, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[top]))
+            probes.append(Probe("front", front, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[front]))
         # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
         # front of the widest section (the links trail the tip toward −x)
         for sign in (+1, -1):
-            finger = self.side_fingers[sign]
+            finger = self.side_fingers[sign] if world.table_height is None else front
             for dx in (-f(0.25) * hx, -f(0.6) * hx):
                 start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
                 travel = 2.0 * hy + 2.0 * STANDOFF
                 probes.append(Probe("side", finger, start, sign * ey, travel, straight.get(finger, 0.0)))
         # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
         # bottom: along +z with the opposing finger
-        for dx, dy in ((-f(0.6) * hx, 0.0), (-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
+        for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in (-f(0.6) * hx, -f(0.25) * hx):
+        for dx in () if world.table_height is not None else (-f(0.4) * hx,):  # none under a table
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
+        if world.table_height is not None:
+            probes += self.table_scan(centre, half, f)
         return probes
+
+    def _with_fallback(
+        self,
+        planned: list[Probe],
+        estimate: tuple[np.ndarray, np.ndarray],
+        targeted: bool,
+        counts: dict[str, int],
+    ) -> Iterator[Probe]:
+        """The ``planned`` probes, then, when they were aimed at open faces and none touched
+        (``counts`` is filled as they run), this round's probes of the whole surface."""
+        yield from planned
+        if targeted and not counts:
+            yield from self.plan_round(*estimate)
+
+    def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
+        """On a table, probes straight down from above on a grid from the front face back
+        :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
+        is (a height map), and where nothing stands down to the table — the back the front,
+        side and top probes cannot reach. The finger is opened to its limit, its tip lowest."""
+        world = self.world
+        finger = world.probe_finger("top")
+        cx, cy, cz = centre.tolist()
+        hx, hy, hz = half.tolist()
+        depth = max(SCAN_DEPTH, 4.0 * hx)
+        top = cz + hz + STANDOFF
+        travel = top - float(world.table_height)  # type: ignore[arg-type]
+        # the opposing finger opened to its limit: its tip below its links, which rise behind it
+        opened = float(world.hand.lower[world.hand.finger_q_index(finger)].max())
+        out = []
+        for x in np.linspace(cx - hx, cx - hx + depth, SCAN_ROWS)[1:]:
+            for dy in (-f(0.5) * hy, 0.0, f(0.5) * hy):
+                start = np.array([x, cy + dy, top])
+                out.append(Probe("top", finger, start, np.array([0.0, 0.0, -1.0]), travel, opened))
+        return out
 
     def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
         return {
@@ -158,8 +200,24 @@ class EP2Agent(GraspAgent):
             "radius": self.world.hand.tip_radius(finger),
         }
 
+    def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
+        """(horizontal axis, most steps) of each slide of this round: :meth:`slide_axes` with
+        SLIDE_STEPS each; once a fit leaves faces open, toward each open face with a
+        horizontal normal only, far enough to pass it by its fitted size."""
+        if not faces:
+            return [(axis, SLIDE_STEPS) for axis in self.slide_axes(board)]
+        out = []
+        for face in faces:
+            n = np.asarray(face["normal"], dtype=float)
+            h = np.array([n[0], n[1], 0.0])
+            norm = float(np.linalg.norm(h))
+            if norm > 0.5:
+                steps = min(MAX_SLIDE_STEPS, SLIDE_STEPS + int(4.0 * float(face["half"]) / SLIDE_STEP))
+                out.append((h / norm, steps))
+        return out
+
     def slide(
-        self, start: np.ndarray, axis: np.ndarray
+        self, start: np.ndarray, axis: np.ndarray, steps: int = SLIDE_STEPS
     ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
         """Drag the top finger over the top from the tip centre ``start`` along the horizontal
         ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
@@ -168,13 +226,13 @@ class EP2Agent(GraspAgent):
         the free tip path of the probe that ended the slide (nothing felt, or a link would
         have touched first: the surface does not go on at that height)."""
         world = self.world
-        finger = world.probe.finger("top")
+        finger = world.probe_finger("top")
         angle = world.probe.angles[finger]
         out: list[tuple[np.ndarray, np.ndarray]] = []
         beyond: list[np.ndarray] = []
         last: tuple[np.ndarray, np.ndarray] | None = None
         z = float(start[2])
-        for k in range(1, SLIDE_STEPS + 1):
+        for k in range(1, steps + 1):
             p = start + axis * (k * SLIDE_STEP)
             p[2] = z + 0.002
             outcome = world.guarded_probe(
@@ -185,8 +243,8 @@ class EP2Agent(GraspAgent):
                 break
             assert outcome.centre is not None and outcome.normal is not None
             last = (outcome.centre, outcome.normal)
-            if k % 3 == 0:
-                out.append(last)  # every third step (and the last, below)
+            if k % SLIDE_KEEP == 0:
+                out.append(last)  # every SLIDE_KEEP-th step (and the last, below)
                 last = None
             if z - float(outcome.centre[2]) > SLIDE_STEP:
                 break  # dropped over an edge
@@ -231,7 +289,14 @@ class EP2Agent(GraspAgent):
         free = list(board.get(keys.EP2_FREE, []))
         counts: dict[str, int] = {}
         missed = blocked = 0
-        for probe in self.plan_round(*estimate):
+        faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
+        # active touch: once a fit leaves faces open, the round probes those faces first, and
+        # the whole surface only when none of them is felt
+        planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
+        answered: set[int] = set()  # groups of alternatives already answered by a touch
+        for probe in self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts):
+            if probe.group in answered:
+                continue
             outcome = world.guarded_probe(
                 probe.finger, probe.start, probe.direction, probe.travel, probe.angle
             )
@@ -239,6 +304,8 @@ class EP2Agent(GraspAgent):
                 assert outcome.centre is not None and outcome.normal is not None
                 touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
                 counts[probe.face] = counts.get(probe.face, 0) + 1
+                if probe.group >= 0:
+                    answered.add(probe.group)
             else:
                 if outcome.free is not None:
                     r = world.hand.tip_radius(probe.finger)
@@ -258,13 +325,21 @@ class EP2Agent(GraspAgent):
             if side == "top"
         ]
         if tops:
-            start = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
-            for axis in self.slide_axes(board):
-                slid, beyond = self.slide(start, axis)
+            highest = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            for axis, steps in self.slide_plan(board, faces):
+                # toward an open face: on from the top touch farthest that way
+                start = (
+                    highest
+                    if steps == SLIDE_STEPS
+                    else np.asarray(
+                        max(tops, key=lambda t: float(np.dot(t["centre"], axis)))["centre"], dtype=float
+                    )
+                )
+                slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
-                    touches.append(self._touch("slide", world.probe.finger("top"), centre, normal))
+                    touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))
                     counts["slide"] = counts.get("slide", 0) + 1
-                r = world.hand.tip_radius(world.probe.finger("top"))
+                r = world.hand.tip_radius(world.probe_finger("top"))
                 free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)
         self.rounds += 1
         board.set(keys.EP2_TOUCHES, touches)

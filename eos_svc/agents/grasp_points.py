@@ -14,9 +14,10 @@ every finger, the postulated object — and completes the information stage. Whe
 assumed (no ``object``, or ``pose_known`` false) the cycle record says "pose assumed upright".
 
 Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no target exists
-yet; 0 otherwise. No candidate because the object is larger than the hand height across
-every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as failed, naming the postulated
-size; so does no collision-free candidate at all.
+yet — or 60 % for an approximate postulate (the convex hull of the touches) once EP2 has no
+rounds left, planned on as it is; 0 otherwise. No candidate because the object is larger
+than the hand height across every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as
+failed, naming the postulated size; so does no collision-free candidate at all.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.schema import keys
-from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.request import MESH, ObjectSpec
 
 #: the reason synthesis gives for a grip wider than the hand height
 TOO_LARGE = "larger than the hand height across the grip"
@@ -39,6 +40,9 @@ TOO_LARGE = "larger than the hand height across the grip"
 
 def size_words(spec: ObjectSpec) -> str:
     """The postulated size in the request's field names, mm (e.g. ``size [70, 35, 45] mm``)."""
+    if spec.shape == MESH:  # a mesh: its extents
+        obj = make_object(spec)
+        return f"extents [{', '.join(f'{2000 * v:.0f}' for v in obj.half_extents())}] mm"
     parts = []
     for key, value in spec.size.items():
         if isinstance(value, tuple):
@@ -57,19 +61,27 @@ class GraspPointsAgent(GraspAgent):
         oracle: plan on this object instead of post_shape's postulate — the true object, for
             measuring the grasp stage apart from recognition only (``plan(...,
             oracle_postulate=True)``); never the planner's default.
+        name: the agent's name (a subclass with another sampler takes its own, see
+            :meth:`choose_candidates`).
     """
 
     reads = frozenset({keys.SHAPE, keys.TARGET, keys.FRICTION})
     writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})
 
-    def __init__(self, default: float, world: HandDriver, oracle: ObjectSpec | None = None) -> None:
-        super().__init__("grasp_points", (INFO,), default, world)
+    def __init__(
+        self, default: float, world: HandDriver, oracle: ObjectSpec | None = None, name: str = "grasp_points"
+    ) -> None:
+        super().__init__(name, (INFO,), default, world)
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it is confident enough, else None."""
+        """post_shape's postulate if it is confident enough (or approximate, with nothing more to
+        ask EP2 for), else None."""
         shape = board.get(keys.SHAPE)
-        if shape is None or shape["confidence"] < self.world.params.confidence_threshold:
+        if shape is None:
+            return None
+        final_approximation = bool(shape.get("approximate")) and shape["needs"] is None
+        if shape["confidence"] < self.world.params.confidence_threshold and not final_approximation:
             return None
         return shape
 
@@ -77,7 +89,7 @@ class GraspPointsAgent(GraspAgent):
         shape = self.confident_shape(board)
         if shape is None or keys.TARGET in board:
             return 0.0
-        return float(shape["confidence"])
+        return max(float(shape["confidence"]), self.world.params.confidence_threshold)
 
     def postulate(self, shape: dict) -> Postulate | None:
         """The object to plan on (the oracle's when given)."""
@@ -88,7 +100,8 @@ class GraspPointsAgent(GraspAgent):
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         shape = self.confident_shape(board)
         if shape is None:
-            return ActionResult(Outcome.CANNOT_ACT, "no shape postulated with enough confidence yet")
+            why = unsure(board.get(keys.SHAPE), self.world.params.confidence_threshold)
+            return ActionResult(Outcome.CANNOT_ACT, f"no shape postulated with enough confidence yet{why}")
         try:
             postulate = self.postulate(shape)
         except ValidationError as exc:
@@ -100,20 +113,12 @@ class GraspPointsAgent(GraspAgent):
                 f"cannot choose grasp points on a {shape['class']} of unknown size from EP1 alone",
                 succeeded=False,
             )
-        world = self.world
-        hand = world.hand
+        hand = self.world.hand
         spec = postulate.spec
-        synthesis = GraspSynthesis(
-            hand,
-            world.sweeps,
-            world.params,
-            make_object(spec),
-            float(board.get(keys.FRICTION, 0.5)),
-            vertical_only=postulate.vertical_only,
-        )
+        synthesis = self.synthesis(board, postulate)
         note = postulate.words()
         note = f" ({note})" if note else ""
-        candidates = synthesis.candidates()
+        candidates = self.choose_candidates(synthesis, spec)
         if not candidates:
             return self._no_grasp(spec, synthesis, note)
         for cand in candidates:
@@ -138,6 +143,25 @@ class GraspPointsAgent(GraspAgent):
             f"wrist turned to roll {roll:.0f}°, pitch {pitch:.0f}°, yaw {yaw:.0f}°, hand placed "
             f"{stand_off * 1000:.0f} mm before the grasp, open",
         )
+
+    def synthesis(self, board: Board, postulate: Postulate) -> GraspSynthesis:
+        """Grasp synthesis of this world's hand on the postulated object, at the board's μ."""
+        world = self.world
+        return GraspSynthesis(
+            world.hand,
+            world.sweeps,
+            world.params,
+            make_object(postulate.spec),
+            float(board.get(keys.FRICTION, 0.5)),
+            vertical_only=postulate.vertical_only,
+            table_height=world.table_height,
+        )
+
+    def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:
+        """The candidate grasps on the postulated object ``spec``, best first: the stock
+        synthesis's (:meth:`GraspSynthesis.candidates`). A grasp agent with another sampler
+        overrides this (``eos_svc.agents.plugins.sampled_grasp_points``)."""
+        return synthesis.candidates()
 
     def _no_grasp(self, spec: ObjectSpec, synthesis: GraspSynthesis, note: str) -> ActionResult:
         """End the run: why no candidate was kept."""
@@ -196,3 +220,28 @@ class GraspPointsAgent(GraspAgent):
             "pose_assumed_upright": not postulate.pose_known,
             "postulate": postulate.source,
         }
+
+
+def unsure(shape: dict | None, threshold: float) -> str:
+    """Why post_shape's postulate is not trusted, in words (empty before there is one): its
+    confidence against the rule, and what keeps it low — faces no touch bounds, classes that
+    explain the touches alike, or touches no class fits."""
+    if shape is None:
+        return ""
+    evidence = shape.get("evidence") or {}
+    out = (
+        f": the {shape['class']} postulated from {evidence.get('contacts', '?')} contacts is "
+        f"{shape['confidence']:.0%} sure (the grasp needs {threshold:.0%})"
+    )
+    faces = shape.get("open_faces") or []
+    classes = list((evidence.get("classes") or {}).items())
+    if faces:
+        normals = "; ".join("[" + ", ".join(f"{v:+.2f}" for v in f["normal"]) + "]" for f in faces)
+        return out + f"; no touch bounds its face{'s' if len(faces) > 1 else ''} toward {normals}"
+    if len(classes) > 1 and classes[1][1] > 0.2:
+        (a, pa), (b, pb) = classes[0], classes[1]
+        return out + f"; the touches fit a {a} ({pa:.0%}) and a {b} ({pb:.0%}) alike"
+    rms = evidence.get("fit_rms")
+    if rms is not None and rms > 2.0:
+        return out + f"; no class fits the touches (whitened residual rms {rms:.1f})"
+    return out + "; its size or centre is not known to 10 %"

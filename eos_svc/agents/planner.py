@@ -19,7 +19,7 @@ grasp_points   information               0.6
 end            grasping                  0.2
 =============  ========================  =======
 
-Another hand (``plan(request, hand=allegro_hand())``) brings its own finger agents, one per
+Another hand (``plan(request, hand=load_hand_named("allegro"))``) brings its own finger agents, one per
 finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
 extra finger (:func:`finger_ratings`); its world parameters are derived from it
 (:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
@@ -31,9 +31,10 @@ The same request with the same seed gives the same cycles and result.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -45,6 +46,7 @@ from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
+from eos_svc.agents.plugins.loading import PluginSpec, plugin_agents, plugin_entries, requested_plugins
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.wrist import WristAgent
@@ -56,6 +58,7 @@ from eos_svc.drivers.worlds import check_world, make_driver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
+from eos_svc.hands import DEFAULT_HAND, load_hand_named
 from eos_svc.kinematics import (
     HandModel,
     Scene,
@@ -69,6 +72,7 @@ from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.schema.result import PlanResult
 from eos_svc.world.admission import check_plannable
 from eos_svc.world.hand_context import HandContext, context_for, default_context
+from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.pose_board import PoseBoard
 from eos_svc.world.world import GraspWorld
@@ -151,6 +155,9 @@ def build_world(
     # only if it takes a noisy reading)
     search_seed = np.random.SeedSequence(request.seed, spawn_key=(0,))
     sensor_seed = np.random.SeedSequence(request.seed, spawn_key=(1,))
+    # the joint encoders' noise and the links' calibration error draw from a third child (only
+    # when asked for: the default plan draws nothing more)
+    sensing_seed = np.random.SeedSequence(request.seed, spawn_key=(2,))
     return GraspWorld(
         context=context,
         scene=Scene(hand, make_object(request.obj)),
@@ -158,6 +165,8 @@ def build_world(
         sensor=TactileSensor(noise_std=request.tactile_noise, rng=sensor_seed),
         rng=np.random.default_rng(search_seed),
         estimator=CurvatureEstimator(),
+        sensing=JointSensing.build(hand, request.encoder_noise, request.link_error, sensing_seed),
+        table_height=None if request.table is None else request.table.height,
     )
 
 
@@ -210,6 +219,8 @@ def plan(
     check_board: bool = False,
     world: str | None = None,
     driver: HandDriver | None = None,
+    agents: Sequence[PluginSpec] = (),
+    offered: Mapping[str, PluginSpec] | None = None,
 ) -> PlanResult:
     """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
 
@@ -217,9 +228,9 @@ def plan(
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
         on_cycle: called with every cycle record as it happens.
         cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: ``urdf/hand3x3.urdf``), e.g.
-            :func:`eos_svc.kinematics.allegro_hand`; its context is built for this plan (≈ 30 ms)
-            unless it is the default hand or ``context`` is given.
+        hand: the hand model (default: the hand ``request.hand`` names, else hand3x3), e.g.
+            ``load_hand_named("allegro")`` (:mod:`eos_svc.hands`); its context is built for this
+            plan (≈ 30 ms) unless it is the default hand or ``context`` is given.
         params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
             for hand3x3, hand-dependent fields derived for another hand).
         context: the hand's context (:class:`~eos_svc.world.hand_context.HandContext`), built
@@ -248,24 +259,41 @@ def plan(
         driver: a hand driver of the caller's (e.g. a :class:`~eos_svc.drivers.zenoh_driver.ZenohDriver`
             of a hand served elsewhere) instead of a world built here for the request;
             ``world`` is then the served world's.
+        agents: plug-in agents added to this plan after the request's own (``request.agents``):
+            factories called with the plan's hand driver, ``Agent`` instances, or names (an
+            ``eos_svc.agents`` entry point, or ``module:attr``); each checked against the
+            plug-in contract (:mod:`eos_svc.agents.plugins.loading`) and placed, in order,
+            just before ``end``.
+        offered: the plug-ins the request's names may pick (name -> plug-in), as a service
+            instance offers them; ``None``: any installed entry point or ``module:attr``.
 
     Raises:
-        ValidationError: a request the planner cannot plan, refused before any cycle by
+        ValidationError: a plug-in that cannot be resolved or breaks the contract (naming
+            ``agents[i]``); a request the planner cannot plan, refused before any cycle by
             :func:`~eos_svc.world.admission.check_plannable` (object out of reach, overlapping
             the hand, wider than the hand's span). Every planning outcome is a status in the result.
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
+    if context is None and hand is None and request.hand not in (None, DEFAULT_HAND):
+        hand = load_hand_named(request.hand)  # the registered hand the request names
     context = context if context is not None else context_for(hand, params)
     world = check_world(request.world if world is None else world)
     model = build_world(request, check=check, context=context)
     if driver is None:  # all the agents get: the world stays the planner's
         driver = make_driver(world, model, request)
-    agents = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
+    team = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
+    wanted = [*requested_plugins(request.agents, offered), *agents]
+    extra = plugin_agents(driver, wanted, team, STAGES) if wanted else []
+    team[-1:-1] = extra  # plug-ins join just before end (ties go to the built-in agents)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
+    entry_check = None
+    if check_board:
+        own = plugin_entries(extra)
+        entry_check = functools.partial(check_entry, extra=own) if own else check_entry
     controller = Controller(
-        agents,
+        team,
         STAGES,
         request.weights,
         max_cycles=request.max_cycles,
@@ -273,7 +301,7 @@ def plan(
         keep_trace=keep_trace,
         callbacks=[on_cycle] if on_cycle is not None else [],
         check_access=check_board,
-        entry_check=check_entry if check_board else None,
+        entry_check=entry_check,
     )
     # records the hand's q per cycle (and in the Drake world the object's pose, for viewers)
     board = PoseBoard(driver, {keys.FRICTION: request.friction}, getattr(driver, "object_pose", None))
@@ -305,6 +333,8 @@ def plan(
         diameter_angle_deg=verdict["diameter_angle_deg"],
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
+        touches=len(board.get(keys.EP1_CONTACT, {})) + len(board.get(keys.EP2_TOUCHES, [])),
+        probes=driver.probes + int(board.get(keys.EP1_RUNS, 0)),
         hand_height=model.hand.hand_height,
         q_final=tuple(float(x) for x in driver.joint_positions()),
         wall_time_s=time.perf_counter() - t0,

@@ -18,6 +18,11 @@ Two sources, in the order the information stage gathers them:
 2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
    least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
    P(class right and size within tolerance). Below 60 % post_shape asks EP2 again.
+3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
+   once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
+   ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
+   end agent counts a success only with a good grasp. (Before that, the best primitive is
+   postulated as always, asking EP2 for more.)
 
 The postulate (board entry ``keys.SHAPE``) keeps ``class``, ``confidence``,
 ``grasp_radius`` (the vertical half extent, what the grasp closes on), ``diameter``,
@@ -39,11 +44,14 @@ import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.ep2 import MAX_ROUNDS as EP2_ROUNDS
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
-from eos_svc.shape.selection import MIN_CONTACTS
+from eos_svc.shape.hull import HullPostulate, hull_postulate
+from eos_svc.shape.open_faces import open_faces
+from eos_svc.shape.selection import MIN_CONTACTS, fit_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
@@ -51,6 +59,11 @@ SPHERE_TOLERANCE = 0.15
 SIZE_TOLERANCE = 0.10
 #: most free-space samples given to the fit
 MAX_FREE_SAMPLES = 60
+#: below this plausibility of the best primitive's fit under the noise model, no class explains
+#: the touches: post_shape postulates their convex hull (:mod:`eos_svc.shape.hull`)
+OUT_OF_CLASS = 1e-3
+#: the approximate postulate's class name
+HULL = "hull"
 #: probability that EP1's curvature class is right (see the module docstring)
 EP1_CLASS_PROBABILITY = 0.5
 
@@ -101,13 +114,16 @@ def touches_from(board: Board, world: HandDriver) -> Touches:
         free[:, 3],
         tactile_noise=world.tactile_noise,
         contact_tolerance=world.params.contact_tolerance,
+        kinematic_sigma=world.kinematic_sigma,
     )
 
 
 class PostShapeAgent(GraspAgent):
     """Turns what the fingers felt into a postulated object with a confidence."""
 
-    reads = frozenset({keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE})
+    reads = frozenset(
+        {keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS}
+    )
     writes = frozenset({keys.SHAPE, keys.D_OVER_H})
 
     def __init__(self, default: float, world: HandDriver) -> None:
@@ -115,7 +131,10 @@ class PostShapeAgent(GraspAgent):
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         new = (
-            ctx.changed(keys.CURVATURE) or ctx.changed(keys.CURVATURE_BOTTOM) or ctx.changed(keys.EP2_TOUCHES)
+            ctx.changed(keys.CURVATURE)
+            or ctx.changed(keys.CURVATURE_BOTTOM)
+            or ctx.changed(keys.EP2_TOUCHES)
+            or ctx.changed(keys.EP1_CONTACT)  # on a table, the bottom is the table's plane
         )
         return 1.0 if new else 0.0
 
@@ -137,6 +156,15 @@ class PostShapeAgent(GraspAgent):
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
         post = select_class(touches)
+        ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
+        if (
+            ep2_done
+            and post.best is not None
+            and fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
+        ):
+            hull = hull_postulate(touches, self.world.table_height)
+            if hull is not None:
+                return self._from_hull(board, curvature, touches, post.kind, hull)
         threshold = self.world.params.confidence_threshold
         fit = post.best
         radius = classify(curvature)[1]
@@ -157,8 +185,11 @@ class PostShapeAgent(GraspAgent):
                 "free_samples": len(touches.free),
             },
             "bounds": None,
+            "open_faces": [],
         }
         if fit is not None:
+            if post.confidence < threshold:  # what EP2 should feel next: the faces no touch bounds
+                shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)
@@ -173,6 +204,41 @@ class PostShapeAgent(GraspAgent):
             Outcome.PROGRESS,
             f"fitted every class to {touches.count} contacts: a {post.kind}{size} ({rivals}), "
             f"confidence {post.confidence:.0%}{ask}",
+        )
+
+    def _from_hull(
+        self, board: Board, curvature: dict, touches: Touches, best: str, hull: HullPostulate
+    ) -> ActionResult:
+        """The approximate postulate (:mod:`eos_svc.shape.hull`), once EP2 has felt all it
+        will: grasp_points plans on it as it is."""
+        radius = classify(curvature)[1]
+        half, centre = hull.half_extents, hull.centre
+        shape: dict[str, Any] = {
+            "class": HULL,
+            "confidence": round(hull.confidence, 6),
+            "grasp_radius": round(float(half[2]), 6),
+            "diameter": round(2.0 * float(half[2]), 6),
+            "centre": np.round(centre, 6).tolist(),
+            "needs": None,
+            "principal_curvatures": curvature["principal_curvatures"],
+            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
+            "object": hull.object,
+            "pose_known": True,
+            "approximate": True,
+            "evidence": {
+                "contacts": touches.count,
+                "best_primitive": best,
+                "on_hull": round(hull.on_hull, 6),
+                "source": "convex hull of the EP1 and EP2 contacts: no primitive explains them",
+            },
+            "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
+        }
+        self._write(board, shape)
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"no class explains the {touches.count} contacts (best: a {best}): the convex hull of the "
+            f"touches, approximate ({hull.on_hull:.0%} of the touches on it), confidence "
+            f"{hull.confidence:.0%}",
         )
 
     def _from_ep1(self, board: Board, curvature: dict, contacts: dict) -> ActionResult:

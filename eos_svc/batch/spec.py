@@ -23,8 +23,6 @@ else:  # pragma: no cover - Python 3.10: the batch extra installs tomli
 
 #: suites ``objects.suite`` names (eos_svc.experiments.grasp_suite)
 SUITES = ("fixed", "quick", "held_back")
-#: hands ``hands`` names (as ``eos plan --hand``)
-HANDS = ("hand3x3", "allegro")
 #: worlds ``world`` accepts: the planner's kinematic world (Pinocchio + coal)
 WORLDS = ("kinematic",)
 #: request fields a condition may vary, in the order they vary (the last fastest)
@@ -122,8 +120,6 @@ def spec_from_dict(data: Mapping[str, Any], default_name: str = "batch") -> Batc
         raise ValidationError("name", f"must be a non-empty string, got {name!r}")
     validate = _validate(data.get("validate", {}))
     hands = _hands(data.get("hands", ["hand3x3"]))
-    if validate.enabled and hands != ("hand3x3",):
-        raise ValidationError("validate.enabled", f"the Drake validation models hand3x3 only; hands: {hands}")
     if "objects" not in data:
         raise ValidationError("objects", "missing: give a suite, a draw or explicit objects")
     return BatchSpec(
@@ -170,10 +166,13 @@ def _list(value: object, field: str) -> list[Any]:
 
 
 def _hands(value: object) -> tuple[str, ...]:
+    from eos_svc.hands import HandRegistry  # the registered hands (eos hands)
+
+    known = HandRegistry().names
     hands = _list(value, "hands")
     for i, hand in enumerate(hands):
-        if hand not in HANDS:
-            raise ValidationError(f"hands[{i}]", f"must be one of {', '.join(HANDS)}, got {hand!r}")
+        if hand not in known:
+            raise ValidationError(f"hands[{i}]", f"must be one of {', '.join(known)}, got {hand!r}")
     if len(set(hands)) != len(hands):
         raise ValidationError("hands", f"a hand named twice: {hands}")
     return tuple(hands)

@@ -19,24 +19,28 @@ from eos_svc.batch.expansion import PlanKey
 from eos_svc.errors import EosError, ValidationError
 
 
-def hand_model(name: str) -> Any:
-    """The hand model ``name`` names (each loaded once per process by its own loader)."""
-    if name == "allegro":
-        from eos_svc.kinematics import allegro_hand
-
-        return allegro_hand()
+def hand_model(name: str, loaded: dict[str, Any] | None = None) -> Any:
+    """The hand ``name`` names (a registered hand, ``eos hands``): the planner's default hand
+    for hand3x3, else built from its description, once per ``loaded`` dict (a chunk's)."""
     from eos_svc.agents import default_hand
+    from eos_svc.hands import DEFAULT_HAND, load_hand_named
 
-    return default_hand()
+    if name == DEFAULT_HAND:
+        return default_hand()
+    if loaded is None:
+        return load_hand_named(name)
+    if name not in loaded:
+        loaded[name] = load_hand_named(name)
+    return loaded[name]
 
 
-def run_key(key: PlanKey, worker: str = "") -> dict[str, Any]:
-    """Plan one key (and validate it when asked): its row."""
+def run_key(key: PlanKey, worker: str = "", loaded: dict[str, Any] | None = None) -> dict[str, Any]:
+    """Plan one key (and validate it when asked): its row (``loaded``: hands already built)."""
     from eos_svc.agents import PlanRequest, plan
 
     started = time.perf_counter()
     row = rows.key_columns(key, worker)
-    hand = hand_model(key.hand)
+    hand = hand_model(key.hand, loaded)
     try:
         result = plan(PlanRequest.from_dict(key.request), hand=hand, keep_trace=False)
     except ValidationError as exc:  # admission: the planner cannot plan this object
@@ -45,12 +49,12 @@ def run_key(key: PlanKey, worker: str = "") -> dict[str, Any]:
         row.update(rows.empty_columns(rows.ERROR, f"{type(exc).__name__}: {exc}"))
     else:
         row.update(rows.result_columns(result, [int(i) for i in hand.wrist_q_index]))
-        row.update(validated_columns(key, result))
+        row.update(validated_columns(key, result, hand))
     row["task_s"] = time.perf_counter() - started
     return row
 
 
-def validated_columns(key: PlanKey, result: Any) -> dict[str, Any]:
+def validated_columns(key: PlanKey, result: Any, hand: Any = None) -> dict[str, Any]:
     """The validation columns of a planned key: not validated, the report, or why it failed."""
     if not key.validate.enabled:
         return rows.validation_columns(None, None)
@@ -59,7 +63,9 @@ def validated_columns(key: PlanKey, result: Any) -> dict[str, Any]:
     from eos_svc.validation import validate_grasp
 
     try:
-        report = validate_grasp(result, seconds=key.validate.seconds, directions=key.validate.directions)
+        report = validate_grasp(
+            result, seconds=key.validate.seconds, directions=key.validate.directions, hand=hand
+        )
     except EosError as exc:
         return rows.validation_columns(None, f"{type(exc).__name__}: {exc}")
     return rows.validation_columns(report, None)
@@ -68,4 +74,5 @@ def validated_columns(key: PlanKey, result: Any) -> dict[str, Any]:
 def run_chunk(keys: list[PlanKey]) -> list[dict[str, Any]]:
     """Plan every key of a chunk, in order: their rows (each names this host and process)."""
     worker = f"{socket.gethostname()}:{os.getpid()}"
-    return [run_key(key, worker) for key in keys]
+    loaded: dict[str, Any] = {}
+    return [run_key(key, worker, loaded) for key in keys]

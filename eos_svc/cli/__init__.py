@@ -17,6 +17,7 @@ from collections.abc import Sequence
 #: command name -> (module, one-line help)
 COMMANDS: dict[str, tuple[str, str]] = {
     "plan": ("eos_svc.cli.plan", "plan one grasp on a scene and print the cycle trace"),
+    "hands": ("eos_svc.cli.hands", "list the registered hands (and check hand description files)"),
     "replay": ("eos_svc.cli.replay", "replay a recorded plan and check it is deterministic"),
     "validate": ("eos_svc.cli.validate", "simulate a planned grasp in Drake: does it hold the object?"),
     "ep1": ("eos_svc.cli.ep1", "run EP1 alone: roll a fingertip and estimate curvature"),

@@ -51,6 +51,8 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
     out = plan_request_dict(args)
     if out.get("friction") is None:
         out.pop("friction", None)
+    if getattr(args, "hand", None) is not None:
+        out["hand"] = args.hand
     return out
 
 
@@ -82,6 +84,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
     add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
+    g.add_argument(
+        "--hand",
+        default=None,
+        metavar="NAME",
+        help="the hand to plan with: one the service has (eos hands; eos serve --hand FILE) (its default)",
+    )
     g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
     g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
     g.add_argument(
@@ -115,22 +123,24 @@ def run(args: argparse.Namespace) -> int:
         fail("ACTION: choose one of list, plan, cancel, watch")
     conf = session_config(args, serving=False)
     from eos_svc.service import protocol as proto
-    from eos_svc.service.client import EosClient, ServiceUnavailableError
+    from eos_svc.service.client import EosClient
+    from eos_svc.service.instances import ServiceUnavailableError
+    from eos_svc.service.wire_json import loads_strict
 
+    if getattr(args, "goal_id", None) is not None:
+        try:
+            proto.check_id(args.goal_id, "goal_id")
+        except ValidationError as exc:
+            fail(f"{'GOAL_ID' if args.action == 'cancel' else '--goal-id'}: {exc.reason}")
     request: Any = None
     if args.action == "plan":
         from eos_svc.cli.plan import FIELD_OPTIONS
         from eos_svc.schema.request import PlanRequest
 
-        try:
-            if args.goal_id is not None:
-                proto.check_id(args.goal_id, "goal_id")
-        except ValidationError as exc:
-            fail(f"--goal-id: {exc.reason}")
         if args.request is not None:
             try:
                 with open(args.request, encoding="utf-8") as fh:
-                    request = proto.loads_strict(fh.read())
+                    request = loads_strict(fh.read())
             except OSError as exc:
                 fail(f"--request: cannot read {args.request!r}: {exc.strerror}")
             except ValueError as exc:
@@ -140,11 +150,6 @@ def run(args: argparse.Namespace) -> int:
                 request = PlanRequest.from_dict(request_dict(args))
             except ValidationError as exc:
                 fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
-    if args.action == "cancel":
-        try:
-            proto.check_id(args.goal_id, "goal_id")
-        except ValidationError as exc:
-            fail(f"GOAL_ID: {exc.reason}")
     token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
     if token is not None and not proto.is_token(token):
         fail(

@@ -6,6 +6,7 @@ import argparse
 import math
 import sys
 from collections.abc import Callable
+from typing import NoReturn
 
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import Weights
@@ -22,12 +23,25 @@ def finite_float(text: str) -> float:
     return value
 
 
-def positive_float(text: str) -> float:
-    """argparse type: a finite float > 0."""
-    value = finite_float(text)
-    if value <= 0:
-        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
-    return value
+def float_in(low: float, high: float = math.inf, *, above: bool = False) -> Callable[[str], float]:
+    """argparse type: a finite float ≥ ``low`` (> with ``above``) and ≤ ``high``."""
+
+    def parse(text: str) -> float:
+        value = finite_float(text)
+        if value < low or (above and value == low) or value > high:
+            bound = f"in [{low:g}, {high:g}]" if high < math.inf else f"{'>' if above else '≥'} {low:g}"
+            raise argparse.ArgumentTypeError(f"must be {bound}, got {text!r}")
+        return value
+
+    return parse
+
+
+#: argparse type: a finite float > 0
+positive_float = float_in(0.0, above=True)
+#: argparse type: a finite float ≥ 0
+non_negative_float = float_in(0.0)
+#: argparse type: a float in [0, 1]
+fraction = float_in(0.0, 1.0)
 
 
 def int_at_least(minimum: int) -> Callable[[str], int]:
@@ -63,10 +77,9 @@ def weights_from_args(args: argparse.Namespace) -> Weights:
         return Weights(args.w_default, args.w_opportunistic, args.w_learned)
     except ValidationError as exc:
         fail(f"--w-*: {exc}")
-        raise  # unreachable
 
 
-def fail(message: str, code: int = 2) -> None:
+def fail(message: str, code: int = 2) -> NoReturn:
     """Print ``eos: error: message`` to stderr and exit with ``code``."""
     print(f"eos: error: {message}", file=sys.stderr)
     raise SystemExit(code)

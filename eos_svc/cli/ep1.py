@@ -12,66 +12,36 @@ import argparse
 import json
 import math
 import sys
-from collections.abc import Callable
 from typing import Any
 
-from eos_svc.cli.common import int_at_least
+from eos_svc.cli.common import fraction, int_at_least, non_negative_float, positive_float
 
 __all__ = ["add_arguments", "run"]
 
 SHAPES = ("sphere", "plane", "cylinder", "ellipsoid")
 
 
-def _number(name: str, lo: float, lo_ok: bool) -> Callable[[str], float]:
-    def parse(text: str) -> float:
-        try:
-            v = float(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} must be a number, got {text!r}") from None
-        if not math.isfinite(v) or v < lo or (v == lo and not lo_ok):
-            rel = ">=" if lo_ok else ">"
-            raise argparse.ArgumentTypeError(f"{name} must be a finite number {rel} {lo:g}, got {text!r}")
-        return v
-
-    return parse
-
-
-def _shape(text: str) -> str:
-    if text not in SHAPES:
-        raise argparse.ArgumentTypeError(f"unknown shape {text!r}; choose from {', '.join(SHAPES)}")
-    return text
-
-
-def _rating(text: str) -> float:
-    v = _number("--until-rating", 0.0, True)(text)
-    if v > 1.0:
-        raise argparse.ArgumentTypeError(f"--until-rating must be in [0, 1], got {text!r}")
-    return v
-
-
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """The options of ``eos ep1``."""
-    parser.add_argument("--shape", type=_shape, default="sphere", help=f"object: {', '.join(SHAPES)}")
+    parser.add_argument("--shape", choices=SHAPES, default="sphere", help=f"object: {', '.join(SHAPES)}")
     parser.add_argument(
         "--radius",
-        type=_number("--radius", 0.0, False),
+        type=positive_float,
         default=0.04,
         help="sphere/cylinder radius, ellipsoid's largest semi-axis, m (default 0.04; ignored for a plane)",
     )
-    parser.add_argument("--noise", type=_number("--noise", 0.0, True), default=2e-4, help="tactile noise, m")
+    parser.add_argument("--noise", type=non_negative_float, default=2e-4, help="tactile noise, m")
     parser.add_argument("--seed", type=int_at_least(0), default=0, help="tactile noise seed")
     parser.add_argument("--finger", default="finger1", help="rolling finger (default finger1)")
-    parser.add_argument(
-        "--omega", type=_number("--omega", 0.0, False), default=0.5, help="rolling rate, rad/s"
-    )
-    parser.add_argument("--dt", type=_number("--dt", 0.0, False), default=0.01, help="time step, s")
+    parser.add_argument("--omega", type=positive_float, default=0.5, help="rolling rate, rad/s")
+    parser.add_argument("--dt", type=positive_float, default=0.01, help="time step, s")
     parser.add_argument(
         "--steps", type=int_at_least(8), default=100, help="steps per direction's sweep (default 100)"
     )
     parser.add_argument("--solver", default="osqp", help="QP backend (osqp default, or daqp, ...)")
     parser.add_argument(
         "--until-rating",
-        type=_rating,
+        type=fraction,
         default=0.95,
         help="repeat EP1 until its rating (1 - sigma_R/R) reaches this (default 0.95)",
     )

@@ -26,6 +26,10 @@ EXPERIMENTS = {
         "eos_svc.experiments.recognition",
         "knowing the object by touch: confusion, shape error, calibration, search length",
     ),
+    "plugins": (
+        "eos_svc.experiments.plugins",
+        "a plug-in grasp agent: chosen when its grasps are better, passed over when worse",
+    ),
 }
 
 

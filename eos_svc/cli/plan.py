@@ -6,7 +6,8 @@ eos plan --json                           # the result as JSON (no trace)
 eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
 eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
 eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
-eos plan --hand allegro                   # the Allegro hand of example-robot-data
+eos plan --hand allegro                   # a registered hand (eos hands), or a description file
+eos plan --hand my_hand.toml
 eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
 eos plan --html plan.html                 # the plan animated in 3-D, one self-contained page
 eos plan --view                           # a live 3-D view on localhost (URL on stderr)
@@ -21,12 +22,10 @@ from typing import IO, Any
 
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
+from eos_svc.cli.hands import add_hand_argument, chosen_hand
 from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
-from eos_svc.records import CycleRecord
-
-#: hands ``--hand`` accepts
-HANDS = ("hand3x3", "allegro")
+from eos_svc.records import REPEAT_SKIP, CycleRecord
 
 #: request field -> command-line option, for error messages
 FIELD_OPTIONS = {
@@ -42,14 +41,24 @@ FIELD_OPTIONS = {
     "tactile_noise": "--noise",
     "max_cycles": "--max-cycles",
     "deadline_s": "--deadline",
+    "agents": "--agent",
     "friction": "--friction",
+    "encoder_noise": "--encoder-noise",
+    "link_error": "--link-error",
 }
 
 
 def add_object_arguments(parser: argparse.ArgumentParser) -> None:
     """Options choosing the object (shared with other commands)."""
     g = parser.add_argument_group("object (SI units: m, rad)")
-    g.add_argument("--shape", default="sphere", help="sphere, ellipsoid, cylinder, box or capsule (sphere)")
+    g.add_argument(
+        "--shape", default="sphere", help="sphere, ellipsoid, cylinder, box, capsule or mesh (sphere)"
+    )
+    g.add_argument("--file", help="mesh: an OBJ, STL or PLY file")
+    g.add_argument("--scale", type=positive_float, help="mesh: the file's units in metres (1)")
+    g.add_argument(
+        "--table", type=finite_float, metavar="Z", help="a table under the object, its top at height Z (m)"
+    )
     g.add_argument("--radius", type=positive_float, help="sphere/cylinder/capsule radius (0.03 for a sphere)")
     g.add_argument(
         "--radii", type=positive_float, nargs=3, metavar=("A", "B", "C"), help="ellipsoid semi-axes"
@@ -70,6 +79,15 @@ def add_request_arguments(
     g = parser.add_argument_group("run")
     g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
+    g.add_argument(
+        "--encoder-noise",
+        type=finite_float,
+        default=0.0,
+        help="joint-encoder noise std of the simulated hand, rad (0)",
+    )
+    g.add_argument(
+        "--link-error", type=finite_float, default=0.0, help="link-length calibration error std, m (0)"
+    )
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
     g.add_argument(
         "--deadline", type=positive_float, help="wall-clock budget, s (10; 600 with --world drake)"
@@ -82,17 +100,20 @@ def add_request_arguments(
         help="Coulomb friction μ at the fingertips, for the grasp quality "
         + ("(the request's default when omitted)" if friction_default is None else f"({friction_default})"),
     )
+    g.add_argument(
+        "--agent",
+        action="append",
+        default=None,
+        metavar="NAME",
+        help="add a plug-in agent, repeatable: an eos_svc.agents entry point or module:attr "
+        "(a service takes only those its instance offers, see eos serve --agent)",
+    )
     return g
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = add_request_arguments(parser)
-    g.add_argument(
-        "--hand",
-        choices=HANDS,
-        default="hand3x3",
-        help="the hand: hand3x3 (urdf/hand3x3.urdf) or allegro (example-robot-data's) (hand3x3)",
-    )
+    add_hand_argument(g)
     g.add_argument(
         "--world",
         choices=WORLDS,
@@ -131,24 +152,19 @@ def add_validate_argument(group: argparse._ArgumentGroup) -> None:
     group.add_argument(
         "--validate",
         action="store_true",
-        help="simulate the final grasp in Drake (hand3x3 only) and add the verdict to the result; "
+        help="simulate the final grasp in Drake (with the plan's hand) and add the verdict to the result; "
         "the exit status still follows the plan",
     )
 
 
-def check_validate_option(args: argparse.Namespace) -> None:
-    """Before planning: ``--validate`` needs hand3x3 (exit 2 otherwise)."""
-    if getattr(args, "validate", False) and getattr(args, "hand", "hand3x3") != "hand3x3":
-        fail("--validate: the Drake validation models hand3x3 only")
-
-
-def validated(result: Any, args: argparse.Namespace) -> Any:
-    """The result with its Drake validation when ``--validate`` was given (exit 2 on a bad case)."""
+def validated(result: Any, args: argparse.Namespace, hand: Any = None) -> Any:
+    """The result with its Drake validation (of the plan's ``hand``; ``None``: the default hand)
+    when ``--validate`` was given (exit 2 on a bad case)."""
     if not getattr(args, "validate", False):
         return result
     from eos_svc.cli.validate import validate_or_fail
 
-    return result.with_validation(validate_or_fail(result))
+    return result.with_validation(validate_or_fail(result, hand=hand))
 
 
 def request_dict(args: argparse.Namespace) -> dict[str, Any]:
@@ -156,7 +172,7 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
     obj: dict[str, Any] = {"shape": args.shape}
     if args.shape == "sphere" and args.radius is None:
         obj["radius"] = 0.03
-    for name in ("radius", "radii", "length", "size", "position", "rpy"):
+    for name in ("radius", "radii", "length", "size", "file", "scale", "position", "rpy"):
         value = getattr(args, name)
         if value is not None:
             obj[name] = value
@@ -173,6 +189,10 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
         "friction": args.friction,
         **({"world": args.world} if getattr(args, "world", "kinematic") != "kinematic" else {}),
+        **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
+        **({"encoder_noise": args.encoder_noise} if args.encoder_noise else {}),
+        **({"link_error": args.link_error} if args.link_error else {}),
+        **({} if args.table is None else {"table": {"height": args.table}}),
     }
 
 
@@ -195,12 +215,21 @@ def format_world(world: dict) -> str:
 
 
 def format_cycle(record: CycleRecord) -> str:
-    """Two readable lines per cycle: stage and every total (``·`` = not eligible), then the
-    chosen agent, its outcome and what it did."""
-    ratings = " ".join(f"{r.name}={r.total:.2f}{'' if r.eligible else '·'}" for r in record.ratings)
+    """Two readable lines per cycle: stage and every total (``·`` = not eligible, ``@remote`` =
+    a remote agent), a line per agent skipped as unavailable, then the chosen agent, its
+    outcome and what it did."""
+    ratings = " ".join(
+        f"{r.name}{'' if r.where == 'local' else '@' + r.where}={r.total:.2f}{'' if r.eligible else '·'}"
+        for r in record.ratings
+    )
     chosen = record.chosen or "-"
     outcome = f" [{record.outcome.value}]" if record.outcome is not None else ""
-    return f"{record.seq:4d} {record.stage:<11} {ratings}\n     -> {chosen}{outcome}: {record.detail}"
+    skips = "".join(
+        f"\n     {r.name} skipped: {r.skipped}"
+        for r in record.ratings
+        if r.skipped and r.skipped != REPEAT_SKIP
+    )
+    return f"{record.seq:4d} {record.stage:<11} {ratings}{skips}\n     -> {chosen}{outcome}: {record.detail}"
 
 
 def _postulate_lines(shape: dict[str, Any]) -> list[str]:
@@ -209,10 +238,13 @@ def _postulate_lines(shape: dict[str, Any]) -> list[str]:
     if obj is None:
         return []
     sizes = {k: v for k, v in obj.items() if k not in ("shape", "position", "rpy")}
-    fmt = ", ".join(
-        f"{k} {[round(x * 1000, 1) for x in v] if isinstance(v, list) else round(v * 1000, 1)} mm"
-        for k, v in sizes.items()
-    )
+    if obj.get("shape") == "mesh":  # the convex hull of the touches: its size in vertices and faces
+        fmt = f"{len(obj.get('vertices', []))} vertices, {len(obj.get('faces', []))} faces"
+    else:
+        fmt = ", ".join(
+            f"{k} {[round(x * 1000, 1) for x in v] if isinstance(v, list) else round(v * 1000, 1)} mm"
+            for k, v in sizes.items()
+        )
     pos = [round(x * 1000, 1) for x in obj["position"]]
     pose = (
         "rpy " + str([round(x, 3) + 0.0 for x in obj["rpy"]])
@@ -239,7 +271,8 @@ def format_result(result: Any) -> str:
         size = "size unknown" if half is None else f"half-height {half * 1000:.2f} mm"
         confidence = s["confidence"]
         lines.append(
-            f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs})"
+            f"shape: {s['class']}, {size}, confidence {confidence:.0%} (EP1 runs: {result.ep1_runs}; "
+            f"{result.touches} touches, {result.probes} probes)"
         )
         lines.extend(_postulate_lines(s))
     truth = result.ground_truth
@@ -262,15 +295,6 @@ def format_result(result: Any) -> str:
     return "\n".join(lines)
 
 
-def chosen_hand(args: argparse.Namespace) -> Any:
-    """The hand ``--hand`` names: ``None`` for hand3x3 (the planner's default), else its model."""
-    if getattr(args, "hand", "hand3x3") == "allegro":
-        from eos_svc.kinematics import allegro_hand
-
-        return allegro_hand()
-    return None
-
-
 def admit(request: Any, hand: Any) -> None:
     """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
     overlapping the hand, wider than its span (:func:`eos_svc.agents.admission.check_plannable`)."""
@@ -290,7 +314,6 @@ def run(args: argparse.Namespace) -> int:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
         fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
-    check_validate_option(args)
     hand = chosen_hand(args)
     admit(request, hand)
     record_file: IO[str] | None = None
@@ -345,7 +368,7 @@ def run(args: argparse.Namespace) -> int:
             draw_result(result, args.picture, hand=hand)
         except OSError as exc:
             fail(f"--picture: cannot write {args.picture!r}: {exc.strerror}")
-    result = validated(result, args)
+    result = validated(result, args, hand)
     if getattr(args, "html", None):  # --html FILE
         records = [r.to_dict() for r in result.trace]
         view_options.write_html(args.html, request, records, result.to_dict(), hand)

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from collections.abc import Iterable
 from types import SimpleNamespace
 from typing import Any
@@ -29,45 +28,33 @@ from eos_svc.recording import (
     Recording,
     Verification,
     compare_run,
-    first_difference,
     normalise,
     read_recording,
     record_from_dict,
 )
 
-__all__ = [
-    "RecordFileError",
-    "add_arguments",
-    "describe",
-    "first_difference",
-    "read_recording",
-    "record_from_dict",
-    "resolve_hand",
-    "run",
-    "verify",
-]
-
 
 def resolve_hand(name: str) -> Any:
-    """The hand model called ``name``: ``None`` (the planner's default) for ``hand3x3``, else
-    the result of :mod:`eos_svc.kinematics`' ``<name>_hand()``.
+    """The hand called ``name``: ``None`` (the planner's default) for ``hand3x3``, else the
+    registered hand of that name or the description file at that path (``eos hands``).
 
     Raises:
-        RecordFileError: no such hand.
+        RecordFileError: no such hand, or its description is bad.
     """
     if name == DEFAULT_HAND:
         return None
-    import eos_svc.kinematics as kinematics
+    from eos_svc.errors import ValidationError
+    from eos_svc.hands import HandRegistry
 
-    factory = getattr(kinematics, f"{name}_hand", None) if name.isidentifier() else None
-    if not callable(factory):
-        raise RecordFileError(f"unknown hand {name!r}")
-    return factory()
+    try:
+        return HandRegistry().build(name)
+    except ValidationError as exc:
+        raise RecordFileError(f"unknown hand {name!r}: {exc}") from None
 
 
-def verify(recording: Recording) -> Verification:
-    """Re-run the recorded request (with the recorded hand) and compare it cycle by cycle,
-    then the result (:func:`eos_svc.recording.compare_run`).
+def verify(recording: Recording, hand: Any = DEFAULT_HAND) -> Verification:
+    """Re-run the recorded request (with ``hand``, by default the recorded one) and compare it
+    cycle by cycle, then the result (:func:`eos_svc.recording.compare_run`).
 
     Raises:
         RecordFileError: the recorded hand is unknown.
@@ -77,7 +64,8 @@ def verify(recording: Recording) -> Verification:
     from eos_svc.world.pose_board import view_entries_as_recorded
 
     request = PlanRequest.from_dict(recording.request)
-    hand = resolve_hand(recording.hand)
+    if hand == DEFAULT_HAND:
+        hand = resolve_hand(recording.hand)
     replayed: list[dict[str, Any]] = []
     result = plan(request, on_cycle=lambda r: replayed.append(normalise(r.to_dict())), hand=hand)
     replayed = view_entries_as_recorded(recording.cycles, replayed)  # older recordings lack hand_q
@@ -138,15 +126,19 @@ def run(args: argparse.Namespace) -> int:
         print(f"no result line: the recorded run was interrupted after {len(recording.cycles)} cycles")
     code = 0
     final = recording.result
+    hand = None
+    if not args.no_verify or args.picture or args.html:
+        try:
+            hand = resolve_hand(recording.hand)
+        except RecordFileError as exc:
+            fail(f"FILE: {args.file}: {exc}")
     if not args.no_verify:
         from eos_svc.errors import ValidationError
 
         try:
-            verification = verify(recording)
+            verification = verify(recording, hand)
         except ValidationError as exc:
             fail(f"FILE: the recorded request is not valid here: {exc}")
-        except RecordFileError as exc:
-            fail(f"FILE: {args.file}: {exc}")
         for line in describe(verification, recording):
             print(line)
         code = 0 if verification.identical else 1
@@ -156,23 +148,11 @@ def run(args: argparse.Namespace) -> int:
 
         if final is None or final.get("q_final") is None:
             fail("--picture: no final hand configuration in the recording (the end agent never acted)")
-        try:
-            hand = resolve_hand(recording.hand)
-        except RecordFileError as exc:
-            fail(f"FILE: {args.file}: {exc}")
         draw_result(final, args.picture, hand=hand)
         print(f"picture: {args.picture}")
-    if getattr(args, "html", None):  # --html FILE: the recorded plan in 3-D
+    if args.html:  # the recorded plan in 3-D
         from eos_svc.cli.view import write_recording_html
 
-        try:
-            hand = resolve_hand(recording.hand)
-        except RecordFileError as exc:
-            fail(f"FILE: {args.file}: {exc}")
         write_recording_html(args.html, recording, final, hand)
         print(f"html: {args.html}")
     return code
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(run(argparse.Namespace()))

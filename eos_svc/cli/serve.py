@@ -12,6 +12,7 @@ import logging
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -113,6 +114,13 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="largest request accepted (default 65536)",
     )
     s.add_argument(
+        "--max-deadline",
+        type=positive_float,
+        default=600.0,
+        metavar="S",
+        help="deadline of a plan whose request gives none or a longer one (s; default 600, at most 3600)",
+    )
+    s.add_argument(
         "--planner",
         choices=("grasp", "root"),
         default="grasp",
@@ -126,6 +134,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="S",
         help="sleep S seconds in every cycle (testing cancellation and failover)",
     )
+    s.add_argument(
+        "--hand",
+        action="append",
+        default=[],
+        metavar="FILE",
+        help="register a hand description file (repeatable); requests name a hand by its "
+        "name (field hand), any registered one (eos hands) or these",
+    )
+    s.add_argument(
+        "--agent",
+        action="append",
+        default=[],
+        metavar="SPEC",
+        help="offer a plug-in agent, repeatable: NAME=module:attr, module:attr or an eos_svc.agents "
+        "entry point; requests name it in their 'agents' field (grasp planner only)",
+    )
     s.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default="info")
 
 
@@ -137,7 +161,7 @@ def run(args: argparse.Namespace) -> int:
     conf = session_config(args, serving=True)
     from eos_svc.service import protocol as proto
     from eos_svc.service.demo_planner import root_plan, slowed
-    from eos_svc.service.server import PlanService, default_admission, default_planner
+    from eos_svc.service.server import PlanService
 
     try:
         if args.namespace is not None:
@@ -146,7 +170,36 @@ def run(args: argparse.Namespace) -> int:
             proto.check_id(args.instance, "instance")
     except ValidationError as exc:
         fail(f"--{exc.field}: {exc.reason}")
-    planner = root_plan if args.planner == "root" else default_planner()
+    if args.max_deadline > 3600:
+        fail(f"--max-deadline: must be at most 3600 s, got {args.max_deadline:g}")
+    admission = None
+    served = ""
+    planner: Callable[..., Any]
+    if args.planner == "grasp":
+        from eos_svc.service.hands import ServedHands
+        from eos_svc.shape import kernels
+
+        try:
+            hands = ServedHands(args.hand)
+        except ValidationError as exc:
+            fail(f"--hand: {exc.field}: {exc.reason}")
+        planner, admission = hands.plan, hands.admit
+        kernels.load_in_background()  # the shape fit's compiled kernels (as for the default planner)
+        served = f"; hands {', '.join(hands.names)}"
+    else:
+        if args.hand:
+            fail("--hand: only the grasp planner has hands (--planner grasp)")
+        planner = root_plan
+    plugins: dict[str, Any] = {}
+    if args.agent:
+        if args.planner != "grasp":
+            fail("--agent: plug-in agents join the grasp planner only (--planner grasp)")
+        from eos_svc.service.plugins import offered_plugins
+
+        try:
+            plugins = offered_plugins(args.agent)
+        except ValidationError as exc:
+            fail(f"{exc.field}: {exc.reason}")
     if args.cycle_delay is not None:
         planner = slowed(planner, args.cycle_delay)
     sys.setswitchinterval(0.001)  # hand the GIL to Zenoh's callback threads sooner while a plan runs
@@ -162,13 +215,17 @@ def run(args: argparse.Namespace) -> int:
             workers=args.workers,
             queue_size=args.queue,
             max_request_bytes=args.max_request_bytes,
-            admission=default_admission() if args.planner == "grasp" else None,
+            max_deadline_s=args.max_deadline,
+            admission=admission,
+            plugins=plugins,
         )
     except Exception as exc:  # zenoh.ZError: cannot listen/connect, bad config
         fail(f"cannot start the Zenoh session: {exc}", code=1)
     print(
         f"eos serve: instance {service.instance} serving under {service.prefix} "
-        f"({args.workers} worker(s), queue {args.queue}); Ctrl-C to stop",
+        f"({args.workers} worker(s), queue {args.queue}{served})"
+        + (f"; plug-ins offered: {', '.join(plugins)}" if plugins else "")
+        + "; Ctrl-C to stop",
         flush=True,
     )
     try:

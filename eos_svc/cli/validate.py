@@ -4,9 +4,11 @@ eos plan --json > result.json && eos validate result.json
 eos plan --record run.jsonl && eos validate run.jsonl
 eos validate result.json --json            # the result with a "validation" entry, as JSON
 eos validate result.json --mass 0.2 --seconds 3
+eos plan --hand trifinger --json > r.json && eos validate r.json --hand trifinger
 
 FILE is what ``eos plan --json`` prints (one JSON object) or an ``eos plan --record`` file
-(its result line is validated). Exit status: 0 held, 1 dropped, 2 bad file or bad field.
+(its result line is validated, with the hand its header names unless ``--hand`` is given).
+Exit status: 0 held, 1 dropped, 2 bad file or bad field.
 ``eos plan --validate`` runs the same check right after planning.
 """
 
@@ -36,10 +38,18 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--directions", type=int_at_least(1), default=6, help="how many of +x -x +y -y +z -z (6)"
     )
     parser.add_argument("--json", action="store_true", help="print the result with its validation as JSON")
+    parser.add_argument(
+        "--hand",
+        default=None,
+        metavar="NAME|FILE",
+        help="the hand that planned it: a registered name (eos hands) or a description file "
+        "(a record file's own hand, else hand3x3)",
+    )
 
 
-def read_result(path: str) -> dict[str, Any]:
-    """The plan result in ``path``: a JSON object, or the result line of a record file.
+def read_result(path: str) -> tuple[dict[str, Any], str | None]:
+    """The plan result in ``path`` (a JSON object, or the result line of a record file) and the
+    hand a record file names (None for a plain result).
 
     Exits with status 2 and a message naming the problem when the file is unusable.
     """
@@ -54,7 +64,7 @@ def read_result(path: str) -> dict[str, Any]:
     except json.JSONDecodeError:
         data = None  # not one JSON document: a record file (JSON lines)?
     if isinstance(data, dict) and MARK not in data:
-        return data
+        return data, None
     if data is not None and not isinstance(data, dict):
         fail(f"FILE: {path!r} holds a JSON {type(data).__name__}, not a plan result object")
     try:
@@ -65,9 +75,7 @@ def read_result(path: str) -> dict[str, Any]:
     if recording.result is None:
         fail(f"FILE: {path!r} has no result line (the recorded run was interrupted)")
     assert recording.result is not None
-    if recording.hand != "hand3x3":
-        fail(f"FILE: the record's hand is {recording.hand!r}; the Drake validation models hand3x3 only")
-    return recording.result
+    return recording.result, recording.hand
 
 
 def format_validation(validation: dict[str, Any]) -> str:
@@ -105,8 +113,14 @@ def validate_or_fail(result: Any, **options: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> int:
-    result = read_result(args.file)
-    check = validate_or_fail(result, seconds=args.seconds, mass=args.mass, directions=args.directions)
+    from eos_svc.cli.hands import DEFAULT_HAND, load_or_fail
+
+    result, recorded_hand = read_result(args.file)
+    name = args.hand or recorded_hand or DEFAULT_HAND
+    hand = None if name == DEFAULT_HAND else load_or_fail(name)
+    check = validate_or_fail(
+        result, seconds=args.seconds, mass=args.mass, directions=args.directions, hand=hand
+    )
     if args.json:
         print(json.dumps({**result, "validation": check.to_dict()}, allow_nan=False))
     else:

@@ -14,7 +14,7 @@ import time
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from eos_svc.cli.common import fail, finite_float, positive_float
+from eos_svc.cli.common import fail, non_negative_float, positive_float
 
 
 def add_html_argument(group: argparse._ArgumentGroup | argparse.ArgumentParser) -> None:
@@ -51,36 +51,20 @@ def add_view_arguments(group: argparse._ArgumentGroup, waits: bool = True) -> No
         )
 
 
-def non_negative_float(text: str) -> float:
-    """argparse type: a finite float ≥ 0."""
-    value = finite_float(text)
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"must be ≥ 0, got {text!r}")
-    return value
-
-
-def _check_port(port: int | None) -> None:
-    if port is not None and not 1024 <= port <= 65535:
-        fail(f"--view-port: must be a port in [1024, 65535] (MeshCat refuses privileged ports), got {port}")
-
-
-def _check_needs_view(args: argparse.Namespace) -> None:
-    """``--view-port``/``--view-wait``/``--view-hold`` without ``--view`` are mistakes: say so."""
-    for name in ("view_port", "view_wait", "view_hold"):
-        if getattr(args, name, None) is not None:
-            fail(f"--{name.replace('_', '-')}: needs --view")
-
-
 def open_view(args: argparse.Namespace, hand: Any = None) -> Any:
     """The :class:`~eos_svc.view.live.LiveView` ``--view`` asks for (its URL printed), or None."""
     if not getattr(args, "view", False):
-        _check_needs_view(args)
+        for name in ("view_port", "view_wait", "view_hold"):  # a view option without --view
+            if getattr(args, name, None) is not None:
+                fail(f"--{name.replace('_', '-')}: needs --view")
         return None
-    _check_port(args.view_port)
+    port = args.view_port
+    if port is not None and not 1024 <= port <= 65535:
+        fail(f"--view-port: must be a port in [1024, 65535] (MeshCat refuses privileged ports), got {port}")
     from eos_svc.view.live import LiveView
 
     try:
-        view = LiveView(hand=hand, port=args.view_port)
+        view = LiveView(hand=hand, port=port)
     except RuntimeError as exc:  # Drake: the port is taken
         fail(f"--view-port: cannot serve the view: {exc}")
     print(f"view: {view.url}", file=sys.stderr, flush=True)
@@ -134,9 +118,7 @@ def with_view(on_cycle: Callable[[Any], None], view: Any) -> Callable[[Any], Non
 
 def hold_view(view: Any, seconds: float | None) -> None:
     """Keep serving the view ``seconds`` (None: until Ctrl-C)."""
-    if view is None:
-        return
-    if seconds is not None and seconds <= 0:
+    if view is None or (seconds is not None and seconds <= 0):
         return
     what = "until Ctrl-C" if seconds is None else f"for {seconds:g} s"
     print(f"view: {view.url} — serving {what}", file=sys.stderr, flush=True)

@@ -57,7 +57,12 @@ def grasp_geometry(world: GraspWorld, friction: float) -> dict[str, Any]:
         angle = math.degrees(math.acos(max(-1.0, min(1.0, cos))))
         about = angle >= GOOD_GRASP_ANGLE_DEG
     quality = contacts_quality(
-        contacts, world.obj.placement.translation, 0.5 * world.obj.diameter, friction, DEFAULT_EDGES
+        contacts,
+        world.obj.placement.translation,
+        0.5 * world.obj.diameter,
+        friction,
+        DEFAULT_EDGES,
+        world.params.contact_patch_radius,
     )
     return {
         "contacts": contacts,

@@ -21,6 +21,7 @@ import numpy as np
 
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.protocol import FingerStep, JointState, TactileReading, Touch, WristMove
+from eos_svc.kinematics.hand import HandState
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
 
 if TYPE_CHECKING:
@@ -36,10 +37,11 @@ if TYPE_CHECKING:
 class KinematicDriver:
     """The driver of a :class:`~eos_svc.world.world.GraspWorld` (see the module docstring)."""
 
-    __slots__ = ("_world",)
+    __slots__ = ("_scratch", "_world")
 
     def __init__(self, world: GraspWorld) -> None:
         self._world = world
+        self._scratch: HandState | None = None  # EP1's placements reuse one state of the hand
 
     # --- what the hand is ------------------------------------------------------------------------
     @property
@@ -78,6 +80,25 @@ class KinematicDriver:
         return float(self._world.sensor.noise_std)
 
     # --- joint state and clock -------------------------------------------------------------------
+    @property
+    def table_height(self) -> float | None:
+        """The table's height (m), ``None`` without one."""
+        return self._world.table_height
+
+    @property
+    def kinematic_sigma(self) -> float:
+        """The joint encoders' fingertip position uncertainty, m."""
+        return float(self._world.encoders.position_sigma)
+
+    @property
+    def probes(self) -> int:
+        """Guarded probes run so far."""
+        return self._world.probes
+
+    def probe_finger(self, face: str) -> str:
+        """The finger that explores ``face`` (:meth:`GraspWorld.probe_finger`)."""
+        return self._world.probe_finger(face)
+
     def joint_state(self) -> JointState:
         """The configuration and the clock (always 0 s: no dynamics)."""
         return JointState(tuple(self._world.q_list()), self.clock())
@@ -141,7 +162,7 @@ class KinematicDriver:
         state = world.state
         contact = world.scene.contact(state, finger)
         reading = world.sensor.read(state, contact)
-        tip = state.data.oMf[world.hand.tip_frame_id(finger)]
+        tip = world.encoders.tip_frame(state, finger)  # as the joint encoders report it
         return TactileReading(
             finger=finger,
             in_contact=bool(reading.in_contact),
@@ -197,7 +218,9 @@ class KinematicDriver:
 
     def place_tip_on(self, finger: str, q: np.ndarray, point: np.ndarray) -> None:
         """EP1's start (:func:`eos_svc.kinematics.ep1.place_hand_for_ep1`)."""
-        self._world.set_q(place_hand_for_ep1(self._world.scene, finger, q=q, point=point))
+        if self._scratch is None:  # a state of the world's hand reused by every placement
+            self._scratch = self._world.hand.state()
+        self._world.set_q(place_hand_for_ep1(self._world.scene, finger, q=q, point=point, scratch=self._scratch))
 
     def roll(
         self,

@@ -149,6 +149,25 @@ class HandDriver(Protocol):
         ...
 
     @property
+    def table_height(self) -> float | None:
+        """The height of the table the object rests on (m), ``None`` without one."""
+        ...
+
+    @property
+    def kinematic_sigma(self) -> float:
+        """The joint sensing's fingertip position uncertainty (m; 0 for exact kinematics)."""
+        ...
+
+    @property
+    def probes(self) -> int:
+        """Guarded probes run so far (EP2's straight moves, touched or not)."""
+        ...
+
+    def probe_finger(self, face: str) -> str:
+        """The finger that explores ``face`` ("top", "bottom", "front" or "side")."""
+        ...
+
+    @property
     def params(self) -> WorldParameters:
         """The planner's constants for this hand."""
         ...

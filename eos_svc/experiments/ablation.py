@@ -11,7 +11,6 @@
 
 from __future__ import annotations
 
-import argparse
 from collections import Counter
 from collections.abc import Sequence
 from pathlib import Path
@@ -20,6 +19,7 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import PlanRequest
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -132,22 +132,13 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
-    parser = experiment_parser("ablation", __doc__, "results/ablation")
-    parser.add_argument("--seeds", type=int, default=20, help="seeds per condition (20)")
-    parser.add_argument("--sweep-points", type=int, default=11, help="default weights in the sweep (11)")
-    return parser
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment ablation [options]``."""
-    args = build_parser().parse_args(argv)
+    parser = experiment_parser("ablation", __doc__, "results/ablation")
+    parser.add_argument("--seeds", type=int_at_least(1), default=20, help="seeds per condition (20)")
+    parser.add_argument("--sweep-points", type=int_at_least(1), default=11, help="weights in the sweep (11)")
+    args = parser.parse_args(argv)
     data = run(args.seeds, args.sweep_points, args.out)
     print(report(data))
     print(f"wrote {args.out}/ablation.json, ablation_sweep.csv, ablation.png")
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

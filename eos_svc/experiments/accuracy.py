@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from eos_svc.cli.common import fraction, int_at_least, non_negative_float
 from eos_svc.kinematics.ep1 import (
     ep1_scene,
     ground_truth_form,
@@ -151,10 +152,6 @@ def run_noisy(
     return rows
 
 
-def _fmt(x: float) -> str:
-    return f"{x:8.3f}"
-
-
 def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise_std: float = 2e-4) -> str:
     """The two Markdown tables."""
     out = [
@@ -172,14 +169,14 @@ def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise
             else f"{r.curvature_error:.3g} 1/m"
         )
         out.append(
-            f"| {r.case} | {_fmt(r.k_est[0])} | {_fmt(r.k_est[1])} | {_fmt(r.k_true[0])} | "
-            f"{_fmt(r.k_true[1])} | {rerr} | {cerr} | {'yes' if r.flat else 'no'} | "
+            f"| {r.case} | {r.k_est[0]:8.3f} | {r.k_est[1]:8.3f} | {r.k_true[0]:8.3f} | "
+            f"{r.k_true[1]:8.3f} | {rerr} | {cerr} | {'yes' if r.flat else 'no'} | "
             f"{r.max_slip:.1e} | {r.max_gap:.1e} | {'PASS' if r.ok else 'FAIL'} |"
         )
     if noisy:
         out += [
             "",
-            f"With tactile noise (sigma = 0.2 mm), EP1 repeated until rating >= target; "
+            f"With tactile noise (sigma = {noise_std * 1000:g} mm), EP1 repeated until rating >= target; "
             f"{noisy[0].seeds} seeds per sphere",
             "",
             "| R | median radius err | max radius err | median EP1 runs | median steps "
@@ -214,16 +211,14 @@ def run(
 def main(argv: Sequence[str] | None = None) -> int:
     """Print the accuracy tables; exit code 0 when every goal is met, 1 otherwise."""
     p = argparse.ArgumentParser(prog="eos experiment accuracy", description=__doc__.split("\n")[0])
-    p.add_argument("--seeds", type=int, default=8, help="seeds per sphere in the noisy part")
-    p.add_argument("--noise", type=float, default=2e-4, help="tactile noise sigma, m")
+    p.add_argument("--seeds", type=int_at_least(1), default=8, help="seeds per sphere in the noisy part")
+    p.add_argument("--noise", type=non_negative_float, default=2e-4, help="tactile noise sigma, m")
     p.add_argument(
-        "--target-rating", type=float, default=0.95, help="repeat EP1 until its rating reaches this"
+        "--target-rating", type=fraction, default=0.95, help="repeat EP1 until its rating reaches this"
     )
     p.add_argument("--no-noise", action="store_true", help="only the noise-free table")
     p.add_argument("--json", action="store_true", help="print JSON")
     a = p.parse_args(argv)
-    if a.seeds < 1 or not (math.isfinite(a.noise) and a.noise >= 0) or not (0 <= a.target_rating <= 1):
-        p.error("--seeds must be >= 1, --noise finite >= 0, --target-rating in [0, 1]")
     out = run(a.seeds, a.noise, a.target_rating, noisy=not a.no_noise)
     if a.json:
         print(json.dumps(out, default=float))

@@ -13,6 +13,15 @@ good grasps are held ≥ 98 %).
     eos experiment grasps --random 40 --draw-seed 3 [--sizes 0.15 0.5] [--no-validate]
                                                # a random draw: any class, size, pose
     eos experiment grasps --world drake        # plans in the Drake world: held = its lift test
+    eos experiment grasps --hand trifinger     # another hand (eos hands) or a description file:
+                                               # the same objects; those it cannot span are refused
+    eos experiment grasps --objects pybullet-random --ids 500-539 --table --seeds 1
+                                               # pybullet's random meshes, resting on a table
+    eos experiment grasps --objects pybullet-named --table --seeds 3   # the mug, duck and teddy
+
+The pybullet objects (``pip install 'eos_svc[objects]'``) are read from the installed package
+and scaled and placed as :mod:`eos_svc.experiments.pybullet_objects` says; ``--table`` puts
+the table under them (without it they float where they would rest).
 
 In the Drake world (:mod:`eos_svc.drivers.drake_world`) every plan runs against the simulated
 object on its table and ends with the lift test; ``held`` is that test's verdict (no separate
@@ -22,6 +31,7 @@ validation), and each run also records how far the object moved (mm) and the rea
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 import time
 from collections.abc import Sequence
@@ -33,6 +43,7 @@ import numpy as np
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
 from eos_svc.drivers.worlds import WORLDS
+from eos_svc.cli.hands import add_hand_argument, chosen_hand
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
@@ -43,28 +54,69 @@ from eos_svc.experiments.grasp_suite import (
     quick_suite,
     random_draw,
 )
+from eos_svc.experiments.pybullet_objects import WorldObject, named_objects, parse_ids, random_objects
+from eos_svc.experiments.recognition import surface_error
+from eos_svc.kinematics import HandModel
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.schema.result import PlanResult
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
+from eos_svc.world.hand_context import HandContext
+from eos_svc.world.parameters import WorldParameters
 
 #: the goal: share of good grasps Drake finds held
 HELD_GOAL = 0.98
+#: the goal: share of the admitted objects (those that fit between the fingertips along some
+#: axis, :func:`~eos_svc.world.fingertip_fit.fit_refusal`) that end in a good grasp
+GOOD_GOAL = 0.95
+#: the postulate's confidence the grasp stage needs (the world's default threshold, 60 %)
+CONFIDENCE_RULE = WorldParameters().confidence_threshold
 #: a Drake-world plan's wall-clock budget, s (the simulation runs at about real time)
 DRAKE_DEADLINE_S = 600.0
+#: words in a size refusal (admission's fit rule) that tell it from a position refusal
+TOO_LARGE = "fits between the fingertips along no axis"
+
+
+def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
+    """What the plan knew of the object: the postulated class, whether it is right, its
+    confidence, the shape error (:func:`~eos_svc.experiments.recognition.surface_error`: RMS
+    distance of the true surface to the postulated one over the true half extent), and the
+    touches and probes it took."""
+    shape = result.shape or {}
+    guess = shape.get("class", "none")
+    error = surface_error(spec, shape.get("object"), np.random.default_rng(result.seed))
+    return {
+        "postulate": guess,
+        "class_right": guess == spec.shape,
+        "confidence": float(shape.get("confidence", 0.0)),
+        "shape_error": error if math.isfinite(error) else None,
+        "touches": result.touches,
+        "probes": result.probes,
+        "grasped_unsure": "grasping" in result.cycles_per_stage
+        and float(shape.get("confidence", 0.0)) < CONFIDENCE_RULE,
+    }
 
 
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject, seed: int, validation: dict[str, Any] | None, world: str = "kinematic"
+    obj: SuiteObject | DrawnObject | WorldObject,
+    seed: int,
+    validation: dict[str, Any] | None,
+    context: HandContext | None = None,
+    options: dict[str, Any] | None = None,
+    world: str = "kinematic",
 ) -> dict[str, Any]:
-    """One run: plan the object with ``seed``, validate the final grasp (unless ``validation``
-    is None: then ``held`` is None); a flat row. In the Drake world ``held`` is the plan's own
-    lift test."""
+    """One run: plan the object with ``seed`` (with the hand of ``context``, default hand3x3, and
+    the request ``options``, e.g. ``tactile_noise``), validate the final grasp with that hand
+    (unless ``validation`` is None: then ``held`` is None); a flat row. In the Drake world
+    (``world="drake"``) ``held`` is the plan's own lift test."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
-        if world == "drake":
-            request = PlanRequest(obj=obj.spec, seed=seed, deadline_s=DRAKE_DEADLINE_S)
-            result = plan(request, keep_trace=False, world="drake")
-        else:
-            result = plan(PlanRequest(obj=obj.spec, seed=seed), keep_trace=False)
+        drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
+        result = plan(
+            PlanRequest(obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})),
+            keep_trace=False,
+            context=context,
+        )
     except ValidationError as exc:  # the planner refuses the request: not a run
         return {
             **row,
@@ -74,6 +126,7 @@ def plan_and_validate(
             "good_grasp": None,
             "held": None,
         }
+    row.update(recognition(obj.spec, result))
     if result.world is not None:
         lift = result.world.get("lift") or {}
         return {
@@ -99,7 +152,8 @@ def plan_and_validate(
             "plan_time_s": result.wall_time_s,
         }
     try:
-        check = validate_grasp(result, **validation)
+        hand = None if context is None else context.hand
+        check = validate_grasp(result, **validation, hand=hand)
     except SimulationError as exc:  # counted as not held, and said so
         return {
             **row,
@@ -136,7 +190,7 @@ def _rate(values: list[bool | None]) -> float | None:
 
 
 def summarise(
-    objects: Sequence[SuiteObject | DrawnObject], runs: list[dict[str, Any]]
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject], runs: list[dict[str, Any]]
 ) -> tuple[list[dict], dict]:
     """Per-object rows and the totals: confusion counts of good_grasp against held (when the
     runs were validated), refusals counted by the field admission named, and every admitted run
@@ -162,9 +216,11 @@ def summarise(
         )
     done = [r for r in runs if r["status"] != "rejected"]
     refused: dict[str, int] = {}
+    refused_why = {"too large": 0, "position": 0}
     for r in runs:
         if r["status"] == "rejected":
             refused[r["refused_field"]] = refused.get(r["refused_field"], 0) + 1
+            refused_why["too large" if TOO_LARGE in r["reason"] else "position"] += 1
     failures = [
         {"object": r["object"], "seed": r["seed"], "status": r["status"], "reason": r["reason"]}
         for r in done
@@ -184,6 +240,9 @@ def summarise(
         "runs": len(done),
         "rejected": len(runs) - len(done),
         "refused_by_field": refused,
+        "refused_by_reason": refused_why,
+        "good_goal": GOOD_GOAL,
+        "good_goal_met": (_rate([r["good_grasp"] for r in done]) or 0.0) >= GOOD_GOAL if done else None,
         "validated": len(validated),
         "confusion": confusion,
         "success_rate": _rate([r["status"] == "success" for r in done]),
@@ -197,6 +256,7 @@ def summarise(
         if validated
         else None,
         "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
+        **recognition_totals(done),
         "median_validation_time_s": float(np.median(timed)) if timed else None,
         "median_object_moved_mm": float(np.median(moved)) if moved else None,
         "failures": failures,
@@ -204,20 +264,43 @@ def summarise(
     return rows, totals
 
 
+def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
+    """Over the admitted runs: class right, the shape error's median and 90th percentile,
+    wrong classes held with confidence ≥ 0.9, and the touches and probes per plan (medians, max)."""
+    if not done:
+        return {}
+    errors = [r["shape_error"] for r in done if r["shape_error"] is not None]
+    return {
+        "class_right_rate": _rate([r["class_right"] for r in done]),
+        "shape_error_median": float(np.median(errors)) if errors else None,
+        "shape_error_p90": float(np.percentile(errors, 90)) if errors else None,
+        "confident_wrong": sum(not r["class_right"] and r["confidence"] >= 0.9 for r in done),
+        "grasped_unsure": sum(r["grasped_unsure"] for r in done),
+        "touches_median": float(np.median([r["touches"] for r in done])),
+        "touches_max": max(r["touches"] for r in done),
+        "probes_median": float(np.median([r["probes"] for r in done])),
+        "probes_max": max(r["probes"] for r in done),
+    }
+
+
 def run(
-    objects: Sequence[SuiteObject | DrawnObject] | None = None,
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject] | None = None,
     seeds: int = 5,
     out: Path = Path("results/grasps"),
     name: str = "grasps",
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
     validate: bool = True,
+    hand: HandModel | None = None,
+    options: dict[str, Any] | None = None,
     world: str = "kinematic",
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
-    drawn object once, with its own seed; write ``name``.json, .csv, ``name``_runs.csv and
-    ``name``.png into ``out``."""
+    drawn object once, with its own seed — with the request ``options`` (e.g. ``tactile_noise``);
+    write ``name``.json, .csv, ``name``_runs.csv and ``name``.png into ``out``. ``hand``: plan
+    and validate with this hand (default hand3x3)."""
     objects = list(fixed_suite() if objects is None else objects)
+    context = None if hand is None else HandContext.build(hand)
     checks = dict(validation or {}) if validate else None
     jobs = [
         (obj, seed)
@@ -227,7 +310,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks, world))
+        runs.append(plan_and_validate(obj, seed, checks, context, options, world))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -243,7 +326,9 @@ def run(
     rows, totals = summarise(objects, runs)
     data = {
         "suite": name,
+        "hand": "hand3x3" if hand is None else getattr(hand, "name", str(hand)),
         "seeds": seeds,
+        "options": dict(options or {}),
         "validation": checks,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
         "rows": rows,
@@ -298,9 +383,11 @@ def report(data: dict) -> str:
     t = data["totals"]
     c = t["confusion"]
     refused = ", ".join(f"{field} {n}" for field, n in sorted(t["refused_by_field"].items())) or "none"
+    why = ", ".join(f"{k} {n}" for k, n in t["refused_by_reason"].items())
     lines.append(
-        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}); "
-        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])}, "
+        f"runs {t['runs']} (refused by admission: {t['rejected']}: {refused}; {why}); "
+        f"success {_pct(t['success_rate'])}, good grasps {_pct(t['good_grasp_rate'])} of the admitted "
+        f"(goal {GOOD_GOAL:.0%}, met: {t['good_goal_met']}), "
         f"success without a good grasp: {t['success_without_good_grasp']}"
     )
     if t["validated"]:
@@ -322,6 +409,15 @@ def report(data: dict) -> str:
         lines.append(f"median object displacement in the Drake world: {t['median_object_moved_mm']:.1f} mm")
     if t["runs"]:
         lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
+        p90 = t["shape_error_p90"]
+        lines.append(
+            f"recognition: class right {_pct(t['class_right_rate'])}, shape error p90 "
+            f"{'-' if p90 is None else f'{p90:.1%}'}, "
+            f"wrong class at confidence >= 0.9: {t['confident_wrong']}, "
+            f"grasping entered below the {CONFIDENCE_RULE:.0%} rule: {t['grasped_unsure']}; "
+            f"per plan: touches median {t['touches_median']:.0f} (max {t['touches_max']}), "
+            f"probes median {t['probes_median']:.0f} (max {t['probes_max']})"
+        )
     if t["failures"]:
         lines.append(f"not a good grasp ({len(t['failures'])}):")
         lines += [f"  {f['object']} seed {f['seed']}: {f['status']} — {f['reason']}" for f in t["failures"]]
@@ -363,7 +459,36 @@ def build_parser() -> argparse.ArgumentParser:
         metavar=("LO", "HI"),
         help="the random draw's widths as fractions of the hand's span (0.15 0.5)",
     )
+    parser.add_argument(
+        "--objects",
+        choices=("pybullet-random", "pybullet-named"),
+        help="pybullet's meshes instead: its random objects (--ids) or the mug, duck and teddy",
+    )
+    parser.add_argument("--ids", default="0-9", help="the random objects' ids, A-B (0-9)")
+    parser.add_argument("--table", action="store_true", help="the pybullet objects rest on a table")
     parser.add_argument("--no-validate", action="store_true", help="plan only: no Drake validation")
+    add_hand_argument(parser)
+    parser.add_argument(
+        "--noise",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the requests' tactile noise (standard deviation, m; default 0.0002)",
+    )
+    parser.add_argument(
+        "--encoder-noise",
+        type=float,
+        default=None,
+        metavar="RAD",
+        help="the simulated hand's joint-encoder noise (standard deviation, rad; default 0)",
+    )
+    parser.add_argument(
+        "--link-error",
+        type=float,
+        default=None,
+        metavar="M",
+        help="the simulated hand's link-length calibration error (standard deviation, m; default 0)",
+    )
     parser.add_argument(
         "--world",
         choices=WORLDS,
@@ -376,6 +501,23 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _pybullet(which: str, ids: str, table: bool) -> tuple[list[WorldObject], str]:
+    """The pybullet objects asked for (on their table, or floating without ``table``)."""
+    if which == "pybullet-named":
+        objects, name = named_objects(), "grasps_pybullet_named"
+    else:
+        span = parse_ids(ids)
+        objects, left = random_objects(span)
+        name = f"grasps_pybullet_{span.start}_{span.stop - 1}"
+        print(
+            f"pybullet random objects {ids}: {len(objects)} the hand can span, left out {left}",
+            file=sys.stderr,
+        )
+    if not table:
+        return [o._replace(table=None) for o in objects], name
+    return objects, name + "_table"
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment grasps [options]``."""
     parser = build_parser()
@@ -386,8 +528,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     if lo > hi:
         parser.error(f"argument --sizes: LO must be ≤ HI, got {lo:g} {hi:g}")
     seeds = args.seeds or (2 if args.quick else 5)
-    objects: Sequence[SuiteObject | DrawnObject]
-    if args.random is not None:
+    objects: Sequence[SuiteObject | DrawnObject | WorldObject]
+    if args.objects is not None:
+        try:
+            objects, name = _pybullet(args.objects, args.ids, args.table)
+        except ValidationError as exc:
+            parser.error(f"argument --{exc.field}: {exc.reason}")
+    elif args.random is not None:
         objects, name = random_draw(args.random, args.draw_seed, (lo, hi)), "grasps_random"
         print(
             f"random draw: {args.random} objects, draw seed {args.draw_seed}, "
@@ -398,11 +545,31 @@ def main(argv: Sequence[str] | None = None) -> int:
         objects, name = held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
         objects, name = (quick_suite() if args.quick else fixed_suite()), "grasps"
+    hand = chosen_hand(args)
+    if hand is not None:
+        name = f"{name}_{hand.name}"
+    options: dict[str, Any] = {}
+    flags = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error"}
+    for key, flag in flags.items():
+        value = getattr(args, flag[2:].replace("-", "_"))
+        if value is not None:
+            options[key] = value
+    try:  # the request checks every option, naming the field
+        PlanRequest(**options)
+    except ValidationError as exc:
+        parser.error(f"argument {flags[exc.field]}: {exc.reason}")
     if args.world == "drake":
         name += "_drake"
-    validation = {"seconds": args.seconds}
     data = run(
-        objects, seeds, args.out, name, validation=validation, validate=not args.no_validate, world=args.world
+        objects,
+        seeds,
+        args.out,
+        name,
+        validation={"seconds": args.seconds},
+        validate=not args.no_validate,
+        hand=hand,
+        options=options,
+        world=args.world,
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")

@@ -11,18 +11,25 @@ repeats are compared.
 
 from __future__ import annotations
 
-import argparse
 import math
-import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from eos_svc.agents import ObjectSpec, PlanRequest, plan
+from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.memory import GraspMemory
-from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
+from eos_svc.cli.common import int_at_least
+from eos_svc.experiments.common import (
+    experiment_parser,
+    pyplot,
+    run_plans,
+    save_figure,
+    write_csv,
+    write_json,
+)
 from eos_svc.ratings import Weights
 
 ACROSS = (math.pi / 2, 0.0, 0.0)
@@ -52,30 +59,23 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     for suffix in ("", "-wal", "-shm"):
         Path(str(db) + suffix).unlink(missing_ok=True)
     memory = GraspMemory(db)
-    seen: set[str] = set()
-    rows: list[dict[str, Any]] = []
     names = stream(repeats, seed)
-    for i, name in enumerate(names):
-        request_seed = seed * 1000 + i
-        base = plan(PlanRequest(obj=OBJECTS[name], seed=request_seed, weights=WITHOUT), keep_trace=True)
-        learned = plan(PlanRequest(obj=OBJECTS[name], seed=request_seed, weights=WITH), memory=memory)
-        rows.append(
-            {
-                "index": i,
-                "object": name,
-                "repeat": name in seen,
-                "grasp_cycles_without": base.cycles_per_stage.get("grasping", 0),
-                "grasp_cycles_with": learned.cycles_per_stage.get("grasping", 0),
-                "status_without": base.status,
-                "status_with": learned.status,
-                "recalled": "recall" in learned.agents_run(),
-            }
-        )
-        seen.add(name)
-        if not quiet:
-            print(f"\rlearning stream: {i + 1}/{len(names)}   ", end="", flush=True, file=sys.stderr)
-    if not quiet:
-        print(file=sys.stderr)
+    requests = [PlanRequest(obj=OBJECTS[name], seed=seed * 1000 + i) for i, name in enumerate(names)]
+    base = run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
+    learned = run_plans([replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory)
+    rows: list[dict[str, Any]] = [
+        {
+            "index": i,
+            "object": name,
+            "repeat": name in names[:i],
+            "grasp_cycles_without": without.cycles_per_stage.get("grasping", 0),
+            "grasp_cycles_with": with_.cycles_per_stage.get("grasping", 0),
+            "status_without": without.status,
+            "status_with": with_.status,
+            "recalled": "recall" in with_.agents_run(),
+        }
+        for i, (name, without, with_) in enumerate(zip(names, base, learned, strict=True))
+    ]
     memory.close()
 
     def mean(key: str, repeat: bool) -> float:
@@ -132,22 +132,13 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
-    parser = experiment_parser("learning", __doc__, "results/learning")
-    parser.add_argument("--repeats", type=int, default=3, help="times each object appears (3)")
-    parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
-    return parser
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment learning [options]``."""
-    args = build_parser().parse_args(argv)
+    parser = experiment_parser("learning", __doc__, "results/learning")
+    parser.add_argument("--repeats", type=int_at_least(1), default=3, help="times each object appears (3)")
+    parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
+    args = parser.parse_args(argv)
     data = run(args.repeats, args.seed, args.out)
     print(report(data))
     print(f"wrote {args.out}/learning.json, learning.csv, learning.png, memory.sqlite")
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -9,7 +9,6 @@ good-grasp rate (contacts about the diameter) is reported beside it.
 
 from __future__ import annotations
 
-import argparse
 from collections.abc import Sequence
 from itertools import pairwise
 from pathlib import Path
@@ -17,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from eos_svc.agents.planner import ratio_sphere_request
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -69,11 +69,9 @@ def run(
             }
         )
     valid = [(row["ratio"], row["mean_grasp_cycles"]) for row in rows if row["mean_grasp_cycles"] is not None]
-    xs = np.array([x for x, _ in valid], dtype=float)
-    ys = np.array([y for _, y in valid], dtype=float)
+    xs, ys = np.array(valid, dtype=float).reshape(-1, 2).T
     slope = float(np.polyfit(xs, ys, 1)[0]) if len(valid) >= 2 else None
-    means = [m for _, m in valid]
-    falling = all(b <= a for a, b in pairwise(means)) if means else False
+    falling = all(b <= a for (_, a), (_, b) in pairwise(valid)) if valid else False
     data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
     write_json(out / "ratio.json", data)
     write_csv(out / "ratio.csv", rows)
@@ -133,22 +131,13 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
-    parser = experiment_parser("ratio", __doc__, "results/ratio")
-    parser.add_argument("--seeds", type=int, default=10, help="seeds per ratio (10)")
-    parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
-    return parser
-
-
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment ratio [options]``."""
-    args = build_parser().parse_args(argv)
+    parser = experiment_parser("ratio", __doc__, "results/ratio")
+    parser.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds per ratio (10)")
+    parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
+    args = parser.parse_args(argv)
     data = run(tuple(args.ratios), args.seeds, args.out)
     print(report(data))
     print(f"wrote {args.out}/ratio.json, ratio.csv, ratio_runs.csv, ratio.png")
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -21,7 +21,6 @@ around the default, yaw and tilt), so they are not the ones the planner was tune
 
 from __future__ import annotations
 
-import argparse
 import itertools
 import math
 from collections.abc import Sequence
@@ -35,6 +34,7 @@ from eos_svc.agents.planner import build_world, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -49,7 +49,6 @@ POSTULATES = (*CLASSES, "plane", "none")
 NOISES = (0.0, 2e-4, 4e-4)
 #: the tolerance "right" refers to (relative shape-and-pose error)
 TOLERANCE = 0.10
-DEFAULT_POSITION = (0.21, 0.02, -0.015)
 
 
 def random_object(kind: str, size_index: int, rng: np.random.Generator) -> ObjectSpec:
@@ -58,7 +57,7 @@ def random_object(kind: str, size_index: int, rng: np.random.Generator) -> Objec
     across the approach or upright, boxes and ellipsoids tilted up to ±0.3 rad)."""
     scale = (0.75, 1.0, 1.25)[size_index]
     jitter = rng.uniform(0.9, 1.1, size=3)
-    px, py, pz = (float(v) for v in np.asarray(DEFAULT_POSITION) + rng.uniform(-0.02, 0.02, size=3))
+    px, py, pz = (float(v) for v in np.asarray(ObjectSpec().position) + rng.uniform(-0.02, 0.02, size=3))
     position = (px, py, pz)
     yaw = float(rng.uniform(-0.5, 0.5))
     if kind == "sphere":
@@ -128,7 +127,7 @@ def run(
 ) -> dict[str, Any]:
     """Run the experiment; write recognition.csv, recognition.json and three PNGs into ``out``."""
     rng = np.random.default_rng(20261201)
-    specs = [(k, s, random_object(k, s, rng)) for k in CLASSES for s in range(sizes) for _ in range(1)]
+    specs = [(k, s, random_object(k, s, rng)) for k in CLASSES for s in range(sizes)]
     rows: list[dict[str, Any]] = []
     for noise in noises:
         requests = [
@@ -181,36 +180,36 @@ def clean(row: dict[str, Any]) -> dict[str, Any]:
 
 def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list[int]) -> dict[str, Any]:
     """Confusion matrices, accuracies, error percentiles, calibration bins, search lengths."""
+
+    def stat(f: Any, values: list, *args: Any) -> float | None:
+        return float(f(values, *args)) if len(values) else None
+
     per_noise = {}
     for noise in noises:
         sub = [r for r in rows if r["noise_m"] == noise]
         confusion = {t: {p: 0 for p in POSTULATES} for t in CLASSES}
         for r in sub:
             confusion[r["truth"]][r["postulate"] if r["postulate"] in POSTULATES else "none"] += 1
-        errs = np.array(
-            [r["surface_error"] for r in sub if r["class_right"] and math.isfinite(r["surface_error"])]
+        right_class = [r for r in sub if r["class_right"]]
+        errs, pos, size = (
+            [r[k] for r in right_class if math.isfinite(r[k])]
+            for k in ("surface_error", "position_error_m", "size_error")
         )
         confident = [r for r in sub if r["confidence"] >= 0.9]
-        pos = [
-            r["position_error_m"] for r in sub if r["class_right"] and math.isfinite(r["position_error_m"])
-        ]
-        size = [r["size_error"] for r in sub if r["class_right"] and math.isfinite(r["size_error"])]
         per_noise[f"{noise:g}"] = {
             "runs": len(sub),
-            "class_accuracy": float(np.mean([r["class_right"] for r in sub])) if sub else math.nan,
-            "right": float(np.mean([r["right"] for r in sub])) if sub else math.nan,
+            "class_accuracy": stat(np.mean, [r["class_right"] for r in sub]) if sub else math.nan,
+            "right": stat(np.mean, [r["right"] for r in sub]) if sub else math.nan,
             "confusion": confusion,
-            "error_median": float(np.median(errs)) if len(errs) else None,
-            "error_p90": float(np.percentile(errs, 90)) if len(errs) else None,
-            "position_error_median_m": float(np.median(pos)) if pos else None,
-            "size_error_median": float(np.median(size)) if size else None,
+            "error_median": stat(np.median, errs),
+            "error_p90": stat(np.percentile, errs, 90),
+            "position_error_median_m": stat(np.median, pos),
+            "size_error_median": stat(np.median, size),
             "confident": len(confident),
-            "confident_right": float(np.mean([r["right"] for r in confident])) if confident else None,
+            "confident_right": stat(np.mean, [r["right"] for r in confident]),
             "wrong_class_confident": sum(1 for r in confident if not r["class_right"]),
-            "median_information_cycles": float(np.median([r["information_cycles"] for r in sub]))
-            if sub
-            else None,
-            "median_wall_time_s": float(np.median([r["wall_time_s"] for r in sub])) if sub else None,
+            "median_information_cycles": stat(np.median, [r["information_cycles"] for r in sub]),
+            "median_wall_time_s": stat(np.median, [r["wall_time_s"] for r in sub]),
         }
     edges = [0.0, 0.2, 0.4, 0.6, 0.8, 0.9, 1.0001]
     bins = []
@@ -221,8 +220,8 @@ def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list
                 "lo": lo,
                 "hi": min(hi, 1.0),
                 "n": len(sub),
-                "mean_confidence": float(np.mean([r["confidence"] for r in sub])) if sub else None,
-                "accuracy": float(np.mean([r["right"] for r in sub])) if sub else None,
+                "mean_confidence": stat(np.mean, [r["confidence"] for r in sub]),
+                "accuracy": stat(np.mean, [r["right"] for r in sub]),
             }
         )
     arr = np.array(lengths)
@@ -318,21 +317,18 @@ def report(data: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment recognition [options]``."""
     parser = experiment_parser("recognition", __doc__, "results/recognition")
-    parser.add_argument("--seeds", type=int, default=3, help="seeds per object and noise (3)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=3, help="seeds per object and noise (3)")
     parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
-    parser.add_argument("--search-seeds", type=int, default=100, help="seeds of the search-length run (100)")
+    parser.add_argument(
+        "--search-seeds", type=int_at_least(1), default=100, help="seeds of the search run (100)"
+    )
     parser.add_argument(
         "--quick", action="store_true", help="one size, one seed, default noise, 10 search seeds"
     )
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment recognition [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     if args.quick:
         data = run(seeds=1, sizes=1, noises=(2e-4,), search_seeds=10, out=args.out)
     else:
@@ -343,7 +339,3 @@ def main(argv: Sequence[str] | None = None) -> int:
         "recognition_calibration.png, recognition_search.png"
     )
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -14,7 +14,6 @@ recognition (its column is *not* the planner's result).
 
 from __future__ import annotations
 
-import argparse
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -23,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
+from eos_svc.cli.common import int_at_least
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -126,26 +126,17 @@ def report(data: dict) -> str:
     return "\n".join(lines)
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Command-line options of this experiment."""
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point: ``eos experiment shapes [options]``."""
     parser = experiment_parser("shapes", __doc__, "results/shapes")
-    parser.add_argument("--seeds", type=int, default=5, help="seeds per object (5)")
+    parser.add_argument("--seeds", type=int_at_least(1), default=5, help="seeds per object (5)")
     parser.add_argument(
         "--oracle",
         action="store_true",
         help="also plan every object with grasp_points on the true object (the grasp stage alone)",
     )
-    return parser
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point: ``eos experiment shapes [options]``."""
-    args = build_parser().parse_args(argv)
+    args = parser.parse_args(argv)
     data = run(args.seeds, args.out, oracle=args.oracle)
     print(report(data))
     print(f"wrote {args.out}/shapes.json, shapes.csv, shapes.png")
     return 0
-
-
-if __name__ == "__main__":  # pragma: no cover
-    raise SystemExit(main())

@@ -18,6 +18,7 @@ from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel, Scene
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds, hand_bound_table
 from eos_svc.objects import SurfaceObject
+from eos_svc.world.table import hand_table_gap, table_shape
 
 if TYPE_CHECKING:
     from eos_svc.world.parameters import WorldParameters
@@ -36,12 +37,20 @@ class HandClearance:
         sweeps: its fingers' closing sweeps (the open hand: every finger at its first sample).
         params: world constants (approach stand-off, clearance, contact tolerance).
         obj: the postulated object.
+        table_height: the table's height (world z, m) when the object rests on one: no hand
+            geometry may come nearer it than the threshold of each check.
     """
 
     def __init__(
-        self, hand: HandModel, sweeps: dict[str, FingerSweep], params: WorldParameters, obj: SurfaceObject
+        self,
+        hand: HandModel,
+        sweeps: dict[str, FingerSweep],
+        params: WorldParameters,
+        obj: SurfaceObject,
+        table_height: float | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
+        self.table = None if table_height is None else table_shape(table_height)
         self.scene = Scene(hand, obj)
         self.state = hand.state(hand.neutral())
         tips = {hand.tip_geometry_id(f) for f in hand.finger_names}
@@ -84,6 +93,8 @@ class HandClearance:
             self.obj.placement.translation.tolist(),
             0.5 * float(self.obj.diameter),
         )
+        if self.table is not None and hand_table_gap(state, self.table) < max(threshold, 0.0):
+            return False  # the table: no part of the hand, fingertips included, may touch it
         return all(lower >= threshold or self.scene.gap(state, gid) >= threshold for lower, gid in bounds)
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:

@@ -22,7 +22,8 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from eos_svc.objects import SurfaceObject
+from eos_svc.objects.base import distinct_units, perpendicular_unit
 
 _EX, _EY, _EZ = np.eye(3)
 
@@ -63,58 +64,20 @@ def frame(approach: np.ndarray, closing: np.ndarray) -> np.ndarray:
     return np.array([[x0, y[0], z0], [x1, y[1], z1], [x2, y[2], z2]])
 
 
-def _unit_perp(v: np.ndarray, axis: np.ndarray) -> np.ndarray | None:
-    """``v`` with its component along unit ``axis`` removed, normalised (None if ~parallel)."""
-    w = v - (v @ axis) * axis
-    n = float(np.linalg.norm(w))
-    return None if n < 1e-6 else w / n
-
-
-def _distinct(vectors: list[np.ndarray | None], signed: bool) -> list[np.ndarray]:
-    """The unit ``vectors`` (Nones skipped) without near-repeats (cosine ≥ 0.999; of either sign
-    unless ``signed``), in order."""
-    out: list[np.ndarray] = []
-    for v in vectors:
-        if v is not None and all((v @ u if signed else abs(v @ u)) < 0.999 for u in out):
-            out.append(v)
-    return out
-
-
 def closing_axes(obj: SurfaceObject, vertical_only: bool = False) -> list[tuple[str, np.ndarray]]:
-    """The closing axes (unsigned, world) through the centre of mass for ``obj``'s kind, with
-    a word on each. ``vertical_only``: the postulate's size is known along the vertical only."""
+    """The closing axes (unsigned, world) through the centre of mass, with a word on each: the
+    object kind's own rule (:meth:`~eos_svc.objects.base.SurfaceObject.closing_axes`).
+    ``vertical_only``: the postulate's size is known along the vertical only."""
     if vertical_only:
         return [("across the vertical", _EZ)]
-    A = obj.placement.rotation
-    if isinstance(obj, Sphere):
-        return [("about a vertical diameter", _EZ), ("about a horizontal diameter", _EY)]
-    if isinstance(obj, Ellipsoid):
-        order = np.argsort(np.asarray(obj.radii))
-        words = ("shortest", "middle")
-        return [(f"across its {w} axis", A[:, int(i)]) for w, i in zip(words, order[:2], strict=True)]
-    if isinstance(obj, (Cylinder, Capsule)):
-        axis = A[:, 2]
-        across = _distinct([A[:, 0], A[:, 1], _unit_perp(_EZ, axis), _unit_perp(_EY, axis)], signed=False)
-        axes = [("across the axis", g) for g in across]
-        total = obj.length + (2.0 * obj.radius if isinstance(obj, Capsule) else 0.0)
-        if total <= 2.0 * obj.radius:  # short: also along the axis (on the end faces)
-            axes.append(("along the axis", axis))
-        return axes
-    if isinstance(obj, Box):
-        return [(f"across faces {name}", A[:, i]) for i, name in enumerate(("±x", "±y", "±z"))]
-    raise TypeError(f"obj: no grasp rule for {type(obj).__name__}")
+    return obj.closing_axes()
 
 
 def approach_axes(obj: SurfaceObject, closing: np.ndarray) -> list[np.ndarray]:
-    """Approach directions (signed, world, ⟂ ``closing``): the object's own axes across the
-    grip and the direction nearest the hand's unrotated approach (+x)."""
-    A = obj.placement.rotation
-    options: list[np.ndarray | None] = [_unit_perp(_EX, closing)]
-    if not isinstance(obj, Sphere):
-        options += [_unit_perp(sign * A[:, i], closing) for i in range(3) for sign in (1.0, -1.0)]
-        if isinstance(obj, (Cylinder, Capsule)):
-            options.append(_unit_perp(np.cross(closing, A[:, 2]), closing))
-    return _distinct(options, signed=True)
+    """Approach directions (signed, world, ⟂ ``closing``): the direction nearest the hand's
+    unrotated approach (+x), then the kind's own
+    (:meth:`~eos_svc.objects.base.SurfaceObject.approach_options`)."""
+    return distinct_units([perpendicular_unit(_EX, closing), *obj.approach_options(closing)], signed=True)
 
 
 def candidate_frames(obj: SurfaceObject, vertical_only: bool = False) -> Iterator[tuple[str, np.ndarray]]:

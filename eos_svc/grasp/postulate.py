@@ -16,26 +16,21 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
-import numpy as np
-import pinocchio as pin
-
-from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere, SurfaceObject
+from eos_svc import objects
+from eos_svc.objects import ObjectSizeError, SurfaceObject
 from eos_svc.schema.request import ObjectSpec
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:
-    """The kinematics object for a validated :class:`ObjectSpec`."""
-    placement = pin.SE3(pin.rpy.rpyToMatrix(*spec.rpy), np.asarray(spec.position, dtype=float))
-    s = spec.size
-    if spec.shape == "sphere":
-        return Sphere(s["radius"], placement)
-    if spec.shape == "ellipsoid":
-        return Ellipsoid(s["radii"], placement)
-    if spec.shape == "cylinder":
-        return Cylinder(s["radius"], s["length"], placement)
-    if spec.shape == "capsule":
-        return Capsule(s["radius"], s["length"], placement)
-    return Box(s["size"], placement)
+    """The kinematics object for a validated :class:`ObjectSpec` (its kind from the registry).
+
+    Raises:
+        ValidationError: ``object.<field>`` when the object cannot be built (a mesh file that
+            cannot be read, a flat mesh)."""
+    try:
+        return objects.make(spec.shape, spec.size, spec.position, spec.rpy)
+    except ObjectSizeError as exc:
+        raise ObjectSizeError(f"object.{exc.field}", exc.reason) from None
 
 
 @dataclass(frozen=True)

@@ -15,6 +15,11 @@ Conventions
   (a unit normal component; an inner approximation of the cone). In the plane (2-D points)
   the cone has exactly two edges ``−n_i ± μ t_i`` — no approximation. With μ = 0 each
   contact gives the one wrench along its normal.
+- Soft-finger contacts (optional, ``patch_radius`` a > 0, 3-D only): a contact pressing over a
+  small circular patch of radius ``a`` also resists a torque about its normal of up to
+  ``γ f_n``, γ = (2/3) μ a (uniform pressure over the patch); each contact then adds the two
+  wrenches of its normal force with torque ``± γ (−n_i)`` — an inner approximation of its
+  limit surface. Two antipodal soft contacts (a parallel jaw's pads) are in force closure.
 - Primitive wrenches ``w_ij = [f_ij ; (p_i − c) × f_ij / L]`` with torques about the
   object's centre ``c`` divided by a characteristic length ``L`` (default: the largest
   contact distance from ``c``; the planner uses the object's half diameter, the radius of a
@@ -106,6 +111,7 @@ def primitive_wrenches(
     mu: float,
     edges: int = DEFAULT_EDGES,
     torque_scale: float | None = None,
+    patch_radius: float = 0.0,
 ) -> tuple[np.ndarray, float, int]:
     """The primitive contact wrenches (see the module docstring for the convention).
 
@@ -116,9 +122,11 @@ def primitive_wrenches(
         mu: Coulomb friction coefficient (≥ 0).
         edges: edges per linearised 3-D cone (≥ 3; ignored in 2-D).
         torque_scale: characteristic length L (default: the largest ``‖p_i − c‖``, or 1).
+        patch_radius: soft-finger contact patch radius a (m, ≥ 0; 0: hard point contacts).
 
     Returns:
-        (wrenches of shape (k·m, 6) or (k·m, 3), the torque scale used, edges per contact).
+        (wrenches of shape (k·w, 6) or (k·w, 3), the torque scale used, wrenches per contact w:
+        the cone's edges, plus two with a soft-finger patch).
 
     Raises:
         ValueError: naming the malformed argument.
@@ -169,6 +177,16 @@ def primitive_wrenches(
         torques = np.stack([ay * fz - az * fy, az * fx - ax * fz, ax * fy - ay * fx], axis=-1)
     else:
         torques = (arm[..., 0] * forces[..., 1] - arm[..., 1] * forces[..., 0])[..., None]
+    patch = float(_array(patch_radius, "patch_radius"))
+    if patch < 0.0:
+        raise ValidationError("patch_radius", f"must be ≥ 0 m, got {patch_radius!r}")
+    if patch > 0.0 and dim == 3 and mu > 0.0:
+        gamma = 2.0 / 3.0 * mu * patch
+        push = -n[:, None, :]  # (k, 1, 3)
+        spin = np.concatenate([push, -push], axis=1) * gamma  # ± γ (−n): torque about the normal
+        forces = np.concatenate([forces, np.repeat(push, 2, axis=1)], axis=1)
+        torques = np.concatenate([torques, np.cross(arm, push) + spin], axis=1)
+        m += 2
     wrenches = np.concatenate([forces, torques / scale], axis=2).reshape(k * m, 6 if dim == 3 else 3)
     return wrenches, scale, m
 
@@ -203,9 +221,10 @@ def grasp_quality(
     mu: float,
     edges: int = DEFAULT_EDGES,
     torque_scale: float | None = None,
+    patch_radius: float = 0.0,
 ) -> GraspQuality:
     """Force closure and ε of contacts (arguments as :func:`primitive_wrenches`)."""
-    w, scale, m = primitive_wrenches(points, normals, centre, mu, edges, torque_scale)
+    w, scale, m = primitive_wrenches(points, normals, centre, mu, edges, torque_scale, patch_radius)
     eps, rank = epsilon_of_wrenches(w)
     k, dim = np.shape(points)
     return GraspQuality(eps > 0.0, eps, float(mu), m, scale, int(k), rank, 6 if dim == 3 else 3)
@@ -217,10 +236,11 @@ def contacts_quality(
     torque_scale: float,
     mu: float,
     edges: int = DEFAULT_EDGES,
+    patch_radius: float = 0.0,
 ) -> GraspQuality:
     """:func:`grasp_quality` of the *touching* fingertips of a plan's ``contacts`` dict
     (per finger: ``touching``, ``point`` and outward ``normal`` in the world frame)."""
     touching = [c for c in contacts.values() if c.get("touching")]
     points = np.array([c["point"] for c in touching], dtype=float).reshape(-1, 3)
     normals = np.array([c["normal"] for c in touching], dtype=float).reshape(-1, 3)
-    return grasp_quality(points, normals, centre, mu, edges, torque_scale)
+    return grasp_quality(points, normals, centre, mu, edges, torque_scale, patch_radius)

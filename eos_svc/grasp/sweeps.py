@@ -45,10 +45,16 @@ class FingerSweep:
         return int(within[-1]) if len(within) else -1
 
 
+#: sweep resolution of a finger with a prismatic joint (m): about the tip travel of 0.01 rad at
+#: a 0.1 m lever, the resolution of a revolute finger
+PRISMATIC_RESOLUTION = 0.001
+
+
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
     """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
 
-    Computed once per hand at the neutral wrist (palm = world).
+    Computed once per hand at the neutral wrist (palm = world); ``resolution`` in rad, or
+    :data:`PRISMATIC_RESOLUTION` m for a finger with a prismatic joint.
     """
     state = hand.state(hand.neutral())
     palm = state.palm_placement()
@@ -56,7 +62,8 @@ def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerS
     for finger in hand.finger_names:
         idx = hand.finger_q_index(finger)
         lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
-        n = max(2, math.ceil((hi - lo) / resolution) + 1)
+        step = PRISMATIC_RESOLUTION if has_prismatic_joint(hand, finger) else resolution
+        n = max(2, math.ceil((hi - lo) / step) + 1)
         angles = np.linspace(lo, hi, n)
         points = np.empty((n, 3))
         q = hand.neutral()
@@ -66,6 +73,13 @@ def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerS
             points[k] = palm.actInv(state.tip_position(finger))
         sweeps[finger] = FingerSweep(angles, points)
     return sweeps
+
+
+def has_prismatic_joint(hand: HandModel, finger: str) -> bool:
+    """Whether one of ``finger``'s joints is prismatic (its coordinate in m, not rad)."""
+    model = hand.model
+    joints = hand.description.finger(finger).joints
+    return any(model.joints[model.getJointId(j)].shortname().startswith("JointModelP") for j in joints)
 
 
 def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:

@@ -19,6 +19,7 @@ SI units throughout: metres, radians.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Iterable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -61,6 +62,8 @@ class GraspSynthesis:
         obj: the postulated object.
         friction: Coulomb μ for ε.
         vertical_only: the postulate's size is known along the vertical only (grasp across it).
+        table_height: the table under the object (world z, m), or None: candidates whose hand
+            would touch it are rejected (:class:`~eos_svc.grasp.clearance.HandClearance`).
 
     Attributes:
         rejections: per reason (in words), how many candidates it rejected.
@@ -74,12 +77,13 @@ class GraspSynthesis:
         obj: SurfaceObject,
         friction: float,
         vertical_only: bool = False,
+        table_height: float | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
         self.friction = friction
         self.vertical_only = vertical_only
         self.opposing = hand.description.opposing_finger
-        self.clearance = HandClearance(hand, sweeps, params, obj)
+        self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
 
     def _reject(self, why: str) -> None:
@@ -118,6 +122,20 @@ class GraspSynthesis:
             return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
         top = max(c.epsilon for c in kept)
         kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+        return kept
+
+    def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
+        """Another sampler's orientations, checked and scored as :meth:`candidates` checks them:
+        each ``(label, palm rotation)`` simulated at its best depth, kept when its contacts lie
+        about the centre and the hand reaches it collision-free, scored by ε; best ε first (no
+        preference for little wrist rotation). The hook for grasp agents with a sampler of
+        their own (``docs/extending.md``)."""
+        kept = []
+        for label, R in frames:
+            cand = self._at_best_depth(label, R)
+            if cand is not None and cand.about_centre and self._collision_free(cand):
+                kept.append(self._scored(cand))
+        kept.sort(key=lambda c: (-c.epsilon, c.turn))
         return kept
 
     def pregrasp(self, c: GraspCandidate) -> tuple[np.ndarray, float] | None:
@@ -210,6 +228,12 @@ class GraspSynthesis:
         normals = np.array([hit.normal for hit in c.landings.values()])
         obj = self.obj
         q = grasp_quality(
-            points, normals, obj.placement.translation, self.friction, SCORE_EDGES, 0.5 * obj.diameter
+            points,
+            normals,
+            obj.placement.translation,
+            self.friction,
+            SCORE_EDGES,
+            0.5 * obj.diameter,
+            self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)

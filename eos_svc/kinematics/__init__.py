@@ -17,7 +17,6 @@ from .hand import (
     WorkspaceError,
     load_hand,
 )
-from .hands import PreShapedHandModel, allegro_description, allegro_hand, load_composite_hand
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
 
@@ -31,15 +30,11 @@ __all__ = [
     "HandModel",
     "HandState",
     "KinematicsError",
-    "PreShapedHandModel",
     "Scene",
     "TactileReading",
     "TactileSensor",
     "UnknownNameError",
     "UrdfLoadError",
     "WorkspaceError",
-    "allegro_description",
-    "allegro_hand",
-    "load_composite_hand",
     "load_hand",
 ]

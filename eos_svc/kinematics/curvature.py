@@ -1,34 +1,14 @@
-"""Curvature estimation from rolling contact (EP1), Montana's first equation with v = 0.
+"""Curvature estimation from rolling contact (EP1): Montana's first equation with v = 0.
 
-Sign convention (the one used everywhere in eos_svc, proved by ``tests/ep1``)
------------------------------------------------------------------------------
-Contact frame ``C``: origin at the contact point, ``z`` = the *fingertip's* outward
-unit normal (it points from the fingertip into the object; it is minus
-:attr:`Contact.normal`), ``x, y`` tangent with ``x × y = z``.
-
-* ``ω = (ω_x, ω_y)`` -- angular velocity of the fingertip relative to the object,
-  tangential components in ``C`` [rad/s] (rolling has no spin, ``ω_z = 0``).
-* ``u = M_f α̇_f`` -- velocity of the contact point *over the fingertip surface*
-  (the time derivative of the tactile reading in the fingertip frame, rotated into
-  ``C``) [m/s]. The tactile sensor measures it.
-* ``K_f``, ``K_o`` -- curvature forms (symmetric 2×2, in ``C``) of fingertip and
-  object [1/m], **positive for convex** surfaces (a sphere of radius R has I/R).
-
-Rolling without sliding (``v = 0``) and keeping contact then gives::
-
-    (K_o + K_f) u = [-ω_y, ω_x]ᵀ   ( = z × ω )
-    K_o u = [-ω_y, ω_x]ᵀ - K_f u                  (the estimator's equation)
-
-Closed-form check: a sphere tip (r_f) rolling at rate |ω| on a sphere (R) moves its
-contact point over the tip at |ω| r_f R / (r_f + R); on a plane at |ω| r_f.
-
-Because the equation is linear and homogeneous in (ω, u), a sample may be given as
-rates (rad/s, m/s) or as finite increments over the same interval (rad, m).
-
-Each sample gives two equations in the three unknowns ``(k_xx, k_xy, k_yy)`` of the
-symmetric ``K_o``; rolls along two independent tangent directions make them
-determined, and :meth:`CurvatureEstimator.estimate` solves the least-squares
-problem over all samples, with the covariance ``s² (AᵀA)⁻¹`` from the residuals.
+Contact frame ``C``: origin at the contact, ``z`` the *fingertip's* outward normal (minus
+:attr:`Contact.normal`), ``x × y = z``. ``ω = (ω_x, ω_y)``: the fingertip's angular velocity
+relative to the object, tangential, rad/s; ``u``: the contact point's velocity over the fingertip
+surface (what the tactile sensor measures), m/s; ``K_f``, ``K_o``: curvature forms (2×2, 1/m,
+positive for convex). Rolling without sliding gives ``K_o u = [-ω_y, ω_x]ᵀ - K_f u``; it is linear
+and homogeneous in (ω, u), so increments over one interval (rad, m) serve as well as rates. Two
+rows per sample in the three unknowns of ``K_o``: rolls along two independent directions
+determine it, solved by least squares with covariance ``s² (AᵀA)⁻¹``. The convention and its
+proofs: ``docs/ep1.md``.
 """
 
 from __future__ import annotations
@@ -64,19 +44,16 @@ class UnderdeterminedError(ValidationError):
 
 def _vec2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float).reshape(-1)
-    if a.shape != (2,) or not all(map(math.isfinite, a.tolist())):
+    if a.shape != (2,) or not np.isfinite(a).all():
         raise ValidationError(name, f"expected 2 finite numbers, got {value!r}")
     return a
 
 
 def _mat2(name: str, value: ArrayLike) -> Array:
     a = np.asarray(value, dtype=float)
-    if a.shape != (2, 2):
+    if a.shape != (2, 2) or not np.isfinite(a).all():
         raise ValidationError(name, f"expected a finite 2x2 matrix, got {value!r}")
-    (a00, a01), (a10, a11) = a.tolist()
-    if not all(map(math.isfinite, (a00, a01, a10, a11))):
-        raise ValidationError(name, f"expected a finite 2x2 matrix, got {value!r}")
-    if abs(a01 - a10) > 1e-9 * (1.0 + max(abs(a00), abs(a01), abs(a10), abs(a11))):
+    if abs(a[0, 1] - a[1, 0]) > 1e-9 * (1.0 + np.abs(a).max()):
         raise ValidationError(name, f"curvature form must be symmetric, got {a.tolist()}")
     return a
 
@@ -228,7 +205,6 @@ class CurvatureEstimator:
             raise UnderdeterminedError(
                 "samples", f"need samples from two independent roll directions, have {m} sample(s)"
             )
-        # CurvatureSample.rows() of every sample, stacked
         rows = [sample.rows() for sample in self._samples]
         A = np.concatenate([a for a, _ in rows])
         b = np.concatenate([rhs for _, rhs in rows])

@@ -117,19 +117,29 @@ def place_hand_for_ep1(
     finger: str = "finger1",
     q: np.ndarray | None = None,
     point: np.ndarray | None = None,
+    *,
+    scratch: HandState | None = None,
 ) -> np.ndarray:
     """A configuration where ``finger``'s tip touches the object with zero gap.
 
     Translates the wrist (x, y, z) of ``q`` (default: neutral) so the fingertip sphere
     centre sits at ``s + r_f n``, with ``s`` the object's surface point closest to ``point``
     (default: closest to the fingertip centre) and ``n`` its outward normal (on an edge or a
-    corner, the direction from ``s`` to ``point``).
+    corner, the direction from ``s`` to ``point``). ``scratch``: a state of the scene's hand to
+    compute in (it is moved; a caller placing often keeps one), default a new one.
 
     Raises:
         WorkspaceError: the wrist would leave its workspace.
+        KinematicsError: ``scratch`` belongs to another hand.
     """
     hand = scene.hand
-    st = hand.state(q)
+    if scratch is None:
+        st = hand.state(q)
+    elif scratch.hand is not hand:
+        raise KinematicsError("scratch", "belongs to another hand model than the scene")
+    else:
+        st = scratch
+        st.update(hand.neutral() if q is None else q)
     c = st.tip_position(finger).copy()
     obj = scene.object
     target = c if point is None else np.asarray(point, dtype=float)
@@ -158,7 +168,7 @@ def place_hand_for_ep1(
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
     v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
+    s2 = _row_norms(v)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -172,14 +182,21 @@ def _log_chart(
 ) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere of radius ``r`` around the unit ``b``, in
     the tangent basis ex, ey at b, m (``directions``: the points normalised, when known)."""
-    d = points / np.linalg.norm(points, axis=1, keepdims=True) if directions is None else directions
+    d = points / _row_norms(points)[:, None] if directions is None else directions
     cosang = d @ b
     v = d - np.outer(cosang, b)
-    sin_ang = np.linalg.norm(v, axis=1)
+    sin_ang = _row_norms(v)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
-    return np.column_stack([v @ ex, v @ ey])
+    return np.array((v @ ex, v @ ey)).T
+
+
+def _row_norms(x: np.ndarray) -> np.ndarray:
+    """The rows' Euclidean lengths: ``np.linalg.norm(x, axis=1)``'s arithmetic, without its checks
+    (microseconds on the few points of a leg)."""
+    out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1))
+    return out
 
 
 def _chart_at_mean(
@@ -187,17 +204,18 @@ def _chart_at_mean(
 ) -> np.ndarray:
     """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with the
     frame's x (``ex_tip``, tip frame) projected on the tangent plane at b as the chart's first axis."""
-    b = P.mean(axis=0)
-    b /= np.linalg.norm(b)
+    b = np.add.reduce(P, axis=0) / len(P)  # P.mean(axis=0)
+    b /= math.sqrt(b.dot(b))  # np.linalg.norm(b), the same arithmetic
     ex = ex_tip - (ex_tip @ b) * b
-    ex /= np.linalg.norm(ex)
-    ey = np.array((b[1] * ex[2] - b[2] * ex[1], b[2] * ex[0] - b[0] * ex[2], b[0] * ex[1] - b[1] * ex[0]))
-    return _log_chart(P, b, ex, ey, r, directions)  # ey = b × ex
+    ex /= math.sqrt(ex.dot(ex))
+    (b0, b1, b2), (e0, e1, e2) = b.tolist(), ex.tolist()
+    ey = np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0))  # b × ex
+    return _log_chart(P, b, ex, ey, r, directions)
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
-    X = np.column_stack([np.ones_like(theta), theta, theta * theta])
+    X = np.array((np.ones_like(theta), theta, theta * theta)).T
     out: np.ndarray = np.linalg.lstsq(X, c, rcond=None)[0][1]
     return out
 

@@ -44,8 +44,7 @@ def shape_bound(geometry: Any) -> tuple[int, Any, Any, float]:
 
 def hand_bound_table(hand: Any) -> list[tuple[int, Any, Any, float]]:
     """:func:`shape_bound` of every collision geometry of ``hand`` (a
-    :class:`~eos_svc.kinematics.HandModel`), in geometry-id order (≈ 30 µs for hand3x3; a
-    plan's world takes it from its hand's context)."""
+    :class:`~eos_svc.kinematics.HandModel`), in geometry-id order."""
     return [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
 
 
@@ -61,45 +60,23 @@ def ball_gap_lower_bounds(
     ``views[id]`` its world (translation, rotation). Each bound is at most the exact gap coal
     would return (tested against coal), so a geometry whose bound reaches a threshold needs no
     exact query."""
-    ox, oy, oz = centre
     obj_radius = radius + BOUND_MARGIN
     bounds = []
     for gid in geometry_ids:
         kind, a, b, ball = table[gid]
         t, R = views[gid]
-        tx, ty, tz = t.tolist()
-        px, py, pz = ox - tx, oy - ty, oz - tz  # object centre relative to the geometry
-        if kind == SPHERE:  # a ball of radius a about the local point b (usually 0)
-            if b is not None:
-                (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
-                bx, by, bz = b
-                px -= r00 * bx + r01 * by + r02 * bz
-                py -= r10 * bx + r11 * by + r12 * bz
-                pz -= r20 * bx + r21 * by + r22 * bz
-            lower = math.sqrt(px * px + py * py + pz * pz) - a
+        p = np.asarray(centre, dtype=float) - t  # the object's centre from the geometry's origin
+        if kind == SPHERE:  # a ball of radius a about the local point b (usually none)
+            lower = np.linalg.norm(p if b is None else p - R @ np.asarray(b)) - a
         else:
-            (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()
-            # the object centre in the geometry's frame
-            lx = r00 * px + r10 * py + r20 * pz
-            ly = r01 * px + r11 * py + r21 * pz
-            lz = r02 * px + r12 * py + r22 * pz
+            local = R.T @ p  # in the geometry's frame
             if kind == BOX:  # half sides a
-                hx, hy, hz = a
-                dx = abs(lx) - hx
-                dy = abs(ly) - hy
-                dz = abs(lz) - hz
-                dx = dx if dx > 0.0 else 0.0
-                dy = dy if dy > 0.0 else 0.0
-                dz = dz if dz > 0.0 else 0.0
-                lower = math.sqrt(dx * dx + dy * dy + dz * dz)
+                lower = np.linalg.norm(np.maximum(np.abs(local) - a, 0.0))
             else:  # SEGMENT: radius a about the local z segment of half length b
-                dz = abs(lz) - b
-                dz = dz if dz > 0.0 else 0.0
-                lower = math.sqrt(lx * lx + ly * ly + dz * dz) - a
+                lower = math.hypot(local[0], local[1], max(abs(local[2]) - b, 0.0)) - a
             if lower <= obj_radius:
-                # they may overlap, and this bound does not hold for a penetration
-                # depth (the object's centre may lie inside the primitive): the balls'
-                # bound (the primitive's local AABB ball, radius ``ball``) does
-                lower = math.sqrt(px * px + py * py + pz * pz) - ball
-        bounds.append((lower - obj_radius, gid))
+                # they may overlap, where this bound does not hold (the centre may lie inside the
+                # primitive): the bound of the primitive's local AABB ball (radius ``ball``) does
+                lower = np.linalg.norm(p) - ball
+        bounds.append((float(lower) - obj_radius, gid))
     return bounds

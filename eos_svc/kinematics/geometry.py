@@ -6,8 +6,7 @@ axis ``e_k`` projected onto the plane ⟂ ``n`` and normalised — world ``y`` i
 is within ~25° of ``e_k`` (``|n_k| ≥ 0.9``) — and ``t2 = n × t1``, so ``(t1, t2, n)`` is a
 right-handed orthonormal frame.
 
-:func:`tangent_pair` is the scalar form (numpy costs microseconds per call on 3-vectors);
-:func:`tangent_basis` returns arrays.
+``tangent_pair`` gives the six floats, ``tangent_basis`` two arrays.
 """
 
 from __future__ import annotations
@@ -29,20 +28,14 @@ def tangent_pair(
     nx: float, ny: float, nz: float, prefer: int = 0
 ) -> tuple[float, float, float, float, float, float]:
     """``t1`` and ``t2`` (six floats) of the unit normal ``(nx, ny, nz)``; ``prefer`` is the
-    index of the preferred world axis (0 = x, 2 = z). Scalar arithmetic: the hot-path form of
-    :func:`tangent_basis`."""
-    if prefer == 0:
-        if abs(nx) < NEAR_AXIS:
-            tx, ty, tz = 1.0 - nx * nx, -nx * ny, -nx * nz
-        else:
-            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
-    elif prefer == 2:
-        if abs(nz) < NEAR_AXIS:
-            tx, ty, tz = -nz * nx, -nz * ny, 1.0 - nz * nz
-        else:
-            tx, ty, tz = -ny * nx, 1.0 - ny * ny, -ny * nz
-    else:
+    index of the preferred world axis (0 = x, 2 = z)."""
+    if prefer not in (0, 2):
         raise ValidationError("prefer", f"must be 0 (world x) or 2 (world z), got {prefer!r}")
+    n = (nx, ny, nz)
+    k = prefer if abs(n[prefer]) < NEAR_AXIS else 1
+    t = [-n[k] * c for c in n]  # e_k − n_k n
+    t[k] += 1.0
+    tx, ty, tz = t
     s = 1.0 / math.sqrt(tx * tx + ty * ty + tz * tz)
     tx, ty, tz = tx * s, ty * s, tz * s
     return tx, ty, tz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx
@@ -57,8 +50,7 @@ def tangent_basis(n: ArrayLike, prefer: int = 0) -> tuple[np.ndarray, np.ndarray
 
 def unit_vector(name: str, v: object) -> np.ndarray:
     """``v`` normalised (a new array); :class:`~eos_svc.errors.ValidationError` naming ``name``
-    unless it is a finite non-zero 3-vector. Scalar arithmetic first (numpy's norm costs µs on
-    3-vectors), numpy when the squares overflow."""
+    unless it is a finite non-zero 3-vector."""
     a = np.asarray(v, dtype=float).reshape(-1)
     if a.shape == (3,):
         x, y, z = a.tolist()

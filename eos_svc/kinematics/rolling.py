@@ -1,17 +1,11 @@
-"""Rolling a sphere fingertip on the object without sliding (EP1's motion): a small differential-IK
-loop in the manner of pink — measure, formulate, solve, integrate.
-
-Each :meth:`RollingQP.step`
-
-1. computes the kinematics at the current ``q`` (Pinocchio: the tip's placement, its Jacobian
-   over the active joints — the wrist, then the rolling finger — and ``J̇ q̇`` at the last q̇);
-2. measures the contact with coal (:class:`~.tip_contact.SphereTipProbe`) and reads the tactile
-   sensor;
-3. builds the QP of :mod:`~.rolling_problem` (a :class:`qpsolvers.Problem`, kept as
-   :attr:`RollingQP.problem`) and solves it with :func:`~.rolling_solvers.solve_rolling_qp`;
-4. integrates ``q ← q + q̇ dt`` (the other fingers keep still).
-
-A failed or infeasible QP raises :class:`RollingQPError` carrying the problem.
+"""Rolling a sphere fingertip on the object without sliding (EP1's motion), a differential-IK
+loop in the manner of pink. Each :meth:`RollingQP.step` computes the tip's placement, Jacobian
+(wrist, then the rolling finger) and ``J̇ q̇`` with Pinocchio, measures the contact with coal,
+reads the tactile sensor, builds the QP of :mod:`~.rolling_problem` (plain arrays), solves it with
+:func:`~.rolling_solvers.solve_rolling_qp` (in closed form unless a bound is active) and integrates
+``q ← q + q̇ dt`` (the other fingers keep still). The step's QP as a :class:`qpsolvers.Problem`
+(:attr:`RollingQP.problem`, :meth:`RollingQP.build`) is made only when asked for or when a backend
+solves it. A failed QP raises :class:`RollingQPError` carrying the problem.
 """
 
 from __future__ import annotations
@@ -26,7 +20,7 @@ import qpsolvers
 
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
-from .rolling_problem import JointBox, rolling_problem
+from .rolling_problem import JointBox, StepQP, step_qp
 from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -67,23 +61,20 @@ class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
     Args:
-        state: the hand state at the start of the roll; the roller steps on Pinocchio data of
-            its own and brings ``state`` up to its configuration when :attr:`state` is read.
+        state: the hand state at the start; the roller steps on Pinocchio data of its own and
+            brings ``state`` up to date when :attr:`state` is read.
         finger: the rolling finger (its tip must be a sphere).
-        axis: world rolling axis (unit after normalisation; tangent to the object at the
-            contact — its normal component is removed unless ``project_axis`` is False).
+        axis: world rolling axis, tangent at the contact (its normal component is removed
+            unless ``project_axis`` is False: EP1 keeps one axis over several legs).
         omega: rolling rate about ``axis``, rad/s (sign gives the direction).
         dt: time step, s (> 0).
         solver: the qpsolvers backend for steps with an active bound (``available_solvers()``).
-        scene: the hand and the object (required; keyword).
+        scene: the hand and the object (keyword).
         tactile: optional sensor; each step then carries a reading of its contact.
         weights: diagonal of W over the active joints (wrist then finger), default 1.
         gap_gain: β of the gap correction, in (0, 1].
-        project_axis: remove the axis' component along the current contact normal (default);
-            False keeps the given axis as it is (EP1 keeps one axis over several legs).
         second_order: targets of the step's average velocity (see :mod:`~.rolling_problem`).
-        closed_form: solve in closed form when no bound is active (see :mod:`~.rolling_solvers`);
-            False: the backend at every step.
+        closed_form: the closed form when no bound is active (see :mod:`~.rolling_solvers`).
 
     :meth:`retarget` starts another roll with the same roller (EP1 rolls six legs with one).
     """
@@ -125,8 +116,7 @@ class RollingQP:
         self.solver, self.dt, self.gap_gain = solver, float(dt), float(gap_gain)
         self.second_order, self.closed_form = bool(second_order), bool(closed_form)
         self.radius = hand.tip_radius(finger)
-        #: the active joints' indices in q and q̇ (the same: the hand model's finger and wrist joints
-        #: are 1-DoF, so q + q̇ dt is exact)
+        #: the active joints' indices in q and q̇ (the same: every joint is 1-DoF)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
         self.box = JointBox(
@@ -136,10 +126,8 @@ class RollingQP:
         if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
             raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
         self.weights = w
-        self._cost = np.diag(w)
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
-        # the roller's own Pinocchio data (the kinematics of its steps); live views of the tip's
-        # world translation and rotation in it, which follow every step
+        # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
         self._data = hand.model.createData()
         tip = self._data.oMf[self._fid]
@@ -147,8 +135,7 @@ class RollingQP:
         self._state = state
         self._qdot = np.zeros(hand.nv)
         self._zero = np.zeros(hand.nv)
-        #: the QP of the last step (or of :meth:`build`)
-        self.problem: qpsolvers.Problem | None = None
+        self._qp: StepQP | None = None  # the QP of the last step (or of build)
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
     def retarget(
@@ -170,7 +157,7 @@ class RollingQP:
         a = unit_vector("axis", axis)
         if project_axis:
             a = a - (a @ n) * n
-        norm = float(np.linalg.norm(a))
+        norm = math.sqrt(float(a @ a))  # np.linalg.norm's own arithmetic, without its checks
         if norm < 1e-6 or abs(a @ n) > 0.5 * norm:
             raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
         self.axis = a / norm
@@ -200,11 +187,17 @@ class RollingQP:
         drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
         return jacobian, drift
 
-    def _build(self) -> tuple[qpsolvers.Problem, Contact]:
+    @property
+    def problem(self) -> qpsolvers.Problem | None:
+        """The QP of the last step (or of :meth:`build`) as a :class:`qpsolvers.Problem` (a new one
+        on each read; None before the first step)."""
+        return None if self._qp is None else self._qp.problem()
+
+    def _build(self) -> tuple[StepQP, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
         jacobian, drift = self._kinematics()
         contact = self._probe.measure(self._centre)
-        problem = rolling_problem(
+        qp = step_qp(
             jacobian,
             drift if self.second_order else None,
             contact,
@@ -212,26 +205,26 @@ class RollingQP:
             self._omega_axis,
             self._q[self.active],
             self.box,
-            self._cost,
+            self.weights,
             self.dt,
             self.gap_gain,
         )
-        self.problem = problem
-        return problem, contact
+        self._qp = qp
+        return qp, contact
 
     def build(self) -> qpsolvers.Problem:
         """The QP of the next step at the current q, without solving it (pink's ``build_ik``)."""
-        return self._build()[0]
+        return self._build()[0].problem()
 
     def step(self) -> RollingStep:
         """Measure the contact, read the sensor, solve the QP, integrate one ``dt``."""
-        problem, contact = self._build()
+        qp, contact = self._build()
         rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
-        x, closed = solve_rolling_qp(problem, self.solver, self.closed_form)
+        x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
         self._qdot[self.active] = x
-        self._q[self.active] += x * self.dt
-        e0, e1, e2, e3, e4, e5 = (problem.A @ x - problem.b).tolist()
+        self._q += self._qdot * self.dt  # the other joints' q̇ is 0
+        e0, e1, e2, e3, e4, e5 = (qp.A @ x - qp.b).tolist()
         return RollingStep(
             contact,
             reading,

@@ -20,11 +20,16 @@ frame of :func:`~eos_svc.kinematics.geometry.tangent_pair`. The equality rows ar
 Second order: ``q̇`` is held for ``dt``, so the targets are asked
 of the step's average velocity ``M (J q̇ + ½ dt J̇ q̇_prev)``, i.e. ``b − ½ dt M J̇ q̇_prev``; the
 slip per step is then O(dt³) instead of O(dt²).
+
+:func:`step_qp` gives the step as plain arrays (:class:`StepQP`; the runner solves most steps in
+closed form from them, :mod:`~.rolling_solvers`); :meth:`StepQP.problem` (and
+:func:`rolling_problem`) the same QP as a :class:`qpsolvers.Problem` for any qpsolvers backend.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import qpsolvers
@@ -32,7 +37,7 @@ import qpsolvers
 from .geometry import tangent_pair
 from .scene import Contact
 
-__all__ = ["JointBox", "contact_rows", "rolling_problem"]
+__all__ = ["JointBox", "StepQP", "contact_rows", "rolling_problem", "step_qp", "velocity_bounds"]
 
 
 @dataclass(frozen=True)
@@ -43,12 +48,33 @@ class JointBox:
     upper: np.ndarray
     velocity: np.ndarray
 
-    def velocity_bounds(self, q: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-        """Bounds on q̇ for one step of ``dt`` s from ``q``: the velocity limits, tightened so that
-        ``q + q̇ dt`` stays within the position limits."""
-        lb = np.maximum(-self.velocity, (self.lower - q) / dt)
-        ub = np.minimum(self.velocity, (self.upper - q) / dt)
-        return lb, ub
+    @cached_property
+    def position_limits(self) -> np.ndarray:
+        """``[lower; upper]`` (2×n), derived once per box."""
+        return np.stack((self.lower, self.upper))
+
+    @cached_property
+    def velocity_floor(self) -> np.ndarray:
+        """``−velocity``, derived once per box."""
+        return -self.velocity
+
+
+class StepQP:
+    """The QP of one step as plain arrays: minimise ``½ xᵀ diag(weights) x`` subject to
+    ``A x = b`` and ``lb ≤ x ≤ ub`` (x: the active joints' velocities, SI)."""
+
+    __slots__ = ("A", "b", "lb", "ub", "weights")
+
+    def __init__(
+        self, weights: np.ndarray, A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray
+    ) -> None:
+        self.weights, self.A, self.b, self.lb, self.ub = weights, A, b, lb, ub
+
+    def problem(self) -> qpsolvers.Problem:
+        """The same QP as a :class:`qpsolvers.Problem` (for a qpsolvers backend)."""
+        return qpsolvers.Problem(
+            np.diag(self.weights), np.zeros(len(self.weights)), A=self.A, b=self.b, lb=self.lb, ub=self.ub
+        )
 
 
 def contact_rows(normal: np.ndarray, radius: float) -> np.ndarray:
@@ -60,14 +86,57 @@ def contact_rows(normal: np.ndarray, radius: float) -> np.ndarray:
     r = radius
     return np.array(
         (
-            (t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z),
-            (t2x, t2y, t2z, r * t1x, r * t1y, r * t1z),
-            (nx, ny, nz, 0.0, 0.0, 0.0),
-            (0.0, 0.0, 0.0, 1.0, 0.0, 0.0),
-            (0.0, 0.0, 0.0, 0.0, 1.0, 0.0),
-            (0.0, 0.0, 0.0, 0.0, 0.0, 1.0),
+            t1x, t1y, t1z, -r * t2x, -r * t2y, -r * t2z,
+            t2x, t2y, t2z, r * t1x, r * t1y, r * t1z,
+            nx, ny, nz, 0.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 1.0, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 1.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
         )
-    )
+    ).reshape(6, 6)  # fmt: skip
+
+
+def velocity_bounds(q: np.ndarray, box: JointBox, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """``(lb, ub)``: the velocity limits, tightened so that ``q + q̇ dt`` stays within the position
+    limits."""
+    reach = (box.position_limits - q) / dt  # the velocities that reach each position limit in dt
+    return np.maximum(box.velocity_floor, reach[0]), np.minimum(box.velocity, reach[1])
+
+
+def step_qp(
+    jacobian: np.ndarray,
+    drift: np.ndarray | None,
+    contact: Contact,
+    radius: float,
+    omega_axis: tuple[float, float, float],
+    q: np.ndarray,
+    box: JointBox,
+    weights: np.ndarray,
+    dt: float,
+    gap_gain: float,
+) -> StepQP:
+    """The QP of one step (module docstring) over the active joints.
+
+    Args:
+        jacobian: the tip frame's 6×nx Jacobian over the active joints (LOCAL_WORLD_ALIGNED).
+        drift: ``J̇ q̇_prev`` (the tip's classical acceleration at the last q̇ with q̈ = 0, 6,
+            LOCAL_WORLD_ALIGNED), or None for first-order targets.
+        contact: the measured contact (its normal, object → tip, and signed gap, m).
+        radius: the tip sphere's radius, m. omega_axis: ω a, the commanded angular velocity, rad/s.
+        q: the active joints' positions; box: their limits; weights: the diagonal of W (nx).
+        dt: the step, s; gap_gain: β in (0, 1].
+    """
+    M = contact_rows(contact.normal, radius)
+    wx, wy, wz = omega_axis
+    gap_target = -gap_gain * contact.distance / dt
+    if drift is None:
+        b = np.array((0.0, 0.0, gap_target, wx, wy, wz))
+    else:  # b − ½ dt M J̇ q̇_prev, on floats (the same roundings as on arrays)
+        h = 0.5 * dt
+        m0, m1, m2, m3, m4, m5 = (M @ drift).tolist()
+        b = np.array((0.0 - h * m0, 0.0 - h * m1, gap_target - h * m2, wx - h * m3, wy - h * m4, wz - h * m5))
+    lb, ub = velocity_bounds(q, box, dt)
+    return StepQP(weights, M @ jacobian, b, lb, ub)
 
 
 def rolling_problem(
@@ -78,25 +147,9 @@ def rolling_problem(
     omega_axis: tuple[float, float, float],
     q: np.ndarray,
     box: JointBox,
-    cost: np.ndarray,
+    weights: np.ndarray,
     dt: float,
     gap_gain: float,
 ) -> qpsolvers.Problem:
-    """The QP of one step (module docstring) as a :class:`qpsolvers.Problem` over the active joints.
-
-    Args:
-        jacobian: the tip frame's 6×nx Jacobian over the active joints (LOCAL_WORLD_ALIGNED).
-        drift: ``J̇ q̇_prev`` (the tip's classical acceleration at the last q̇ with q̈ = 0, 6,
-            LOCAL_WORLD_ALIGNED), or None for first-order targets.
-        contact: the measured contact (its normal, object → tip, and signed gap, m).
-        radius: the tip sphere's radius, m. omega_axis: ω a, the commanded angular velocity, rad/s.
-        q: the active joints' positions; box: their limits; cost: W (nx×nx, diagonal).
-        dt: the step, s; gap_gain: β in (0, 1].
-    """
-    M = contact_rows(contact.normal, radius)
-    wx, wy, wz = omega_axis
-    target = np.array((0.0, 0.0, -gap_gain * contact.distance / dt, wx, wy, wz))
-    if drift is not None:
-        target -= (0.5 * dt) * (M @ drift)
-    lb, ub = box.velocity_bounds(q, dt)
-    return qpsolvers.Problem(cost, np.zeros(len(q)), A=M @ jacobian, b=target, lb=lb, ub=ub)
+    """The QP of :func:`step_qp` (same arguments) as a :class:`qpsolvers.Problem`."""
+    return step_qp(jacobian, drift, contact, radius, omega_axis, q, box, weights, dt, gap_gain).problem()

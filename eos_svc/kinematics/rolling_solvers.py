@@ -1,15 +1,9 @@
-"""The solver runner of the rolling QP: solves a :class:`qpsolvers.Problem` built by
-:func:`~eos_svc.kinematics.rolling_problem.rolling_problem`.
+"""The solver of the rolling QP (:func:`~eos_svc.kinematics.rolling_problem.step_qp`).
 
-:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances:
-the no-slip residual is ≲ 1e-8 m/s). Its one accelerator: the problem has only equalities and box
-bounds and a diagonal ``P``, so the minimum-``P``-norm solution of the equalities
-(:func:`equality_optimum`, one Cholesky solve of a 6×6 system) is the QP's optimum whenever it
-lies within the bounds — then no backend is called. It is what nearly every step of EP1 takes
-(``benchmarks/bench_rolling.py``: with it, one EP1 run takes a few times less than with OSQP every
-step; ``tests/ep1/test_rolling.py`` checks it against qpsolvers within 1e-9 rad/s).
-
-A failed or infeasible QP raises :class:`RollingQPError`, which carries the problem.
+:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances).
+The problem has only equalities, box bounds and a diagonal ``W``, so the minimum-``W``-norm
+solution of the equalities (:func:`equality_optimum`) is the QP's optimum whenever it lies within
+the bounds: then no backend is called. A failed or infeasible QP raises :class:`RollingQPError`.
 """
 
 from __future__ import annotations
@@ -23,10 +17,11 @@ from scipy.linalg import lapack
 
 from eos_svc.errors import ComputationError
 
+from .rolling_problem import StepQP
+
 __all__ = ["BOUND_TOLERANCE", "RollingQPError", "available_solvers", "equality_optimum", "solve_rolling_qp"]
 
-#: tolerance on the bounds, rad/s or m/s: the closed form is taken when it meets the bounds to it
-#: (OSQP's own tolerance below: its solutions meet the bounds only to about as much)
+#: tolerance on the bounds, rad/s or m/s, of the closed form (OSQP's own tolerance below)
 BOUND_TOLERANCE = 1e-7
 
 #: settings per backend (the rest: the backend's defaults)
@@ -55,36 +50,34 @@ class RollingQPError(ComputationError):
         self.status = status
 
 
-def equality_optimum(problem: qpsolvers.Problem, tolerance: float = BOUND_TOLERANCE) -> np.ndarray | None:
-    """``argmin ½ xᵀ P x`` subject to ``A x = b`` (P diagonal), ``x = P⁻¹Aᵀ (A P⁻¹ Aᵀ)⁻¹ b``, when it
-    lies within ``[lb − tolerance, ub + tolerance]``: it is then the optimum of the whole QP (no bound
-    is active). None when a bound would be violated or ``A`` has not full row rank."""
-    A, b, lb, ub = problem.A, problem.b, problem.lb, problem.ub
-    assert A is not None and b is not None and lb is not None and ub is not None
-    A_scaled = A / problem.P.diagonal()  # A P⁻¹
-    _, y, info = lapack.dposv(A_scaled @ A.T, b)
+def equality_optimum(qp: StepQP, tolerance: float = BOUND_TOLERANCE) -> np.ndarray | None:
+    """``argmin ½ xᵀ W x`` subject to ``A x = b`` (W = diag(weights)), ``x = W⁻¹Aᵀ (A W⁻¹ Aᵀ)⁻¹ b``,
+    when it lies within ``[lb − tolerance, ub + tolerance]``: it is then the optimum of the whole QP
+    (no bound is active). None when a bound would be violated or ``A`` has not full row rank."""
+    A = qp.A
+    A_scaled = A / qp.weights  # A W⁻¹
+    _, y, info = lapack.dposv(A_scaled @ A.T, qp.b)
     if info != 0:
         return None
     x: np.ndarray = A_scaled.T @ y
     # the smallest slack to either bound, ≥ −tolerance (False on NaN)
-    return x if np.minimum(x - lb, ub - x).min() >= -tolerance else None
+    return x if np.minimum.reduce(np.minimum(x - qp.lb, qp.ub - x)) >= -tolerance else None
 
 
-def solve_rolling_qp(
-    problem: qpsolvers.Problem, solver: str = "osqp", closed_form: bool = True
-) -> tuple[np.ndarray, bool]:
-    """The joint velocities that solve ``problem``, and whether the closed form gave them:
+def solve_rolling_qp(qp: StepQP, solver: str = "osqp", closed_form: bool = True) -> tuple[np.ndarray, bool]:
+    """The joint velocities that solve ``qp``, and whether the closed form gave them:
     :func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
-    backend ``solver``.
+    backend ``solver`` on :meth:`StepQP.problem`.
 
     Raises:
         RollingQPError: the bounds are inconsistent or the backend finds no finite solution.
     """
     if closed_form:
-        x = equality_optimum(problem)
+        x = equality_optimum(qp)
         if x is not None:
             return x, True
-    if problem.lb is not None and problem.ub is not None and (problem.lb > problem.ub).any():
+    problem = qp.problem()
+    if (qp.lb > qp.ub).any():
         raise RollingQPError("joint limits leave no feasible velocity", problem, solver, "infeasible bounds")
     with warnings.catch_warnings():  # dense matrices converted for OSQP; OSQP's own status warning
         warnings.simplefilter("ignore")

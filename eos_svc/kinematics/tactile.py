@@ -138,4 +138,4 @@ class TactileSensor:
             if norm > 1e-12:
                 px, py, pz = px * r / norm, py * r / norm, pz * r / norm
         point = np.array((px, py, pz))
-        return TactileReading(contact.finger, point, point / r, in_contact, distance)
+        return TactileReading(contact.finger, point, np.array((px / r, py / r, pz / r)), in_contact, distance)

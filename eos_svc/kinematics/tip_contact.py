@@ -53,16 +53,11 @@ class SphereTipProbe:
         self._tf_tip.setTranslation(centre)
         res = self._result
         res.clear()  # a result at distance <= 0 would satisfy the next request as it is
-        d = float(self._distance(self._tf_obj, self._tf_tip, self._request, res))
+        dist = float(self._distance(self._tf_obj, self._tf_tip, self._request, res))
         p_obj = res.getNearestPoint1()
-        (cx, cy, cz), (ox, oy, oz) = centre.tolist(), p_obj.tolist()
-        dx, dy, dz = cx - ox, cy - oy, cz - oz
-        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
+        d = centre - p_obj
+        dx, dy, dz = d.tolist()
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)  # np.sum(d * d)'s arithmetic, without its wrapper
         # the tip centre outside the object: the normal through it (exact); else coal's
-        if norm > 1e-12 and d > -0.5 * self.radius:
-            nx, ny, nz = dx / norm, dy / norm, dz / norm
-        else:
-            nx, ny, nz = res.normal.tolist()
-        r = self.radius
-        tip = np.array((cx - r * nx, cy - r * ny, cz - r * nz))
-        return Contact(self.finger, d, tip, p_obj, np.array((nx, ny, nz)))
+        normal = d / norm if norm > 1e-12 and dist > -0.5 * self.radius else np.array(res.normal)
+        return Contact(self.finger, dist, centre - self.radius * normal, p_obj, normal)

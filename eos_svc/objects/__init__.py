@@ -3,7 +3,7 @@
 - :mod:`~eos_svc.objects.base`: :class:`SurfaceObject`, the abstract kind.
 - :mod:`~eos_svc.objects.sphere`, :mod:`~eos_svc.objects.ellipsoid`,
   :mod:`~eos_svc.objects.cylinder`, :mod:`~eos_svc.objects.capsule`,
-  :mod:`~eos_svc.objects.box`: the kinds.
+  :mod:`~eos_svc.objects.box`: the primitives; :mod:`~eos_svc.objects.mesh`: a triangle mesh.
 - :mod:`~eos_svc.objects.registry`: the kinds by name (:data:`KINDS`). See ``docs/objects.md``.
 """
 
@@ -12,16 +12,19 @@ from eos_svc.objects.box import Box
 from eos_svc.objects.capsule import Capsule
 from eos_svc.objects.cylinder import Cylinder
 from eos_svc.objects.ellipsoid import Ellipsoid
-from eos_svc.objects.registry import KINDS, from_dict, kind_of, make
+from eos_svc.objects.mesh import Mesh
+from eos_svc.objects.registry import FITTED_KINDS, KINDS, from_dict, kind_of, make
 from eos_svc.objects.sphere import Sphere
 
 __all__ = [
+    "FITTED_KINDS",
     "KINDS",
     "Box",
     "Capsule",
     "CurvatureUndefinedError",
     "Cylinder",
     "Ellipsoid",
+    "Mesh",
     "ObjectSizeError",
     "Sphere",
     "SurfaceObject",

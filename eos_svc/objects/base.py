@@ -12,8 +12,11 @@ Every kind gives:
   implementation), point-wise (:meth:`signed_distance`) and the closest surface point;
 - its differential geometry at a surface point (:meth:`principal_curvatures`,
   :meth:`curvature_form`): the ground truth for EP1's curvature estimate;
-- its extents, its coal shape (:attr:`geometry`), its Drake / MeshCat shape
-  (:meth:`drake_shape`) and its mass properties (:meth:`mass_properties`).
+- its extents and smallest width (:meth:`smallest_width`), its coal shape (:attr:`geometry`),
+  its Drake / MeshCat shape (:meth:`drake_shape`: the drawing; :meth:`drake_collision_shapes`:
+  what Drake's contact engine takes) and its mass properties (:meth:`mass_properties`);
+- its grasp rules (:meth:`closing_axes`, :meth:`approach_options`): the axes grasp synthesis
+  closes the hand across (GraspIt's primitive rules, Miller et al., ICRA 2003).
 
 Where the curvature is not defined (box edges and corners, cylinder rims) a
 :class:`CurvatureUndefinedError` is raised.
@@ -101,6 +104,23 @@ def unit(v: Array, n: Array, fallback: Array) -> Array:
     return out
 
 
+def perpendicular_unit(v: Array, axis: Array) -> Array | None:
+    """``v`` with its component along unit ``axis`` removed, normalised (None if ~parallel)."""
+    w = v - (v @ axis) * axis
+    n = float(np.linalg.norm(w))
+    return None if n < 1e-6 else w / n
+
+
+def distinct_units(vectors: list[Array | None], signed: bool) -> list[Array]:
+    """The unit ``vectors`` (Nones skipped) without near-repeats (cosine ≥ 0.999; of either sign
+    unless ``signed``), in order."""
+    out: list[Array] = []
+    for v in vectors:
+        if v is not None and all((v @ u if signed else abs(v @ u)) < 0.999 for u in out):
+            out.append(v)
+    return out
+
+
 class SurfaceObject(ABC):
     """A rigid convex object: a primitive shape at ``placement`` (world ← object)."""
 
@@ -113,6 +133,8 @@ class SurfaceObject(ABC):
     #: how the shape fit orients the kind: ``"none"`` (a sphere), ``"rotation"`` (a rotation
     #: vector about a start orientation) or ``"axis"`` (an axis tilted from a start axis)
     orientation: ClassVar[str] = "rotation"
+    #: the shape fit fits this kind to touches (a primitive with half sizes); False: a mesh
+    fittable: ClassVar[bool] = True
 
     def __init__(self, placement: pin.SE3 | None = None) -> None:
         if placement is None:
@@ -171,6 +193,31 @@ class SurfaceObject(ABC):
     @abstractmethod
     def drake_shape(self) -> Any:
         """The pydrake.geometry shape (Drake's validation and the MeshCat drawing)."""
+
+    def triangles(self) -> Array | None:
+        """The surface's triangles (F, 3, 3), object frame, m, when the kind is made of them
+        (a mesh: the flat pictures draw them), else None (a primitive: drawn from its coal shape)."""
+        return None
+
+    def drake_collision_shapes(self) -> list[Any]:
+        """The pydrake.geometry shapes Drake's contact engine takes, in the object frame
+        (default: :meth:`drake_shape`; a mesh: its convex pieces)."""
+        return [self.drake_shape()]
+
+    @abstractmethod
+    def smallest_width(self) -> tuple[float, str]:
+        """(the object's smallest width (m), the size field that sets it)."""
+
+    @abstractmethod
+    def closing_axes(self) -> list[tuple[str, Array]]:
+        """The closing axes (unsigned, world) through the centre of mass for the kind, each
+        with a word on it (see :mod:`eos_svc.grasp.frames`)."""
+
+    def approach_options(self, closing: Array) -> list[Array | None]:
+        """Approach directions (signed, world, ⟂ ``closing``) of the kind besides the hand's own
+        (None where one is parallel to ``closing``): by default the object's axes."""
+        A = self.rotation
+        return [perpendicular_unit(sign * A[:, i], closing) for i in range(3) for sign in (1.0, -1.0)]
 
     @property
     @abstractmethod
@@ -235,16 +282,22 @@ class SurfaceObject(ABC):
         return out
 
     # -- distance -------------------------------------------------------------------------
+    def local_distances(self, P: Array) -> tuple[Array, Array]:
+        """Signed distance (N,) m and outward gradient (N, 3) at local points ``P`` (N, 3) of
+        this object (default: :meth:`local_distance` at its half sizes)."""
+        d, g = self.local_distance(P[None], self.half_sizes[None, None])
+        return d[0], g[0]
+
     def signed_distances(self, points: Array) -> tuple[Array, Array]:
         """(signed distance (N,) m, outward gradient (N, 3) world) at world ``points`` (N, 3)."""
-        d, g = self.local_distance(self.to_local(points)[None], self.half_sizes[None, None])
-        return d[0], g[0] @ self.placement.rotation.T
+        d, g = self.local_distances(self.to_local(points))
+        return d, g @ self.placement.rotation.T
 
     def _local_closest(self, p_world: Array) -> tuple[Array, Array, float]:
         """(local point, its closest surface point (local), signed distance) of a world point."""
         p = self.to_local(vector3("p_world", p_world))
-        d, g = self.local_distance(p[None, None], self.half_sizes[None, None])
-        return p, p - d[0, 0] * g[0, 0], float(d[0, 0])
+        d, g = self.local_distances(p[None])
+        return p, p - d[0] * g[0], float(d[0])
 
     def signed_distance(self, p_world: Array) -> float:
         """Signed distance from ``p_world`` to the surface, m (negative inside)."""
@@ -272,6 +325,11 @@ class SurfaceObject(ABC):
     def half_extents(self) -> Array:
         """Half extents of the object's bounds along the world x, y, z axes (m)."""
         return self.local_bounds(self.rotation)
+
+    def depth_below_centre(self) -> float:
+        """How far the object reaches below its centre (world −z, m): its lowest point is at
+        ``centre[2] − depth_below_centre()`` (a centred primitive: its vertical half extent)."""
+        return float(self.half_extents()[2])
 
     # -- curvature ------------------------------------------------------------------------
     def _local_form(self, p_world: Array) -> tuple[Array, Array]:

@@ -97,6 +97,14 @@ class Box(SurfaceObject):
 
         return DrakeBox(*self.size)
 
+    def smallest_width(self) -> tuple[float, str]:
+        return float(self.size.min()), "size"
+
+    def closing_axes(self) -> list[tuple[str, Array]]:
+        """Across each pair of opposite faces."""
+        A = self.rotation
+        return [(f"across faces {name}", A[:, i]) for i, name in enumerate(("±x", "±y", "±z"))]
+
     @property
     def volume(self) -> float:
         return float(np.prod(self.size))

@@ -10,9 +10,20 @@ import coal
 import numpy as np
 import pinocchio as pin
 
-from eos_svc.objects.base import EDGE_TOLERANCE, TINY, Array, CurvatureUndefinedError, SurfaceObject, positive
+from eos_svc.objects.base import (
+    EDGE_TOLERANCE,
+    TINY,
+    Array,
+    CurvatureUndefinedError,
+    SurfaceObject,
+    distinct_units,
+    perpendicular_unit,
+    positive,
+)
 
 _X = np.array([1.0, 0.0, 0.0])
+_Y = np.array([0.0, 1.0, 0.0])
+_Z = np.array([0.0, 0.0, 1.0])
 
 
 class Cylinder(SurfaceObject):
@@ -106,6 +117,31 @@ class Cylinder(SurfaceObject):
         from pydrake.geometry import Cylinder as DrakeCylinder
 
         return DrakeCylinder(self.radius, self.length)
+
+    def smallest_width(self) -> tuple[float, str]:
+        if self.length < 2.0 * self.radius:
+            return self.length, "length"
+        return 2.0 * self.radius, "radius"
+
+    def closing_axes(self) -> list[tuple[str, Array]]:
+        """Across the axis (its normals, the vertical's and the hand's y's parts across it), and
+        along it when the object is no longer than wide (on the end faces)."""
+        A = self.rotation
+        axis = A[:, 2]
+        across = distinct_units(
+            [A[:, 0], A[:, 1], perpendicular_unit(_Z, axis), perpendicular_unit(_Y, axis)], signed=False
+        )
+        axes = [("across the axis", g) for g in across]
+        if self.length <= 2.0 * self.radius:
+            axes.append(("along the axis", axis))
+        return axes
+
+    def approach_options(self, closing: Array) -> list[Array | None]:
+        """The object's axes, and the direction across both the grip and the axis."""
+        return [
+            *super().approach_options(closing),
+            perpendicular_unit(np.cross(closing, self.rotation[:, 2]), closing),
+        ]
 
     @property
     def volume(self) -> float:

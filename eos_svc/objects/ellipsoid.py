@@ -140,6 +140,15 @@ class Ellipsoid(SurfaceObject):
 
         return DrakeEllipsoid(*self.radii)
 
+    def smallest_width(self) -> tuple[float, str]:
+        return 2.0 * float(self.radii.min()), "radii"
+
+    def closing_axes(self) -> list[tuple[str, Array]]:
+        """Across its two shorter axes."""
+        A, order = self.rotation, np.argsort(self.radii)
+        words = ("shortest", "middle")
+        return [(f"across its {w} axis", A[:, int(i)]) for w, i in zip(words, order[:2], strict=True)]
+
     @property
     def volume(self) -> float:
         return 4.0 / 3.0 * math.pi * float(np.prod(self.radii))

@@ -14,10 +14,15 @@ from eos_svc.objects.box import Box
 from eos_svc.objects.capsule import Capsule
 from eos_svc.objects.cylinder import Cylinder
 from eos_svc.objects.ellipsoid import Ellipsoid
+from eos_svc.objects.mesh import Mesh
 from eos_svc.objects.sphere import Sphere
 
-#: every object kind by its JSON name, in the order the shape fit breaks ties
-KINDS: dict[str, type[SurfaceObject]] = {cls.kind: cls for cls in (Sphere, Ellipsoid, Cylinder, Capsule, Box)}
+#: every object kind by its JSON name; the fitted ones first, in the order the shape fit breaks ties
+KINDS: dict[str, type[SurfaceObject]] = {
+    cls.kind: cls for cls in (Sphere, Ellipsoid, Cylinder, Capsule, Box, Mesh)
+}
+#: the kinds the shape fit fits to touches (the primitives: ``fittable``)
+FITTED_KINDS: dict[str, type[SurfaceObject]] = {name: cls for name, cls in KINDS.items() if cls.fittable}
 
 
 def kind_of(name: str, field: str = "object.shape") -> type[SurfaceObject]:

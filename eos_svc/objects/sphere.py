@@ -70,6 +70,20 @@ class Sphere(SurfaceObject):
 
         return DrakeSphere(self.radius)
 
+    def smallest_width(self) -> tuple[float, str]:
+        return 2.0 * self.radius, "radius"
+
+    def closing_axes(self) -> list[tuple[str, Array]]:
+        """About a vertical and a horizontal diameter."""
+        return [
+            ("about a vertical diameter", _UP),
+            ("about a horizontal diameter", np.array([0.0, 1.0, 0.0])),
+        ]
+
+    def approach_options(self, closing: Array) -> list[Array | None]:
+        """None besides the hand's own: every direction is alike on a sphere."""
+        return []
+
     @property
     def volume(self) -> float:
         return 4.0 / 3.0 * math.pi * self.radius**3

@@ -16,6 +16,7 @@ present, no undeclared field, and each field of the declared type (``float`` acc
 import functools
 import sys
 import types
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any, Literal, Union, get_args, get_origin
 
@@ -86,6 +87,8 @@ ShapeEntry = TypedDict(
         "pose_known": NotRequired[bool],
         "evidence": NotRequired[dict[str, Any]],
         "bounds": NotRequired[list[Vector] | None],
+        "open_faces": NotRequired[list[dict[str, Any]]],
+        "approximate": NotRequired[bool],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -96,7 +99,10 @@ half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (w
 ``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
 e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
 JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
-postulate rests on) and ``bounds`` (world-axis bounds [lo, hi], m).
+postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``open_faces`` (the
+fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` size and
+``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`)
+and ``approximate`` (True: the convex hull of the touches, no primitive explaining them).
 """
 
 
@@ -220,7 +226,16 @@ OUTSIDE_WRITERS: dict[str, str] = {
 }
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
-    {keys.OUTCOME, keys.SHAPE, keys.CURVATURE, keys.D_OVER_H, keys.EP1_RUNS, keys.TARGET}
+    {
+        keys.OUTCOME,
+        keys.SHAPE,
+        keys.CURVATURE,
+        keys.D_OVER_H,
+        keys.EP1_RUNS,
+        keys.TARGET,
+        keys.EP1_CONTACT,
+        keys.EP2_TOUCHES,
+    }
 )
 
 #: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)
@@ -228,15 +243,18 @@ _ALIASES: dict[str, Any] = {"FingerState": FingerState}
 
 
 # --- the runtime check --------------------------------------------------------------------
-def check_entry(key: str, value: Any) -> None:
-    """Check ``value`` against entry ``key``'s declared type.
+def check_entry(key: str, value: Any, extra: Mapping[str, Entry] | None = None) -> None:
+    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES`, or in
+    ``extra``: the entries plug-in agents declare for themselves).
 
     Raises:
         ContractError: ``field`` names the entry (``board.shape``) or the part at fault
             (``board.shape.confidence``), ``reason`` says what is wrong; also for an entry
-            that :data:`ENTRIES` does not declare.
+            that neither declares.
     """
     entry = ENTRIES.get(key)
+    if entry is None and extra:
+        entry = extra.get(key)
     if entry is None:
         raise ContractError(
             f"board.{key}", "no type is declared for this entry in eos_svc.schema.board_entries"

@@ -16,6 +16,7 @@ JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 from __future__ import annotations
 
 import math
+import re
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -31,6 +32,15 @@ SHAPE_SIZE_FIELDS: dict[str, tuple[str, ...]] = {
     "box": ("size",),
     "capsule": ("radius", "length"),
 }
+#: the mesh kind (:mod:`eos_svc.objects.mesh`): a file, or vertices and faces inline, and a scale
+MESH = "mesh"
+MESH_FIELDS = ("file", "vertices", "faces", "scale")
+MESH_FILE_TYPES = (".obj", ".stl", ".ply")
+#: the most vertices and triangles an inline mesh may have (a request stays small)
+MAX_MESH_VERTICES = 5000
+MAX_MESH_FACES = 10000
+#: the scale bounds of a mesh (its file's units to metres: 1e-3 for millimetres)
+MAX_MESH_SCALE = 1000.0
 #: size fields holding three numbers
 VECTOR_SIZE_FIELDS = frozenset({"radii", "size"})
 #: largest object dimension accepted (m); anything bigger is not a hand-held object
@@ -45,6 +55,15 @@ MAX_TACTILE_NOISE = 0.01
 #: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
 DEFAULT_FRICTION = 0.5
 MAX_FRICTION = 10.0
+#: largest joint-encoder noise σ a request may ask for (rad)
+MAX_ENCODER_NOISE = 0.05
+#: largest link-length calibration error σ a request may ask for (m)
+MAX_LINK_ERROR = 0.005
+
+#: most plug-in agents a request may name
+MAX_PLUGINS = 16
+#: longest plug-in name accepted (characters)
+MAX_PLUGIN_NAME = 200
 
 DEFAULT_OBJECT: dict[str, Any] = {"shape": "sphere", "radius": 0.03, "position": [0.21, 0.02, -0.015]}
 
@@ -80,11 +99,8 @@ def _vector3(value: object, name: str) -> tuple[float, float, float]:
 
 
 def _integer(value: object, name: str, lo: int, hi: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
+    if isinstance(value, bool) or not isinstance(value, int):  # 1e5 or 5.0 too: integers are integers
+        raise ValidationError(name, f"must be an integer, got {type(value).__name__}")
     if not lo <= value <= hi:
         raise ValidationError(name, f"must be in [{lo}, {hi}], got {value}")
     return value
@@ -97,12 +113,65 @@ def _check_keys(data: Mapping[str, Any], allowed: set[str], prefix: str) -> None
             raise ValidationError(where, f"unknown field (allowed: {', '.join(sorted(allowed))})")
 
 
+def _plugin_names(value: object) -> tuple[str, ...]:
+    """The request's plug-in names, checked: a list of distinct non-empty strings."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
+        raise ValidationError("agents", f"must be a list of plug-in names, got {type(value).__name__}")
+    if len(value) > MAX_PLUGINS:
+        raise ValidationError("agents", f"names at most {MAX_PLUGINS} plug-ins, got {len(value)}")
+    for i, name in enumerate(value):
+        if not isinstance(name, str) or not name or len(name) > MAX_PLUGIN_NAME:
+            raise ValidationError(
+                f"agents[{i}]", f"must be a plug-in name of 1 to {MAX_PLUGIN_NAME} characters"
+            )
+        if name in value[:i]:
+            raise ValidationError(f"agents[{i}]", f"plug-in {name!r} is named twice")
+    return tuple(value)
+
+
+def mesh_size(size: Mapping[str, Any]) -> dict[str, Any]:
+    """A mesh's size fields checked: ``file`` (an .obj, .stl or .ply path) or ``vertices`` and
+    ``faces`` inline (at most :data:`MAX_MESH_VERTICES` / :data:`MAX_MESH_FACES`), and ``scale``
+    (> 0, default 1). Errors name the field (``object.vertices[12][1]``) and the reason."""
+    for key in size:
+        if key not in MESH_FIELDS:
+            raise ValidationError(f"object.{key}", f"not a field of a mesh (takes {', '.join(MESH_FIELDS)})")
+    scale = _positive(size.get("scale", 1.0), "object.scale", MAX_MESH_SCALE)
+    inline = "vertices" in size or "faces" in size
+    if ("file" in size) == inline:
+        raise ValidationError("object.file", "a mesh takes either a file or vertices and faces inline")
+    if not inline:
+        file = size["file"]
+        if not isinstance(file, str) or not file.lower().endswith(MESH_FILE_TYPES):
+            raise ValidationError("object.file", f"must be a path ending in {', '.join(MESH_FILE_TYPES)}")
+        return {"file": file, "scale": scale}
+    for key in ("vertices", "faces"):
+        if key not in size:
+            raise ValidationError(f"object.{key}", "is required with an inline mesh")
+    vertices, faces = size["vertices"], size["faces"]
+    for key, rows, limit in (("vertices", vertices, MAX_MESH_VERTICES), ("faces", faces, MAX_MESH_FACES)):
+        if not isinstance(rows, (list, tuple)) or len(rows) < 4:
+            raise ValidationError(f"object.{key}", "must be a list of at least 4 triples")
+        if len(rows) > limit:
+            raise ValidationError(f"object.{key}", f"{len(rows)} {key} exceed the limit of {limit}")
+    V = tuple(_vector3(v, f"object.vertices[{i}]") for i, v in enumerate(vertices))
+    F = []
+    for i, f in enumerate(faces):
+        if not isinstance(f, (list, tuple)) or len(f) != 3:
+            raise ValidationError(f"object.faces[{i}]", "must be 3 vertex indices")
+        F.append(tuple(_integer(k, f"object.faces[{i}][{j}]", 0, len(V) - 1) for j, k in enumerate(f)))
+    extent = max(max(v[a] for v in V) - min(v[a] for v in V) for a in range(3)) * scale
+    if extent > MAX_OBJECT_SIZE:
+        raise ValidationError("object.vertices", f"the mesh spans {extent:.3f} m > {MAX_OBJECT_SIZE} m")
+    return {"vertices": V, "faces": tuple(F), "scale": scale}
+
+
 @dataclass(frozen=True)
 class ObjectSpec:
     """The object to grasp: a primitive shape at a pose (metres, radians).
 
     Attributes:
-        shape: one of :data:`SHAPE_SIZE_FIELDS`.
+        shape: one of :data:`SHAPE_SIZE_FIELDS`, or :data:`MESH` (its fields: :func:`mesh_size`).
         size: the shape's size fields, e.g. ``{"radius": 0.03}`` or
             ``{"size": (0.05, 0.05, 0.05)}`` (box: full edge lengths).
         position: centre in the world frame (m).
@@ -115,9 +184,14 @@ class ObjectSpec:
     rpy: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
+        if self.shape == MESH:
+            object.__setattr__(self, "size", mesh_size(self.size))
+            self._check_pose()
+            return
         if self.shape not in SHAPE_SIZE_FIELDS:
             raise ValidationError(
-                "object.shape", f"unknown shape {self.shape!r} (choose from {', '.join(SHAPE_SIZE_FIELDS)})"
+                "object.shape",
+                f"unknown shape {self.shape!r} (choose from {', '.join((*SHAPE_SIZE_FIELDS, MESH))})",
             )
         wanted = SHAPE_SIZE_FIELDS[self.shape]
         clean: dict[str, Any] = {}
@@ -138,6 +212,9 @@ class ObjectSpec:
                     f"object.{key}", f"not a size of a {self.shape} (takes {', '.join(wanted)})"
                 )
         object.__setattr__(self, "size", clean)
+        self._check_pose()
+
+    def _check_pose(self) -> None:
         position = _vector3(self.position, "object.position")
         for i, v in enumerate(position):
             if abs(v) > MAX_POSITION:
@@ -145,27 +222,14 @@ class ObjectSpec:
         object.__setattr__(self, "position", position)
         object.__setattr__(self, "rpy", _vector3(self.rpy, "object.rpy"))
 
-    @classmethod
-    def from_checked(
-        cls,
-        shape: str,
-        size: dict[str, Any],
-        position: tuple[float, float, float],
-        rpy: tuple[float, float, float],
-    ) -> ObjectSpec:
-        """Build from values already checked exactly as ``__post_init__`` checks them, without
-        checking them again: ``size`` holds the shape's size fields in :data:`SHAPE_SIZE_FIELDS`
-        order (floats; tuples of 3 floats for :data:`VECTOR_SIZE_FIELDS`), all floats finite and
-        within the bounds. For a decoder that enforced those constraints itself (the service's
-        typed wire decoder, :mod:`eos_svc.service.request_wire`); anyone else: the constructor."""
-        spec = object.__new__(cls)
-        spec.__dict__.update(shape=shape, size=size, position=position, rpy=rpy)  # frozen: no setattr
-        return spec
-
     @property
     def diameter(self) -> float:
         """Characteristic diameter (m): the sphere's 2R, otherwise the largest extent across the grip."""
         s = self.size
+        if self.shape == MESH:  # the mesh's own: it must be read
+            from eos_svc.objects import make
+
+            return make(self.shape, s, self.position, self.rpy).diameter
         if self.shape == "sphere":
             return 2.0 * s["radius"]
         if self.shape == "ellipsoid":
@@ -184,6 +248,14 @@ class ObjectSpec:
         shape = data["shape"]
         if not isinstance(shape, str):
             raise ValidationError(f"{prefix}.shape", f"must be a string, got {type(shape).__name__}")
+        if shape == MESH:
+            _check_keys(data, {"shape", "position", "rpy", *MESH_FIELDS}, prefix)
+            return cls(
+                shape=shape,
+                size={k: data[k] for k in MESH_FIELDS if k in data},
+                position=data.get("position", DEFAULT_OBJECT["position"]),
+                rpy=data.get("rpy", (0.0, 0.0, 0.0)),
+            )
         size_fields = set(SHAPE_SIZE_FIELDS.get(shape, ()))
         all_sizes = {k for v in SHAPE_SIZE_FIELDS.values() for k in v}
         _check_keys(data, {"shape", "position", "rpy"} | all_sizes, prefix)
@@ -205,10 +277,47 @@ class ObjectSpec:
         """JSON form."""
         out: dict[str, Any] = {"shape": self.shape}
         for key, value in self.size.items():
-            out[key] = list(value) if isinstance(value, tuple) else value
+            if key in ("vertices", "faces"):
+                out[key] = [list(row) for row in value]
+            else:
+                out[key] = list(value) if isinstance(value, tuple) else value
         out["position"] = list(self.position)
         out["rpy"] = list(self.rpy)
         return out
+
+
+#: a hand name a request may give (the registered hands' names are of this form)
+_HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
+
+
+@dataclass(frozen=True)
+class Table:
+    """A horizontal support surface under the object: its top at world z = ``height`` (m).
+
+    The planner knows it: no hand motion below it, no probe from under it, no grasp whose hand
+    would touch it; the Drake validation welds a box there."""
+
+    height: float
+
+    def __post_init__(self) -> None:
+        z = _number(self.height, "table.height")
+        if abs(z) > MAX_POSITION:
+            raise ValidationError("table.height", f"must be within ±{MAX_POSITION} m, got {z}")
+        object.__setattr__(self, "height", z)
+
+    @classmethod
+    def from_dict(cls, data: object) -> Table:
+        """Validate and build from ``{"height": z}``."""
+        if not isinstance(data, Mapping):
+            raise ValidationError("table", f'must be an object {{"height": z}}, got {type(data).__name__}')
+        _check_keys(data, {"height"}, "table")
+        if "height" not in data:
+            raise ValidationError("table.height", "is required")
+        return cls(data["height"])
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON form."""
+        return {"height": self.height}
 
 
 @dataclass(frozen=True)
@@ -227,6 +336,17 @@ class PlanRequest:
         world: where the hand acts, one of :data:`WORLDS`: ``"kinematic"`` (exact, the object
             fixed) or ``"drake"`` (the object a free body on a table; success needs the lift
             test). The JSON form carries it only when it is not ``"kinematic"``.
+        agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
+            point or ``module:attr``; a service instance takes only those it offers); at most
+            :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
+        encoder_noise: standard deviation of every finger joint encoder's reading (rad), in
+            [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
+        link_error: standard deviation of every finger link's length calibration error (m),
+            in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
+        hand: the name of a registered hand to plan with (``eos hands``; a service plans
+            with the hands it registered), or ``None`` for the planner's default hand.
+        table: the support surface the object rests on (``"table": {"height": z}``), or
+            ``None`` (the default, the paper's scene: the object floats, no support).
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -237,8 +357,19 @@ class PlanRequest:
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
     world: str = "kinematic"
+    agents: tuple[str, ...] = ()
+    encoder_noise: float = 0.0
+    link_error: float = 0.0
+    hand: str | None = None
+    table: Table | None = None
 
     def __post_init__(self) -> None:
+        if self.table is not None and not isinstance(self.table, Table):
+            raise ValidationError("table", f"must be a Table or None, got {type(self.table).__name__}")
+        if self.hand is not None and not (isinstance(self.hand, str) and _HAND_NAME.fullmatch(self.hand)):
+            raise ValidationError(
+                "hand", f"must be a hand name of 1-64 characters A-Z a-z 0-9 _ . -, got {self.hand!r}"
+            )
         if not isinstance(self.obj, ObjectSpec):
             raise ValidationError("object", f"must be an ObjectSpec, got {type(self.obj).__name__}")
         if not isinstance(self.weights, Weights):
@@ -257,32 +388,16 @@ class PlanRequest:
         object.__setattr__(self, "friction", mu)
         if self.world not in WORLDS:
             raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
-
-    @classmethod
-    def from_checked(
-        cls,
-        obj: ObjectSpec,
-        weights: Weights,
-        seed: int,
-        tactile_noise: float,
-        max_cycles: int,
-        deadline_s: float | None,
-        friction: float,
-    ) -> PlanRequest:
-        """Build from values already checked exactly as ``__post_init__`` checks them (ints for
-        ``seed`` and ``max_cycles``, floats otherwise, all within their bounds), without checking
-        them again; see :meth:`ObjectSpec.from_checked`."""
-        request = object.__new__(cls)
-        request.__dict__.update(
-            obj=obj,
-            weights=weights,
-            seed=seed,
-            tactile_noise=tactile_noise,
-            max_cycles=max_cycles,
-            deadline_s=deadline_s,
-            friction=friction,
-        )
-        return request
+        if self.agents:
+            object.__setattr__(self, "agents", _plugin_names(self.agents))
+        for name, limit, unit in (
+            ("encoder_noise", MAX_ENCODER_NOISE, "rad"),
+            ("link_error", MAX_LINK_ERROR, "m"),
+        ):
+            value = _number(getattr(self, name), name)
+            if not 0.0 <= value <= limit:
+                raise ValidationError(name, f"must be in [0, {limit}] {unit}, got {value}")
+            object.__setattr__(self, name, value)
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
@@ -295,22 +410,52 @@ class PlanRequest:
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
             data,
-            {"object", "weights", "seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "world"},
+            {
+                "object",
+                "weights",
+                "seed",
+                "tactile_noise",
+                "max_cycles",
+                "deadline_s",
+                "friction",
+                "encoder_noise",
+                "link_error",
+                "agents",
+                "hand",
+                "table",
+                "world",
+            },
             "",
         )
+        if data.get("table") is not None:
+            kwargs_table = Table.from_dict(data["table"])
         kwargs: dict[str, Any] = {}
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in ("seed", "tactile_noise", "max_cycles", "deadline_s", "friction", "world"):
+        for key in (
+            "seed",
+            "tactile_noise",
+            "max_cycles",
+            "deadline_s",
+            "friction",
+            "encoder_noise",
+            "link_error",
+            "agents",
+            "hand",
+                "world",
+        ):
             if key in data:
                 kwargs[key] = data[key]
+        if data.get("table") is not None:
+            kwargs["table"] = kwargs_table
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON form (round-trips through :meth:`from_dict`)."""
-        out = {
+        """JSON form (round-trips through :meth:`from_dict`); ``encoder_noise`` and
+        ``link_error`` only when not 0 (the exact kinematics, their default); ``table`` only when set."""
+        out: dict[str, Any] = {
             "object": self.obj.to_dict(),
             "weights": self.weights.to_dict(),
             "seed": self.seed,
@@ -321,4 +466,14 @@ class PlanRequest:
         }
         if self.world != "kinematic":
             out["world"] = self.world
+        if self.agents:
+            out["agents"] = list(self.agents)
+        if self.encoder_noise:
+            out["encoder_noise"] = self.encoder_noise
+        if self.link_error:
+            out["link_error"] = self.link_error
+        if self.hand is not None:
+            out["hand"] = self.hand
+        if self.table is not None:  # absent in the paper's scene: the JSON form stays as it was
+            out["table"] = self.table.to_dict()
         return out

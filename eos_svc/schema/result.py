@@ -61,6 +61,8 @@ class PlanResult:
         q_final: the hand configuration the end agent judged (None when it never acted or
             the trace was not kept).
         d_over_h: estimated diameter over hand height (None if never estimated).
+        touches: the contacts the object's postulate rests on (EP1's and EP2's).
+        probes: the guarded probes EP2 ran (touched, missed or blocked) plus EP1's runs.
         seed: the request's seed. ``wall_time_s``: seconds for the whole call.
         trace: every cycle record (when kept).
         validation: the Drake validation of the final grasp
@@ -97,6 +99,8 @@ class PlanResult:
     q_final: tuple[float, ...] | None = field(default=None, repr=False)
     validation: dict | None = None
     world: dict | None = None
+    touches: int = 0
+    probes: int = 0
 
     @property
     def success(self) -> bool:
@@ -177,6 +181,8 @@ class PlanResult:
             "d_over_h": self.d_over_h,
             "hand_height": self.hand_height,
             "ep1_runs": self.ep1_runs,
+            "touches": self.touches,
+            "probes": self.probes,
             "seed": self.seed,
             "weights": self.weights,
             "wall_time_s": self.wall_time_s,

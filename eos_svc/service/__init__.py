@@ -4,7 +4,9 @@ See ``docs/service.md``. Key expressions live under ``eos/@v1[/<namespace>]``;
 messages are JSON with ``"schema": 1``.
 """
 
-from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
+from eos_svc.service.client import EosClient
+from eos_svc.service.instances import ServiceUnavailableError
+from eos_svc.service.plan_attempt import PlanOutcome
 from eos_svc.service.protocol import SCHEMA_VERSION, RequestError, decode_request, encode_request
 from eos_svc.service.server import PlanService, ServiceStats
 from eos_svc.service.session import free_port, loopback, make_config

@@ -12,7 +12,9 @@ and prints one table. The probes:
 - :func:`stranger_cancel`: a second session that learned a running goal's id from its status
   tries to cancel it (``forbidden``; the owner's cancel works);
 - :func:`unplannable`: objects out of reach, overlapping the hand, too large
-  (``invalid_request`` naming the field).
+  (``invalid_request`` naming the field);
+- :func:`squatter`: a second session that read the owner's goal ids from the status topic
+  holds the ids that would come next were they a counter; the owner's next plans all succeed.
 """
 
 from __future__ import annotations
@@ -178,6 +180,49 @@ def stranger_cancel(owner: EosClient, stranger: EosClient, instance: str | None 
     status = box["out"].status if "out" in box else "no answer"
     probe.ok = probe.codes == Counter({proto.E_FORBIDDEN: 2}) and owner_ok and status == "cancelled"
     probe.detail = f"goal id read from the status topic; owner's cancel -> {status}"
+    return probe
+
+
+def squatter(owner: EosClient, squatter: EosClient, instance: str, plans: int = 3) -> Probe:
+    """The squatter watches the statuses, learns the owner's goal id and sends long plans under the
+    ids that would follow it were ids a counter (``g-<hex>-<n+1>``, ...; for any other form, the id
+    with ``1``, ``2``, ... appended) to ``instance``; then the owner plans ``plans`` times there:
+    expected, every plan answered with a result (no ``duplicate_goal``)."""
+    probe = Probe(f"squatter holds the guessed next {plans} goal ids")
+    learned: list[str] = []
+    sub = squatter.watch(lambda kind, msg: learned.append(msg["goal_id"]) if kind == "status" else None)
+    first = owner.plan(PlanRequest(max_cycles=2), instance=instance).goal_id
+    deadline = time.monotonic() + 5
+    while first not in learned and time.monotonic() < deadline:
+        time.sleep(0.01)
+    stem, _, number = first.rpartition("-")
+    guesses = [
+        f"{stem}-{int(number) + i}" if number.isdigit() else f"{first}{i}" for i in range(1, plans + 1)
+    ]
+    held = [
+        threading.Thread(
+            target=lambda g=g: squatter.plan(PlanRequest(max_cycles=40), goal_id=g, instance=instance),
+            daemon=True,
+        )
+        for g in guesses
+    ]
+    for t in held:
+        t.start()
+    time.sleep(0.3)  # held: running or queued
+    for _ in range(plans):
+        probe.sent += 1
+        try:
+            probe.codes[owner.plan(PlanRequest(max_cycles=2), instance=instance, timeout=30).status] += 1
+        except proto.RequestError as err:
+            probe.codes[err.code] += 1
+        probe.answered_once += 1
+    sub.undeclare()
+    for t in held:
+        t.join(30)
+    probe.ok = sum(probe.codes[c] for c in proto.ERROR_CODES) == 0
+    probe.detail = f"the owner's first id {first} read from the status topic; failed plans: " + str(
+        sum(probe.codes[c] for c in proto.ERROR_CODES)
+    )
     return probe
 
 

@@ -1,14 +1,11 @@
-"""Wire protocol of the EOS planning service: key expressions and message schemas.
+"""Wire protocol of the EOS planning service: key expressions and messages.
 
-Everything on the wire is UTF-8 JSON (RFC 8259) carrying ``"schema": 1``, read
-strictly: UTF-8 only (a leading UTF-8 byte-order mark is ignored; UTF-16/32 and
-invalid bytes such as encoded surrogates are refused), no NaN/Infinity, no
-duplicate keys in an object, no integer beyond ±2**64 (refused naming its
-field). Every error reply is bounded: the field and reason it echoes are
-clipped (:data:`MAX_FIELD_JSON`, :data:`MAX_REASON_JSON`), so a reply stays
-under 4 KiB whatever the request. Key expressions live under a versioned prefix
-``eos/@v1`` (``@v1`` is a verbatim chunk: wildcards never cross it), with an
-optional namespace: ``eos/@v1/<namespace>``. With ``P`` the prefix:
+Every message is UTF-8 JSON carrying ``"schema": 1``, read strictly
+(:mod:`eos_svc.service.wire_json`). Every error reply is bounded: the field and reason it echoes
+are clipped (:data:`MAX_FIELD_JSON`, :data:`MAX_REASON_JSON`), so a reply stays under 4 KiB
+whatever the request. Key expressions live under a versioned prefix ``eos/@v1`` (``@v1`` is a
+verbatim chunk: wildcards never cross it), with an optional namespace: ``eos/@v1/<namespace>``.
+With ``P`` the prefix:
 
 =================================  =========================  ==========================================
 key expression                     Zenoh entity               message
@@ -20,12 +17,12 @@ key expression                     Zenoh entity               message
 ``P/cancel/<goal_id>``             queryable ``P/cancel/*``   request: :func:`encode_cancel` (the goal's
                                                               ``cancel_token``); reply: ``{"goal_id",
                                                               "instance", "found"}`` or ``forbidden``
-``P/goal/<goal_id>/cycle``         publication (BLOCK)        ``{"schema", "goal_id", "instance", "seq",
+``P/goal/<goal_id>/cycle``         publication (DROP)         ``{"schema", "goal_id", "instance", "seq",
                                                               "record"}`` — one per cycle, seq 1, 2, ...
-``P/goal/<goal_id>/status``        publication (BLOCK)        ``{"schema", "goal_id", "instance", "state",
+``P/goal/<goal_id>/status``        publication (DROP)         ``{"schema", "goal_id", "instance", "state",
                                                               ...}`` — ``running`` with the ``request``,
                                                               then ``done`` with ``status``, ``cycles``
-                                                              and ``result``
+                                                              and ``result`` (also the plan's reply)
 =================================  =========================  ==========================================
 
 This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
@@ -33,25 +30,25 @@ This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
 
 from __future__ import annotations
 
-import base64
 import hmac
-import json
-import math
-import os
 import re
+import secrets
 from collections.abc import Mapping
 from json.encoder import encode_basestring_ascii as _json_str
 from typing import Any, NamedTuple
 
 import msgspec
 
-from eos_svc.errors import ContractError, ValidationError
-from eos_svc.records import CycleRecord, to_jsonable
+from eos_svc.errors import ValidationError
 from eos_svc.schema.request import PlanRequest
-from eos_svc.service.ids import ID_PATTERN as ID_PATTERN  # the protocol's names, defined there
-from eos_svc.service.ids import TOKEN_PATTERN as TOKEN_PATTERN
-from eos_svc.service.ids import is_id, is_token
-from eos_svc.service.request_wire import decode_fast
+from eos_svc.service.wire_json import (
+    DuplicateKeyError,
+    HugeIntegerError,
+    check_integers,
+    dumps,
+    loads_strict,
+    parse,
+)
 
 #: version of the message schemas (the ``"schema"`` field of every message)
 SCHEMA_VERSION = 1
@@ -59,6 +56,8 @@ SCHEMA_VERSION = 1
 ROOT = "eos/@v1"
 #: largest plan request accepted (bytes of JSON)
 MAX_REQUEST_BYTES = 64 * 1024
+#: largest cancel request accepted (bytes of JSON)
+MAX_CANCEL_BYTES = 1024
 
 # Error codes carried by error replies.
 E_TOO_LARGE = "payload_too_large"
@@ -83,13 +82,16 @@ ERROR_CODES = frozenset(
         E_FORBIDDEN,
     }
 )
-#: largest cancel request accepted (bytes of JSON)
-MAX_CANCEL_BYTES = 1024
 
 #: plan states published on ``P/goal/<goal_id>/status``
 STATE_RUNNING = "running"
 STATE_DONE = "done"
 
+#: goal ids and namespaces: one plain key-expression chunk (no wildcards, no ``@``, no ``/``)
+ID_PATTERN = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.\-]{0,63}")
+#: a cancel token: the goal owner's secret (16-128 URL-safe characters), sent with the request and
+#: with a cancel, never published
+TOKEN_PATTERN = re.compile(r"[A-Za-z0-9_\-]{16,128}")
 
 #: largest JSON size of the field name an error reply echoes (bytes, escaped)
 MAX_FIELD_JSON = 256
@@ -97,9 +99,19 @@ MAX_FIELD_JSON = 256
 MAX_REASON_JSON = 1536
 
 
+def is_id(value: str) -> bool:
+    """Whether ``value`` is a goal id, instance id or namespace (:data:`ID_PATTERN`)."""
+    return ID_PATTERN.fullmatch(value) is not None
+
+
+def is_token(value: str) -> bool:
+    """Whether ``value`` has the form of a cancel token (:data:`TOKEN_PATTERN`)."""
+    return TOKEN_PATTERN.fullmatch(value) is not None
+
+
 def clip(text: str, max_json: int) -> str:
     """``text`` cut (with a trailing ``…``) so that its JSON string form is at most ``max_json`` bytes."""
-    if len(text) * 12 + 2 <= max_json or len(_json_str(text)) <= max_json:  # 12: \udXXX\udXXX
+    if len(_json_str(text)) <= max_json:
         return text
     cut = text[: max_json - 3]
     while len(_json_str(cut + "…")) > max_json:
@@ -186,281 +198,10 @@ def goal_keys(pfx: str, goal_id: str = "*") -> str:
     return f"{pfx}/goal/{goal_id}/*"
 
 
-def _reject_constant(name: str) -> Any:
-    raise ValidationError("payload", f"{name} is not valid JSON")
-
-
-class DuplicateKeyError(ValidationError):
-    """An object of the message has the same key twice (RFC 8259: names SHOULD be unique)."""
-
-    def __init__(self, field: str, reason: str = "duplicate key in an object") -> None:
-        super().__init__(field, reason)
-        self.key = field  #: the repeated key
-
-
-class _HugeInt:
-    """An integer literal too long to be any field's value (kept as text, named later)."""
-
-    __slots__ = ("digits",)
-
-    def __init__(self, digits: str) -> None:
-        self.digits = digits
-
-
-def _parse_int(literal: str) -> Any:
-    """``int`` for literals up to 20 digits (all ≤ 2**64 need); longer ones are never converted
-    (Python refuses > 4,300 digits, and big ones cost quadratic time): a :class:`_HugeInt`."""
-    return int(literal) if len(literal) <= 21 else _HugeInt(literal)
-
-
-def _unique_object(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
-    """A JSON object, refusing a key given twice."""
-    obj = dict(pairs)
-    if len(obj) != len(pairs):
-        seen: set[str] = set()
-        for key, _ in pairs:
-            if key in seen:
-                raise DuplicateKeyError(key)
-            seen.add(key)
-    return obj
-
-
-#: one strict decoder for every message (``json.loads`` with options builds a new one per call)
-_DECODER = json.JSONDecoder(
-    parse_constant=_reject_constant, parse_int=_parse_int, object_pairs_hook=_unique_object
-)
-#: one compact strict encoder (what ``json.dumps(separators=..., allow_nan=False)`` builds per call)
-_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
-_BOM = b"\xef\xbb\xbf"
-_tuple_new = tuple.__new__
-_msgspec_decode = msgspec.json.Decoder().decode
-_msgspec_encode = msgspec.json.Encoder().encode
-
-
-def _text(data: bytes | bytearray | str) -> str:
-    """JSON text from UTF-8 bytes (strict: invalid bytes, encoded surrogates, UTF-16/32 refused;
-    a leading UTF-8 byte-order mark ignored, as RFC 8259 §8.1 allows)."""
-    if isinstance(data, str):
-        return data[1:] if data.startswith("\ufeff") else data
-    if not isinstance(data, (bytes, bytearray)):
-        raise ContractError(
-            "payload", f"the JSON object must be str, bytes or bytearray, not {type(data).__name__}"
-        )
-    if data.startswith(_BOM):
-        data = data[3:]
-    elif b"\x00" in data[:4] or data[:2] in (b"\xff\xfe", b"\xfe\xff"):  # what json.detect_encoding reads
-        raise ValidationError("payload", "not UTF-8: UTF-16 or UTF-32 text (the wire is UTF-8)")
-    return data.decode("utf-8")  # strict: a UnicodeDecodeError (a ValueError) names the byte
-
-
-def loads_strict(data: bytes | str) -> Any:
-    """Parse strict JSON (see the module doc); raises ValueError (an integer beyond ±2**64
-    included, named by where it is) or RecursionError."""
-    value = _DECODER.decode(_text(data))
-    if _LONG_DIGITS.search(data.encode() if isinstance(data, str) else data):
-        try:
-            _check_integers(value, "", None)
-        except RequestError as err:
-            raise ValidationError(err.field, err.reason) from None
-    return value
-
-
-def loads_message(data: bytes) -> Any:
-    """Parse a message *from the service* (reply, cycle, status) fast, with msgspec: strict
-    UTF-8, no NaN/Infinity (a duplicate key keeps its last value: requests, which come from
-    anyone, go through :func:`decode_envelope` instead). Raises ValueError or RecursionError."""
-    return _msgspec_decode(data)
-
-
-def encode_result(obj: Any) -> bytes:
-    """A plan result (or any message body) as compact JSON bytes, fast (msgspec; non-finite
-    floats become ``null``); values msgspec cannot encode (NumPy scalars and arrays, objects
-    with ``to_dict``) go through ``to_jsonable`` first, and msgspec writes that: the same bytes
-    as converting first whenever the plain values agree."""
-    try:
-        return _msgspec_encode(obj)
-    except (TypeError, ValueError, OverflowError, msgspec.EncodeError):
-        return _msgspec_encode(to_jsonable(obj))
-
-
-def dumps(obj: Any) -> bytes:
-    """Compact strict JSON bytes."""
-    return _ENCODER.encode(obj).encode()
-
-
-# ---------------------------------------------------------------------- cycle records on the wire
-_float_repr = float.__repr__
-#: float -> its JSON text: rating values, weights and many board values repeat from cycle to cycle
-_FLOAT_TEXT: dict[float, str] = {}
-_FLOAT_TEXT_MAX = 4096
-
-
-def _float_json(x: float) -> str:
-    """JSON text of a float as ``dumps(to_jsonable(x))`` writes it (non-finite: ``null``)."""
-    if x == 0.0:  # 0.0 and -0.0 are equal keys: never cached
-        return _float_repr(x)
-    s = _FLOAT_TEXT.get(x)
-    if s is None:
-        if not math.isfinite(x):
-            return "null"
-        s = _float_repr(x)
-        if len(_FLOAT_TEXT) < _FLOAT_TEXT_MAX:
-            _FLOAT_TEXT[x] = s
-    return s
-
-
-def _value_json(v: Any) -> str:
-    """JSON text of any record value, as ``dumps(to_jsonable(v))`` writes it."""
-    t = type(v)
-    if t is float:
-        return _float_json(v)
-    if t is str:
-        return _json_str(v)
-    if v is None:
-        return "null"
-    if v is True:
-        return "true"
-    if v is False:
-        return "false"
-    if t is int:
-        return int.__repr__(v)
-    if t is tuple and v and all([type(x) is float for x in v]):
-        # a flat tuple of floats: the hand's configuration (board entry hand_q), written as the
-        # new value of one cycle and the old value of the next — the same tuple, encoded once
-        last = _last_vector[0]
-        if v is last[0]:
-            return last[1]
-        text = "[" + ",".join([_float_repr(x) if math.isfinite(x) else "null" for x in v]) + "]"
-        _last_vector[0] = (v, text)
-        return text
-    return _ENCODER.encode(to_jsonable(v))
-
-
-#: (the last float tuple encoded, its JSON) in one slot, read and replaced whole (thread-safe as
-#: _last_weights); tuples are immutable, so the same object always has the same text
-_last_vector: list[tuple[Any, str]] = [((), "")]
-
-
-#: agent name -> ``{"agent":"<name>","default":`` (the fixed start of its rating row)
-_RATING_HEAD: dict[str, str] = {}
-_ELIGIBLE = {True: ',"eligible":true}', False: ',"eligible":false}'}
-#: (the last Weights seen, its JSON) in one slot: read and replaced whole, so workers running
-#: plans with different weights never pair one's Weights with the other's JSON
-_last_weights: list[tuple[Any, str]] = [(None, "")]
-
-
-def cycle_record_json(record: CycleRecord) -> str:
-    """``CycleRecord.to_dict()`` as compact strict JSON, without building the dict.
-
-    The same text as ``dumps(to_jsonable(record.to_dict()))`` (checked by the tests), written
-    straight from the record with the fixed parts and repeated floats cached: a cycle is
-    encoded once per cycle in the service's planner thread.
-    """
-    weights = record.weights
-    last = _last_weights[0]
-    if weights is last[0]:
-        weights_json = last[1]
-    else:
-        weights_json = _value_json(weights.to_dict())
-        _last_weights[0] = (weights, weights_json)
-    fj = _float_json
-    vj = _value_json
-    rows = []
-    for r in record.ratings:
-        name = r.name
-        head = _RATING_HEAD.get(name) if type(name) is str else None
-        if head is None:
-            head = '{"agent":' + vj(name) + ',"default":'
-            if type(name) is str and len(_RATING_HEAD) < 1024:
-                _RATING_HEAD[name] = head
-        d, o, le, tot, el = r.default, r.opportunistic, r.learned, r.total, r.eligible
-        rows.append(
-            head
-            + (fj(d) if type(d) is float else vj(d))
-            + ',"opportunistic":'
-            + (fj(o) if type(o) is float else vj(o))
-            + ',"learned":'
-            + (fj(le) if type(le) is float else vj(le))
-            + ',"total":'
-            + (fj(tot) if type(tot) is float else vj(tot))
-            + (_ELIGIBLE[el] if type(el) is bool else ',"eligible":' + vj(el) + "}")
-        )
-    outcome = record.outcome
-    changes = [
-        '{"key":' + vj(c.key) + ',"old":' + vj(c.old) + ',"new":' + vj(c.new) + "}" for c in record.changes
-    ]
-    return (
-        '{"seq":'
-        + vj(record.seq)
-        + ',"stage":'
-        + vj(record.stage)
-        + ',"stage_cycle":'
-        + vj(record.stage_cycle)
-        + ',"weights":'
-        + weights_json
-        + ',"ratings":['
-        + ",".join(rows)
-        + '],"chosen":'
-        + vj(record.chosen)
-        + ',"outcome":'
-        + ("null" if outcome is None else vj(outcome.value))
-        + ',"detail":'
-        + vj(record.detail)
-        + ',"changes":['
-        + ",".join(changes)
-        + '],"elapsed_s":'
-        + vj(record.elapsed_s)
-        + "}"
-    )
-
-
-#: fresh cancel tokens, made :data:`_TOKEN_BATCH` at a time (one ``os.urandom`` call, as
-#: ``secrets.token_urlsafe`` makes each); emptied in a forked child, which must not reuse its
-#: parent's secrets
-_TOKENS: list[str] = []
-_TOKEN_BATCH = 64
-os.register_at_fork(after_in_child=_TOKENS.clear)
-
-
+# ---------------------------------------------------------------------- cancel
 def new_cancel_token() -> str:
-    """A fresh random cancel token: 128 bits from the OS's CSPRNG, URL-safe base64 (22 characters),
-    each handed out once (``list.pop`` is atomic: threads may share the batch)."""
-    try:
-        return _TOKENS.pop()
-    except IndexError:
-        raw = os.urandom(16 * _TOKEN_BATCH)
-        _TOKENS.extend(
-            base64.urlsafe_b64encode(raw[i : i + 16]).rstrip(b"=").decode() for i in range(0, len(raw), 16)
-        )
-        return _TOKENS.pop()
-
-
-def encode_request(
-    goal_id: str,
-    request: PlanRequest | Mapping[str, Any],
-    cancel_token: str | None = None,
-    watch: bool | None = None,
-) -> bytes:
-    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,]
-    ["watch": ...,] <PlanRequest fields>}``. Without a ``cancel_token`` nobody can cancel the
-    goal. ``watch``: whether the requester subscribes to the goal's messages before sending
-    (see :class:`Envelope`); ``None`` leaves it out and the service asks Zenoh instead.
-
-    A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
-    their shortest round-trip digits, e.g. ``1e-05`` as ``0.00001``); a mapping is sent as given,
-    through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
-    envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
-    if cancel_token is not None:
-        envelope["cancel_token"] = cancel_token
-    if watch is not None:
-        envelope["watch"] = bool(watch)
-    if isinstance(request, PlanRequest):
-        return _msgspec_encode({**envelope, **request.to_dict()})  # no key of the body is the envelope's
-    body = dict(request)
-    if not body or body.keys() & envelope.keys():  # the body's fields win, as in a merged dict
-        return dumps({**envelope, **body})
-    # the envelope spliced before the body's own JSON (no merged dict): the same bytes
-    return dumps(envelope)[:-1] + b"," + dumps(body)[1:]
+    """A fresh random cancel token: 128 bits from the OS's CSPRNG, URL-safe base64 (22 characters)."""
+    return secrets.token_urlsafe(16)
 
 
 def encode_cancel(cancel_token: str | None) -> bytes:
@@ -487,30 +228,29 @@ def token_matches(expected: str | None, given: str | None) -> bool:
     return hmac.compare_digest(expected.encode(), given.encode())
 
 
-#: largest |integer| on the wire (no field needs more; bigger ones do not fit a float)
-MAX_WIRE_INT = 2**64
+# ---------------------------------------------------------------------- plan requests
+def encode_request(
+    goal_id: str,
+    request: PlanRequest | Mapping[str, Any],
+    cancel_token: str | None = None,
+    watch: bool | None = None,
+) -> bytes:
+    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,]
+    ["watch": ...,] <PlanRequest fields>}``. Without a ``cancel_token`` nobody can cancel the
+    goal. ``watch``: whether the requester subscribes to the goal's messages before sending
+    (see :class:`Envelope`); ``None`` leaves it out and the service asks Zenoh instead.
 
-
-#: 20 digits in a row: the only way to write an integer with |x| > 2**64 (= 18446744073709551616)
-_LONG_DIGITS = re.compile(rb"[0-9]{20}")
-
-
-def _check_integers(value: Any, path: str, goal_id: str | None) -> None:
-    """Reject integers too large for any field, naming where they are."""
-    stack: list[tuple[Any, str]] = [(value, path)]
-    while stack:
-        v, where = stack.pop()
-        if isinstance(v, dict):
-            stack.extend((item, f"{where}.{k}" if where else str(k)) for k, item in v.items())
-        elif isinstance(v, list):
-            stack.extend((item, f"{where}[{i}]") for i, item in enumerate(v))
-        elif isinstance(v, _HugeInt) or (
-            isinstance(v, int) and not isinstance(v, bool) and abs(v) > MAX_WIRE_INT
-        ):
-            digits = len(v.digits.lstrip("-")) if isinstance(v, _HugeInt) else len(str(abs(v)))
-            raise RequestError(
-                E_INVALID, where or "request", f"integer too large ({digits} digits; |x| ≤ 2**64)", goal_id
-            )
+    A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
+    their shortest round-trip digits); a mapping is sent as given (its fields win over the
+    envelope's), through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
+    envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
+    if cancel_token is not None:
+        envelope["cancel_token"] = cancel_token
+    if watch is not None:
+        envelope["watch"] = bool(watch)
+    if isinstance(request, PlanRequest):
+        return msgspec.json.encode({**envelope, **request.to_dict()})
+    return dumps({**envelope, **dict(request)})
 
 
 class Envelope(NamedTuple):
@@ -535,7 +275,6 @@ Envelope.__new__.__annotations__ = {
     "watch": bool | None,
 }
 
-
 #: the envelope's keys around a plan request's own fields
 _ENVELOPE_KEYS = frozenset(("schema", "goal_id", "cancel_token", "watch"))
 
@@ -549,11 +288,8 @@ def decode_request(
 
 
 def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MAX_REQUEST_BYTES) -> Envelope:
-    """Decode and validate a plan request with its envelope (goal id, cancel token).
-
-    A request in the form the clients send (every field present and valid) takes one typed
-    msgspec decode (:func:`~eos_svc.service.request_wire.decode_fast`); anything else, the strict
-    stdlib parser and the field-by-field checks, which name the field and the reason.
+    """Decode and validate a plan request with its envelope (goal id, cancel token, watch hint):
+    the strict parser, then every field checked in turn.
 
     Raises:
         RequestError: and nothing else, whatever the bytes — with the code, the field and the reason.
@@ -561,19 +297,10 @@ def decode_envelope(payload: bytes | bytearray | memoryview, max_bytes: int = MA
     if len(payload) > max_bytes:
         raise RequestError(E_TOO_LARGE, "request", f"{len(payload)} bytes > limit {max_bytes}")
     raw = payload if isinstance(payload, bytes) else bytes(payload)
-    fast = decode_fast(raw)  # the clients' form, in one typed decode
-    if fast is not None:
-        return _tuple_new(Envelope, fast)  # a NamedTuple made in C
-    return decode_checked(raw)
-
-
-def decode_checked(raw: bytes) -> Envelope:
-    """The full path of :func:`decode_envelope` (any size): the strict stdlib parser, then every
-    field checked in turn; raises a :class:`RequestError` naming the field and the reason."""
     try:
-        data = _DECODER.decode(_text(raw))
+        data = parse(raw)
     except DuplicateKeyError as exc:
-        raise RequestError(E_NOT_JSON, clip(exc.key, MAX_FIELD_JSON), "duplicate key in an object") from None
+        raise RequestError(E_NOT_JSON, exc.key, "duplicate key in an object") from None
     except ValidationError as exc:  # not UTF-8 at all (UTF-16/32), NaN/Infinity
         raise RequestError(E_NOT_JSON, "request", exc.reason) from None
     except UnicodeDecodeError as exc:
@@ -588,8 +315,10 @@ def decode_checked(raw: bytes) -> Envelope:
         raise RequestError(E_INVALID, "request", f"must be a JSON object, got {type(data).__name__}")
     goal_raw = data.get("goal_id")
     goal_id = goal_raw if isinstance(goal_raw, str) and is_id(goal_raw) else None
-    if _LONG_DIGITS.search(raw):  # an integer beyond 2**64 has ≥ 20 digits: only then look for it
-        _check_integers(data, "", goal_id)
+    try:
+        check_integers(data, raw)
+    except HugeIntegerError as exc:
+        raise RequestError(E_INVALID, exc.field, exc.reason, goal_id) from None
     if "schema" not in data:
         raise RequestError(E_SCHEMA, "schema", "is required", goal_id)
     schema = data["schema"]
@@ -618,6 +347,13 @@ def decode_checked(raw: bytes) -> Envelope:
         raise RequestError(E_INVALID, exc.field or "request", exc.reason, goal_id) from None
     except (ArithmeticError, TypeError, ValueError, RecursionError) as exc:  # e.g. float(10**400)
         raise RequestError(E_INVALID, "request", f"unacceptable value: {str(exc)[:200]}", goal_id) from None
+    if "file" in request.obj.size:  # a mesh: the service reads no file of its host's
+        raise RequestError(
+            E_INVALID,
+            "object.file",
+            "the service reads no files: send the mesh inline (vertices, faces)",
+            goal_id,
+        )
     return Envelope(goal_id, request, token, watch)
 
 

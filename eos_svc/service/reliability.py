@@ -3,7 +3,8 @@
     python -m eos_svc.service.reliability load   [--instances 2 --clients 4 --plans 25]
     python -m eos_svc.service.reliability fault  # two instances, one SIGKILLed mid-load
     python -m eos_svc.service.reliability freeze # two instances, one SIGSTOPped mid-load
-    python -m eos_svc.service.reliability abuse  # big payloads, mutated requests, wildcard, stranger cancel
+    python -m eos_svc.service.reliability abuse  # big and mutated requests, wildcard, stranger, squatter
+    python -m eos_svc.service.reliability slow-watcher  # others' plan times with a watcher that never drains
     python -m eos_svc.service.reliability all    # every run above, one table
 
 Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
@@ -22,7 +23,6 @@ from __future__ import annotations
 import argparse
 import json
 import signal
-import subprocess
 import sys
 import threading
 import time
@@ -32,87 +32,15 @@ from typing import Any
 
 import zenoh
 
-from eos_svc.errors import ComputationError, ValidationError
+from eos_svc.errors import ValidationError
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import EosClient, PlanOutcome, ServiceUnavailableError
-from eos_svc.service.session import direct_callback, free_port, loopback, make_config
-
-
-@dataclass
-class Server:
-    """One ``eos serve`` subprocess."""
-
-    port: int
-    proc: subprocess.Popen[str]
-    instance: str
-    stats: dict[str, int] | None = None
-
-
-def start_servers(
-    n: int,
-    *,
-    planner: str = "grasp",
-    workers: int = 2,
-    queue: int = 16,
-    lease_ms: int | None = None,
-    cycle_delay: float | None = None,
-) -> list[Server]:
-    """Start ``n`` service processes on loopback; the first listens, the others also connect to it."""
-    servers: list[Server] = []
-    for i in range(n):
-        port = free_port()
-        cmd = [
-            sys.executable,
-            "-m",
-            "eos_svc.cli",
-            "serve",
-            "--listen",
-            loopback(port),
-            "--instance",
-            f"inst-{i}",
-            "--planner",
-            planner,
-            "--workers",
-            str(workers),
-            "--queue",
-            str(queue),
-            "--log-level",
-            "warning",
-        ]
-        if servers:
-            cmd += ["--connect", loopback(servers[0].port)]
-        if lease_ms is not None:
-            cmd += ["--lease-ms", str(lease_ms)]
-        if cycle_delay is not None:
-            cmd += ["--cycle-delay", str(cycle_delay)]
-        proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        assert proc.stdout is not None
-        line = proc.stdout.readline()
-        if "serving" not in line:
-            proc.kill()
-            err = proc.stderr.read() if proc.stderr else ""
-            raise ComputationError(f"eos serve did not start: {line}{err}")
-        servers.append(Server(port, proc, f"inst-{i}"))
-    return servers
-
-
-def stop_servers(servers: list[Server]) -> None:
-    """SIGTERM the live servers (SIGCONT first, in case one is frozen) and read their final stats."""
-    for s in servers:
-        if s.proc.poll() is None:
-            s.proc.send_signal(signal.SIGCONT)
-            s.proc.send_signal(signal.SIGTERM)
-    for s in servers:
-        try:
-            out, _ = s.proc.communicate(timeout=15)
-        except subprocess.TimeoutExpired:
-            s.proc.kill()
-            out, _ = s.proc.communicate()
-        for line in (out or "").splitlines():
-            if "stopped;" in line:
-                s.stats = json.loads(line.split("stopped;", 1)[1].strip().replace("'", '"'))
+from eos_svc.service.client import EosClient
+from eos_svc.service.plan_attempt import PlanOutcome
+from eos_svc.service.serve_processes import counters_consistent, start_servers, stop_servers
+from eos_svc.service.session import direct_callback, loopback, make_config
+from eos_svc.service.slow_watcher import run_slow_watcher
 
 
 @dataclass
@@ -135,12 +63,14 @@ class Report:
 
     @property
     def ok(self) -> bool:
-        """Every request answered exactly once, every stream complete and contiguous."""
+        """Every request answered exactly once, every stream complete and contiguous, every
+        instance's counters consistent."""
         return (
             self.answered == self.requested
             and not self.failed
             and not self.incomplete
             and not self.observer_gaps
+            and all(counters_consistent(s) for s in self.server_stats.values())
         )
 
     def row(self) -> abuse.Probe:
@@ -159,32 +89,6 @@ class Report:
         )
         probe.detail = "; ".join(notes)
         return probe
-
-    def print(self) -> None:
-        """Human-readable counts."""
-        print(f"== reliability {self.mode}: {'OK' if self.ok else 'FAILED'} in {self.wall_s:.1f} s")
-        if self.event:
-            print(f"   event: {self.event}")
-        print(
-            f"   requests {self.requested}, answered {self.answered} (exactly once each: "
-            f"{self.answered == self.requested and not self.failed}), retried on another instance "
-            f"{self.retried}"
-        )
-        print(f"   statuses {dict(self.statuses)}")
-        print(
-            f"   cycles received by clients {self.cycles_received}, "
-            f"incomplete streams {len(self.incomplete)}; "
-            f"observer saw {self.observer_cycles} cycles, gaps {len(self.observer_gaps)}"
-        )
-        for name, st in self.server_stats.items():
-            print(f"   {name}: {st if st is not None else 'killed (no stats)'}")
-        for what, items in (
-            ("failed", self.failed),
-            ("incomplete", self.incomplete),
-            ("gaps", self.observer_gaps),
-        ):
-            if items:
-                print(f"   {what}: {items[:10]}{' ...' if len(items) > 10 else ''}")
 
 
 class Observer:
@@ -326,7 +230,7 @@ def run_abuse(
     inst-1 (every cycle slowed to 20 ms) runs the goal a stranger tries to cancel.
     """
     servers = start_servers(1, planner=planner)
-    servers += _start_more(servers[0], planner)
+    servers += start_servers(1, planner=planner, cycle_delay=0.02, join=servers[0], first_index=1)
     endpoints = [loopback(s.port) for s in servers]
     rows: list[abuse.Probe] = []
     owner = EosClient.open(make_config(connect=endpoints))
@@ -349,6 +253,7 @@ def run_abuse(
             rows.append(abuse.unplannable(session, key))
         rows.append(abuse.wildcard_plan(session, owner.prefix, len(servers)))
         rows.append(abuse.stranger_cancel(owner, stranger, instance=servers[1].instance))
+        rows.append(abuse.squatter(owner, stranger, instance=servers[1].instance))
         memory = abuse.Probe(f"memory of {servers[0].instance} (RSS)")
         growth = after_mutated - start
         memory.ok = growth <= RSS_BOUND_MB
@@ -363,24 +268,13 @@ def run_abuse(
         stop_servers(servers)
     if servers[0].stats is not None:
         rows[-1].detail += f"; {servers[0].instance}: {servers[0].stats}"
+    counters = abuse.Probe("counters of every instance")
+    counters.ok = all(s.stats is not None and counters_consistent(s.stats) for s in servers)
+    counters.detail = "received == replied_ok + replied_err + left_to_peers: " + ", ".join(
+        f"{s.instance} {counters_consistent(s.stats) if s.stats else 'no stats'}" for s in servers
+    )
+    rows.append(counters)
     return rows
-
-
-def _start_more(first: Server, planner: str) -> list[Server]:
-    """A second instance connected to ``first``, every cycle slowed to 20 ms (long goals to cancel)."""
-    port = free_port()
-    cmd = [
-        sys.executable, "-m", "eos_svc.cli", "serve", "--listen", loopback(port), "--connect",
-        loopback(first.port), "--instance", "inst-1", "--planner", planner, "--cycle-delay", "0.02",
-        "--log-level", "warning",
-    ]  # fmt: skip
-    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    assert proc.stdout is not None
-    line = proc.stdout.readline()
-    if "serving" not in line:
-        proc.kill()
-        raise ServiceUnavailableError(f"eos serve did not start: {line}")
-    return [Server(port, proc, "inst-1")]
 
 
 def print_table(rows: list[abuse.Probe]) -> None:
@@ -398,7 +292,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m eos_svc.service.reliability", description=__doc__.splitlines()[0]
     )
-    parser.add_argument("mode", choices=("load", "fault", "freeze", "abuse", "all"))
+    parser.add_argument("mode", choices=("load", "fault", "freeze", "abuse", "slow-watcher", "all"))
     parser.add_argument("--instances", type=int, default=2, help="service processes (fault/freeze: ≥ 2)")
     parser.add_argument("--clients", type=int, default=4, help="concurrent clients, each its own session")
     parser.add_argument("--plans", type=int, default=25, help="plans per client")
@@ -409,6 +303,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--big", type=int, default=100, help="abuse: oversized payloads sent")
     parser.add_argument("--big-mb", type=float, default=10.0, help="abuse: size of each (MB)")
     parser.add_argument("--mutated", type=int, default=10_000, help="abuse: mutated requests sent")
+    parser.add_argument("--window", type=float, default=20.0, help="slow-watcher: each load window (s)")
     args = parser.parse_args(argv)
     for name in ("instances", "clients", "plans"):
         if getattr(args, name) < 1 or getattr(args, name) > 1000:
@@ -416,8 +311,11 @@ def main(argv: list[str] | None = None) -> int:
     if not 0 <= args.big <= 10_000 or not 0 <= args.mutated <= 1_000_000 or not 0 < args.big_mb <= 100:
         parser.error("--big: [0, 10000]; --mutated: [0, 1000000]; --big-mb: (0, 100]")
     rows: list[abuse.Probe] = []
-    modes = ("load", "fault", "freeze", "abuse") if args.mode == "all" else (args.mode,)
+    modes = ("load", "fault", "freeze", "abuse", "slow-watcher") if args.mode == "all" else (args.mode,)
     for mode in modes:
+        if mode == "slow-watcher":
+            rows.append(run_slow_watcher(window_s=args.window, clients=args.clients, planner=args.planner))
+            continue
         if mode == "abuse":
             rows += run_abuse(big=args.big, big_mb=args.big_mb, mutated=args.mutated, planner=args.planner)
             continue

@@ -2,17 +2,13 @@
 
 from __future__ import annotations
 
-import functools
 import json
 import socket
-import types
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 import zenoh
-
-from eos_svc.service.zenoh_threads import kept_thread_state
 
 #: default listening endpoint of ``eos serve``
 DEFAULT_LISTEN = "tcp/127.0.0.1:7447"
@@ -76,29 +72,8 @@ def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | 
     per query (≈ 1 ms each), and a process that exits with such an entity
     still declared hangs at interpreter shutdown. ``indirect`` is marked
     unstable in zenoh-python 1.x; without it the default handler is used.
-
-    A ``callback`` or ``drop`` that runs Python code runs with the Zenoh thread's Python state
-    kept between calls (:func:`~eos_svc.service.zenoh_threads.kept_thread_state`); a built-in
-    such as ``SimpleQueue.put``, or a ``functools.partial`` of one, runs no Python frame and is
-    passed as it is.
     """
-    if _runs_python(callback):
-        callback = kept_thread_state(callback)
-    if drop is not None and _runs_python(drop):
-        drop = kept_thread_state(drop)
     try:
         return zenoh.handlers.Callback(callback, drop, indirect=False)
     except TypeError:  # pragma: no cover - a zenoh-python without the option
         return zenoh.handlers.Callback(callback, drop)
-
-
-#: callables implemented in C, which run no Python frame
-_BUILT_IN = (types.BuiltinFunctionType, types.MethodWrapperType, types.WrapperDescriptorType)
-
-
-def _runs_python(callback: Callable[..., Any]) -> bool:
-    """Whether calling ``callback`` runs Python code: anything but a built-in (such as
-    ``SimpleQueue.put``) or a ``functools.partial`` of one."""
-    while isinstance(callback, functools.partial):
-        callback = callback.func
-    return not isinstance(callback, _BUILT_IN)

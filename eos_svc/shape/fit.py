@@ -31,7 +31,8 @@ import numpy as np
 import pinocchio as pin
 from scipy.optimize import least_squares, leastsq
 
-from eos_svc.objects import KINDS, SurfaceObject
+from eos_svc.objects import FITTED_KINDS as KINDS
+from eos_svc.objects import SurfaceObject
 from eos_svc.objects.base import norm
 from eos_svc.shape import kernels
 from eos_svc.shape.starts import ClassStarts

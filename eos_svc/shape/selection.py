@@ -31,7 +31,7 @@ import numpy as np
 import pinocchio as pin
 from scipy import special
 
-from eos_svc.objects import KINDS
+from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.fit import GOOD_FIT, ClassFit, explains, extent_ratios, fit_class
 from eos_svc.shape.starts import ClassStarts
 from eos_svc.shape.touches import Touches

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from eos_svc.objects import KINDS
+from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.touches import Touches
 
 #: smallest half size a start may take (m)

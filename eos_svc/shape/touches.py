@@ -37,6 +37,8 @@ class Touches:
         radii: (N,) fingertip radii.
         free: (M, 3) tip-centre samples of probes that touched nothing; ``free_radii`` (M,).
         tactile_noise: σ of the tactile contact location along the fingertip (m).
+        kinematic_sigma: σ of a reported tip-centre position from the hand's joint encoders
+            and link calibration (m; 0: exact kinematics, :mod:`eos_svc.world.joint_sensing`).
         contact_tolerance: a tip within this gap counts as touching (m); the gap at touch is
             taken as uniform on [0, tolerance].
     """
@@ -48,6 +50,7 @@ class Touches:
     free_radii: np.ndarray = field(default_factory=lambda: np.empty(0))
     tactile_noise: float = 2e-4
     contact_tolerance: float = 1e-4
+    kinematic_sigma: float = 0.0
 
     def __post_init__(self) -> None:
         self.centres = np.asarray(self.centres, dtype=float).reshape(-1, 3)
@@ -73,8 +76,10 @@ class Touches:
 
     @property
     def sigma_distance(self) -> float:
-        """σ of the tip-centre distance residual (m): the gap's spread at first touch."""
-        return max(self.contact_tolerance / math.sqrt(12.0), MIN_DISTANCE_SIGMA)
+        """σ of the tip-centre distance residual (m): the gap's spread at first touch, and the
+        reported tip centre's own error (:attr:`kinematic_sigma`) when there is one."""
+        gap = max(self.contact_tolerance / math.sqrt(12.0), MIN_DISTANCE_SIGMA)
+        return gap if self.kinematic_sigma == 0.0 else math.hypot(gap, self.kinematic_sigma)
 
     @property
     def gap_offset(self) -> float:
@@ -97,4 +102,5 @@ class Touches:
             np.concatenate([self.free_radii, other.free_radii]),
             self.tactile_noise,
             self.contact_tolerance,
+            self.kinematic_sigma,
         )

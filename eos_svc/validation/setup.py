@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from eos_svc.errors import ValidationError
-from eos_svc.schema.request import MAX_FRICTION, SHAPE_SIZE_FIELDS, ObjectSpec
+from eos_svc.schema.request import MAX_FRICTION, MESH_FIELDS, SHAPE_SIZE_FIELDS, ObjectSpec, Table
 from eos_svc.validation.report import DIRECTIONS
 
 
@@ -27,11 +27,13 @@ class GraspSetup:
             roll, pitch, yaw (rad), then each finger's joints from the palm out (rad)).
         obj: the real object, shape, size and pose.
         friction: Coulomb μ of the hand–object contacts.
+        table_height: the table the object rests on (world z of its top, m), or None.
     """
 
     q_final: tuple[float, ...]
     obj: ObjectSpec
     friction: float
+    table_height: float | None = None
 
 
 def _field(result: Any, name: str) -> Any:
@@ -54,8 +56,9 @@ def _q_final(value: Any, joints: int) -> tuple[float, ...]:
     if len(value) != joints:
         raise ValidationError(
             "q_final",
-            f"must have {joints} joint values (wrist then fingers), got {len(value)}: the validation "
-            "models hand3x3 only — is this another hand's plan (e.g. --hand allegro)?",
+            f"must have {joints} joint values (wrist then fingers), got {len(value)}: is this another "
+            "hand's plan (e.g. --hand allegro)? Validate it with its hand (validate_grasp(..., hand=...), "
+            "eos validate --hand NAME)",
         )
     out = []
     for i, v in enumerate(value):
@@ -68,7 +71,7 @@ def _q_final(value: Any, joints: int) -> tuple[float, ...]:
 def _object(value: Any) -> ObjectSpec:
     if not isinstance(value, Mapping):
         raise ValidationError("ground_truth", f"must be an object, got {type(value).__name__}")
-    sizes = {k for fields in SHAPE_SIZE_FIELDS.values() for k in fields}
+    sizes = {k for fields in SHAPE_SIZE_FIELDS.values() for k in fields} | set(MESH_FIELDS)
     # ground_truth also carries derived fields (diameter, d_over_h): keep what a request has
     spec = {k: v for k, v in value.items() if k in sizes | {"shape", "position", "rpy"}}
     if "position" not in spec:
@@ -103,7 +106,20 @@ def grasp_setup(result: Any, joints: int) -> GraspSetup:
     q = _q_final(_field(result, "q_final"), joints)
     obj = _object(_field(result, "ground_truth"))
     friction = _friction(_field(result, "friction"))
-    return GraspSetup(q, obj, friction)
+    return GraspSetup(q, obj, friction, _table_height(result))
+
+
+def _table_height(result: Any) -> float | None:
+    """The table of the plan's request (``request.table.height``), or None (none, or a result
+    without its request)."""
+    request = result.get("request") if isinstance(result, Mapping) else getattr(result, "request", None)
+    table = request.get("table") if isinstance(request, Mapping) else None
+    if table is None:
+        return None
+    try:
+        return Table.from_dict(table).height
+    except ValidationError as exc:
+        raise ValidationError(f"request.{exc.field}", exc.reason) from None
 
 
 def load_directions(directions: int | Sequence[str]) -> tuple[str, ...]:

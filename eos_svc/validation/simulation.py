@@ -1,14 +1,16 @@
-"""The grasp in Drake: hand3x3 welded at its planned wrist pose, fingers squeezing, a free object.
+"""The grasp in Drake: a hand welded at its planned wrist pose, fingers squeezing, a free object.
 
 Built with Drake's ``MultibodyPlant`` (discrete, SAP solver, point contact) from the same URDF
-the planner loads with Pinocchio, parsed by Drake's own ``Parser``. Drake-only adjustments are
+the planner loads with Pinocchio (for a described hand, the URDF text its description makes:
+:class:`~eos_svc.hands.DescribedHand`), parsed by Drake's own ``Parser``. Drake-only adjustments are
 made here in code, never in the URDF:
 
 - the six wrist joints are removed and the palm is welded to the world at the pose Drake's
   own forward kinematics gives for the planned wrist coordinates (the links between world and
   palm, which carry no geometry, are welded too);
 - a joint actuator with an implicit PD controller (gains ``kp``, ``kd``, the URDF's effort
-  limit) is added to every finger joint (the URDF declares no transmissions);
+  limit) is added to every finger joint, and to every joint a pre-shape holds (the URDF
+  declares no transmissions);
 - collisions between hand bodies are filtered out (the planner checks only hand–object
   distances, and the finger links are not meant to touch one another);
 - every hand and object collision geometry gets the request's Coulomb μ and one point-contact
@@ -30,6 +32,7 @@ from typing import Any
 import numpy as np
 from pydrake.geometry import (
     AddContactMaterial,
+    Box,
     CollisionFilterDeclaration,
     ProximityProperties,
     RoleAssign,
@@ -65,6 +68,10 @@ DEFAULT_CONTACT_STIFFNESS = 2e4
 DEFAULT_TIME_STEP = 1e-3
 
 OBJECT_NAME = "object"
+#: the table's geometry name, side (m) and thickness (m): a slab whose top is the table's height
+TABLE_NAME = "table"
+TABLE_SIDE = 2.0
+TABLE_THICKNESS = 0.1
 #: name of the hand part made of the palm and every hand body outside the fingers
 PALM_PART = "palm"
 
@@ -88,19 +95,37 @@ def urdf_effort_limits(urdf: Path) -> dict[str, float]:
     return out
 
 
-def object_shape(spec: ObjectSpec) -> tuple[Shape, SpatialInertia]:
-    """Drake's shape for ``spec`` and the unit-mass solid inertia about its centre (scaled
-    later), both from the object's kind (:mod:`eos_svc.objects`)."""
+def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
+    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
+    and the unit-mass solid inertia about its centre (scaled later), both from the object's
+    kind (:mod:`eos_svc.objects`)."""
     obj = objects.make(spec.shape, spec.size, spec.position)
     _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
     inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    return obj.drake_shape(), SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    return obj.drake_collision_shapes(), unit
 
 
-def palm_pose(urdf: Path, description: HandDescription, wrist_q: Sequence[float]) -> RigidTransform:
+def hand_parser(plant: MultibodyPlant, package_dirs: Sequence[Path] = ()) -> Parser:
+    """A Drake parser whose package map resolves ``package://example-robot-data/...`` (and any
+    other package) under each of ``package_dirs`` (directories holding package folders)."""
+    parser = Parser(plant)
+    for directory in package_dirs:
+        for package in sorted(Path(directory).iterdir()):
+            if package.is_dir() and not parser.package_map().Contains(package.name):
+                parser.package_map().Add(package.name, package)
+    return parser
+
+
+def palm_pose(
+    urdf: Path,
+    description: HandDescription,
+    wrist_q: Sequence[float],
+    package_dirs: Sequence[Path] = (),
+) -> RigidTransform:
     """The palm's pose in the world for the wrist coordinates ``wrist_q`` (Drake's kinematics)."""
     plant = MultibodyPlant(0.0)
-    Parser(plant).AddModels(urdf)
+    hand_parser(plant, package_dirs).AddModels(urdf)
     plant.Finalize()
     context = plant.CreateDefaultContext()
     q = plant.GetPositions(context)
@@ -116,7 +141,11 @@ class GraspSimulation:
     Args:
         urdf: the hand's URDF.
         description: which joints are the wrist and the fingers.
-        q_final: every joint value in the planner's order (wrist joints then finger joints).
+        q_final: every joint value in the planner's order (``joint_names``).
+        joint_names: the joints ``q_final`` gives, in its order (default: the wrist joints, then
+            each finger's joints, as hand3x3's model orders them); joints that are neither wrist
+            nor finger joints (a pre-shape) are held at their value by the same PD, unsqueezed.
+        package_dirs: directories of the packages the URDF's ``package://`` URIs name.
         obj: the object (shape, size, pose).
         friction: Coulomb μ of every contact.
         mass: object mass (kg).
@@ -124,6 +153,8 @@ class GraspSimulation:
         kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
         contact_stiffness: point-contact stiffness of every geometry (N/m).
         time_step: the discrete plant's step (s).
+        table_height: the table's top (world z, m): a box welded to the world under it, in
+            contact with the hand and the object like them (None: no table).
     """
 
     def __init__(
@@ -134,29 +165,35 @@ class GraspSimulation:
         obj: ObjectSpec,
         *,
         friction: float,
+        joint_names: Sequence[str] | None = None,
+        package_dirs: Sequence[Path] = (),
         mass: float = DEFAULT_MASS,
         squeeze: float = DEFAULT_SQUEEZE,
         kp: float = DEFAULT_KP,
         kd: float = DEFAULT_KD,
         contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
         time_step: float = DEFAULT_TIME_STEP,
+        table_height: float | None = None,
     ) -> None:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]
-        if len(q_final) != len(wrist) + len(finger_joints):
-            raise ValidationError("q_final", f"must have {len(wrist) + len(finger_joints)} values")
+        names = list(joint_names) if joint_names is not None else [*wrist, *finger_joints]
+        if len(q_final) != len(names):
+            raise ValidationError("q_final", f"must have {len(names)} values")
+        value = dict(zip(names, (float(v) for v in q_final), strict=True))
+        held_joints = [j for j in names if j not in wrist]  # finger joints and the pre-shape
         efforts = urdf_effort_limits(urdf)
         self.effort_limit = min(efforts.get(j, np.inf) for j in finger_joints)
         if not np.isfinite(self.effort_limit):
             raise ValidationError("urdf", f"{urdf}: the finger joints have no effort limit")
-        X_WP = palm_pose(urdf, description, q_final[: len(wrist)])
+        X_WP = palm_pose(urdf, description, [value[j] for j in wrist], package_dirs)
 
         builder = DiagramBuilder()
         config = MultibodyPlantConfig(
             time_step=time_step, contact_model="point", discrete_contact_approximation="sap"
         )
         plant, scene_graph = AddMultibodyPlant(config, builder)
-        (hand,) = Parser(plant).AddModels(urdf)
+        (hand,) = hand_parser(plant, package_dirs).AddModels(urdf)
         palm = plant.GetBodyByName(description.palm_frame)
         between = {
             plant.get_joint(j).child_body().index()
@@ -168,7 +205,7 @@ class GraspSimulation:
         plant.WeldFrames(plant.world_frame(), palm.body_frame(), X_WP)
         for index in sorted(between):  # no geometry: only so they are not free bodies
             plant.WeldFrames(plant.world_frame(), plant.get_body(index).body_frame(), RigidTransform())
-        for name in finger_joints:
+        for name in held_joints:
             joint = plant.GetJointByName(name)
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts[name])
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
@@ -180,11 +217,18 @@ class GraspSimulation:
             friction=CoulombFriction(friction, friction),
             properties=material,
         )
-        shape, unit_inertia = object_shape(obj)
+        shapes, unit_inertia = object_shapes(obj)
         instance = plant.AddModelInstance(OBJECT_NAME)
         inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody(OBJECT_NAME, instance, inertia)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, OBJECT_NAME, material)
+        for i, shape in enumerate(shapes):
+            plant.RegisterCollisionGeometry(
+                body, RigidTransform(), shape, OBJECT_NAME if i == 0 else f"{OBJECT_NAME}_{i}", material
+            )
+        if table_height is not None:
+            top = RigidTransform(vec((0.0, 0.0, table_height - 0.5 * TABLE_THICKNESS)))
+            table = Box(TABLE_SIDE, TABLE_SIDE, TABLE_THICKNESS)
+            plant.RegisterCollisionGeometry(plant.world_body(), top, table, TABLE_NAME, material)
         plant.mutable_gravity_field().set_gravity_vector([0.0, 0.0, 0.0])
         plant.Finalize()
 
@@ -212,12 +256,14 @@ class GraspSimulation:
         self._plant_context = plant.GetMyMutableContextFromRoot(self.context)
         pc = self._plant_context
         q = plant.GetPositions(pc)
-        for name, value in zip(finger_joints, q_final[len(wrist) :], strict=True):
-            q[plant.GetJointByName(name).position_start()] = value
+        for name in held_joints:
+            q[plant.GetJointByName(name).position_start()] = value[name]
         plant.SetPositions(pc, q)
         plant.SetFreeBodyPose(pc, body, RigidTransform(RollPitchYaw(vec(obj.rpy)), vec(obj.position)))
-        # actuated joints in actuator order = finger_joints order (added in that order)
-        target = np.asarray(q_final[len(wrist) :], dtype=float) + squeeze
+        # actuated joints in actuator order = held_joints order (added in that order); the
+        # fingers squeeze, the pre-shape holds
+        closing = set(finger_joints)
+        target = np.array([value[j] + (squeeze if j in closing else 0.0) for j in held_joints])
         plant.get_desired_state_input_port(hand).FixValue(pc, np.concatenate([target, np.zeros(len(target))]))
         plant.get_actuation_input_port().FixValue(pc, np.zeros(plant.num_actuated_dofs()))
         self._apply(np.zeros(3))

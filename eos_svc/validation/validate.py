@@ -19,7 +19,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from eos_svc.errors import ValidationError
-from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription
+from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription, HandModel
+from eos_svc.validation.drake_hand import drake_urdf, model_joint_names
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
 from eos_svc.validation.simulation import (
@@ -59,9 +60,9 @@ def validate_grasp(
     directions: int | Sequence[str] = 6,
     seconds: float = 1.5,
     mass: float = DEFAULT_MASS,
-    squeeze: float = DEFAULT_SQUEEZE,
-    kp: float = DEFAULT_KP,
-    kd: float = DEFAULT_KD,
+    squeeze: float | None = None,
+    kp: float | None = None,
+    kd: float | None = None,
     settle_seconds: float = 0.3,
     hold_tolerance: float = 0.01,
     min_parts: int = 2,
@@ -70,6 +71,7 @@ def validate_grasp(
     stop_distance: float = 0.05,
     urdf: str | Path = HAND3X3_URDF,
     description: HandDescription | None = None,
+    hand: HandModel | None = None,
 ) -> GraspValidation:
     """Simulate a plan's final grasp in Drake and say whether it holds the object.
 
@@ -79,24 +81,79 @@ def validate_grasp(
         directions: how many of +x, -x, +y, -y, +z, -z (in that order), or a list of them.
         seconds: load time per direction (s).
         mass: object mass (kg); the load is ``mass · 9.81`` N.
-        squeeze: added to every planned finger angle as the PD target (rad, closing).
-        kp, kd: PD gains of every finger joint (N·m/rad, N·m·s/rad); torques are clipped at
-            the URDF's effort limit.
+        squeeze: added to every planned finger joint as the PD target (rad, or m for a
+            prismatic joint; closing); default: the hand's ``[drake] squeeze``, else
+            :data:`DEFAULT_SQUEEZE`.
+        kp, kd: PD gains of every finger joint (N·m/rad, N·m·s/rad; N/m, N·s/m for a
+            prismatic one); torques are clipped at the URDF's effort limit; default: the
+            hand's ``[drake]`` values, else :data:`DEFAULT_KP`, :data:`DEFAULT_KD`.
         settle_seconds: squeeze time before the loads (s).
         hold_tolerance: largest displacement that still counts as held (m).
         min_parts: fewest hand parts (palm or fingers) that must touch the object at the end.
         contact_stiffness: point-contact stiffness (N/m).
         time_step: discrete step of the plant (s).
         stop_distance: a direction stops early once the object is this far away (m).
-        urdf, description: the hand (default hand3x3).
+        urdf, description: the hand (default hand3x3), when ``hand`` is not given.
+        hand: the hand model the plan used: its URDF (a described hand's composite text), its
+            description and its joints in the model's order.
 
     Raises:
         ValidationError: naming the bad field of ``result`` or the bad argument.
         SimulationError: Drake failed while simulating (an :class:`~eos_svc.errors.EosError`).
     """
     t_start = time.perf_counter()
-    description = description or HandDescription.hand3x3()
-    joints = len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers)
+    settings = dict(getattr(hand, "drake", {})) if hand is not None else {}
+    options: dict[str, Any] = {
+        "directions": directions,
+        "seconds": seconds,
+        "mass": mass,
+        "squeeze": settings.get("squeeze", DEFAULT_SQUEEZE) if squeeze is None else squeeze,
+        "kp": settings.get("kp", DEFAULT_KP) if kp is None else kp,
+        "kd": settings.get("kd", DEFAULT_KD) if kd is None else kd,
+        "settle_seconds": settle_seconds,
+        "hold_tolerance": hold_tolerance,
+        "min_parts": min_parts,
+        "contact_stiffness": contact_stiffness,
+        "time_step": time_step,
+        "stop_distance": stop_distance,
+    }
+    if hand is None:
+        return _validate(
+            result, t_start, Path(urdf), description or HandDescription.hand3x3(), None, (), **options
+        )
+    with drake_urdf(hand) as (path, package_dirs):
+        return _validate(
+            result, t_start, path, hand.description, model_joint_names(hand), package_dirs, **options
+        )
+
+
+def _validate(
+    result: PlanResult | Mapping[str, Any],
+    t_start: float,
+    urdf: Path,
+    description: HandDescription,
+    joint_names: Sequence[str] | None,
+    package_dirs: Sequence[Path],
+    *,
+    directions: int | Sequence[str],
+    seconds: float,
+    mass: float,
+    squeeze: float,
+    kp: float,
+    kd: float,
+    settle_seconds: float,
+    hold_tolerance: float,
+    min_parts: int,
+    contact_stiffness: float,
+    time_step: float,
+    stop_distance: float,
+) -> GraspValidation:
+    """:func:`validate_grasp` once the hand's URDF file, description and joints are known."""
+    joints = (
+        len(joint_names)
+        if joint_names is not None
+        else (len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers))
+    )
     setup = grasp_setup(result, joints)
     names = load_directions(directions)
     seconds = _positive(seconds, "seconds", MAX_SECONDS)
@@ -122,12 +179,15 @@ def validate_grasp(
             setup.q_final,
             setup.obj,
             friction=setup.friction,
+            joint_names=joint_names,
+            package_dirs=package_dirs,
             mass=mass,
             squeeze=float(squeeze),
             kp=kp,
             kd=kd,
             contact_stiffness=contact_stiffness,
             time_step=time_step,
+            table_height=setup.table_height,
         )
         settled = sim.settle(settle_seconds)
         settle_touching = sim.touching()

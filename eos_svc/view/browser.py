@@ -1,12 +1,9 @@
 """Screenshots of a view in headless Chromium, offline (for the tests and the README picture).
 
-    screenshot("file:///tmp/plan.html#cycle=70", "shot.png")
-    # or: python -m eos_svc.view.browser "file:///tmp/plan.html#cycle=70" shot.png
+    python -m eos_svc.view.browser "file:///tmp/plan.html#cycle=70" shot.png
 
-Chromium runs headless with software WebGL (SwiftShader), a fresh profile, no background
-traffic and no network at all: every host name resolves to nothing and the proxy is a closed
-port, so a page that needed the network would show nothing. ``--virtual-time-budget`` lets the
-page's timers run (the scene loads, the animation is positioned) before the picture is taken.
+Chromium runs headless with software WebGL, a fresh profile and no network (every host name
+resolves to nothing); ``--virtual-time-budget`` lets the page's timers run before the shot.
 """
 
 from __future__ import annotations
@@ -56,7 +53,7 @@ def find_chromium() -> str | None:
 
 def screenshot_command(
     url: str,
-    png: str | Path,
+    png: str | Path | None,
     profile: str | Path,
     *,
     size: tuple[int, int] = (1024, 768),
@@ -64,7 +61,8 @@ def screenshot_command(
     offline: bool = True,
     chromium: str | None = None,
 ) -> list[str]:
-    """The Chromium command line that writes a screenshot of ``url`` to ``png``."""
+    """The Chromium command line that writes a screenshot of ``url`` to ``png`` (None: that prints
+    the page's DOM instead)."""
     exe = chromium or find_chromium()
     if exe is None:
         raise BrowserError(f"no Chromium found (tried {', '.join(CHROMIUM_NAMES)}); apt-get install chromium")
@@ -75,7 +73,7 @@ def screenshot_command(
         f"--user-data-dir={profile}",
         f"--window-size={size[0]},{size[1]}",
         f"--virtual-time-budget={budget_ms}",
-        f"--screenshot={png}",
+        "--dump-dom" if png is None else f"--screenshot={png}",
         url,
     ]
 
@@ -94,9 +92,7 @@ def dump_dom(url: str, *, budget_ms: int = 8000, offline: bool = True, timeout_s
         BrowserError: no Chromium, or it printed nothing.
     """
     with tempfile.TemporaryDirectory(prefix="eos-chromium-", ignore_cleanup_errors=True) as profile:
-        cmd = screenshot_command(url, "unused.png", profile, budget_ms=budget_ms, offline=offline)
-        cmd = [c for c in cmd if not c.startswith("--screenshot=")]
-        cmd.insert(-1, "--dump-dom")
+        cmd = screenshot_command(url, None, profile, budget_ms=budget_ms, offline=offline)
         proc = _run(cmd, url, timeout_s)
     if not proc.stdout.strip():
         raise BrowserError(f"Chromium printed no DOM (exit {proc.returncode}): {proc.stderr[-500:]}")

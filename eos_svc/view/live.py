@@ -8,11 +8,10 @@
 ``eos plan --view`` feeds it from the planner; ``eos client watch --view`` from the service's
 cycle stream over Zenoh (:class:`StreamView`), so a remote plan can be watched.
 
-Cost: while no browser is connected a cycle only keeps what the final animation needs (a few
-µs); with a browser connected the hand is re-posed at most :data:`MAX_UPDATES_PER_S` times a
-second (each MeshCat transform message costs ≈ 30 µs), and always on the last cycle. Every
-MeshCat call happens in the thread that made the view (Drake's Meshcat requires it):
-:class:`StreamView` queues the messages Zenoh delivers and draws them in :meth:`StreamView.pump`.
+While no browser is connected a cycle only keeps what the final animation needs; with one, the
+hand is re-posed at most :data:`MAX_UPDATES_PER_S` times a second. Every MeshCat call happens in
+the thread that made the view (Drake's Meshcat requires it): :class:`StreamView` queues the
+messages Zenoh delivers and draws them in :meth:`StreamView.pump`.
 """
 
 from __future__ import annotations
@@ -22,14 +21,14 @@ import time
 from collections.abc import Mapping
 from typing import Any
 
-from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
+from pydrake.geometry import MeshcatAnimation
 
 from eos_svc.agents.planner import default_hand
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.view.replay_html import animate_hand, quiet_drake
+from eos_svc.view.replay_html import animate_hand
 from eos_svc.view.scene import (
     CONTACTS,
     OBJECT,
@@ -40,6 +39,8 @@ from eos_svc.view.scene import (
     HandDrawing,
     add_contacts,
     add_object,
+    new_meshcat,
+    play_once,
     postulated_object,
     set_camera,
 )
@@ -54,25 +55,16 @@ WANTED = frozenset({keys.HAND_Q, keys.HAND_PATH, keys.SHAPE, keys.OUTCOME})
 
 
 def light_record(record: Any) -> dict[str, Any]:
-    """The parts of a cycle record a view needs, as a JSON-form dict, from a
-    :class:`~eos_svc.records.CycleRecord` (without building its full ``to_dict()``) or from a
-    record already in JSON form."""
-    if isinstance(record, Mapping):
-        seq, changes = record.get("seq"), record.get("changes")
-        if isinstance(seq, bool) or not isinstance(seq, int) or not isinstance(changes, list):
-            raise TypeError("not a cycle record: seq must be an integer and changes a list")
-        return {
-            **{k: record.get(k) for k in ("seq", "stage", "chosen", "outcome", "detail")},
-            "changes": [c for c in changes if isinstance(c, Mapping) and c.get("key") in WANTED],
-        }
-    outcome = record.outcome
+    """The parts of a cycle record a view needs (JSON form), from a
+    :class:`~eos_svc.records.CycleRecord` or its JSON form."""
+    if not isinstance(record, Mapping):
+        record = record.to_dict()
+    seq, changes = record.get("seq"), record.get("changes")
+    if isinstance(seq, bool) or not isinstance(seq, int) or not isinstance(changes, list):
+        raise TypeError("not a cycle record: seq must be an integer and changes a list")
     return {
-        "seq": record.seq,
-        "stage": record.stage,
-        "chosen": record.chosen,
-        "outcome": None if outcome is None else outcome.value,
-        "detail": record.detail,
-        "changes": [{"key": c.key, "new": c.new} for c in record.changes if c.key in WANTED],
+        **{k: record.get(k) for k in ("seq", "stage", "chosen", "outcome", "detail")},
+        "changes": [c for c in changes if isinstance(c, Mapping) and c.get("key") in WANTED],
     }
 
 
@@ -102,13 +94,7 @@ class LiveView:
     def __init__(
         self, hand: HandModel | None = None, port: int | None = None, host: str = "localhost"
     ) -> None:
-        params = MeshcatParams()
-        params.host = host
-        params.show_stats_plot = False
-        if port is not None:
-            params.port = port
-        with quiet_drake():
-            self.meshcat = Meshcat(params)
+        self.meshcat = new_meshcat(host, port)
         self.url = self.meshcat.web_url()
         self.hand = hand or default_hand()
         self.drawing = HandDrawing(self.hand)
@@ -117,8 +103,6 @@ class LiveView:
         self._q_new: Any = None  # the last hand_q written (JSON form), converted when drawn
         self._records: list[dict[str, Any]] = []  # the cycles' entries a view reads, for finish()
         self.drawing.pose_in(self.meshcat, self._q0)
-        self.meshcat.SetProperty("/Grid", "visible", False)
-        self.meshcat.SetProperty("/Axes", "visible", False)
         set_camera(self.meshcat, ObjectSpec().position)  # where the default object lies
         self.request: PlanRequest | None = None
         self._label: str | None = None
@@ -208,10 +192,7 @@ class LiveView:
         if len(timeline.keyframes) > 1:
             anim = MeshcatAnimation(timeline.fps)
             animate_hand(anim, self.drawing, timeline)
-            anim.set_autoplay(False)
-            anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
-            anim.set_clamp_when_finished(True)
-            mc.SetAnimation(anim)
+            play_once(mc, anim, autoplay=False)
         self._show_label(
             f"{result.get('status')} after {result.get('cycles')} cycles; "
             f"good grasp: {'yes' if result.get('good_grasp') else 'no'}"
@@ -277,15 +258,12 @@ class StreamView:
         done = 0
         try:
             item = self.inbox.get(timeout=timeout) if timeout > 0 else self.inbox.get_nowait()
-        except queue.Empty:
-            return 0
-        while True:
-            self._handle(*item)
-            done += 1
-            try:
+            while True:
+                self._handle(*item)
+                done += 1
                 item = self.inbox.get_nowait()
-            except queue.Empty:
-                return done
+        except queue.Empty:
+            return done
 
     def _handle(self, kind: str, msg: dict[str, Any]) -> None:
         """Draw one message; one the view cannot read (a malformed request, record or result)

@@ -4,14 +4,10 @@
     from eos_svc.view.picture import draw_result
     draw_result(plan(), "grasp.png")
 
-One figure, four panels: a 3-D view and three orthographic views (top x–y, side x–z,
-front y–z) in millimetres. The hand is drawn from its Pinocchio GeometryModel at the final
-configuration (palm box, link cylinders, fingertip spheres, each placed by
-``GeometryData.oMg``), the object from the request's primitive at its pose; every touching
-contact is a red dot with an arrow along the force direction (−outward normal, into the
-object). Every primitive is convex: it is drawn as the convex hull of points on its surface,
-and in the orthographic views as the outline of their projection, painted back to front.
-Rendering uses matplotlib's Agg canvas directly (no global backend is changed).
+One figure: a 3-D view and three orthographic views (top x–y, side x–z, front y–z) in mm. Every
+primitive is convex: drawn as the convex hull of points on its surface, in the orthographic views
+as the outline of their projection, back to front. Each touching contact is a red dot with an
+arrow along the force direction (into the object). Uses matplotlib's Agg canvas directly.
 """
 
 from __future__ import annotations
@@ -33,16 +29,10 @@ from eos_svc.errors import ContractError, ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import PlanRequest
-from eos_svc.view.scene import touching_contacts
+from eos_svc.view.scene import CONTACT_COLOUR, OBJECT_COLOUR, hand_colours, touching_contacts
 
 #: mesh resolution (segments around a circle)
 SEGMENTS = 16
-#: colours
-OBJECT_COLOUR = "#4c9be8"
-HAND_COLOUR = "#9a9a9a"
-PALM_COLOUR = "#6d6d6d"
-TIP_PALETTE = ("#e8a33c", "#58b85c", "#b565c9", "#e377c2", "#17becf")
-CONTACT_COLOUR = "#d62728"
 #: orthographic views: (title, horizontal axis, vertical axis, depth axis, depth sign toward viewer)
 VIEWS = (
     ("top (x-y, from +z)", 0, 1, 2, 1.0),
@@ -88,11 +78,7 @@ def surface_points(shape: coal.ShapeBase) -> np.ndarray:
     if isinstance(shape, coal.Cylinder):
         phi = np.linspace(0.0, 2.0 * np.pi, SEGMENTS, endpoint=False)
         ring = shape.radius * np.stack([np.cos(phi), np.sin(phi)], axis=1)
-        return np.vstack([np.column_stack([ring, np.full(SEGMENTS, z)]) for z in (-1, 1)]) * [
-            1,
-            1,
-            shape.halfLength,
-        ]
+        return np.vstack([np.column_stack([ring, np.full(SEGMENTS, z * shape.halfLength)]) for z in (-1, 1)])
     raise ContractError("shape", f"cannot draw a {type(shape).__name__}")
 
 
@@ -123,22 +109,20 @@ def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) ->
     hand = hand or default_hand()
     obj = make_object(request.obj)
     placed = obj.placement
+    own = obj.triangles()
+    surface = shape_mesh(obj.geometry) if own is None else list(own)
     solids = [
         (
             "object",
-            [p @ placed.rotation.T + placed.translation for p in shape_mesh(obj.geometry)],
+            [p @ placed.rotation.T + placed.translation for p in surface],
             OBJECT_COLOUR,
             0.35,
         )
     ]
     state = hand.state(np.asarray(q, dtype=float))
-    tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
-    for gid, g in enumerate(hand.collision_model.geometryObjects):
+    geometries = hand.collision_model.geometryObjects
+    for gid, (g, colour) in enumerate(zip(geometries, hand_colours(hand), strict=True)):
         m = state.geometry_data.oMg[gid]
-        if gid in tips:
-            colour = TIP_PALETTE[tips[gid] % len(TIP_PALETTE)]
-        else:
-            colour = PALM_COLOUR if g.name.startswith("palm") else HAND_COLOUR
         try:
             polys = shape_mesh(g.geometry)
         except TypeError:

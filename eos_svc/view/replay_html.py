@@ -4,24 +4,18 @@
     from eos_svc.view import write_result_html
     write_result_html(plan(), "plan.html")           # or: eos plan --html plan.html
 
-The page (Drake's ``Meshcat.StaticHtml()``: three.js, the MeshCat viewer and the scene in one
-file, no network) plays the whole plan once: the hand moving through every cycle (search moves,
-EP1's rolls, the wrist approach, each finger closing), the object, the postulated object (when
-the postulate carries one) and, from the end agent's verdict on, the contacts with their force
-directions and friction cones. A panel at the top left shows the cycle under the time cursor
-(number, stage, chosen agent, outcome, what it did), a play/pause button and a time slider.
-The page reads its URL fragment: ``#t=SECONDS`` or ``#cycle=N`` (the end of cycle N) opens it
-paused at that time.
+The page (``Meshcat.StaticHtml()``: three.js, the viewer and the scene, no network) plays the
+whole plan once; a panel shows the cycle under the time cursor with a play button and a time
+slider. ``#t=SECONDS`` or ``#cycle=N`` (the end of cycle N) in the URL opens it paused there.
 """
 
 from __future__ import annotations
 
 import html
 import json
-import logging
 from collections.abc import Iterable, Mapping, Sequence
-from contextlib import contextmanager
 from dataclasses import dataclass
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +37,8 @@ from eos_svc.view.scene import (
     HandDrawing,
     add_contacts,
     add_object,
+    new_meshcat,
+    play_once,
     postulated_object,
     set_camera,
     vec,
@@ -51,29 +47,6 @@ from eos_svc.view.timeline import Timeline, build_timeline, changes_of
 
 #: two poses closer than this (max |entry| of the 4×4 difference) are the same keyframe
 POSE_EPS = 1e-9
-
-
-@contextmanager
-def quiet_drake() -> Any:
-    """Silence Drake's INFO log lines (e.g. "Meshcat listening ...") for a moment."""
-    logger = logging.getLogger("drake")
-    level = logger.level
-    logger.setLevel(logging.WARNING)
-    try:
-        yield
-    finally:
-        logger.setLevel(level)
-
-
-def export_meshcat() -> Meshcat:
-    """A MeshCat instance used only to build a page (its server on localhost, on an ephemeral
-    port: it never takes one of the 7000–7099 a live view would use)."""
-    params = MeshcatParams()
-    params.host = "localhost"
-    params.port = 0
-    params.show_stats_plot = False
-    with quiet_drake():
-        return Meshcat(params)
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -197,7 +170,7 @@ def plan_scene(
     records = list(records)
     drawing = HandDrawing(hand)
     timeline = build_timeline(records, hand.neutral())
-    meshcat = export_meshcat()
+    meshcat = new_meshcat(port=0)  # never one of the ports a live view would use
     drawing.add_to(meshcat)
     drawing.pose_in(meshcat, timeline.keyframes[0][1])
     add_object(meshcat, OBJECT, req.obj, OBJECT_RGBA)
@@ -212,13 +185,8 @@ def plan_scene(
     if drawn:
         anim.SetProperty(0, CONTACTS, "visible", False)
         anim.SetProperty(verdict[0] if verdict else timeline.frames, CONTACTS, "visible", True)
-    anim.set_autoplay(True)
-    anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
-    anim.set_clamp_when_finished(True)
-    meshcat.SetAnimation(anim)
+    play_once(meshcat, anim, autoplay=True)
     set_camera(meshcat, req.obj.position)
-    meshcat.SetProperty("/Grid", "visible", False)
-    meshcat.SetProperty("/Axes", "visible", False)
     info = {
         "title": _result_text(req, result),
         "duration": timeline.duration_s,
@@ -240,12 +208,16 @@ def plan_page(
 
 
 def inject_panel(page: str, info: Mapping[str, Any]) -> str:
-    """``page`` with the plan panel (HTML, CSS, script and the plan's JSON) before ``</body>``."""
+    """``page`` with the plan panel (``panel.html``, ``panel.js`` beside this module, and the
+    plan's JSON) before ``</body>``."""
     data = json.dumps(info, allow_nan=False).replace("</", "<\\/")
+    here = resources.files("eos_svc.view")
+    title = html.escape(str(info.get("title", "")))
     panel = (
-        PANEL_HTML.replace("@TITLE@", html.escape(str(info.get("title", ""))))
+        "\n"
+        + here.joinpath("panel.html").read_text(encoding="utf-8").replace("@TITLE@", title)
         + f'<script type="application/json" id="eos-plan">{data}</script>\n'
-        + f"<script>{PANEL_JS}</script>\n"
+        + f"<script>\n{here.joinpath('panel.js').read_text(encoding='utf-8')}</script>\n"
     )
     at = page.rfind("</body>")
     if at < 0:
@@ -280,118 +252,3 @@ def write_result_html(result: Any, path: str | Path, hand: HandModel | None = No
     if not trace and result.cycles:
         raise ValueError("the result holds no trace: plan with keep_trace=True to draw it")
     return write_plan_html(path, result.request, [r.to_dict() for r in trace], result.to_dict(), hand)
-
-
-PANEL_HTML = """
-<div id="eos-panel">
-  <div id="eos-title">@TITLE@</div>
-  <div id="eos-controls">
-    <button id="eos-play" type="button">pause</button>
-    <input id="eos-time" type="range" min="0" max="1" step="0.0625" value="0">
-    <span id="eos-clock">0.0 s</span>
-  </div>
-  <div id="eos-cycle"></div>
-  <div id="eos-detail"></div>
-  <div id="eos-legend"><b style="color:#4c9be8">&#9632;</b> object (truth)
-    <b style="color:#ffd91a">&#9632;</b> postulate
-    <b style="color:#e8a33c">&#9632;</b><b style="color:#58b85c">&#9632;</b><b
-    style="color:#b565c9">&#9632;</b> fingertips
-    <b style="color:#d62728">&#9632;</b> contacts, force lines, friction cones</div>
-</div>
-<style>
-  #eos-panel { position: fixed; left: 8px; top: 8px; width: 440px; padding: 8px 10px;
-    background: rgba(255, 255, 255, 0.88); border-radius: 6px; font: 12px/1.35 sans-serif;
-    color: #222; z-index: 10; }
-  #eos-title { font-weight: bold; margin-bottom: 4px; }
-  #eos-controls { display: flex; gap: 6px; align-items: center; margin: 4px 0; }
-  #eos-time { flex: 1; }
-  #eos-cycle { font-family: monospace; font-size: 13px; }
-  #eos-detail { margin-top: 2px; min-height: 3em; }
-  #eos-legend { margin-top: 4px; color: #555; }
-</style>
-"""
-
-PANEL_JS = """
-(function () {
-  var plan = JSON.parse(document.getElementById("eos-plan").textContent);
-  var slider = document.getElementById("eos-time");
-  var button = document.getElementById("eos-play");
-  slider.max = String(plan.duration);
-  slider.step = String(1 / plan.fps);
-  var target = null;
-  function parseHash() {
-    var h = window.location.hash.replace(/^#/, "");
-    var m = /(?:^|&)t=([0-9.]+)/.exec(h);
-    if (m) { return parseFloat(m[1]); }
-    m = /(?:^|&)cycle=([0-9]+)/.exec(h);
-    if (m) {
-      var n = parseInt(m[1], 10);
-      for (var i = 0; i < plan.cycles.length; i++) {
-        if (plan.cycles[i].seq === n) { return plan.cycles[i].t1; }
-      }
-      return plan.duration;
-    }
-    return null;
-  }
-  function animator() {
-    if (typeof viewer === "undefined" || !viewer.animator) { return null; }
-    return viewer.animator.actions.length ? viewer.animator : null;
-  }
-  function now(a) {
-    return a.actions.reduce(function (m, x) { return Math.max(m, x.time); }, 0);
-  }
-  function cycleAt(t) {
-    var lo = 0, hi = plan.cycles.length - 1, found = -1;
-    while (lo <= hi) {
-      var mid = (lo + hi) >> 1;
-      // cycle k covers (t0, t1]: at its t1 the cycle is done and shown
-      if (plan.cycles[mid].t0 < t - 1e-9) { found = mid; lo = mid + 1; } else { hi = mid - 1; }
-    }
-    return found < 0 ? null : plan.cycles[found];
-  }
-  function show(t) {
-    var c = cycleAt(t);
-    slider.value = String(t);
-    document.getElementById("eos-clock").textContent = t.toFixed(1) + " / " + plan.duration.toFixed(1) + " s";
-    document.getElementById("eos-cycle").textContent = c === null ? "before the first cycle" :
-      "cycle " + c.seq + "/" + plan.cycles.length + "  " + c.stage + "  " + (c.chosen || "-") +
-      " [" + (c.outcome || "-") + "]";
-    document.getElementById("eos-detail").textContent = c === null ? "" : c.detail;
-    document.body.dataset.eosCycle = c === null ? "0" : String(c.seq);
-  }
-  function seek(a, t) {
-    a.pause();
-    a.seek(t);
-    a.display_progress(t);
-    button.textContent = "play";
-    show(t);
-  }
-  var ready = false;
-  window.setInterval(function () {
-    var a = animator();
-    if (a === null) { return; }
-    if (!ready) {
-      ready = true;
-      target = parseHash();
-      if (target !== null) { seek(a, target); }
-      document.body.dataset.eosReady = "1";
-    }
-    if (a.playing) { show(now(a)); button.textContent = "pause"; } else { button.textContent = "play"; }
-  }, 100);
-  window.addEventListener("hashchange", function () {
-    var a = animator(), t = parseHash();
-    if (a !== null && t !== null) { seek(a, t); }
-  });
-  slider.addEventListener("input", function () {
-    var a = animator();
-    if (a !== null) { seek(a, parseFloat(slider.value)); }
-  });
-  button.addEventListener("click", function () {
-    var a = animator();
-    if (a === null) { return; }
-    if (a.playing) { a.pause(); return; }
-    if (now(a) >= plan.duration - 1e-6) { a.reset(); }
-    a.play();
-  });
-})();
-"""

@@ -1,25 +1,13 @@
-"""What a plan's 3-D view draws, in Drake's MeshCat: the hand, the object, the postulate, contacts.
-
-Shared by the replay file (:mod:`eos_svc.view.replay_html`) and the live view
-(:mod:`eos_svc.view.live`). Every solid is a MeshCat primitive placed in the world frame (z up,
-metres):
-
-- the hand: every collision geometry of its Pinocchio GeometryModel (palm box, link cylinders,
-  fingertip spheres), placed by ``GeometryData.oMg`` at a configuration q
-  (:meth:`HandDrawing.poses`); a geometry that is not a primitive is drawn as its local
-  bounding box;
-- the object (ground truth) from the request's primitive at its pose, translucent blue;
-- the postulated object (post_shape's ``object``, when the postulate carries one) translucent
-  yellow over it;
-- each touching contact of the final grasp: a red dot at the contact point, a red line along
-  the contact force's direction (−outward normal, into the object) and the Coulomb friction
-  cone about it (half-angle atan μ, apex at the contact), translucent red.
-
-Colours follow :mod:`eos_svc.agents.picture` (the PNG of the final grasp).
+"""What a plan's 3-D view draws in Drake's MeshCat (world frame, z up, metres): the hand's
+collision geometries at a configuration, the object, the postulated object and the contacts
+with their force lines and friction cones (``docs/view.md``, "What is drawn"). Shared by the
+replay page (:mod:`eos_svc.view.replay_html`) and the live view (:mod:`eos_svc.view.live`);
+its colours also paint the PNG pictures (:mod:`eos_svc.view.picture`).
 """
 
 from __future__ import annotations
 
+import logging
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -33,7 +21,9 @@ from pydrake.geometry import (
     Cylinder,
     Ellipsoid,
     Meshcat,
+    MeshcatAnimation,
     MeshcatCone,
+    MeshcatParams,
     Rgba,
     Shape,
     Sphere,
@@ -51,24 +41,57 @@ OBJECT = f"{ROOT}/object"
 POSTULATE = f"{ROOT}/postulate"
 CONTACTS = f"{ROOT}/contacts"
 
-#: colours (RGBA, 0..1); the fingertips per finger in the hand's order
-OBJECT_RGBA = Rgba(0.298, 0.608, 0.910, 0.45)
+#: colours, shared with the PNG pictures (:mod:`eos_svc.view.picture`); tips in finger order
+OBJECT_COLOUR = "#4c9be8"
+LINK_COLOUR = "#9a9a9a"
+PALM_COLOUR = "#6d6d6d"
+TIP_COLOURS = ("#e8a33c", "#58b85c", "#b565c9", "#e377c2", "#17becf")
+CONTACT_COLOUR = "#d62728"
+
+
+def rgba(colour: str, alpha: float = 1.0) -> Rgba:
+    """MeshCat's colour of ``#rrggbb`` with opacity ``alpha``."""
+    r, g, b = (int(colour[i : i + 2], 16) / 255.0 for i in (1, 3, 5))
+    return Rgba(r, g, b, alpha)
+
+
+OBJECT_RGBA = rgba(OBJECT_COLOUR, 0.45)
 POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.2)
-LINK_RGBA = Rgba(0.60, 0.60, 0.62, 1.0)
-PALM_RGBA = Rgba(0.43, 0.43, 0.45, 1.0)
-TIP_RGBAS = (
-    Rgba(0.910, 0.639, 0.235, 1.0),  # orange
-    Rgba(0.345, 0.722, 0.361, 1.0),  # green
-    Rgba(0.710, 0.396, 0.788, 1.0),  # purple
-    Rgba(0.890, 0.467, 0.761, 1.0),
-    Rgba(0.090, 0.745, 0.812, 1.0),
-)
-CONTACT_RGBA = Rgba(0.839, 0.153, 0.157, 1.0)
-CONE_RGBA = Rgba(0.839, 0.153, 0.157, 0.35)
+CONTACT_RGBA = rgba(CONTACT_COLOUR)
+CONE_RGBA = rgba(CONTACT_COLOUR, 0.35)
 #: drawn size of a contact: dot radius, normal line length, friction cone height (m)
 CONTACT_DOT = 0.0025
 NORMAL_LENGTH = 0.03
 CONE_HEIGHT = 0.02
+
+
+def new_meshcat(host: str = "localhost", port: int | None = None) -> Meshcat:
+    """A MeshCat server without its stats plot, grid or axes; ``port`` None: Drake's choice (the
+    first free one of 7000–7099), 0: an ephemeral port (for building a page only). Drake's
+    "Meshcat listening" log line is silenced."""
+    params = MeshcatParams()
+    params.host = host
+    params.show_stats_plot = False
+    if port is not None:
+        params.port = port
+    drake_log = logging.getLogger("drake")
+    level = drake_log.level
+    drake_log.setLevel(logging.WARNING)
+    try:
+        meshcat = Meshcat(params)
+    finally:
+        drake_log.setLevel(level)
+    meshcat.SetProperty("/Grid", "visible", False)
+    meshcat.SetProperty("/Axes", "visible", False)
+    return meshcat
+
+
+def play_once(meshcat: Meshcat, anim: MeshcatAnimation, autoplay: bool) -> None:
+    """Set ``anim`` as the page's animation, played once and held at its end."""
+    anim.set_autoplay(autoplay)
+    anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
+    anim.set_clamp_when_finished(True)
+    meshcat.SetAnimation(anim)
 
 
 def vec(values: Any) -> Any:
@@ -117,6 +140,20 @@ def _coal_shape(geometry: Any) -> tuple[Shape, RigidTransform]:
     return Box(*(hi - lo)), RigidTransform(vec(0.5 * (lo + hi)))
 
 
+def hand_colours(hand: HandModel) -> list[str]:
+    """The colour of every collision geometry of ``hand`` (id order): its finger's tip colour,
+    the palm's, or the links'."""
+    tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
+    return [
+        TIP_COLOURS[tips[gid] % len(TIP_COLOURS)]
+        if gid in tips
+        else PALM_COLOUR
+        if g.name.startswith("palm")
+        else LINK_COLOUR
+        for gid, g in enumerate(hand.collision_model.geometryObjects)
+    ]
+
+
 @dataclass(frozen=True)
 class HandPart:
     """One drawn hand geometry: its scene path, primitive, offset in its frame, colour."""
@@ -136,24 +173,12 @@ class HandDrawing:
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
-        tips = {hand.tip_geometry_id(f): k for k, f in enumerate(hand.finger_names)}
         parts = []
-        for gid, g in enumerate(hand.collision_model.geometryObjects):
-            if gid in tips:
-                rgba = TIP_RGBAS[tips[gid] % len(TIP_RGBAS)]
-            elif g.name.startswith("palm"):
-                rgba = PALM_RGBA
-            else:
-                rgba = LINK_RGBA
+        for g, colour in zip(hand.collision_model.geometryObjects, hand_colours(hand), strict=True):
             shape, offset = _coal_shape(g.geometry)
-            parts.append(HandPart(f"{HAND}/{g.name}", shape, offset, rgba))
+            parts.append(HandPart(f"{HAND}/{g.name}", shape, offset, rgba(colour)))
         self.parts: tuple[HandPart, ...] = tuple(parts)
         self._state = hand.state(hand.neutral())
-
-    @property
-    def nq(self) -> int:
-        """Length of a configuration of this hand."""
-        return int(self.hand.model.nq)
 
     def poses(self, q: Sequence[float] | np.ndarray) -> list[RigidTransform]:
         """World pose of every part at configuration ``q`` (in :attr:`parts` order)."""
@@ -208,18 +233,6 @@ def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.
     return out
 
 
-def friction_or_default(friction: object) -> float:
-    """``friction`` when it is a positive finite number, else the request's default μ."""
-    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
-    value = float(friction) if number else math.nan  # type: ignore[arg-type]
-    return value if math.isfinite(value) and value > 0 else DEFAULT_FRICTION
-
-
-def _frame_along(axis: np.ndarray) -> RotationMatrix:
-    """A rotation whose z axis is the unit vector ``axis``."""
-    return RotationMatrix.MakeFromOneVector(vec(axis), 2)
-
-
 def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: object) -> list[str]:
     """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`;
     the cone's μ is ``friction`` (the request's default when it is not a positive number).
@@ -227,7 +240,10 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
     Returns:
         the scene paths drawn, one per contact (each a folder).
     """
-    mu = friction_or_default(friction)
+    number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
+    mu = float(friction) if number else math.nan  # type: ignore[arg-type]
+    if not (math.isfinite(mu) and mu > 0):
+        mu = DEFAULT_FRICTION
     paths = []
     for finger, point, normal in touching_contacts(contacts):
         path = f"{CONTACTS}/{finger}"
@@ -242,7 +258,9 @@ def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction:
         )
         radius = mu * CONE_HEIGHT
         meshcat.SetObject(f"{path}/cone", MeshcatCone(CONE_HEIGHT, radius, radius), CONE_RGBA)
-        meshcat.SetTransform(f"{path}/cone", RigidTransform(_frame_along(inward), vec(point)))
+        meshcat.SetTransform(
+            f"{path}/cone", RigidTransform(RotationMatrix.MakeFromOneVector(vec(inward), 2), vec(point))
+        )
         paths.append(path)
     return paths
 

@@ -1,14 +1,10 @@
 """A plan's cycles as an animation timeline: where the hand is at which frame, what each cycle did.
 
-Built from cycle records in their JSON form (:meth:`CycleRecord.to_dict`, as in a record file
-or the service's cycle stream), which carry the hand's configuration after every cycle that
-moved it (board entry ``hand_q``, written by :class:`~eos_svc.agents.pose_board.PoseBoard`) and
-the sampled path of every EP1 roll (``hand_path``). Each cycle gets at least
-:data:`CYCLE_FRAMES` frames; a move that turns joints is split into keyframes of at most
-:data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel (interpolated in joint
-space, so the bodies follow the kinematics between keyframes; a pure wrist translation needs no
-split), an EP1 roll adds one keyframe per sample. The page interpolates each body's pose
-linearly between keyframes.
+Built from cycle records in their JSON form, which carry the hand's configuration after every
+cycle that moved it (``hand_q``) and the sampled path of every EP1 roll (``hand_path``). Each
+cycle gets at least :data:`CYCLE_FRAMES` frames; a move that turns joints is split into
+keyframes of at most :data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel
+(interpolated in joint space), an EP1 roll adds one keyframe per sample.
 """
 
 from __future__ import annotations
@@ -87,13 +83,6 @@ class Timeline:
         """Length of the animation, s."""
         return self.frames / self.fps
 
-    def span_end_s(self, seq: int) -> float:
-        """Time at the end of cycle ``seq`` (s); KeyError when there is no such cycle."""
-        for span in self.spans:
-            if span.seq == seq:
-                return span.end / self.fps
-        raise KeyError(seq)
-
 
 def _steps_between(a: Sequence[float], b: Sequence[float]) -> int:
     """How many keyframes a move from ``a`` to ``b`` needs (≥ 1): wrist x, y, z are the first
@@ -131,7 +120,7 @@ def changes_of(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 class TimelineBuilder:
-    """Builds a :class:`Timeline` cycle by cycle (the live view feeds it as cycles arrive).
+    """Builds a :class:`Timeline` cycle by cycle.
 
     Args:
         q0: the hand's configuration before the first cycle.

@@ -12,10 +12,17 @@ each a real geometric query on the hand's model (coal distances, Pinocchio kinem
   the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
 * **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
   object must clear every hand collision geometry by ``clearance`` (coal distances).
-* **size** (the size field that sets the object's smallest width): two fingertips can touch
-  opposite sides of an object only if its smallest width is at most the hand's *span*, the
-  largest distance between the surfaces of two fingertips over the fingers' joint ranges
-  (:func:`~eos_svc.world.hand_context.hand_span`). Wider in every direction: no grasp exists.
+* **size** (the size field of the object's thinnest grip): the object must fit between this
+  hand's fingertips along some axis — its width there below the widest opening at which every
+  finger still reaches a contact (across flat faces, the tip before its links; across curved
+  ones, the tips' reach and the planner's d/h < 1 rule), with room behind the contacts before
+  the palm. One rule, :func:`~eos_svc.world.fingertip_fit.fit_refusal`, on the hand's
+  :class:`~eos_svc.world.fingertip_fit.FingertipOpening`; not the hand's *span* (the largest
+  distance between two fingertips, :func:`~eos_svc.world.hand_context.hand_span`), which
+  fingers opened that wide no longer close on.
+
+With a table (``request.table``), a fourth: **on the table** (``object.position[2]``): the
+object may not reach into it (:func:`check_on_table`).
 """
 
 from __future__ import annotations
@@ -31,6 +38,7 @@ from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.fingertip_fit import fit_refusal
 from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
 from eos_svc.world.parameters import WorldParameters
 
@@ -52,17 +60,10 @@ def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
 
 
 def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
-    """The object's smallest width (m) and the size field that sets it (``object.<field>``)."""
-    s = spec.size
-    if spec.shape in ("sphere", "capsule"):
-        return 2.0 * s["radius"], "object.radius"
-    if spec.shape == "ellipsoid":
-        return 2.0 * min(s["radii"]), "object.radii"
-    if spec.shape == "cylinder":
-        if s["length"] < 2.0 * s["radius"]:
-            return s["length"], "object.length"
-        return 2.0 * s["radius"], "object.radius"
-    return min(s["size"]), "object.size"
+    """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
+    kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
+    width, size_field = make_object(spec).smallest_width()
+    return width, f"object.{size_field}"
 
 
 def _distance(
@@ -94,14 +95,34 @@ def check_plannable(
 
     Raises:
         ValidationError: ``object.position`` when the object is out of reach or overlaps the
-            hand at its start configuration; the size field when it is wider than the hand's
-            span in every direction.
+            hand at its start configuration; the size field when it fits between the
+            fingertips along no axis.
     """
     context = context_for(hand) if context is None else context
     verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
     if verdict:
         field, reason = verdict
         raise ValidationError(field, reason)
+    if request.table is not None:
+        check_on_table(request.obj, request.table.height)
+
+
+#: how far an object may reach into the table (m): resting on it, within rounding
+TABLE_TOLERANCE = 1e-3
+
+
+def check_on_table(spec: ObjectSpec, height: float) -> None:
+    """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
+    :data:`TABLE_TOLERANCE` (its lowest point:
+    :meth:`~eos_svc.objects.base.SurfaceObject.depth_below_centre`)."""
+    obj = make_object(spec)
+    lowest = float(obj.centre[2] - obj.depth_below_centre())
+    if lowest < height - TABLE_TOLERANCE:
+        raise ValidationError(
+            "object.position[2]",
+            f"the object reaches {1000 * (height - lowest):.1f} mm into the table (its lowest point "
+            f"z = {lowest:.4f} m, the table's top z = {height:.4f} m): place it on the table",
+        )
 
 
 def check_default(request: PlanRequest) -> None:
@@ -127,15 +148,11 @@ def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]
 
 def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     """The three tests of the module doc; raises the refusal."""
-    params, span, reach_ahead = context.params, context.span, context.forward_reach
+    params, reach_ahead = context.params, context.forward_reach
 
-    width, size_field = smallest_width(spec)
-    if width > span:
-        raise ValidationError(
-            size_field,
-            f"the {spec.shape}'s smallest width {width:.3f} m exceeds the hand's span {span:.3f} m "
-            "(widest opening between two fingertips): no grasp exists",
-        )
+    too_large = fit_refusal(spec, context.opening, params.clearance)
+    if too_large is not None:
+        raise ValidationError(*too_large)
 
     # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
     # centre's distance to it and at least that minus the bounding radius: coal only in between.
@@ -211,13 +228,4 @@ def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
 
 def _diameter(spec: ObjectSpec) -> float:
     """Diameter of the smallest sphere about the object's centre that contains it (m)."""
-    s = spec.size
-    if spec.shape == "sphere":
-        return 2.0 * s["radius"]
-    if spec.shape == "ellipsoid":
-        return 2.0 * max(s["radii"])
-    if spec.shape == "cylinder":
-        return 2.0 * math.hypot(s["radius"], 0.5 * s["length"])
-    if spec.shape == "capsule":
-        return 2.0 * s["radius"] + s["length"]
-    return float(np.linalg.norm(s["size"]))
+    return make_object(spec).diameter

@@ -18,7 +18,7 @@ def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[st
     Returns:
         (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
         object; the step was cut at the contact by regula falsi), ``"link"`` (another part
-        of the finger touched first: not a precision grip) or ``"limit"`` (the joint
+        of the finger, or the table, touched first: not a precision grip) or ``"limit"`` (the joint
         limit was reached without touching).
     """
     tol = world.params.contact_tolerance
@@ -27,6 +27,9 @@ def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[st
     f0 = world.memo.get(("closing", finger))  # the closing gap at q0, when known
     q1, at_limit = world.state.close_finger(finger, dtheta)
     world.set_q(q1)
+    if world.table_gap() < 0.5 * tol:  # the finger would touch the table: stay, as at a link's touch
+        world.set_q(q0)
+        return "link", world.finger_angle(finger)
     if closing_clear(world, finger):
         return ("limit" if at_limit else "moved"), world.finger_angle(finger)
     f1 = closing_gap(world, finger)

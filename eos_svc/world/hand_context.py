@@ -16,18 +16,19 @@ import dataclasses
 import functools
 import itertools
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import coal
 import numpy as np
 
 from eos_svc.grasp.sweeps import FingerSweep, build_sweeps, finger_link_geometries, forward_reach
-from eos_svc.kinematics import HAND3X3_URDF, HandModel, load_hand
+from eos_svc.hands import DEFAULT_HAND, load_hand_named
+from eos_svc.kinematics import HandModel
 from eos_svc.kinematics.gap_bounds import hand_bound_table
 from eos_svc.kinematics.hand_state import read_only
 from eos_svc.world.coverage import Lattice, column_counts, lattice_of
-from eos_svc.world.parameters import WorldParameters, derive_hand_fields, is_hand3x3
+from eos_svc.world.fingertip_fit import FingertipOpening
+from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probe_pose import ProbePose
 from eos_svc.world.probing import ProbeChoice
 
@@ -67,6 +68,9 @@ class HandContext:
         neutral_geometries: the collision geometries at the start configuration.
         forward_reach: how far ahead of the wrist the fingers reach (m).
         lattice: the search's column lattice and its distances (from ``params``; ≈ 0.2 ms).
+        opening: the widest openings between the fingertips at which every finger still
+            reaches a contact, and the room behind the contacts (what admission's size rule
+            asks: :func:`~eos_svc.world.fingertip_fit.fit_refusal`).
     """
 
     hand: HandModel
@@ -84,15 +88,16 @@ class HandContext:
     neutral_geometries: tuple[PlacedGeometry, ...]
     forward_reach: float
     lattice: Lattice
+    opening: FingertipOpening
 
     @classmethod
     def build(cls, hand: HandModel, params: WorldParameters | None = None) -> HandContext:
         """The context of ``hand`` (``params`` default: :meth:`WorldParameters.for_hand`)."""
         sweeps = build_sweeps(hand)
         if params is None:
-            fields = {} if is_hand3x3(hand) else derive_hand_fields(hand, sweeps)
-            params = WorldParameters(**fields)  # type: ignore[arg-type]
+            params = WorldParameters.for_hand(hand, sweeps)
         probe = ProbeChoice.for_hand(hand, sweeps)
+        links = finger_link_geometries(hand)
         sides = side_fingers(hand)
         angles = {(f, probe.angles.get(f, 0.0)) for f in (probe.top, probe.bottom, *sides.values())}
         return cls(
@@ -100,7 +105,7 @@ class HandContext:
             sweeps=sweeps,
             params=params,
             bounds=hand_bound_table(hand),
-            links=finger_link_geometries(hand),
+            links=links,
             probe=probe,
             probe_poses={(f, a): ProbePose.build(hand, f, a) for f, a in angles},
             angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
@@ -111,6 +116,7 @@ class HandContext:
             neutral_geometries=neutral_geometries(hand),
             forward_reach=forward_reach(hand, sweeps),
             lattice=lattice_of(*column_counts(params)),
+            opening=FingertipOpening.build(hand, sweeps, links),
         )
 
     def with_params(self, params: WorldParameters) -> HandContext:
@@ -127,8 +133,9 @@ class HandContext:
 
 @functools.cache
 def default_context() -> HandContext:
-    """The context of hand3x3 (``urdf/hand3x3.urdf``), built once per process."""
-    return HandContext.build(load_hand(Path(HAND3X3_URDF)))
+    """The context of the default hand (hand3x3, from its shipped description), built once per
+    process."""
+    return HandContext.build(load_hand_named(DEFAULT_HAND))
 
 
 def context_for(hand: HandModel | None = None, params: WorldParameters | None = None) -> HandContext:

@@ -1,7 +1,8 @@
 """The grasp world's tunable constants and what they derive from the hand (SI units).
 
 :meth:`WorldParameters.for_hand` derives the hand-dependent fields (grasp centre, search box,
-hand bound) from a hand's model and closing sweeps (:mod:`eos_svc.agents.sweeps`).
+hand bound) from a hand's model and closing sweeps (:mod:`eos_svc.grasp.sweeps`); a hand's
+description may set any of them (``[world]``, see ``docs/hands.md``).
 """
 
 from __future__ import annotations
@@ -11,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.grasp.sweeps import FingerSweep, build_sweeps
-from eos_svc.kinematics import HandDescription, HandModel
+from eos_svc.hands import DescribedHand
+from eos_svc.kinematics import HandModel
 
 
 @dataclass(frozen=True)
@@ -40,6 +42,9 @@ class WorldParameters:
             of the contact grasp_points chose for it, on the postulated object (m).
         hand_bound: radius of a ball about the grasp centre that contains the whole hand at
             any finger angle (m); objects farther away need no collision query.
+        contact_patch_radius: radius of the fingertips' contact patch for the grasp quality
+            (m): 0 for hard point contacts (sphere tips); > 0 for soft pads, which also resist
+            a torque about the contact normal (:mod:`eos_svc.grasp.quality`).
     """
 
     search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
@@ -58,21 +63,19 @@ class WorldParameters:
     confidence_threshold: float = 0.6
     landing_tolerance: float = 0.002
     hand_bound: float = 0.2
+    contact_patch_radius: float = 0.0
 
     @classmethod
-    def for_hand(cls, hand: HandModel, **overrides: object) -> WorldParameters:
-        """Parameters for ``hand``: the defaults (tuned for hand3x3) for hand3x3 itself; for
-        another hand the hand-dependent fields are derived from its model (see
-        :func:`derive_hand_fields`). ``overrides`` replace any field afterwards."""
-        if is_hand3x3(hand):
-            return cls(**overrides)  # type: ignore[arg-type]
-        return cls(**{**derive_hand_fields(hand), **overrides})  # type: ignore[arg-type]
-
-
-def is_hand3x3(hand: HandModel) -> bool:
-    """Whether ``hand`` is described as hand3x3 (the hand the defaults are tuned for)."""
-    radius = hand.tip_radius(hand.finger_names[0])
-    return hand.description == HandDescription.hand3x3(radius)
+    def for_hand(
+        cls, hand: HandModel, sweeps: dict[str, FingerSweep] | None = None, **overrides: object
+    ) -> WorldParameters:
+        """Parameters for ``hand``: the hand-dependent fields derived from its model (see
+        :func:`derive_hand_fields`), then those its description sets (``[world]`` of a
+        :class:`~eos_svc.hands.DescribedHand`: hand3x3's are the values the planner was tuned
+        with), then ``overrides``."""
+        described = hand.world_overrides if isinstance(hand, DescribedHand) else {}
+        fields = {**derive_hand_fields(hand, sweeps), **described, **overrides}
+        return cls(**fields)
 
 
 def derive_hand_fields(hand: HandModel, sweeps: dict[str, FingerSweep] | None = None) -> dict[str, object]:

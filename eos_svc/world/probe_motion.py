@@ -22,8 +22,10 @@ def guarded_probe(
     The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
     ``angle`` and every other finger opened, so that the tip's centre is at ``start``
     (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
-    there). Conservative advancement: each sub-step is at most the tip's gap beyond half
-    the contact tolerance and the other geometries' gap beyond half the contact tolerance
+    there). With a table, a probe whose hand would start within ``clearance`` of it (a probe
+    from below) is blocked, and a downward travel is cut where the hand would reach it.
+    Conservative advancement: each sub-step is at most the tip's gap beyond half the contact
+    tolerance and the other geometries' gap beyond half the contact tolerance
     (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
     above the face its tip touches), so only the tip can touch, and it never pushes the
     object. The start's clearance is taken as the other geometries' exact minimum and the
@@ -71,6 +73,12 @@ def guarded_probe(
             break
     else:
         return ProbeOutcome("blocked", finger, why="no clear start")
+    if world.table is not None:  # the table: no start under or at it, no travel into it
+        table_room = world.table_gap() - p.clearance
+        if table_room < 0.0:
+            return ProbeOutcome("blocked", finger, why="the hand would be under or at the table")
+        if d[2] < 0.0:
+            travel = min(travel, table_room / -d[2])
     tol = p.contact_tolerance
     half_tol = 0.5 * tol
     # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
@@ -90,7 +98,7 @@ def guarded_probe(
         tip_gap = float(contact.distance)
         if tip_gap <= tol:
             reading = world.sensor.read(state, contact)
-            M = state.data.oMf[hand.tip_frame_id(finger)]
+            M = world.encoders.tip_frame(state, finger)  # as the joint encoders report it
             normal = -(M.rotation @ reading.normal_tip)
             return ProbeOutcome(
                 "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
@@ -109,7 +117,7 @@ def guarded_probe(
                 return ProbeOutcome(
                     "blocked",
                     finger,
-                    free=densify(np.array(free)),
+                    free=densify(_reported(world, finger, np.array(free))),
                     travelled=travelled,
                     why="another part of the hand would touch first",
                 )
@@ -123,7 +131,23 @@ def guarded_probe(
             break
         floor = _probe_floor_after(floor, step)
         exact = False
-    return ProbeOutcome("missed", finger, free=densify(np.array(free)), travelled=travelled)
+    return ProbeOutcome(
+        "missed", finger, free=densify(_reported(world, finger, np.array(free))), travelled=travelled
+    )
+
+
+def _reported(world: GraspWorld, finger: str, path: np.ndarray) -> np.ndarray:
+    """A probe's true tip-centre path (N, 3) as the hand reports it: shifted by the report's
+    error at the probe's end (the finger's joints hold still during a probe, the wrist is known;
+    :class:`~eos_svc.world.joint_sensing.JointSensing`). The path itself when exact."""
+    if world.encoders.exact:
+        return path
+    state = world.state
+    offset = (
+        world.encoders.tip_frame(state, finger).translation
+        - state.data.oMf[world.hand.tip_frame_id(finger)].translation
+    )
+    return path + offset
 
 
 #: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all

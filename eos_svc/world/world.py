@@ -38,8 +38,10 @@ from eos_svc.objects import SurfaceObject
 from eos_svc.world import finger_closing, probe_motion, wrist_motion
 from eos_svc.world.coverage import SpaceFillingOrder
 from eos_svc.world.hand_context import HandContext
+from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
 from eos_svc.world.probing import ProbeChoice, ProbeOutcome
+from eos_svc.world.table import hand_table_gap, table_shape
 
 
 @dataclass
@@ -55,11 +57,17 @@ class GraspWorld:
     sensor: TactileSensor
     rng: np.random.Generator
     estimator: CurvatureEstimator = field(default_factory=CurvatureEstimator)
+    sensing: JointSensing | None = None  # the joint encoders' and links' errors (None: exact)
+    #: the support surface's height (world z, m) the object rests on, or None (no table)
+    table_height: float | None = None
 
     def __post_init__(self) -> None:
+        # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
+        self.encoders: JointSensing = self.sensing if self.sensing is not None else JointSensing(self.hand)
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
         self.grasp_centre_palm = np.asarray(self.params.grasp_centre, dtype=float)
         self.version = 0  # bumped on every move
+        self.probes = 0  # guarded probes run so far (EP2's straight moves, touched or not)
         self.memo: dict[object, Any] = {}
         # the object's bounding ball (centre, m; radius, m) for the gaps' lower bounds: the
         # object is fixed for a world's lifetime (a plan never moves it)
@@ -68,6 +76,7 @@ class GraspWorld:
         # the search's lattice order, drawn from rng at the first search move (see search_step)
         self.search_order: SpaceFillingOrder | None = None
         self.search_columns = np.empty((0, 0, 2))
+        self.table = None if self.table_height is None else table_shape(self.table_height)
 
     # --- what the world is made of ---------------------------------------------------
     @property
@@ -166,6 +175,25 @@ class GraspWorld:
             self.memo["clearance"] = value
         return value
 
+    def probe_finger(self, face: str) -> str:
+        """The finger that explores ``face`` ("top", "bottom", "front" or "side"; a side probe
+        along ±y is led by ``context.side_fingers``): :attr:`probe`'s choice, except on a table,
+        where every probe is the opposing finger's — the hand's lowest part, it keeps the rest
+        of the hand above the probed place."""
+        if self.table is not None or face == "bottom":
+            return self.probe.bottom
+        return self.probe.top
+
+    def table_gap(self) -> float:
+        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf``
+        without one (memoised per hand pose)."""
+        if self.table is None:
+            return math.inf
+        value = self.memo.get("table_gap")
+        if value is None:
+            value = self.memo["table_gap"] = hand_table_gap(self.state, self.table)
+        return value
+
     def hand_clear(self, threshold: float) -> bool:
         """``hand_clearance() >= threshold``, without the exact collision queries when the
         geometries' lower bounds already reach ``threshold``."""
@@ -254,7 +282,9 @@ class GraspWorld:
     def guarded_probe(
         self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
     ) -> ProbeOutcome:
-        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
+        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`),
+        counted in :attr:`probes`."""
+        self.probes += 1
         return probe_motion.guarded_probe(self, finger, start, direction, travel, angle)
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+from eos_svc.world.table import clamp_above
 
 if TYPE_CHECKING:
     from eos_svc.world.world import GraspWorld
@@ -16,7 +17,8 @@ if TYPE_CHECKING:
 def search_step(world: GraspWorld) -> tuple[str, float, bool]:
     """One search move: a sweep of the next column of the coverage plan in this run's seeded
     space-filling order (:mod:`eos_svc.world.coverage`): back to the box's rear (−x), across to
-    the column (y, z), forward through the box (+x), each leg a guarded straight move
+    the column (y, z) — no lower than the table allows, when there is one — forward through
+    the box (+x), each leg a guarded straight move
     (:func:`guarded_wrist_move`) that stops where the object enters the envelope or short of a
     contact.
 
@@ -31,6 +33,8 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
         world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
     j, k = world.search_order.take()
     y, z = (float(v) for v in world.search_columns[j, k])
+    if world.table is not None:  # a column under the table's reach is swept as low as it allows
+        z = max(z, world.wrist_xyz()[2] - (world.table_gap() - p.clearance) + 1e-6)
     x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
     moved = 0.0
     for leg in ((x_lo, *world.wrist_xyz()[1:]), (x_lo, y, z), (x_hi, y, z)):
@@ -67,7 +71,8 @@ def guarded_wrist_move(
     length, so no sub-step can bring the hand closer than that) and, with
     ``stop_when_located``, at most the grasp centre's gap beyond the envelope (floored at
     0.5 mm). Stops when the object is located, when the hand is within 0.1 mm of the clearance
-    (blocked) or at the target.
+    (blocked) or at the target. With a table the target is first shortened so that no hand
+    geometry comes within ``params.clearance`` of it (then blocked at the shortened target).
 
     Returns:
         (length moved in m, blocked flag).
@@ -75,10 +80,11 @@ def guarded_wrist_move(
     p = world.params
     xyz = world.wrist_xyz_q
     start = world.wrist_position().copy()
+    target, under_table = clamp_above(start, target, world.table_gap(), p.clearance)
     delta = np.asarray(target, dtype=float) - start
     length = float(np.linalg.norm(delta))
     if length < 1e-12:
-        return 0.0, False
+        return 0.0, under_table
     unit = delta / length
     q = world.state.q
     travelled = 0.0
@@ -105,7 +111,7 @@ def guarded_wrist_move(
         q[xyz] = start + unit * travelled
         world.set_q(q)
         if travelled >= length - 1e-12:
-            return travelled, False
+            return travelled, under_table
     return travelled, True
 
 
@@ -113,7 +119,7 @@ def step_wrist_toward(world: GraspWorld, target: np.ndarray, step: float) -> tup
     """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
 
     Stops short (by bisection) where any hand geometry would come within half the contact
-    tolerance of the object, so the hand never pushes the object.
+    tolerance of the object, so the hand never pushes the object, and short of the table.
 
     Returns:
         (distance left to the target in m, stopped-by-contact flag).
@@ -126,6 +132,9 @@ def step_wrist_toward(world: GraspWorld, target: np.ndarray, step: float) -> tup
     if dist < 1e-9:
         return 0.0, False
     move = min(step, dist)
+    reach, under_table = clamp_above(start, start + delta * (move / dist), world.table_gap(), threshold)
+    if under_table:  # the table stops the step first: move as far as it allows
+        move = float(np.linalg.norm(reach - start))
     q = world.state.q.copy()
 
     def clear_at(fraction: float) -> bool:
@@ -134,7 +143,7 @@ def step_wrist_toward(world: GraspWorld, target: np.ndarray, step: float) -> tup
         return world.hand_clear(threshold)
 
     if clear_at(1.0):
-        return dist - move, False
+        return dist - move, under_table
     lo, hi = 0.0, 1.0  # fraction of the move that keeps the hand clear
     for _ in range(30):
         mid = 0.5 * (lo + hi)

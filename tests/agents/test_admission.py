@@ -62,10 +62,11 @@ def test_reach_near_a_corner_uses_the_true_distance():
 
 
 def test_a_big_object_is_reachable_by_its_surface_not_its_centre():
-    # a 16 cm cube whose centre is 12 cm past the box: its face is 4 cm away, within the envelope
-    spec = ObjectSpec("box", {"size": [0.16, 0.16, 0.16]}, (HI[0] + 0.12, 0.0, 0.0))
+    # a box 16 cm deep (9 cm thin: it fits between the fingertips) whose centre is 12 cm past
+    # the box: its face is 4 cm away, within the envelope
+    spec = ObjectSpec("box", {"size": [0.16, 0.16, 0.09]}, (HI[0] + 0.12, 0.0, 0.0))
     assert refusal(spec) is None
-    far = ObjectSpec("box", {"size": [0.16, 0.16, 0.16]}, (HI[0] + 0.14, 0.0, 0.0))
+    far = ObjectSpec("box", {"size": [0.16, 0.16, 0.09]}, (HI[0] + 0.14, 0.0, 0.0))
     err = refusal(far)
     assert err is not None and err.field == "object.position[0]"
 
@@ -77,7 +78,7 @@ def test_overlap_with_the_hand_at_its_start_configuration(position):
     assert "overlaps the hand" in err.reason
 
 
-def test_span_covers_the_fingers_opening_and_sizes_around_it():
+def test_span_covers_the_fingers_opening():
     hand = default_hand()
     span = hand_span(hand)
     # closed form from the closing sweeps: the two farthest tips when all joints open together
@@ -89,9 +90,6 @@ def test_span_covers_the_fingers_opening_and_sizes_around_it():
         if a != b
     )
     assert opened <= span < opened + 0.05
-    assert refusal(sphere(0.5 * span - 1e-3, (0.35, 0.0, 0.0))) is None
-    err = refusal(sphere(0.5 * span + 1e-3, (0.35, 0.0, 0.0)))
-    assert err is not None and err.field == "object.radius" and "span" in err.reason
 
 
 @pytest.mark.parametrize(

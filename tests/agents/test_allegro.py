@@ -1,8 +1,9 @@
 """Other hands: the planner with the Allegro hand of example-robot-data.
 
 The Allegro URDF is found from the installed example-robot-data distribution and put on the
-planner's six wrist joints (``eos_svc.kinematics.allegro_hand``); the planner takes its
-fingers, sweeps, probe fingers and world parameters from the hand.
+planner's six wrist joints (its description ``eos_svc/hands/data/allegro.toml``, loaded by the
+``eos_load_hand`` fixture of ``eos_svc.testing.pytest_plugin``); the planner takes its fingers,
+sweeps, probe fingers and world parameters from the hand.
 """
 
 from __future__ import annotations
@@ -14,16 +15,14 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, build_agents, build_world, plan
 from eos_svc.agents.planner import DEFAULT_RATINGS, default_hand, finger_ratings
-from eos_svc.kinematics import allegro_hand
-from eos_svc.kinematics.hands import ALLEGRO_PRESHAPE, allegro_urdf_path
 from eos_svc.world.parameters import WorldParameters
 
 SPHERE = ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.02, -0.015))
 
 
 @pytest.fixture(scope="module")
-def hand():
-    return allegro_hand()
+def hand(eos_load_hand):
+    return eos_load_hand("allegro")
 
 
 @pytest.fixture(scope="module")
@@ -32,9 +31,8 @@ def result(hand):
 
 
 def test_allegro_loads_on_the_wrist_from_the_installed_distribution(hand):
-    assert allegro_urdf_path().is_file()
-    assert "site-packages" in str(allegro_urdf_path()) or "dist-packages" in str(allegro_urdf_path())
-    assert hand is allegro_hand()  # cached
+    assert hand.urdf_path.is_file()
+    assert "site-packages" in str(hand.urdf_path) or "dist-packages" in str(hand.urdf_path)
     assert hand.nq == hand.nv == 22  # six wrist joints + the Allegro's sixteen
     assert hand.description.wrist_joints[:3] == ("wrist_x", "wrist_y", "wrist_z")
     assert hand.finger_names == ("index", "middle", "ring", "thumb")
@@ -44,7 +42,7 @@ def test_allegro_loads_on_the_wrist_from_the_installed_distribution(hand):
     assert len(hand.collision_model.geometryObjects) == 21  # palm box, link boxes, tip spheres
     # the pre-shape holds in the neutral configuration, within the joint limits
     q = hand.neutral()
-    for joint, value in ALLEGRO_PRESHAPE.items():
+    for joint, value in hand.spec.preshape.items():
         assert q[hand.joint_q_index(joint)] == value
     assert hand.within_limits(q)
 

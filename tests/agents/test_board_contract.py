@@ -16,7 +16,6 @@ from eos_svc.agents.board_table import TABLE_BEGIN, TABLE_END, planner_access_ta
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.board_access import access_map, undeclared_entries
 from eos_svc.errors import ContractError, ValidationError
-from eos_svc.kinematics import allegro_hand
 from eos_svc.schema import keys as keys_module
 from eos_svc.schema.board_entries import (
     AFTER_RUN,
@@ -57,6 +56,8 @@ def _cycles(result) -> list[dict]:
     for record in result.trace:
         d = record.to_dict()
         d.pop("elapsed_s")
+        for row in d["ratings"]:
+            row.pop("latency_s")  # wall-clock, as elapsed_s
         out.append(d)
     return out
 
@@ -100,8 +101,8 @@ def test_checked_plans_reach_every_writer(tmp_path):
     assert written - set(OUTSIDE_WRITERS) == declared
 
 
-def test_checked_allegro_plan_runs_the_same_cycles():
-    hand = allegro_hand()
+def test_checked_allegro_plan_runs_the_same_cycles(eos_load_hand):
+    hand = eos_load_hand("allegro")
     request = PlanRequest.from_dict({"seed": 2, "object": {"shape": "sphere", "radius": 0.032}})
     checked = plan(request, hand=hand, check_board=True)
     _same_plan(checked, plan(request, hand=hand))
@@ -164,10 +165,19 @@ def _shape(**fields) -> dict:
 
 def test_entry_check_accepts_the_declared_forms():
     check_entry(keys_module.SHAPE, _shape())
-    # the postulate's optional object fields: object, pose_known, evidence, bounds
+    # the postulate's optional object fields: object, pose_known, evidence, bounds, open_faces, approximate
     obj = {"shape": "sphere", "radius": 0.03, "position": [0.2, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
     check_entry(keys_module.SHAPE, _shape(object=obj, pose_known=True, evidence={"contacts": 5}, bounds=None))
-    assert ShapeEntry.__optional_keys__ == {"object", "pose_known", "evidence", "bounds"}
+    face = {"centre": [0.3, 0.0, 0.0], "normal": [1.0, 0.0, 0.0], "half": 0.05, "delta_chi2": 0.0}
+    check_entry(keys_module.SHAPE, _shape(open_faces=[face]))
+    assert ShapeEntry.__optional_keys__ == {
+        "object",
+        "pose_known",
+        "evidence",
+        "bounds",
+        "open_faces",
+        "approximate",
+    }
     check_entry(keys_module.FINGER_STATE, {"finger1": "open", "finger2": "touching"})
     check_entry(keys_module.GAP, 1)  # an int is a float
     check_entry(keys_module.GAP, np.float64(0.5))

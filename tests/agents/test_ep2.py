@@ -9,7 +9,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import build_world, default_hand
-from eos_svc.kinematics import allegro_hand
+from eos_svc.hands import load_hand_named
 from eos_svc.world.hand_context import side_fingers
 
 
@@ -105,7 +105,9 @@ def test_ep1_repeats_while_its_curvature_is_not_trusted_then_ep2():
     assert result.shape["class"] == "sphere" and result.shape["confidence"] >= 0.9
 
 
-@pytest.mark.parametrize("make_hand", [default_hand, allegro_hand], ids=["hand3x3", "allegro"])
+@pytest.mark.parametrize(
+    "make_hand", [default_hand, lambda: load_hand_named("allegro")], ids=["hand3x3", "allegro"]
+)
 def test_side_fingers_lead_along_plus_and_minus_y(make_hand):
     hand = make_hand()
     state = hand.state(hand.neutral())

@@ -100,7 +100,13 @@ def test_every_cycle_reaches_the_callback():
 
 
 def test_too_large_object_fails_cleanly():
-    r = plan(ratio_sphere_request(1.3, seed=1, position=(0.3, 0.02, -0.015)))
+    request = ratio_sphere_request(1.3, seed=1, position=(0.3, 0.02, -0.015))
+    # admission refuses it: it fits between the fingertips along no axis
+    with pytest.raises(ValidationError) as info:
+        plan(request)
+    assert info.value.field == "object.radius" and "along no axis" in info.value.reason
+    # planned anyway, the grasp stage finds it too large and says so
+    r = plan(request, check=False)
     assert r.status == "failed"
     assert "too large" in r.reason
 

@@ -7,8 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from eos_svc.agents.planner import default_hand
-from eos_svc.kinematics import HandModel, UnknownNameError, allegro_hand
+from eos_svc.kinematics import HandModel, UnknownNameError
 from eos_svc.world.probe_pose import ProbePose
 
 
@@ -23,9 +22,9 @@ def _plain(hand: HandModel, q: np.ndarray, finger: str, angle: float) -> np.ndar
     return out
 
 
-@pytest.mark.parametrize("which", ["hand3x3", "allegro"])
-def test_probe_pose_equals_the_plain_assignments(which: str) -> None:
-    hand = default_hand() if which == "hand3x3" else allegro_hand()
+def test_probe_pose_equals_the_plain_assignments(eos_hand) -> None:
+    """Every registered hand (the eos_hand fixture of eos_svc.testing.pytest_plugin)."""
+    hand = eos_hand
     rng = np.random.default_rng(3)
     for _ in range(20):
         q = hand.lower + (hand.upper - hand.lower) * rng.random(hand.nq)

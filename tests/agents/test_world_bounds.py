@@ -13,7 +13,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
-from eos_svc.kinematics import allegro_hand
+from eos_svc.hands import load_hand_named
 from eos_svc.world.finger_closing import closing_clear, closing_gap
 
 OBJECTS = [
@@ -41,7 +41,7 @@ def random_poses(world, rng, n):
 @pytest.mark.parametrize("spec", OBJECTS, ids=lambda s: s.shape)
 @pytest.mark.parametrize("hand_name", ["hand3x3", "allegro"])
 def test_lower_bounds_never_exceed_the_exact_gaps(spec, hand_name):
-    hand = allegro_hand() if hand_name == "allegro" else None
+    hand = load_hand_named("allegro") if hand_name == "allegro" else None
     request = PlanRequest(obj=spec)
     if hand is not None:
         request = PlanRequest(obj=ObjectSpec(spec.shape, spec.size, (0.12, 0.0, 0.0), spec.rpy))

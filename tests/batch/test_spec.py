@@ -44,10 +44,6 @@ def test_the_example_spec_parses_and_expands_to_its_documented_count() -> None:
         ({"objects": {"explicit": [{"shape": "sphere", "radius": -1.0}]}}, "objects.explicit[0].radius"),
         ({"objects": {"draw": {"count": 3}}}, "objects.draw.draw_seed"),
         ({"objects": {"suite": "quick"}, "hands": ["hand3x3", "shadow"]}, "hands[1]"),
-        (
-            {"objects": {"suite": "quick"}, "hands": ["allegro"], "validate": {"enabled": True}},
-            "validate.enabled",
-        ),
         ({"objects": {"suite": "quick"}, "seeds": [1, 1]}, "seeds"),
         ({"objects": {"suite": "quick"}, "run": {"plans_per_task": 0}}, "run.plans_per_task"),
     ],

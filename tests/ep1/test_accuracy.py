@@ -33,3 +33,17 @@ def test_noisy_median_radius_error_within_five_percent():
     rows = accuracy.run_noisy(seeds=8)
     for r in rows:
         assert r.median_radius_error <= 0.05, r
+
+
+@pytest.mark.parametrize(
+    ("argv", "option"),
+    [
+        (["--seeds", "0"], "--seeds"),
+        (["--noise", "nan"], "--noise"),
+        (["--target-rating", "1.5"], "--target-rating"),
+    ],
+)
+def test_bad_options_exit_2_naming_the_option(argv, option, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        accuracy.main(argv)
+    assert exit_info.value.code == 2 and f"argument {option}:" in capsys.readouterr().err

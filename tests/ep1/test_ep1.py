@@ -19,6 +19,7 @@ from eos_svc.kinematics.ep1 import (
     repeat_ep1,
     run_ep1,
 )
+from eos_svc.kinematics.hand import KinematicsError
 
 
 def _start(shape, size, finger="finger1"):
@@ -34,6 +35,19 @@ def test_place_hand_touches_with_zero_gap():
     for shape, size in [("sphere", 0.02), ("plane", 1.0), ("cylinder", 0.03), ("ellipsoid", 0.05)]:
         sc, st = _start(shape, size)
         assert abs(sc.contact(st, "finger1").distance) < 1e-9
+
+
+def test_place_hand_in_a_scratch_state_gives_the_same_configuration():
+    """A scratch state (re-used, left anywhere) changes nothing of the placement; another hand's
+    state is refused, naming the argument."""
+    sc = ep1_scene("ellipsoid", 0.05)
+    scratch = sc.hand.state()
+    for point in (None, np.array([0.0, 0.0, 0.5]), np.array([0.02, -0.01, 0.5])):
+        q = place_hand_for_ep1(sc, "finger1", point=point)
+        np.testing.assert_array_equal(place_hand_for_ep1(sc, "finger1", point=point, scratch=scratch), q)
+    other = ep1_scene("sphere", 0.03).hand.state()
+    with pytest.raises(KinematicsError, match="scratch"):
+        place_hand_for_ep1(sc, "finger1", scratch=other)
 
 
 @pytest.mark.parametrize("R", [0.01, 0.08])

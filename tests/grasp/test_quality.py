@@ -250,3 +250,41 @@ def test_primitive_wrench_torques_are_arm_cross_force():
     w, scale, m = primitive_wrenches(p, n, [0.01, 0.0, -0.02], 0.4, edges=6)
     arms = np.repeat(p - np.array([0.01, 0.0, -0.02]), m, axis=0)
     np.testing.assert_allclose(w[:, 3:], np.cross(arms, w[:, :3]) / scale, atol=1e-15)
+
+
+# --- soft-finger contacts (a contact patch of radius a) -----------------------------------
+def test_soft_contact_adds_the_two_torsion_wrenches_of_its_patch():
+    """Per contact, the cone's edges and two wrenches of the normal force with torque
+    ± γ (−n) about the normal, γ = (2/3) μ a (uniform pressure on a disc of radius a)."""
+    p = np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]])
+    mu, a, L = 0.5, 0.008, 0.03
+    w, scale, m = primitive_wrenches(p, p, [0.0, 0.0, 0.0], mu, edges=8, torque_scale=L, patch_radius=a)
+    assert m == 10 and w.shape == (20, 6) and scale == L
+    gamma = 2.0 / 3.0 * mu * a
+    torsion = w.reshape(2, 10, 6)[0, 8:]  # the first contact's two extra wrenches
+    assert np.allclose(torsion[:, :3], [[-1.0, 0.0, 0.0]] * 2)
+    assert np.allclose(sorted(torsion[:, 3]), [-gamma / L, gamma / L])
+
+
+def test_antipodal_soft_contacts_close_and_their_torsion_bounds_epsilon():
+    """Two antipodal pads (a parallel jaw) are in force closure once a > 0: the torque about
+    the line through them is resisted by torsional friction alone, at most γ / L per unit
+    normal force, which bounds ε (the hull reaches no farther along that torque axis)."""
+    p = np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]])
+    hard = grasp_quality(p, p, [0.0, 0.0, 0.0], 0.5, torque_scale=0.03)
+    assert not hard.force_closure
+    previous = 0.0
+    for a in (0.002, 0.005, 0.01):
+        soft = grasp_quality(p, p, [0.0, 0.0, 0.0], 0.5, torque_scale=0.03, patch_radius=a)
+        assert soft.force_closure and soft.rank == 6
+        assert 0.0 < soft.epsilon <= 2.0 / 3.0 * 0.5 * a / 0.03 + 1e-12
+        assert soft.epsilon > previous
+        previous = soft.epsilon
+    assert grasp_quality(p, p, [0.0, 0.0, 0.0], 0.0, patch_radius=0.01).force_closure is False
+
+
+def test_a_negative_patch_is_refused_by_name():
+    p = np.array([[0.03, 0.0, 0.0], [-0.03, 0.0, 0.0]])
+    with pytest.raises(ValueError) as info:
+        primitive_wrenches(p, p, None, 0.5, patch_radius=-0.001)
+    assert getattr(info.value, "field", None) == "patch_radius"

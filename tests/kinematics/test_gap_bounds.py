@@ -47,10 +47,6 @@ def test_bounds_never_exceed_the_exact_gap_and_are_tight_for_a_sphere():
     assert near > 50  # many poses close to contact, where a loose bound would show
 
 
-def test_hand_bound_table_is_shape_bound_of_every_geometry():
-    from eos_svc.agents.planner import default_hand
-    from eos_svc.kinematics import allegro_hand
-
-    for hand in (default_hand(), allegro_hand()):
-        table = hand_bound_table(hand)
-        assert table == [shape_bound(go.geometry) for go in hand.collision_model.geometryObjects]
+def test_hand_bound_table_is_shape_bound_of_every_geometry(eos_hand):
+    table = hand_bound_table(eos_hand)
+    assert table == [shape_bound(go.geometry) for go in eos_hand.collision_model.geometryObjects]

@@ -9,7 +9,8 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics import Scene, allegro_hand
+from eos_svc.hands import load_hand_named
+from eos_svc.kinematics import Scene
 from eos_svc.objects import Box, Capsule, Cylinder, Ellipsoid, Sphere
 
 
@@ -36,7 +37,7 @@ def _plain_distance(scene, shape, transform) -> float:
 @pytest.mark.parametrize("hand_name", ["hand3x3", "allegro"])
 def test_functor_gaps_are_coal_distance_bit_for_bit(obj, hand_name, hand):
     if hand_name == "allegro":
-        hand = allegro_hand()  # on the planner's wrist (the conftest fixture has none)
+        hand = load_hand_named("allegro")  # on the planner's wrist (the conftest fixture has none)
     scene = Scene(hand, obj)
     state = hand.state(hand.neutral())
     rng = np.random.default_rng(4)

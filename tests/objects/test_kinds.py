@@ -14,6 +14,7 @@ from pydrake.multibody.tree import SpatialInertia
 
 from eos_svc.errors import ValidationError
 from eos_svc.objects import (
+    FITTED_KINDS,
     KINDS,
     Box,
     Capsule,
@@ -55,7 +56,8 @@ def surface_samples(obj: SurfaceObject, rng: np.random.Generator, n: int = 4000)
 
 
 def test_the_registry_names_every_kind_once():
-    assert list(KINDS) == ["sphere", "ellipsoid", "cylinder", "capsule", "box"]
+    assert list(KINDS) == ["sphere", "ellipsoid", "cylinder", "capsule", "box", "mesh"]
+    assert list(FITTED_KINDS) == ["sphere", "ellipsoid", "cylinder", "capsule", "box"]
     assert all(cls.kind == name for name, cls in KINDS.items())
 
 

@@ -35,6 +35,7 @@ class Once(Agent):
 
 core = Controller([Once("once", ["s"], 0.5)], ["s"], Weights(0.5, 0.5)).run()
 result = plan(PlanRequest(seed=3))
+described = plan(PlanRequest(seed=1, hand="trifinger"))  # a shipped description (package data)
 resource = importlib.resources.files("eos_svc.data").joinpath("hand3x3.urdf")
 print(json.dumps({
     "package": eos_svc.__file__,
@@ -44,6 +45,8 @@ print(json.dumps({
     "core": core.status.value,
     "plan": result.status,
     "cycles": result.cycles,
+    "trifinger": described.status,
+    "trifinger_fingers": sorted(described.contacts),
 }))
 """
 
@@ -85,6 +88,9 @@ def test_the_wheel_carries_the_urdf_every_module_and_data_file(wheel: Path):
     assert any(f.endswith(".py") for f in files)
     assert files <= names, sorted(files - names)  # every module and every data file
     assert not any(n.startswith(("urdf/", "tests/", "benchmarks/")) for n in names)
+    # the worked plug-in agent, nameable by an installed eos_svc (docs/extending.md)
+    entry_points = next(n for n in names if n.endswith(".dist-info/entry_points.txt"))
+    assert "[eos_svc.agents]\nsampled_grasp_points = " in zipfile.ZipFile(wheel).read(entry_points).decode()
 
 
 def test_installed_package_loads_its_urdf_through_importlib_resources(wheel: Path, tmp_path: Path):
@@ -100,6 +106,16 @@ def test_installed_package_loads_its_urdf_through_importlib_resources(wheel: Pat
     assert seen["package"].startswith(str(target))  # the installed copy, not the checkout
     assert seen["urdf"] == seen["resource"] == str(target / "eos_svc" / "data" / "hand3x3.urdf")
     assert seen["nq"] == 15 and seen["core"] == "completed" and seen["plan"] == "success"
+    assert seen["trifinger"] == "success" and seen["trifinger_fingers"] == ["finger1", "finger2", "finger3"]
+
+
+def test_the_wheel_declares_the_pytest_plugin(wheel: Path):
+    """pytest loads eos_svc's fixtures wherever the wheel is installed (entry point pytest11)."""
+    archive = zipfile.ZipFile(wheel)
+    (entry_points,) = [n for n in archive.namelist() if n.endswith(".dist-info/entry_points.txt")]
+    text = archive.read(entry_points).decode()
+    assert "[pytest11]" in text
+    assert "eos_svc.testing.pytest_plugin = eos_svc.testing.pytest_plugin" in text
 
 
 @pytest.mark.slow

@@ -7,13 +7,8 @@ import json
 import pytest
 
 from eos_svc.cli import main
-from eos_svc.cli.replay import (
-    RecordFileError,
-    first_difference,
-    read_recording,
-    record_from_dict,
-    verify,
-)
+from eos_svc.cli.replay import verify
+from eos_svc.recording import RecordFileError, first_difference, read_recording, record_from_dict
 
 
 @pytest.fixture(scope="module")

@@ -11,8 +11,9 @@ import pytest
 
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import PlanOutcome
 from eos_svc.service.demo_planner import slowed
+from eos_svc.service.plan_attempt import PlanOutcome
+from eos_svc.service.wire_json import loads_strict
 from tests.service.waiting import wait_until
 
 
@@ -85,13 +86,13 @@ def test_a_goal_sent_without_a_token_cannot_be_cancelled(port, services, clients
     client.wait_for_instances(1)
     payload = proto.encode_request("tokenless", PlanRequest(max_cycles=30))  # no cancel_token
     handler = client.session.get(proto.plan_key(client.prefix, svc.instance), payload=payload, timeout=20)
-    wait_until(lambda: "tokenless" in svc._active, 20)
+    wait_until(lambda: svc._goals.get("tokenless") is not None, 20)
     with pytest.raises(proto.RequestError) as info:
         client.cancel("tokenless", cancel_token="any-secret-0123456789")
     assert info.value.code == proto.E_FORBIDDEN and "without a cancel_token" in info.value.reason
     replies = list(handler)
     assert len(replies) == 1 and replies[0].ok is not None  # it ran to its end
-    assert proto.loads_strict(replies[0].ok.payload.to_bytes())["result"]["status"] == "cycle_limit"
+    assert loads_strict(replies[0].ok.payload.to_bytes())["result"]["status"] == "cycle_limit"
 
 
 def test_a_malformed_cancel_token_in_a_request_is_named():

@@ -1,4 +1,4 @@
-"""The service's fast encoders write exactly what the plain to_dict -> to_jsonable -> JSON chain writes."""
+"""The service's encoders write what the plain to_dict -> to_jsonable -> JSON chain writes."""
 
 from __future__ import annotations
 
@@ -14,13 +14,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from eos_svc.agent import Outcome
-from eos_svc.board import BoardChange
 from eos_svc.ratings import Weights
-from eos_svc.records import AgentRating, CycleRecord, to_jsonable
+from eos_svc.records import CycleRecord, to_jsonable
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan
-from tests.service.threads import run_in_threads
+from eos_svc.service.wire_json import dumps, encode_result, loads_strict
 
 
 def reference_to_jsonable(value: Any) -> Any:
@@ -50,9 +49,9 @@ def reference_record_json(record: CycleRecord) -> bytes:
     """What the service published before: ``to_dict`` then strict JSON, ``to_jsonable`` on failure."""
     d = record.to_dict()
     try:
-        return proto.dumps(d)
+        return dumps(d)
     except (TypeError, ValueError):
-        return proto.dumps(reference_to_jsonable(d))
+        return dumps(reference_to_jsonable(d))
 
 
 class Colour(Enum):
@@ -85,7 +84,7 @@ values = st.recursive(
 @given(values)
 def test_to_jsonable_fast_paths_change_nothing(value):
     assert to_jsonable(value) == reference_to_jsonable(value)
-    assert proto.dumps(to_jsonable(value)) == proto.dumps(reference_to_jsonable(value))
+    assert dumps(to_jsonable(value)) == dumps(reference_to_jsonable(value))
 
 
 def _record(ratings, changes, **kw: Any) -> CycleRecord:
@@ -108,54 +107,14 @@ def _record(ratings, changes, **kw: Any) -> CycleRecord:
 rating_values = floats | st.integers(0, 2) | st.sampled_from([np.float64(0.25), np.float32(0.5), np.int64(1)])
 
 
-@settings(max_examples=300, deadline=None)
-@given(
-    st.lists(
-        st.tuples(
-            st.text(max_size=5),
-            rating_values,
-            rating_values,
-            rating_values,
-            rating_values,
-            st.booleans() | st.just(np.bool_(True)),
-        ),
-        max_size=5,
-    ),
-    st.lists(st.tuples(st.text(max_size=4), values, values), max_size=3),
-    st.none() | st.text(max_size=4),
-    st.none() | st.sampled_from(list(Outcome)),
-    floats,
-)
-def test_cycle_record_json_is_the_records_json(ratings, changes, chosen, outcome, elapsed):
-    record = _record(
-        [AgentRating(*r) for r in ratings],
-        [BoardChange(k, old, new) for k, old, new in changes],
-        chosen=chosen,
-        outcome=outcome,
-        elapsed_s=elapsed,
-    )
-    assert proto.cycle_record_json(record).encode() == reference_record_json(record)
-
-
-def test_cycle_record_json_caches_do_not_mix_signs_or_types():
-    for first, second in ((0.0, -0.0), (-0.0, 0.0), (1, 1.0), (1.0, True), (0.5, np.float64(0.5))):
-        for v in (first, second, first):
-            record = _record([AgentRating("a", v, v, v, v, True)], [])
-            assert proto.cycle_record_json(record).encode() == reference_record_json(record)
-    w1, w2 = Weights(0.5, 0.5, 0.0), Weights(0.25, 0.75, 0.0)
-    for w in (w1, w2, w1):
-        record = _record([], [], weights=w)
-        assert proto.cycle_record_json(record).encode() == reference_record_json(record)
-
-
-def test_cycle_record_json_on_real_runs(grasp_planner):
+def test_cycle_records_encoded_are_their_json_on_real_runs(grasp_planner):
     records: list[CycleRecord] = []
     for seed in range(3):
         root_plan(PlanRequest(seed=seed), on_cycle=records.append)
     grasp_planner(PlanRequest(seed=3), on_cycle=records.append)
     assert records
     for record in records:
-        assert proto.cycle_record_json(record).encode() == reference_record_json(record)
+        assert json.loads(encode_result(record.to_dict())) == json.loads(reference_record_json(record))
 
 
 @pytest.mark.parametrize(
@@ -186,7 +145,7 @@ def test_loads_strict_reads_what_json_loads_reads(payload):
     except (ValueError, RecursionError) as exc:
         expected = type(exc)
     try:
-        got: Any = proto.loads_strict(payload)
+        got: Any = loads_strict(payload)
     except (ValueError, RecursionError) as exc:
         got = type(exc)
     if isinstance(expected, type):
@@ -203,10 +162,10 @@ def test_encode_request_is_the_merged_envelope(body):
     merged = body.to_dict() if isinstance(body, PlanRequest) else dict(body)
     encoded = proto.encode_request("g-1", body)
     if isinstance(body, PlanRequest):  # msgspec's float text: the same values, read back exactly
-        assert proto.loads_strict(encoded) == {"schema": 1, "goal_id": "g-1", **merged}
+        assert loads_strict(encoded) == {"schema": 1, "goal_id": "g-1", **merged}
         assert proto.decode_request(encoded) == ("g-1", body)
     else:
-        assert encoded == proto.dumps({"schema": 1, "goal_id": "g-1", **merged})
+        assert encoded == dumps({"schema": 1, "goal_id": "g-1", **merged})
 
 
 @pytest.mark.parametrize("seed", [1, 2, 3])
@@ -233,21 +192,6 @@ def test_encoded_plan_requests_read_back_exactly(seed):
         )
         payload = proto.encode_request("g-2", req, proto.new_cancel_token())
         assert proto.decode_request(payload) == ("g-2", req)
-
-
-def test_cycle_record_json_from_concurrent_workers_with_different_weights():
-    bad: list[bytes] = []
-
-    def work(weights: Weights) -> None:
-        record = _record([AgentRating("a", 0.5, 0.25, 0.0, 0.375, True)], [], weights=weights)
-        expected = reference_record_json(record)
-        for _ in range(3000):
-            got = proto.cycle_record_json(record).encode()
-            if got != expected:
-                bad.append(got)
-
-    run_in_threads(work, (Weights(0.5, 0.5, 0.0), Weights(0.2, 0.8)), 60)
-    assert not bad
 
 
 def _plain(value: Any) -> bool:
@@ -295,7 +239,7 @@ def test_plan_results_encoded_as_held_are_their_to_dict_json():
     for result in results:
         held = result.to_dict(jsonable=False)
         assert _plain(held)
-        assert proto.encode_result(held) == proto.encode_result(result.to_dict())
-        assert json.loads(proto.encode_result(held)) == result.to_dict()
+        assert encode_result(held) == encode_result(result.to_dict())
+        assert json.loads(encode_result(held)) == result.to_dict()
         statuses.add(result.status)
     assert len(statuses) >= 2  # cut short and whole plans among them

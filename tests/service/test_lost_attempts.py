@@ -34,7 +34,7 @@ def _held_planner(release: threading.Event, started: threading.Event) -> Any:
 
 def _settled(client: Any) -> bool:
     """No attempt of the client registered or counted in flight."""
-    return not client._waiters and not any(client._inflight.values())
+    return not client._instances._waiters and not any(client._instances._inflight.values())
 
 
 @pytest.mark.parametrize("watch", [False, True])

@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
+from eos_svc.service.wire_json import dumps
 
 
 def test_keys_are_versioned_and_namespaced():
@@ -40,7 +41,7 @@ def test_bad_goal_ids(goal):
 
 def test_error_reply_round_trip():
     err = proto.RequestError(proto.E_INVALID, "object.radius", "must be > 0", "g1")
-    back = proto.error_from_payload(proto.dumps(err.to_dict()))
+    back = proto.error_from_payload(dumps(err.to_dict()))
     assert (back.code, back.field, back.reason, back.goal_id) == (
         "invalid_request",
         "object.radius",
@@ -132,23 +133,8 @@ def test_fuzz_text(text):
     _decode_only_request_errors(text.encode("utf-8", "surrogatepass"))
 
 
-@settings(max_examples=3000, deadline=None)
-@given(
-    st.one_of(
-        st.text(alphabet="aZ09_.-/*@é \x00", max_size=140),
-        st.text(max_size=140),
-        st.text(alphabet="abcXYZ0123456789_-", min_size=10, max_size=140),
-        st.text(alphabet="_-.", min_size=1, max_size=30),
-    )
-)
-def test_fast_id_and_token_checks_are_the_patterns(value):
-    """``is_id``/``is_token`` (string methods, on every request's path) answer as the patterns do."""
-    assert proto.is_id(value) == bool(proto.ID_PATTERN.fullmatch(value))
-    assert proto.is_token(value) == bool(proto.TOKEN_PATTERN.fullmatch(value))
-
-
-def test_fast_id_and_token_checks_on_edges():
-    for value in ("a", "a" * 64, "a" * 65, "-a", ".a", "_a", "a-._", "0", "", "a/b", "a*", "é", "a\n"):
-        assert proto.is_id(value) == bool(proto.ID_PATTERN.fullmatch(value)), value
-    for value in ("-" * 16, "_" * 128, "a" * 15, "a" * 16, "a" * 128, "a" * 129, "a" * 15 + ".", "ä" * 16):
-        assert proto.is_token(value) == bool(proto.TOKEN_PATTERN.fullmatch(value)), value
+def test_id_and_token_forms():
+    assert all(proto.is_id(v) for v in ("a", "a" * 64, "a-._", "0", "G-1.x_y"))
+    assert not any(proto.is_id(v) for v in ("a" * 65, "-a", ".a", "_a", "", "a/b", "a*", "é", "a\n"))
+    assert all(proto.is_token(v) for v in ("-" * 16, "_" * 128, "a" * 16, "a" * 128))
+    assert not any(proto.is_token(v) for v in ("a" * 15, "a" * 129, "a" * 15 + ".", "ä" * 16))

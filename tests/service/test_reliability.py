@@ -6,22 +6,23 @@ import pytest
 
 from eos_svc.service import protocol as proto
 from eos_svc.service.reliability import RSS_BOUND_MB, print_table, run, run_abuse
+from eos_svc.service.slow_watcher import run_slow_watcher
 
 
 def test_quick_load_every_request_answered_once_nothing_lost():
     report = run("load", instances=2, clients=3, plans=6, planner="root", time_limit_s=30)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
     assert report.answered == 18 and report.cycles_received == report.observer_cycles > 0
     assert all(
-        s is not None and s["received"] == s["replied_ok"] + s["replied_err"]
+        s is not None and s["received"] == s["replied_ok"] + s["replied_err"] + s["left_to_peers"]
         for s in report.server_stats.values()
     )
 
 
 def test_quick_fault_sigkill_one_instance_mid_load():
     report = run("fault", instances=2, clients=3, plans=6, planner="root", time_limit_s=30, cycle_delay=0.003)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
     assert report.answered == 18
     assert report.server_stats["inst-1"] is None  # killed
@@ -31,7 +32,7 @@ def test_quick_fault_sigkill_one_instance_mid_load():
 @pytest.mark.parametrize("mode", ["load", "fault", "freeze"])
 def test_full_reliability_runs_with_the_grasp_planner(mode):
     report = run(mode, instances=2, clients=4, plans=15, planner="grasp", time_limit_s=120)
-    report.print()
+    print_table([report.row()])
     assert report.ok, report
 
 
@@ -42,7 +43,10 @@ def _check_abuse(rows, big: int, mutated: int) -> None:
     assert by_name[str(big)].codes == {proto.E_TOO_LARGE: big}
     mutants = by_name[str(mutated)]
     assert mutants.answered_once == mutated and mutants.codes[proto.E_INTERNAL] == 0
-    assert f"bound +{RSS_BOUND_MB:.0f}" in rows[-1].detail
+    memory = next(r for r in rows if r.name.startswith("memory"))
+    assert f"bound +{RSS_BOUND_MB:.0f}" in memory.detail
+    assert by_name["counters of every instance"].ok
+    assert by_name["squatter holds the guessed next 3 goal ids"].codes[proto.E_DUPLICATE] == 0
 
 
 def test_quick_abuse_memory_stays_bounded_and_every_probe_gets_its_answer():
@@ -53,3 +57,10 @@ def test_quick_abuse_memory_stays_bounded_and_every_probe_gets_its_answer():
 @pytest.mark.slow
 def test_full_abuse_100_big_payloads_and_10000_mutated_requests():
     _check_abuse(run_abuse(big=100, mutated=10_000), 100, 10_000)
+
+
+@pytest.mark.slow
+def test_a_slow_watcher_for_20_s_leaves_the_others_p99_within_1_5x():
+    row = run_slow_watcher(window_s=20.0, clients=4, planner="grasp")
+    print_table([row])
+    assert row.ok, row.detail

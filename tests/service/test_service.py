@@ -12,8 +12,9 @@ import pytest
 
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
-from eos_svc.service.client import PlanOutcome, ServiceUnavailableError
 from eos_svc.service.demo_planner import slowed
+from eos_svc.service.instances import ServiceUnavailableError
+from eos_svc.service.plan_attempt import PlanOutcome
 from tests.service.threads import run_in_threads
 from tests.service.waiting import wait_until
 

@@ -16,7 +16,8 @@ from eos_svc.schema.request import PlanRequest
 from eos_svc.service import make_config
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import slowed
-from eos_svc.service.server import _GoalWatchers
+from eos_svc.service.goal_watchers import GoalWatchers
+from eos_svc.service.wire_json import loads_strict
 from tests.service.waiting import wait_until
 
 
@@ -103,11 +104,11 @@ class _NoticesNeverCome:
 
     any = False
 
-    def __init__(self, real: _GoalWatchers) -> None:
+    def __init__(self, real: GoalWatchers) -> None:
         self._real = real
 
     def watched(self, hint: bool | None) -> bool:
-        return _GoalWatchers.watched(self, hint)  # type: ignore[arg-type]
+        return GoalWatchers.watched(self, hint)  # type: ignore[arg-type]
 
     def now(self) -> bool:
         self._real.refresh()
@@ -137,7 +138,7 @@ def test_a_request_without_the_hint_is_watched_from_its_start(port, services, cl
             session.get(proto.plan_key(client.prefix, client.instances()[0]), payload=payload, timeout=30)
         )
         assert len(replies) == 1 and replies[0].ok is not None
-        first = proto.loads_message(seen.get(timeout=10).payload.to_bytes())
+        first = loads_strict(seen.get(timeout=10).payload.to_bytes())
         sub.undeclare()
         assert first.get("state") == "running", first
     # the same with the hint false: the instance takes the sender's word and, knowing of no
@@ -148,14 +149,14 @@ def test_a_request_without_the_hint_is_watched_from_its_start(port, services, cl
 
 
 @pytest.fixture
-def lone_watchers() -> Iterator[Callable[..., _GoalWatchers]]:
+def lone_watchers() -> Iterator[Callable[..., GoalWatchers]]:
     """Factory: a service's goal watchers on a Zenoh session of their own (no service); at the
     end, the real publisher put back where a test swapped it, undeclared, the session closed."""
     session = zenoh.open(make_config())
-    made: list[tuple[_GoalWatchers, Any]] = []
+    made: list[tuple[GoalWatchers, Any]] = []
 
-    def make(on_notice: Callable[[], None] = lambda: None) -> _GoalWatchers:
-        watchers = _GoalWatchers(session, proto.prefix(None), on_notice)
+    def make(on_notice: Callable[[], None] = lambda: None) -> GoalWatchers:
+        watchers = GoalWatchers(session, proto.prefix(None), on_notice)
         made.append((watchers, watchers._publisher))
         return watchers
 

@@ -8,6 +8,7 @@ import json
 import pytest
 
 from eos_svc.service import protocol as proto
+from eos_svc.service.wire_json import dumps, loads_strict
 
 VALID = {"schema": 1, "goal_id": "g1", "seed": 3}
 
@@ -94,7 +95,7 @@ def test_error_replies_are_bounded(name):
     payload = json.dumps({"schema": 1, "goal_id": "g1", name: 1}, ensure_ascii=False).encode()
     err = refusal(payload)
     assert err.code == proto.E_INVALID and err.field.startswith(name[:10])
-    reply = proto.dumps(err.to_dict())
+    reply = dumps(err.to_dict())
     assert len(reply) <= 4096
     back = proto.error_from_payload(reply)
     assert back.field == err.field and back.reason == err.reason
@@ -104,13 +105,13 @@ def test_clip_keeps_short_text_and_bounds_long_text():
     assert proto.clip("seed", 256) == "seed"
     for s in ["a" * 1000, "😀" * 1000, '"\\' * 1000]:
         c = proto.clip(s, 256)
-        assert len(proto.dumps(c)) <= 256 and c.endswith("…") and s.startswith(c[:-1])
+        assert len(dumps(c)) <= 256 and c.endswith("…") and s.startswith(c[:-1])
 
 
 def test_loads_strict_names_a_huge_integer_instead_of_returning_it():
     with pytest.raises(ValueError, match=r"object\.position\[1\]: integer too large"):
-        proto.loads_strict('{"object": {"position": [0.2, ' + "9" * 40 + ", 0]}}")
-    assert proto.loads_strict(b'{"seed": 18446744073709551616}') == {"seed": 2**64}
+        loads_strict('{"object": {"position": [0.2, ' + "9" * 40 + ", 0]}}")
+    assert loads_strict(b'{"seed": 18446744073709551616}') == {"seed": 2**64}
 
 
 def test_cli_request_file_with_a_huge_integer_exits_2_naming_it(tmp_path, capsys):

@@ -5,8 +5,10 @@ from __future__ import annotations
 import csv
 import json
 
+import numpy as np
+
 from eos_svc.experiments import grasps
-from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite
+from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite, random_draw
 
 
 def test_suites_cover_every_class_and_differ():
@@ -94,6 +96,12 @@ def test_random_draw_experiment_lists_failures_and_refusals(tmp_path, capsys):
         assert f"{f['object']} seed {f['seed']}: {f['status']}" in out
     assert totals["success_without_good_grasp"] == 0
     assert "refused by admission" in out
+    # recognition and the touches and probes of every admitted plan
+    admitted = [r for r in data["runs"] if r["status"] != "rejected"]
+    assert totals["touches_median"] == np.median([r["touches"] for r in admitted])
+    assert all(r["probes"] >= r["touches"] - 2 for r in admitted)  # EP1's two contacts: its runs
+    assert totals["class_right_rate"] == np.mean([r["class_right"] for r in admitted])
+    assert "touches median" in out and "shape error p90" in out
 
 
 def test_random_draw_sizes_are_checked(capsys):
@@ -103,3 +111,33 @@ def test_random_draw_sizes_are_checked(capsys):
         grasps.main(["--random", "2", "--sizes", "0.5", "0.2"])
     assert exc.value.code == 2
     assert "--sizes: LO must be ≤ HI" in capsys.readouterr().err
+
+
+def test_random_draw_counts_the_fit_rule(tmp_path):
+    # large objects: the refusals for size are exactly those the fit rule refuses
+    from eos_svc.world.fingertip_fit import fit_refusal
+    from eos_svc.world.hand_context import default_context
+
+    code = grasps.main(
+        [
+            "--random",
+            "6",
+            "--draw-seed",
+            "4",
+            "--sizes",
+            "0.7",
+            "1.0",
+            "--no-validate",
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert code == 0
+    data = json.loads((tmp_path / "grasps_random.json").read_text())
+    ctx = default_context()
+    too_large = [
+        o for o in random_draw(6, 4, (0.7, 1.0)) if fit_refusal(o.spec, ctx.opening, ctx.params.clearance)
+    ]
+    assert too_large  # objects this large mostly do not fit
+    assert data["totals"]["refused_by_reason"]["too large"] == len(too_large)
+    assert data["totals"]["good_goal"] == grasps.GOOD_GOAL

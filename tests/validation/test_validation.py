@@ -167,18 +167,25 @@ def test_cli_exit_1_when_dropped_and_2_on_bad_files(tmp_path, good_plan, capsys)
         code, out, err = eos(capsys, "validate", str(path))
         assert code == 2, (name, out, err)
         assert message in err and "Traceback" not in err
-    code, _, err = eos(capsys, "plan", "--hand", "allegro", "--validate")
-    assert code == 2 and "--validate" in err
+    code, _, err = eos(capsys, "plan", "--hand", "no_such_hand.toml", "--validate")
+    assert code == 2 and "--hand: no_such_hand.toml: file: cannot read" in err
+
+
+def test_another_hands_plan_is_validated_with_that_hand(capsys):
+    # the Drake model is built from the hand's description (here the Allegro's composite URDF)
+    code, out, _ = eos(capsys, "plan", "--hand", "allegro", "--validate", "--quiet")
+    assert code == 0 and "validation (Drake): HELD" in out
+    assert "touching index, middle, ring, thumb" in out
 
 
 def test_another_hands_result_is_refused_saying_the_validation_is_for_hand3x3():
     # a real Allegro plan's JSON result: its q_final has the Allegro's joints, and the refusal
     # says why (the Drake model is hand3x3's), not only the count
     from eos_svc.agents import PlanRequest, plan
-    from eos_svc.kinematics import allegro_hand
+    from eos_svc.hands import load_hand_named
 
-    data = plan(PlanRequest(), hand=allegro_hand()).to_dict()
+    data = plan(PlanRequest(), hand=load_hand_named("allegro")).to_dict()
     with pytest.raises(ValidationError) as info:
         validate_grasp(data)
     assert info.value.field == "q_final"
-    assert "hand3x3 only" in info.value.reason and "allegro" in info.value.reason
+    assert "--hand NAME" in info.value.reason and "allegro" in info.value.reason

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import PlanRequest, plan
-from eos_svc.agents.planner import default_hand, make_object
+from eos_svc.agents.planner import make_object
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.view.replay_html import plan_scene
 from eos_svc.view.scene import CONTACTS, OBJECT, HandDrawing, object_shape, touching_contacts
@@ -28,14 +28,16 @@ def test_object_pose_is_the_planners(spec):
     assert np.allclose(pose.translation(), placement.translation, atol=1e-12)
 
 
-def test_fingertips_are_drawn_at_the_tip_frames():
-    hand = default_hand()
+def test_fingertips_are_drawn_at_the_tip_frames(eos_hand):
+    """Every registered hand (the eos_hand fixture): the 3-D view draws each from its model."""
+    hand = eos_hand
     drawing = HandDrawing(hand)
     rng = np.random.default_rng(7)
+    wrist = hand.wrist_q_index
     for _ in range(5):
         q = hand.neutral()
-        q[:3] = rng.uniform(-0.05, 0.05, 3)
-        q[3:6] = rng.uniform(-0.3, 0.3, 3)
+        q[wrist[:3]] = rng.uniform(-0.05, 0.05, 3)
+        q[wrist[3:6]] = rng.uniform(-0.3, 0.3, 3)
         for finger in hand.finger_names:
             idx = hand.finger_q_index(finger)
             q[idx] = rng.uniform(hand.lower[idx], hand.upper[idx])

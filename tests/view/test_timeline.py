@@ -47,7 +47,6 @@ def test_cycle_spans_tile_the_time_and_ep1_takes_longer(planned):
     search = [s for s in tl.spans if s.stage == "search"]
     assert min(s.end - s.start for s in ep1) > 4 * max(s.end - s.start for s in search)
     assert tl.frames == tl.spans[-1].end and tl.duration_s == tl.frames / tl.fps
-    assert tl.span_end_s(len(records)) == tl.duration_s
     assert tl.verdict is not None and tl.verdict[0] == tl.spans[-1].end  # end judged in the last cycle
 
 

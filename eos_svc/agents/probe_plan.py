@@ -1,0 +1,93 @@
+"""EP2's probes: one planned guarded probe, and the probes aimed at the faces a fit leaves open.
+
+Once post_shape has fitted the object, a face no touch bounds (:mod:`eos_svc.shape.open_faces`)
+is where the postulate's size is uncertain: the object may reach farther that way. Each open
+face gets probes that separate the candidate extents (active touch):
+
+a guarded probe straight onto the face along its inward normal, from beyond where it could be
+(the fitted size doubled), with a finger whose tip leads that way: the straight top finger
+(the opposing one for a face turned down) for faces the hand sees (normal toward −x or
+sideways); for a face turned away from the hand (normal toward +x) the same finger *hooked*
+(every joint at :data:`HOOK_ANGLE`: its tip curled back toward the hand, ahead of its links and
+the palm), reaching around the object. A probe another part of the hand would end is
+abandoned, as every guarded probe is; its alternatives follow (the other finger, a deeper
+hook, points off the face's centre), and the first that touches ends the face's group.
+
+SI units: metres, radians.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from eos_svc.drivers.protocol import HandDriver
+
+#: every joint of a hooked finger (rad): its tip points back toward the hand, ahead of its
+#: links and the palm (hand3x3: from 0.9 rad the tip, not a link, meets a face turned away)
+HOOK_ANGLE = 1.0
+#: the hook angles tried, in order, when the one before cannot reach the face (rad)
+HOOK_ANGLES = (HOOK_ANGLE, 1.3)
+#: offset of the alternative probes from the face's centre, along its tangents (m)
+OFFSET = 0.012
+#: how far beyond the fitted face a targeted probe may find it, as a multiple of the fitted
+#: half size (the object may be that much larger that way)
+REACH = 2.0
+#: the fractions of that reach tried, in order (a start the wrist cannot reach is skipped)
+REACH_FRACTIONS = (1.0, 0.5, 0.25)
+#: the least that reach (m)
+MIN_REACH = 0.05
+#: a face is turned away from the hand when its normal's x component exceeds this
+AWAY = 0.3
+
+
+@dataclass(frozen=True)
+class Probe:
+    """One planned guarded probe: which face, finger (at joint ``angle``, rad), start of the
+    tip centre and direction (world), travel (m)."""
+
+    face: str
+    finger: str
+    start: np.ndarray
+    direction: np.ndarray
+    travel: float
+    angle: float
+    group: int = -1  #: probes of one group (≥ 0) are alternatives: the first that touches ends it
+
+
+def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> list[Probe]:
+    """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
+    half size), in order; ``standoff``: how far outside a surface a probe starts (m)."""
+    probe = world.probe
+    top, bottom = probe.finger("top"), probe.finger("bottom")
+    probes: list[Probe] = []
+    for k, face in enumerate(faces):
+        centre = np.asarray(face["centre"], dtype=float)
+        normal = np.asarray(face["normal"], dtype=float)
+        away = normal[0] > AWAY
+        first = bottom if normal[2] < -0.5 else top
+        fingers = (first, bottom if first == top else top)
+        angles = HOOK_ANGLES if away else (None,)
+        t1, t2 = _tangents(normal)
+        # from as far out as the object may reach, nearer when the wrist cannot start there
+        for fraction in REACH_FRACTIONS:
+            reach = max(MIN_REACH, fraction * REACH * float(face["half"]))
+            travel = 2.0 * reach + standoff
+            for offset in (np.zeros(3), *(sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0))):
+                start = centre + offset + normal * (reach + standoff)
+                for finger in fingers:
+                    for angle in angles:
+                        a = probe.angles.get(finger, 0.0) if angle is None else angle
+                        probes.append(Probe("open", finger, start, -normal, travel, a, group=k))
+    return probes
+
+
+def _tangents(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two unit tangents of a face of unit ``normal``: the horizontal one (or x when the face
+    is level) and the one across it."""
+    t1 = np.cross(np.array([0.0, 0.0, 1.0]), normal)
+    if float(np.linalg.norm(t1)) < 1e-6:
+        t1 = np.array([1.0, 0.0, 0.0])
+    t1 = t1 / np.linalg.norm(t1)
+    return t1, np.cross(normal, t1)

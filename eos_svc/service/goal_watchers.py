@@ -1,0 +1,118 @@
+"""Whether anyone watches the goals: a flag the service reads before publishing a goal's messages.
+
+Zenoh drops a put nobody subscribes to unsent; the service skips building such a message at all
+(a plan nobody watches costs no encoding and no put). :class:`GoalWatchers` answers whether any
+subscriber matches ``P/goal/*/*`` from a publisher declared on that key and never used to put.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable
+from typing import Any
+
+import zenoh
+
+from eos_svc.service import protocol as proto
+from eos_svc.service.session import direct_callback
+
+
+class GoalWatchers:
+    """Whether any subscriber matches ``P/goal/*/*`` (the cycles and status of any goal).
+
+    A publisher declared on that key and never used to put. Two answers:
+
+    - :meth:`now`: its matching status read from Zenoh's routing tables at this moment (the
+      tables that would route a put), exact: a client's subscriber declared before it sends
+      the plan query reaches the service before the query (in order on the same link), so a
+      goal watched from the start gets every message. A few µs warm, tens of µs in a process
+      that has been idle (cold caches): asked once per plan whose request does not say
+      whether its sender watches, and only when ``any`` is false.
+    - :attr:`any`: a Python bool, free to read before every cycle. A matching listener's
+      notice that says "matching" sets it at once (a put too many costs little; nothing is
+      woken on the request's path); one that says "nobody" asks for :meth:`refresh`
+      (``on_notice``: the service's dispatcher thread runs it), which sets it to the routing
+      tables' answer. The service also refreshes it after every plan that ends with it set or
+      with Zenoh's last notice saying "matching" (after the reply), and before answering every
+      cancel query. Readings are taken one at a time (a lock), so an older one never overwrites
+      a newer one, and a "matching" notice that comes during a reading makes it read again. So
+      the flag turns false only from an exact reading, never from a notice Zenoh delivered late
+      or out of order (it delivers them from tasks it spawns); a stale "matching" lasts until
+      the first plan that ends after it (plans running meanwhile publish to nobody). It lags a
+      new subscriber by the notice's delay (well under a millisecond to a few): enough for a
+      watcher that comes in the middle of a plan; a watcher that syncs with the instance
+      (:meth:`~eos_svc.service.EosClient.watch`: a cancel query) is counted from then on.
+    - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
+    """
+
+    __slots__ = (
+        "_listener",
+        "_matching_notices",
+        "_on_notice",
+        "_publisher",
+        "_reading",
+        "any",
+        "zenoh_says_matching",
+    )
+
+    def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
+        self._publisher = session.declare_publisher(proto.goal_keys(prefix))
+        self.any = False
+        #: what Zenoh's last notice said: Zenoh notifies only when its own state changes, which
+        #: a reading of ours may have left behind; the worker reads the tables while it is true
+        self.zenoh_says_matching = False
+        self._matching_notices = 0  # changes with every "matching" notice (see refresh)
+        self._reading = threading.Lock()  # one reading at a time (see refresh)
+        self._on_notice = on_notice
+        self._listener = self._publisher.declare_matching_listener(direct_callback(self._on_status))
+        self.refresh()  # the watchers already there, exactly, without waiting for a notice
+
+    def _on_status(self, status: Any) -> None:
+        # in Zenoh's thread: an attribute store or a queue put; never blocks, never calls Zenoh
+        if status.matching:
+            self.zenoh_says_matching = True
+            self._matching_notices += 1  # the counter first, then the flag (see refresh)
+            self.any = True  # believed at once (a put too many costs little), nothing woken
+        else:
+            self.zenoh_says_matching = False
+            self._on_notice()  # "nobody": believed only from the tables, read in another thread
+
+    def watched(self, hint: bool | None) -> bool:
+        """Whether to publish a goal's messages from its start: the requester's ``watch`` hint
+        (it subscribed, or not: then the watchers known, :attr:`any`), or without one :meth:`now`."""
+        if hint is None:
+            return self.now()
+        return hint or self.any
+
+    def now(self) -> bool:
+        """True when at least one subscriber matches some goal's messages now (exact)."""
+        return self.any or self._tables_say_matching()
+
+    def _tables_say_matching(self) -> bool:
+        """The publisher's matching status, read from Zenoh's routing tables now."""
+        status = self._publisher.matching_status  # a MatchingStatus (the 1.x stubs say bool)
+        return bool(getattr(status, "matching", status))
+
+    def refresh(self) -> None:
+        """Set :attr:`any` to the routing tables' answer now (from our threads, never from
+        Zenoh's). One reading at a time: Zenoh releases the GIL while it reads, so without the
+        lock a worker's "nobody" could be stored after the dispatcher's newer "matching" (a
+        watcher's sync). A "matching" notice that comes while the tables are read makes it read
+        them again, so a "nobody" read before that notice never overwrites it."""
+        with self._reading:  # never taken in Zenoh's threads: waiting on it cannot block them
+            while True:
+                mark = self._matching_notices
+                matching = self._tables_say_matching()
+                self.any = matching
+                # stored first, checked after: a notice before the store is seen here, one
+                # after it set the flag itself
+                if matching or self._matching_notices == mark:
+                    return
+
+    def undeclare(self) -> None:
+        """Undeclare the listener and the publisher (each tried, whatever the other did)."""
+        try:
+            self._listener.undeclare()
+        finally:
+            with self._reading:  # not while a reading uses the publisher
+                self._publisher.undeclare()
