@@ -40,7 +40,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.validation.simulation import object_shape, urdf_effort_limits, vec
+from eos_svc.validation.simulation import object_shapes, urdf_effort_limits, vec
 
 
 @dataclass(frozen=True)
@@ -116,11 +116,12 @@ class DrakeHandPlant:
         table = plant.RegisterCollisionGeometry(
             plant.world_body(), table_pose, Box(tx, ty, tz), "table", material
         )
-        shape, unit_inertia = object_shape(spec)
+        shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
         instance = plant.AddModelInstance("object")
         inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody("object", instance, inertia)
-        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, "object", material)
+        for i, shape in enumerate(shapes):
+            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", material)
         plant.set_gravity_enabled(model, False)
         plant.Finalize()
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
