@@ -21,8 +21,8 @@ import numpy as np
 
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.protocol import FingerStep, JointState, TactileReading, Touch, WristMove
-from eos_svc.kinematics.hand import HandState
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
+from eos_svc.kinematics.hand import HandState
 
 if TYPE_CHECKING:
     from eos_svc.grasp.sweeps import FingerSweep
@@ -220,7 +220,9 @@ class KinematicDriver:
         """EP1's start (:func:`eos_svc.kinematics.ep1.place_hand_for_ep1`)."""
         if self._scratch is None:  # a state of the world's hand reused by every placement
             self._scratch = self._world.hand.state()
-        self._world.set_q(place_hand_for_ep1(self._world.scene, finger, q=q, point=point, scratch=self._scratch))
+        self._world.set_q(
+            place_hand_for_ep1(self._world.scene, finger, q=q, point=point, scratch=self._scratch)
+        )
 
     def roll(
         self,

@@ -42,8 +42,8 @@ import numpy as np
 
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
-from eos_svc.drivers.worlds import WORLDS
 from eos_svc.cli.hands import add_hand_argument, chosen_hand
+from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
@@ -113,7 +113,9 @@ def plan_and_validate(
     try:
         drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
         result = plan(
-            PlanRequest(obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})),
+            PlanRequest(
+                obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})
+            ),
             keep_trace=False,
             context=context,
         )

@@ -33,8 +33,8 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys
 from eos_svc.agents.planner import build_world, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
-from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.cli.common import int_at_least
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,

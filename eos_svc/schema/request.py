@@ -444,7 +444,7 @@ class PlanRequest:
             "link_error",
             "agents",
             "hand",
-                "world",
+            "world",
         ):
             if key in data:
                 kwargs[key] = data[key]

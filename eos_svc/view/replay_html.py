@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 from pydrake.common.eigen_geometry import Quaternion
-from pydrake.geometry import Meshcat, MeshcatAnimation, MeshcatParams
+from pydrake.geometry import Meshcat, MeshcatAnimation
 from pydrake.math import RigidTransform, RotationMatrix
 
 from eos_svc.agents.planner import default_hand

@@ -28,9 +28,9 @@ from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Union
 
 from eos_svc.agent import Agent
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.schema.board_entries import ENTRIES, Entry
-from eos_svc.drivers.protocol import HandDriver
 
 #: the entry-point group installed packages register their agents in
 ENTRY_POINT_GROUP = "eos_svc.agents"
