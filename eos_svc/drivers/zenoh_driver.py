@@ -114,6 +114,26 @@ class ZenohDriver:
         """The served sensor's noise, m."""
         return self._noise
 
+    @property
+    def table_height(self) -> float | None:
+        """The served world's table height (m), ``None`` without one."""
+        value = self._call("table_height")
+        return None if value is None else float(value)
+
+    @property
+    def kinematic_sigma(self) -> float:
+        """The served hand's fingertip position uncertainty, m."""
+        return float(self._call("kinematic_sigma"))
+
+    @property
+    def probes(self) -> int:
+        """Guarded probes the served world has run."""
+        return int(self._call("probes"))
+
+    def probe_finger(self, face: str) -> str:
+        """The finger that explores ``face`` in the served world."""
+        return str(self._call("probe_finger", face=face))
+
     # --- joint state (local kinematics of the last joint values) ----------------------------------
     def joint_state(self) -> JointState:
         """The last joint values and the served clock."""

@@ -30,8 +30,15 @@ from eos_svc.schema.request import PlanRequest
 from eos_svc.service.session import make_config
 
 #: the protocol's methods a client may call, with the arguments that cross as arrays
+#: the protocol's properties served as calls without arguments
+PROPERTIES = frozenset({"table_height", "kinematic_sigma", "probes"})
+#: the protocol's methods served, each with its array-valued arguments
 METHODS: dict[str, tuple[str, ...]] = {
     "clock": (),
+    "probe_finger": (),
+    "table_height": (),  # the next three are the driver's properties, read rather than called
+    "kinematic_sigma": (),
+    "probes": (),
     "object_gap_to_grasp_centre": (),
     "located": (),
     "nearest_surface_point": ("point",),
@@ -92,6 +99,8 @@ class HandServer:
                 "normal": encode(result.normal),
                 "path": [encode(q) for q in result.path],
             }
+        elif method in PROPERTIES:
+            out = encode(getattr(driver, method))
         else:
             out = encode(getattr(driver, method)(**args))
         return {"result": out, "q": encode(driver.joint_positions())}
