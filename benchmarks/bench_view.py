@@ -31,6 +31,7 @@ from _harness import table
 from eos_svc.agents import PlanRequest, keys, plan
 from eos_svc.agents.planner import build_world, ratio_sphere_request
 from eos_svc.board import Board
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.view import write_result_html
 from eos_svc.view.live import LiveView
 from eos_svc.world.pose_board import PoseBoard
@@ -45,7 +46,7 @@ def end_cycle_times(request: PlanRequest, samples: int = 2001) -> tuple[float, f
     hand moved (untimed) before every cycle, as in a plan's moving cycles."""
     world = build_world(request)
     q0 = world.state.q
-    boards = (Board({keys.FRICTION: 0.5}), PoseBoard(world, {keys.FRICTION: 0.5}))
+    boards = (Board({keys.FRICTION: 0.5}), PoseBoard(KinematicDriver(world), {keys.FRICTION: 0.5}))
     times: tuple[list[float], list[float]] = ([], [])
     for i in range(samples):
         q = q0.copy()

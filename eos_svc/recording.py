@@ -35,8 +35,9 @@ from eos_svc.records import AgentRating, CycleRecord
 RECORD_SCHEMA = 1
 #: the key marking the header and result lines (cycle lines never have it)
 MARK = "eos_record"
-#: fields that measure wall-clock time: never compared
-TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "latency_s"})
+#: fields that measure wall-clock time: never compared (a simulated world's own wall time and
+#: real-time factor among them)
+TIMING_FIELDS = frozenset({"elapsed_s", "wall_time_s", "latency_s", "simulation_wall_s", "real_time_factor"})
 #: fields added to the cycle record since its first form: a record written before them lacks
 #: them, and a replay that has them does not diverge for that alone
 ADDED_FIELDS = frozenset({"where", "skipped"})

@@ -1,4 +1,4 @@
-"""What every grasp agent shares: the world it acts on and the run's ratios."""
+"""What every grasp agent shares: the hand driver it acts through and the run's ratios."""
 
 from __future__ import annotations
 
@@ -8,8 +8,8 @@ from typing import Any
 
 from eos_svc.agent import Agent, CycleContext
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 SEARCH, INFO, GRASP = "search", "information", "grasping"
 STAGES = (SEARCH, INFO, GRASP)
@@ -34,7 +34,9 @@ def zero_at_stage_start(test: PreconditionTest) -> PreconditionTest:
 
 
 class GraspAgent(Agent):
-    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` bound to a world.
+    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` bound to a hand
+    driver (:class:`~eos_svc.drivers.protocol.HandDriver`: the agent senses and acts only
+    through it and never holds the true object).
 
     The grasp agents keep the paper's rule that every opportunistic sub-rating is 0 at a
     stage's first cycle (§5; the §4.1 ablation and Fig. 3 depend on it): the core asks every
@@ -48,7 +50,7 @@ class GraspAgent(Agent):
         if own is not None:
             cls.opportunistic = zero_at_stage_start(own)  # type: ignore[assignment,method-assign]
 
-    def __init__(self, name: str, stages: Iterable[str], default: float, world: GraspWorld) -> None:
+    def __init__(self, name: str, stages: Iterable[str], default: float, world: HandDriver) -> None:
         super().__init__(name, stages, default)
         self.world = world
 

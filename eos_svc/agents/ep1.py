@@ -30,12 +30,12 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.kinematics.curvature import CurvatureEstimator
-from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
-from eos_svc.kinematics.hand import HandState, KinematicsError
+from eos_svc.kinematics.ep1 import EP1Result
+from eos_svc.kinematics.hand import KinematicsError
 from eos_svc.kinematics.rolling import RollingQPError
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 #: QP backend EP1 falls back on when OSQP does not converge on a roll
 FALLBACK_SOLVER = "daqp"
@@ -63,13 +63,12 @@ class EP1Agent(GraspAgent):
         }
     )
 
-    def __init__(self, default: float, world: GraspWorld, solver: str = "osqp") -> None:
+    def __init__(self, default: float, world: HandDriver, solver: str = "osqp") -> None:
         super().__init__("ep1", (INFO,), default, world)
         self.solver = solver
         self.side: str | None = None
         self.estimators: dict[str, CurvatureEstimator] = {}
         #: the hand state :meth:`_place` computes in (made on the first placement, then re-used)
-        self._scratch: HandState | None = None
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -91,7 +90,7 @@ class EP1Agent(GraspAgent):
         """
         world = self.world
         hand = world.hand
-        q = world.state.q
+        q = world.joint_positions()
         q[hand.wrist_q_index[3:6]] = 0.0
         for other in hand.finger_names:
             idx = hand.finger_q_index(other)
@@ -100,24 +99,19 @@ class EP1Agent(GraspAgent):
         # Proximity: the object's surface point nearest the grasp centre, 1 cm inside it,
         # then straight up (down) — the closest surface point from there is on the top (bottom).
         centre = world.grasp_centre_world()
-        near = world.obj.closest_surface_point(centre)
+        near = world.nearest_surface_point(centre)
         inward = near - centre
         norm = float(np.linalg.norm(inward))
         direction = inward / norm if norm > 1e-9 else np.array([1.0, 0.0, 0.0])
         inside = near + 0.01 * direction
         aim = inside + np.array([0.0, 0.0, sign * PROBE_REACH])
-        if self._scratch is None or self._scratch.hand is not hand:
-            self._scratch = hand.state()
-        world.set_q(place_hand_for_ep1(world.scene, finger, q=q, point=aim, scratch=self._scratch))
+        world.place_tip_on(finger, q, aim)
         return near, direction
 
     def _roll(self, finger: str, estimator: CurvatureEstimator, solver: str) -> EP1Result:
         p = self.world.params
-        return run_ep1(
-            self.world.scene,
-            self.world.state,
+        return self.world.roll(
             finger,
-            self.world.sensor,
             omega=p.ep1_omega,
             dt=p.ep1_dt,
             steps_per_direction=p.ep1_steps,
@@ -170,8 +164,7 @@ class EP1Agent(GraspAgent):
         estimator = self.estimators.setdefault(side, CurvatureEstimator())
         fallback = ""
         try:
-            with world.direct_motion():  # run_ep1 moves the state directly
-                result = self._roll(finger, estimator, self.solver)
+            result = self._roll(finger, estimator, self.solver)
         except (RollingQPError, KinematicsError) as exc:
             if not isinstance(exc, RollingQPError) or self.solver == FALLBACK_SOLVER:
                 return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}")
@@ -179,17 +172,14 @@ class EP1Agent(GraspAgent):
             # dense active-set solver is slower but exact: redo this run with it.
             try:
                 self._place(side, finger)
-                with world.direct_motion():
-                    result = self._roll(finger, estimator, FALLBACK_SOLVER)
+                result = self._roll(finger, estimator, FALLBACK_SOLVER)
             except (RollingQPError, KinematicsError) as exc2:
                 return ActionResult(Outcome.CANNOT_ACT, f"EP1 could not roll {finger}: {exc}; then {exc2}")
             fallback = f" ({self.solver} stalled: {exc.status}; rolled with {FALLBACK_SOLVER})"
         est = result.estimate
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
-        reading = world.sensor.read(world.state, world.scene.contact(world.state, finger))
-        tip = world.encoders.tip_frame(world.state, finger)  # as the joint encoders report it
-        point = tip.translation + tip.rotation @ reading.point_tip
-        normal = -(tip.rotation @ reading.normal_tip)
+        reading = world.tactile(finger)
+        point, normal = reading.point, reading.normal
         summary = est.to_dict()
         summary["finger"] = finger
         summary["side"] = side

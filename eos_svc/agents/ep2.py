@@ -49,8 +49,8 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.probe_plan import Probe, targeted_probes
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 #: most EP2 rounds in one plan
 MAX_ROUNDS = 5
@@ -100,7 +100,7 @@ class EP2Agent(GraspAgent):
     reads = frozenset({keys.SHAPE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE})
     writes = frozenset({keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS})
 
-    def __init__(self, default: float, world: GraspWorld) -> None:
+    def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("ep2", (INFO,), default, world)
         self.rounds = 0
         self.side_fingers = world.context.side_fingers
@@ -139,7 +139,7 @@ class EP2Agent(GraspAgent):
         # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
         # front of the widest section (the links trail the tip toward −x)
         for sign in (+1, -1):
-            finger = self.side_fingers[sign] if world.table is None else front
+            finger = self.side_fingers[sign] if world.table_height is None else front
             for dx in (-f(0.25) * hx, -f(0.6) * hx):
                 start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
                 travel = 2.0 * hy + 2.0 * STANDOFF
@@ -149,10 +149,10 @@ class EP2Agent(GraspAgent):
         for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in () if world.table is not None else (-f(0.4) * hx,):  # none under a table
+        for dx in () if world.table_height is not None else (-f(0.4) * hx,):  # none under a table
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
-        if world.table is not None:
+        if world.table_height is not None:
             probes += self.table_scan(centre, half, f)
         return probes
 

@@ -30,12 +30,12 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.world.world import GraspWorld
 
 #: finger states that end a finger's part in the grasp
 DONE_STATES = frozenset({"touching", "missed", "link"})
@@ -49,7 +49,7 @@ class FingerAgent(GraspAgent):
     )
     writes = frozenset({keys.LOCATED, keys.GAP, keys.SEARCH_MOVES, keys.FINGER_STATE, keys.FINGER_ANGLE})
 
-    def __init__(self, finger: str, default: float, world: GraspWorld) -> None:
+    def __init__(self, finger: str, default: float, world: HandDriver) -> None:
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger
         self._tip_radius = world.hand.tip_radius(finger)
@@ -194,7 +194,8 @@ class FingerAgent(GraspAgent):
                 Outcome.CANNOT_ACT,
                 f"closing {self.finger} from here {where} (the hand must reach its grasp position first)",
             )
-        event, angle = self.world.close_finger_step(self.finger, self.world.params.finger_step)
+        step = self.world.close_finger_step(self.finger, self.world.params.finger_step)
+        event, angle = step.event, step.angle
         new_state = {"moved": "closing", "touched": "touching", "limit": "missed", "link": "link"}[event]
         states = dict(board.get(keys.FINGER_STATE, {}))
         states[self.finger] = new_state

@@ -27,12 +27,12 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.schema import keys
 from eos_svc.schema.request import MESH, ObjectSpec
-from eos_svc.world.world import GraspWorld
 
 #: the reason synthesis gives for a grip wider than the hand height
 TOO_LARGE = "larger than the hand height across the grip"
@@ -69,7 +69,7 @@ class GraspPointsAgent(GraspAgent):
     writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})
 
     def __init__(
-        self, default: float, world: GraspWorld, oracle: ObjectSpec | None = None, name: str = "grasp_points"
+        self, default: float, world: HandDriver, oracle: ObjectSpec | None = None, name: str = "grasp_points"
     ) -> None:
         super().__init__(name, (INFO,), default, world)
         self.oracle = oracle
@@ -190,7 +190,7 @@ class GraspPointsAgent(GraspAgent):
         pre = synthesis.pregrasp(cand)
         if pre is None:
             return None
-        q = world.state.q
+        q = world.joint_positions()
         widx = hand.wrist_q_index
         q[widx[:3]] = pre[0]
         q[widx[3:6]] = cand.wrist_rpy
@@ -198,7 +198,7 @@ class GraspPointsAgent(GraspAgent):
             # open: every joint at the start of the finger's closing sweep (all joints equal,
             # so that closing follows the sweep the grasp was planned on)
             q[hand.finger_q_index(finger)] = world.sweeps[finger].angles[0]
-        world.set_q(q)
+        world.move_joints(q)
         if not world.hand_clear(world.params.clearance):
             return None
         return pre

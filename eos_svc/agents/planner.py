@@ -40,7 +40,7 @@ import numpy as np
 
 from eos_svc.agent import Agent
 from eos_svc.agents.base import STAGES
-from eos_svc.agents.end import EndAgent, grasp_geometry
+from eos_svc.agents.end import EndAgent
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
 from eos_svc.agents.finger import FingerAgent
@@ -52,6 +52,9 @@ from eos_svc.agents.recall import RecallAgent
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
+from eos_svc.drivers.kinematic import KinematicDriver
+from eos_svc.drivers.protocol import HandDriver
+from eos_svc.drivers.worlds import check_world, make_driver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.grasp.sweeps import FingerSweep
@@ -168,7 +171,7 @@ def build_world(
 
 
 def build_agents(
-    world: GraspWorld,
+    world: HandDriver | GraspWorld,
     ratings: dict[str, float] | None = None,
     solver: str = "osqp",
     memory: GraspMemory | None = None,
@@ -180,7 +183,12 @@ def build_agents(
     post_shape's postulate (measurement only).
 
     One finger agent per finger of the world's hand, in the hand's order, named after the
-    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents)."""
+    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents).
+
+    The agents get the world's hand driver only (a :class:`GraspWorld` is wrapped in its
+    :class:`~eos_svc.drivers.kinematic.KinematicDriver`): they never hold the true object."""
+    if isinstance(world, GraspWorld):
+        world = KinematicDriver(world)
     fingers = world.hand.finger_names
     r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
@@ -209,6 +217,8 @@ def plan(
     oracle_postulate: bool = False,
     check: bool = True,
     check_board: bool = False,
+    world: str | None = None,
+    driver: HandDriver | None = None,
     agents: Sequence[PluginSpec] = (),
     offered: Mapping[str, PluginSpec] | None = None,
 ) -> PlanResult:
@@ -241,8 +251,16 @@ def plan(
             against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
             plan with status ``error`` naming the agent and the entry. Off by default; the
             plan's cycles are the same either way.
+        world: where the hand acts (default: the request's ``world``; see
+            :mod:`eos_svc.drivers.worlds`): ``"kinematic"`` (exact, the object fixed: the
+            paper's experiments) or ``"drake"`` (the object a free body on a
+            table under gravity; the grasp must pass the lift test; the result's ``world``
+            entry says how far the object moved and how fast the simulation ran).
+        driver: a hand driver of the caller's (e.g. a :class:`~eos_svc.drivers.zenoh_driver.ZenohDriver`
+            of a hand served elsewhere) instead of a world built here for the request;
+            ``world`` is then the served world's.
         agents: plug-in agents added to this plan after the request's own (``request.agents``):
-            factories called with the plan's world, ``Agent`` instances, or names (an
+            factories called with the plan's hand driver, ``Agent`` instances, or names (an
             ``eos_svc.agents`` entry point, or ``module:attr``); each checked against the
             plug-in contract (:mod:`eos_svc.agents.plugins.loading`) and placed, in order,
             just before ``end``.
@@ -260,10 +278,13 @@ def plan(
     if context is None and hand is None and request.hand not in (None, DEFAULT_HAND):
         hand = load_hand_named(request.hand)  # the registered hand the request names
     context = context if context is not None else context_for(hand, params)
-    world = build_world(request, check=check, context=context)
-    team = build_agents(world, memory=memory, oracle=request.obj if oracle_postulate else None)
+    world = check_world(request.world if world is None else world)
+    model = build_world(request, check=check, context=context)
+    if driver is None:  # all the agents get: the world stays the planner's
+        driver = make_driver(world, model, request)
+    team = build_agents(driver, memory=memory, oracle=request.obj if oracle_postulate else None)
     wanted = [*requested_plugins(request.agents, offered), *agents]
-    extra = plugin_agents(world, wanted, team, STAGES) if wanted else []
+    extra = plugin_agents(driver, wanted, team, STAGES) if wanted else []
     team[-1:-1] = extra  # plug-ins join just before end (ties go to the built-in agents)
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
@@ -282,18 +303,19 @@ def plan(
         check_access=check_board,
         entry_check=entry_check,
     )
-    board = PoseBoard(world, {keys.FRICTION: request.friction})  # records the hand's q per cycle
+    # records the hand's q per cycle (and in the Drake world the object's pose, for viewers)
+    board = PoseBoard(driver, {keys.FRICTION: request.friction}, getattr(driver, "object_pose", None))
     run = controller.run(board, cancel=cancel)
     verdict = board.get(keys.OUTCOME)
     judged = verdict is not None  # the end agent's verdict is the one authority on "good"
     if verdict is None:  # nobody judged: report the final contacts and their quality only
-        verdict = grasp_geometry(world, request.friction)
+        verdict = driver.judge_grip(request.friction)
     good = judged and bool(verdict["good"])
     if memory is not None:
-        remember(memory, world, board, run.cycles_per_stage.get("grasping", 0), good)
-    obj = world.obj
+        remember(memory, driver, board, run.cycles_per_stage.get("grasping", 0), good)
+    obj = model.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
-    truth["d_over_h"] = obj.diameter / world.hand.hand_height
+    truth["d_over_h"] = obj.diameter / model.hand.hand_height
     if request.obj.shape == "sphere":
         truth["radius"] = request.obj.size["radius"]
     shape = board.get(keys.SHAPE)
@@ -312,15 +334,16 @@ def plan(
         d_over_h=board.get(keys.D_OVER_H),
         ep1_runs=int(board.get(keys.EP1_RUNS, 0)),
         touches=len(board.get(keys.EP1_CONTACT, {})) + len(board.get(keys.EP2_TOUCHES, [])),
-        probes=world.probes + int(board.get(keys.EP1_RUNS, 0)),
-        hand_height=world.hand.hand_height,
-        q_final=tuple(float(x) for x in world.state.q),
+        probes=driver.probes + int(board.get(keys.EP1_RUNS, 0)),
+        hand_height=model.hand.hand_height,
+        q_final=tuple(float(x) for x in driver.joint_positions()),
         wall_time_s=time.perf_counter() - t0,
+        world=getattr(driver, "report", lambda: None)(),
     )
     return result
 
 
-def remember(memory: GraspMemory, world: GraspWorld, board: Board, grasp_cycles: int, success: bool) -> None:
+def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:
     """Record a plan that reached grasping: one try for its key, and the grasp if it worked."""
     shape, dh = board.get(keys.SHAPE), board.get(keys.D_OVER_H)
     if shape is None or dh is None or shape.get("centre") is None or keys.TARGET not in board:

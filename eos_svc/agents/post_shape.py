@@ -46,12 +46,12 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.ep2 import MAX_ROUNDS as EP2_ROUNDS
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
 from eos_svc.shape.selection import MIN_CONTACTS, fit_probability
-from eos_svc.world.world import GraspWorld
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
@@ -90,7 +90,7 @@ def classify(curvature: dict) -> tuple[str, float]:
     return "ellipsoid", 1.0 / mean
 
 
-def touches_from(board: Board, world: GraspWorld) -> Touches:
+def touches_from(board: Board, world: HandDriver) -> Touches:
     """EP1's and EP2's contacts and EP2's free samples as fit measurements."""
     centres, normals, radii = [], [], []
     for contact in board.get(keys.EP1_CONTACT, {}).values():
@@ -112,9 +112,9 @@ def touches_from(board: Board, world: GraspWorld) -> Touches:
         np.array(radii),
         free[:, :3],
         free[:, 3],
-        tactile_noise=world.sensor.noise_std,
+        tactile_noise=world.tactile_noise,
         contact_tolerance=world.params.contact_tolerance,
-        kinematic_sigma=world.encoders.position_sigma,
+        kinematic_sigma=world.kinematic_sigma,
     )
 
 
@@ -126,7 +126,7 @@ class PostShapeAgent(GraspAgent):
     )
     writes = frozenset({keys.SHAPE, keys.D_OVER_H})
 
-    def __init__(self, default: float, world: GraspWorld) -> None:
+    def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("post_shape", (INFO,), default, world)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
@@ -271,7 +271,7 @@ class PostShapeAgent(GraspAgent):
                 own = size_confidence(None if rel is None else float(rel))
                 how = f"curvature radius {radius * 1000:.2f} mm on top, centre between top and bottom"
             else:
-                own = size_confidence(max(self.world.sensor.noise_std, 1e-6) / half)
+                own = size_confidence(max(self.world.tactile_noise, 1e-6) / half)
                 how = "from the top and bottom contacts"
             needs = "curvature" if own < self.world.params.confidence_threshold else "surface"
         confidence = EP1_CLASS_PROBABILITY * own

@@ -22,7 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from eos_svc.world.world import GraspWorld
+from eos_svc.drivers.protocol import HandDriver
 
 #: every joint of a hooked finger (rad): its tip points back toward the hand, ahead of its
 #: links and the palm (hand3x3: from 0.9 rad the tip, not a link, meets a face turned away)
@@ -56,7 +56,7 @@ class Probe:
     group: int = -1  #: probes of one group (≥ 0) are alternatives: the first that touches ends it
 
 
-def targeted_probes(world: GraspWorld, faces: list[dict], standoff: float) -> list[Probe]:
+def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> list[Probe]:
     """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
     half size), in order; ``standoff``: how far outside a surface a probe starts (m)."""
     probe = world.probe

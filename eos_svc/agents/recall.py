@@ -17,8 +17,8 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, GraspAgent
 from eos_svc.agents.memory import GraspMemory, RememberedGrasp
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 RECALLED = keys.RECALLED  #: board entry: the memory key recall applied
 
@@ -29,7 +29,7 @@ class RecallAgent(GraspAgent):
     reads = frozenset({keys.SHAPE, keys.D_OVER_H, RECALLED})
     writes = frozenset({RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
 
-    def __init__(self, world: GraspWorld, memory: GraspMemory) -> None:
+    def __init__(self, world: HandDriver, memory: GraspMemory) -> None:
         super().__init__("recall", (GRASP,), 0.0, world)
         self.memory = memory
         self._cache: tuple[object, RememberedGrasp | None] = (None, None)
@@ -58,7 +58,7 @@ class RecallAgent(GraspAgent):
         world = self.world
         hand = world.hand
         shape = board[keys.SHAPE]
-        q = world.state.q
+        q = world.joint_positions()
         q[hand.wrist_q_index[:3]] = np.asarray(shape["centre"]) + np.asarray(entry.offset)
         # the wrist keeps the orientation grasp_points turned it to (the remembered offset is
         # the wrist's position relative to the centre at that orientation)
@@ -68,7 +68,7 @@ class RecallAgent(GraspAgent):
                 idx = hand.finger_q_index(finger)
                 q[idx] = np.maximum(hand.lower[idx], entry.angles.get(finger, 0.0) - margin * (attempt + 1))
             q = np.clip(q, hand.lower, hand.upper)
-            world.set_q(q)
+            world.move_joints(q)
             if world.hand_clear(0.5 * world.params.contact_tolerance):
                 break
         else:

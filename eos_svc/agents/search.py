@@ -16,9 +16,9 @@ from __future__ import annotations
 
 from eos_svc.agent import ActionResult, Outcome
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 from eos_svc.world.coverage import column_counts
-from eos_svc.world.world import GraspWorld
 
 
 def search_rating(board: Board) -> float:
@@ -26,14 +26,14 @@ def search_rating(board: Board) -> float:
     return 0.0 if board.get(keys.LOCATED) else 1.0
 
 
-def search_move_limit(world: GraspWorld) -> int:
+def search_move_limit(world: HandDriver) -> int:
     """Sweeps after which the search gives up: every column of the coverage lattice twice
     (:func:`eos_svc.world.coverage.column_counts`)."""
     ny, nz = column_counts(world.params)
     return 2 * ny * nz
 
 
-def search_move(world: GraspWorld, board: Board, who: str) -> ActionResult:
+def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
     """Make one search move and report whether the object is now located."""
     if world.located():
         board.set(keys.LOCATED, True)

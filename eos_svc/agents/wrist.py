@@ -22,11 +22,11 @@ from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.grasp.landing import landing
 from eos_svc.grasp.postulate import make_object
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.world.world import GraspWorld
 
 #: the wrist's least opportunistic sub-rating while the hand is short of its grasp position
 WRIST_FLOOR = 0.05
@@ -42,7 +42,7 @@ class WristAgent(GraspAgent):
         {keys.LOCATED, keys.GAP, keys.SEARCH_MOVES, keys.TARGET, keys.AT_TARGET, keys.WRIST_LEFT}
     )
 
-    def __init__(self, default: float, world: GraspWorld) -> None:
+    def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("wrist", (SEARCH, GRASP), default, world)
 
     @staticmethod
@@ -68,9 +68,8 @@ class WristAgent(GraspAgent):
             return ActionResult(Outcome.PROGRESS, "the hand is already at its grasp position: it holds")
         if self.any_touching(board):
             return ActionResult(Outcome.CANNOT_ACT, "a fingertip touches the object: the hand must stay")
-        left, blocked = self.world.step_wrist_toward(
-            np.asarray(target["wrist"]), self.world.params.wrist_step
-        )
+        move = self.world.step_wrist_toward(np.asarray(target["wrist"]), self.world.params.wrist_step)
+        left, blocked = move.left, move.blocked
         board.set(keys.WRIST_LEFT, round(left, 6))
         if left < 1e-6 or blocked:
             board.set(keys.AT_TARGET, True)
@@ -90,12 +89,12 @@ class WristAgent(GraspAgent):
         if spec is None:
             return "no postulated object to re-predict the contacts on"
         obj = make_object(ObjectSpec.from_dict(spec))
-        palm = world.state.data.oMf[hand.palm_frame_id]
+        palm_translation, palm_rotation = world.palm_views()
         contacts = dict(target.get("contacts", {}))
         for finger in hand.finger_names:
             sweep = world.sweeps[finger]
             start = sweep.index_at(world.finger_angle(finger))
-            hit = landing(obj, sweep, hand.tip_radius(finger), palm.rotation, palm.translation, start)
+            hit = landing(obj, sweep, hand.tip_radius(finger), palm_rotation, palm_translation, start)
             if hit is not None:
                 contacts[finger] = hit.to_dict()
         board.set(keys.TARGET, {**target, "contacts": contacts, "repredicted": True})

@@ -23,6 +23,7 @@ from typing import IO, Any
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
 from eos_svc.cli.hands import add_hand_argument, chosen_hand
+from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.records import REPEAT_SKIP, CycleRecord
 
@@ -88,7 +89,9 @@ def add_request_arguments(
         "--link-error", type=finite_float, default=0.0, help="link-length calibration error std, m (0)"
     )
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
-    g.add_argument("--deadline", type=positive_float, default=10.0, help="wall-clock budget, s (10)")
+    g.add_argument(
+        "--deadline", type=positive_float, help="wall-clock budget, s (10; 600 with --world drake)"
+    )
     g.add_argument(
         "--friction",
         type=finite_float,
@@ -111,6 +114,13 @@ def add_request_arguments(
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     g = add_request_arguments(parser)
     add_hand_argument(g)
+    g.add_argument(
+        "--world",
+        choices=WORLDS,
+        default="kinematic",
+        help="where the hand acts: kinematic (exact, the object fixed) or drake (the object a free "
+        "body on a table under gravity; success needs the lift test) (kinematic)",
+    )
     g.add_argument(
         "--memory",
         metavar="DB",
@@ -176,13 +186,32 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
-        "deadline_s": args.deadline,
+        "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
         "friction": args.friction,
+        **({"world": args.world} if getattr(args, "world", "kinematic") != "kinematic" else {}),
         **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
         **({"encoder_noise": args.encoder_noise} if args.encoder_noise else {}),
         **({"link_error": args.link_error} if args.link_error else {}),
         **({} if args.table is None else {"table": {"height": args.table}}),
     }
+
+
+def default_deadline(args: argparse.Namespace) -> float:
+    """The wall-clock budget when ``--deadline`` is not given: 10 s, 600 s in the Drake world."""
+    return 600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0
+
+
+def format_world(world: dict) -> str:
+    """The Drake world's figures in one line."""
+    lift = world.get("lift") or {}
+    held = "held" if lift.get("held") else f"not held ({lift.get('why', 'no lift test')})"
+    moved = ""
+    if world.get("moved_past_relocation_limit"):
+        moved = " (past 2 mm: not re-located, the plan assumed it still)"
+    return (
+        f"drake world: object moved {world['object_moved_mm']:.1f} mm{moved}; lift test: {held}; "
+        f"{world['simulated_s']:.1f} s simulated, real-time factor {world['real_time_factor']}"
+    )
 
 
 def format_cycle(record: CycleRecord) -> str:
@@ -255,6 +284,9 @@ def format_result(result: Any) -> str:
         closure = "force closure" if getattr(result, "force_closure", False) else "no force closure"
         eps = result.epsilon
         lines.append(f"quality: {closure} at μ = {result.friction:g}, ε = {eps:.3f} (Ferrari-Canny)")
+    world = getattr(result, "world", None)  # a replayed recording's result may have none
+    if world is not None:
+        lines.append(format_world(world))
     lines.append(f"seed {result.seed}, weights {result.weights}, {result.wall_time_s * 1000:.1f} ms")
     if getattr(result, "validation", None):
         from eos_svc.cli.validate import format_validation

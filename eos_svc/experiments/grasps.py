@@ -12,6 +12,7 @@ good grasps are held ≥ 98 %).
     eos experiment grasps --quick --seeds 1    # one object per class
     eos experiment grasps --random 40 --draw-seed 3 [--sizes 0.15 0.5] [--no-validate]
                                                # a random draw: any class, size, pose
+    eos experiment grasps --world drake        # plans in the Drake world: held = its lift test
     eos experiment grasps --hand trifinger     # another hand (eos hands) or a description file:
                                                # the same objects; those it cannot span are refused
     eos experiment grasps --objects pybullet-random --ids 500-539 --table --seeds 1
@@ -21,6 +22,10 @@ good grasps are held ≥ 98 %).
 The pybullet objects (``pip install 'eos_svc[objects]'``) are read from the installed package
 and scaled and placed as :mod:`eos_svc.experiments.pybullet_objects` says; ``--table`` puts
 the table under them (without it they float where they would rest).
+
+In the Drake world (:mod:`eos_svc.drivers.drake_world`) every plan runs against the simulated
+object on its table and ends with the lift test; ``held`` is that test's verdict (no separate
+validation), and each run also records how far the object moved (mm) and the real-time factor.
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ import numpy as np
 from eos_svc.agents import PlanRequest, plan
 from eos_svc.cli.common import int_at_least, positive_float
 from eos_svc.cli.hands import add_hand_argument, chosen_hand
+from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, pyplot, save_figure, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
@@ -65,6 +71,8 @@ HELD_GOAL = 0.98
 GOOD_GOAL = 0.95
 #: the postulate's confidence the grasp stage needs (the world's default threshold, 60 %)
 CONFIDENCE_RULE = WorldParameters().confidence_threshold
+#: a Drake-world plan's wall-clock budget, s (the simulation runs at about real time)
+DRAKE_DEADLINE_S = 600.0
 #: words in a size refusal (admission's fit rule) that tell it from a position refusal
 TOO_LARGE = "fits between the fingertips along no axis"
 
@@ -95,14 +103,19 @@ def plan_and_validate(
     validation: dict[str, Any] | None,
     context: HandContext | None = None,
     options: dict[str, Any] | None = None,
+    world: str = "kinematic",
 ) -> dict[str, Any]:
     """One run: plan the object with ``seed`` (with the hand of ``context``, default hand3x3, and
     the request ``options``, e.g. ``tactile_noise``), validate the final grasp with that hand
-    (unless ``validation`` is None: then ``held`` is None); a flat row."""
+    (unless ``validation`` is None: then ``held`` is None); a flat row. In the Drake world
+    (``world="drake"``) ``held`` is the plan's own lift test."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     try:
+        drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
         result = plan(
-            PlanRequest(obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **(options or {})),
+            PlanRequest(
+                obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})
+            ),
             keep_trace=False,
             context=context,
         )
@@ -116,6 +129,20 @@ def plan_and_validate(
             "held": None,
         }
     row.update(recognition(obj.spec, result))
+    if result.world is not None:
+        lift = result.world.get("lift") or {}
+        return {
+            **row,
+            "status": result.status,
+            "reason": result.reason,
+            "good_grasp": bool(result.good_grasp),
+            "held": bool(lift.get("held", False)),
+            "epsilon": result.epsilon,
+            "plan_time_s": result.wall_time_s,
+            "object_moved_mm": result.world["object_moved_mm"],
+            "lift": lift.get("why", "no lift test"),
+            "real_time_factor": result.world["real_time_factor"],
+        }
     if validation is None:
         return {
             **row,
@@ -209,6 +236,8 @@ def summarise(
         "not_good_dropped": sum(not r["good_grasp"] and not r["held"] for r in validated),
     }
     good = confusion["good_held"] + confusion["good_dropped"]
+    timed = [r["validation_time_s"] for r in validated if "validation_time_s" in r]  # not in Drake's
+    moved = [r["object_moved_mm"] for r in done if "object_moved_mm" in r]  # the Drake world's
     totals = {
         "runs": len(done),
         "rejected": len(runs) - len(done),
@@ -230,9 +259,8 @@ def summarise(
         else None,
         "median_plan_time_s": float(np.median([r["plan_time_s"] for r in done])) if done else None,
         **recognition_totals(done),
-        "median_validation_time_s": float(np.median([r["validation_time_s"] for r in validated]))
-        if validated
-        else None,
+        "median_validation_time_s": float(np.median(timed)) if timed else None,
+        "median_object_moved_mm": float(np.median(moved)) if moved else None,
         "failures": failures,
     }
     return rows, totals
@@ -267,6 +295,7 @@ def run(
     validate: bool = True,
     hand: HandModel | None = None,
     options: dict[str, Any] | None = None,
+    world: str = "kinematic",
 ) -> dict:
     """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
     drawn object once, with its own seed — with the request ``options`` (e.g. ``tactile_noise``);
@@ -283,7 +312,7 @@ def run(
     runs: list[dict[str, Any]] = []
     t0 = time.perf_counter()
     for obj, seed in jobs:
-        runs.append(plan_and_validate(obj, seed, checks, context, options))
+        runs.append(plan_and_validate(obj, seed, checks, context, options, world))
         if not quiet:
             elapsed = time.perf_counter() - t0
             print(
@@ -371,8 +400,15 @@ def report(data: dict) -> str:
             f"  good       {c['good_held']:>8} {c['good_dropped']:>8}",
             f"  not good   {c['not_good_held']:>8} {c['not_good_dropped']:>8}",
             f"good grasps held: {_pct(t['held_given_good'])} (goal {HELD_GOAL:.0%}, met: {t['goal_met']}); "
-            f"agreement {_pct(t['agreement'])}; median validation {t['median_validation_time_s']:.1f} s",
+            f"agreement {_pct(t['agreement'])}"
+            + (
+                f"; median validation {t['median_validation_time_s']:.1f} s"
+                if t["median_validation_time_s"] is not None
+                else "; held = the Drake world's lift test"
+            ),
         ]
+    if t.get("median_object_moved_mm") is not None:
+        lines.append(f"median object displacement in the Drake world: {t['median_object_moved_mm']:.1f} mm")
     if t["runs"]:
         lines.append(f"median plan {t['median_plan_time_s'] * 1000:.0f} ms")
         p90 = t["shape_error_p90"]
@@ -456,6 +492,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="the simulated hand's link-length calibration error (standard deviation, m; default 0)",
     )
     parser.add_argument(
+        "--world",
+        choices=WORLDS,
+        default="kinematic",
+        help="where the plans run: kinematic, or drake (held = the plan's own lift test) (kinematic)",
+    )
+    parser.add_argument(
         "--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)"
     )
     return parser
@@ -518,6 +560,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         PlanRequest(**options)
     except ValidationError as exc:
         parser.error(f"argument {flags[exc.field]}: {exc.reason}")
+    if args.world == "drake":
+        name += "_drake"
     data = run(
         objects,
         seeds,
@@ -527,6 +571,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         validate=not args.no_validate,
         hand=hand,
         options=options,
+        world=args.world,
     )
     print(report(data))
     print(f"wrote {args.out}/{name}.json, {name}.csv, {name}_runs.csv, {name}.png")

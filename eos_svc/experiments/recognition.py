@@ -34,6 +34,7 @@ from eos_svc.agents.planner import build_world, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.cli.common import int_at_least
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.experiments.common import (
     experiment_parser,
     pyplot,
@@ -104,7 +105,7 @@ def search_lengths(seeds: int = 100, limit: int = 2000) -> list[int]:
     """Search moves to locate the default object for seeds 1…``seeds`` (``limit + 1`` if not)."""
     out = []
     for seed in range(1, seeds + 1):
-        world = build_world(PlanRequest(seed=seed))
+        world = KinematicDriver(build_world(PlanRequest(seed=seed)))
         board = Board()
         n = limit + 1
         for k in range(1, limit + 1):

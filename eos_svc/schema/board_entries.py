@@ -160,7 +160,7 @@ class FingertipContact(TypedDict):
 
 
 class OutcomeEntry(TypedDict):
-    """The end agent's verdict (:func:`eos_svc.agents.end.grasp_geometry`): contacts per finger,
+    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`): contacts per finger,
     whether all touch, the grip is good and about the diameter, the angle across the centre
     (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
     hand configuration judged."""
@@ -197,6 +197,10 @@ ENTRIES: dict[str, Entry] = {
     ),
     keys.EP2_RUNS: Entry(int, "EP2 rounds so far"),
     keys.HAND_Q: Entry(list[float], "the hand's configuration after the cycle (m, rad)"),
+    keys.OBJECT_POSE: Entry(
+        list[float],
+        "a moving world's object pose after the cycle: x, y, z (m), quaternion w, x, y, z (viewers)",
+    ),
     keys.HAND_PATH: Entry(
         list[list[float]], "the hand's configurations during an EP1 roll, sampled (for viewers)"
     ),
@@ -215,7 +219,11 @@ ENTRIES: dict[str, Entry] = {
 
 #: entries written by others than the agents: entry -> who (the planner before the first cycle,
 #: from the request)
-OUTSIDE_WRITERS: dict[str, str] = {keys.FRICTION: "plan set-up", keys.HAND_Q: "PoseBoard, every cycle"}
+OUTSIDE_WRITERS: dict[str, str] = {
+    keys.FRICTION: "plan set-up",
+    keys.HAND_Q: "PoseBoard, every cycle",
+    keys.OBJECT_POSE: "PoseBoard, every cycle of a world whose object moves (Drake)",
+}
 #: entries the planner reads after the run, for its result and the grasp memory
 AFTER_RUN: frozenset[str] = frozenset(
     {

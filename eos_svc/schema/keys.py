@@ -32,4 +32,5 @@ FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the 
 Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)
 HAND_Q = "hand_q"  #: tuple: the hand's configuration after the cycle (rad/m, 1e-7; written by PoseBoard)
 RECALLED = "recalled"  #: str: the grasp-memory key recall applied
+OBJECT_POSE = "object_pose"  #: list: the object's pose after the cycle, Drake world (by PoseBoard)
 HAND_PATH = "hand_path"  #: list of q: the hand's path during an EP1 roll (sampled; for viewers)

@@ -49,6 +49,8 @@ MAX_OBJECT_SIZE = 1.0
 MAX_POSITION = 10.0
 MAX_CYCLES_LIMIT = 100_000
 MAX_DEADLINE_S = 3600.0
+#: the worlds a plan can run in (:mod:`eos_svc.drivers.worlds`)
+WORLDS = ("kinematic", "drake")
 MAX_TACTILE_NOISE = 0.01
 #: default and largest Coulomb friction coefficient μ at the fingertip contacts (grasp quality)
 DEFAULT_FRICTION = 0.5
@@ -331,6 +333,9 @@ class PlanRequest:
         deadline_s: wall-clock budget of the run (s), or ``None``.
         friction: Coulomb friction coefficient μ of the fingertip contacts, in
             [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
+        world: where the hand acts, one of :data:`WORLDS`: ``"kinematic"`` (exact, the object
+            fixed) or ``"drake"`` (the object a free body on a table; success needs the lift
+            test). The JSON form carries it only when it is not ``"kinematic"``.
         agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
             point or ``module:attr``; a service instance takes only those it offers); at most
             :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
@@ -351,6 +356,7 @@ class PlanRequest:
     max_cycles: int = 2000
     deadline_s: float | None = 10.0
     friction: float = DEFAULT_FRICTION
+    world: str = "kinematic"
     agents: tuple[str, ...] = ()
     encoder_noise: float = 0.0
     link_error: float = 0.0
@@ -380,6 +386,8 @@ class PlanRequest:
         if not 0.0 <= mu <= MAX_FRICTION:
             raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
         object.__setattr__(self, "friction", mu)
+        if self.world not in WORLDS:
+            raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
         if self.agents:
             object.__setattr__(self, "agents", _plugin_names(self.agents))
         for name, limit, unit in (
@@ -415,6 +423,7 @@ class PlanRequest:
                 "agents",
                 "hand",
                 "table",
+                "world",
             },
             "",
         )
@@ -435,6 +444,7 @@ class PlanRequest:
             "link_error",
             "agents",
             "hand",
+            "world",
         ):
             if key in data:
                 kwargs[key] = data[key]
@@ -454,6 +464,8 @@ class PlanRequest:
             "deadline_s": self.deadline_s,
             "friction": self.friction,
         }
+        if self.world != "kinematic":
+            out["world"] = self.world
         if self.agents:
             out["agents"] = list(self.agents)
         if self.encoder_noise:

@@ -67,6 +67,9 @@ class PlanResult:
         trace: every cycle record (when kept).
         validation: the Drake validation of the final grasp
             (:meth:`eos_svc.validation.GraspValidation.to_dict`), None unless asked for.
+        world: the Drake world's figures (:meth:`eos_svc.drivers.drake_world.DrakeDriver.report`:
+            how far the object moved (mm), the lift test, simulated and wall time); None in the
+            kinematic world (and then absent from :meth:`to_dict`).
     """
 
     status: str
@@ -95,6 +98,7 @@ class PlanResult:
     quality: dict | None = None
     q_final: tuple[float, ...] | None = field(default=None, repr=False)
     validation: dict | None = None
+    world: dict | None = None
     touches: int = 0
     probes: int = 0
 
@@ -185,6 +189,8 @@ class PlanResult:
             "request": self.request,
             "validation": self.validation,
         }
+        if self.world is not None:
+            out["world"] = self.world
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]
         if not jsonable:

@@ -20,11 +20,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydrake.common.eigen_geometry import Quaternion
 from pydrake.geometry import Meshcat, MeshcatAnimation
-from pydrake.math import RigidTransform
+from pydrake.math import RigidTransform, RotationMatrix
 
 from eos_svc.agents.planner import default_hand
 from eos_svc.kinematics import HandModel
+from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec, PlanRequest
 from eos_svc.view.scene import (
     CONTACTS,
@@ -39,8 +41,9 @@ from eos_svc.view.scene import (
     play_once,
     postulated_object,
     set_camera,
+    vec,
 )
-from eos_svc.view.timeline import Timeline, build_timeline
+from eos_svc.view.timeline import Timeline, build_timeline, changes_of
 
 #: two poses closer than this (max |entry| of the 4×4 difference) are the same keyframe
 POSE_EPS = 1e-9
@@ -95,6 +98,25 @@ def _postulates(meshcat: Meshcat, anim: MeshcatAnimation, timeline: Timeline) ->
     return drawn
 
 
+def _animate_object(anim: MeshcatAnimation, timeline: Timeline, records: Sequence[Mapping[str, Any]]) -> int:
+    """Move the true object to its recorded pose at the end of every cycle that moved it (the
+    Drake world's ``object_pose`` entries: x, y, z, quaternion w, x, y, z); returns how many."""
+    moved = 0
+    for record in records:
+        pose = changes_of(record).get(keys.OBJECT_POSE)
+        if not isinstance(pose, Sequence) or len(pose) != 7:
+            continue
+        try:
+            end = timeline.span_end_s(int(record["seq"]))
+        except (KeyError, TypeError, ValueError):
+            continue
+        x, y, z, qw, qx, qy, qz = (float(v) for v in pose)
+        rotation = RotationMatrix(Quaternion(np.array([qw, qx, qy, qz]) / np.linalg.norm([qw, qx, qy, qz])))
+        anim.SetTransform(round(end * timeline.fps), OBJECT, RigidTransform(rotation, vec((x, y, z))))
+        moved += 1
+    return moved
+
+
 def _result_text(request: PlanRequest, result: Mapping[str, Any] | None) -> str:
     obj = request.obj
     head = f"{obj.shape} d = {obj.diameter * 1000:.1f} mm at {tuple(round(x, 3) for x in obj.position)}"
@@ -145,6 +167,7 @@ def plan_scene(
     """
     req = request if isinstance(request, PlanRequest) else PlanRequest.from_dict(dict(request))
     hand = hand or default_hand()
+    records = list(records)
     drawing = HandDrawing(hand)
     timeline = build_timeline(records, hand.neutral())
     meshcat = new_meshcat(port=0)  # never one of the ports a live view would use
@@ -153,6 +176,7 @@ def plan_scene(
     add_object(meshcat, OBJECT, req.obj, OBJECT_RGBA)
     anim = MeshcatAnimation(timeline.fps)
     animate_hand(anim, drawing, timeline)
+    _animate_object(anim, timeline, records)
     postulates = _postulates(meshcat, anim, timeline)
     verdict = timeline.verdict
     contacts = (result or {}).get("contacts") or (verdict[1].get("contacts") if verdict else None)

@@ -83,6 +83,13 @@ class Timeline:
         """Length of the animation, s."""
         return self.frames / self.fps
 
+    def span_end_s(self, seq: int) -> float:
+        """Time at the end of cycle ``seq`` (s); KeyError when there is no such cycle."""
+        for span in self.spans:
+            if span.seq == seq:
+                return span.end / self.fps
+        raise KeyError(seq)
+
 
 def _steps_between(a: Sequence[float], b: Sequence[float]) -> int:
     """How many keyframes a move from ``a`` to ``b`` needs (≥ 1): wrist x, y, z are the first

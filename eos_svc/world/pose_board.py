@@ -10,45 +10,60 @@ the same with it.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from eos_svc.board import Board, BoardChange
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
-from eos_svc.world.world import GraspWorld
 
 #: decimals kept of every joint value in ``keys.HAND_Q`` (0.1 µm, 0.1 µrad)
 Q_DECIMALS = 7
 
 
-def hand_q(world: GraspWorld) -> tuple[float, ...]:
-    """The world's hand configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
-    return tuple(world.state.q.round(Q_DECIMALS).tolist())
+def hand_q(world: HandDriver) -> tuple[float, ...]:
+    """The hand's configuration as written on the board (rounded to :data:`Q_DECIMALS`)."""
+    return tuple(world.joint_positions().round(Q_DECIMALS).tolist())
 
 
 class PoseBoard(Board):
-    """A board that records the hand's configuration at the end of every cycle that moved it.
+    """A board that records the hand's configuration at the end of every cycle that moved it,
+    and, in a world whose object moves (``object_pose``: the Drake world's, for viewers; no
+    agent reads it), the object's pose (``keys.OBJECT_POSE``) when it moved.
 
     Args:
-        world: the world whose hand is recorded.
+        world: the driver of the hand recorded.
         entries: initial entries (set up by the caller, not recorded as changes).
+        object_pose: the world's object pose now (x, y, z, qw, qx, qy, qz), or None.
     """
 
-    __slots__ = ("_world",)
+    __slots__ = ("_object_pose", "_world")
 
-    def __init__(self, world: GraspWorld, entries: Mapping[str, Any] | None = None) -> None:
-        super().__init__({**(entries or {}), keys.HAND_Q: hand_q(world)})
+    def __init__(
+        self,
+        world: HandDriver,
+        entries: Mapping[str, Any] | None = None,
+        object_pose: Callable[[], list[float]] | None = None,
+    ) -> None:
+        initial = {**(entries or {}), keys.HAND_Q: hand_q(world)}
+        if object_pose is not None:
+            initial[keys.OBJECT_POSE] = object_pose()
+        super().__init__(initial)
         self._world = world
+        self._object_pose = object_pose
 
     def end_cycle(self) -> tuple[BoardChange, ...]:
-        """Write ``keys.HAND_Q`` (a change only when the hand moved), then end the cycle."""
+        """Write ``keys.HAND_Q`` (a change only when the hand moved) and the object's pose (when
+        it moved), then end the cycle."""
         if self._changes is not None:
             self.set(keys.HAND_Q, hand_q(self._world))
+            if self._object_pose is not None:
+                self.set(keys.OBJECT_POSE, self._object_pose())
         return super().end_cycle()
 
 
-#: board entries only viewers read: the hand's configuration and EP1's sampled path
-VIEW_KEYS = frozenset({keys.HAND_Q, keys.HAND_PATH})
+#: board entries only viewers read: the hand's configuration, EP1's sampled path, a moving object's pose
+VIEW_KEYS = frozenset({keys.HAND_Q, keys.HAND_PATH, keys.OBJECT_POSE})
 
 
 def has_hand_q(cycles: Sequence[Mapping[str, Any]]) -> bool:

@@ -13,6 +13,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys, plan
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.planner import build_world, default_hand, parameters_for, ratio_sphere_request
 from eos_svc.board import Board
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.grasp.candidate import diameter_angle_deg
 from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
@@ -279,7 +280,7 @@ def test_every_candidate_is_reached_collision_free(spec):
 def test_object_larger_than_the_hand_in_every_direction_fails_naming_its_size():
     world = build_world(PlanRequest())
     big = ObjectSpec("box", {"size": (0.13, 0.14, 0.15)}, (0.3, 0.02, -0.015))
-    agent = GraspPointsAgent(0.6, world, oracle=big)
+    agent = GraspPointsAgent(0.6, KinematicDriver(world), oracle=big)
     board = Board(
         {keys.SHAPE: {"class": "box", "confidence": 0.9, "grasp_radius": 0.075, "centre": [0.3, 0.02, 0]}}
     )
@@ -386,18 +387,19 @@ def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
     from eos_svc.agents.wrist import WristAgent
 
     world = build_world(PlanRequest())
+    driver = KinematicDriver(world)
     spec = ObjectSpec()  # the default sphere, as its own postulate
     board = Board({keys.SHAPE: {"class": "sphere", "confidence": 0.9, "grasp_radius": 0.03, "centre": None}})
     ctx = CycleContext(seq=1, stage="information", stage_cycle=0, events=(), last_agent=None, acted={})
-    assert GraspPointsAgent(0.6, world, oracle=spec).act(board, ctx).outcome is Outcome.STAGE_COMPLETE
+    assert GraspPointsAgent(0.6, driver, oracle=spec).act(board, ctx).outcome is Outcome.STAGE_COMPLETE
     target = board[keys.TARGET]
-    fingers = [FingerAgent(f, 0.5, world) for f in world.hand.finger_names]
+    fingers = [FingerAgent(f, 0.5, driver) for f in world.hand.finger_names]
     # the hand stands 12 mm short of its grasp position (as if a contact had stopped it)
     q = world.state.q
     q[world.hand.wrist_q_index[:3]] = np.asarray(target["wrist"]) - 0.012 * np.asarray(target["approach"])
     world.set_q(q)
     assert not any(f.in_reach(board) for f in fingers)  # from here every tip lands elsewhere
-    words = WristAgent(0.9, world).repredict(board, target)
+    words = WristAgent(0.9, driver).repredict(board, target)
     assert words == "contacts re-predicted from here"
     new = board[keys.TARGET]
     assert new["repredicted"] and new["contacts"] != target["contacts"]

@@ -12,6 +12,7 @@ from eos_svc.agents.base import STAGES
 from eos_svc.agents.planner import build_agents, build_world
 from eos_svc.board import Board
 from eos_svc.controller import Controller
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.world.pose_board import PoseBoard
 
@@ -58,7 +59,10 @@ def test_the_records_do_not_change_the_plan():
     cylinder = ObjectSpec("cylinder", {"radius": 0.025, "length": 0.08}, (0.2, 0.0, 0.0))
     request = PlanRequest(obj=cylinder, seed=4)
     runs = []
-    for make in (lambda w: Board({keys.FRICTION: 0.5}), lambda w: PoseBoard(w, {keys.FRICTION: 0.5})):
+    for make in (
+        lambda w: Board({keys.FRICTION: 0.5}),
+        lambda w: PoseBoard(KinematicDriver(w), {keys.FRICTION: 0.5}),
+    ):
         world = build_world(request)
         run = Controller(build_agents(world), STAGES, request.weights, max_cycles=2000).run(make(world))
         runs.append(

@@ -2,7 +2,7 @@
 
 A *plug-in* is one of:
 
-- a factory: a callable taking the plan's :class:`~eos_svc.world.world.GraspWorld` and
+- a factory: a callable taking the plan's :class:`~eos_svc.world.world.HandDriver` and
   returning an :class:`~eos_svc.agent.Agent` (an ``Agent`` subclass whose constructor takes the
   world is one) — called once per plan;
 - an ``Agent`` instance, used as it is (an agent bound to no world, e.g. a
@@ -28,15 +28,15 @@ from importlib.metadata import EntryPoint, entry_points
 from typing import Any, Union
 
 from eos_svc.agent import Agent
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.schema.board_entries import ENTRIES, Entry
-from eos_svc.world.world import GraspWorld
 
 #: the entry-point group installed packages register their agents in
 ENTRY_POINT_GROUP = "eos_svc.agents"
 
 #: a factory of a plug-in agent: called with the plan's world
-AgentFactory = Callable[[GraspWorld], Agent]
+AgentFactory = Callable[[HandDriver], Agent]
 #: what ``plan(..., agents=[...])`` takes: a factory, an agent, or a name
 PluginSpec = Union[str, AgentFactory, Agent]  # noqa: UP007 (a runtime alias on Python 3.10)
 
@@ -131,7 +131,7 @@ def check_contract(
 
 
 def plugin_agents(
-    world: GraspWorld, plugins: Sequence[PluginSpec], builtin: Sequence[Agent], stages: Sequence[str]
+    world: HandDriver, plugins: Sequence[PluginSpec], builtin: Sequence[Agent], stages: Sequence[str]
 ) -> list[Agent]:
     """The plug-in agents of one plan, built and checked, in the order given.
 

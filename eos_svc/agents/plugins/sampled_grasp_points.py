@@ -36,6 +36,7 @@ import numpy as np
 from eos_svc.agent import CycleContext
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.board import Board
+from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.candidate import GraspCandidate
 from eos_svc.grasp.frames import approach_axes, candidate_frames, frame
@@ -44,7 +45,6 @@ from eos_svc.grasp.synthesis import GraspSynthesis
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.world.world import GraspWorld
 
 #: the plug-in's default sub-rating: above grasp_points' 0.6, so that it wins when it asks
 DEFAULT_RATING = 0.65
@@ -101,7 +101,7 @@ class SampledGraspPointsAgent(GraspPointsAgent):
 
     def __init__(
         self,
-        world: GraspWorld,
+        world: HandDriver,
         default: float = DEFAULT_RATING,
         samples: int = DEFAULT_SAMPLES,
         primitive_frames: bool = True,

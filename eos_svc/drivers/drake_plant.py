@@ -1,0 +1,247 @@
+"""The Drake world's plant: the whole hand on its wrist joints, a table, the object resting on it.
+
+Built with Drake's ``MultibodyPlant`` (discrete, SAP, point contact) from the URDF the planner
+loads with Pinocchio (parsed by Drake's own ``Parser``). Drake-only choices, made here in code:
+
+- every joint gets an actuator with an implicit PD controller (``PdControllerGains``) capped by
+  the URDF's effort limit: the wrist's joints stiff (position control), the finger joints soft
+  (``finger_kp``; Drake validation's gains);
+- the hand's own weight is off (a robot arm carries it); the object's is on (gravity, its mass);
+- a table, a box welded to the world, its top at the object's lowest point, so the object rests
+  on it; the hand does not collide with the table (the planner plans no table avoidance) nor
+  with itself; every hand, table and object geometry has the request's Coulomb μ.
+
+Reference: Drake, https://drake.mit.edu (MultibodyPlant; SAP: Castro et al., "An Unconstrained
+Convex Formulation of Compliant Contact", IEEE T-RO 2023).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from pydrake.geometry import (
+    AddContactMaterial,
+    Box,
+    CollisionFilterDeclaration,
+    GeometrySet,
+    ProximityProperties,
+    RoleAssign,
+)
+from pydrake.math import RigidTransform, RollPitchYaw
+from pydrake.multibody.parsing import Parser
+from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
+from pydrake.multibody.tree import PdControllerGains, SpatialInertia
+from pydrake.systems.analysis import Simulator
+from pydrake.systems.framework import DiagramBuilder
+
+from eos_svc.errors import ValidationError
+from eos_svc.kinematics import HandModel
+from eos_svc.objects import SurfaceObject
+from eos_svc.schema.request import ObjectSpec
+from eos_svc.validation.simulation import object_shapes, urdf_effort_limits, vec
+
+
+@dataclass(frozen=True)
+class PlantSettings:
+    """The physical model's constants (SI).
+
+    Attributes:
+        mass: the object's mass, kg.
+        time_step: the discrete plant's step, s.
+        wrist_kp, wrist_kd: the wrist's translation joints' PD gains (N/m, N·s/m).
+        wrist_rot_kp, wrist_rot_kd: the wrist's rotation joints' gains (N·m/rad, N·m·s/rad).
+        finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad).
+        contact_stiffness: point-contact stiffness, N/m.
+        table_size: the table box's x, y extent and thickness, m.
+        hand_touches_table: whether the hand collides with the table (off by default: the
+            planner plans no table avoidance and EP1 feels a resting object's bottom, which a
+            table would hide).
+    """
+
+    mass: float = 0.1
+    time_step: float = 1e-3
+    wrist_kp: float = 4000.0
+    wrist_kd: float = 80.0
+    wrist_rot_kp: float = 100.0
+    wrist_rot_kd: float = 2.0
+    finger_kp: float = 5.0
+    finger_kd: float = 0.05
+    contact_stiffness: float = 2e4
+    table_size: tuple[float, float, float] = (0.6, 0.6, 0.04)
+    hand_touches_table: bool = False
+
+
+class DrakeHandPlant:
+    """The hand, the table and the object in one Drake simulation (see the module docstring).
+
+    Joint values cross in the planner's order (:attr:`HandModel.lower`'s: wrist then fingers).
+    """
+
+    def __init__(self, hand: HandModel, spec: ObjectSpec, obj: SurfaceObject, friction: float,
+                 settings: PlantSettings | None = None) -> None:  # fmt: skip
+        if hand.urdf_path is None:
+            raise ValidationError("hand", "the Drake world needs the hand's URDF (this hand has none)")
+        s = settings or PlantSettings()
+        self.settings = s
+        efforts = urdf_effort_limits(hand.urdf_path)
+        builder = DiagramBuilder()
+        config = MultibodyPlantConfig(
+            time_step=s.time_step, contact_model="point", discrete_contact_approximation="sap"
+        )
+        plant, scene_graph = AddMultibodyPlant(config, builder)
+        (model,) = Parser(plant).AddModels(hand.urdf_path)
+        names = [str(n) for n in hand.model.names[1:]]  # Pinocchio's joints in q order (1 DoF each)
+        wrist = set(hand.description.wrist_joints)
+        for name in names:
+            joint = plant.GetJointByName(name, model)
+            if name in wrist:
+                prismatic = joint.type_name() == "prismatic"
+                kp, kd = (s.wrist_kp, s.wrist_kd) if prismatic else (s.wrist_rot_kp, s.wrist_rot_kd)
+            else:
+                kp, kd = s.finger_kp, s.finger_kd
+            actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts.get(name, np.inf))
+            actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
+        material = ProximityProperties()
+        AddContactMaterial(
+            dissipation=None,
+            point_stiffness=s.contact_stiffness,
+            friction=CoulombFriction(friction, friction),
+            properties=material,
+        )
+        lowest = float(obj.centre[2] - obj.half_extent(np.array([0.0, 0.0, 1.0])))
+        tx, ty, tz = s.table_size
+        table_pose = RigidTransform(vec((obj.centre[0], obj.centre[1], lowest - 0.5 * tz)))
+        table = plant.RegisterCollisionGeometry(
+            plant.world_body(), table_pose, Box(tx, ty, tz), "table", material
+        )
+        shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
+        instance = plant.AddModelInstance("object")
+        inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
+        body = plant.AddRigidBody("object", instance, inertia)
+        for i, shape in enumerate(shapes):
+            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", material)
+        plant.set_gravity_enabled(model, False)
+        plant.Finalize()
+        hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
+        for b in hand_bodies:
+            for geometry in plant.GetCollisionGeometriesForBody(b):
+                scene_graph.AssignRole(plant.get_source_id(), geometry, material, RoleAssign.kReplace)
+        hand_set = plant.CollectRegisteredGeometries(hand_bodies)
+        manager = scene_graph.collision_filter_manager()
+        manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
+        if not s.hand_touches_table:
+            manager.Apply(CollisionFilterDeclaration().ExcludeBetween(hand_set, GeometrySet(table)))
+        self.plant, self.model, self.body = plant, model, body
+        self.tip_bodies = {
+            f: plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body()
+            for f in hand.finger_names
+        }
+        self.diagram = builder.Build()
+        self.simulator = Simulator(self.diagram)
+        self.root = self.simulator.get_mutable_context()
+        self.context = plant.GetMyMutableContextFromRoot(self.root)
+        # q order: Drake's position index of each planner joint (the actuators were added in it)
+        self._index = [plant.GetJointByName(n, model).position_start() for n in names]
+        self.table_top = lowest
+        pose = RigidTransform(RollPitchYaw(vec(spec.rpy)), vec(obj.centre))
+        plant.SetFreeBodyPose(self.context, body, pose)
+        plant.get_actuation_input_port().FixValue(self.context, np.zeros(plant.num_actuated_dofs()))
+        self._n = len(names)
+        self.set_object_wrench(np.zeros(3), np.zeros(3))
+
+    # --- the hand --------------------------------------------------------------------------
+    def hand_q(self) -> np.ndarray:
+        """The hand's joint values, planner order."""
+        return np.asarray(self.plant.GetPositions(self.context))[self._index]
+
+    def set_hand_q(self, q: np.ndarray) -> None:
+        """Place the hand at ``q`` (at rest) and hold it there."""
+        full = np.array(self.plant.GetPositions(self.context))
+        full[self._index] = q
+        self.plant.SetPositions(self.context, full)
+        v = np.array(self.plant.GetVelocities(self.context))
+        v[:] = 0.0
+        self.plant.SetVelocities(self.context, v)
+        self.command(q)
+
+    def command(self, q: np.ndarray) -> None:
+        """The PD controllers' target: joint values ``q`` (planner order), zero velocity."""
+        target = np.concatenate([np.asarray(q, dtype=float), np.zeros(self._n)])
+        self.plant.get_desired_state_input_port(self.model).FixValue(self.context, target)
+
+    def command_moving(self, q: np.ndarray, v: np.ndarray) -> None:
+        """The PD controllers' target: joint values ``q`` moving at ``v`` (planner order)."""
+        target = np.concatenate([np.asarray(q, dtype=float), np.asarray(v, dtype=float)])
+        self.plant.get_desired_state_input_port(self.model).FixValue(self.context, target)
+
+    def advance_to(self, t: float) -> None:
+        """Simulate up to time ``t``, s."""
+        self.simulator.AdvanceTo(t)
+
+    def save(self) -> Any:
+        """A copy of the simulation's state (time, positions, velocities)."""
+        return self.root.Clone()
+
+    def restore(self, saved: Any) -> None:
+        """Back to a state :meth:`save` made."""
+        self.root.SetTimeStateAndParametersFrom(saved)
+        self.simulator.Initialize()
+
+    def body_pose(self, name: str) -> RigidTransform:
+        """The pose of the hand's body ``name`` in the world."""
+        return self.plant.EvalBodyPoseInWorld(self.context, self.plant.GetBodyByName(name, self.model))
+
+    def advance(self, seconds: float) -> None:
+        """Simulate ``seconds`` more."""
+        self.simulator.AdvanceTo(self.root.get_time() + seconds)
+
+    def time(self) -> float:
+        """Simulated time, s."""
+        return float(self.root.get_time())
+
+    # --- the object ----------------------------------------------------------------------------
+    def object_pose(self) -> RigidTransform:
+        """The object's pose in the world."""
+        return self.plant.EvalBodyPoseInWorld(self.context, self.body)
+
+    def set_object_wrench(self, force: np.ndarray, torque: np.ndarray) -> None:
+        """An external force (N) at the object's centre and a torque (N·m), world frame."""
+        from pydrake.multibody.math import SpatialForce
+        from pydrake.multibody.plant import ExternallyAppliedSpatialForce
+
+        f = ExternallyAppliedSpatialForce()
+        f.body_index = self.body.index()
+        f.p_BoBq_B = vec((0.0, 0.0, 0.0))
+        f.F_Bq_W = SpatialForce(vec(torque), vec(force))
+        self.plant.get_applied_spatial_force_input_port().FixValue(self.context, [f])
+
+    def object_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
+        """Every contact of the object: (other body index, point (m), unit normal out of the
+        object, normal force (N)), from the plant's contact results."""
+        results = self.plant.get_contact_results_output_port().Eval(self.context)
+        me = self.body.index()
+        out = []
+        for i in range(results.num_point_pair_contacts()):
+            info = results.point_pair_contact_info(i)
+            a, b = info.bodyA_index(), info.bodyB_index()
+            if me not in (a, b):
+                continue
+            normal = np.asarray(info.point_pair().nhat_BA_W)  # from B into A
+            force = np.asarray(info.contact_force())  # on B, world
+            if b == me:  # normal out of the object (B) toward A
+                other, n_out, f_on_obj = a, normal, force
+            else:
+                other, n_out, f_on_obj = b, -normal, -force
+            pushing = float(max(0.0, -f_on_obj @ n_out))
+            out.append((int(other), np.asarray(info.contact_point()), n_out, pushing))
+        return out
+
+    def tip_force(self, finger_body: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
+        """The contact of a fingertip body with the object: (point, normal, force) or None."""
+        best = None
+        for other, point, normal, force in self.object_contacts():
+            if other == int(finger_body.index()) and (best is None or force > best[2]):
+                best = (point, normal, force)
+        return best

@@ -1,0 +1,120 @@
+"""The Drake world: the object rests on the table, a guarded finger touch reports Drake's contact,
+the lift test lifts a grip, and a Drake plan succeeds only when the lift test held."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from eos_svc.agents import PlanRequest, build_world, plan
+from eos_svc.drivers.drake_plant import DrakeHandPlant
+from eos_svc.drivers.drake_world import DrakeDriver
+from eos_svc.drivers.lift_test import GRAVITY, lift_test
+from eos_svc.errors import ValidationError
+from eos_svc.grasp.postulate import make_object
+
+REQUEST = PlanRequest(seed=1)
+
+
+def drake_driver(request: PlanRequest = REQUEST) -> DrakeDriver:
+    return DrakeDriver(build_world(request), request.obj, request.friction)
+
+
+def test_the_object_rests_on_the_table_under_gravity() -> None:
+    driver = drake_driver()
+    plant = driver._plant
+    plant.advance(0.5)
+    assert driver.object_moved() < 2e-4  # it stays where it was put, on the table top
+    table = [f for other, _, normal, f in plant.object_contacts() if other == 0]
+    assert sum(table) == pytest.approx(plant.settings.mass * GRAVITY, rel=0.02)  # it carries the weight
+    lowest = plant.object_pose().translation()[2] - 0.5 * make_object(REQUEST.obj).diameter
+    assert abs(lowest - plant.table_top) < 1e-4
+
+
+def test_a_guarded_finger_touch_reports_a_surface_point_and_a_positive_force() -> None:
+    kinematic = plan(REQUEST)  # a grip the fingers reach from 0.3 rad more open
+    driver = drake_driver()
+    q = np.array(kinematic.q_final)
+    hand = driver.hand
+    for finger in hand.finger_names:
+        q[hand.finger_q_index(finger)] -= 0.3
+    driver.move_joints(q)
+    finger = hand.opposing_finger
+    for _ in range(40):
+        step = driver.close_finger_step(finger, 0.02)
+        if step.event != "moved":
+            break
+    assert step.event == "touched" and step.touch is not None
+    touch = step.touch
+    assert touch.force > 0.0
+    centre = driver._plant.object_pose().translation()
+    radius = REQUEST.obj.size["radius"]
+    assert abs(np.linalg.norm(touch.point - centre) - radius) < 1e-3  # on the sphere's surface
+    assert float(np.dot(touch.normal, (touch.point - centre) / radius)) > 0.99  # outward
+
+
+def test_the_lift_test_lifts_a_kinematic_grip_ten_centimetres_and_it_holds_under_the_weight() -> None:
+    result = plan(REQUEST)
+    hand = build_world(REQUEST).hand
+    obj = make_object(REQUEST.obj)
+    plant = DrakeHandPlant(hand, REQUEST.obj, obj, REQUEST.friction)
+    plant.set_hand_q(np.array(result.q_final))
+    plant.simulator.Initialize()
+    lift = lift_test(plant, hand, hand.wrist_q_index[:3], 0.5 * obj.diameter)
+    assert lift["rise_m"] > 0.09  # the object went up with the hand
+    assert lift["lift_drift_m"] < 0.01
+    forces = {k: v for k, v in lift["load_displacement_m"].items() if not k.startswith("torque")}
+    assert len(forces) == 6 and max(forces.values()) < 0.01
+
+
+def test_an_unknown_world_is_refused_naming_the_field() -> None:
+    with pytest.raises(ValidationError) as err:
+        plan(REQUEST, world="mujoco")
+    assert err.value.field == "world"
+
+
+@pytest.mark.slow
+def test_a_drake_plan_succeeds_only_when_the_lift_test_held() -> None:
+    result = plan(PlanRequest(seed=1, deadline_s=600), world="drake")
+    assert result.world is not None and result.world["name"] == "drake"
+    lift = result.world["lift"]
+    assert (result.status == "success") == bool(lift is not None and lift["held"])
+    assert result.world["simulated_s"] > 0 and result.world["object_moved_mm"] >= 0.0
+    assert result.world["moved_past_relocation_limit"] == (result.world["object_moved_mm"] > 2.0)
+
+
+def test_the_request_carries_its_world_and_the_kinematic_form_is_unchanged() -> None:
+    assert PlanRequest.from_dict({"world": "drake"}).world == "drake"
+    assert "world" not in PlanRequest().to_dict()  # the kinematic world's JSON form as before
+    assert PlanRequest(world="drake").to_dict()["world"] == "drake"
+    with pytest.raises(ValidationError) as err:
+        PlanRequest.from_dict({"world": "mujoco"})
+    assert err.value.field == "world"
+
+
+def test_a_drake_plan_records_the_object_pose_and_the_view_moves_the_object() -> None:
+    from pydrake.geometry import MeshcatAnimation
+
+    from eos_svc.schema import keys
+    from eos_svc.view.replay_html import _animate_object, plan_scene
+
+    request = PlanRequest(seed=1, max_cycles=3, world="drake", deadline_s=600)
+    result = plan(request)
+    records = [r.to_dict() for r in result.trace]
+    poses = [c["new"] for r in records for c in r["changes"] if c["key"] == keys.OBJECT_POSE]
+    assert poses and all(len(p) == 7 for p in poses)
+    assert abs(poses[-1][2] - request.obj.position[2]) < 1e-3  # still resting on the table
+    scene = plan_scene(request, records, result.to_dict())
+    assert scene.timeline.frames > 0
+    assert _animate_object(MeshcatAnimation(scene.timeline.fps), scene.timeline, records) == len(poses)
+    kinematic = plan(PlanRequest(seed=1, max_cycles=3))
+    assert not any(c.key == keys.OBJECT_POSE for r in kinematic.trace for c in r.changes)
+
+
+def test_a_drake_plan_replays_cycle_for_cycle(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from eos_svc.cli import main
+
+    record = tmp_path / "drake.jsonl"
+    base = ["plan", "--world", "drake", "--max-cycles", "7", "--quiet", "--record", str(record)]
+    assert main(base) == 1  # 7 cycles cannot grasp: a cycle limit, exit 1
+    assert main(["replay", "--quiet", str(record)]) == 0  # deterministic: the same cycles and result
