@@ -12,7 +12,7 @@ A planner then adds it to a plan::
 By default it serves post_shape (the planner's own shape postulator) under the name
 ``remote_post_shape`` with the default sub-rating 0.75 (above the local post_shape's 0.7, so it is
 chosen while it answers, and the local one carries on when it does not). ``--agent`` names any
-plug-in factory (``module:attr``, called with a world of the default hand and the default
+plug-in factory (``module:attr``, called with the kinematic driver of the default hand and the default
 request's tactile noise; the agent acts on the board entries it is sent, never on the
 planner's hand). ``main(conf, ...)`` does the work; the argument parsing below is apart
 (zenoh-python examples style).
@@ -47,12 +47,15 @@ def main(
     namespace: str | None = None,
     duration_s: float | None = None,
 ) -> int:
-    """Serve ``factory(world)`` as ``name`` until SIGINT/SIGTERM (or ``duration_s``)."""
+    """Serve ``factory(driver)`` (the default scene's kinematic driver) as ``name`` until
+    SIGINT/SIGTERM (or ``duration_s``)."""
     from eos_svc.agents.planner import build_world
+    from eos_svc.drivers.kinematic import KinematicDriver
     from eos_svc.remote_agents import AgentServer
     from eos_svc.schema.request import PlanRequest
 
-    agent = factory(build_world(PlanRequest()))
+    # agents act through a hand driver, never on the world itself (docs/drivers.md)
+    agent = factory(KinematicDriver(build_world(PlanRequest())))
     stop = threading.Event()
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda *_: stop.set())
