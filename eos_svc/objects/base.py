@@ -121,6 +121,22 @@ def distinct_units(vectors: list[Array | None], signed: bool) -> list[Array]:
     return out
 
 
+def across_axis_units(rotation: Array) -> list[Array]:
+    """Distinct closing directions across a solid of revolution's axis (its rotation's third
+    column): its frame's x and y, and the parts across the axis of world z and y."""
+    axis = rotation[:, 2]
+    world_y, world_z = np.array([0.0, 1.0, 0.0]), np.array([0.0, 0.0, 1.0])
+    return distinct_units(
+        [
+            rotation[:, 0],
+            rotation[:, 1],
+            perpendicular_unit(world_z, axis),
+            perpendicular_unit(world_y, axis),
+        ],
+        signed=False,
+    )
+
+
 class SurfaceObject(ABC):
     """A rigid convex object: a primitive shape at ``placement`` (world ← object)."""
 

@@ -14,7 +14,7 @@ import pinocchio as pin
 from eos_svc.objects.base import (
     Array,
     SurfaceObject,
-    distinct_units,
+    across_axis_units,
     norm,
     perpendicular_unit,
     positive,
@@ -22,8 +22,6 @@ from eos_svc.objects.base import (
 )
 
 _X = np.array([1.0, 0.0, 0.0])
-_Y = np.array([0.0, 1.0, 0.0])
-_Z = np.array([0.0, 0.0, 1.0])
 
 
 class Capsule(SurfaceObject):
@@ -105,17 +103,9 @@ class Capsule(SurfaceObject):
         return 2.0 * self.radius, "radius"
 
     def closing_axes(self) -> list[tuple[str, Array]]:
-        """Across the axis (its normals, the vertical's and the hand's y's parts across it), and
-        along it when the object is no longer than wide (on the end faces)."""
-        A = self.rotation
-        axis = A[:, 2]
-        across = distinct_units(
-            [A[:, 0], A[:, 1], perpendicular_unit(_Z, axis), perpendicular_unit(_Y, axis)], signed=False
-        )
-        axes = [("across the axis", g) for g in across]
-        if self.length + 2.0 * self.radius <= 2.0 * self.radius:
-            axes.append(("along the axis", axis))
-        return axes
+        """Across the axis (its normals, the vertical's and the hand's y's parts across it); never
+        along it: a capsule is always longer than wide."""
+        return [("across the axis", g) for g in across_axis_units(self.rotation)]
 
     def approach_options(self, closing: Array) -> list[Array | None]:
         """The object's axes, and the direction across both the grip and the axis."""

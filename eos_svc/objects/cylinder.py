@@ -16,14 +16,12 @@ from eos_svc.objects.base import (
     Array,
     CurvatureUndefinedError,
     SurfaceObject,
-    distinct_units,
+    across_axis_units,
     perpendicular_unit,
     positive,
 )
 
 _X = np.array([1.0, 0.0, 0.0])
-_Y = np.array([0.0, 1.0, 0.0])
-_Z = np.array([0.0, 0.0, 1.0])
 
 
 class Cylinder(SurfaceObject):
@@ -126,12 +124,8 @@ class Cylinder(SurfaceObject):
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across the axis (its normals, the vertical's and the hand's y's parts across it), and
         along it when the object is no longer than wide (on the end faces)."""
-        A = self.rotation
-        axis = A[:, 2]
-        across = distinct_units(
-            [A[:, 0], A[:, 1], perpendicular_unit(_Z, axis), perpendicular_unit(_Y, axis)], signed=False
-        )
-        axes = [("across the axis", g) for g in across]
+        axis = self.rotation[:, 2]
+        axes = [("across the axis", g) for g in across_axis_units(self.rotation)]
         if self.length <= 2.0 * self.radius:
             axes.append(("along the axis", axis))
         return axes
