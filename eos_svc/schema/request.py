@@ -286,6 +286,20 @@ class ObjectSpec:
         return out
 
 
+#: the request's fields taken from the JSON form as they are (checked by ``PlanRequest``)
+_PLAIN_FIELDS = (
+    "seed",
+    "tactile_noise",
+    "max_cycles",
+    "deadline_s",
+    "friction",
+    "encoder_noise",
+    "link_error",
+    "agents",
+    "hand",
+    "world",
+)
+
 #: a hand name a request may give (the registered hands' names are of this form)
 _HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 
@@ -410,46 +424,19 @@ class PlanRequest:
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
             data,
-            {
-                "object",
-                "weights",
-                "seed",
-                "tactile_noise",
-                "max_cycles",
-                "deadline_s",
-                "friction",
-                "encoder_noise",
-                "link_error",
-                "agents",
-                "hand",
-                "table",
-                "world",
-            },
+            {"object", "weights", "table", *_PLAIN_FIELDS},
             "",
         )
-        if data.get("table") is not None:
-            kwargs_table = Table.from_dict(data["table"])
         kwargs: dict[str, Any] = {}
+        if data.get("table") is not None:
+            kwargs["table"] = Table.from_dict(data["table"])
         if "object" in data:
             kwargs["obj"] = ObjectSpec.from_dict(data["object"])
         if "weights" in data:
             kwargs["weights"] = Weights.from_dict(data["weights"])
-        for key in (
-            "seed",
-            "tactile_noise",
-            "max_cycles",
-            "deadline_s",
-            "friction",
-            "encoder_noise",
-            "link_error",
-            "agents",
-            "hand",
-            "world",
-        ):
+        for key in _PLAIN_FIELDS:
             if key in data:
                 kwargs[key] = data[key]
-        if data.get("table") is not None:
-            kwargs["table"] = kwargs_table
         return cls(**kwargs)
 
     def to_dict(self) -> dict[str, Any]:
