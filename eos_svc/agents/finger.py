@@ -82,7 +82,7 @@ class FingerAgent(GraspAgent):
         if it closes from where it is now; None when it would not land on it at all.
 
         Memoised: per target and wrist pose, the gaps of the whole sweep to the object (they
-        change only when the wrist moves, :class:`~eos_svc.agents.synthesis.SweepLandings`),
+        change only when the wrist moves, :class:`~eos_svc.grasp.landing.SweepLandings`),
         then per first touching sample the landing's distance to the chosen contact."""
         found = self._landings(board)
         if found is None:

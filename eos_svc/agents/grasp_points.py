@@ -1,9 +1,9 @@
 """grasp_points: chooses the grasp on the postulated object and places the hand before it.
 
-Grasp synthesis (:mod:`eos_svc.agents.synthesis`; Miller, Knoop, Christensen, Allen, ICRA
+Grasp synthesis (:mod:`eos_svc.grasp.synthesis`; Miller, Knoop, Christensen, Allen, ICRA
 2003): from post_shape's postulate — its class, size and pose (``object``), or, for an older
 postulate without it, an upright object of its class sized by the vertical half-extent
-(:mod:`eos_svc.agents.postulate`) — candidate grasps per primitive (approach direction and
+(:mod:`eos_svc.grasp.postulate`) — candidate grasps per primitive (approach direction and
 the hand's roll about it, using the whole wrist; contacts across the centre of mass) are
 simulated on the postulated object, kept when every fingertip lands from a collision-free
 pre-grasp, and scored by Ferrari–Canny ε; the best is chosen. The action turns the wrist to

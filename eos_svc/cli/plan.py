@@ -297,7 +297,7 @@ def format_result(result: Any) -> str:
 
 def admit(request: Any, hand: Any) -> None:
     """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
-    overlapping the hand, wider than its span (:func:`eos_svc.agents.admission.check_plannable`)."""
+    overlapping the hand, wider than its span (:func:`eos_svc.world.admission.check_plannable`)."""
     from eos_svc.world.admission import check_plannable
 
     try:

@@ -85,7 +85,7 @@ def has_prismatic_joint(hand: HandModel, finger: str) -> bool:
 def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:
     """How far ahead of the wrist the hand reaches (m): the largest x of any fingertip centre
     over its closing path, plus its radius (0.14 m for hand3x3). The search's findability rule
-    (:func:`eos_svc.agents.coverage.findable`) needs it."""
+    (:func:`eos_svc.world.coverage.findable`) needs it."""
     return max(float(s.points[:, 0].max()) + hand.tip_radius(f) for f, s in sweeps.items())
 
 

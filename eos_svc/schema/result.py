@@ -55,7 +55,7 @@ class PlanResult:
         force_closure: the touching contacts are in force closure (Coulomb, μ = ``friction``),
             as the end agent found (or, when it never acted, measured on the final contacts).
         epsilon: Ferrari–Canny ε of the touching contacts (0 without force closure); see
-            :mod:`eos_svc.agents.quality` (torques about the object's centre / its half diameter).
+            :mod:`eos_svc.grasp.quality` (torques about the object's centre / its half diameter).
         friction: the Coulomb coefficient μ used.
         quality: the full quality record (cone edges, torque scale, rank, …).
         q_final: the hand configuration the end agent judged (None when it never acted or

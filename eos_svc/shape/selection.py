@@ -235,7 +235,7 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
 def screen(
     touches: Touches, classes: tuple[str, ...], class_starts: ClassStarts | None = None
 ) -> dict[str, ClassFit]:
-    """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.ranked_starts`)
+    """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.nearest_order`)
     for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²).
     ``class_starts``: the touches' starts, if already at hand."""
     shared = ClassStarts(touches) if class_starts is None else class_starts

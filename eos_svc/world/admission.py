@@ -219,7 +219,7 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
 
 
 def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
-    """The object's coal shape and placement (as :func:`eos_svc.agents.postulate.make_object` builds)."""
+    """The object's coal shape and placement (as :func:`eos_svc.grasp.postulate.make_object` builds)."""
     obj = make_object(spec)
     return obj.geometry, coal.Transform3s(
         np.array(obj.placement.rotation), np.array(obj.placement.translation)

@@ -2,7 +2,7 @@
 
 A *plug-in* is one of:
 
-- a factory: a callable taking the plan's :class:`~eos_svc.world.world.HandDriver` and
+- a factory: a callable taking the plan's :class:`~eos_svc.drivers.protocol.HandDriver` and
   returning an :class:`~eos_svc.agent.Agent` (an ``Agent`` subclass whose constructor takes the
   world is one) — called once per plan;
 - an ``Agent`` instance, used as it is (an agent bound to no world, e.g. a
