@@ -7,7 +7,7 @@ import json
 
 import numpy as np
 
-from eos_svc.experiments import grasps
+from eos_svc.experiments import grasps, grasps_report
 from eos_svc.experiments.grasp_suite import fixed_suite, held_back_suite, quick_suite, random_draw
 
 
@@ -48,7 +48,7 @@ def test_tiny_suite_end_to_end(tmp_path):
     assert sphere["status"] == "success" and sphere["good_grasp"] and sphere["held"], sphere
     with (tmp_path / "grasps_runs.csv").open() as f:
         assert [r["object"] for r in csv.DictReader(f)] == [o.label for o in objects]
-    assert "confusion" in grasps.report(data)
+    assert "confusion" in grasps_report.report(data)
 
 
 def test_random_draw_is_seeded_and_within_its_ranges():
@@ -140,4 +140,4 @@ def test_random_draw_counts_the_fit_rule(tmp_path):
     ]
     assert too_large  # objects this large mostly do not fit
     assert data["totals"]["refused_by_reason"]["too large"] == len(too_large)
-    assert data["totals"]["good_goal"] == grasps.GOOD_GOAL
+    assert data["totals"]["good_goal"] == grasps_report.GOOD_GOAL
