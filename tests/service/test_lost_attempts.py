@@ -6,7 +6,6 @@ cycle stream."""
 from __future__ import annotations
 
 import threading
-import time
 from typing import Any
 
 import pytest
@@ -14,6 +13,7 @@ import zenoh
 
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import ServiceUnavailableError, loopback, make_config
+from eos_svc.service import client as client_module
 from eos_svc.service import protocol as proto
 from eos_svc.service.demo_planner import root_plan
 from tests.service.waiting import wait_until
@@ -30,6 +30,20 @@ def _held_planner(release: threading.Event, started: threading.Event) -> Any:
         return root_plan(request, **kwargs)
 
     return plan
+
+
+def _asked(monkeypatch: pytest.MonkeyPatch) -> list[str]:
+    """The instances the client's attempts query, in order: a spy on the real
+    :class:`~eos_svc.service.plan_attempt.Attempt` (each query is still sent)."""
+    asked: list[str] = []
+    real = client_module.Attempt
+
+    def spy(session: Any, prefix: str, iid: str, *rest: Any) -> Any:
+        asked.append(iid)
+        return real(session, prefix, iid, *rest)
+
+    monkeypatch.setattr(client_module, "Attempt", spy)
+    return asked
 
 
 def _settled(client: Any) -> bool:
@@ -53,11 +67,11 @@ def test_a_withdrawn_token_loses_the_attempt_and_another_instance_plans(port, se
     )
     t.start()
     try:
-        assert started.wait(10), "the plan did not reach the stuck instance"
+        assert started.wait(60), "the plan did not reach the stuck instance"
         token = stuck._entities[-1]  # its liveliness token, declared last
         assert type(token).__name__ == "LivelinessToken"
         token.undeclare()
-        t.join(15)
+        t.join(60)  # returns as soon as the plan is done: long only on a loaded machine
         assert not t.is_alive(), "the client did not give up on the stuck instance"
     finally:
         release.set()
@@ -67,7 +81,7 @@ def test_a_withdrawn_token_loses_the_attempt_and_another_instance_plans(port, se
 
 
 @pytest.mark.parametrize("watch", [False, True])
-def test_an_instance_that_times_out_is_not_asked_again(port, services, clients, watch):
+def test_an_instance_that_times_out_is_not_asked_again(port, services, clients, watch, monkeypatch):
     """Zenoh's own ``Timeout`` reply loses the attempt (never an ``internal_error``), and the
     instance, which may still hold the goal, is not asked again by this call (it would refuse
     the goal id as a duplicate): with one instance, the default three attempts end in
@@ -75,27 +89,32 @@ def test_an_instance_that_times_out_is_not_asked_again(port, services, clients, 
     release, started = threading.Event(), threading.Event()
     svc = services(port, planner=_held_planner(release, started))
     client = clients(port)
-    client.wait_for_instances(1)
-    t0 = time.monotonic()
+    (iid,) = client.wait_for_instances(1)
+    asked = _asked(monkeypatch)
     try:
         with pytest.raises(ServiceUnavailableError, match="no reply within the query's timeout"):
             client.plan(ONE, watch=watch, timeout=0.5)
+        assert asked == [iid]  # one query of the three attempts allowed, no more
+        # the query reaches the instance (late, on a loaded machine): counted once, never refused
+        assert started.wait(30) and wait_until(lambda: svc.stats.received == 1, 30)
     finally:
         release.set()
-    assert time.monotonic() - t0 < 3.0  # one query (0.5 s) and one discovery (0.5 s), no more
-    assert svc.stats.received == 1 and svc.stats.replied_err == 0  # asked once, never refused
+    assert svc.stats.received == 1 and svc.stats.replied_err == 0
     assert _settled(client)
 
 
-def test_every_instance_timed_out_is_tried_once(port, services, clients):
+def test_every_instance_timed_out_is_tried_once(port, services, clients, monkeypatch):
     release = threading.Event()
     a = services(port, planner=_held_planner(release, threading.Event()), instance="a")
     b = services(None, (port,), planner=_held_planner(release, threading.Event()), instance="b")
     client = clients(port)
     client.wait_for_instances(2)
+    asked = _asked(monkeypatch)
     try:
         with pytest.raises(ServiceUnavailableError, match="no reply within the query's timeout"):
             client.plan(ONE, watch=False, timeout=0.5)
+        assert sorted(asked) == ["a", "b"]  # each once, then no attempt left to anyone
+        assert wait_until(lambda: (a.stats.received, b.stats.received) == (1, 1), 30)
     finally:
         release.set()
     assert (a.stats.received, b.stats.received) == (1, 1)
