@@ -578,13 +578,14 @@ class _Proxy:
 
 def probe_server(port: int, out: str) -> None:
     """``--probe-server``: a one-worker grasp service with timestamps on every step."""
+    from eos_svc.service import goal_stream
     from eos_svc.service import protocol as proto
     from eos_svc.service import server as srv
     from eos_svc.service.goal_watchers import GoalWatchers
 
     sys.setswitchinterval(0.001)  # as eos serve
     _timed(proto, "decode_envelope", "decode0", "decode1")
-    _timed(srv, "encode_result", "json0", "json1")
+    _timed(goal_stream, "encode_result", "json0", "json1")  # the done message (the reply)
     _timed(GoalWatchers, "watched", "watch0", "watch1")
 
     from eos_svc.schema.result import PlanResult

@@ -38,7 +38,7 @@ from eos_svc.service.plan_attempt import (
     PlanOutcome,
 )
 from eos_svc.service.session import direct_callback
-from eos_svc.service.wire_json import loads_strict
+from eos_svc.service.wire_json import loads_message
 
 #: tries with a fresh goal id when the service refuses the one drawn as a duplicate
 _DUPLICATE_RETRIES = 3
@@ -251,7 +251,7 @@ class EosClient:
         for reply in self._cancel_query(goal_id, proto.encode_cancel(cancel_token), timeout):
             if reply.ok is not None:
                 try:
-                    found = found or bool(loads_strict(reply.ok.payload.to_bytes()).get("found"))
+                    found = found or bool(loads_message(reply.ok.payload.to_bytes()).get("found"))
                 except (ValueError, AttributeError):
                     continue
             elif reply.err is not None:
@@ -294,7 +294,7 @@ class EosClient:
 
         def on_sample(sample: zenoh.Sample) -> None:
             try:
-                msg = loads_strict(sample.payload.to_bytes())
+                msg = loads_message(sample.payload.to_bytes())
             except (ValueError, RecursionError):
                 return
             kind = "cycle" if str(sample.key_expr).endswith("/cycle") else "status"
@@ -320,7 +320,7 @@ class EosClient:
         for reply in self._cancel_query(f"sync-{secrets.token_hex(8)}", None, timeout):
             if reply.ok is not None:
                 try:
-                    answered.add(str(loads_strict(reply.ok.payload.to_bytes())["instance"]))
+                    answered.add(str(loads_message(reply.ok.payload.to_bytes())["instance"]))
                 except (ValueError, KeyError, TypeError):
                     continue
         return sorted(answered)

@@ -23,7 +23,7 @@ from eos_svc.errors import EosError
 from eos_svc.service import protocol as proto
 from eos_svc.service.instances import LiveInstances
 from eos_svc.service.session import direct_callback
-from eos_svc.service.wire_json import loads_strict
+from eos_svc.service.wire_json import loads_message
 
 _JSON = zenoh.Encoding.APPLICATION_JSON
 NO_CONSOLIDATION = zenoh.ConsolidationMode.NONE
@@ -107,7 +107,7 @@ class _Stream:
     def accept(self, payload: bytes) -> dict[str, Any] | None:
         """Parse a cycle or status message of this attempt's instance; record a cycle. None: not ours."""
         try:
-            msg = loads_strict(payload)
+            msg = loads_message(payload)
         except (ValueError, RecursionError):
             return None
         if not isinstance(msg, dict) or msg.get("instance") != self.iid:
@@ -212,7 +212,7 @@ class Attempt:
             elif kind == "reply":
                 ok = item.ok  # read once: every read makes a new Sample object in Zenoh's binding
                 if ok is not None:
-                    return self._outcome(loads_strict(ok.payload.to_bytes()), stream)
+                    return self._outcome(loads_message(ok.payload.to_bytes()), stream)
                 if _zenoh_timeout(item.err):  # Zenoh's, not the instance's: it never answered
                     raise NoReplyInTimeError(f"no reply within the query's timeout ({self.timeout:g} s)")
                 raise proto.error_from_payload(item.err.payload.to_bytes())

@@ -1,11 +1,14 @@
 """Strict JSON of the service's wire: one reader, two writers.
 
-Everything on the wire is UTF-8 JSON (RFC 8259), read strictly by :func:`loads_strict`: UTF-8
-only (a leading UTF-8 byte-order mark is ignored; UTF-16/32 and invalid bytes such as encoded
-surrogates are refused), no NaN/Infinity, no duplicate keys in an object, no integer beyond
-±2**64 (refused naming its field; such literals are never converted). Written by :func:`dumps`
-(the stdlib's strict encoder: messages the service builds itself) or :func:`encode_result`
-(msgspec: a plan result or cycle record, non-finite floats as ``null``).
+Everything on the wire is UTF-8 JSON (RFC 8259). What anyone may send the service (a plan or
+cancel request, a request file) is read strictly by :func:`loads_strict`: UTF-8 only (a leading
+UTF-8 byte-order mark is ignored; UTF-16/32 and invalid bytes such as encoded surrogates are
+refused), no NaN/Infinity, no duplicate keys in an object, no integer beyond ±2**64 (refused
+naming its field; such literals are never converted). What the service writes (replies, cycles,
+status) a client reads with :func:`loads_message` (msgspec: strict UTF-8, no NaN/Infinity; a
+repeated key keeps its last value). Written by :func:`dumps` (the stdlib's strict encoder:
+messages the service builds itself) or :func:`encode_result` (msgspec: a plan result or cycle
+record, non-finite floats as ``null``).
 
 This module is pure (no Zenoh import).
 """
@@ -124,6 +127,12 @@ def loads_strict(data: bytes | bytearray | str) -> Any:
     value = parse(data)
     check_integers(value, data)
     return value
+
+
+def loads_message(data: bytes) -> Any:
+    """Parse a message the service wrote (a reply, a cycle, a status) — msgspec, in C: strict
+    UTF-8, no NaN/Infinity, no trailing data. Raises ``ValueError`` (``msgspec.DecodeError``)."""
+    return msgspec.json.decode(data)
 
 
 def dumps(obj: Any) -> bytes:
