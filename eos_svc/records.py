@@ -176,10 +176,6 @@ class RunResult:
         return out
 
 
-#: exact types ``to_jsonable`` returns unchanged
-_PLAIN: frozenset[type] = frozenset({str, int, bool, type(None)})
-
-
 def to_jsonable(value: Any) -> Any:
     """Convert a board value to something ``json.dumps`` accepts.
 
@@ -187,20 +183,6 @@ def to_jsonable(value: Any) -> Any:
     with ``tolist()``, e.g. NumPy arrays) without importing NumPy. Non-finite
     floats become ``None`` so the output stays strict JSON.
     """
-    # Fast paths for the exact built-in types (most of a record or result): same output as the
-    # general chain below, without its isinstance/hasattr tests on every node.
-    t = type(value)
-    if t is float:
-        return value if math.isfinite(value) else None
-    if t in _PLAIN:
-        return value
-    if t is dict:
-        return {
-            (k if type(k) is str else str(k)): (v if type(v) in _PLAIN else to_jsonable(v))
-            for k, v in value.items()
-        }
-    if t is list or t is tuple:
-        return [v if type(v) in _PLAIN else to_jsonable(v) for v in value]
     if value is None or isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, float):
