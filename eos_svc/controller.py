@@ -197,7 +197,6 @@ class Controller:
         stages = self.stages
         max_cycles = self.max_cycles
         clock = time.monotonic
-        new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__
         tables = self._stage_tables(board)
         log = _CycleLog(self.callbacks, self.keep_trace, clock)
         emit = log.emit
@@ -217,7 +216,7 @@ class Controller:
                 return log.result(*self._limit_end(cancel, seq, stage), seq, per_stage, completed, stage)
             seq += 1
             per_stage[stage] += 1
-            ctx = new_tuple(CycleContext, (seq, stage, stage_cycle, events, last_agent, acted))
+            ctx = CycleContext(seq, stage, stage_cycle, events, last_agent, acted)
 
             # --- rate ---------------------------------------------------------
             rows: list[AgentRating] = []
@@ -256,9 +255,7 @@ class Controller:
                         log.unavailable(name, seq, why)
                         now = clock()
                         latency, started = now - started, now
-                        rows.append(
-                            new_tuple(AgentRating, (name, default, 0.0, 0.0, 0.0, False, where, latency, why))
-                        )
+                        rows.append(AgentRating(name, default, 0.0, 0.0, 0.0, False, where, latency, why))
                         continue
                     variable = opp * wo + learned * wl
                     total = weighted_default + variable
@@ -267,10 +264,7 @@ class Controller:
                     latency, started = now - started, now
                     skipped = None if eligible else REPEAT_SKIP
                     rows.append(
-                        new_tuple(
-                            AgentRating,
-                            (name, default, opp, learned, total, eligible, where, latency, skipped),
-                        )
+                        AgentRating(name, default, opp, learned, total, eligible, where, latency, skipped)
                     )
                     if eligible and total > best_total:
                         best = agent
@@ -292,7 +286,7 @@ class Controller:
             board.begin_cycle()
             try:
                 result = best.act(best_view, ctx)
-                if result.__class__ is not ActionResult and not isinstance(result, ActionResult):
+                if not isinstance(result, ActionResult):
                     raise ContractError(
                         f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
                     )
@@ -439,7 +433,7 @@ class _CycleLog:
 
     def emit(self, fields: tuple) -> str | None:
         """Record a cycle; returns an error text if a callback raised."""
-        record = _new_tuple(CycleRecord, (*fields, self.clock() - self.t0))
+        record = CycleRecord(*fields, self.clock() - self.t0)
         if self.keep:
             self.trace.append(record)
         for callback in self.callbacks:
@@ -471,6 +465,3 @@ class _CycleLog:
             trace=tuple(self.trace),
             wall_time_s=self.clock() - self.t0,
         )
-
-
-_new_tuple = tuple.__new__  # builds named tuples without their Python-level __new__

@@ -91,9 +91,6 @@ def _vector3(value: object, name: str) -> tuple[float, float, float]:
         raise ValidationError(name, f"must be a list of 3 numbers, got {type(value).__name__}")
     if len(value) != 3:
         raise ValidationError(name, f"must have 3 numbers, got {len(value)}")
-    x, y, z = value
-    if type(x) is float and type(y) is float and type(z) is float and math.isfinite(x + y + z):
-        return (x, y, z)  # the common case, without building three field names
     x, y, z = (_number(v, f"{name}[{i}]") for i, v in enumerate(value))
     return (x, y, z)
 
