@@ -119,6 +119,10 @@ class RollingQP:
         #: the active joints' indices in q and q̇ (the same: every joint is 1-DoF)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
+        # the active columns of the Jacobian: a slice (a view) when they are contiguous
+        first = int(self.active[0])
+        contiguous = np.array_equal(self.active, np.arange(first, first + self.nx))
+        self._columns: slice | np.ndarray = slice(first, first + self.nx) if contiguous else self.active
         self.box = JointBox(
             hand.lower[self.active], hand.upper[self.active], hand.velocity_limit[self.active]
         )
@@ -181,9 +185,9 @@ class RollingQP:
         views), its Jacobian over the active joints and ``J̇ q̇`` (LOCAL_WORLD_ALIGNED)."""
         model, data = self.hand.model, self._data
         pin.forwardKinematics(model, data, self._q, self._qdot, self._zero)
-        pin.updateFramePlacement(model, data, self._fid)
         pin.computeJointJacobians(model, data)
-        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA).take(self.active, axis=1)
+        # getFrameJacobian also places the tip frame (data.oMf[fid], the live views)
+        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA)[:, self._columns]
         drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
         return jacobian, drift
 
@@ -224,7 +228,7 @@ class RollingQP:
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
         self._qdot[self.active] = x
         self._q += self._qdot * self.dt  # the other joints' q̇ is 0
-        e0, e1, e2, e3, e4, e5 = (qp.A @ x - qp.b).tolist()
+        e0, e1, e2, e3, e4, e5 = (qp.A.dot(x) - qp.b).tolist()
         return RollingStep(
             contact,
             reading,
