@@ -27,7 +27,7 @@ import numpy as np
 from eos_svc.grasp.candidate import GraspCandidate, diameter_angle_deg
 from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
-from eos_svc.grasp.landing import Landing, landing
+from eos_svc.grasp.landing import hand_landings
 from eos_svc.grasp.quality import grasp_quality
 from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel
@@ -83,6 +83,7 @@ class GraspSynthesis:
         self.friction = friction
         self.vertical_only = vertical_only
         self.opposing = hand.description.opposing_finger
+        self.tip_radii = {f: hand.tip_radius(f) for f in hand.finger_names}
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
 
@@ -204,13 +205,11 @@ class GraspSynthesis:
         if np.any(wrist < self.hand.lower[widx]) or np.any(wrist > self.hand.upper[widx]):
             self._reject("wrist position out of its limits")
             return None
-        landings: dict[str, Landing] = {}
-        for finger in self.hand.finger_names:
-            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
-            if hit is None:
-                self._reject("a fingertip misses the object")
-                return None
-            landings[finger] = hit
+        found = hand_landings(self.obj, self.sweeps, self.tip_radii, R, wrist)
+        landings = {f: hit for f, hit in found.items() if hit is not None}
+        if len(landings) < len(found):
+            self._reject("a fingertip misses the object")
+            return None
         others = [hit.point for f, hit in landings.items() if f != self.opposing]
         angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
         return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
