@@ -15,11 +15,11 @@ from eos_svc.agents.planner import build_world, default_hand, parameters_for, ra
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.grasp.candidate import diameter_angle_deg
-from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.frames import candidate_frames, frame, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
-from eos_svc.grasp.synthesis import GraspSynthesis
+from eos_svc.grasp.synthesis import EPSILON_TIE, SCORED, GraspSynthesis
 
 HERE = (0.21, 0.02, -0.015)
 
@@ -275,6 +275,34 @@ def test_every_candidate_is_reached_collision_free(spec):
         assert min(gaps(check.configuration(c.wrist_rpy, c.wrist, landed), skip_tips=True)) >= 0.0
     top = max(c.epsilon for c in cands)
     assert cands[0].epsilon >= 0.95 * top
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("sphere", {"radius": 0.03}, HERE),
+        ObjectSpec("ellipsoid", {"radii": (0.03, 0.045, 0.022)}, HERE, (0.2, -0.4, 0.6)),
+        ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, HERE),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.0, 0.0, 0.8)),
+    ],
+    ids=lambda spec: spec.shape,
+)
+def test_candidates_are_the_choice_among_every_orientation_simulated(spec):
+    # candidates() stops simulating after the least-rotated collision-free candidates; the
+    # choice made here from every orientation simulated first is the same, in the same order
+    lazy = synthesis(spec).candidates()
+    s = synthesis(spec)
+    simulated = [c for label, R in candidate_frames(s.obj) if (c := s._at_best_depth(label, R)) is not None]
+    about = sorted((c for c in simulated if c.about_centre), key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+    kept = []
+    for c in about:
+        if s._collision_free(c):
+            kept.append(s._scored(c))
+            if len(kept) == (1 if spec.shape == "sphere" else SCORED):
+                break
+    top = max(c.epsilon for c in kept)
+    kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+    assert [(c.label, c.depth, c.epsilon) for c in lazy] == [(c.label, c.depth, c.epsilon) for c in kept]
 
 
 def test_object_larger_than_the_hand_in_every_direction_fails_naming_its_size():
