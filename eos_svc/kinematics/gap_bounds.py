@@ -75,7 +75,8 @@ def ball_gap_lower_bounds(
         else:
             lx, ly, lz = p.dot(R).tolist()  # Rᵀ p: in the geometry's frame
             if kind == BOX:  # half sides a
-                lower = math.hypot(max(abs(lx) - a[0], 0.0), max(abs(ly) - a[1], 0.0), max(abs(lz) - a[2], 0.0))
+                ax, ay, az = a
+                lower = math.hypot(max(abs(lx) - ax, 0.0), max(abs(ly) - ay, 0.0), max(abs(lz) - az, 0.0))
             else:  # SEGMENT: radius a about the local z segment of half length b
                 lower = math.hypot(lx, ly, max(abs(lz) - b, 0.0)) - a
             if lower <= obj_radius:

@@ -293,7 +293,8 @@ def test_candidates_are_the_choice_among_every_orientation_simulated(spec):
     lazy = synthesis(spec).candidates()
     s = synthesis(spec)
     simulated = [c for label, R in candidate_frames(s.obj) if (c := s._at_best_depth(label, R)) is not None]
-    about = sorted((c for c in simulated if c.about_centre), key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+    about = [c for c in simulated if c.about_centre]
+    about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
     kept = []
     for c in about:
         if s._collision_free(c):
