@@ -123,15 +123,18 @@ class RollingQP:
         self.nx = len(self.active)
         # the active columns of the Jacobian: a slice (a view) when they are contiguous
         first = int(self.active[0])
-        contiguous = np.array_equal(self.active, np.arange(first, first + self.nx))
+        contiguous = self.active.tolist() == list(range(first, first + self.nx))
         self._columns: slice | np.ndarray = slice(first, first + self.nx) if contiguous else self.active
         self.box = JointBox(
             hand.lower[self.active], hand.upper[self.active], hand.velocity_limit[self.active]
         )
-        w = np.ones(self.nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
-        if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
-            raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
-        self.weights = w
+        if weights is None:
+            self.weights = np.ones(self.nx)
+        else:
+            w = np.asarray(weights, dtype=float).reshape(-1)
+            if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+                raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
+            self.weights = w
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
         # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
