@@ -16,7 +16,7 @@ from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.grasp.candidate import diameter_angle_deg
 from eos_svc.grasp.frames import candidate_frames, frame, rotation_from_rpy, rpy_from_rotation
-from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
+from eos_svc.grasp.landing import SweepLandings, hand_landings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
 from eos_svc.grasp.synthesis import EPSILON_TIE, SCORED, GraspSynthesis
@@ -71,6 +71,33 @@ def test_wrist_angles_outside_the_joint_limits_are_refused():
     s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
     assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 1.0)) == pytest.approx((0.3, 0.2, 1.0), abs=1e-12)
     assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 2.0)) is None  # yaw beyond π/2
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("ellipsoid", {"radii": (0.04, 0.025, 0.03)}, HERE, (0.4, -0.3, 0.9)),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
+    ],
+    ids=lambda spec: spec.shape,
+)
+def test_the_hands_landings_in_one_query_are_each_fingers_landing(spec):
+    # hand_landings stacks the three sweeps into one distance query: the same landings as
+    # landing() finger by finger (the ellipsoid's Newton batch may iterate once more: 1e-12 m)
+    s = synthesis(spec)
+    R = rotation_from_rpy(0.2, -0.1, 0.3)
+    wrist = np.asarray(HERE) - R[:, 0] * 0.12
+    together = hand_landings(s.obj, s.sweeps, s.tip_radii, R, wrist)
+    assert tuple(together) == tuple(s.hand.finger_names)
+    for f, hit in together.items():
+        alone = landing(s.obj, s.sweeps[f], s.tip_radii[f], R, wrist)
+        assert (hit is None) == (alone is None)
+        if hit is not None:
+            assert hit.index == alone.index
+            assert np.allclose(hit.point, alone.point, atol=1e-12) and hit.angle == pytest.approx(
+                alone.angle, abs=1e-12
+            )
+    assert sum(hit is not None for hit in together.values()) >= 2
 
 
 def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
