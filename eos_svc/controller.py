@@ -433,7 +433,7 @@ class _CycleLog:
 
     def emit(self, fields: tuple) -> str | None:
         """Record a cycle; returns an error text if a callback raised."""
-        record = CycleRecord(*fields, self.clock() - self.t0)
+        record = CycleRecord._make((*fields, self.clock() - self.t0))
         if self.keep:
             self.trace.append(record)
         for callback in self.callbacks:
