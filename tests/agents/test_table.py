@@ -139,3 +139,15 @@ def test_on_a_table_no_candidate_closes_vertically_or_climbs_from_under_it():
     for _, R in frames:
         assert abs(R[2, 2]) <= STEEP and R[2, 0] <= RISING + 1e-12
     assert any(abs(R[2, 2]) > STEEP for _, R in candidate_frames(obj))  # without a table: it does
+
+
+def test_a_short_object_on_a_table_is_located_by_the_rolled_hand():
+    # 25 mm tall: upright, the hand's palm reaches 75 mm below its grasp centre, which then
+    # stays more than the envelope (50 mm) above the object's top; rolled, it comes down to it
+    flat = ObjectSpec("box", {"size": (0.06, 0.05, 0.025)}, (0.21, 0.02, -0.0375))
+    result = plan(PlanRequest(obj=flat, seed=2, table=Table(-0.05)))
+    assert "information" in result.cycles_per_stage  # located: the search stage ended
+    first = next(r for r in result.trace if r.stage == "search" and r.chosen is not None)
+    assert first.detail.startswith("rolled the hand a quarter turn over the table")
+    hand, table = default_hand(), table_shape(-0.05)
+    assert min(hand_table_gap(hand.state(q), table) for q in hand_poses(result)) >= -1e-9
