@@ -248,7 +248,7 @@ class RollingQP:
         rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
-        self._qdot[self.active] = x
+        self._qdot[self._columns] = x  # the active joints (a slice when contiguous)
         self._q += self._qdot * self.dt  # the other joints' q̇ is 0
         e0, e1, e2, e3, e4, e5 = (qp.A.dot(x) - qp.b).tolist()
         return RollingStep(
