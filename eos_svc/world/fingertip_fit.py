@@ -233,7 +233,12 @@ def fit_refusal(spec: ObjectSpec, opening: FingertipOpening, clearance: float) -
     axes = grip_axes(spec)
     if any(fits_across(a, opening, clearance) for a in axes):
         return None
-    thinnest = min(axes, key=lambda a: a.width / opening.limit(a.surface, min(a.approach_halves)))
+
+    def share(a: GripAxis) -> float:  # the width as a share of its opening (inf: no opening)
+        limit = opening.limit(a.surface, min(a.approach_halves))
+        return a.width / limit if limit > 0.0 else math.inf
+
+    thinnest = min(axes, key=lambda a: (share(a), a.width))
     limit = opening.limit(thinnest.surface, min(thinnest.approach_halves))
     if thinnest.width >= limit:
         why = (

@@ -73,3 +73,23 @@ def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(
     assert all(c["touching"] for c in result.contacts.values())
     check = validate_grasp(result, hand=eos_hand, directions=2, seconds=0.5)
     assert check.held, check.reason
+
+
+def test_every_hand_builds_the_drake_world_and_the_object_rests_on_its_table(
+    eos_hand_context, eos_scene_request
+):
+    """The Drake world (``--world drake``) is built from the same description for every hand:
+    stepped for half a second with the hand open above, the object stays on the table and the
+    table carries its weight."""
+    from eos_svc.agents import build_world
+    from eos_svc.drivers.drake_world import DrakeDriver
+    from eos_svc.drivers.lift_test import GRAVITY
+
+    world = build_world(eos_scene_request, context=eos_hand_context)
+    driver = DrakeDriver(world, eos_scene_request.obj, eos_scene_request.friction)
+    assert driver.hand is eos_hand_context.hand
+    plant = driver._plant
+    plant.advance(0.5)
+    assert driver.object_moved() < 5e-4
+    table = [f for other, _, _normal, f in plant.object_contacts() if other == 0]
+    assert sum(table) == pytest.approx(plant.settings.mass * GRAVITY, rel=0.02)
