@@ -75,7 +75,7 @@ def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(
     assert check.held, check.reason
 
 
-def test_every_hand_builds_the_drake_world_and_the_object_rests_on_its_table(
+def test_every_hand_builds_the_drake_world_and_its_table_carries_the_object(
     eos_hand_context, eos_scene_request
 ):
     """The Drake world (``--world drake``) is built from the same description for every hand:
