@@ -53,20 +53,7 @@ def test_the_scene_world_holds_the_hand_and_the_object(
     assert eos_scene_request.obj.shape == "sphere"
 
 
-#: hands that do not grasp the scene's sphere today, and why (strict: a fix makes the test fail
-#: until the entry is removed)
-SPHERE_MISSES = {
-    "g1_dex3": "its index and middle fingers close in planes 57 mm apart and reach only 75 mm in "
-    "front of the palm, while the open thumb first nears the hand axis 104 mm out: every sphere "
-    "candidate has a fingertip missing the object (cylinders and ellipsoids are grasped)",
-}
-
-
-def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(
-    eos_hand, eos_hand_context, eos_scene_request, request
-):
-    if eos_hand.name in SPHERE_MISSES:
-        request.applymarker(pytest.mark.xfail(reason=SPHERE_MISSES[eos_hand.name], strict=True))
+def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(eos_hand, eos_hand_context, eos_scene_request):
     result = plan(eos_scene_request, context=eos_hand_context, keep_trace=False)
     assert result.status == "success", result.reason
     assert result.good_grasp and result.force_closure
