@@ -125,9 +125,10 @@ def _side_probes(
             toward_hand = -np.array([np.cos(yaw), np.sin(yaw), 0.0])  # the fingers point away from it
             for shift in SIDE_SHIFTS:
                 start = centre + normal * (reach + standoff) + shift * toward_hand
+                travel = 2.0 * reach + standoff
                 for finger in fingers:
                     angle = world.probe.angles.get(finger, 0.0)
-                    out.append(Probe("open", finger, start, -normal, 2.0 * reach + standoff, angle, group, yaw))
+                    out.append(Probe("open", finger, start, -normal, travel, angle, group, yaw))
     return out
 
 
