@@ -113,10 +113,10 @@ def _side_probes(
     hand = world.hand
     yaw_q = hand.wrist_q_index[5]
     heading = float(np.arctan2(normal[1], normal[0]))
+    lo, hi = float(hand.lower[yaw_q]), float(hand.upper[yaw_q])
+    # within the limits (a limit that rounds a quarter turn, as hand3x3's 1.570796, is taken)
     yaws = [
-        y
-        for y in (heading + SIDE_TURN, heading - SIDE_TURN)
-        if hand.lower[yaw_q] - 1e-9 <= y <= hand.upper[yaw_q] + 1e-9
+        min(max(y, lo), hi) for y in (heading + SIDE_TURN, heading - SIDE_TURN) if lo - 1e-3 <= y <= hi + 1e-3
     ]
     out = []
     for fraction in REACH_FRACTIONS:
