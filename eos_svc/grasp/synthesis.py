@@ -206,14 +206,25 @@ class GraspSynthesis:
             return None
         landings: dict[str, Landing] = {}
         for finger in self.hand.finger_names:
-            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
+            sweep, r = self.sweeps[finger], self.hand.tip_radius(finger)
+            hit = landing(self.obj, sweep, r, R, wrist)
             if hit is None:
                 self._reject("a fingertip misses the object")
+                return None
+            if self._open_gap(sweep, r, R, wrist) < self.params.clearance:
+                # the open hand would come closer than the clearance (a parallel jaw opened
+                # hardly wider than the object): its approach would stop short
+                self._reject("an open fingertip passes closer than the clearance")
                 return None
             landings[finger] = hit
         others = [hit.point for f, hit in landings.items() if f != self.opposing]
         angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
         return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
+
+    def _open_gap(self, sweep: FingerSweep, tip_radius: float, R: np.ndarray, wrist: np.ndarray) -> float:
+        """The open fingertip's gap to the object (m), the palm at ``wrist`` turned by ``R``."""
+        tip = R @ sweep.points[0] + wrist
+        return float(self.obj.signed_distances(tip[None, :])[0][0]) - tip_radius
 
     def _collision_free(self, c: GraspCandidate) -> bool:
         why = self.clearance.collision(c)
