@@ -51,7 +51,8 @@ class PlantSettings:
         time_step: the discrete plant's step, s.
         wrist_kp, wrist_kd: the wrist's translation joints' PD gains (N/m, N·s/m).
         wrist_rot_kp, wrist_rot_kd: the wrist's rotation joints' gains (N·m/rad, N·m·s/rad).
-        finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad).
+        finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad), unless the hand's
+            description gives its own (``[drake]`` kp, kd; N/m, N·s/m for a prismatic finger).
         contact_stiffness: point-contact stiffness, N/m.
         table_size: the table box's x, y extent and thickness, m.
         hand_touches_table: whether the hand collides with the table (off by default: the
@@ -94,13 +95,14 @@ class DrakeHandPlant:
             (model,) = hand_parser(plant, package_dirs).AddModels(urdf)
         names = [str(n) for n in hand.model.names[1:]]  # Pinocchio's joints in q order (1 DoF each)
         wrist = set(hand.description.wrist_joints)
+        drake = dict(getattr(hand, "drake", {}))
         for name in names:
             joint = plant.GetJointByName(name, model)
             if name in wrist:
                 prismatic = joint.type_name() == "prismatic"
                 kp, kd = (s.wrist_kp, s.wrist_kd) if prismatic else (s.wrist_rot_kp, s.wrist_rot_kd)
-            else:
-                kp, kd = s.finger_kp, s.finger_kd
+            else:  # the description's [drake] gains (as Drake validation's), else the settings'
+                kp, kd = drake.get("kp", s.finger_kp), drake.get("kd", s.finger_kd)
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts.get(name, np.inf))
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
         material = ProximityProperties()
