@@ -298,7 +298,7 @@ class EP2Agent(GraspAgent):
             if probe.group in answered:
                 continue
             outcome = world.guarded_probe(
-                probe.finger, probe.start, probe.direction, probe.travel, probe.angle
+                probe.finger, probe.start, probe.direction, probe.travel, probe.angle, probe.yaw
             )
             if outcome.event == "touched":
                 assert outcome.centre is not None and outcome.normal is not None
