@@ -143,6 +143,7 @@ class RollingQP:
         self._qp: StepQP | None = None  # the QP of the last step (or of build)
         #: steps for which the velocity bounds are surely ∓q̇max (steps_at_speed_limits)
         self._steps_at_speed_limits = 0
+        self._state = state
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
     def retarget(
@@ -156,6 +157,8 @@ class RollingQP:
         if state is not None:
             if state.hand is not self.hand:
                 raise KinematicsError("state", "belongs to another hand model")
+            if state is not self._state:  # the state rolled until now: its data back at its q
+                self._state.update(self._state.q)
             self._use(state)
         self._qdot[:] = 0.0
         self._steps_at_speed_limits = 0
