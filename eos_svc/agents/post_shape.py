@@ -51,6 +51,7 @@ from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
+from eos_svc.shape.probe_information import candidates_of
 from eos_svc.shape.selection import MIN_CONTACTS, fit_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
@@ -190,6 +191,7 @@ class PostShapeAgent(GraspAgent):
         if fit is not None:
             if post.confidence < threshold:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
+                shape["candidates"] = [c.to_dict() for c in candidates_of(post)]  # for EP2 to tell apart
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)

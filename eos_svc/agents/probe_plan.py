@@ -56,9 +56,10 @@ class Probe:
     group: int = -1  #: probes of one group (≥ 0) are alternatives: the first that touches ends it
 
 
-def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> list[Probe]:
+def targeted_probes(world: HandDriver, faces: list[dict], standoff: float, label: str = "open") -> list[Probe]:
     """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
-    half size), in order; ``standoff``: how far outside a surface a probe starts (m)."""
+    half size), in order; ``standoff``: how far outside a surface a probe starts (m);
+    ``label``: the face name their touches carry."""
     probe = world.probe
     top, bottom = probe.finger("top"), probe.finger("bottom")
     probes: list[Probe] = []
@@ -79,7 +80,7 @@ def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> li
                 for finger in fingers:
                     for angle in angles:
                         a = probe.angles.get(finger, 0.0) if angle is None else angle
-                        probes.append(Probe("open", finger, start, -normal, travel, a, group=k))
+                        probes.append(Probe(label, finger, start, -normal, travel, a, group=k))
     return probes
 
 
