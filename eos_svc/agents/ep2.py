@@ -33,7 +33,7 @@ rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
-Opportunistic sub-rating: when post_shape has just pondered and asks for more of the surface
+Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and asks for more of the surface
 (``needs: "surface"``: EP1's curvature is trusted but the class or the extent is ambiguous),
 the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and after
 :data:`MAX_ROUNDS` rounds.
@@ -117,7 +117,7 @@ class EP2Agent(GraspAgent):
         shape = board.get(keys.SHAPE)
         if shape is None or shape.get("needs") != "surface" or self.rounds >= MAX_ROUNDS:
             return 0.0
-        if not ctx.changed(keys.SHAPE):
+        if not (ctx.changed(keys.SHAPE) or ctx.last_agent == "post_shape"):  # it has pondered what EP2 felt
             return 0.0
         return max(RATING_FLOOR, min(1.0, 1.0 - float(shape["confidence"])))
 

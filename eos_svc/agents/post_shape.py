@@ -32,7 +32,8 @@ position, rpy), None for a plane or before the size is known — ``pose_known`` 
 orientation is assumed upright), ``evidence`` (contacts used, fit residual, competing classes
 with their probabilities) and ``bounds`` (the object's world-axis bounds, m).
 
-Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
+Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new (a contact, or a probe's
+free path), else 0.
 """
 
 from __future__ import annotations
@@ -135,6 +136,7 @@ class PostShapeAgent(GraspAgent):
             ctx.changed(keys.CURVATURE)
             or ctx.changed(keys.CURVATURE_BOTTOM)
             or ctx.changed(keys.EP2_TOUCHES)
+            or ctx.changed(keys.EP2_FREE)  # a probe that touched nothing bounds the object too
             or ctx.changed(keys.EP1_CONTACT)  # on a table, the bottom is the table's plane
         )
         return 1.0 if new else 0.0
