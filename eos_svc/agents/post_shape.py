@@ -53,7 +53,7 @@ from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
 from eos_svc.shape.probe_information import candidates_of
-from eos_svc.shape.selection import MIN_CONTACTS, fit_probability
+from eos_svc.shape.selection import MIN_CONTACTS, fit_probability, tolerance_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
@@ -66,6 +66,11 @@ MAX_FREE_SAMPLES = 60
 OUT_OF_CLASS = 1e-3
 #: the approximate postulate's class name
 HULL = "hull"
+#: the precision rule: while fewer contacts than this, a confident postulate is asked to be
+#: precise too — P(sizes and centre within ±PRECISION) at least the confidence threshold —
+#: before the grasp (EP2's active touch is cheap; a few contacts fit five classes loosely)
+PRECISION_CONTACTS = 12
+PRECISION = 0.03
 #: probability that EP1's curvature class is right (see the module docstring)
 EP1_CLASS_PROBABILITY = 0.5
 
@@ -171,13 +176,20 @@ class PostShapeAgent(GraspAgent):
         threshold = self.world.params.confidence_threshold
         fit = post.best
         radius = classify(curvature)[1]
+        precise = (
+            fit is None
+            or touches.count >= PRECISION_CONTACTS
+            or ep2_done
+            or tolerance_probability(fit, tolerance=PRECISION) >= threshold
+        )
+        trusted = post.confidence >= threshold and precise
         shape: dict[str, Any] = {
             "class": post.kind,
             "confidence": round(post.confidence, 6),
             "grasp_radius": None,
             "diameter": None,
             "centre": None,
-            "needs": None if post.confidence >= threshold else "surface",
+            "needs": None if trusted else "surface",
             "principal_curvatures": curvature["principal_curvatures"],
             "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": post.object(),
@@ -191,7 +203,7 @@ class PostShapeAgent(GraspAgent):
             "open_faces": [],
         }
         if fit is not None:
-            if post.confidence < threshold:  # what EP2 should feel next: the faces no touch bounds
+            if not trusted:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
                 shape["candidates"] = [c.to_dict() for c in candidates_of(post)]  # for EP2 to tell apart
             g = fit.geometry
@@ -202,7 +214,9 @@ class PostShapeAgent(GraspAgent):
             shape["bounds"] = [np.round(g.centre - half, 6).tolist(), np.round(g.centre + half, 6).tolist()]
         self._write(board, shape)
         rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
-        ask = "" if shape["needs"] is None else "; asks EP2 for more of the surface"
+        ask = "" if trusted else "; asks EP2 for more of the surface"
+        if post.confidence >= threshold and not precise:
+            ask += f" (its size not yet known to {PRECISION:.0%})"
         size = "" if fit is None else f", half-height {shape['grasp_radius'] * 1000:.2f} mm"
         return ActionResult(
             Outcome.PROGRESS,
