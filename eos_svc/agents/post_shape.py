@@ -180,7 +180,7 @@ class PostShapeAgent(GraspAgent):
             fit is None
             or touches.count >= PRECISION_CONTACTS
             or ep2_done
-            or tolerance_probability(fit, tolerance=PRECISION) >= threshold
+            or tolerance_probability(fit, touches, tolerance=PRECISION) >= threshold
         )
         trusted = post.confidence >= threshold and precise
         shape: dict[str, Any] = {
@@ -205,7 +205,7 @@ class PostShapeAgent(GraspAgent):
         if fit is not None:
             if not trusted:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
-                shape["candidates"] = [c.to_dict() for c in candidates_of(post)]  # for EP2 to tell apart
+                shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]  # for EP2 to tell apart
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)

@@ -33,6 +33,9 @@ from eos_svc.shape.probe_information import Candidate, choose, disagreement
 OFFSET = 0.5
 #: a probe is worth making only when the candidates' predicted distances spread more than this (m)
 MIN_SPREAD = 5e-4
+#: the least half size a line's reach is planned for (m): a probe starts up to twice that
+#: beyond the face (nearer where the wrist cannot start there), as the object may reach farther
+REACH_HALF = 0.1
 #: the outward normals of the faces probed
 NORMALS = tuple(s * e for e in np.eye(3) for s in (1.0, -1.0))
 
@@ -41,7 +44,7 @@ def probe_faces(centre: np.ndarray, half: np.ndarray, table: bool) -> list[dict]
     """The lines the hand may probe along, as the faces :func:`targeted_probes` aims at: per
     outward normal (none turned down on a table), the bounds' face centre and the points
     ±OFFSET of its half sizes off it along both tangents (``half``: the bounds' half size along
-    the normal)."""
+    the normal, at least REACH_HALF)."""
     faces = []
     for normal in NORMALS:
         if table and normal[2] < -0.5:
@@ -52,7 +55,7 @@ def probe_faces(centre: np.ndarray, half: np.ndarray, table: bool) -> list[dict]
             point = centre + normal * half[axis]
             point[u] += a * half[u]
             point[v] += b * half[v]
-            faces.append({"centre": point, "normal": normal, "half": float(half[axis])})
+            faces.append({"centre": point, "normal": normal, "half": max(float(half[axis]), REACH_HALF)})
     return faces
 
 
@@ -68,7 +71,7 @@ def next_probes(
     informative first, each line's probes the alternatives (one group) in order; none when no
     line's predicted distance spreads over MIN_SPREAD."""
     faces = probe_faces(*estimate, table=world.table_height is not None)
-    probes = targeted_probes(world, faces, standoff, label="active")
+    probes = targeted_probes(world, faces, standoff, label="active", off_centre=False)
     groups: dict[int, list[Probe]] = {}
     for probe in probes:
         groups.setdefault(probe.group, []).append(probe)

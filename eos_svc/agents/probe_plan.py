@@ -56,10 +56,13 @@ class Probe:
     group: int = -1  #: probes of one group (≥ 0) are alternatives: the first that touches ends it
 
 
-def targeted_probes(world: HandDriver, faces: list[dict], standoff: float, label: str = "open") -> list[Probe]:
+def targeted_probes(
+    world: HandDriver, faces: list[dict], standoff: float, label: str = "open", off_centre: bool = True
+) -> list[Probe]:
     """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
     half size), in order; ``standoff``: how far outside a surface a probe starts (m);
-    ``label``: the face name their touches carry."""
+    ``label``: the face name their touches carry; ``off_centre``: with the alternatives off the
+    face's centre (else on its centre line only)."""
     probe = world.probe
     top, bottom = probe.finger("top"), probe.finger("bottom")
     probes: list[Probe] = []
@@ -75,7 +78,8 @@ def targeted_probes(world: HandDriver, faces: list[dict], standoff: float, label
         for fraction in REACH_FRACTIONS:
             reach = max(MIN_REACH, fraction * REACH * float(face["half"]))
             travel = 2.0 * reach + standoff
-            for offset in (np.zeros(3), *(sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0))):
+            offsets = (sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0)) if off_centre else ()
+            for offset in (np.zeros(3), *offsets):
                 start = centre + offset + normal * (reach + standoff)
                 for finger in fingers:
                     for angle in angles:

@@ -14,7 +14,9 @@ under each of them is found by sphere tracing the tip centre's offset surface (s
 = tip radius, :func:`hit_distances`). The predictions give the probes' covariance ``C = RᵀR``
 (:func:`disagreement`): rows of R are the classes' mean predictions about the mixture mean,
 weighted by √P(class), and each sigma pair's half difference, weighted by √P(class) — the
-mixture's variance, the within-class part linearised (the unscented transform's 1-σ points).
+mixture's variance, the within-class part linearised (the unscented transform's 1-σ points) —
+and, for a face the touches bound on one side only, the fit with that face moved far out
+(:func:`reaches_of`), weighted by √(P(class) × its likelihood ratio).
 :func:`choose` then picks probes greedily: the one of largest predicted variance, C conditioned
 on measuring it with noise σ (``C ← C − c cᵀ / (c_jj + σ²)``), the next, …: each pick maximises
 the expected information gain ``½ ln(1 + var/σ²)`` given the earlier ones (greedy selection for
@@ -25,14 +27,16 @@ SI units: metres, radians.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from eos_svc.objects import FITTED_KINDS as KINDS
-from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry
+from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry, batch_residuals
 from eos_svc.shape.selection import Postulate
+from eos_svc.shape.touches import Touches
 
 #: largest sigma-point step of a centre coordinate (m)
 MAX_CENTRE_STEP = 0.03
@@ -44,6 +48,10 @@ MAX_LOG_SIZE_STEP = 0.35
 MIN_PROBABILITY = 0.01
 #: most candidate classes
 MOST_CANDIDATES = 3
+#: a reach moves a face out by this fraction of its size
+REACH_STEP = 0.5
+#: reaches less likely than this (likelihood ratio against the fit) are left out
+MIN_REACH_WEIGHT = 0.01
 #: sphere tracing: most steps, and the gap (m) at which a trace has touched
 TRACE_STEPS = 80
 TRACE_TOLERANCE = 1e-4
@@ -53,18 +61,22 @@ TRACE_TOLERANCE = 1e-4
 class Candidate:
     """One candidate class of the postulate: its posterior ``probability``, its fit's
     parameters ``theta`` about the start orientation ``r0`` (:mod:`eos_svc.shape.fit`'s
-    layout) and the sigma steps ``steps`` (k, k): column i is the i-th 1-σ step."""
+    layout), the sigma steps ``steps`` (k, k): column i is the i-th 1-σ step, and its
+    ``reaches`` (E, k): the fit with a face moved far out, each with its likelihood ratio
+    against the fit in ``reach_weights`` (:func:`reaches_of`)."""
 
     kind: str
     probability: float
     theta: np.ndarray
     r0: np.ndarray
     steps: np.ndarray
+    reaches: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    reach_weights: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
     @classmethod
-    def of(cls, fit: ClassFit, probability: float) -> Candidate:
+    def of(cls, fit: ClassFit, probability: float, touches: Touches | None = None) -> Candidate:
         """The candidate of a class fit: its covariance's Cholesky factor, each column
-        shrunk so that no step exceeds the caps."""
+        shrunk so that no step exceeds the caps; given the touches, its :func:`reaches` too."""
         cov = 0.5 * (fit.covariance + fit.covariance.T)
         try:
             root = np.linalg.cholesky(cov)
@@ -74,7 +86,9 @@ class Candidate:
         caps = step_caps(fit.kind)
         scale = np.max(np.abs(root) / caps[:, None], axis=0)
         root = root / np.maximum(scale, 1.0)[None, :]
-        return cls(fit.kind, float(probability), np.asarray(fit.theta, float), np.asarray(fit.r0, float), root)
+        reaches, weights = reaches_of(fit, touches) if touches is not None else (np.zeros((0, 0)), np.zeros(0))
+        theta, r0 = np.asarray(fit.theta, float), np.asarray(fit.r0, float)
+        return cls(fit.kind, float(probability), theta, r0, root, reaches, weights)
 
     def members(self) -> np.ndarray:
         """The parameter vectors (1 + 2k, k): θ, then θ + Lᵢ for each i, then θ − Lᵢ."""
@@ -88,6 +102,8 @@ class Candidate:
             "parameters": np.round(self.theta, 9).tolist(),
             "start_rotation": np.round(self.r0, 12).tolist(),
             "sigma_steps": np.round(self.steps, 9).tolist(),
+            "reaches": np.round(self.reaches, 9).tolist(),
+            "reach_weights": np.round(self.reach_weights, 6).tolist(),
         }
 
     @classmethod
@@ -102,6 +118,8 @@ class Candidate:
             np.asarray(data["parameters"], dtype=float),
             np.asarray(data["start_rotation"], dtype=float).reshape(3, 3),
             np.asarray(data["sigma_steps"], dtype=float),
+            np.asarray(data.get("reaches", []), dtype=float).reshape(-1, len(data["parameters"])),
+            np.asarray(data.get("reach_weights", []), dtype=float),
         )
 
 
@@ -114,12 +132,44 @@ def step_caps(kind: str) -> np.ndarray:
     return caps
 
 
-def candidates_of(post: Postulate) -> list[Candidate]:
+def reaches_of(fit: ClassFit, touches: Touches) -> tuple[np.ndarray, np.ndarray]:
+    """(parameters (E, k), likelihood ratios (E,)) of the fit with one face moved out by
+    :data:`REACH_STEP` of its size, the opposite face kept — along each oriented size axis,
+    both ways — where the ratio ``exp(−Δχ²/2)`` is at least :data:`MIN_REACH_WEIGHT`: a face
+    bounded on one side only (the touches stop at it, nothing touched beyond) may lie much
+    farther than the fit's covariance, a local quadratic, says."""
+    kind, theta = fit.kind, fit.theta
+    orientation = KINDS[kind].orientation
+    half, R = fit.geometry.half_sizes, fit.geometry.rotation
+    variants = []
+    for n, i in enumerate(SIZE_INDEX[kind]):
+        if orientation == "rotation":
+            axis = R[:, n]
+        elif orientation == "axis" and n == len(half) - 1:
+            axis = R[:, 2]
+        else:
+            continue
+        for side in (1.0, -1.0):
+            t = theta.copy()
+            t[i] += math.log(1.0 + REACH_STEP)
+            t[:3] += side * REACH_STEP * half[n] * axis
+            variants.append(t)
+    if not variants:
+        return np.zeros((0, len(theta))), np.zeros(0)
+    thetas = np.array(variants)
+    residuals = batch_residuals(thetas, kind, fit.r0, touches)
+    weights = np.exp(-0.5 * np.maximum(np.sum(residuals * residuals, axis=1) - fit.chi2, 0.0))
+    keep = weights >= MIN_REACH_WEIGHT
+    return thetas[keep], weights[keep]
+
+
+def candidates_of(post: Postulate, touches: Touches | None = None) -> list[Candidate]:
     """The postulate's candidate classes: at most :data:`MOST_CANDIDATES`, each at least
-    :data:`MIN_PROBABILITY` likely, the likeliest first."""
+    :data:`MIN_PROBABILITY` likely, the likeliest first (with their reaches, given the
+    touches)."""
     ranked = sorted(post.probabilities.items(), key=lambda kv: -kv[1])
     return [
-        Candidate.of(post.fits[kind], p)
+        Candidate.of(post.fits[kind], p, touches)
         for kind, p in ranked[:MOST_CANDIDATES]
         if p >= MIN_PROBABILITY and kind in post.fits
     ]
@@ -171,6 +221,9 @@ def disagreement(
         T = hit_distances(c.kind, c.members(), c.r0, starts, directions, travel, radius)
         k = len(c.theta)
         rows.append(np.sqrt(w) * 0.5 * (T[1 : 1 + k] - T[1 + k :]))
+        if len(c.reaches):
+            E = hit_distances(c.kind, c.reaches, c.r0, starts, directions, travel, radius)
+            rows.append(np.sqrt(w * c.reach_weights)[:, None] * (E - T[0]))
         means.append(T[0])
         weights.append(w)
     mean = sum(w * m for w, m in zip(weights, means, strict=True))
