@@ -78,7 +78,7 @@ class GraspPointsAgent(GraspAgent):
         """post_shape's postulate if it is confident enough and post_shape asks for nothing more
         (or approximate, with nothing more to ask EP2 for), else None."""
         shape = board.get(keys.SHAPE)
-        if shape is None or shape["needs"] is not None:
+        if shape is None or shape.get("needs") is not None:
             return None
         if shape["confidence"] < self.world.params.confidence_threshold and not shape.get("approximate"):
             return None
