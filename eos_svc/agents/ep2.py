@@ -11,32 +11,41 @@ probe that runs its whole travel touches nothing and tells where the object is *
 free path); one another part of the hand would touch first is abandoned. The hand never
 pushes the object.
 
-Each round plans, around the current estimate (centre and half extents along the world axes:
-EP1's top and bottom contacts and the approach point at first, the fitted object after),
-probes of the front (+x), of both sides (±y), of the top (−z) and of the bottom (+z), and
-*slides* over the top (toward the back and to both sides at first, along the postulated
-object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
-the fingertip dragged over the surface, until it drops over an edge (the last contact is on
-the edge: the object's extent that way), a link would touch first (a curved top past its
-apex) or nothing is felt; a slide keeps the contact of every :data:`SLIDE_KEEP`-th step and
-its last. Later rounds shift the probe offsets by the run's generator, so repeated rounds
-feel new places.
+**Active touch** (:mod:`eos_svc.agents.probe_choice`): the first round is three probes (the
+front and both sides), which with EP1's top and bottom give post_shape five contacts to fit.
+While post_shape's postulate is not trusted it leaves its ``candidates`` (the likeliest
+classes, their fits' uncertainty and far-reaching faces), and each **active round** probes the
+:data:`ROUND_PROBES` lines where those candidates' predicted touches disagree most — where
+the competing classes' surfaces differ, where a size or the pose is least known
+(:mod:`eos_svc.shape.probe_information`) — a line the hand cannot probe giving way to the next
+of the :data:`RANKED_LINES` best. EP2 stops when post_shape trusts its postulate.
 
-**Active touch**: once post_shape's fit leaves faces no touch bounds (``open_faces`` of the
-postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone — straight onto
-each, a finger hooked round the object for a face turned away from the hand
-(:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
-whole surface again only when none of them is felt.
+A **round over the whole surface** comes when there is no candidate line to probe (no fit yet,
+every line blocked or met nothing, the candidates agree everywhere, or after
+:data:`MAX_ACTIVE_ROUNDS` active rounds): around the current estimate (centre and half
+extents along the world axes: EP1's top and bottom contacts and the approach point at first,
+the fitted object after), probes of the front (+x), of both sides (±y), of the top (−z) and
+of the bottom (+z), and *slides* over the top (toward the back and to both sides at first,
+along the postulated object's own horizontal axes once it has an orientation): short guarded
+probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the
+last contact is on the edge: the object's extent that way), a link would touch first (a
+curved top past its apex) or nothing is felt; a slide keeps the contact of every
+:data:`SLIDE_KEEP`-th step and its last. Later rounds shift the probe offsets by the run's
+generator, so repeated rounds feel new places. Once post_shape's fit leaves faces no touch
+bounds (``open_faces``, :mod:`eos_svc.shape.open_faces`), such a round probes those faces
+first — straight onto each, a finger hooked round the object for a face turned away from the
+hand (:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch;
+the whole surface again only when none of them is felt.
 When the object rests on a table there is no bottom probe, and every probe is the opposing
 finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
 rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
-Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and asks for more of the surface
-(``needs: "surface"``: EP1's curvature is trusted but the class or the extent is ambiguous),
-the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and after
-:data:`MAX_ROUNDS` rounds.
+Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and
+asks for more of the surface (``needs: "surface"``: the class or the extent is ambiguous, or
+not yet precise), the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and
+after :data:`MAX_ROUNDS` rounds over the whole surface.
 """
 
 from __future__ import annotations
@@ -352,7 +361,14 @@ class EP2Agent(GraspAgent):
         return missed, blocked
 
     def _done(
-        self, board: Board, touches: list[dict], free: list, counts: dict[str, int], missed: int, blocked: int, what: str
+        self,
+        board: Board,
+        touches: list[dict],
+        free: list,
+        counts: dict[str, int],
+        missed: int,
+        blocked: int,
+        what: str,
     ) -> ActionResult:
         board.set(keys.EP2_TOUCHES, touches)
         board.set(keys.EP2_FREE, free)
@@ -381,7 +397,9 @@ class EP2Agent(GraspAgent):
             missed, blocked = self.run_lines(active, touches, free, counts)
             if counts or missed:
                 self.active_rounds += 1
-                return self._done(board, touches, free, counts, missed, blocked, f"active round {self.active_rounds}")
+                return self._done(
+                    board, touches, free, counts, missed, blocked, f"active round {self.active_rounds}"
+                )
         faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
         # once a fit leaves faces open, the round probes those faces first, and the whole
         # surface only when none of them is felt

@@ -17,7 +17,11 @@ Two sources, in the order the information stage gathers them:
    more of the surface (``needs: "surface"``: EP2).
 2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
    least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
-   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again.
+   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again — and, while
+   the postulate rests on fewer than :data:`PRECISION_CONTACTS` contacts, also while its sizes
+   and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
+   a few contacts fit five classes loosely) — leaving its ``candidates``
+   (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
 3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
    once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
    ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
@@ -205,7 +209,8 @@ class PostShapeAgent(GraspAgent):
         if fit is not None:
             if not trusted:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
-                shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]  # for EP2 to tell apart
+                # the classes and extents EP2 should tell apart (its next probes)
+                shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)

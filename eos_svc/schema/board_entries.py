@@ -199,7 +199,7 @@ ENTRIES: dict[str, Entry] = {
     keys.EP2_FREE: Entry(
         list[list[float]], "tip-centre samples [x, y, z, tip radius] of EP2 probes that touched nothing (m)"
     ),
-    keys.EP2_RUNS: Entry(int, "EP2 rounds so far"),
+    keys.EP2_RUNS: Entry(int, "EP2 rounds over the whole surface so far (active-touch rounds not counted)"),
     keys.HAND_Q: Entry(list[float], "the hand's configuration after the cycle (m, rad)"),
     keys.OBJECT_POSE: Entry(
         list[float],

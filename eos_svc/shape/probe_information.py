@@ -86,7 +86,8 @@ class Candidate:
         caps = step_caps(fit.kind)
         scale = np.max(np.abs(root) / caps[:, None], axis=0)
         root = root / np.maximum(scale, 1.0)[None, :]
-        reaches, weights = reaches_of(fit, touches) if touches is not None else (np.zeros((0, 0)), np.zeros(0))
+        none = (np.zeros((0, len(fit.theta))), np.zeros(0))
+        reaches, weights = none if touches is None else reaches_of(fit, touches)
         theta, r0 = np.asarray(fit.theta, float), np.asarray(fit.r0, float)
         return cls(fit.kind, float(probability), theta, r0, root, reaches, weights)
 

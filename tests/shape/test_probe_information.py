@@ -38,8 +38,13 @@ def test_hit_distances_match_closed_forms():
     np.testing.assert_allclose(t[0], 0.2 - 0.04 - TIP, atol=2e-4)
     # a line that passes the sphere by more than R + r touches nothing: its whole travel
     t = hit_distances(
-        "sphere", sphere.members()[:1], np.eye(3), np.array([[0.2, 0.06, 0.0]]),
-        np.array([[-1.0, 0.0, 0.0]]), np.array([0.4]), np.array([TIP]),
+        "sphere",
+        sphere.members()[:1],
+        np.eye(3),
+        np.array([[0.2, 0.06, 0.0]]),
+        np.array([[-1.0, 0.0, 0.0]]),
+        np.array([0.4]),
+        np.array([TIP]),
     )
     assert t[0, 0] == pytest.approx(0.4)
 
@@ -114,6 +119,9 @@ def test_ep2_probes_where_a_box_and_a_cylinder_differ():
     expected = (a + r) - math.sqrt((a + r) ** 2 - (OFFSET * a) ** 2)
     R = disagreement(
         [Candidate.from_dict(c) for c in candidates],
-        probe.start[None], probe.direction[None], np.array([probe.travel]), np.array([r]),
+        probe.start[None],
+        probe.direction[None],
+        np.array([probe.travel]),
+        np.array([r]),
     )
     assert 2 * float(np.sqrt(np.sum(R * R))) == pytest.approx(expected, abs=3e-4)
