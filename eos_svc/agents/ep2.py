@@ -69,7 +69,7 @@ MAX_ACTIVE_ROUNDS = 8
 #: most lines an active-touch round probes
 ROUND_PROBES = 2
 #: the most informative lines an active-touch round ranks (tried in order while lines are blocked)
-RANKED_LINES = 5
+RANKED_LINES = 12
 #: lowest opportunistic sub-rating while post_shape asks for the surface
 RATING_FLOOR = 0.05
 #: how far outside the estimated surface a probe starts (m)

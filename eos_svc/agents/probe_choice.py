@@ -67,9 +67,10 @@ def next_probes(
     standoff: float,
 ) -> list[list[Probe]]:
     """The ``most`` most informative lines onto the ``estimate`` (centre, half extents along
-    the world axes, m) under post_shape's ``candidates`` (their JSON form), the most
-    informative first, each line's probes the alternatives (one group) in order; none when no
-    line's predicted distance spreads over MIN_SPREAD."""
+    the world axes, m) under post_shape's ``candidates`` (their JSON form), each line's probes
+    the alternatives (one group) in order: the greedy choice (each given the ones before), then
+    the other lines by their own spread (tried when the hand cannot probe the chosen ones);
+    none when no line's predicted distance spreads over MIN_SPREAD."""
     faces = probe_faces(*estimate, table=world.table_height is not None)
     probes = targeted_probes(world, faces, standoff, label="active", off_centre=False)
     groups: dict[int, list[Probe]] = {}
@@ -85,8 +86,11 @@ def next_probes(
     )
     noise = math.hypot(world.tactile_noise, world.kinematic_sigma)
     picks = choose(R, noise, most, MIN_SPREAD**2)
+    # then, for when those lines cannot be probed, the others by their own spread
+    variance = np.sum(R * R, axis=0)
+    rest = [int(j) for j in np.argsort(-variance) if variance[j] > MIN_SPREAD**2 and j not in picks]
     keys = list(groups)
-    return [groups[keys[j]] for j in picks]
+    return [groups[keys[j]] for j in (picks + rest)[:most]]
 
 
 def seed_probes(world: HandDriver, centre: np.ndarray, half: np.ndarray, standoff: float) -> list[Probe]:
