@@ -48,6 +48,9 @@ FIT_SLACK = 2.0
 HOPELESS = 2000.0
 #: iterations that show a class hopeless once another fits
 QUICK_NFEV = 6
+#: a sibling class (:func:`siblings`) whose χ² exceeds the best class's by more than this is
+#: refitted from the best class's fit
+SIBLING_GAP = 10.0
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
 
@@ -225,6 +228,8 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
         fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, class_starts=shared)
     best_kind = min(fits, key=lambda k: fits[k].chi2)
     for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
+        if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
+            continue  # near the best already: a refit would barely move the posterior
         start = shared.add(kind, *sibling_start(fits[best_kind], kind))
         refit = fit_class(kind, touches, class_starts=shared, only=start)
         if refit.chi2 < fits[kind].chi2:
