@@ -48,6 +48,9 @@ GOOD_ENOUGH_ANGLE_DEG = 172.0
 EPSILON_TIE = 0.05
 #: collision-free candidates about the centre scored by ε, the least-rotated first
 SCORED = 4
+#: how far past a wrist joint's limit (rad) an angle still counts as at it: URDF limits are
+#: written rounded (1.570796 for π/2), and a grasp from above needs a yaw of exactly π/2
+LIMIT_SLACK = 1e-6
 #: largest object across the grip, as a fraction of the hand height (paper §2.1: d/h < 1)
 MAX_D_OVER_H = 1.0
 
@@ -83,6 +86,7 @@ class GraspSynthesis:
         self.friction = friction
         self.vertical_only = vertical_only
         self.opposing = hand.description.opposing_finger
+        self.on_table = table_height is not None
         self.tip_radii = {f: hand.tip_radius(f) for f in hand.finger_names}
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
@@ -105,7 +109,7 @@ class GraspSynthesis:
         wanted = 1 if isinstance(self.obj, Sphere) else SCORED
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
-        for group in _turn_groups(candidate_frames(self.obj, self.vertical_only)):
+        for group in _turn_groups(candidate_frames(self.obj, self.vertical_only, self.on_table)):
             fresh = [c for label, R in group if (c := self._at_best_depth(label, R)) is not None]
             simulated += fresh
             for cand in sorted((c for c in fresh if c.about_centre), key=lambda c: (-c.angle_deg, c.label)):
@@ -146,15 +150,19 @@ class GraspSynthesis:
         return self.clearance.pregrasp(c)
 
     def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
-        """The wrist joint values for palm rotation ``R``, or None outside their limits."""
+        """The wrist joint values for palm rotation ``R``, or None outside their limits (by more
+        than :data:`LIMIT_SLACK`; within it, the limit)."""
         rpy = rpy_from_rotation(R)
         if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
             return None
         widx = self.hand.wrist_q_index[3:6]
+        lo, hi = self.hand.lower[widx], self.hand.upper[widx]
         a = np.asarray(rpy)
-        if np.any(a < self.hand.lower[widx] - 1e-9) or np.any(a > self.hand.upper[widx] + 1e-9):
+        if np.any(a < lo - LIMIT_SLACK) or np.any(a > hi + LIMIT_SLACK):
             return None
-        return rpy
+        # a limit written rounded in the URDF (1.570796 for π/2) admits the exact angle
+        roll, pitch, yaw = (float(v) for v in np.clip(a, lo, hi))
+        return roll, pitch, yaw
 
     def depth_for(self, extent: float) -> float | None:
         """Depth that puts the opposing fingertip straight under the centre when it touches:
