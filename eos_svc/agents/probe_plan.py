@@ -66,9 +66,13 @@ class Probe:
     yaw: float = 0.0  #: the wrist's turn about the vertical during the probe (rad)
 
 
-def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> list[Probe]:
+def targeted_probes(
+    world: HandDriver, faces: list[dict], standoff: float, label: str = "open", off_centre: bool = True
+) -> list[Probe]:
     """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
-    half size), in order; ``standoff``: how far outside a surface a probe starts (m)."""
+    half size), in order; ``standoff``: how far outside a surface a probe starts (m);
+    ``label``: the face name their touches carry; ``off_centre``: with the alternatives off the
+    face's centre (else on its centre line only)."""
     probe = world.probe
     top, bottom = probe.finger("top"), probe.finger("bottom")
     probes: list[Probe] = []
@@ -84,12 +88,13 @@ def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> li
         for fraction in REACH_FRACTIONS:
             reach = max(MIN_REACH, fraction * REACH * float(face["half"]))
             travel = 2.0 * reach + standoff
-            for offset in (np.zeros(3), *(sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0))):
+            offsets = (sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0)) if off_centre else ()
+            for offset in (np.zeros(3), *offsets):
                 start = centre + offset + normal * (reach + standoff)
                 for finger in fingers:
                     for angle in angles:
                         a = probe.angles.get(finger, 0.0) if angle is None else angle
-                        probes.append(Probe("open", finger, start, -normal, travel, a, group=k))
+                        probes.append(Probe(label, finger, start, -normal, travel, a, group=k))
         if away:
             probes += _side_probes(world, centre, normal, float(face["half"]), standoff, fingers, k)
     return probes
