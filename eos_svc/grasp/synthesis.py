@@ -219,9 +219,21 @@ class GraspSynthesis:
         if len(landings) < len(found):
             self._reject("a fingertip misses the object")
             return None
+        if self._open_gap(R, wrist) < self.params.clearance:
+            # the open hand would come closer than the clearance (a parallel jaw opened hardly
+            # wider than the object): its approach would stop short
+            self._reject("an open fingertip passes closer than the clearance")
+            return None
         others = [hit.point for f, hit in landings.items() if f != self.opposing]
         angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
         return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
+
+    def _open_gap(self, R: np.ndarray, wrist: np.ndarray) -> float:
+        """The open fingertips' least gap to the object (m), the palm at ``wrist`` turned by ``R``."""
+        names = self.hand.finger_names
+        tips = np.array([R @ self.sweeps[f].points[0] + wrist for f in names])
+        radii = np.array([self.tip_radii[f] for f in names])
+        return float(np.min(self.obj.signed_distances(tips)[0] - radii))
 
     def _collision_free(self, c: GraspCandidate) -> bool:
         why = self.clearance.collision(c)

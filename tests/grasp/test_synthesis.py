@@ -483,3 +483,27 @@ def test_diameter_angle_closed_forms():
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(-0.03, 0.01), at(-0.03, -0.01)]) == pytest.approx(180.0)
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.0, 0.02), at(0.0, 0.04)]) == pytest.approx(90.0)
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.01, 0.01)]) == pytest.approx(45.0)
+
+
+def test_a_parallel_jaw_is_not_planned_across_a_width_its_open_pads_barely_pass():
+    """The Panda's jaw opens 80 mm between its pads: across a box's 79 mm the open pads would pass
+    within 0.5 mm of the faces (less than the 2 mm clearance), so no candidate grips across it —
+    the grip goes across the box's 30 mm instead; a box 70 mm tall is gripped across its height."""
+    from eos_svc.hands import load_hand_named
+    from eos_svc.world.hand_context import HandContext
+
+    ctx = HandContext.build(load_hand_named("panda"))
+
+    def closing_axes(height: float) -> tuple[GraspSynthesis, list[float]]:
+        """The synthesis and |z| of each kept candidate's closing axis (world)."""
+        spec = ObjectSpec("box", {"size": (0.03, 0.03, height)}, HERE)
+        found = GraspSynthesis(ctx.hand, ctx.sweeps, ctx.params, make_object(spec), 0.5)
+        candidates = found.candidates()
+        assert candidates and all(c.about_centre for c in candidates)
+        return found, [abs(float(c.rotation[2, 2])) for c in candidates]
+
+    tall, vertical = closing_axes(0.079)
+    assert max(vertical) < 1e-6  # none across the height
+    assert tall.rejections.get("an open fingertip passes closer than the clearance", 0) > 0
+    _, vertical = closing_axes(0.07)  # the open pads pass 5 mm from the top and bottom faces
+    assert max(vertical) == pytest.approx(1.0)
