@@ -32,6 +32,8 @@ NEW_FEATURES: dict[str, str] = {
     "world/joint_sensing.py": "encoder noise and link error as request options",
     "agents/probe_plan.py": "active touch: probes aimed at open faces",
     "shape/open_faces.py": "active touch: the faces a fit leaves open",
+    "agents/probe_choice.py": "active touch: the probes where candidate postulates disagree",
+    "shape/probe_information.py": "active touch: a probe's expected information",
     "experiments/pybullet_objects.py": "pybullet test objects (meshes)",
     "experiments/plugins.py": "eos experiment plugins",
     "cli/batch.py": "eos batch",
