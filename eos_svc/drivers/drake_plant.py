@@ -80,7 +80,7 @@ class DrakeHandPlant:
     """
 
     def __init__(self, hand: HandModel, spec: ObjectSpec, obj: SurfaceObject, friction: float,
-                 settings: PlantSettings | None = None) -> None:  # fmt: skip
+                 settings: PlantSettings | None = None, table_height: float | None = None) -> None:  # fmt: skip
         if hand.urdf_path is None:
             raise ValidationError("hand", "the Drake world needs the hand's URDF (this hand has none)")
         s = settings or PlantSettings()
@@ -111,6 +111,7 @@ class DrakeHandPlant:
             properties=material,
         )
         lowest = float(obj.centre[2] - obj.half_extent(np.array([0.0, 0.0, 1.0])))
+        lowest = lowest if table_height is None else float(table_height)  # the request's table
         tx, ty, tz = s.table_size
         table_pose = RigidTransform(vec((obj.centre[0], obj.centre[1], lowest - 0.5 * tz)))
         table = plant.RegisterCollisionGeometry(

@@ -40,7 +40,7 @@ import pinocchio as pin
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.drivers.lift_test import lift_test
+from eos_svc.drivers.lift_test import GRAVITY, lift_test
 from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
 
@@ -64,10 +64,13 @@ class DrakeSettings:
         approach_speed: the wrist's speed of a motion that may touch (probes, grasp steps), m/s.
         joint_speed: a rotation's speed (wrist rotations, fingers), rad/s.
         chunk: how often a motion's target is updated and its contacts read, s.
-        stop_force: a hand body pushing the object harder than this ends a motion early, N.
+        stop_force: a hand body pushing the object harder than this ends a motion early, N
+            (at most :data:`STOP_FRACTION` of the force that slides the resting object: μ m g).
         touch_force: a touch presses on until the fingertip's normal force reaches this, N.
-        press_limit: the most a touch presses on past the kinematic first touch (rad of a
-            finger, m of the wrist).
+        press_limit: the most a touch presses on past the kinematic first touch (m of the
+            wrist; a finger presses on by ``finger_press_limit`` rad).
+        finger_press_limit: the most a finger's touch presses on, rad.
+        press_steps: a press advances in this many plant steps (its force read at each).
     """
 
     free_speed: float = 0.5
@@ -77,6 +80,13 @@ class DrakeSettings:
     stop_force: float = 2.0
     touch_force: float = 0.05
     press_limit: float = 0.003
+    finger_press_limit: float = 0.05
+    press_steps: int = 150
+
+
+#: a guarded motion stops before a hand body pushes the resting object with more than this
+#: fraction of the force that would slide it on the table (μ m g)
+STOP_FRACTION = 0.5
 
 
 class DrakeDriver(KinematicDriver):
@@ -88,7 +98,7 @@ class DrakeDriver(KinematicDriver):
         friction: Coulomb μ of every contact.
     """
 
-    __slots__ = ("_lift", "_moved_max", "_plant", "_settings", "_sim_wall", "_start")
+    __slots__ = ("_explored", "_lift", "_moved_max", "_plant", "_settings", "_sim_wall", "_start", "_stop")
 
     def __init__(
         self,
@@ -107,8 +117,16 @@ class DrakeDriver(KinematicDriver):
         self._timed(lambda: self._plant.advance(0.2))  # the object settles on the table
         self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
+        self._explored: float | None = None  # how far the object had moved when the grip was judged
         self._lift: dict[str, Any] | None = None
+        weight = self._plant.settings.mass * GRAVITY
+        self._stop = min(self._settings.stop_force, STOP_FRACTION * friction * weight)
         self._sync()
+
+    @property
+    def support_height(self) -> float | None:
+        """The Drake table's top (m): the object rests on it (the hand passes through it)."""
+        return self._plant.table_top
 
     # --- time ---------------------------------------------------------------------------------
     def clock(self) -> float:
@@ -172,7 +190,7 @@ class DrakeDriver(KinematicDriver):
                 along, rate = (3 - 2 * tau) * tau * tau, 6 * tau * (1 - tau) / duration
                 plant.command_moving(q_from + along * delta, rate * delta)
                 plant.advance_to(t0 + tau * duration)
-                if self._pushing() > s.stop_force:
+                if self._pushing() > self._stop:
                     plant.command(plant.hand_q())
                     stopped = True
                     return
@@ -188,20 +206,23 @@ class DrakeDriver(KinematicDriver):
         return max((f for other, _, _, f in self._plant.object_contacts() if other != table), default=0.0)
 
     def _press(self, finger: str, direction: np.ndarray) -> Touch | None:
-        """Press on along the joint-space ``direction`` (per unit of press) until ``finger``'s
-        tip pushes with ``touch_force``; the touch as Drake reports it."""
+        """Press on along the joint-space ``direction`` (its length: the most to press on) until
+        ``finger``'s tip pushes with ``touch_force``, one plant step at a time so that the press
+        ends near that force (a light touch moves no resting object); the touch as Drake
+        reports it."""
         plant, s = self._plant, self._settings
         body = plant.tip_bodies[finger]
         q0 = plant.hand_q()
         found = plant.tip_force(body)
+        step = plant.settings.time_step
 
         def run() -> tuple[np.ndarray, np.ndarray, float] | None:
             nonlocal found
-            for k in range(1, 31):
+            for k in range(1, s.press_steps + 1):
                 if found is not None and found[2] >= s.touch_force:
                     break
-                plant.command(q0 + direction * (s.press_limit * k / 30))
-                plant.advance(s.chunk)
+                plant.command(q0 + direction * (k / s.press_steps))
+                plant.advance(step)
                 found = plant.tip_force(body)
             return found
 
@@ -244,7 +265,7 @@ class DrakeDriver(KinematicDriver):
             return step
         direction = np.zeros(len(q0))
         direction[world.context.finger_q[finger]] = 1.0
-        touch = self._press(finger, direction * (0.05 / self._settings.press_limit))
+        touch = self._press(finger, direction * self._settings.finger_press_limit)
         return FingerStep(step.event, world.finger_angle(finger), touch or step.touch)
 
     def guarded_probe(
@@ -260,7 +281,7 @@ class DrakeDriver(KinematicDriver):
         self._execute(q_start, q_end, self._settings.approach_speed)
         if outcome.event == "touched":
             push = np.zeros(len(q_end))
-            push[world.wrist_xyz_q] = unit
+            push[world.wrist_xyz_q] = unit * self._settings.press_limit
             self._press(finger, push)
         return outcome
 
@@ -310,7 +331,7 @@ class DrakeDriver(KinematicDriver):
         """Contacts and quality where the object now is, then the lift test: good only if held."""
         self._sync()
         verdict = grasp_geometry(self._world, friction)
-        moved = self.object_moved()
+        moved = self._explored = self.object_moved()  # before the lift moves it on purpose
         verdict["object_moved_mm"] = round(1000.0 * moved, 3)
         if verdict["all_touching"]:
             world, radius = self._world, 0.5 * float(self._world.obj.diameter)
@@ -325,7 +346,7 @@ class DrakeDriver(KinematicDriver):
     def report(self) -> dict[str, Any]:
         """The Drake world's figures for the plan result."""
         sim = self._plant.time()
-        moved = self.object_moved()
+        moved = self.object_moved() if self._explored is None else self._explored
         return {
             "name": "drake",
             "object_moved_mm": round(1000.0 * moved, 3),

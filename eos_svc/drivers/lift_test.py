@@ -2,7 +2,8 @@
 
 After the grip (every fingertip touching), in the Drake world (:mod:`eos_svc.drivers.drake_plant`):
 
-1. squeeze: every finger joint's PD target ``squeeze`` rad further closed, settle;
+1. squeeze: every finger joint's PD target ``squeeze`` rad further closed (0.1 rad: 0.5 N·m at
+   the Drake world's finger gain, half hand3x3's effort limit), settle;
 2. lift: the wrist up ``height`` m (a straight ramp), hold;
 3. load: from the lifted state, one at a time, the object's weight acting along ±x, ±y, ±z (an
    external force that cancels gravity and adds ``m g`` along the direction) and a torque
@@ -50,7 +51,7 @@ def lift_test(
     radius: float,
     *,
     height: float = 0.1,
-    squeeze: float = 0.05,
+    squeeze: float = 0.1,
     lift_s: float = 1.0,
     settle_s: float = 0.3,
     load_s: float = 0.3,
