@@ -22,8 +22,10 @@ from typing import Any
 
 import numpy as np
 from pydrake.geometry import (
+    AddCompliantHydroelasticPropertiesForHalfSpace,
     AddContactMaterial,
-    Box,
+    AddRigidHydroelasticProperties,
+    HalfSpace,
     CollisionFilterDeclaration,
     GeometrySet,
     ProximityProperties,
@@ -43,6 +45,10 @@ from eos_svc.schema.request import ObjectSpec
 from eos_svc.validation.simulation import object_shapes, urdf_effort_limits, vec
 
 
+#: the object starts this far above the table, m
+DROP = 1e-4
+
+
 @dataclass(frozen=True)
 class PlantSettings:
     """The physical model's constants (SI).
@@ -54,7 +60,9 @@ class PlantSettings:
         wrist_rot_kp, wrist_rot_kd: the wrist's rotation joints' gains (N·m/rad, N·m·s/rad).
         finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad).
         contact_stiffness: point-contact stiffness, N/m.
-        table_size: the table box's x, y extent and thickness, m.
+        table_slab, table_modulus: the table's compliant layer (hydroelastic): thickness (m) and
+            modulus (Pa).
+        resolution: the object's hydroelastic mesh resolution (m).
         hand_touches_table: whether the hand collides with the table (off by default: the
             planner plans no table avoidance and EP1 feels a resting object's bottom, which a
             table would hide).
@@ -69,7 +77,9 @@ class PlantSettings:
     finger_kp: float = 5.0
     finger_kd: float = 0.05
     contact_stiffness: float = 2e4
-    table_size: tuple[float, float, float] = (0.6, 0.6, 0.04)
+    table_slab: float = 0.01
+    table_modulus: float = 1e6
+    resolution: float = 0.005
     hand_touches_table: bool = False
 
 
@@ -88,7 +98,7 @@ class DrakeHandPlant:
         efforts = urdf_effort_limits(hand.urdf_path)
         builder = DiagramBuilder()
         config = MultibodyPlantConfig(
-            time_step=s.time_step, contact_model="point", discrete_contact_approximation="sap"
+            time_step=s.time_step, contact_model="hydroelastic_with_fallback", discrete_contact_approximation="sap"
         )
         plant, scene_graph = AddMultibodyPlant(config, builder)
         (model,) = Parser(plant).AddModels(hand.urdf_path)
@@ -112,17 +122,25 @@ class DrakeHandPlant:
         )
         lowest = float(obj.centre[2] - obj.half_extent(np.array([0.0, 0.0, 1.0])))
         lowest = lowest if table_height is None else float(table_height)  # the request's table
-        tx, ty, tz = s.table_size
-        table_pose = RigidTransform(vec((obj.centre[0], obj.centre[1], lowest - 0.5 * tz)))
+        # the table: a soft half-space (hydroelastic) with its top at z = lowest, so that the object
+        # rests on a pressure patch, not on one point (a box on a box balances on its deepest point)
+        table_material = ProximityProperties()
+        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
+                           friction=CoulombFriction(friction, friction), properties=table_material)  # fmt: skip
+        AddCompliantHydroelasticPropertiesForHalfSpace(s.table_slab, s.table_modulus, table_material)
         table = plant.RegisterCollisionGeometry(
-            plant.world_body(), table_pose, Box(tx, ty, tz), "table", material
+            plant.world_body(), RigidTransform(vec((0.0, 0.0, lowest))), HalfSpace(), "table", table_material
         )
+        object_material = ProximityProperties()
+        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
+                           friction=CoulombFriction(friction, friction), properties=object_material)  # fmt: skip
+        AddRigidHydroelasticProperties(s.resolution, object_material)
         shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
         instance = plant.AddModelInstance("object")
         inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody("object", instance, inertia)
         for i, shape in enumerate(shapes):
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", material)
+            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", object_material)
         plant.set_gravity_enabled(model, False)
         plant.Finalize()
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
@@ -146,7 +164,9 @@ class DrakeHandPlant:
         # q order: Drake's position index of each planner joint (the actuators were added in it)
         self._index = [plant.GetJointByName(n, model).position_start() for n in names]
         self.table_top = lowest
-        pose = RigidTransform(RollPitchYaw(vec(spec.rpy)), vec(obj.centre))
+        # dropped from 0.1 mm above the table (a vertex exactly on its plane is degenerate for the
+        # hydroelastic intersection)
+        pose = RigidTransform(RollPitchYaw(vec(spec.rpy)), vec(obj.centre) + vec((0.0, 0.0, DROP)))
         plant.SetFreeBodyPose(self.context, body, pose)
         plant.get_actuation_input_port().FixValue(self.context, np.zeros(plant.num_actuated_dofs()))
         self._n = len(names)
