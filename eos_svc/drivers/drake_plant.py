@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 from pydrake.geometry import (
+    AddCompliantHydroelasticProperties,
     AddCompliantHydroelasticPropertiesForHalfSpace,
     AddContactMaterial,
     AddRigidHydroelasticProperties,
@@ -62,7 +63,11 @@ class PlantSettings:
         contact_stiffness: point-contact stiffness, N/m.
         table_slab, table_modulus: the table's compliant layer (hydroelastic): thickness (m) and
             modulus (Pa).
-        resolution: the object's hydroelastic mesh resolution (m).
+        resolution: the object's hydroelastic mesh resolution (m; at most a tenth of its
+            diameter, at least 3 mm).
+        soft_tips, tip_modulus, tip_resolution: the fingertips as compliant hydroelastic bodies
+            (a pressure patch with torsional friction, as a soft pad has), their modulus (Pa) and
+            mesh resolution (m); without them, point contact.
         hand_touches_table: whether the hand collides with the table (off by default: the
             planner plans no table avoidance and EP1 feels a resting object's bottom, which a
             table would hide).
@@ -78,8 +83,11 @@ class PlantSettings:
     finger_kd: float = 0.05
     contact_stiffness: float = 2e4
     table_slab: float = 0.01
-    table_modulus: float = 1e6
-    resolution: float = 0.005
+    table_modulus: float = 1e7
+    resolution: float = 0.01
+    soft_tips: bool = True
+    tip_modulus: float = 1e6
+    tip_resolution: float = 0.008
     hand_touches_table: bool = False
 
 
@@ -134,7 +142,8 @@ class DrakeHandPlant:
         object_material = ProximityProperties()
         AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
                            friction=CoulombFriction(friction, friction), properties=object_material)  # fmt: skip
-        AddRigidHydroelasticProperties(s.resolution, object_material)
+        resolution = min(s.resolution, max(0.003, 0.1 * float(obj.diameter)))  # a sagitta < 0.2 mm
+        AddRigidHydroelasticProperties(resolution, object_material)
         shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
         instance = plant.AddModelInstance("object")
         inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
@@ -144,9 +153,17 @@ class DrakeHandPlant:
         plant.set_gravity_enabled(model, False)
         plant.Finalize()
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
+        tips = {int(plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body().index())
+                for f in hand.finger_names}  # fmt: skip
+        tip_material = ProximityProperties()  # soft fingertips: a pressure patch, torsional friction
+        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
+                           friction=CoulombFriction(friction, friction), properties=tip_material)  # fmt: skip
+        AddCompliantHydroelasticProperties(s.tip_resolution, s.tip_modulus, tip_material)
         for b in hand_bodies:
+            soft = s.soft_tips and int(b.index()) in tips
             for geometry in plant.GetCollisionGeometriesForBody(b):
-                scene_graph.AssignRole(plant.get_source_id(), geometry, material, RoleAssign.kReplace)
+                scene_graph.AssignRole(plant.get_source_id(), geometry, tip_material if soft else material,
+                                       RoleAssign.kReplace)  # fmt: skip
         hand_set = plant.CollectRegisteredGeometries(hand_bodies)
         manager = scene_graph.collision_filter_manager()
         manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
@@ -157,6 +174,7 @@ class DrakeHandPlant:
             f: plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body()
             for f in hand.finger_names
         }
+        self._inspector = scene_graph.model_inspector()
         self.diagram = builder.Build()
         self.simulator = Simulator(self.diagram)
         self.root = self.simulator.get_mutable_context()
@@ -240,7 +258,8 @@ class DrakeHandPlant:
 
     def object_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
         """Every contact of the object: (other body index, point (m), unit normal out of the
-        object, normal force (N)), from the plant's contact results."""
+        object, normal force (N)), from the plant's contact results (the hand's are point
+        contacts; the table's a hydroelastic patch: its centroid, and its whole force)."""
         results = self.plant.get_contact_results_output_port().Eval(self.context)
         me = self.body.index()
         out = []
@@ -257,7 +276,29 @@ class DrakeHandPlant:
                 other, n_out, f_on_obj = b, -normal, -force
             pushing = float(max(0.0, -f_on_obj @ n_out))
             out.append((int(other), np.asarray(info.contact_point()), n_out, pushing))
+        body_of = self._body_of_geometry
+        for i in range(results.num_hydroelastic_contacts()):  # patches: the table's, soft fingertips'
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            a, b = body_of(surface.id_M()), body_of(surface.id_N())  # body A: geometry M's
+            if me not in (a, b):
+                continue
+            f_on_obj = np.asarray(info.F_Ac_W().translational())
+            other = b if a == me else a
+            if a != me:
+                f_on_obj = -f_on_obj
+            # the patch's area-weighted normal (Drake's face normals point out of N into M)
+            mean = sum((surface.area(f) * np.asarray(surface.face_normal(f)) for f in range(surface.num_faces())),
+                       np.zeros(3))  # fmt: skip
+            norm = float(np.linalg.norm(mean))
+            n_out = (mean if a != me else -mean) / norm if norm > 0.0 else np.array([0.0, 0.0, -1.0])
+            pushing = float(max(0.0, -f_on_obj @ n_out))
+            out.append((other, np.asarray(surface.centroid()), n_out, pushing))
         return out
+
+    def _body_of_geometry(self, geometry: Any) -> int:
+        """The index of the body a geometry belongs to."""
+        return int(self.plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry)).index())
 
     def tip_force(self, finger_body: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
         """The contact of a fingertip body with the object: (point, normal, force) or None."""

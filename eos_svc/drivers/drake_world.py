@@ -40,7 +40,7 @@ import pinocchio as pin
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.drivers.lift_test import GRAVITY, lift_test
+from eos_svc.drivers.lift_test import GRAVITY, lift_test, squeeze_grip
 from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
 
@@ -141,14 +141,15 @@ class DrakeDriver(KinematicDriver):
             self._sim_wall += time.perf_counter() - t0
 
     # --- keeping the model in step with Drake ---------------------------------------------------
-    def _sync(self) -> None:
-        """The model takes the object's pose and the hand's joint values from Drake."""
+    def _sync(self, hand: bool = True) -> None:
+        """The model takes the object's pose and (with ``hand``) the hand's joint values from Drake."""
         world = self._world
         pose = self._plant.object_pose()
         world.scene.set_object_placement(pin.SE3(np.asarray(pose.rotation().matrix()), pose.translation()))
         world.obj_centre = tuple(float(x) for x in pose.translation())
-        hand = world.hand
-        world.set_q(np.clip(self._plant.hand_q(), hand.lower, hand.upper))
+        if hand:
+            model = world.hand
+            world.set_q(np.clip(self._plant.hand_q(), model.lower, model.upper))
         self._moved_max = max(self._moved_max, float(np.linalg.norm(pose.translation() - self._start)))
 
     def object_pose(self) -> list[float]:
@@ -315,7 +316,9 @@ class DrakeDriver(KinematicDriver):
             plant.advance(self._settings.chunk)
 
         self._timed(run)
-        self._sync()
+        # the model keeps the roll's planned end (its tip on the surface), not Drake's joint values:
+        # a soft fingertip pressed on the object sinks into it past the contact tolerance
+        self._sync(hand=False)
         return result
 
     def tactile(self, finger: str) -> TactileReading:
@@ -328,14 +331,18 @@ class DrakeDriver(KinematicDriver):
 
     # --- the referee ------------------------------------------------------------------------------
     def judge_grip(self, friction: float) -> dict[str, Any]:
-        """Contacts and quality where the object now is, then the lift test: good only if held."""
+        """The grip squeezed (the lift test's first step: every finger joint 0.1 rad further
+        closed, settled), its contacts and quality where the object now is, then the rest of
+        the lift test: good only if held."""
+        moved = self._explored = self.object_moved()  # before the grip and the lift move it
+        world = self._world
+        target = self._timed(lambda: squeeze_grip(self._plant, world.hand))
         self._sync()
-        verdict = grasp_geometry(self._world, friction)
-        moved = self._explored = self.object_moved()  # before the lift moves it on purpose
+        verdict = grasp_geometry(world, friction)
         verdict["object_moved_mm"] = round(1000.0 * moved, 3)
         if verdict["all_touching"]:
-            world, radius = self._world, 0.5 * float(self._world.obj.diameter)
-            lift = self._timed(lambda: lift_test(self._plant, world.hand, world.wrist_xyz_q, radius))
+            radius = 0.5 * float(world.obj.diameter)
+            lift = self._timed(lambda: lift_test(self._plant, world.hand, world.wrist_xyz_q, radius, target))
         else:
             lift = {"held": False, "why": "not every fingertip touches: nothing to lift"}
         self._lift = lift

@@ -9,7 +9,7 @@ import pytest
 from eos_svc.agents import PlanRequest, build_world, plan
 from eos_svc.drivers.drake_plant import DrakeHandPlant
 from eos_svc.drivers.drake_world import DrakeDriver
-from eos_svc.drivers.lift_test import GRAVITY, lift_test
+from eos_svc.drivers.lift_test import GRAVITY, lift_test, squeeze_grip
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 
@@ -28,7 +28,7 @@ def test_the_object_rests_on_the_table_under_gravity() -> None:
     table = [f for other, _, normal, f in plant.object_contacts() if other == 0]
     assert sum(table) == pytest.approx(plant.settings.mass * GRAVITY, rel=0.02)  # it carries the weight
     lowest = plant.object_pose().translation()[2] - 0.5 * make_object(REQUEST.obj).diameter
-    assert abs(lowest - plant.table_top) < 1e-4
+    assert abs(lowest - plant.table_top) < 5e-4  # sunk into the table's compliant layer by less than 0.5 mm
 
 
 def test_a_guarded_finger_touch_reports_a_surface_point_and_a_positive_force() -> None:
@@ -60,7 +60,8 @@ def test_the_lift_test_lifts_a_kinematic_grip_ten_centimetres_and_it_holds_under
     plant = DrakeHandPlant(hand, REQUEST.obj, obj, REQUEST.friction)
     plant.set_hand_q(np.array(result.q_final))
     plant.simulator.Initialize()
-    lift = lift_test(plant, hand, hand.wrist_q_index[:3], 0.5 * obj.diameter)
+    target = squeeze_grip(plant, hand)
+    lift = lift_test(plant, hand, hand.wrist_q_index[:3], 0.5 * obj.diameter, target)
     assert lift["rise_m"] > 0.09  # the object went up with the hand
     assert lift["lift_drift_m"] < 0.01
     forces = {k: v for k, v in lift["load_displacement_m"].items() if not k.startswith("torque")}
