@@ -65,6 +65,9 @@ class PlantSettings:
             modulus (Pa).
         resolution: the object's hydroelastic mesh resolution (m; at most a tenth of its
             diameter, at least 3 mm).
+        rolling_resistance: the table's rolling resistance coefficient (a torque ``c N h``
+            against rolling: neither point nor hydroelastic contact has one, and a ball touched
+            once would roll on for ever); rolling_update: how often its torque is updated, s.
         soft_tips, tip_modulus, tip_resolution: the fingertips as compliant hydroelastic bodies
             (a pressure patch with torsional friction, as a soft pad has), their modulus (Pa) and
             mesh resolution (m); without them, point contact.
@@ -85,6 +88,8 @@ class PlantSettings:
     table_slab: float = 0.01
     table_modulus: float = 1e7
     resolution: float = 0.01
+    rolling_resistance: float = 0.01
+    rolling_update: float = 0.005
     soft_tips: bool = True
     tip_modulus: float = 1e6
     tip_resolution: float = 0.008
@@ -188,6 +193,9 @@ class DrakeHandPlant:
         plant.SetFreeBodyPose(self.context, body, pose)
         plant.get_actuation_input_port().FixValue(self.context, np.zeros(plant.num_actuated_dofs()))
         self._n = len(names)
+        self._table_geometry = table
+        self._wrench = (np.zeros(3), np.zeros(3))
+        plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
         self.set_object_wrench(np.zeros(3), np.zeros(3))
 
     # --- the hand --------------------------------------------------------------------------
@@ -216,8 +224,12 @@ class DrakeHandPlant:
         self.plant.get_desired_state_input_port(self.model).FixValue(self.context, target)
 
     def advance_to(self, t: float) -> None:
-        """Simulate up to time ``t``, s."""
-        self.simulator.AdvanceTo(t)
+        """Simulate up to time ``t``, s (in steps of at most ``rolling_update`` s, the rolling
+        resistance's torque updated before each)."""
+        step = self.settings.rolling_update
+        while self.root.get_time() < t - 1e-12:
+            self._apply_wrench()
+            self.simulator.AdvanceTo(min(t, self.root.get_time() + step))
 
     def save(self) -> Any:
         """A copy of the simulation's state (time, positions, velocities)."""
@@ -234,7 +246,7 @@ class DrakeHandPlant:
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more."""
-        self.simulator.AdvanceTo(self.root.get_time() + seconds)
+        self.advance_to(self.root.get_time() + seconds)
 
     def time(self) -> float:
         """Simulated time, s."""
@@ -246,14 +258,46 @@ class DrakeHandPlant:
         return self.plant.EvalBodyPoseInWorld(self.context, self.body)
 
     def set_object_wrench(self, force: np.ndarray, torque: np.ndarray) -> None:
-        """An external force (N) at the object's centre and a torque (N·m), world frame."""
+        """An external force (N) at the object's centre and a torque (N·m), world frame (the
+        rolling resistance's torque is added to it as the simulation runs)."""
+        self._wrench = (np.asarray(force, dtype=float), np.asarray(torque, dtype=float))
+        self._apply_wrench()
+
+    def rolling_torque(self) -> np.ndarray:
+        """The table's rolling resistance on the object (N·m, world): ``c N h`` (c: the
+        coefficient, N: the table's normal force, h: the centre's height above the table)
+        against the object's rolling about horizontal axes, viscous below 0.05 rad/s."""
+        c = self.settings.rolling_resistance
+        if c <= 0.0:
+            return np.zeros(3)
+        normal = self.table_force()
+        if normal <= 0.0:
+            return np.zeros(3)
+        spin = np.array(self.plant.EvalBodySpatialVelocityInWorld(self.context, self.body).rotational())
+        spin[2] = 0.0
+        height = max(0.0, float(self.object_pose().translation()[2]) - self.table_top)
+        return -c * normal * height * spin / max(float(np.linalg.norm(spin)), 0.05)
+
+    def table_force(self) -> float:
+        """The table's normal force on the object (N)."""
+        results = self.plant.get_contact_results_output_port().Eval(self.context)
+        total = 0.0
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            if self._table_geometry in (surface.id_M(), surface.id_N()):
+                total += abs(float(info.F_Ac_W().translational()[2]))
+        return total
+
+    def _apply_wrench(self) -> None:
         from pydrake.multibody.math import SpatialForce
         from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
+        force, torque = self._wrench
         f = ExternallyAppliedSpatialForce()
         f.body_index = self.body.index()
         f.p_BoBq_B = vec((0.0, 0.0, 0.0))
-        f.F_Bq_W = SpatialForce(vec(torque), vec(force))
+        f.F_Bq_W = SpatialForce(vec(torque + self.rolling_torque()), vec(force))
         self.plant.get_applied_spatial_force_input_port().FixValue(self.context, [f])
 
     def object_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:

@@ -163,10 +163,11 @@ class DrakeDriver(KinematicDriver):
         """How far the object's centre is from where it rested at the start, m."""
         return float(np.linalg.norm(self._plant.object_pose().translation() - self._start))
 
-    def _execute(self, q_from: np.ndarray, q_to: np.ndarray, speed: float) -> bool:
+    def _execute(self, q_from: np.ndarray, q_to: np.ndarray, speed: float, guard: float | None = None) -> bool:
         """Place the hand at ``q_from`` (a transfer), then ramp to ``q_to`` in Drake, the wrist
         at ``speed`` m/s; stops early when a hand body pushes the object harder than
-        ``stop_force``. Returns whether it stopped early."""
+        ``guard`` N (default: the stop force; a touch's motion: the touch force). Returns whether
+        it stopped early."""
         plant, s = self._plant, self._settings
         q_from, q_to = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
         if np.max(np.abs(plant.hand_q() - q_from)) > 1e-6:
@@ -182,6 +183,7 @@ class DrakeDriver(KinematicDriver):
         duration *= 1.5  # a smoothstep profile: its peak speed is 1.5 times its mean
         steps = max(1, int(np.ceil(duration / s.chunk)))
         stopped = False
+        limit = self._stop if guard is None else guard
 
         def run() -> None:
             nonlocal stopped
@@ -191,7 +193,7 @@ class DrakeDriver(KinematicDriver):
                 along, rate = (3 - 2 * tau) * tau * tau, 6 * tau * (1 - tau) / duration
                 plant.command_moving(q_from + along * delta, rate * delta)
                 plant.advance_to(t0 + tau * duration)
-                if self._pushing() > self._stop:
+                if self._pushing() > limit:
                     plant.command(plant.hand_q())
                     stopped = True
                     return
@@ -261,7 +263,7 @@ class DrakeDriver(KinematicDriver):
         world = self._world
         q0 = world.state.q
         step = super().close_finger_step(finger, dtheta)
-        self._execute(q0, world.state.q, self._settings.approach_speed)
+        self._execute(q0, world.state.q, self._settings.approach_speed, self._settings.touch_force)
         if step.event != "touched":
             return step
         direction = np.zeros(len(q0))
@@ -279,7 +281,7 @@ class DrakeDriver(KinematicDriver):
         unit = np.asarray(direction, dtype=float) / float(np.linalg.norm(direction))
         q_start = q_end.copy()
         q_start[world.wrist_xyz_q] -= outcome.travelled * unit
-        self._execute(q_start, q_end, self._settings.approach_speed)
+        self._execute(q_start, q_end, self._settings.approach_speed, self._settings.touch_force)
         if outcome.event == "touched":
             push = np.zeros(len(q_end))
             push[world.wrist_xyz_q] = unit * self._settings.press_limit
