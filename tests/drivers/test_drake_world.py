@@ -119,3 +119,46 @@ def test_a_drake_plan_replays_cycle_for_cycle(tmp_path) -> None:  # type: ignore
     base = ["plan", "--world", "drake", "--max-cycles", "7", "--quiet", "--record", str(record)]
     assert main(base) == 1  # 7 cycles cannot grasp: a cycle limit, exit 1
     assert main(["replay", "--quiet", str(record)]) == 0  # deterministic: the same cycles and result
+
+
+def test_a_rolling_ball_stops_as_the_tables_rolling_resistance_says() -> None:
+    """Rolling at v = 2 cm/s, the ball decelerates at a = c N h r / (7/5 m r²) (h = r: its
+    centre's height) and stops after about v² / 2a; without the coefficient only the soft
+    table's own damping slows it, and it goes farther."""
+    from pydrake.multibody.math import SpatialVelocity
+
+    from eos_svc.drivers.drake_plant import PlantSettings
+
+    hand, obj, r = build_world(REQUEST).hand, make_object(REQUEST.obj), REQUEST.obj.size["radius"]
+    travelled = {}
+    for c in (0.01, 0.0):
+        plant = DrakeHandPlant(hand, REQUEST.obj, obj, REQUEST.friction, PlantSettings(rolling_resistance=c))
+        plant.set_hand_q(build_world(REQUEST).state.q)
+        plant.simulator.Initialize()
+        plant.advance(0.2)
+        start = np.array(plant.object_pose().translation())
+        v = 0.02  # along +y: rolling about -x
+        twist = SpatialVelocity(np.array([-v / r, 0.0, 0.0]), np.array([0.0, v, 0.0]))
+        plant.plant.SetFreeBodySpatialVelocity(plant.context, plant.body, twist)
+        plant.advance(1.0)
+        travelled[c] = float(np.linalg.norm(np.array(plant.object_pose().translation()) - start))
+        if c > 0.0:  # about at rest (below 0.05 rad/s the resistance is viscous: a slow tail)
+            speed = plant.plant.EvalBodySpatialVelocityInWorld(plant.context, plant.body).translational()
+            assert float(np.linalg.norm(speed)) < 5e-4
+    mass = plant.settings.mass
+    a = 0.01 * mass * GRAVITY * r * r / (1.4 * mass * r * r)
+    assert travelled[0.01] == pytest.approx(v * v / (2 * a), rel=0.3)  # about 2.9 mm, then at rest
+    assert travelled[0.0] > travelled[0.01]
+
+
+def test_a_light_touch_leaves_a_resting_box_where_it_was() -> None:
+    from eos_svc.schema.request import ObjectSpec
+
+    request = PlanRequest(obj=ObjectSpec("box", {"size": (0.05, 0.05, 0.05)}, (0.21, 0.02, -0.015)), seed=1)
+    driver = drake_driver(request)
+    finger = driver.probe_finger("front")
+    start = np.array([0.21 - 0.025 - 0.02, 0.02, -0.015])
+    for _ in range(3):
+        outcome = driver.guarded_probe(finger, start, np.array([1.0, 0.0, 0.0]), 0.09, driver.probe.angles[finger])
+        assert outcome.event == "touched"
+    assert driver.object_moved() < 1e-4  # three touches at 0.05 N: less than 0.1 mm
