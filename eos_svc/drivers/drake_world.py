@@ -84,6 +84,8 @@ class DrakeSettings:
     press_steps: int = 150
 
 
+#: the longest the object is given to come to rest on the table before the plan starts, s
+SETTLE_LIMIT = 3.0
 #: a guarded motion stops before a hand body pushes the resting object with more than this
 #: fraction of the force that would slide it on the table (μ m g)
 STOP_FRACTION = 0.5
@@ -114,7 +116,7 @@ class DrakeDriver(KinematicDriver):
         self._plant.set_hand_q(world.state.q)
         self._plant.simulator.Initialize()
         self._sim_wall = 0.0
-        self._timed(lambda: self._plant.advance(0.2))  # the object settles on the table
+        self._timed(self._settle)  # the object comes to rest on the table (it may tip over first)
         self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
         self._explored: float | None = None  # how far the object had moved when the grip was judged
@@ -139,6 +141,17 @@ class DrakeDriver(KinematicDriver):
             return run()
         finally:
             self._sim_wall += time.perf_counter() - t0
+
+    def _settle(self) -> None:
+        """Simulate until the object rests (speed < 1 mm/s, spin < 0.05 rad/s: it may topple
+        from the pose it was put in) or :data:`SETTLE_LIMIT` s have passed."""
+        plant = self._plant
+        plant.advance(0.2)
+        while plant.time() < SETTLE_LIMIT:
+            v = plant.plant.EvalBodySpatialVelocityInWorld(plant.context, plant.body)
+            if np.linalg.norm(v.translational()) < 1e-3 and np.linalg.norm(v.rotational()) < 0.05:
+                return
+            plant.advance(0.1)
 
     # --- keeping the model in step with Drake ---------------------------------------------------
     def _sync(self, hand: bool = True) -> None:
