@@ -100,7 +100,7 @@ class DrakeDriver(KinematicDriver):
         friction: Coulomb μ of every contact.
     """
 
-    __slots__ = ("_explored", "_lift", "_moved_max", "_plant", "_settings", "_sim_wall", "_start", "_stop")
+    __slots__ = ("_explored", "_lift", "_transfers", "_moved_max", "_plant", "_settings", "_sim_wall", "_start", "_stop")
 
     def __init__(
         self,
@@ -119,6 +119,7 @@ class DrakeDriver(KinematicDriver):
         self._timed(self._settle)  # the object comes to rest on the table (it may tip over first)
         self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
+        self._transfers = 0  # free-space transfers made without simulation
         self._explored: float | None = None  # how far the object had moved when the grip was judged
         self._lift: dict[str, Any] | None = None
         weight = self._plant.settings.mass * GRAVITY
@@ -184,7 +185,7 @@ class DrakeDriver(KinematicDriver):
         plant, s = self._plant, self._settings
         q_from, q_to = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
         if np.max(np.abs(plant.hand_q() - q_from)) > 1e-6:
-            plant.set_hand_q(q_from)
+            self._transfer(q_from)
         delta = q_to - q_from
         xyz = self._world.wrist_xyz_q
         rest = np.ones(len(delta), dtype=bool)
@@ -215,6 +216,14 @@ class DrakeDriver(KinematicDriver):
         self._timed(run)
         self._sync()
         return stopped
+
+    def _transfer(self, q: np.ndarray) -> None:
+        """Place Drake's hand at ``q`` without simulating the way there (a free-space transfer:
+        the arm's collision-free motion is assumed), counted when the wrist jumps more than 1 mm."""
+        jump = float(np.linalg.norm(self._plant.hand_q()[self._world.wrist_xyz_q] - q[self._world.wrist_xyz_q]))
+        if jump > 1e-3:
+            self._transfers += 1
+        self._plant.set_hand_q(q)
 
     def _pushing(self) -> float:
         """The largest normal force of any hand body on the object, N."""
@@ -321,7 +330,7 @@ class DrakeDriver(KinematicDriver):
         )  # fmt: skip
         plant = self._plant
         path = [np.asarray(q) for q in result.path] or [result.q_final]
-        plant.set_hand_q(path[0])
+        self._transfer(path[0])
 
         def run() -> None:
             for a, b in itertools.pairwise(path):
@@ -377,6 +386,7 @@ class DrakeDriver(KinematicDriver):
             "moved_past_relocation_limit": bool(moved > RELOCATE_AFTER),
             "object_moved_max_mm": round(1000.0 * self._moved_max, 3),
             "lift": self._lift,
+            "transfers_unsimulated": self._transfers,
             "simulated_s": round(sim, 4),
             "simulation_wall_s": round(self._sim_wall, 4),
             "real_time_factor": round(sim / self._sim_wall, 3) if self._sim_wall > 0 else None,
