@@ -26,9 +26,9 @@ from pydrake.geometry import (
     AddCompliantHydroelasticPropertiesForHalfSpace,
     AddContactMaterial,
     AddRigidHydroelasticProperties,
-    HalfSpace,
     CollisionFilterDeclaration,
     GeometrySet,
+    HalfSpace,
     ProximityProperties,
     RoleAssign,
 )
@@ -45,9 +45,20 @@ from eos_svc.objects import SurfaceObject
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.validation.simulation import object_shapes, urdf_effort_limits, vec
 
-
 #: the object starts this far above the table, m
 DROP = 1e-4
+
+
+def contact_material(friction: float, stiffness: float) -> ProximityProperties:
+    """Proximity properties with Coulomb ``friction`` and a point-contact ``stiffness`` (N/m)."""
+    material = ProximityProperties()
+    AddContactMaterial(
+        dissipation=None,
+        point_stiffness=stiffness,
+        friction=CoulombFriction(friction, friction),
+        properties=material,
+    )
+    return material
 
 
 @dataclass(frozen=True)
@@ -102,8 +113,15 @@ class DrakeHandPlant:
     Joint values cross in the planner's order (:attr:`HandModel.lower`'s: wrist then fingers).
     """
 
-    def __init__(self, hand: HandModel, spec: ObjectSpec, obj: SurfaceObject, friction: float,
-                 settings: PlantSettings | None = None, table_height: float | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        hand: HandModel,
+        spec: ObjectSpec,
+        obj: SurfaceObject,
+        friction: float,
+        settings: PlantSettings | None = None,
+        table_height: float | None = None,
+    ) -> None:
         if hand.urdf_path is None:
             raise ValidationError("hand", "the Drake world needs the hand's URDF (this hand has none)")
         s = settings or PlantSettings()
@@ -111,7 +129,9 @@ class DrakeHandPlant:
         efforts = urdf_effort_limits(hand.urdf_path)
         builder = DiagramBuilder()
         config = MultibodyPlantConfig(
-            time_step=s.time_step, contact_model="hydroelastic_with_fallback", discrete_contact_approximation="sap"
+            time_step=s.time_step,
+            contact_model="hydroelastic_with_fallback",
+            discrete_contact_approximation="sap",
         )
         plant, scene_graph = AddMultibodyPlant(config, builder)
         (model,) = Parser(plant).AddModels(hand.urdf_path)
@@ -126,27 +146,17 @@ class DrakeHandPlant:
                 kp, kd = s.finger_kp, s.finger_kd
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts.get(name, np.inf))
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
-        material = ProximityProperties()
-        AddContactMaterial(
-            dissipation=None,
-            point_stiffness=s.contact_stiffness,
-            friction=CoulombFriction(friction, friction),
-            properties=material,
-        )
+        material = contact_material(friction, s.contact_stiffness)
         lowest = float(obj.centre[2] - obj.half_extent(np.array([0.0, 0.0, 1.0])))
         lowest = lowest if table_height is None else float(table_height)  # the request's table
         # the table: a soft half-space (hydroelastic) with its top at z = lowest, so that the object
         # rests on a pressure patch, not on one point (a box on a box balances on its deepest point)
-        table_material = ProximityProperties()
-        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
-                           friction=CoulombFriction(friction, friction), properties=table_material)  # fmt: skip
+        table_material = contact_material(friction, s.contact_stiffness)
         AddCompliantHydroelasticPropertiesForHalfSpace(s.table_slab, s.table_modulus, table_material)
         table = plant.RegisterCollisionGeometry(
             plant.world_body(), RigidTransform(vec((0.0, 0.0, lowest))), HalfSpace(), "table", table_material
         )
-        object_material = ProximityProperties()
-        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
-                           friction=CoulombFriction(friction, friction), properties=object_material)  # fmt: skip
+        object_material = contact_material(friction, s.contact_stiffness)
         resolution = min(s.resolution, max(0.003, 0.1 * float(obj.diameter)))  # a sagitta < 0.2 mm
         AddRigidHydroelasticProperties(resolution, object_material)
         shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
@@ -160,15 +170,12 @@ class DrakeHandPlant:
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
         tips = {int(plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body().index())
                 for f in hand.finger_names}  # fmt: skip
-        tip_material = ProximityProperties()  # soft fingertips: a pressure patch, torsional friction
-        AddContactMaterial(dissipation=None, point_stiffness=s.contact_stiffness,
-                           friction=CoulombFriction(friction, friction), properties=tip_material)  # fmt: skip
+        tip_material = contact_material(friction, s.contact_stiffness)  # soft pads: torsional friction
         AddCompliantHydroelasticProperties(s.tip_resolution, s.tip_modulus, tip_material)
         for b in hand_bodies:
-            soft = s.soft_tips and int(b.index()) in tips
+            chosen = tip_material if s.soft_tips and int(b.index()) in tips else material
             for geometry in plant.GetCollisionGeometriesForBody(b):
-                scene_graph.AssignRole(plant.get_source_id(), geometry, tip_material if soft else material,
-                                       RoleAssign.kReplace)  # fmt: skip
+                scene_graph.AssignRole(plant.get_source_id(), geometry, chosen, RoleAssign.kReplace)
         hand_set = plant.CollectRegisteredGeometries(hand_bodies)
         manager = scene_graph.collision_filter_manager()
         manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
@@ -332,8 +339,8 @@ class DrakeHandPlant:
             if a != me:
                 f_on_obj = -f_on_obj
             # the patch's area-weighted normal (Drake's face normals point out of N into M)
-            mean = sum((surface.area(f) * np.asarray(surface.face_normal(f)) for f in range(surface.num_faces())),
-                       np.zeros(3))  # fmt: skip
+            faces = range(surface.num_faces())
+            mean = sum((surface.area(f) * np.asarray(surface.face_normal(f)) for f in faces), np.zeros(3))
             norm = float(np.linalg.norm(mean))
             n_out = (mean if a != me else -mean) / norm if norm > 0.0 else np.array([0.0, 0.0, -1.0])
             pushing = float(max(0.0, -f_on_obj @ n_out))

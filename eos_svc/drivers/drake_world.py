@@ -100,7 +100,17 @@ class DrakeDriver(KinematicDriver):
         friction: Coulomb μ of every contact.
     """
 
-    __slots__ = ("_explored", "_lift", "_transfers", "_moved_max", "_plant", "_settings", "_sim_wall", "_start", "_stop")
+    __slots__ = (
+        "_explored",
+        "_lift",
+        "_moved_max",
+        "_plant",
+        "_settings",
+        "_sim_wall",
+        "_start",
+        "_stop",
+        "_transfers",
+    )
 
     def __init__(
         self,
@@ -177,7 +187,9 @@ class DrakeDriver(KinematicDriver):
         """How far the object's centre is from where it rested at the start, m."""
         return float(np.linalg.norm(self._plant.object_pose().translation() - self._start))
 
-    def _execute(self, q_from: np.ndarray, q_to: np.ndarray, speed: float, guard: float | None = None) -> bool:
+    def _execute(
+        self, q_from: np.ndarray, q_to: np.ndarray, speed: float, guard: float | None = None
+    ) -> bool:
         """Place the hand at ``q_from`` (a transfer), then ramp to ``q_to`` in Drake, the wrist
         at ``speed`` m/s; stops early when a hand body pushes the object harder than
         ``guard`` N (default: the stop force; a touch's motion: the touch force). Returns whether
@@ -220,7 +232,9 @@ class DrakeDriver(KinematicDriver):
     def _transfer(self, q: np.ndarray) -> None:
         """Place Drake's hand at ``q`` without simulating the way there (a free-space transfer:
         the arm's collision-free motion is assumed), counted when the wrist jumps more than 1 mm."""
-        jump = float(np.linalg.norm(self._plant.hand_q()[self._world.wrist_xyz_q] - q[self._world.wrist_xyz_q]))
+        jump = float(
+            np.linalg.norm(self._plant.hand_q()[self._world.wrist_xyz_q] - q[self._world.wrist_xyz_q])
+        )
         if jump > 1e-3:
             self._transfers += 1
         self._plant.set_hand_q(q)

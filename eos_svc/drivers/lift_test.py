@@ -44,7 +44,9 @@ def _in_palm(plant: DrakeHandPlant, palm: str) -> np.ndarray:
     return np.asarray(X_WP.inverse().multiply(plant.object_pose().translation()))
 
 
-def squeeze_grip(plant: DrakeHandPlant, hand: HandModel, squeeze: float = 0.1, settle_s: float = 0.3) -> np.ndarray:
+def squeeze_grip(
+    plant: DrakeHandPlant, hand: HandModel, squeeze: float = 0.1, settle_s: float = 0.3
+) -> np.ndarray:
     """Step 1: every finger joint's target ``squeeze`` rad further closed than where it is,
     settled for ``settle_s`` s (the grip the lift starts from); returns the joint targets."""
     q = plant.hand_q()

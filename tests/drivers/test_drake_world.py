@@ -159,6 +159,8 @@ def test_a_light_touch_leaves_a_resting_box_where_it_was() -> None:
     finger = driver.probe_finger("front")
     start = np.array([0.21 - 0.025 - 0.02, 0.02, -0.015])
     for _ in range(3):
-        outcome = driver.guarded_probe(finger, start, np.array([1.0, 0.0, 0.0]), 0.09, driver.probe.angles[finger])
+        outcome = driver.guarded_probe(
+            finger, start, np.array([1.0, 0.0, 0.0]), 0.09, driver.probe.angles[finger]
+        )
         assert outcome.event == "touched"
     assert driver.object_moved() < 1e-4  # three touches at 0.05 N: less than 0.1 mm
