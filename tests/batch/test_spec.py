@@ -63,7 +63,12 @@ def test_a_drake_key_plans_in_the_drake_world() -> None:
     from eos_svc.batch.task import run_key
 
     spec = spec_from_dict(
-        {"world": "drake", "objects": {"suite": "quick"}, "seeds": [1], "conditions": {"max_cycles": 6}}
+        {
+            "world": "drake",
+            "objects": {"suite": "quick"},
+            "seeds": [1],
+            "conditions": {"max_cycles": 6, "deadline_s": 600.0},
+        }
     )
     keys = expand(spec)
     kinematic = expand(spec_from_dict({"objects": {"suite": "quick"}, "seeds": [1]}))
