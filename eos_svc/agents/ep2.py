@@ -11,49 +11,65 @@ probe that runs its whole travel touches nothing and tells where the object is *
 free path); one another part of the hand would touch first is abandoned. The hand never
 pushes the object.
 
-Each round plans, around the current estimate (centre and half extents along the world axes:
-EP1's top and bottom contacts and the approach point at first, the fitted object after),
-probes of the front (+x), of both sides (±y), of the top (−z) and of the bottom (+z), and
-*slides* over the top (toward the back and to both sides at first, along the postulated
-object's own horizontal axes once it has an orientation): short guarded probes every 3 mm,
-the fingertip dragged over the surface, until it drops over an edge (the last contact is on
-the edge: the object's extent that way), a link would touch first (a curved top past its
-apex) or nothing is felt; a slide keeps the contact of every :data:`SLIDE_KEEP`-th step and
-its last. Later rounds shift the probe offsets by the run's generator, so repeated rounds
-feel new places.
+**Active touch** (:mod:`eos_svc.agents.probe_choice`): the first round is three probes (the
+front and both sides), which with EP1's top and bottom give post_shape five contacts to fit.
+While post_shape's postulate is not trusted it leaves its ``candidates`` (the likeliest
+classes, their fits' uncertainty and far-reaching faces), and each **active round** probes the
+:data:`ROUND_PROBES` lines where those candidates' predicted touches disagree most — where
+the competing classes' surfaces differ, where a size or the pose is least known
+(:mod:`eos_svc.shape.probe_information`) — a line the hand cannot probe giving way to the next
+of the :data:`RANKED_LINES` best. EP2 stops when post_shape trusts its postulate.
 
-**Active touch**: once post_shape's fit leaves faces no touch bounds (``open_faces`` of the
-postulate, :mod:`eos_svc.shape.open_faces`), a round probes those faces alone — straight onto
-each, a finger hooked round the object for a face turned away from the hand
-(:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch; the
-whole surface again only when none of them is felt.
+A **round over the whole surface** comes when there is no candidate line to probe (no fit yet,
+every line blocked or met nothing, the candidates agree everywhere, or after
+:data:`MAX_ACTIVE_ROUNDS` active rounds): around the current estimate (centre and half
+extents along the world axes: EP1's top and bottom contacts and the approach point at first,
+the fitted object after), probes of the front (+x), of both sides (±y), of the top (−z) and
+of the bottom (+z), and *slides* over the top (toward the back and to both sides at first,
+along the postulated object's own horizontal axes once it has an orientation): short guarded
+probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the
+last contact is on the edge: the object's extent that way), a link would touch first (a
+curved top past its apex) or nothing is felt; a slide keeps the contact of every
+:data:`SLIDE_KEEP`-th step and its last. Later rounds shift the probe offsets by the run's
+generator, so repeated rounds feel new places. Once post_shape's fit leaves faces no touch
+bounds (``open_faces``, :mod:`eos_svc.shape.open_faces`), such a round probes those faces
+first — straight onto each, a finger hooked round the object for a face turned away from the
+hand (:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch;
+the whole surface again only when none of them is felt.
 When the object rests on a table there is no bottom probe, and every probe is the opposing
 finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
 rest of the hand stays above the table).
 The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
 class to them (:mod:`eos_svc.shape`).
 
-Opportunistic sub-rating: when post_shape has just pondered and asks for more of the surface
-(``needs: "surface"``: EP1's curvature is trusted but the class or the extent is ambiguous),
-the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and after
-:data:`MAX_ROUNDS` rounds.
+Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and
+asks for more of the surface (``needs: "surface"``: the class or the extent is ambiguous, or
+not yet precise), the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and
+after :data:`MAX_ROUNDS` rounds over the whole surface.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.probe_choice import next_probes, seed_probes
 from eos_svc.agents.probe_plan import Probe, targeted_probes
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 
-#: most EP2 rounds in one plan
+#: most EP2 rounds over the whole surface in one plan
 MAX_ROUNDS = 5
+#: most active-touch rounds in one plan
+MAX_ACTIVE_ROUNDS = 8
+#: most lines an active-touch round probes
+ROUND_PROBES = 2
+#: the most informative lines an active-touch round ranks (tried in order while lines are blocked)
+RANKED_LINES = 12
 #: lowest opportunistic sub-rating while post_shape asks for the surface
 RATING_FLOOR = 0.05
 #: how far outside the estimated surface a probe starts (m)
@@ -102,14 +118,15 @@ class EP2Agent(GraspAgent):
 
     def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("ep2", (INFO,), default, world)
-        self.rounds = 0
+        self.rounds = 0  # rounds over the whole surface
+        self.active_rounds = 0
         self.side_fingers = world.context.side_fingers
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
         if shape is None or shape.get("needs") != "surface" or self.rounds >= MAX_ROUNDS:
             return 0.0
-        if not ctx.changed(keys.SHAPE):
+        if not (ctx.changed(keys.SHAPE) or ctx.last_agent == "post_shape"):  # it has pondered what EP2 felt
             return 0.0
         return max(RATING_FLOOR, min(1.0, 1.0 - float(shape["confidence"])))
 
@@ -278,27 +295,54 @@ class EP2Agent(GraspAgent):
                 axes.extend([h / n, -h / n])
         return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
 
-    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
-        estimate = estimate_box(board)
-        if estimate is None:
-            return ActionResult(
-                Outcome.CANNOT_ACT, "no estimate of the object to plan probes around yet (EP1 feels it first)"
-            )
+    def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> list[list[Probe]]:
+        """This round's active-touch lines, each its alternative probes
+        (:mod:`eos_svc.agents.probe_choice`): the seed probes before anything is felt (off a
+        table), the most informative lines while post_shape leaves candidates and active rounds
+        remain; none otherwise (a round of the whole surface)."""
         world = self.world
-        touches = list(board.get(keys.EP2_TOUCHES, []))
-        free = list(board.get(keys.EP2_FREE, []))
-        counts: dict[str, int] = {}
+        if self.active_rounds == 0 and keys.EP2_TOUCHES not in board and world.table_height is None:
+            return [seed_probes(world, *estimate, STANDOFF)]
+        candidates = (board.get(keys.SHAPE) or {}).get("candidates") or []
+        if not candidates or self.active_rounds >= MAX_ACTIVE_ROUNDS:
+            return []
+        return next_probes(world, candidates, estimate, RANKED_LINES, STANDOFF)
+
+    def run_lines(
+        self, lines: list[list[Probe]], touches: list[dict], free: list[list[float]], counts: dict[str, int]
+    ) -> tuple[int, int]:
+        """Run the ``lines`` in order until ROUND_PROBES of them are answered (a touch, or a
+        whole travel free): a line the hand cannot probe (every alternative blocked) gives way
+        to the next. (missed, blocked)."""
+        missed = blocked = answered = 0
+        for line in lines:
+            felt = sum(counts.values())
+            m, b = self.run_probes(line, touches, free, counts, miss_answers=True)
+            missed, blocked = missed + m, blocked + b
+            answered += sum(counts.values()) > felt or m > 0
+            if answered >= ROUND_PROBES:
+                break
+        return missed, blocked
+
+    def run_probes(
+        self,
+        probes: Iterable[Probe],
+        touches: list[dict],
+        free: list[list[float]],
+        counts: dict[str, int],
+        miss_answers: bool = False,
+    ) -> tuple[int, int]:
+        """Run ``probes`` (a group's alternatives after one of them touched — or, with
+        ``miss_answers``, ran its whole travel — are skipped), adding to ``touches``, ``free``
+        and the touches per face ``counts``; (missed, blocked)."""
+        world = self.world
         missed = blocked = 0
-        faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
-        # active touch: once a fit leaves faces open, the round probes those faces first, and
-        # the whole surface only when none of them is felt
-        planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
         answered: set[int] = set()  # groups of alternatives already answered by a touch
-        for probe in self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts):
+        for probe in probes:
             if probe.group in answered:
                 continue
             outcome = world.guarded_probe(
-                probe.finger, probe.start, probe.direction, probe.travel, probe.angle
+                probe.finger, probe.start, probe.direction, probe.travel, probe.angle, probe.yaw
             )
             if outcome.event == "touched":
                 assert outcome.centre is not None and outcome.normal is not None
@@ -312,6 +356,57 @@ class EP2Agent(GraspAgent):
                     free.extend([*row, r] for row in np.asarray(outcome.free).round(7).tolist())
                 missed += outcome.event == "missed"
                 blocked += outcome.event == "blocked"
+                if miss_answers and outcome.event == "missed" and probe.group >= 0:
+                    answered.add(probe.group)
+        return missed, blocked
+
+    def _done(
+        self,
+        board: Board,
+        touches: list[dict],
+        free: list,
+        counts: dict[str, int],
+        missed: int,
+        blocked: int,
+        what: str,
+    ) -> ActionResult:
+        board.set(keys.EP2_TOUCHES, touches)
+        board.set(keys.EP2_FREE, free)
+        board.set(keys.EP2_RUNS, self.rounds)
+        felt = ", ".join(f"{face} {n}" for face, n in counts.items()) or "nothing"
+        return ActionResult(
+            Outcome.PROGRESS,
+            f"EP2 {what}: guarded probes touched {sum(counts.values())} ({felt}), "
+            f"missed {missed}, blocked {blocked}; {len(touches)} contacts in all",
+        )
+
+    def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        estimate = estimate_box(board)
+        if estimate is None:
+            return ActionResult(
+                Outcome.CANNOT_ACT, "no estimate of the object to plan probes around yet (EP1 feels it first)"
+            )
+        world = self.world
+        touches = list(board.get(keys.EP2_TOUCHES, []))
+        free = list(board.get(keys.EP2_FREE, []))
+        counts: dict[str, int] = {}
+        # active touch: a few probes where the candidates disagree most; a round of the whole
+        # surface (below) when there is none to make, or none of them met or missed the object
+        active = self.active_plan(board, estimate)
+        if active:
+            missed, blocked = self.run_lines(active, touches, free, counts)
+            if counts or missed:
+                self.active_rounds += 1
+                return self._done(
+                    board, touches, free, counts, missed, blocked, f"active round {self.active_rounds}"
+                )
+        faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
+        # once a fit leaves faces open, the round probes those faces first, and the whole
+        # surface only when none of them is felt
+        planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
+        missed, blocked = self.run_probes(
+            self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts), touches, free, counts
+        )
         # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
         # +x (toward the back), +y and −y until the tip drops over an edge, a link would
         # touch first, or nothing is felt
@@ -342,12 +437,4 @@ class EP2Agent(GraspAgent):
                 r = world.hand.tip_radius(world.probe_finger("top"))
                 free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)
         self.rounds += 1
-        board.set(keys.EP2_TOUCHES, touches)
-        board.set(keys.EP2_FREE, free)
-        board.set(keys.EP2_RUNS, self.rounds)
-        felt = ", ".join(f"{face} {n}" for face, n in counts.items()) or "nothing"
-        return ActionResult(
-            Outcome.PROGRESS,
-            f"EP2 round {self.rounds}: guarded probes touched {sum(counts.values())} ({felt}), "
-            f"missed {missed}, blocked {blocked}; {len(touches)} contacts in all",
-        )
+        return self._done(board, touches, free, counts, missed, blocked, f"round {self.rounds}")

@@ -75,13 +75,12 @@ class GraspPointsAgent(GraspAgent):
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it is confident enough (or approximate, with nothing more to
-        ask EP2 for), else None."""
+        """post_shape's postulate if it is confident enough and post_shape asks for nothing more
+        (or approximate, with nothing more to ask EP2 for), else None."""
         shape = board.get(keys.SHAPE)
-        if shape is None:
+        if shape is None or shape.get("needs") is not None:
             return None
-        final_approximation = bool(shape.get("approximate")) and shape["needs"] is None
-        if shape["confidence"] < self.world.params.confidence_threshold and not final_approximation:
+        if shape["confidence"] < self.world.params.confidence_threshold and not shape.get("approximate"):
             return None
         return shape
 

@@ -17,7 +17,11 @@ Two sources, in the order the information stage gathers them:
    more of the surface (``needs: "surface"``: EP2).
 2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
    least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
-   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again.
+   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again — and, while
+   the postulate rests on fewer than :data:`PRECISION_CONTACTS` contacts, also while its sizes
+   and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
+   a few contacts fit five classes loosely) — leaving its ``candidates``
+   (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
 3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
    once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
    ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
@@ -32,7 +36,8 @@ position, rpy), None for a plane or before the size is known — ``pose_known`` 
 orientation is assumed upright), ``evidence`` (contacts used, fit residual, competing classes
 with their probabilities) and ``bounds`` (the object's world-axis bounds, m).
 
-Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
+Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new (a contact, or a probe's
+free path), else 0.
 """
 
 from __future__ import annotations
@@ -51,7 +56,8 @@ from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
-from eos_svc.shape.selection import MIN_CONTACTS, fit_probability
+from eos_svc.shape.probe_information import candidates_of
+from eos_svc.shape.selection import MIN_CONTACTS, fit_probability, tolerance_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
@@ -64,6 +70,11 @@ MAX_FREE_SAMPLES = 60
 OUT_OF_CLASS = 1e-3
 #: the approximate postulate's class name
 HULL = "hull"
+#: the precision rule: while fewer contacts than this, a confident postulate is asked to be
+#: precise too — P(sizes and centre within ±PRECISION) at least the confidence threshold —
+#: before the grasp (EP2's active touch is cheap; a few contacts fit five classes loosely)
+PRECISION_CONTACTS = 12
+PRECISION = 0.03
 #: probability that EP1's curvature class is right (see the module docstring)
 EP1_CLASS_PROBABILITY = 0.5
 
@@ -134,6 +145,7 @@ class PostShapeAgent(GraspAgent):
             ctx.changed(keys.CURVATURE)
             or ctx.changed(keys.CURVATURE_BOTTOM)
             or ctx.changed(keys.EP2_TOUCHES)
+            or ctx.changed(keys.EP2_FREE)  # a probe that touched nothing bounds the object too
             or ctx.changed(keys.EP1_CONTACT)  # on a table, the bottom is the table's plane
         )
         return 1.0 if new else 0.0
@@ -168,13 +180,20 @@ class PostShapeAgent(GraspAgent):
         threshold = self.world.params.confidence_threshold
         fit = post.best
         radius = classify(curvature)[1]
+        precise = (
+            fit is None
+            or touches.count >= PRECISION_CONTACTS
+            or ep2_done
+            or tolerance_probability(fit, touches, tolerance=PRECISION) >= threshold
+        )
+        trusted = post.confidence >= threshold and precise
         shape: dict[str, Any] = {
             "class": post.kind,
             "confidence": round(post.confidence, 6),
             "grasp_radius": None,
             "diameter": None,
             "centre": None,
-            "needs": None if post.confidence >= threshold else "surface",
+            "needs": None if trusted else "surface",
             "principal_curvatures": curvature["principal_curvatures"],
             "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": post.object(),
@@ -188,8 +207,10 @@ class PostShapeAgent(GraspAgent):
             "open_faces": [],
         }
         if fit is not None:
-            if post.confidence < threshold:  # what EP2 should feel next: the faces no touch bounds
+            if not trusted:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
+                # the classes and extents EP2 should tell apart (its next probes)
+                shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]
             g = fit.geometry
             half = g.half_extents()
             shape["grasp_radius"] = round(float(half[2]), 6)
@@ -198,7 +219,9 @@ class PostShapeAgent(GraspAgent):
             shape["bounds"] = [np.round(g.centre - half, 6).tolist(), np.round(g.centre + half, 6).tolist()]
         self._write(board, shape)
         rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
-        ask = "" if shape["needs"] is None else "; asks EP2 for more of the surface"
+        ask = "" if trusted else "; asks EP2 for more of the surface"
+        if post.confidence >= threshold and not precise:
+            ask += f" (its size not yet known to {PRECISION:.0%})"
         size = "" if fit is None else f", half-height {shape['grasp_radius'] * 1000:.2f} mm"
         return ActionResult(
             Outcome.PROGRESS,

@@ -11,7 +11,11 @@ sideways); for a face turned away from the hand (normal toward +x) the same fing
 (every joint at :data:`HOOK_ANGLE`: its tip curled back toward the hand, ahead of its links and
 the palm), reaching around the object. A probe another part of the hand would end is
 abandoned, as every guarded probe is; its alternatives follow (the other finger, a deeper
-hook, points off the face's centre), and the first that touches ends the face's group.
+hook, points off the face's centre), and the first that touches ends the face's group. A hand
+whose fingers cannot curl back (a parallel jaw's prismatic fingers) or reach round a long
+object has one more way to such a face: the wrist turned a quarter turn about the vertical
+(:data:`SIDE_TURN`), the hand beside the object and its fingers across the face, the tip moved
+onto it from behind (tried after the hooks, within the wrist's yaw limits).
 
 SI units: metres, radians.
 """
@@ -40,6 +44,11 @@ REACH_FRACTIONS = (1.0, 0.5, 0.25)
 MIN_REACH = 0.05
 #: a face is turned away from the hand when its normal's x component exceeds this
 AWAY = 0.3
+#: the wrist's turn about the vertical, either way, of a probe from the side onto a face turned
+#: away (rad): the fingers across the probe's direction
+SIDE_TURN = 0.5 * np.pi
+#: shifts of a side probe's start from the face's centre toward the hand (m)
+SIDE_SHIFTS = (0.0, 0.012, 0.024)
 
 
 @dataclass(frozen=True)
@@ -54,11 +63,16 @@ class Probe:
     travel: float
     angle: float
     group: int = -1  #: probes of one group (≥ 0) are alternatives: the first that touches ends it
+    yaw: float = 0.0  #: the wrist's turn about the vertical during the probe (rad)
 
 
-def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> list[Probe]:
+def targeted_probes(
+    world: HandDriver, faces: list[dict], standoff: float, label: str = "open", off_centre: bool = True
+) -> list[Probe]:
     """The probes of the open ``faces`` (post_shape's ``open_faces``: centre, outward normal,
-    half size), in order; ``standoff``: how far outside a surface a probe starts (m)."""
+    half size), in order; ``standoff``: how far outside a surface a probe starts (m);
+    ``label``: the face name their touches carry; ``off_centre``: with the alternatives off the
+    face's centre (else on its centre line only)."""
     probe = world.probe
     top, bottom = probe.finger("top"), probe.finger("bottom")
     probes: list[Probe] = []
@@ -74,13 +88,53 @@ def targeted_probes(world: HandDriver, faces: list[dict], standoff: float) -> li
         for fraction in REACH_FRACTIONS:
             reach = max(MIN_REACH, fraction * REACH * float(face["half"]))
             travel = 2.0 * reach + standoff
-            for offset in (np.zeros(3), *(sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0))):
+            offsets = (sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0)) if off_centre else ()
+            for offset in (np.zeros(3), *offsets):
                 start = centre + offset + normal * (reach + standoff)
                 for finger in fingers:
                     for angle in angles:
                         a = probe.angles.get(finger, 0.0) if angle is None else angle
-                        probes.append(Probe("open", finger, start, -normal, travel, a, group=k))
+                        probes.append(Probe(label, finger, start, -normal, travel, a, group=k))
+        if away:
+            probes += _side_probes(world, centre, normal, float(face["half"]), standoff, fingers, k)
     return probes
+
+
+def _side_probes(
+    world: HandDriver,
+    centre: np.ndarray,
+    normal: np.ndarray,
+    half: float,
+    standoff: float,
+    fingers: tuple[str, str],
+    group: int,
+) -> list[Probe]:
+    """Probes of a face turned away (outward ``normal``, fitted ``half`` size, m) with the wrist
+    turned :data:`SIDE_TURN` either way about the vertical (within its yaw limits): the fingers
+    point across the probe's direction, so the hand stays beside the object while the tip moves
+    onto the face from behind it; each finger straight, from the reaches of
+    :data:`REACH_FRACTIONS`, at the face's centre and :data:`SIDE_SHIFTS` toward the hand (the
+    finger's base, wider than its tip, then passes beside the face)."""
+    hand = world.hand
+    yaw_q = hand.wrist_q_index[5]
+    heading = float(np.arctan2(normal[1], normal[0]))
+    lo, hi = float(hand.lower[yaw_q]), float(hand.upper[yaw_q])
+    # within the limits (a limit that rounds a quarter turn, as hand3x3's 1.570796, is taken)
+    yaws = [
+        min(max(y, lo), hi) for y in (heading + SIDE_TURN, heading - SIDE_TURN) if lo - 1e-3 <= y <= hi + 1e-3
+    ]
+    out = []
+    for fraction in REACH_FRACTIONS:
+        reach = max(MIN_REACH, fraction * REACH * half)
+        for yaw in yaws:
+            toward_hand = -np.array([np.cos(yaw), np.sin(yaw), 0.0])  # the fingers point away from it
+            for shift in SIDE_SHIFTS:
+                start = centre + normal * (reach + standoff) + shift * toward_hand
+                travel = 2.0 * reach + standoff
+                for finger in fingers:
+                    angle = world.probe.angles.get(finger, 0.0)
+                    out.append(Probe("open", finger, start, -normal, travel, angle, group, yaw))
+    return out
 
 
 def _tangents(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

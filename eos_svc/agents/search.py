@@ -10,9 +10,17 @@ proximity sense of the palm, active all along a move (the move stops there), doc
 ``docs/planner.md``. Any of the motion agents (finger1–3, wrist) can make a
 search move: the finger agents lead the hand with their fingertip, the wrist
 moves it; the paper allows all four in the search stage.
+
+On a table the first search move first rolls the hand a quarter turn about its approach axis
+(:func:`roll_for_table`): upright, the hand is as tall as its finger spread (hand3x3: its palm
+reaches 75 mm below the grasp centre), so over a table its grasp centre could not come
+within the envelope of an object shorter than about 50 mm; rolled, its fingers lie side by
+side over the table and the grasp centre sweeps as low as the fingers' thickness allows.
 """
 
 from __future__ import annotations
+
+import math
 
 from eos_svc.agent import ActionResult, Outcome
 from eos_svc.board import Board
@@ -33,8 +41,25 @@ def search_move_limit(world: HandDriver) -> int:
     return 2 * ny * nz
 
 
+def roll_for_table(world: HandDriver) -> bool:
+    """Roll the hand a quarter turn about its approach axis (the wrist's roll joint to π/2),
+    where it stands, when it is then clear of the object; whether it rolled."""
+    hand = world.hand
+    q = world.joint_positions()
+    roll = hand.wrist_q_index[3]
+    before = float(q[roll])
+    q[roll] = min(max(0.5 * math.pi, float(hand.lower[roll])), float(hand.upper[roll]))
+    world.move_joints(q)
+    if world.hand_clear(world.params.clearance):
+        return True
+    q[roll] = before
+    world.move_joints(q)
+    return False
+
+
 def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
-    """Make one search move and report whether the object is now located."""
+    """Make one search move and report whether the object is now located (on a table, the
+    hand rolled first: :func:`roll_for_table`)."""
     if world.located():
         board.set(keys.LOCATED, True)
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
@@ -48,12 +73,15 @@ def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
             f"({moves} sweeps): it is not where the search can find it",
             succeeded=False,
         )
+    rolled = moves == 0 and world.table_height is not None and roll_for_table(world)
     label, moved, blocked = world.search_step()
     board.set(keys.SEARCH_MOVES, moves + 1)
     gap = world.object_gap_to_grasp_centre()
     board.set(keys.GAP, round(gap, 6))
-    what = f"{who} moved the hand {moved * 1000:.1f} mm sweeping column {label}" + (
-        " (stopped short of a contact)" if blocked else ""
+    what = (
+        ("rolled the hand a quarter turn over the table, " if rolled else "")
+        + (f"{who} moved the hand {moved * 1000:.1f} mm sweeping column {label}")
+        + (" (stopped short of a contact)" if blocked else "")
     )
     if world.located():
         board.set(keys.LOCATED, True)

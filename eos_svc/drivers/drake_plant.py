@@ -33,17 +33,16 @@ from pydrake.geometry import (
     RoleAssign,
 )
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
 from pydrake.multibody.tree import PdControllerGains, SpatialInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from eos_svc.errors import ValidationError
 from eos_svc.kinematics import HandModel
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.validation.simulation import object_shapes, urdf_effort_limits, vec
+from eos_svc.validation.drake_hand import drake_urdf
+from eos_svc.validation.simulation import hand_parser, object_shapes, urdf_effort_limits, vec
 
 #: the object starts this far above the table, m
 DROP = 1e-4
@@ -70,7 +69,8 @@ class PlantSettings:
         time_step: the discrete plant's step, s.
         wrist_kp, wrist_kd: the wrist's translation joints' PD gains (N/m, N·s/m).
         wrist_rot_kp, wrist_rot_kd: the wrist's rotation joints' gains (N·m/rad, N·m·s/rad).
-        finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad).
+        finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad), unless the hand's
+            description gives its own (``[drake]`` kp, kd; N/m, N·s/m for a prismatic finger).
         contact_stiffness: point-contact stiffness, N/m.
         table_slab, table_modulus: the table's compliant layer (hydroelastic): thickness (m) and
             modulus (Pa).
@@ -122,11 +122,8 @@ class DrakeHandPlant:
         settings: PlantSettings | None = None,
         table_height: float | None = None,
     ) -> None:
-        if hand.urdf_path is None:
-            raise ValidationError("hand", "the Drake world needs the hand's URDF (this hand has none)")
         s = settings or PlantSettings()
         self.settings = s
-        efforts = urdf_effort_limits(hand.urdf_path)
         builder = DiagramBuilder()
         config = MultibodyPlantConfig(
             time_step=s.time_step,
@@ -134,16 +131,21 @@ class DrakeHandPlant:
             discrete_contact_approximation="sap",
         )
         plant, scene_graph = AddMultibodyPlant(config, builder)
-        (model,) = Parser(plant).AddModels(hand.urdf_path)
+        # the URDF the hand's description makes (a composite for a described hand), as Drake
+        # validation reads it (drake_urdf raises ValidationError for a hand without one)
+        with drake_urdf(hand) as (urdf, package_dirs):
+            efforts = urdf_effort_limits(urdf)
+            (model,) = hand_parser(plant, package_dirs).AddModels(urdf)
         names = [str(n) for n in hand.model.names[1:]]  # Pinocchio's joints in q order (1 DoF each)
         wrist = set(hand.description.wrist_joints)
+        drake = dict(getattr(hand, "drake", {}))
         for name in names:
             joint = plant.GetJointByName(name, model)
             if name in wrist:
                 prismatic = joint.type_name() == "prismatic"
                 kp, kd = (s.wrist_kp, s.wrist_kd) if prismatic else (s.wrist_rot_kp, s.wrist_rot_kd)
-            else:
-                kp, kd = s.finger_kp, s.finger_kd
+            else:  # the description's [drake] gains (as Drake validation's), else the settings'
+                kp, kd = drake.get("kp", s.finger_kp), drake.get("kd", s.finger_kd)
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts.get(name, np.inf))
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
         material = contact_material(friction, s.contact_stiffness)

@@ -308,11 +308,17 @@ class DrakeDriver(KinematicDriver):
         return FingerStep(step.event, world.finger_angle(finger), touch or step.touch)
 
     def guarded_probe(
-        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+        self,
+        finger: str,
+        start: np.ndarray,
+        direction: np.ndarray,
+        travel: float,
+        angle: float,
+        yaw: float = 0.0,
     ) -> ProbeOutcome:
         """EP2's probe: placed (a transfer), advanced in Drake; a touch presses on."""
         world = self._world
-        outcome = super().guarded_probe(finger, start, direction, travel, angle)
+        outcome = super().guarded_probe(finger, start, direction, travel, angle, yaw)
         q_end = world.state.q
         unit = np.asarray(direction, dtype=float) / float(np.linalg.norm(direction))
         q_start = q_end.copy()

@@ -216,10 +216,16 @@ class KinematicDriver:
         return FingerStep(event, angle, touch)
 
     def guarded_probe(
-        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+        self,
+        finger: str,
+        start: np.ndarray,
+        direction: np.ndarray,
+        travel: float,
+        angle: float,
+        yaw: float = 0.0,
     ) -> ProbeOutcome:
         """EP2's guarded probe (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
-        return self._world.guarded_probe(finger, start, direction, travel, angle)
+        return self._world.guarded_probe(finger, start, direction, travel, angle, yaw)
 
     def place_tip_on(self, finger: str, q: np.ndarray, point: np.ndarray) -> None:
         """EP1's start (:func:`eos_svc.kinematics.ep1.place_hand_for_ep1`)."""

@@ -283,9 +283,16 @@ class HandDriver(Protocol):
         ...
 
     def guarded_probe(
-        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+        self,
+        finger: str,
+        start: np.ndarray,
+        direction: np.ndarray,
+        travel: float,
+        angle: float,
+        yaw: float = 0.0,
     ) -> ProbeOutcome:
-        """EP2's guarded straight move of a fingertip from ``start`` along ``direction``."""
+        """EP2's guarded straight move of a fingertip from ``start`` along ``direction``, the
+        wrist turned by ``yaw`` (rad) about the vertical."""
         ...
 
     def place_tip_on(self, finger: str, q: np.ndarray, point: np.ndarray) -> None:

@@ -235,10 +235,18 @@ class ZenohDriver:
         return out
 
     def guarded_probe(
-        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+        self,
+        finger: str,
+        start: np.ndarray,
+        direction: np.ndarray,
+        travel: float,
+        angle: float,
+        yaw: float = 0.0,
     ) -> ProbeOutcome:
         """EP2's guarded probe."""
         args = {"finger": finger, "start": start, "direction": direction, "travel": travel, "angle": angle}
+        if yaw != 0.0:  # the wire form of an unturned probe is unchanged
+            args["yaw"] = yaw
         out: ProbeOutcome = decode(self._call("guarded_probe", **args))
         return out
 

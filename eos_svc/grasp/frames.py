@@ -12,7 +12,10 @@ through the object's centre of mass across the object, as GraspIt's primitive ru
 - box: across each pair of opposite faces, approach along the other face normals.
 
 Each closing axis is taken in both senses (the opposing finger on either side), with every
-approach across it. Angles in radians.
+approach across it. On a table (``on_table``) the object is also grasped **from above**: the
+approach straight down (the palm facing the table, the fingers closing about the object above
+it), or the downward direction across a tilted closing axis; no approach climbs from under the
+table, and no closing axis is vertical (a finger would go under the object). Angles in radians.
 """
 
 from __future__ import annotations
@@ -73,17 +76,33 @@ def closing_axes(obj: SurfaceObject, vertical_only: bool = False) -> list[tuple[
     return obj.closing_axes()
 
 
-def approach_axes(obj: SurfaceObject, closing: np.ndarray) -> list[np.ndarray]:
+#: on a table: a closing axis this close to the vertical (|z component|) is not tried, nor an
+#: approach climbing more steeply than this (from under the table)
+STEEP = 0.9
+RISING = 0.2
+
+
+def approach_axes(obj: SurfaceObject, closing: np.ndarray, on_table: bool = False) -> list[np.ndarray]:
     """Approach directions (signed, world, ⟂ ``closing``): the direction nearest the hand's
     unrotated approach (+x), then the kind's own
-    (:meth:`~eos_svc.objects.base.SurfaceObject.approach_options`)."""
-    return distinct_units([perpendicular_unit(_EX, closing), *obj.approach_options(closing)], signed=True)
+    (:meth:`~eos_svc.objects.base.SurfaceObject.approach_options`); ``on_table``: also the
+    downward one (from above), and none rising more than :data:`RISING` (from under it)."""
+    down = [perpendicular_unit(-_EZ, closing)] if on_table else []
+    options = [perpendicular_unit(_EX, closing), *obj.approach_options(closing), *down]
+    axes = distinct_units(options, signed=True)
+    return [x for x in axes if not on_table or float(x[2]) <= RISING]
 
 
-def candidate_frames(obj: SurfaceObject, vertical_only: bool = False) -> Iterator[tuple[str, np.ndarray]]:
+def candidate_frames(
+    obj: SurfaceObject, vertical_only: bool = False, on_table: bool = False
+) -> Iterator[tuple[str, np.ndarray]]:
     """(label, palm rotation) of every candidate orientation: each closing axis in both senses
-    (the opposing finger on either side), each approach across it."""
+    (the opposing finger on either side), each approach across it; ``on_table``: from above
+    too, no closing axis steeper than :data:`STEEP` (see the module docstring)."""
     for words, g in closing_axes(obj, vertical_only):
-        for x in approach_axes(obj, g):
+        if on_table and abs(float(g[2])) > STEEP:
+            continue
+        for x in approach_axes(obj, g, on_table):
+            label = f"{words} from above" if on_table and float(x[2]) < -STEEP else words
             for sign in (1.0, -1.0):
-                yield words, frame(x, sign * g)
+                yield label, frame(x, sign * g)

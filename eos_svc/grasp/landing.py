@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from bisect import bisect_left
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -148,3 +149,27 @@ def landing(
     it never does, or already touches there (see :class:`SweepLandings`)."""
     pts, gaps = rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
     return SweepLandings(obj, sweep, pts, gaps).landing(start)
+
+
+def hand_landings(
+    obj: SurfaceObject,
+    sweeps: Mapping[str, FingerSweep],
+    tip_radii: Mapping[str, float],
+    rotation: np.ndarray,
+    origin: np.ndarray,
+) -> dict[str, Landing | None]:
+    """The :func:`landing` closing from open (sample 0) of every finger of ``tip_radii`` (in its
+    order), the palm at (``rotation``, ``origin``): the fingers' sweeps stacked into one
+    signed-distance query (an object's distance costs mostly per query, not per point: the
+    ellipsoid's Newton iteration)."""
+    names = list(tip_radii)
+    stacked = np.concatenate([sweeps[f].points for f in names]) @ rotation.T + origin
+    sizes = [len(sweeps[f].points) for f in names]
+    radii = np.repeat([tip_radii[f] for f in names], sizes)
+    gaps = obj.signed_distances(stacked)[0] - radii
+    ends = np.cumsum(sizes)
+    out: dict[str, Landing | None] = {}
+    for f, end, size in zip(names, ends.tolist(), sizes, strict=True):
+        part = slice(end - size, end)
+        out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part]).landing(0)
+    return out

@@ -27,7 +27,7 @@ import numpy as np
 from eos_svc.grasp.candidate import GraspCandidate, diameter_angle_deg
 from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
-from eos_svc.grasp.landing import Landing, landing
+from eos_svc.grasp.landing import hand_landings
 from eos_svc.grasp.quality import grasp_quality
 from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel
@@ -48,6 +48,9 @@ GOOD_ENOUGH_ANGLE_DEG = 172.0
 EPSILON_TIE = 0.05
 #: collision-free candidates about the centre scored by ε, the least-rotated first
 SCORED = 4
+#: how far past a wrist joint's limit (rad) an angle still counts as at it: URDF limits are
+#: written rounded (1.570796 for π/2), and a grasp from above needs a yaw of exactly π/2
+LIMIT_SLACK = 1e-6
 #: largest object across the grip, as a fraction of the hand height (paper §2.1: d/h < 1)
 MAX_D_OVER_H = 1.0
 
@@ -83,6 +86,8 @@ class GraspSynthesis:
         self.friction = friction
         self.vertical_only = vertical_only
         self.opposing = hand.description.opposing_finger
+        self.on_table = table_height is not None
+        self.tip_radii = {f: hand.tip_radius(f) for f in hand.finger_names}
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
 
@@ -92,33 +97,34 @@ class GraspSynthesis:
     def candidates(self) -> list[GraspCandidate]:
         """The best candidates, best first.
 
-        Every candidate orientation is simulated at its best depth; of those about the centre,
-        the ``SCORED`` least-rotated that are collision-free (one for a sphere, whose grasps
-        about its diameters are all alike) are scored by ε; the best ε wins, and candidates
-        within ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first.
-        When none about the centre is collision-free, the collision-free one closest to it is
-        returned alone (the best the hand can do; its ``about_centre`` is False)."""
-        simulated = [
-            c
-            for label, R in candidate_frames(self.obj, self.vertical_only)
-            if (c := self._at_best_depth(label, R)) is not None
-        ]
-        about = sorted(
-            (c for c in simulated if c.about_centre), key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label)
-        )
+        Candidate orientations are simulated at their best depth from the least wrist rotation
+        up, a group of equal rotations at a time; of those about the centre, the ``SCORED``
+        least-rotated that are collision-free (one for a sphere, whose grasps about its
+        diameters are all alike) are scored by ε; the best ε wins, and candidates within
+        ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first. The
+        orientations rotated more than the last one scored cannot change the choice and are
+        not simulated. When none about the centre is collision-free, the collision-free one
+        closest to it is returned alone (the best the hand can do; its ``about_centre`` is
+        False)."""
         wanted = 1 if isinstance(self.obj, Sphere) else SCORED
+        simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
-        for cand in about:
-            if self._collision_free(cand):
-                kept.append(self._scored(cand))
-                if len(kept) == wanted:
-                    break
+        for group in _turn_groups(candidate_frames(self.obj, self.vertical_only, self.on_table)):
+            fresh = [c for label, R in group if (c := self._at_best_depth(label, R)) is not None]
+            simulated += fresh
+            for cand in sorted((c for c in fresh if c.about_centre), key=lambda c: (-c.angle_deg, c.label)):
+                if self._collision_free(cand):
+                    kept.append(self._scored(cand))
+                    if len(kept) == wanted:
+                        break
+            if len(kept) == wanted:
+                break
         if not kept:
-            # no grasp about the centre is reachable: the one closest to it, the best the hand
-            # can do (the end agent will judge it)
-            if len(about) < len(simulated):
-                self._reject("contacts not about the centre")
+            # no grasp about the centre is reachable (every orientation was simulated): the one
+            # closest to it, the best the hand can do (the end agent will judge it)
             rest = sorted((c for c in simulated if not c.about_centre), key=lambda c: (-c.angle_deg, c.turn))
+            if len(rest) > 0:
+                self._reject("contacts not about the centre")
             return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
         top = max(c.epsilon for c in kept)
         kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
@@ -144,15 +150,19 @@ class GraspSynthesis:
         return self.clearance.pregrasp(c)
 
     def wrist_rpy(self, R: np.ndarray) -> tuple[float, float, float] | None:
-        """The wrist joint values for palm rotation ``R``, or None outside their limits."""
+        """The wrist joint values for palm rotation ``R``, or None outside their limits (by more
+        than :data:`LIMIT_SLACK`; within it, the limit)."""
         rpy = rpy_from_rotation(R)
         if not np.allclose(rotation_from_rpy(*rpy), R, atol=1e-9):
             return None
         widx = self.hand.wrist_q_index[3:6]
+        lo, hi = self.hand.lower[widx], self.hand.upper[widx]
         a = np.asarray(rpy)
-        if np.any(a < self.hand.lower[widx] - 1e-9) or np.any(a > self.hand.upper[widx] + 1e-9):
+        if np.any(a < lo - LIMIT_SLACK) or np.any(a > hi + LIMIT_SLACK):
             return None
-        return rpy
+        # a limit written rounded in the URDF (1.570796 for π/2) admits the exact angle
+        roll, pitch, yaw = (float(v) for v in np.clip(a, lo, hi))
+        return roll, pitch, yaw
 
     def depth_for(self, extent: float) -> float | None:
         """Depth that puts the opposing fingertip straight under the centre when it touches:
@@ -204,16 +214,26 @@ class GraspSynthesis:
         if np.any(wrist < self.hand.lower[widx]) or np.any(wrist > self.hand.upper[widx]):
             self._reject("wrist position out of its limits")
             return None
-        landings: dict[str, Landing] = {}
-        for finger in self.hand.finger_names:
-            hit = landing(self.obj, self.sweeps[finger], self.hand.tip_radius(finger), R, wrist)
-            if hit is None:
-                self._reject("a fingertip misses the object")
-                return None
-            landings[finger] = hit
+        found = hand_landings(self.obj, self.sweeps, self.tip_radii, R, wrist)
+        landings = {f: hit for f, hit in found.items() if hit is not None}
+        if len(landings) < len(found):
+            self._reject("a fingertip misses the object")
+            return None
+        if self._open_gap(R, wrist) < self.params.clearance:
+            # the open hand would come closer than the clearance (a parallel jaw opened hardly
+            # wider than the object): its approach would stop short
+            self._reject("an open fingertip passes closer than the clearance")
+            return None
         others = [hit.point for f, hit in landings.items() if f != self.opposing]
         angle = diameter_angle_deg(centre, landings[self.opposing].point, others)
         return GraspCandidate(label, R, rpy, wrist, depth, extent, landings, angle, turn=palm_turn(R))
+
+    def _open_gap(self, R: np.ndarray, wrist: np.ndarray) -> float:
+        """The open fingertips' least gap to the object (m), the palm at ``wrist`` turned by ``R``."""
+        names = self.hand.finger_names
+        tips = np.array([R @ self.sweeps[f].points[0] + wrist for f in names])
+        radii = np.array([self.tip_radii[f] for f in names])
+        return float(np.min(self.obj.signed_distances(tips)[0] - radii))
 
     def _collision_free(self, c: GraspCandidate) -> bool:
         why = self.clearance.collision(c)
@@ -237,3 +257,12 @@ class GraspSynthesis:
             self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)
+
+
+def _turn_groups(frames: Iterable[tuple[str, np.ndarray]]) -> list[list[tuple[str, np.ndarray]]]:
+    """The candidate frames ``(label, R)`` in groups of equal wrist rotation (:func:`palm_turn`
+    rounded to 1e-6 rad), the least-rotated group first, each group in the frames' order."""
+    groups: dict[float, list[tuple[str, np.ndarray]]] = {}
+    for label, R in frames:
+        groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
+    return [groups[turn] for turn in sorted(groups)]

@@ -59,24 +59,29 @@ def ball_gap_lower_bounds(
     ``radius`` about ``centre`` (world, m): ``table[id]`` is the geometry's :func:`shape_bound`,
     ``views[id]`` its world (translation, rotation). Each bound is at most the exact gap coal
     would return (tested against coal), so a geometry whose bound reaches a threshold needs no
-    exact query."""
+    exact query. Arithmetic on floats: numpy costs ~0.5 µs a call on 3-vectors."""
     obj_radius = radius + BOUND_MARGIN
+    c = np.asarray(centre, dtype=float)
     bounds = []
     for gid in geometry_ids:
         kind, a, b, ball = table[gid]
         t, R = views[gid]
-        p = np.asarray(centre, dtype=float) - t  # the object's centre from the geometry's origin
+        p = c - t  # the object's centre from the geometry's origin (world axes)
+        px, py, pz = p.tolist()
         if kind == SPHERE:  # a ball of radius a about the local point b (usually none)
-            lower = np.linalg.norm(p if b is None else p - R @ np.asarray(b)) - a
+            if b is not None:
+                px, py, pz = (p - R.dot(b)).tolist()
+            lower = math.hypot(px, py, pz) - a
         else:
-            local = R.T @ p  # in the geometry's frame
+            lx, ly, lz = p.dot(R).tolist()  # Rᵀ p: in the geometry's frame
             if kind == BOX:  # half sides a
-                lower = np.linalg.norm(np.maximum(np.abs(local) - a, 0.0))
+                ax, ay, az = a
+                lower = math.hypot(max(abs(lx) - ax, 0.0), max(abs(ly) - ay, 0.0), max(abs(lz) - az, 0.0))
             else:  # SEGMENT: radius a about the local z segment of half length b
-                lower = math.hypot(local[0], local[1], max(abs(local[2]) - b, 0.0)) - a
+                lower = math.hypot(lx, ly, max(abs(lz) - b, 0.0)) - a
             if lower <= obj_radius:
                 # they may overlap, where this bound does not hold (the centre may lie inside the
                 # primitive): the bound of the primitive's local AABB ball (radius ``ball``) does
-                lower = np.linalg.norm(p) - ball
-        bounds.append((float(lower) - obj_radius, gid))
+                lower = math.hypot(px, py, pz) - ball
+        bounds.append((lower - obj_radius, gid))
     return bounds

@@ -31,11 +31,15 @@ def tangent_pair(
     index of the preferred world axis (0 = x, 2 = z)."""
     if prefer not in (0, 2):
         raise ValidationError("prefer", f"must be 0 (world x) or 2 (world z), got {prefer!r}")
-    n = (nx, ny, nz)
-    k = prefer if abs(n[prefer]) < NEAR_AXIS else 1
-    t = [-n[k] * c for c in n]  # e_k − n_k n
-    t[k] += 1.0
-    tx, ty, tz = t
+    k = prefer if abs(nz if prefer == 2 else nx) < NEAR_AXIS else 1
+    nk = (nx, ny, nz)[k]
+    tx, ty, tz = -nk * nx, -nk * ny, -nk * nz  # e_k − n_k n
+    if k == 0:
+        tx += 1.0
+    elif k == 1:
+        ty += 1.0
+    else:
+        tz += 1.0
     s = 1.0 / math.sqrt(tx * tx + ty * ty + tz * tz)
     tx, ty, tz = tx * s, ty * s, tz * s
     return tx, ty, tz, ny * tz - nz * ty, nz * tx - nx * tz, nx * ty - ny * tx

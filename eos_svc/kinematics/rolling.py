@@ -31,9 +31,11 @@ __all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class RollingStep:
-    """Outcome of one rolling step.
+    """Outcome of one rolling step (a plain record, as :class:`~.scene.Contact` and
+    :class:`~.tactile.TactileReading`: made at every step, where a frozen dataclass's
+    ``__init__`` costs ~0.5 µs more).
 
     Attributes:
         contact: the contact measured at the start of the step (configuration before it).
@@ -119,13 +121,20 @@ class RollingQP:
         #: the active joints' indices in q and q̇ (the same: every joint is 1-DoF)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
+        # the active columns of the Jacobian: a slice (a view) when they are contiguous
+        first = int(self.active[0])
+        contiguous = self.active.tolist() == list(range(first, first + self.nx))
+        self._columns: slice | np.ndarray = slice(first, first + self.nx) if contiguous else self.active
         self.box = JointBox(
             hand.lower[self.active], hand.upper[self.active], hand.velocity_limit[self.active]
         )
-        w = np.ones(self.nx) if weights is None else np.asarray(weights, dtype=float).reshape(-1)
-        if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
-            raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
-        self.weights = w
+        if weights is None:
+            self.weights = np.ones(self.nx)
+        else:
+            w = np.asarray(weights, dtype=float).reshape(-1)
+            if w.shape != (self.nx,) or not np.all(np.isfinite(w)) or np.any(w <= 0):
+                raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
+            self.weights = w
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
         # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
@@ -181,9 +190,9 @@ class RollingQP:
         views), its Jacobian over the active joints and ``J̇ q̇`` (LOCAL_WORLD_ALIGNED)."""
         model, data = self.hand.model, self._data
         pin.forwardKinematics(model, data, self._q, self._qdot, self._zero)
-        pin.updateFramePlacement(model, data, self._fid)
         pin.computeJointJacobians(model, data)
-        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA).take(self.active, axis=1)
+        # getFrameJacobian also places the tip frame (data.oMf[fid], the live views)
+        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA)[:, self._columns]
         drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
         return jacobian, drift
 
@@ -224,7 +233,7 @@ class RollingQP:
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
         self._qdot[self.active] = x
         self._q += self._qdot * self.dt  # the other joints' q̇ is 0
-        e0, e1, e2, e3, e4, e5 = (qp.A @ x - qp.b).tolist()
+        e0, e1, e2, e3, e4, e5 = (qp.A.dot(x) - qp.b).tolist()
         return RollingStep(
             contact,
             reading,

@@ -133,10 +133,10 @@ def step_qp(
         b = np.array((0.0, 0.0, gap_target, wx, wy, wz))
     else:  # b − ½ dt M J̇ q̇_prev, on floats (the same roundings as on arrays)
         h = 0.5 * dt
-        m0, m1, m2, m3, m4, m5 = (M @ drift).tolist()
+        m0, m1, m2, m3, m4, m5 = M.dot(drift).tolist()
         b = np.array((0.0 - h * m0, 0.0 - h * m1, gap_target - h * m2, wx - h * m3, wy - h * m4, wz - h * m5))
     lb, ub = velocity_bounds(q, box, dt)
-    return StepQP(weights, M @ jacobian, b, lb, ub)
+    return StepQP(weights, M.dot(jacobian), b, lb, ub)
 
 
 def rolling_problem(

@@ -56,10 +56,11 @@ def equality_optimum(qp: StepQP, tolerance: float = BOUND_TOLERANCE) -> np.ndarr
     (no bound is active). None when a bound would be violated or ``A`` has not full row rank."""
     A = qp.A
     A_scaled = A / qp.weights  # A W⁻¹
-    _, y, info = lapack.dposv(A_scaled @ A.T, qp.b)
+    # ndarray.dot rather than @: the same product, half the call overhead on these 6×n arrays
+    _, y, info = lapack.dposv(A_scaled.dot(A.T), qp.b)
     if info != 0:
         return None
-    x: np.ndarray = A_scaled.T @ y
+    x: np.ndarray = y.dot(A_scaled)  # W⁻¹Aᵀ y
     # the smallest slack to either bound, ≥ −tolerance (False on NaN)
     return x if np.minimum.reduce(np.minimum(x - qp.lb, qp.ub - x)) >= -tolerance else None
 

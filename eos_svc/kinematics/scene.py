@@ -24,7 +24,7 @@ from .hand import HandModel, HandState, KinematicsError, UnknownNameError
 __all__ = ["Contact", "Scene"]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class Contact:
     """Closest-point result between one hand geometry and the object.
 

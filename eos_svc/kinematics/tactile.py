@@ -21,7 +21,7 @@ from .scene import Contact
 __all__ = ["TactileReading", "TactileSensor"]
 
 
-@dataclass(frozen=True, slots=True)
+@dataclass(slots=True)
 class TactileReading:
     """One reading of a fingertip sensor.
 

@@ -55,9 +55,14 @@ class SphereTipProbe:
         res.clear()  # a result at distance <= 0 would satisfy the next request as it is
         dist = float(self._distance(self._tf_obj, self._tf_tip, self._request, res))
         p_obj = res.getNearestPoint1()
-        d = centre - p_obj
-        dx, dy, dz = d.tolist()
-        norm = math.sqrt(dx * dx + dy * dy + dz * dz)  # np.sum(d * d)'s arithmetic, without its wrapper
+        (cx, cy, cz), (px, py, pz) = centre.tolist(), p_obj.tolist()
+        dx, dy, dz = cx - px, cy - py, cz - pz  # on floats: numpy costs ~0.3 µs a call on 3-vectors
+        norm = math.sqrt(dx * dx + dy * dy + dz * dz)
         # the tip centre outside the object: the normal through it (exact); else coal's
-        normal = d / norm if norm > 1e-12 and dist > -0.5 * self.radius else np.array(res.normal)
-        return Contact(self.finger, dist, centre - self.radius * normal, p_obj, normal)
+        if norm > 1e-12 and dist > -0.5 * self.radius:
+            nx, ny, nz = dx / norm, dy / norm, dz / norm
+        else:
+            nx, ny, nz = res.normal.tolist()
+        r = self.radius
+        tip = np.array((cx - r * nx, cy - r * ny, cz - r * nz))
+        return Contact(self.finger, dist, tip, p_obj, np.array((nx, ny, nz)))

@@ -38,11 +38,15 @@ def closest_points(P: Array, a: Array) -> Array:
     ap2 = (a * P) ** 2
     for _ in range(ITERATIONS):
         inv = 1.0 / (t[..., None] + a2)
-        total = (ap2 * inv * inv).sum(axis=-1)  # F + 1 = h⁻²
-        slope = (ap2 * inv**3).sum(axis=-1)  # h' h⁻³
+        terms = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
+        total = terms.sum(axis=-1)  # F + 1 = h⁻²
+        slope = (terms * inv).sum(axis=-1)  # h' h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
-        t = np.maximum(t + step, pole)
-        if (np.abs(step) <= STEP_TOLERANCE * (1e-6 + np.abs(t))).all():
+        t_next = np.maximum(t + step, pole)
+        # converged where t no longer moves (a point held at the pole moves no more either)
+        settled = (np.abs(t_next - t) <= STEP_TOLERANCE * (1e-6 + np.abs(t_next))).all()
+        t = t_next
+        if settled:
             break
     S = a2 * P / (t[..., None] + a2)
     at_pole = inside & (t <= pole)

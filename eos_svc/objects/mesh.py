@@ -149,7 +149,7 @@ class Mesh(SurfaceObject):
         self.mesh, self.hull, self._solid = mesh, hull, (mesh if self.closed else hull)
         self._inline = None if file is not None else (V.tolist(), F.tolist())
         self._triangles = np.asarray(mesh.triangles, dtype=float)
-        self._face_normals = np.asarray(mesh.face_normals, dtype=float)
+        self._face_normals = outward_normals(mesh)
         self._hull_normals = np.asarray(hull.face_normals, dtype=float)
         self._hull_offsets = np.einsum("fi,fi->f", self._hull_normals, np.asarray(hull.triangles)[:, 0, :])
         self._geom = coal.BVHModelOBBRSS()
@@ -325,6 +325,19 @@ class Mesh(SurfaceObject):
         """trimesh's inertia of the solid (unit density) about its centre of mass, over its mass."""
         out: Array = np.asarray(self._solid.moment_inertia, dtype=float) / float(self._solid.mass)
         return out
+
+
+def outward_normals(mesh: Any) -> Array:
+    """Unit normals (F, 3) of a trimesh's faces; a degenerate (zero-area) face, which has none —
+    a hull of touches rounded to µm can hold a few — takes the direction from the centre of
+    mass (the origin) to its centroid, outward on a star-shaped mesh."""
+    normals = np.array(mesh.face_normals, dtype=float)
+    none = np.linalg.norm(normals, axis=1) < 0.5
+    if np.any(none):
+        centroids = np.asarray(mesh.triangles_center, dtype=float)[none]
+        lengths = np.linalg.norm(centroids, axis=1, keepdims=True)
+        normals[none] = np.where(lengths > TINY, centroids / np.maximum(lengths, TINY), [0.0, 0.0, 1.0])
+    return normals
 
 
 def _decompose(vertices: Array, faces: Array, sender: Any) -> None:

@@ -88,6 +88,7 @@ ShapeEntry = TypedDict(
         "evidence": NotRequired[dict[str, Any]],
         "bounds": NotRequired[list[Vector] | None],
         "open_faces": NotRequired[list[dict[str, Any]]],
+        "candidates": NotRequired[list[dict[str, Any]]],
         "approximate": NotRequired[bool],
     },
 )
@@ -101,7 +102,10 @@ e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in 
 JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
 postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``open_faces`` (the
 fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` size and
-``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`)
+``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`), ``candidates``
+(while the postulate is not trusted: the likeliest classes, each its ``class``,
+``probability``, fitted ``parameters``, ``start_rotation`` and ``sigma_steps``, from which EP2
+chooses its next probes, :mod:`eos_svc.shape.probe_information`)
 and ``approximate`` (True: the convex hull of the touches, no primitive explaining them).
 """
 
@@ -195,7 +199,7 @@ ENTRIES: dict[str, Entry] = {
     keys.EP2_FREE: Entry(
         list[list[float]], "tip-centre samples [x, y, z, tip radius] of EP2 probes that touched nothing (m)"
     ),
-    keys.EP2_RUNS: Entry(int, "EP2 rounds so far"),
+    keys.EP2_RUNS: Entry(int, "EP2 rounds over the whole surface so far (active-touch rounds not counted)"),
     keys.HAND_Q: Entry(list[float], "the hand's configuration after the cycle (m, rad)"),
     keys.OBJECT_POSE: Entry(
         list[float],

@@ -7,6 +7,8 @@
   (scipy.optimize.least_squares; the distances are the kinds' own, :mod:`eos_svc.objects`).
 - :mod:`~eos_svc.shape.selection`: fit every kind, posterior over kinds from BIC, the
   calibrated confidence and the postulated object in the request's JSON form.
+- :mod:`~eos_svc.shape.probe_information`: the candidate postulates' predicted touches along
+  a probe's line, and the probes of largest expected information (active touch).
 """
 
 from eos_svc.shape.fit import ClassFit, fit_class

@@ -322,6 +322,7 @@ def fit_class(
     max_starts: int | None = None,
     nearest_first: bool = False,
     class_starts: ClassStarts | None = None,
+    only: int | None = None,
 ) -> ClassFit:
     """The least-squares fit of ``kind`` (the best of its starts).
 
@@ -329,8 +330,9 @@ def fit_class(
     start ends above it, the remaining starts are skipped. ``max_starts``: try at most that
     many starts (all by default). ``nearest_first``: try the starts from the nearest to the
     touches (:func:`nearest_order`). ``class_starts``: the touches' starts (shared by the
-    fits of several kinds to the same touches), else computed here. A start that
-    :func:`explains` the touches ends the search (:func:`_minimise` from each start)."""
+    fits of several kinds to the same touches), else computed here; ``only``: fit from that
+    start alone. A start that :func:`explains` the touches ends the search (:func:`_minimise`
+    from each start)."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k, m = N_PARAMS[kind], residual_count(touches)
@@ -338,6 +340,8 @@ def fit_class(
     data = shared.fit_data(FitData.of)
     candidates = shared.of(kind)
     order = nearest_order(kind, shared, data) if nearest_first else range(len(candidates))
+    if only is not None:
+        order = [only]
     best = None
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]

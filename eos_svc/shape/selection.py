@@ -32,7 +32,7 @@ import pinocchio as pin
 from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
-from eos_svc.shape.fit import GOOD_FIT, ClassFit, explains, extent_ratios, fit_class
+from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
 from eos_svc.shape.starts import ClassStarts
 from eos_svc.shape.touches import Touches
 
@@ -48,6 +48,9 @@ FIT_SLACK = 2.0
 HOPELESS = 2000.0
 #: iterations that show a class hopeless once another fits
 QUICK_NFEV = 6
+#: a sibling class (:func:`siblings`) whose χ² exceeds the best class's by more than this is
+#: refitted from the best class's fit
+SIBLING_GAP = 10.0
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
 
@@ -161,17 +164,19 @@ def _within(tolerance: np.ndarray, sigma: np.ndarray) -> float:
     return p
 
 
-def tolerance_probability(fit: ClassFit, touches: Touches | None = None) -> float:
-    """P(every size within ±SIZE_TOLERANCE and the centre within SIZE_TOLERANCE × the mean
-    half size), from the fit's Gaussian covariance (independent parameters) and, given the
-    touches, times ``1 − r`` per size with ``r`` the likelihood ratio of a size 10 % off with
-    one face kept (:func:`~eos_svc.shape.fit.extent_ratios`: a size bounded on one side only
-    is not known)."""
+def tolerance_probability(
+    fit: ClassFit, touches: Touches | None = None, tolerance: float = SIZE_TOLERANCE
+) -> float:
+    """P(every size within ±``tolerance`` (relative) and the centre within ``tolerance`` × the
+    mean half size), from the fit's Gaussian covariance (independent parameters) and, given
+    the touches, times ``1 − r`` per size with ``r`` the likelihood ratio of a size
+    ``tolerance`` off with one face kept (:func:`~eos_svc.shape.fit.extent_ratios`: a size
+    bounded on one side only is not known)."""
     sizes = fit.geometry.half_sizes
-    p_size = _within(np.full(len(sizes), SIZE_TOLERANCE), fit.size_sigmas())
+    p_size = _within(np.full(len(sizes), tolerance), fit.size_sigmas())
     if touches is not None:
-        p_size *= float(np.prod(1.0 - extent_ratios(fit, touches, SIZE_TOLERANCE)))
-    p_centre = _within(np.full(3, SIZE_TOLERANCE * float(np.mean(sizes))), fit.centre_sigmas())
+        p_size *= float(np.prod(1.0 - extent_ratios(fit, touches, tolerance)))
+    p_centre = _within(np.full(3, tolerance * float(np.mean(sizes))), fit.centre_sigmas())
     return p_size * p_centre
 
 
@@ -221,6 +226,14 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
         fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, class_starts=shared)
+    best_kind = min(fits, key=lambda k: fits[k].chi2)
+    for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
+        if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
+            continue  # near the best already: a refit would barely move the posterior
+        start = shared.add(kind, *sibling_start(fits[best_kind], kind))
+        refit = fit_class(kind, touches, class_starts=shared, only=start)
+        if refit.chi2 < fits[kind].chi2:
+            fits[kind] = refit
     fits = {k: fits[k] for k in classes}
     bic = {k: f.chi2 + f.n_params * math.log(m) for k, f in fits.items()}
     low = min(bic.values())
@@ -230,6 +243,35 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     kind = max(classes, key=lambda k: (probs[k], -classes.index(k)))
     confidence = probs[kind] * tolerance_probability(fits[kind], touches) * fit_probability(fits[kind], m)
     return Postulate(kind, confidence, probs, fits, touches.count)
+
+
+def siblings(kind: str, classes: tuple[str, ...]) -> list[str]:
+    """The other classes oriented and sized like ``kind`` (cylinder and capsule; box and
+    ellipsoid): one's fit is a good start for the other's."""
+    a = KINDS[kind]
+    return [
+        k
+        for k in classes
+        if k != kind
+        and KINDS[k].orientation == a.orientation != "none"
+        and KINDS[k].half_size_count == a.half_size_count
+    ]
+
+
+def sibling_start(fit: ClassFit, kind: str) -> tuple[np.ndarray, np.ndarray]:
+    """A start ``(theta0, r0)`` of ``kind`` (a :func:`siblings` of the fit's) at the fitted
+    object's centre and orientation with its extents: the same half sizes, except along an
+    axis-oriented kind's axis, where the half length is set so the extent matches (a capsule's
+    caps reach one radius past its straight part)."""
+    g = fit.geometry
+    half = np.array(g.half_sizes, dtype=float)
+    if KINDS[kind].orientation == "axis":
+        z = np.array([0.0, 0.0, 1.0])
+        extent = g.local_half_extent(z)
+        cap = KINDS[kind].from_half_sizes(np.array([half[0], 1.0])).local_half_extent(z) - 1.0
+        half[1] = max(extent - cap, 0.1 * half[0])
+    orientation = np.zeros(SIZE_INDEX[kind][0] - 3)  # about r0 = the fitted rotation
+    return np.concatenate([g.centre, orientation, np.log(half)]), np.array(g.rotation)
 
 
 def screen(

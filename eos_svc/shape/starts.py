@@ -141,6 +141,12 @@ class ClassStarts:
             self._of[kind] = self._starts(kind)
         return list(self._of[kind])
 
+    def add(self, kind: str, theta0: np.ndarray, r0: np.ndarray) -> int:
+        """Add a start of ``kind`` (e.g. from another kind's fit); its index."""
+        starts = self._of.setdefault(kind, self._starts(kind))
+        starts.append((theta0, r0))
+        return len(starts) - 1
+
     @cached_property
     def scatter_axes(self) -> np.ndarray:
         """:func:`normal_scatter_axes` of the normals."""

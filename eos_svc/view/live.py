@@ -39,6 +39,7 @@ from eos_svc.view.scene import (
     HandDrawing,
     add_contacts,
     add_object,
+    drawn_postulate,
     new_meshcat,
     play_once,
     postulated_object,
@@ -212,7 +213,7 @@ class LiveView:
         if spec is None:
             self.meshcat.Delete(POSTULATE)
         else:
-            add_object(self.meshcat, POSTULATE, spec, POSTULATE_RGBA)
+            add_object(self.meshcat, POSTULATE, drawn_postulate(spec), POSTULATE_RGBA)
 
     def _show_label(self, text: str) -> None:
         """The current cycle as a button label in the page's controls (top right)."""

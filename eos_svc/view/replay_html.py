@@ -37,6 +37,7 @@ from eos_svc.view.scene import (
     HandDrawing,
     add_contacts,
     add_object,
+    drawn_postulate,
     new_meshcat,
     play_once,
     postulated_object,
@@ -89,7 +90,7 @@ def _postulates(meshcat: Meshcat, anim: MeshcatAnimation, timeline: Timeline) ->
         if spec is None:
             continue
         path = f"{POSTULATE}/{k}"
-        add_object(meshcat, path, spec, POSTULATE_RGBA)
+        add_object(meshcat, path, drawn_postulate(spec), POSTULATE_RGBA)
         anim.SetProperty(0, path, "visible", False)
         anim.SetProperty(frame, path, "visible", True)
         if k + 1 < len(shown):

@@ -10,7 +10,7 @@ from __future__ import annotations
 import logging
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import coal
@@ -57,6 +57,8 @@ def rgba(colour: str, alpha: float = 1.0) -> Rgba:
 
 OBJECT_RGBA = rgba(OBJECT_COLOUR, 0.45)
 POSTULATE_RGBA = Rgba(1.0, 0.85, 0.1, 0.2)
+#: the postulated object is drawn this much larger (:func:`drawn_postulate`)
+POSTULATE_INFLATION = 1.01
 CONTACT_RGBA = rgba(CONTACT_COLOUR)
 CONE_RGBA = rgba(CONTACT_COLOUR, 0.35)
 #: drawn size of a contact: dot radius, normal line length, friction cone height (m)
@@ -120,6 +122,22 @@ def postulated_object(shape: Mapping[str, Any] | None) -> ObjectSpec | None:
         return ObjectSpec.from_dict(dict(data))
     except (ValueError, TypeError):  # ValidationError is a ValueError
         return None
+
+
+def drawn_postulate(spec: ObjectSpec) -> ObjectSpec:
+    """The postulated object as drawn: its sizes ×:data:`POSTULATE_INFLATION`, so that where it
+    coincides with the true object its translucent surface lies just outside the truth's
+    instead of flickering through it (z-fighting); a size field that is not a number or a
+    list of numbers is kept."""
+
+    def grown(value: Any) -> Any:
+        if isinstance(value, (int, float)):
+            return float(value) * POSTULATE_INFLATION
+        if isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) for v in value):
+            return tuple(float(v) * POSTULATE_INFLATION for v in value)
+        return value
+
+    return replace(spec, size={k: grown(v) for k, v in spec.size.items()})
 
 
 def _coal_shape(geometry: Any) -> tuple[Shape, RigidTransform]:

@@ -14,6 +14,11 @@ every finger, closing from open, still reaches a contact with its fingertip:
   falls away from the links, so only the tips' own reach counts, capped by the grasp rule
   the planner plans with (paper §2.1: d/h < 1, :data:`~eos_svc.grasp.synthesis.MAX_D_OVER_H`).
 
+Fingers that close side by side in planes apart from the palm's x–z plane (G1 Dex3's index and
+middle, 57 mm apart) also need the object wide enough across them: a finger whose tip path
+never comes nearer that plane than the object's half extent across it (plus the tip's radius)
+misses it (:attr:`FingertipOpening.side_reach`).
+
 A grip across an axis also needs room behind its contacts: the object's centre sits under the
 opposing fingertip's contact, which lies at a depth ahead of the palm that the opposing
 finger's sweep fixes (:meth:`FingertipOpening.room`); along some approach across the grip the
@@ -56,6 +61,10 @@ class FingertipOpening:
         opposing_x: the same samples' depth ahead of the palm frame (m).
         palm_front: the largest x of the hand's geometries that are not on a finger (m).
         tip_radius: the opposing fingertip's radius (m).
+        side_reach: the least half extent across the fingers' closing planes (the palm's y
+            axis) that every fingertip reaches: over the fingers, the largest of the tip path's
+            least distance from the palm's x–z plane less the tip radius (m; ≤ 0 when every
+            path crosses that plane).
     """
 
     flat_by_depth: tuple[float, ...]
@@ -64,6 +73,7 @@ class FingertipOpening:
     opposing_x: tuple[float, ...]
     palm_front: float
     tip_radius: float
+    side_reach: float = 0.0
 
     @classmethod
     def build(
@@ -124,6 +134,9 @@ class FingertipOpening:
             opposing_x=tuple(opposing.points[:, 0].tolist()),
             palm_front=front if math.isfinite(front) else 0.0,
             tip_radius=hand.tip_radius(hand.description.opposing_finger),
+            side_reach=max(
+                float(np.min(np.abs(sweep.points[:, 1]))) - hand.tip_radius(f) for f, sweep in sweeps.items()
+            ),
         )
 
     @property
@@ -220,11 +233,24 @@ def _mesh_grip_axes(spec: ObjectSpec) -> list[GripAxis]:
     ]
 
 
+def grip_sides(axis: GripAxis) -> list[tuple[float, float]]:
+    """(half extent along the approach, half extent across the fingers) of each way the hand may
+    take a grip across ``axis``: either perpendicular half as the approach, the other across."""
+    halves = axis.approach_halves
+    if len(halves) == 1:
+        return [(halves[0], halves[0])]
+    a, b = halves[0], halves[1]
+    return [(a, b), (b, a)]
+
+
 def fits_across(axis: GripAxis, opening: FingertipOpening, clearance: float) -> bool:
     """Whether a grip across ``axis`` fits: its width below the opening for its surface, and
-    along some approach the object's half extent within the room behind the contacts."""
-    depth = min(axis.approach_halves)
-    return axis.width < opening.limit(axis.surface, depth) and depth <= opening.room(axis.width) - clearance
+    along some approach the object's half extent within the room behind the contacts and its
+    half extent across the fingers at least :attr:`FingertipOpening.side_reach`."""
+    if axis.width >= opening.limit(axis.surface, min(axis.approach_halves)):
+        return False
+    room = opening.room(axis.width) - clearance
+    return any(depth <= room and side >= opening.side_reach for depth, side in grip_sides(axis))
 
 
 def fit_refusal(spec: ObjectSpec, opening: FingertipOpening, clearance: float) -> tuple[str, str] | None:
@@ -233,7 +259,12 @@ def fit_refusal(spec: ObjectSpec, opening: FingertipOpening, clearance: float) -
     axes = grip_axes(spec)
     if any(fits_across(a, opening, clearance) for a in axes):
         return None
-    thinnest = min(axes, key=lambda a: a.width / opening.limit(a.surface, min(a.approach_halves)))
+
+    def share(a: GripAxis) -> float:  # the width as a share of its opening (inf: no opening)
+        limit = opening.limit(a.surface, min(a.approach_halves))
+        return a.width / limit if limit > 0.0 else math.inf
+
+    thinnest = min(axes, key=lambda a: (share(a), a.width))
     limit = opening.limit(thinnest.surface, min(thinnest.approach_halves))
     if thinnest.width >= limit:
         why = (
@@ -242,6 +273,13 @@ def fit_refusal(spec: ObjectSpec, opening: FingertipOpening, clearance: float) -
             f"({limit * 1000:.1f} mm across {thinnest.surface} surfaces"
             + (f" {min(thinnest.approach_halves) * 1000:.0f} mm deep" if thinnest.surface == "flat" else "")
             + ")"
+        )
+    elif all(side < opening.side_reach for _depth, side in grip_sides(thinnest)):
+        side = max(side for _depth, side in grip_sides(thinnest))
+        why = (
+            f"across its thinnest grip ({thinnest.width * 1000:.1f} mm) it is {2.0 * side * 1000:.1f} mm "
+            f"wide across the fingers, narrower than the {2.0 * opening.side_reach * 1000:.1f} mm "
+            f"between the fingertips of the fingers closing side by side (a fingertip would miss it)"
         )
     else:
         room = opening.room(thinnest.width) - clearance

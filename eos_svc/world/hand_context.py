@@ -125,10 +125,11 @@ class HandContext:
             return self
         return dataclasses.replace(self, params=params, lattice=lattice_of(*column_counts(params)))
 
-    def probe_pose(self, finger: str, angle: float) -> ProbePose:
-        """The :class:`ProbePose` of ``finger`` at ``angle`` rad (kept for EP2's, else built)."""
-        pose = self.probe_poses.get((finger, float(angle)))
-        return pose if pose is not None else ProbePose.build(self.hand, finger, angle)
+    def probe_pose(self, finger: str, angle: float, yaw: float = 0.0) -> ProbePose:
+        """The :class:`ProbePose` of ``finger`` at ``angle`` rad, the wrist turned by ``yaw`` rad
+        (kept for EP2's unturned probes, else built)."""
+        pose = self.probe_poses.get((finger, float(angle))) if yaw == 0.0 else None
+        return pose if pose is not None else ProbePose.build(self.hand, finger, angle, yaw)
 
 
 @functools.cache

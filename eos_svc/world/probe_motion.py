@@ -14,12 +14,20 @@ if TYPE_CHECKING:
 
 
 def guarded_probe(
-    world: GraspWorld, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+    world: GraspWorld,
+    finger: str,
+    start: np.ndarray,
+    direction: np.ndarray,
+    travel: float,
+    angle: float,
+    yaw: float = 0.0,
 ) -> ProbeOutcome:
     """Move ``finger``'s tip in a straight line from ``start`` along ``direction`` (world,
     m) for at most ``travel`` m, stopping at first touch (EP2's guarded move).
 
-    The hand is placed with its wrist rotation at zero, ``finger`` at joint angle
+    The hand is placed with its wrist rotation at zero (turned by ``yaw`` rad about the vertical
+    when given: a hand whose fingers cannot curl back reaches a face turned away from it from
+    the side), ``finger`` at joint angle
     ``angle`` and every other finger opened, so that the tip's centre is at ``start``
     (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
     there). With a table, a probe whose hand would start within ``clearance`` of it (a probe
@@ -43,7 +51,7 @@ def guarded_probe(
     hand = world.hand
     d = np.asarray(direction, dtype=float)
     d = d / math.sqrt(d.dot(d))  # = d / np.linalg.norm(d) (sqrt of the dot product)
-    pose = world.context.probe_pose(finger, angle)  # wrist rotation 0, the fingers set
+    pose = world.context.probe_pose(finger, angle, yaw)  # wrist rotation (0, 0, yaw), the fingers set
     q = world.state.q
     pose.apply(q)
     world.set_q(q)

@@ -18,7 +18,8 @@ class ProbePose:
 
     Attributes:
         indices: q indices of the wrist's roll, pitch and yaw joints, then every finger's joints.
-        values: their values (rad): wrist rotation 0, the probing finger's joints at the angle,
+        values: their values (rad): wrist roll and pitch 0 and its yaw the probe's (0 unless a
+            probe turns the hand about the vertical), the probing finger's joints at the angle,
             every other finger open (its lower limits).
         wrist_xyz: q indices of the wrist's x, y, z joints (a list of ints).
         wrist_lo, wrist_hi: their limits (m), as floats.
@@ -38,11 +39,12 @@ class ProbePose:
         q[self.indices] = self.values
 
     @classmethod
-    def build(cls, hand: HandModel, finger: str, angle: float) -> ProbePose:
-        """The pose of a probe of ``finger`` at joint angle ``angle`` (rad) on ``hand``."""
+    def build(cls, hand: HandModel, finger: str, angle: float, yaw: float = 0.0) -> ProbePose:
+        """The pose of a probe of ``finger`` at joint angle ``angle`` (rad) on ``hand``, the
+        wrist turned by ``yaw`` (rad) about the vertical."""
         wq = hand.wrist_q_index
         parts_i = [np.asarray(wq[3:6], dtype=np.intp)]
-        parts_v = [np.zeros(len(wq[3:6]))]
+        parts_v = [np.array([0.0, 0.0, yaw])]
         for f in hand.finger_names:
             idx = np.asarray(hand.finger_q_index(f), dtype=np.intp)
             parts_i.append(idx)

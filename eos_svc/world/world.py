@@ -280,12 +280,18 @@ class GraspWorld:
         return wrist_motion.step_wrist_toward(self, target, step)
 
     def guarded_probe(
-        self, finger: str, start: np.ndarray, direction: np.ndarray, travel: float, angle: float
+        self,
+        finger: str,
+        start: np.ndarray,
+        direction: np.ndarray,
+        travel: float,
+        angle: float,
+        yaw: float = 0.0,
     ) -> ProbeOutcome:
         """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`),
         counted in :attr:`probes`."""
         self.probes += 1
-        return probe_motion.guarded_probe(self, finger, start, direction, travel, angle)
+        return probe_motion.guarded_probe(self, finger, start, direction, travel, angle, yaw)
 
     def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
         """A finger's closing step (:func:`eos_svc.world.finger_closing.close_finger_step`)."""

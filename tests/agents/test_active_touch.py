@@ -47,13 +47,46 @@ def test_probes_of_open_faces_start_beyond_and_move_inward():
         assert float((probe.start - face["centre"]) @ n) == pytest.approx(max(0.05, 2 * face["half"]) + 0.03)
         assert probe.travel > float((probe.start - face["centre"]) @ n)
     # the alternatives of a face: the other finger, a deeper hook, nearer starts, off-centre points
-    alternatives = [p for p in probes if p.group == 0]
+    alternatives = [p for p in probes if p.group == 0 and p.yaw == 0.0]
     assert {p.finger for p in alternatives} == {"finger1", "finger3"}
     assert {p.angle for p in alternatives} == set(HOOK_ANGLES)
     # 5 points per reach; reaches 0.1 m, then 0.05 m (the least) twice
     assert len({tuple(np.round(p.start, 6)) for p in alternatives}) == 2 * 5 < len(REACH_FRACTIONS) * 5
     out = world.guarded_probe(back.finger, back.start, back.direction, back.travel, back.angle)
     assert out.event == "touched" and out.centre[0] == pytest.approx(0.35 + 0.01, abs=2e-4)
+    # after the hooks, the face turned away from the side: the wrist turned a quarter turn either
+    # way, the start shifted toward the hand; a side face gets none
+    turned = [p for p in probes if p.yaw != 0.0]
+    assert turned and all(p.group == 0 for p in turned)
+    order = [p.yaw != 0.0 for p in probes if p.group == 0]
+    assert order == sorted(order)  # every turned probe after the unturned ones
+    assert {round(p.yaw, 5) for p in turned} == {round(np.pi / 2, 5), round(-np.pi / 2, 5)}
+    for p in turned:
+        assert np.allclose(p.direction, [-1.0, 0.0, 0.0]) and p.start[0] > 0.3
+
+
+def test_a_parallel_jaw_feels_a_face_turned_away_only_from_the_side():
+    """The Panda's jaw cannot curl a finger back, and its hand body, 204 mm tall, sits 38 mm
+    behind the tips: a straight probe onto a 50 mm cube's back face is blocked; with the wrist
+    turned a quarter turn, the hand beside the cube, the tip touches the back face (its centre
+    one tip radius behind it, the normal along +x)."""
+    from eos_svc.hands import load_hand_named
+    from eos_svc.world.hand_context import HandContext
+
+    context = HandContext.build(load_hand_named("panda"))
+    spec = ObjectSpec("box", {"size": [0.05, 0.05, 0.05]}, (0.21, 0.02, -0.015))
+    world = build_world(PlanRequest(obj=spec, seed=1), context=context)
+    finger, back = world.probe.top, 0.235
+    angle = world.probe.angles[finger]
+    start = np.array([back + 0.05, 0.02 - 0.012, -0.015])
+    west = np.array([-1.0, 0.0, 0.0])
+    assert world.guarded_probe(finger, start, west, 0.08, angle).event == "blocked"
+    for yaw in (np.pi / 2, -np.pi / 2):
+        side_start = start if yaw > 0 else start + np.array([0.0, 0.024, 0.0])
+        out = world.guarded_probe(finger, side_start, west, 0.08, angle, yaw)
+        assert out.event == "touched", out.why
+        assert out.centre[0] - back == pytest.approx(world.hand.tip_radius(finger), abs=2e-4)
+        assert out.normal[0] > 0.99
 
 
 def test_a_long_box_is_known_and_grasped_with_its_back_felt():
@@ -62,7 +95,7 @@ def test_a_long_box_is_known_and_grasped_with_its_back_felt():
     result = plan(PlanRequest(obj=spec, seed=2))
     assert result.good_grasp and result.status == "success"
     details = [c.detail for c in result.trace if c.chosen == "ep2"]
-    assert any("open" in d for d in details)
+    assert any("active" in d for d in details)  # EP2's active touch found the back
     size = sorted(result.shape["object"]["size"])
     assert size[-1] == pytest.approx(0.2, rel=0.03)
 

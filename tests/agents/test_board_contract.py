@@ -165,17 +165,21 @@ def _shape(**fields) -> dict:
 
 def test_entry_check_accepts_the_declared_forms():
     check_entry(keys_module.SHAPE, _shape())
-    # the postulate's optional object fields: object, pose_known, evidence, bounds, open_faces, approximate
+    # the postulate's optional object fields: object, pose_known, evidence, bounds, open_faces,
+    # candidates, approximate
     obj = {"shape": "sphere", "radius": 0.03, "position": [0.2, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
     check_entry(keys_module.SHAPE, _shape(object=obj, pose_known=True, evidence={"contacts": 5}, bounds=None))
     face = {"centre": [0.3, 0.0, 0.0], "normal": [1.0, 0.0, 0.0], "half": 0.05, "delta_chi2": 0.0}
     check_entry(keys_module.SHAPE, _shape(open_faces=[face]))
+    candidate = {"class": "sphere", "probability": 1.0, "parameters": [0.2, 0.0, 0.0, -3.5]}
+    check_entry(keys_module.SHAPE, _shape(candidates=[candidate]))
     assert ShapeEntry.__optional_keys__ == {
         "object",
         "pose_known",
         "evidence",
         "bounds",
         "open_faces",
+        "candidates",
         "approximate",
     }
     check_entry(keys_module.FINGER_STATE, {"finger1": "open", "finger2": "touching"})

@@ -66,7 +66,7 @@ def test_the_postulate_is_an_object_in_the_request_form(box_plan):
     np.testing.assert_allclose(sorted(posited.size["size"]), sorted(spec.size["size"]), atol=2e-3)
     np.testing.assert_allclose(posited.position, spec.position, atol=2e-3)
     evidence = shape["evidence"]
-    assert evidence["contacts"] >= 10
+    assert 2 < evidence["contacts"] <= 13  # EP1's two and EP2's active touch (#30: at most 13)
     assert sum(evidence["classes"].values()) == pytest.approx(1.0, abs=1e-5)
     assert "fit_rms" in evidence
     assert result.to_dict()["shape"]["object"] == shape["object"]
@@ -102,7 +102,7 @@ def test_ep1_repeats_while_its_curvature_is_not_trusted_then_ep2():
     first_ep2 = next(i for i, (who, _) in enumerate(details) if who == "ep2")
     assert details[again + 1][0] == "ep1" and again < first_ep2
     assert result.ep1_runs >= 3
-    assert result.shape["class"] == "sphere" and result.shape["confidence"] >= 0.9
+    assert result.shape["class"] == "sphere" and result.shape["confidence"] >= 0.6
 
 
 @pytest.mark.parametrize(

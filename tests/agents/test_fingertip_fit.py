@@ -89,3 +89,27 @@ def test_room_behind_the_contacts():
     deep = ObjectSpec("box", {"size": (0.3, 0.3, 0.06)}, (0.4, 0.0, 0.0))
     refusal = fit_refusal(deep, opening, 0.002)
     assert refusal is not None and refusal[0] == "object.size"
+
+
+def test_a_sphere_narrower_than_the_side_by_side_fingertips_is_refused_and_indeed_missed():
+    """G1 Dex3's index and middle close in planes 57 mm apart: a sphere whose radius is below
+    their tips' inner distance from the mid-plane (side_reach) is missed by a fingertip at every
+    candidate, and admission refuses it naming the radius; one just wider is grasped."""
+    from eos_svc.hands import load_hand_named
+    from eos_svc.world.hand_context import HandContext
+
+    ctx = HandContext.build(load_hand_named("g1_dex3"))
+    reach = ctx.opening.side_reach
+    tip = ctx.hand.tip_radius("index")
+    assert reach == pytest.approx(0.0285 - tip, abs=1e-3)  # the fingers' planes at ±28.5 mm
+
+    def found(spec: ObjectSpec) -> bool:
+        synthesis = GraspSynthesis(ctx.hand, ctx.sweeps, ctx.params, make_object(spec), 0.5)
+        return any(c.about_centre for c in synthesis.candidates())
+
+    narrow = ObjectSpec("sphere", {"radius": reach - 0.002}, POSITION)
+    assert not found(narrow)
+    field, reason = plannable_verdict(narrow, ctx)
+    assert field == "object.radius" and "across the fingers" in reason
+    wide = ObjectSpec("sphere", {"radius": reach + 0.002}, POSITION)
+    assert plannable_verdict(wide, ctx) == () and found(wide)

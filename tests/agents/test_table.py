@@ -101,3 +101,53 @@ def test_a_box_mesh_on_a_table_is_planned_as_the_box():
     result = plan(request)
     assert result.status == "success" and result.good_grasp
     assert result.shape is not None and result.shape["class"] == "box"
+
+
+def table_synthesis(spec: ObjectSpec, table: float | None):
+    from eos_svc.agents.planner import build_world, parameters_for
+    from eos_svc.grasp.postulate import make_object
+    from eos_svc.grasp.synthesis import GraspSynthesis
+
+    hand = default_hand()
+    world = build_world(PlanRequest(), hand)
+    params = parameters_for(hand)
+    return GraspSynthesis(hand, world.sweeps, params, make_object(spec), 0.5, table_height=table)
+
+
+def test_on_a_table_a_sphere_is_grasped_from_above_and_never_from_below():
+    # a ball resting on the table: from the side the opposing finger would go under the table;
+    # from above (palm down, closing across a horizontal diameter) it is reachable
+    ball = ObjectSpec("sphere", {"radius": 0.027}, (0.21, 0.02, -0.023))
+    on_table = table_synthesis(ball, -0.05)
+    best = on_table.candidates()
+    assert best and best[0].label.endswith("from above")
+    assert np.allclose(best[0].approach, [0.0, 0.0, -1.0], atol=1e-9)  # straight down
+    assert abs(float(best[0].closing[2])) < 1e-9  # closing across a horizontal diameter
+    assert best[0].about_centre
+    # the same ball floating: the paper's candidates, none from above
+    floating = table_synthesis(ball, None).candidates()
+    assert floating and not any("from above" in c.label for c in floating)
+
+
+def test_on_a_table_no_candidate_closes_vertically_or_climbs_from_under_it():
+    from eos_svc.grasp.frames import RISING, STEEP, candidate_frames
+    from eos_svc.grasp.postulate import make_object
+
+    obj = make_object(ObjectSpec("box", {"size": (0.05, 0.04, 0.06)}, (0.21, 0.02, -0.02), (0.3, 0.2, 0.5)))
+    frames = list(candidate_frames(obj, on_table=True))
+    assert frames and any(label.endswith("from above") for label, _ in frames)
+    for _, R in frames:
+        assert abs(R[2, 2]) <= STEEP and R[2, 0] <= RISING + 1e-12
+    assert any(abs(R[2, 2]) > STEEP for _, R in candidate_frames(obj))  # without a table: it does
+
+
+def test_a_short_object_on_a_table_is_located_by_the_rolled_hand():
+    # 25 mm tall: upright, the hand's palm reaches 75 mm below its grasp centre, which then
+    # stays more than the envelope (50 mm) above the object's top; rolled, it comes down to it
+    flat = ObjectSpec("box", {"size": (0.06, 0.05, 0.025)}, (0.21, 0.02, -0.0375))
+    result = plan(PlanRequest(obj=flat, seed=2, table=Table(-0.05)))
+    assert "information" in result.cycles_per_stage  # located: the search stage ended
+    first = next(r for r in result.trace if r.stage == "search" and r.chosen is not None)
+    assert first.detail.startswith("rolled the hand a quarter turn over the table")
+    hand, table = default_hand(), table_shape(-0.05)
+    assert min(hand_table_gap(hand.state(q), table) for q in hand_poses(result)) >= -1e-9

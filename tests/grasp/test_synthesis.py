@@ -15,11 +15,11 @@ from eos_svc.agents.planner import build_world, default_hand, parameters_for, ra
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.grasp.candidate import diameter_angle_deg
-from eos_svc.grasp.frames import frame, rotation_from_rpy, rpy_from_rotation
-from eos_svc.grasp.landing import SweepLandings, landing, rotated_sweep_gaps
+from eos_svc.grasp.frames import candidate_frames, frame, rotation_from_rpy, rpy_from_rotation
+from eos_svc.grasp.landing import SweepLandings, hand_landings, landing, rotated_sweep_gaps
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.grasp.quality import grasp_quality
-from eos_svc.grasp.synthesis import GraspSynthesis
+from eos_svc.grasp.synthesis import EPSILON_TIE, SCORED, GraspSynthesis
 
 HERE = (0.21, 0.02, -0.015)
 
@@ -71,6 +71,33 @@ def test_wrist_angles_outside_the_joint_limits_are_refused():
     s = synthesis(ObjectSpec("sphere", {"radius": 0.03}, HERE))
     assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 1.0)) == pytest.approx((0.3, 0.2, 1.0), abs=1e-12)
     assert s.wrist_rpy(rotation_from_rpy(0.3, 0.2, 2.0)) is None  # yaw beyond π/2
+
+
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("ellipsoid", {"radii": (0.04, 0.025, 0.03)}, HERE, (0.4, -0.3, 0.9)),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.3, 0.6, -1.1)),
+    ],
+    ids=lambda spec: spec.shape,
+)
+def test_the_hands_landings_in_one_query_are_each_fingers_landing(spec):
+    # hand_landings stacks the three sweeps into one distance query: the same landings as
+    # landing() finger by finger (the ellipsoid's Newton batch may iterate once more: 1e-12 m)
+    s = synthesis(spec)
+    R = rotation_from_rpy(0.2, -0.1, 0.3)
+    wrist = np.asarray(HERE) - R[:, 0] * 0.12
+    together = hand_landings(s.obj, s.sweeps, s.tip_radii, R, wrist)
+    assert tuple(together) == tuple(s.hand.finger_names)
+    for f, hit in together.items():
+        alone = landing(s.obj, s.sweeps[f], s.tip_radii[f], R, wrist)
+        assert (hit is None) == (alone is None)
+        if hit is not None:
+            assert hit.index == alone.index
+            assert np.allclose(hit.point, alone.point, atol=1e-12) and hit.angle == pytest.approx(
+                alone.angle, abs=1e-12
+            )
+    assert sum(hit is not None for hit in together.values()) >= 2
 
 
 def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
@@ -277,6 +304,35 @@ def test_every_candidate_is_reached_collision_free(spec):
     assert cands[0].epsilon >= 0.95 * top
 
 
+@pytest.mark.parametrize(
+    "spec",
+    [
+        ObjectSpec("sphere", {"radius": 0.03}, HERE),
+        ObjectSpec("ellipsoid", {"radii": (0.03, 0.045, 0.022)}, HERE, (0.2, -0.4, 0.6)),
+        ObjectSpec("cylinder", {"radius": 0.02, "length": 0.08}, HERE),
+        ObjectSpec("box", {"size": (0.07, 0.035, 0.045)}, HERE, (0.0, 0.0, 0.8)),
+    ],
+    ids=lambda spec: spec.shape,
+)
+def test_candidates_are_the_choice_among_every_orientation_simulated(spec):
+    # candidates() stops simulating after the least-rotated collision-free candidates; the
+    # choice made here from every orientation simulated first is the same, in the same order
+    lazy = synthesis(spec).candidates()
+    s = synthesis(spec)
+    simulated = [c for label, R in candidate_frames(s.obj) if (c := s._at_best_depth(label, R)) is not None]
+    about = [c for c in simulated if c.about_centre]
+    about.sort(key=lambda c: (round(c.turn, 6), -c.angle_deg, c.label))
+    kept = []
+    for c in about:
+        if s._collision_free(c):
+            kept.append(s._scored(c))
+            if len(kept) == (1 if spec.shape == "sphere" else SCORED):
+                break
+    top = max(c.epsilon for c in kept)
+    kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
+    assert [(c.label, c.depth, c.epsilon) for c in lazy] == [(c.label, c.depth, c.epsilon) for c in kept]
+
+
 def test_object_larger_than_the_hand_in_every_direction_fails_naming_its_size():
     world = build_world(PlanRequest())
     big = ObjectSpec("box", {"size": (0.13, 0.14, 0.15)}, (0.3, 0.02, -0.015))
@@ -427,3 +483,27 @@ def test_diameter_angle_closed_forms():
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(-0.03, 0.01), at(-0.03, -0.01)]) == pytest.approx(180.0)
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.0, 0.02), at(0.0, 0.04)]) == pytest.approx(90.0)
     assert diameter_angle_deg(c, at(0.03, 0.0), [at(0.01, 0.01)]) == pytest.approx(45.0)
+
+
+def test_a_parallel_jaw_is_not_planned_across_a_width_its_open_pads_barely_pass():
+    """The Panda's jaw opens 80 mm between its pads: across a box's 79 mm the open pads would pass
+    within 0.5 mm of the faces (less than the 2 mm clearance), so no candidate grips across it —
+    the grip goes across the box's 30 mm instead; a box 70 mm tall is gripped across its height."""
+    from eos_svc.hands import load_hand_named
+    from eos_svc.world.hand_context import HandContext
+
+    ctx = HandContext.build(load_hand_named("panda"))
+
+    def closing_axes(height: float) -> tuple[GraspSynthesis, list[float]]:
+        """The synthesis and |z| of each kept candidate's closing axis (world)."""
+        spec = ObjectSpec("box", {"size": (0.03, 0.03, height)}, HERE)
+        found = GraspSynthesis(ctx.hand, ctx.sweeps, ctx.params, make_object(spec), 0.5)
+        candidates = found.candidates()
+        assert candidates and all(c.about_centre for c in candidates)
+        return found, [abs(float(c.rotation[2, 2])) for c in candidates]
+
+    tall, vertical = closing_axes(0.079)
+    assert max(vertical) < 1e-6  # none across the height
+    assert tall.rejections.get("an open fingertip passes closer than the clearance", 0) > 0
+    _, vertical = closing_axes(0.07)  # the open pads pass 5 mm from the top and bottom faces
+    assert max(vertical) == pytest.approx(1.0)

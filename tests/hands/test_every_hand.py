@@ -53,23 +53,30 @@ def test_the_scene_world_holds_the_hand_and_the_object(
     assert eos_scene_request.obj.shape == "sphere"
 
 
-#: hands that do not grasp the scene's sphere today, and why (strict: a fix makes the test fail
-#: until the entry is removed)
-SPHERE_MISSES = {
-    "g1_dex3": "its index and middle fingers close in planes 57 mm apart and reach only 75 mm in "
-    "front of the palm, while the open thumb first nears the hand axis 104 mm out: every sphere "
-    "candidate has a fingertip missing the object (cylinders and ellipsoids are grasped)",
-}
-
-
-def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(
-    eos_hand, eos_hand_context, eos_scene_request, request
-):
-    if eos_hand.name in SPHERE_MISSES:
-        request.applymarker(pytest.mark.xfail(reason=SPHERE_MISSES[eos_hand.name], strict=True))
+def test_every_hand_grasps_the_scene_sphere_and_drake_holds_it(eos_hand, eos_hand_context, eos_scene_request):
     result = plan(eos_scene_request, context=eos_hand_context, keep_trace=False)
     assert result.status == "success", result.reason
     assert result.good_grasp and result.force_closure
     assert all(c["touching"] for c in result.contacts.values())
     check = validate_grasp(result, hand=eos_hand, directions=2, seconds=0.5)
     assert check.held, check.reason
+
+
+def test_every_hand_builds_the_drake_world_and_its_table_carries_the_object(
+    eos_hand_context, eos_scene_request
+):
+    """The Drake world (``--world drake``) is built from the same description for every hand:
+    stepped for half a second with the hand open above, the object stays on the table and the
+    table carries its weight."""
+    from eos_svc.agents import build_world
+    from eos_svc.drivers.drake_world import DrakeDriver
+    from eos_svc.drivers.lift_test import GRAVITY
+
+    world = build_world(eos_scene_request, context=eos_hand_context)
+    driver = DrakeDriver(world, eos_scene_request.obj, eos_scene_request.friction)
+    assert driver.hand is eos_hand_context.hand
+    plant = driver._plant
+    plant.advance(0.5)
+    assert driver.object_moved() < 5e-4
+    table = [f for other, _, _normal, f in plant.object_contacts() if other == 0]
+    assert sum(table) == pytest.approx(plant.settings.mass * GRAVITY, rel=0.02)

@@ -180,3 +180,17 @@ def test_a_mesh_is_drawn_from_its_triangles(tmp_path):
     spec = ObjectSpec("mesh", inline(box_mesh()), (0.21, 0.02, 0.0))
     solids = scene_solids(default_hand().neutral(), PlanRequest(obj=spec))
     assert solids[0][0] == "object" and len(solids[0][1]) == 12
+
+
+def test_a_degenerate_face_gets_an_outward_normal():
+    # a hull of touches rounded to µm can hold zero-area faces (pybullet random 629): their normal
+    # was the zero vector, and a fingertip landing on one broke the grasp's ε
+    box = box_mesh()
+    V = np.vstack([box.vertices, 0.5 * (box.vertices[0] + box.vertices[1])])  # a point on an edge
+    F = np.vstack([box.faces, [[0, 1, len(V) - 1]]])  # collinear: zero area
+    mesh = Mesh(vertices=V.tolist(), faces=F.tolist())
+    assert np.allclose(np.linalg.norm(mesh._face_normals, axis=1), 1.0)
+    degenerate = int(np.argmin(mesh.mesh.area_faces))
+    assert mesh.mesh.area_faces[degenerate] < 1e-15
+    centroid = mesh.mesh.triangles_center[degenerate]
+    assert float(mesh._face_normals[degenerate] @ centroid) > 0.0  # outward
