@@ -84,6 +84,8 @@ class DrakeSettings:
     press_steps: int = 150
 
 
+#: how much further every finger joint is closed for the grip the lift test starts from, rad
+SQUEEZE = 0.1
 #: the longest the object is given to come to rest on the table before the plan starts, s
 SETTLE_LIMIT = 3.0
 #: a guarded motion stops before a hand body pushes the resting object with more than this
@@ -380,7 +382,9 @@ class DrakeDriver(KinematicDriver):
         the lift test: good only if held."""
         moved = self._explored = self.object_moved()  # before the grip and the lift move it
         world = self._world
-        target = self._timed(lambda: squeeze_grip(self._plant, world.hand))
+        # a described hand's own squeeze (its [drake] table: per joint unit, m for a prismatic finger)
+        squeeze = float(dict(getattr(world.hand, "drake", {})).get("squeeze", SQUEEZE))
+        target = self._timed(lambda: squeeze_grip(self._plant, world.hand, squeeze))
         self._sync()
         verdict = grasp_geometry(world, friction)
         verdict["object_moved_mm"] = round(1000.0 * moved, 3)
