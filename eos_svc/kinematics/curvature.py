@@ -76,10 +76,11 @@ class CurvatureSample:
 
     def rows(self) -> tuple[Array, Array]:
         """The two least-squares rows ``A (2×3)`` and right-hand side ``b (2,)``."""
-        u1, u2 = self.contact_velocity
-        A = np.array([[u1, u2, 0.0], [0.0, u1, u2]])
-        w = np.array([-self.omega_xy[1], self.omega_xy[0]])
-        return A, w - self.K_f @ self.contact_velocity
+        u1, u2 = self.contact_velocity.tolist()  # floats: numpy scalars cost µs each here
+        w1, w2 = self.omega_xy.tolist()
+        (k11, k12), (k21, k22) = self.K_f.tolist()
+        A = np.array(((u1, u2, 0.0), (0.0, u1, u2)))
+        return A, np.array((-w2 - (k11 * u1 + k12 * u2), w1 - (k21 * u1 + k22 * u2)))  # (−w₂, w₁) − K_f u
 
 
 @dataclass(frozen=True)
@@ -217,12 +218,13 @@ class CurvatureEstimator:
                 "do not determine the curvature form: roll along two independent "
                 "tangent directions (contact velocities are parallel or zero)",
             )
-        theta = np.linalg.solve(AtA, A.T @ b)
+        AtA_inv = np.linalg.inv(AtA)  # well conditioned (checked above): θ and the covariance
+        theta = AtA_inv @ (A.T @ b)
         r = b - A @ theta
         dof = 2 * m - 3
         rss = float(r @ r)
         s2 = rss / dof if dof > 0 else math.inf
-        cov = s2 * np.linalg.inv(AtA) if dof > 0 else np.full((3, 3), math.inf)
+        cov = s2 * AtA_inv if dof > 0 else np.full((3, 3), math.inf)
         form = np.array([[theta[0], theta[1]], [theta[1], theta[2]]])
         evals, evecs = np.linalg.eigh(form)
         ks = (float(evals[1]), float(evals[0]))  # k1 >= k2 (eigh's eigenvalues ascend)

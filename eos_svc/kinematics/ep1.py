@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack
 
 from eos_svc.objects import Box, CurvatureUndefinedError, Cylinder, Ellipsoid, Sphere, SurfaceObject
 
@@ -214,9 +215,14 @@ def _chart_at_mean(
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates)."""
-    X = np.array((np.ones_like(theta), theta, theta * theta)).T
-    out: np.ndarray = np.linalg.lstsq(X, c, rcond=None)[0][1]
+    """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates), from the
+    normal equations ``XᵀX p = Xᵀc`` by Cholesky (three unknowns, ϑ of order 0.1 rad: XᵀX is well
+    enough conditioned; ``lstsq`` costs ~25 µs a call, this ~5 µs)."""
+    X = np.array((np.ones_like(theta), theta, theta * theta))  # Xᵀ
+    _, p, info = lapack.dposv(X.dot(X.T), X.dot(c))
+    if info != 0:
+        raise EP1Error("state", "the roll's angles do not determine the fit (too few distinct ones)")
+    out: np.ndarray = p[1]
     return out
 
 
@@ -293,43 +299,48 @@ def run_ep1(
     rq: RollingQP | None = None
     steps = 0
     path: list[np.ndarray] = [state.q.copy()] if path_every > 0 else []
-    for phi_deg, a_xy in zip(dirs, in_plane, strict=True):
-        axis = F[:, :2] @ a_xy
-        points: list[np.ndarray] = []  # tactile points in contact (tip frame)
-        rotations: list[np.ndarray] = []  # the tip's rotation at each of them
-        set_of: list[int] = []  # 0: the outward half-legs, 1: the sweep back
-        for sign, n_steps, k_set in legs:
-            # the axis stays the one tangent at the start (fixed for the whole direction)
-            if rq is None:
-                rq = RollingQP(
-                    state, finger, axis, sign * omega, dt, solver, scene=scene, tactile=tactile_sensor,
-                    project_axis=False,
-                )  # fmt: skip
-            else:
-                rq.retarget(axis, sign * omega, project_axis=False)
-            for _ in range(n_steps):
-                s = rq.step()
-                assert s.reading is not None
-                if s.reading.in_contact:
-                    points.append(s.reading.point_tip)
-                    rotations.append(s.tip_rotation)
-                    set_of.append(k_set)
-                slips.append(s.slip_speed)
-                gaps.append(abs(s.contact.distance))
-                steps += 1
-                if path_every > 0 and steps % path_every == 0:
-                    path.append(rq.q)
-        P_all = np.array(points).reshape(-1, 3)
-        R_all = np.array(rotations).reshape(-1, 3, 3)
-        sets = np.array(set_of, dtype=int)
-        # realized net roll angle of the tip about a (not the commanded ω·t)
-        th_all = _log3(np.matmul(R0.T, R_all)) @ (R0.T @ axis)
-        for k in (0, 1):
-            P = P_all[sets == k]
-            if len(P) < 5:
-                raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
-            s_fit = _fit_slope(th_all[sets == k], _chart_at_mean(P, ex_tip, r))
-            samples.append(est.add_sample(a_xy, s_fit, K_f))
+    q_start = state.q
+    try:
+        for phi_deg, a_xy in zip(dirs, in_plane, strict=True):
+            axis = F[:, :2] @ a_xy
+            points: list[np.ndarray] = []  # tactile points in contact (tip frame)
+            rotations: list[np.ndarray] = []  # the tip's rotation at each of them
+            set_of: list[int] = []  # 0: the outward half-legs, 1: the sweep back
+            for sign, n_steps, k_set in legs:
+                # the axis stays the one tangent at the start (fixed for the whole direction)
+                if rq is None:
+                    rq = RollingQP(
+                        state, finger, axis, sign * omega, dt, solver, scene=scene, tactile=tactile_sensor,
+                        project_axis=False,
+                    )  # fmt: skip
+                else:
+                    rq.retarget(axis, sign * omega, project_axis=False)
+                for _ in range(n_steps):
+                    s = rq.step()
+                    assert s.reading is not None
+                    if s.reading.in_contact:
+                        points.append(s.reading.point_tip)
+                        rotations.append(s.tip_rotation)
+                        set_of.append(k_set)
+                    slips.append(s.slip_speed)
+                    gaps.append(abs(s.contact.distance))
+                    steps += 1
+                    if path_every > 0 and steps % path_every == 0:
+                        path.append(rq.q)
+            P_all = np.array(points).reshape(-1, 3)
+            R_all = np.array(rotations).reshape(-1, 3, 3)
+            sets = np.array(set_of, dtype=int)
+            # realized net roll angle of the tip about a (not the commanded ω·t)
+            th_all = _log3(np.matmul(R0.T, R_all)) @ (R0.T @ axis)
+            for k in (0, 1):
+                P = P_all[sets == k]
+                if len(P) < 5:
+                    raise EP1Error("state", f"{finger} lost contact while rolling (direction {phi_deg}°)")
+                s_fit = _fit_slope(th_all[sets == k], _chart_at_mean(P, ex_tip, r))
+                samples.append(est.add_sample(a_xy, s_fit, K_f))
+    except BaseException:  # the roller moved the state's kinematics: back to the start
+        state.update(q_start)
+        raise
     assert rq is not None
     state.update(rq.q)
     max_slip = max(slips)

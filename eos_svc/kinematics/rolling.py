@@ -20,7 +20,7 @@ import qpsolvers
 
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
-from .rolling_problem import JointBox, StepQP, step_qp
+from .rolling_problem import JointBox, StepQP, step_qp, steps_at_speed_limits, velocity_bounds
 from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -63,8 +63,9 @@ class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
     Args:
-        state: the hand state at the start; the roller steps on Pinocchio data of its own and
-            brings ``state`` up to date when :attr:`state` is read.
+        state: the hand state at the start; the roller steps on its Pinocchio data (the state's
+            placements are those of the roll until :attr:`state` is read, which brings
+            ``state`` up to date).
         finger: the rolling finger (its tip must be a sphere).
         axis: world rolling axis, tangent at the contact (its normal component is removed
             unless ``project_axis`` is False: EP1 keeps one axis over several legs).
@@ -136,15 +137,13 @@ class RollingQP:
                 raise KinematicsError("weights", f"must be {self.nx} finite numbers > 0")
             self.weights = w
         self._probe = SphereTipProbe(finger, self.radius, scene.object.geometry)
-        # the roller's own Pinocchio data; live views of the tip's world translation and rotation
         self._fid = hand.tip_frame_id(finger)
-        self._data = hand.model.createData()
-        tip = self._data.oMf[self._fid]
-        self._centre, self._rotation = tip.translation, tip.rotation
-        self._state = state
         self._qdot = np.zeros(hand.nv)
         self._zero = np.zeros(hand.nv)
         self._qp: StepQP | None = None  # the QP of the last step (or of build)
+        #: steps for which the velocity bounds are surely ∓q̇max (steps_at_speed_limits)
+        self._steps_at_speed_limits = 0
+        self._state = state
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
     def retarget(
@@ -158,8 +157,11 @@ class RollingQP:
         if state is not None:
             if state.hand is not self.hand:
                 raise KinematicsError("state", "belongs to another hand model")
-            self._state, self._q = state, state.q
+            if state is not self._state:  # the state rolled until now: its data back at its q
+                self._state.update(self._state.q)
+            self._use(state)
         self._qdot[:] = 0.0
+        self._steps_at_speed_limits = 0
         self._kinematics()
         self._probe.place_object(self.scene.object.placement)
         n = self._probe.measure(self._centre).normal
@@ -173,6 +175,13 @@ class RollingQP:
         self.omega = float(omega)
         wx, wy, wz = (self.omega * self.axis).tolist()
         self._omega_axis = (wx, wy, wz)
+
+    def _use(self, state: HandState) -> None:
+        """Roll from ``state``'s configuration on its Pinocchio data (a new one costs ~50 µs,
+        a few % of an EP1 run); live views of the tip's world translation and rotation."""
+        self._state, self._q, self._data = state, state.q, state.data
+        tip = self._data.oMf[self._fid]
+        self._centre, self._rotation = tip.translation, tip.rotation
 
     @property
     def q(self) -> np.ndarray:
@@ -202,6 +211,18 @@ class RollingQP:
         on each read; None before the first step)."""
         return None if self._qp is None else self._qp.problem()
 
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The velocity bounds at q: ``∓q̇max`` while every position limit is out of a step's
+        reach (:func:`~.rolling_problem.steps_at_speed_limits`, evaluated again when that many
+        steps are taken), else :func:`~.rolling_problem.velocity_bounds`."""
+        box = self.box
+        if self._steps_at_speed_limits > 0:
+            self._steps_at_speed_limits -= 1
+            return box.velocity_floor, box.velocity
+        q = self._q[self.active]
+        self._steps_at_speed_limits = max(steps_at_speed_limits(q, box, self.dt) - 1, 0)  # after this one
+        return velocity_bounds(q, box, self.dt)
+
     def _build(self) -> tuple[StepQP, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
         jacobian, drift = self._kinematics()
@@ -212,8 +233,7 @@ class RollingQP:
             contact,
             self.radius,
             self._omega_axis,
-            self._q[self.active],
-            self.box,
+            self._bounds(),
             self.weights,
             self.dt,
             self.gap_gain,
@@ -231,7 +251,7 @@ class RollingQP:
         rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
-        self._qdot[self.active] = x
+        self._qdot[self._columns] = x  # the active joints (a slice when contiguous)
         self._q += self._qdot * self.dt  # the other joints' q̇ is 0
         e0, e1, e2, e3, e4, e5 = (qp.A.dot(x) - qp.b).tolist()
         return RollingStep(

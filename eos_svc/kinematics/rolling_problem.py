@@ -37,7 +37,19 @@ import qpsolvers
 from .geometry import tangent_pair
 from .scene import Contact
 
-__all__ = ["JointBox", "StepQP", "contact_rows", "rolling_problem", "step_qp", "velocity_bounds"]
+__all__ = [
+    "JointBox",
+    "StepQP",
+    "contact_rows",
+    "rolling_problem",
+    "step_qp",
+    "steps_at_speed_limits",
+    "velocity_bounds",
+]
+
+#: the most a solver's q̇ may exceed a velocity bound, as a fraction of the limit (plus 1e-6):
+#: what :func:`steps_at_speed_limits` allows for each step
+SPEED_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -103,14 +115,25 @@ def velocity_bounds(q: np.ndarray, box: JointBox, dt: float) -> tuple[np.ndarray
     return np.maximum(box.velocity_floor, reach[0]), np.minimum(box.velocity, reach[1])
 
 
+def steps_at_speed_limits(q: np.ndarray, box: JointBox, dt: float) -> int:
+    """How many steps from ``q``, this one included, :func:`velocity_bounds` surely stays the
+    velocity limits ``∓q̇max`` (no position limit within a step's reach): 0 when a position limit
+    binds now. Each step moves a joint by at most ``q̇ dt`` with ``|q̇| ≤ q̇max`` (plus
+    :data:`SPEED_MARGIN` for a solver's tolerance), so its slack ``(q − q_min)/dt − q̇max`` (and
+    ``(q_max − q)/dt − q̇max``) falls by at most that much per step."""
+    slack = np.minimum((q - box.lower) / dt, (box.upper - q) / dt) - box.velocity
+    per_step = box.velocity * (1.0 + SPEED_MARGIN) + 1e-6
+    steps = float((slack / per_step).min())
+    return int(steps) + 1 if steps >= 0.0 else 0
+
+
 def step_qp(
     jacobian: np.ndarray,
     drift: np.ndarray | None,
     contact: Contact,
     radius: float,
     omega_axis: tuple[float, float, float],
-    q: np.ndarray,
-    box: JointBox,
+    bounds: tuple[np.ndarray, np.ndarray],
     weights: np.ndarray,
     dt: float,
     gap_gain: float,
@@ -123,7 +146,8 @@ def step_qp(
             LOCAL_WORLD_ALIGNED), or None for first-order targets.
         contact: the measured contact (its normal, object → tip, and signed gap, m).
         radius: the tip sphere's radius, m. omega_axis: ω a, the commanded angular velocity, rad/s.
-        q: the active joints' positions; box: their limits; weights: the diagonal of W (nx).
+        bounds: ``(lb, ub)`` of the active joints' velocities (:func:`velocity_bounds`);
+        weights: the diagonal of W (nx).
         dt: the step, s; gap_gain: β in (0, 1].
     """
     M = contact_rows(contact.normal, radius)
@@ -135,7 +159,7 @@ def step_qp(
         h = 0.5 * dt
         m0, m1, m2, m3, m4, m5 = M.dot(drift).tolist()
         b = np.array((0.0 - h * m0, 0.0 - h * m1, gap_target - h * m2, wx - h * m3, wy - h * m4, wz - h * m5))
-    lb, ub = velocity_bounds(q, box, dt)
+    lb, ub = bounds
     return StepQP(weights, M.dot(jacobian), b, lb, ub)
 
 
@@ -151,5 +175,7 @@ def rolling_problem(
     dt: float,
     gap_gain: float,
 ) -> qpsolvers.Problem:
-    """The QP of :func:`step_qp` (same arguments) as a :class:`qpsolvers.Problem`."""
-    return step_qp(jacobian, drift, contact, radius, omega_axis, q, box, weights, dt, gap_gain).problem()
+    """The QP of :func:`step_qp` at the active joints' positions ``q`` within ``box`` (the other
+    arguments: :func:`step_qp`'s) as a :class:`qpsolvers.Problem`."""
+    bounds = velocity_bounds(q, box, dt)
+    return step_qp(jacobian, drift, contact, radius, omega_axis, bounds, weights, dt, gap_gain).problem()

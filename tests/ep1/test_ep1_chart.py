@@ -9,7 +9,7 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from eos_svc.kinematics.ep1 import _chart_at_mean, _log3
+from eos_svc.kinematics.ep1 import EP1Error, _chart_at_mean, _fit_slope, _log3
 
 
 @pytest.mark.parametrize("spread", [1e-9, 0.05, 0.4, 2.5])
@@ -43,3 +43,26 @@ def test_chart_coordinates_are_geodesic_arcs_on_the_tip() -> None:
                 want.append(r * a * np.array([t @ ex, t @ ey]))
         got = _chart_at_mean(np.array(pts), ex_tip, r)
         assert np.allclose(got, np.array(want), atol=1e-12)
+
+
+def test_fit_slope_recovers_the_quadratics_slope_and_matches_lstsq() -> None:
+    """The slope at ϑ = 0 of an exact quadratic (both coordinates), and of noisy samples that of
+    numpy's ``lstsq`` within 1e-9 (relative), over a leg's angles (±0.2 rad, 5–40 readings)."""
+    rng = np.random.default_rng(5)
+    for n in (5, 8, 16, 40):
+        theta = rng.uniform(-0.2, 0.2, n)
+        exact = (
+            np.outer(np.ones(n), [1e-3, -2e-3])
+            + np.outer(theta, [0.01, 0.02])
+            + np.outer(theta**2, [0.3, -0.1])
+        )
+        assert np.allclose(_fit_slope(theta, exact), [0.01, 0.02], rtol=0, atol=1e-12)
+        noisy = exact + rng.normal(size=(n, 2)) * 2e-4
+        X = np.array((np.ones(n), theta, theta * theta)).T
+        reference = np.linalg.lstsq(X, noisy, rcond=None)[0][1]
+        assert np.allclose(_fit_slope(theta, noisy), reference, rtol=1e-9, atol=1e-12)
+
+
+def test_fit_slope_names_too_few_distinct_angles() -> None:
+    with pytest.raises(EP1Error, match="state"):
+        _fit_slope(np.zeros(5), np.zeros((5, 2)))  # the tip never turned
