@@ -71,7 +71,7 @@ def next_probes(
     the alternatives (one group) in order: the greedy choice (each given the ones before), then
     the other lines by their own spread (tried when the hand cannot probe the chosen ones);
     none when no line's predicted distance spreads over MIN_SPREAD."""
-    faces = probe_faces(*estimate, table=world.table_height is not None)
+    faces = probe_faces(*estimate, table=world.support_height is not None)
     probes = targeted_probes(world, faces, standoff, label="active", off_centre=False)
     groups: dict[int, list[Probe]] = {}
     for probe in probes:
