@@ -56,7 +56,7 @@ from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
-from eos_svc.shape.probe_information import candidates_of
+from eos_svc.shape.probe_information import Candidate, candidates_of
 from eos_svc.shape.selection import MIN_CONTACTS, fit_probability, tolerance_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
@@ -167,7 +167,12 @@ class PostShapeAgent(GraspAgent):
             board.set(keys.D_OVER_H, round(2.0 * shape["grasp_radius"] / self.world.hand.hand_height, 6))
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
-        post = select_class(touches)
+        # the previous postulate's candidate fits, on fewer of these touches, start their classes'
+        warm = {
+            c.kind: (c.theta, c.r0)
+            for c in (Candidate.from_dict(d) for d in (board.get(keys.SHAPE) or {}).get("candidates", []))
+        }
+        post = select_class(touches, warm=warm)
         ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
         if (
             ep2_done
