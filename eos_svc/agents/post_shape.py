@@ -22,6 +22,9 @@ Two sources, in the order the information stage gathers them:
    and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
    a few contacts fit five classes loosely) — leaving its ``candidates``
    (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
+   The next fit starts each of those classes from its candidate (``select_class``'s ``warm``):
+   a few new contacts move an optimum little, so the class's cold starts are tried only when
+   that refit does not explain the touches to within the noise.
 3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
    once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
    ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
@@ -133,7 +136,15 @@ class PostShapeAgent(GraspAgent):
     """Turns what the fingers felt into a postulated object with a confidence."""
 
     reads = frozenset(
-        {keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS}
+        {
+            keys.CURVATURE,
+            keys.EP1_CONTACT,
+            keys.APPROACH,
+            keys.EP2_TOUCHES,
+            keys.EP2_FREE,
+            keys.EP2_RUNS,
+            keys.SHAPE,  # its own previous candidates: warm starts of the next fit
+        }
     )
     writes = frozenset({keys.SHAPE, keys.D_OVER_H})
 
