@@ -129,7 +129,7 @@ class EP1Agent(GraspAgent):
         top = contacts.get("top")
         if top is None:
             return ActionResult(Outcome.CANNOT_ACT, "no top contact yet to place the bottom under")
-        height = float(self.world.table_height)  # type: ignore[arg-type]
+        height = float(self.world.support_height)  # type: ignore[arg-type]
         point = [top["point"][0], top["point"][1], round(height, 6)]
         contacts["bottom"] = {"finger": finger, "point": point, "normal": [0.0, 0.0, -1.0]}
         board.set(keys.EP1_CONTACT, contacts)
@@ -144,7 +144,7 @@ class EP1Agent(GraspAgent):
         shape = board.get(keys.SHAPE)
         side = "bottom" if shape is not None and shape.get("needs") == "bottom" else "top"
         finger = self._finger_for(side)
-        if side == "bottom" and world.table_height is not None:
+        if side == "bottom" and world.support_height is not None:
             return self._table_bottom(board, finger)
         moved = ""
         if self.side != side or not world.touching(finger):

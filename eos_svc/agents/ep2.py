@@ -166,7 +166,7 @@ class EP2Agent(GraspAgent):
         for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
             start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
             probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
-        for dx in () if world.table_height is not None else (-f(0.4) * hx,):  # none under a table
+        for dx in () if world.support_height is not None else (-f(0.4) * hx,):  # none under a support
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))
         if world.table_height is not None:

@@ -31,6 +31,7 @@ The same request with the same seed gives the same cycles and result.
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 import time
@@ -313,6 +314,12 @@ def plan(
     good = judged and bool(verdict["good"])
     if memory is not None:
         remember(memory, driver, board, run.cycles_per_stage.get("grasping", 0), good)
+    report = getattr(driver, "report", lambda: None)()
+    if report is not None and report.get("moved_past_relocation_limit"):  # the planner says so
+        run = dataclasses.replace(run, reason=(
+            f"{run.reason} (the object moved {report['object_moved_mm']:.1f} mm while the hand explored "
+            "it, more than the 2 mm the plan tolerates: the grasp aimed where it had been)"
+        ))  # fmt: skip
     obj = model.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / model.hand.hand_height
@@ -338,7 +345,7 @@ def plan(
         hand_height=model.hand.hand_height,
         q_final=tuple(float(x) for x in driver.joint_positions()),
         wall_time_s=time.perf_counter() - t0,
-        world=getattr(driver, "report", lambda: None)(),
+        world=report,
     )
     return result
 

@@ -72,7 +72,7 @@ def next_probes(
     the alternatives (one group) in order: the greedy choice (each given the ones before), then
     the other lines by their own spread (tried when the hand cannot probe the chosen ones);
     none when no line's predicted distance spreads over MIN_SPREAD."""
-    faces = probe_faces(*estimate, table=world.table_height is not None)
+    faces = probe_faces(*estimate, table=world.support_height is not None)
     # each line scored by its face's first probe; the alternatives made for the lines returned
     firsts = [next(face_probes(world, face, k, standoff, "active", False)) for k, face in enumerate(faces)]
     R = disagreement(

@@ -23,8 +23,9 @@ else:  # pragma: no cover - Python 3.10: the batch extra installs tomli
 
 #: suites ``objects.suite`` names (eos_svc.experiments.grasp_suite)
 SUITES = ("fixed", "quick", "held_back")
-#: worlds ``world`` accepts: the planner's kinematic world (Pinocchio + coal)
-WORLDS = ("kinematic",)
+#: worlds ``world`` accepts: the planner's kinematic world (Pinocchio + coal) and the Drake world
+#: (:mod:`eos_svc.drivers.worlds`; its status ``success`` means the lift test held)
+WORLDS = ("kinematic", "drake")
 #: request fields a condition may vary, in the order they vary (the last fastest)
 CONDITION_FIELDS = ("tactile_noise", "friction", "weights", "max_cycles", "deadline_s")
 #: plans per Ray task by default: one with validation (≈ 1-2.5 s each), a chunk without
@@ -112,9 +113,7 @@ def spec_from_dict(data: Mapping[str, Any], default_name: str = "batch") -> Batc
     _keys(data, {"name", "world", "hands", "objects", "seeds", "conditions", "validate", "run"}, "")
     world = data.get("world", "kinematic")
     if world not in WORLDS:
-        raise ValidationError(
-            "world", f"only {', '.join(map(repr, WORLDS))} is available (the planner's world), got {world!r}"
-        )
+        raise ValidationError("world", f"must be one of {', '.join(map(repr, WORLDS))}, got {world!r}")
     name = data.get("name", default_name)
     if not isinstance(name, str) or not name:
         raise ValidationError("name", f"must be a non-empty string, got {name!r}")

@@ -42,7 +42,7 @@ def run_key(key: PlanKey, worker: str = "", loaded: dict[str, Any] | None = None
     row = rows.key_columns(key, worker)
     hand = hand_model(key.hand, loaded)
     try:
-        result = plan(PlanRequest.from_dict(key.request), hand=hand, keep_trace=False)
+        result = plan(PlanRequest.from_dict(key.request), hand=hand, keep_trace=False, world=key.world)
     except ValidationError as exc:  # admission: the planner cannot plan this object
         row.update(rows.empty_columns(rows.REFUSED, f"{exc.field}: {exc.reason}"))
     except Exception as exc:  # a bug or a failed computation: recorded, the batch goes on

@@ -22,10 +22,13 @@ from typing import Any
 
 import numpy as np
 from pydrake.geometry import (
+    AddCompliantHydroelasticProperties,
+    AddCompliantHydroelasticPropertiesForHalfSpace,
     AddContactMaterial,
-    Box,
+    AddRigidHydroelasticProperties,
     CollisionFilterDeclaration,
     GeometrySet,
+    HalfSpace,
     ProximityProperties,
     RoleAssign,
 )
@@ -41,6 +44,21 @@ from eos_svc.schema.request import ObjectSpec
 from eos_svc.validation.drake_hand import drake_urdf
 from eos_svc.validation.simulation import hand_parser, object_shapes, urdf_effort_limits, vec
 
+#: the object starts this far above the table, m
+DROP = 1e-4
+
+
+def contact_material(friction: float, stiffness: float) -> ProximityProperties:
+    """Proximity properties with Coulomb ``friction`` and a point-contact ``stiffness`` (N/m)."""
+    material = ProximityProperties()
+    AddContactMaterial(
+        dissipation=None,
+        point_stiffness=stiffness,
+        friction=CoulombFriction(friction, friction),
+        properties=material,
+    )
+    return material
+
 
 @dataclass(frozen=True)
 class PlantSettings:
@@ -54,7 +72,16 @@ class PlantSettings:
         finger_kp, finger_kd: the finger joints' gains (N·m/rad, N·m·s/rad), unless the hand's
             description gives its own (``[drake]`` kp, kd; N/m, N·s/m for a prismatic finger).
         contact_stiffness: point-contact stiffness, N/m.
-        table_size: the table box's x, y extent and thickness, m.
+        table_slab, table_modulus: the table's compliant layer (hydroelastic): thickness (m) and
+            modulus (Pa).
+        resolution: the object's hydroelastic mesh resolution (m; at most a tenth of its
+            diameter, at least 3 mm).
+        rolling_resistance: the table's rolling resistance coefficient (a torque ``c N h``
+            against rolling: neither point nor hydroelastic contact has one, and a ball touched
+            once would roll on for ever); rolling_update: how often its torque is updated, s.
+        soft_tips, tip_modulus, tip_resolution: the fingertips as compliant hydroelastic bodies
+            (a pressure patch with torsional friction, as a soft pad has), their modulus (Pa) and
+            mesh resolution (m); without them, point contact.
         hand_touches_table: whether the hand collides with the table (off by default: the
             planner plans no table avoidance and EP1 feels a resting object's bottom, which a
             table would hide).
@@ -69,7 +96,14 @@ class PlantSettings:
     finger_kp: float = 5.0
     finger_kd: float = 0.05
     contact_stiffness: float = 2e4
-    table_size: tuple[float, float, float] = (0.6, 0.6, 0.04)
+    table_slab: float = 0.01
+    table_modulus: float = 1e7
+    resolution: float = 0.01
+    rolling_resistance: float = 0.01
+    rolling_update: float = 0.005
+    soft_tips: bool = True
+    tip_modulus: float = 1e6
+    tip_resolution: float = 0.008
     hand_touches_table: bool = False
 
 
@@ -79,13 +113,22 @@ class DrakeHandPlant:
     Joint values cross in the planner's order (:attr:`HandModel.lower`'s: wrist then fingers).
     """
 
-    def __init__(self, hand: HandModel, spec: ObjectSpec, obj: SurfaceObject, friction: float,
-                 settings: PlantSettings | None = None) -> None:  # fmt: skip
+    def __init__(
+        self,
+        hand: HandModel,
+        spec: ObjectSpec,
+        obj: SurfaceObject,
+        friction: float,
+        settings: PlantSettings | None = None,
+        table_height: float | None = None,
+    ) -> None:
         s = settings or PlantSettings()
         self.settings = s
         builder = DiagramBuilder()
         config = MultibodyPlantConfig(
-            time_step=s.time_step, contact_model="point", discrete_contact_approximation="sap"
+            time_step=s.time_step,
+            contact_model="hydroelastic_with_fallback",
+            discrete_contact_approximation="sap",
         )
         plant, scene_graph = AddMultibodyPlant(config, builder)
         # the URDF the hand's description makes (a composite for a described hand), as Drake
@@ -105,31 +148,36 @@ class DrakeHandPlant:
                 kp, kd = drake.get("kp", s.finger_kp), drake.get("kd", s.finger_kd)
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts.get(name, np.inf))
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
-        material = ProximityProperties()
-        AddContactMaterial(
-            dissipation=None,
-            point_stiffness=s.contact_stiffness,
-            friction=CoulombFriction(friction, friction),
-            properties=material,
-        )
+        material = contact_material(friction, s.contact_stiffness)
         lowest = float(obj.centre[2] - obj.half_extent(np.array([0.0, 0.0, 1.0])))
-        tx, ty, tz = s.table_size
-        table_pose = RigidTransform(vec((obj.centre[0], obj.centre[1], lowest - 0.5 * tz)))
+        lowest = lowest if table_height is None else float(table_height)  # the request's table
+        # the table: a soft half-space (hydroelastic) with its top at z = lowest, so that the object
+        # rests on a pressure patch, not on one point (a box on a box balances on its deepest point)
+        table_material = contact_material(friction, s.contact_stiffness)
+        AddCompliantHydroelasticPropertiesForHalfSpace(s.table_slab, s.table_modulus, table_material)
         table = plant.RegisterCollisionGeometry(
-            plant.world_body(), table_pose, Box(tx, ty, tz), "table", material
+            plant.world_body(), RigidTransform(vec((0.0, 0.0, lowest))), HalfSpace(), "table", table_material
         )
+        object_material = contact_material(friction, s.contact_stiffness)
+        resolution = min(s.resolution, max(0.003, 0.1 * float(obj.diameter)))  # a sagitta < 0.2 mm
+        AddRigidHydroelasticProperties(resolution, object_material)
         shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
         instance = plant.AddModelInstance("object")
         inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
         body = plant.AddRigidBody("object", instance, inertia)
         for i, shape in enumerate(shapes):
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", material)
+            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", object_material)
         plant.set_gravity_enabled(model, False)
         plant.Finalize()
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
+        tips = {int(plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body().index())
+                for f in hand.finger_names}  # fmt: skip
+        tip_material = contact_material(friction, s.contact_stiffness)  # soft pads: torsional friction
+        AddCompliantHydroelasticProperties(s.tip_resolution, s.tip_modulus, tip_material)
         for b in hand_bodies:
+            chosen = tip_material if s.soft_tips and int(b.index()) in tips else material
             for geometry in plant.GetCollisionGeometriesForBody(b):
-                scene_graph.AssignRole(plant.get_source_id(), geometry, material, RoleAssign.kReplace)
+                scene_graph.AssignRole(plant.get_source_id(), geometry, chosen, RoleAssign.kReplace)
         hand_set = plant.CollectRegisteredGeometries(hand_bodies)
         manager = scene_graph.collision_filter_manager()
         manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
@@ -140,6 +188,7 @@ class DrakeHandPlant:
             f: plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body()
             for f in hand.finger_names
         }
+        self._inspector = scene_graph.model_inspector()
         self.diagram = builder.Build()
         self.simulator = Simulator(self.diagram)
         self.root = self.simulator.get_mutable_context()
@@ -147,10 +196,15 @@ class DrakeHandPlant:
         # q order: Drake's position index of each planner joint (the actuators were added in it)
         self._index = [plant.GetJointByName(n, model).position_start() for n in names]
         self.table_top = lowest
-        pose = RigidTransform(RollPitchYaw(vec(spec.rpy)), vec(obj.centre))
+        # dropped from 0.1 mm above the table (a vertex exactly on its plane is degenerate for the
+        # hydroelastic intersection)
+        pose = RigidTransform(RollPitchYaw(vec(spec.rpy)), vec(obj.centre) + vec((0.0, 0.0, DROP)))
         plant.SetFreeBodyPose(self.context, body, pose)
         plant.get_actuation_input_port().FixValue(self.context, np.zeros(plant.num_actuated_dofs()))
         self._n = len(names)
+        self._table_geometry = table
+        self._wrench = (np.zeros(3), np.zeros(3))
+        plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
         self.set_object_wrench(np.zeros(3), np.zeros(3))
 
     # --- the hand --------------------------------------------------------------------------
@@ -179,8 +233,12 @@ class DrakeHandPlant:
         self.plant.get_desired_state_input_port(self.model).FixValue(self.context, target)
 
     def advance_to(self, t: float) -> None:
-        """Simulate up to time ``t``, s."""
-        self.simulator.AdvanceTo(t)
+        """Simulate up to time ``t``, s (in steps of at most ``rolling_update`` s, the rolling
+        resistance's torque updated before each)."""
+        step = self.settings.rolling_update
+        while self.root.get_time() < t - 1e-12:
+            self._apply_wrench()
+            self.simulator.AdvanceTo(min(t, self.root.get_time() + step))
 
     def save(self) -> Any:
         """A copy of the simulation's state (time, positions, velocities)."""
@@ -197,7 +255,7 @@ class DrakeHandPlant:
 
     def advance(self, seconds: float) -> None:
         """Simulate ``seconds`` more."""
-        self.simulator.AdvanceTo(self.root.get_time() + seconds)
+        self.advance_to(self.root.get_time() + seconds)
 
     def time(self) -> float:
         """Simulated time, s."""
@@ -209,19 +267,52 @@ class DrakeHandPlant:
         return self.plant.EvalBodyPoseInWorld(self.context, self.body)
 
     def set_object_wrench(self, force: np.ndarray, torque: np.ndarray) -> None:
-        """An external force (N) at the object's centre and a torque (N·m), world frame."""
+        """An external force (N) at the object's centre and a torque (N·m), world frame (the
+        rolling resistance's torque is added to it as the simulation runs)."""
+        self._wrench = (np.asarray(force, dtype=float), np.asarray(torque, dtype=float))
+        self._apply_wrench()
+
+    def rolling_torque(self) -> np.ndarray:
+        """The table's rolling resistance on the object (N·m, world): ``c N h`` (c: the
+        coefficient, N: the table's normal force, h: the centre's height above the table)
+        against the object's rolling about horizontal axes, viscous below 0.05 rad/s."""
+        c = self.settings.rolling_resistance
+        if c <= 0.0:
+            return np.zeros(3)
+        normal = self.table_force()
+        if normal <= 0.0:
+            return np.zeros(3)
+        spin = np.array(self.plant.EvalBodySpatialVelocityInWorld(self.context, self.body).rotational())
+        spin[2] = 0.0
+        height = max(0.0, float(self.object_pose().translation()[2]) - self.table_top)
+        return -c * normal * height * spin / max(float(np.linalg.norm(spin)), 0.05)
+
+    def table_force(self) -> float:
+        """The table's normal force on the object (N)."""
+        results = self.plant.get_contact_results_output_port().Eval(self.context)
+        total = 0.0
+        for i in range(results.num_hydroelastic_contacts()):
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            if self._table_geometry in (surface.id_M(), surface.id_N()):
+                total += abs(float(info.F_Ac_W().translational()[2]))
+        return total
+
+    def _apply_wrench(self) -> None:
         from pydrake.multibody.math import SpatialForce
         from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
+        force, torque = self._wrench
         f = ExternallyAppliedSpatialForce()
         f.body_index = self.body.index()
         f.p_BoBq_B = vec((0.0, 0.0, 0.0))
-        f.F_Bq_W = SpatialForce(vec(torque), vec(force))
+        f.F_Bq_W = SpatialForce(vec(torque + self.rolling_torque()), vec(force))
         self.plant.get_applied_spatial_force_input_port().FixValue(self.context, [f])
 
     def object_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
         """Every contact of the object: (other body index, point (m), unit normal out of the
-        object, normal force (N)), from the plant's contact results."""
+        object, normal force (N)), from the plant's contact results (the hand's are point
+        contacts; the table's a hydroelastic patch: its centroid, and its whole force)."""
         results = self.plant.get_contact_results_output_port().Eval(self.context)
         me = self.body.index()
         out = []
@@ -238,7 +329,29 @@ class DrakeHandPlant:
                 other, n_out, f_on_obj = b, -normal, -force
             pushing = float(max(0.0, -f_on_obj @ n_out))
             out.append((int(other), np.asarray(info.contact_point()), n_out, pushing))
+        body_of = self._body_of_geometry
+        for i in range(results.num_hydroelastic_contacts()):  # patches: the table's, soft fingertips'
+            info = results.hydroelastic_contact_info(i)
+            surface = info.contact_surface()
+            a, b = body_of(surface.id_M()), body_of(surface.id_N())  # body A: geometry M's
+            if me not in (a, b):
+                continue
+            f_on_obj = np.asarray(info.F_Ac_W().translational())
+            other = b if a == me else a
+            if a != me:
+                f_on_obj = -f_on_obj
+            # the patch's area-weighted normal (Drake's face normals point out of N into M)
+            faces = range(surface.num_faces())
+            mean = sum((surface.area(f) * np.asarray(surface.face_normal(f)) for f in faces), np.zeros(3))
+            norm = float(np.linalg.norm(mean))
+            n_out = (mean if a != me else -mean) / norm if norm > 0.0 else np.array([0.0, 0.0, -1.0])
+            pushing = float(max(0.0, -f_on_obj @ n_out))
+            out.append((other, np.asarray(surface.centroid()), n_out, pushing))
         return out
+
+    def _body_of_geometry(self, geometry: Any) -> int:
+        """The index of the body a geometry belongs to."""
+        return int(self.plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry)).index())
 
     def tip_force(self, finger_body: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
         """The contact of a fingertip body with the object: (point, normal, force) or None."""

@@ -40,7 +40,7 @@ import pinocchio as pin
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.drivers.lift_test import lift_test
+from eos_svc.drivers.lift_test import GRAVITY, lift_test, squeeze_grip
 from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
 
@@ -64,10 +64,13 @@ class DrakeSettings:
         approach_speed: the wrist's speed of a motion that may touch (probes, grasp steps), m/s.
         joint_speed: a rotation's speed (wrist rotations, fingers), rad/s.
         chunk: how often a motion's target is updated and its contacts read, s.
-        stop_force: a hand body pushing the object harder than this ends a motion early, N.
+        stop_force: a hand body pushing the object harder than this ends a motion early, N
+            (at most :data:`STOP_FRACTION` of the force that slides the resting object: μ m g).
         touch_force: a touch presses on until the fingertip's normal force reaches this, N.
-        press_limit: the most a touch presses on past the kinematic first touch (rad of a
-            finger, m of the wrist).
+        press_limit: the most a touch presses on past the kinematic first touch (m of the
+            wrist; a finger presses on by ``finger_press_limit`` rad).
+        finger_press_limit: the most a finger's touch presses on, rad.
+        press_steps: a press advances in this many plant steps (its force read at each).
     """
 
     free_speed: float = 0.5
@@ -77,6 +80,17 @@ class DrakeSettings:
     stop_force: float = 2.0
     touch_force: float = 0.05
     press_limit: float = 0.003
+    finger_press_limit: float = 0.05
+    press_steps: int = 150
+
+
+#: how much further every finger joint is closed for the grip the lift test starts from, rad
+SQUEEZE = 0.1
+#: the longest the object is given to come to rest on the table before the plan starts, s
+SETTLE_LIMIT = 3.0
+#: a guarded motion stops before a hand body pushes the resting object with more than this
+#: fraction of the force that would slide it on the table (μ m g)
+STOP_FRACTION = 0.5
 
 
 class DrakeDriver(KinematicDriver):
@@ -88,7 +102,17 @@ class DrakeDriver(KinematicDriver):
         friction: Coulomb μ of every contact.
     """
 
-    __slots__ = ("_lift", "_moved_max", "_plant", "_settings", "_sim_wall", "_start")
+    __slots__ = (
+        "_explored",
+        "_lift",
+        "_moved_max",
+        "_plant",
+        "_settings",
+        "_sim_wall",
+        "_start",
+        "_stop",
+        "_transfers",
+    )
 
     def __init__(
         self,
@@ -104,11 +128,20 @@ class DrakeDriver(KinematicDriver):
         self._plant.set_hand_q(world.state.q)
         self._plant.simulator.Initialize()
         self._sim_wall = 0.0
-        self._timed(lambda: self._plant.advance(0.2))  # the object settles on the table
+        self._timed(self._settle)  # the object comes to rest on the table (it may tip over first)
         self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
+        self._transfers = 0  # free-space transfers made without simulation
+        self._explored: float | None = None  # how far the object had moved when the grip was judged
         self._lift: dict[str, Any] | None = None
+        weight = self._plant.settings.mass * GRAVITY
+        self._stop = min(self._settings.stop_force, STOP_FRACTION * friction * weight)
         self._sync()
+
+    @property
+    def support_height(self) -> float | None:
+        """The Drake table's top (m): the object rests on it (the hand passes through it)."""
+        return self._plant.table_top
 
     # --- time ---------------------------------------------------------------------------------
     def clock(self) -> float:
@@ -122,15 +155,27 @@ class DrakeDriver(KinematicDriver):
         finally:
             self._sim_wall += time.perf_counter() - t0
 
+    def _settle(self) -> None:
+        """Simulate until the object rests (speed < 1 mm/s, spin < 0.05 rad/s: it may topple
+        from the pose it was put in) or :data:`SETTLE_LIMIT` s have passed."""
+        plant = self._plant
+        plant.advance(0.2)
+        while plant.time() < SETTLE_LIMIT:
+            v = plant.plant.EvalBodySpatialVelocityInWorld(plant.context, plant.body)
+            if np.linalg.norm(v.translational()) < 1e-3 and np.linalg.norm(v.rotational()) < 0.05:
+                return
+            plant.advance(0.1)
+
     # --- keeping the model in step with Drake ---------------------------------------------------
-    def _sync(self) -> None:
-        """The model takes the object's pose and the hand's joint values from Drake."""
+    def _sync(self, hand: bool = True) -> None:
+        """The model takes the object's pose and (with ``hand``) the hand's joint values from Drake."""
         world = self._world
         pose = self._plant.object_pose()
         world.scene.set_object_placement(pin.SE3(np.asarray(pose.rotation().matrix()), pose.translation()))
         world.obj_centre = tuple(float(x) for x in pose.translation())
-        hand = world.hand
-        world.set_q(np.clip(self._plant.hand_q(), hand.lower, hand.upper))
+        if hand:
+            model = world.hand
+            world.set_q(np.clip(self._plant.hand_q(), model.lower, model.upper))
         self._moved_max = max(self._moved_max, float(np.linalg.norm(pose.translation() - self._start)))
 
     def object_pose(self) -> list[float]:
@@ -144,14 +189,17 @@ class DrakeDriver(KinematicDriver):
         """How far the object's centre is from where it rested at the start, m."""
         return float(np.linalg.norm(self._plant.object_pose().translation() - self._start))
 
-    def _execute(self, q_from: np.ndarray, q_to: np.ndarray, speed: float) -> bool:
+    def _execute(
+        self, q_from: np.ndarray, q_to: np.ndarray, speed: float, guard: float | None = None
+    ) -> bool:
         """Place the hand at ``q_from`` (a transfer), then ramp to ``q_to`` in Drake, the wrist
         at ``speed`` m/s; stops early when a hand body pushes the object harder than
-        ``stop_force``. Returns whether it stopped early."""
+        ``guard`` N (default: the stop force; a touch's motion: the touch force). Returns whether
+        it stopped early."""
         plant, s = self._plant, self._settings
         q_from, q_to = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
         if np.max(np.abs(plant.hand_q() - q_from)) > 1e-6:
-            plant.set_hand_q(q_from)
+            self._transfer(q_from)
         delta = q_to - q_from
         xyz = self._world.wrist_xyz_q
         rest = np.ones(len(delta), dtype=bool)
@@ -163,6 +211,7 @@ class DrakeDriver(KinematicDriver):
         duration *= 1.5  # a smoothstep profile: its peak speed is 1.5 times its mean
         steps = max(1, int(np.ceil(duration / s.chunk)))
         stopped = False
+        limit = self._stop if guard is None else guard
 
         def run() -> None:
             nonlocal stopped
@@ -172,7 +221,7 @@ class DrakeDriver(KinematicDriver):
                 along, rate = (3 - 2 * tau) * tau * tau, 6 * tau * (1 - tau) / duration
                 plant.command_moving(q_from + along * delta, rate * delta)
                 plant.advance_to(t0 + tau * duration)
-                if self._pushing() > s.stop_force:
+                if self._pushing() > limit:
                     plant.command(plant.hand_q())
                     stopped = True
                     return
@@ -182,26 +231,39 @@ class DrakeDriver(KinematicDriver):
         self._sync()
         return stopped
 
+    def _transfer(self, q: np.ndarray) -> None:
+        """Place Drake's hand at ``q`` without simulating the way there (a free-space transfer:
+        the arm's collision-free motion is assumed), counted when the wrist jumps more than 1 mm."""
+        jump = float(
+            np.linalg.norm(self._plant.hand_q()[self._world.wrist_xyz_q] - q[self._world.wrist_xyz_q])
+        )
+        if jump > 1e-3:
+            self._transfers += 1
+        self._plant.set_hand_q(q)
+
     def _pushing(self) -> float:
         """The largest normal force of any hand body on the object, N."""
         table = 0  # the world body (the table is welded to it)
         return max((f for other, _, _, f in self._plant.object_contacts() if other != table), default=0.0)
 
     def _press(self, finger: str, direction: np.ndarray) -> Touch | None:
-        """Press on along the joint-space ``direction`` (per unit of press) until ``finger``'s
-        tip pushes with ``touch_force``; the touch as Drake reports it."""
+        """Press on along the joint-space ``direction`` (its length: the most to press on) until
+        ``finger``'s tip pushes with ``touch_force``, one plant step at a time so that the press
+        ends near that force (a light touch moves no resting object); the touch as Drake
+        reports it."""
         plant, s = self._plant, self._settings
         body = plant.tip_bodies[finger]
         q0 = plant.hand_q()
         found = plant.tip_force(body)
+        step = plant.settings.time_step
 
         def run() -> tuple[np.ndarray, np.ndarray, float] | None:
             nonlocal found
-            for k in range(1, 31):
+            for k in range(1, s.press_steps + 1):
                 if found is not None and found[2] >= s.touch_force:
                     break
-                plant.command(q0 + direction * (s.press_limit * k / 30))
-                plant.advance(s.chunk)
+                plant.command(q0 + direction * (k / s.press_steps))
+                plant.advance(step)
                 found = plant.tip_force(body)
             return found
 
@@ -239,12 +301,12 @@ class DrakeDriver(KinematicDriver):
         world = self._world
         q0 = world.state.q
         step = super().close_finger_step(finger, dtheta)
-        self._execute(q0, world.state.q, self._settings.approach_speed)
+        self._execute(q0, world.state.q, self._settings.approach_speed, self._settings.touch_force)
         if step.event != "touched":
             return step
         direction = np.zeros(len(q0))
         direction[world.context.finger_q[finger]] = 1.0
-        touch = self._press(finger, direction * (0.05 / self._settings.press_limit))
+        touch = self._press(finger, direction * self._settings.finger_press_limit)
         return FingerStep(step.event, world.finger_angle(finger), touch or step.touch)
 
     def guarded_probe(
@@ -263,10 +325,10 @@ class DrakeDriver(KinematicDriver):
         unit = np.asarray(direction, dtype=float) / float(np.linalg.norm(direction))
         q_start = q_end.copy()
         q_start[world.wrist_xyz_q] -= outcome.travelled * unit
-        self._execute(q_start, q_end, self._settings.approach_speed)
+        self._execute(q_start, q_end, self._settings.approach_speed, self._settings.touch_force)
         if outcome.event == "touched":
             push = np.zeros(len(q_end))
-            push[world.wrist_xyz_q] = unit
+            push[world.wrist_xyz_q] = unit * self._settings.press_limit
             self._press(finger, push)
         return outcome
 
@@ -290,7 +352,7 @@ class DrakeDriver(KinematicDriver):
         )  # fmt: skip
         plant = self._plant
         path = [np.asarray(q) for q in result.path] or [result.q_final]
-        plant.set_hand_q(path[0])
+        self._transfer(path[0])
 
         def run() -> None:
             for a, b in itertools.pairwise(path):
@@ -300,7 +362,9 @@ class DrakeDriver(KinematicDriver):
             plant.advance(self._settings.chunk)
 
         self._timed(run)
-        self._sync()
+        # the model keeps the roll's planned end (its tip on the surface), not Drake's joint values:
+        # a soft fingertip pressed on the object sinks into it past the contact tolerance
+        self._sync(hand=False)
         return result
 
     def tactile(self, finger: str) -> TactileReading:
@@ -313,14 +377,20 @@ class DrakeDriver(KinematicDriver):
 
     # --- the referee ------------------------------------------------------------------------------
     def judge_grip(self, friction: float) -> dict[str, Any]:
-        """Contacts and quality where the object now is, then the lift test: good only if held."""
+        """The grip squeezed (the lift test's first step: every finger joint 0.1 rad further
+        closed, settled), its contacts and quality where the object now is, then the rest of
+        the lift test: good only if held."""
+        moved = self._explored = self.object_moved()  # before the grip and the lift move it
+        world = self._world
+        # a described hand's own squeeze (its [drake] table: per joint unit, m for a prismatic finger)
+        squeeze = float(dict(getattr(world.hand, "drake", {})).get("squeeze", SQUEEZE))
+        target = self._timed(lambda: squeeze_grip(self._plant, world.hand, squeeze))
         self._sync()
-        verdict = grasp_geometry(self._world, friction)
-        moved = self.object_moved()
+        verdict = grasp_geometry(world, friction)
         verdict["object_moved_mm"] = round(1000.0 * moved, 3)
         if verdict["all_touching"]:
-            world, radius = self._world, 0.5 * float(self._world.obj.diameter)
-            lift = self._timed(lambda: lift_test(self._plant, world.hand, world.wrist_xyz_q, radius))
+            radius = 0.5 * float(world.obj.diameter)
+            lift = self._timed(lambda: lift_test(self._plant, world.hand, world.wrist_xyz_q, radius, target))
         else:
             lift = {"held": False, "why": "not every fingertip touches: nothing to lift"}
         self._lift = lift
@@ -331,7 +401,7 @@ class DrakeDriver(KinematicDriver):
     def report(self) -> dict[str, Any]:
         """The Drake world's figures for the plan result."""
         sim = self._plant.time()
-        moved = self.object_moved()
+        moved = self.object_moved() if self._explored is None else self._explored
         return {
             "name": "drake",
             "object_moved_mm": round(1000.0 * moved, 3),
@@ -340,6 +410,7 @@ class DrakeDriver(KinematicDriver):
             "moved_past_relocation_limit": bool(moved > RELOCATE_AFTER),
             "object_moved_max_mm": round(1000.0 * self._moved_max, 3),
             "lift": self._lift,
+            "transfers_unsimulated": self._transfers,
             "simulated_s": round(sim, 4),
             "simulation_wall_s": round(self._sim_wall, 4),
             "real_time_factor": round(sim / self._sim_wall, 3) if self._sim_wall > 0 else None,

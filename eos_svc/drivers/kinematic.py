@@ -86,6 +86,11 @@ class KinematicDriver:
         return self._world.table_height
 
     @property
+    def support_height(self) -> float | None:
+        """The surface the object rests on (m): the table's, ``None`` without one."""
+        return self._world.table_height
+
+    @property
     def kinematic_sigma(self) -> float:
         """The joint encoders' fingertip position uncertainty, m."""
         return float(self._world.encoders.position_sigma)

@@ -2,7 +2,8 @@
 
 After the grip (every fingertip touching), in the Drake world (:mod:`eos_svc.drivers.drake_plant`):
 
-1. squeeze: every finger joint's PD target ``squeeze`` rad further closed, settle;
+1. squeeze: every finger joint's PD target ``squeeze`` rad further closed (0.1 rad: 0.5 N·m at
+   the Drake world's finger gain, half hand3x3's effort limit), settle;
 2. lift: the wrist up ``height`` m (a straight ramp), hold;
 3. load: from the lifted state, one at a time, the object's weight acting along ±x, ±y, ±z (an
    external force that cancels gravity and adds ``m g`` along the direction) and a torque
@@ -43,31 +44,41 @@ def _in_palm(plant: DrakeHandPlant, palm: str) -> np.ndarray:
     return np.asarray(X_WP.inverse().multiply(plant.object_pose().translation()))
 
 
+def squeeze_grip(
+    plant: DrakeHandPlant, hand: HandModel, squeeze: float = 0.1, settle_s: float = 0.3
+) -> np.ndarray:
+    """Step 1: every finger joint's target ``squeeze`` rad further closed than where it is,
+    settled for ``settle_s`` s (the grip the lift starts from); returns the joint targets."""
+    q = plant.hand_q()
+    fingers = np.ones(len(q), dtype=bool)
+    fingers[np.asarray(hand.wrist_q_index)] = False
+    target: np.ndarray = q + squeeze * fingers
+    plant.set_object_wrench(np.zeros(3), np.zeros(3))
+    plant.command(target)
+    plant.advance(settle_s)
+    return target
+
+
 def lift_test(
     plant: DrakeHandPlant,
     hand: HandModel,
     wrist_xyz_q: Any,
     radius: float,
+    target: np.ndarray,
     *,
     height: float = 0.1,
-    squeeze: float = 0.05,
     lift_s: float = 1.0,
     settle_s: float = 0.3,
     load_s: float = 0.3,
     limit: float = 0.01,
     chunk: float = 0.01,
 ) -> dict[str, Any]:
-    """Run the lift test (see the module docstring) from the plant's state; returns
-    ``held`` and the figures (m): rise, drift during the lift, displacement per load."""
+    """Steps 2 and 3 of the lift test (see the module docstring) from the squeezed grip
+    (``target``: :func:`squeeze_grip`'s joint targets); returns ``held`` and the figures (m):
+    rise, drift during the lift, displacement per load."""
     palm = hand.model.frames[hand.palm_frame_id].name
     mass = plant.settings.mass
     q = plant.hand_q()
-    fingers = np.ones(len(q), dtype=bool)
-    fingers[np.asarray(hand.wrist_q_index)] = False
-    target = q + squeeze * fingers
-    plant.set_object_wrench(np.zeros(3), np.zeros(3))
-    plant.command(target)
-    plant.advance(settle_s)
     before = _in_palm(plant, palm)
     z0 = float(plant.object_pose().translation()[2])
     lifted = target.copy()

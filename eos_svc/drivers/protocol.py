@@ -154,6 +154,13 @@ class HandDriver(Protocol):
         ...
 
     @property
+    def support_height(self) -> float | None:
+        """The height of the surface the object rests on (m), ``None`` when it rests on none: the
+        table's, or in a world whose hand may pass through its support (the Drake world's) that
+        support's. Its bottom need not be felt (it is that plane) and is never probed from under."""
+        ...
+
+    @property
     def kinematic_sigma(self) -> float:
         """The joint sensing's fingertip position uncertainty (m; 0 for exact kinematics)."""
         ...

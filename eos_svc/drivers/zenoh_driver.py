@@ -121,6 +121,12 @@ class ZenohDriver:
         return None if value is None else float(value)
 
     @property
+    def support_height(self) -> float | None:
+        """The surface the served object rests on (m), ``None`` without one."""
+        value = self._call("support_height")
+        return None if value is None else float(value)
+
+    @property
     def kinematic_sigma(self) -> float:
         """The served hand's fingertip position uncertainty, m."""
         return float(self._call("kinematic_sigma"))

@@ -32,10 +32,10 @@ def test_without_the_batch_extra_the_error_says_how_to_install_it(
 
 def test_a_bad_spec_exits_2_naming_the_field(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     spec = tmp_path / "s.toml"
-    spec.write_text('world = "drake"\n[objects]\nsuite = "quick"\n')
+    spec.write_text('world = "mujoco"\n[objects]\nsuite = "quick"\n')
     with pytest.raises(SystemExit) as exc:
         main(["batch", str(spec)])
-    assert exc.value.code == 2 and "world: only 'kinematic'" in capsys.readouterr().err
+    assert exc.value.code == 2 and "world: must be one of 'kinematic', 'drake'" in capsys.readouterr().err
 
 
 def test_planning_imports_neither_ray_nor_pyarrow() -> None:

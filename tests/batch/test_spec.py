@@ -28,7 +28,7 @@ def test_the_example_spec_parses_and_expands_to_its_documented_count() -> None:
 @pytest.mark.parametrize(
     ("data", "field"),
     [
-        ({"objects": {"suite": "quick"}, "world": "drake"}, "world"),
+        ({"objects": {"suite": "quick"}, "world": "mujoco"}, "world"),
         ({"objects": {"suite": "quick"}, "colour": 1}, "colour"),
         ({"objects": {"suite": "nope"}}, "objects.suite[0]"),
         ({}, "objects"),
@@ -57,6 +57,24 @@ def test_a_bad_field_is_refused_by_name(data: dict, field: str) -> None:
 def test_the_world_error_says_what_is_available() -> None:
     with pytest.raises(ValidationError, match="kinematic"):
         spec_from_dict({"objects": {"suite": "quick"}, "world": "mujoco"})
+
+
+def test_a_drake_key_plans_in_the_drake_world() -> None:
+    from eos_svc.batch.task import run_key
+
+    spec = spec_from_dict(
+        {
+            "world": "drake",
+            "objects": {"suite": "quick"},
+            "seeds": [1],
+            "conditions": {"max_cycles": 6, "deadline_s": 600.0},
+        }
+    )
+    keys = expand(spec)
+    kinematic = expand(spec_from_dict({"objects": {"suite": "quick"}, "seeds": [1]}))
+    assert keys[0].world == "drake" and keys[0].key != kinematic[0].key  # the world is in the id
+    row = run_key(keys[0])
+    assert row["world"] == "drake" and row["status"] == "cycle_limit"  # six cycles of a Drake plan
 
 
 def test_a_drawn_object_keeps_its_drawn_seed_unless_seeds_are_given() -> None:
