@@ -22,6 +22,9 @@ Two sources, in the order the information stage gathers them:
    and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
    a few contacts fit five classes loosely) — leaving its ``candidates``
    (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
+   The next fit starts each of those classes from its candidate (``select_class``'s ``warm``):
+   a few new contacts move an optimum little, so the class's cold starts are tried only when
+   that refit does not explain the touches to within the noise.
 3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
    once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
    ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
@@ -56,7 +59,7 @@ from eos_svc.schema import keys
 from eos_svc.shape import Touches, select_class
 from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
-from eos_svc.shape.probe_information import candidates_of
+from eos_svc.shape.probe_information import Candidate, candidates_of
 from eos_svc.shape.selection import MIN_CONTACTS, fit_probability, tolerance_probability
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
@@ -133,7 +136,15 @@ class PostShapeAgent(GraspAgent):
     """Turns what the fingers felt into a postulated object with a confidence."""
 
     reads = frozenset(
-        {keys.CURVATURE, keys.EP1_CONTACT, keys.APPROACH, keys.EP2_TOUCHES, keys.EP2_FREE, keys.EP2_RUNS}
+        {
+            keys.CURVATURE,
+            keys.EP1_CONTACT,
+            keys.APPROACH,
+            keys.EP2_TOUCHES,
+            keys.EP2_FREE,
+            keys.EP2_RUNS,
+            keys.SHAPE,  # its own previous candidates: warm starts of the next fit
+        }
     )
     writes = frozenset({keys.SHAPE, keys.D_OVER_H})
 
@@ -167,7 +178,12 @@ class PostShapeAgent(GraspAgent):
             board.set(keys.D_OVER_H, round(2.0 * shape["grasp_radius"] / self.world.hand.hand_height, 6))
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
-        post = select_class(touches)
+        # the previous postulate's candidate fits, on fewer of these touches, start their classes'
+        warm = {
+            c.kind: (c.theta, c.r0)
+            for c in (Candidate.from_dict(d) for d in (board.get(keys.SHAPE) or {}).get("candidates", []))
+        }
+        post = select_class(touches, warm=warm)
         ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
         if (
             ep2_done

@@ -25,7 +25,7 @@ from itertools import product
 
 import numpy as np
 
-from eos_svc.agents.probe_plan import Probe, targeted_probes
+from eos_svc.agents.probe_plan import Probe, face_probes
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.shape.probe_information import Candidate, choose, disagreement
 
@@ -41,7 +41,8 @@ NORMALS = tuple(s * e for e in np.eye(3) for s in (1.0, -1.0))
 
 
 def probe_faces(centre: np.ndarray, half: np.ndarray, table: bool) -> list[dict]:
-    """The lines the hand may probe along, as the faces :func:`targeted_probes` aims at: per
+    """The lines the hand may probe along, as the faces
+    :func:`~eos_svc.agents.probe_plan.targeted_probes` aims at: per
     outward normal (none turned down on a table), the bounds' face centre and the points
     ±OFFSET of its half sizes off it along both tangents (``half``: the bounds' half size along
     the normal, at least REACH_HALF)."""
@@ -72,11 +73,8 @@ def next_probes(
     the other lines by their own spread (tried when the hand cannot probe the chosen ones);
     none when no line's predicted distance spreads over MIN_SPREAD."""
     faces = probe_faces(*estimate, table=world.support_height is not None)
-    probes = targeted_probes(world, faces, standoff, label="active", off_centre=False)
-    groups: dict[int, list[Probe]] = {}
-    for probe in probes:
-        groups.setdefault(probe.group, []).append(probe)
-    firsts = [g[0] for g in groups.values()]
+    # each line scored by its face's first probe; the alternatives made for the lines returned
+    firsts = [next(face_probes(world, face, k, standoff, "active", False)) for k, face in enumerate(faces)]
     R = disagreement(
         [Candidate.from_dict(c) for c in candidates],
         np.array([p.start for p in firsts]),
@@ -89,8 +87,7 @@ def next_probes(
     # then, for when those lines cannot be probed, the others by their own spread
     variance = np.sum(R * R, axis=0)
     rest = [int(j) for j in np.argsort(-variance) if variance[j] > MIN_SPREAD**2 and j not in picks]
-    keys = list(groups)
-    return [groups[keys[j]] for j in (picks + rest)[:most]]
+    return [list(face_probes(world, faces[j], j, standoff, "active", False)) for j in (picks + rest)[:most]]
 
 
 def seed_probes(world: HandDriver, centre: np.ndarray, half: np.ndarray, standoff: float) -> list[Probe]:

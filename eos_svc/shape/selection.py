@@ -190,8 +190,17 @@ def is_plane(touches: Touches) -> bool:
     return bool(np.all(cos >= math.cos(PLANE_ANGLE)))
 
 
-def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postulate:
+def select_class(
+    touches: Touches,
+    classes: tuple[str, ...] = CLASSES,
+    warm: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+) -> Postulate:
     """Fit every class to ``touches`` and choose by posterior (BIC, equal priors).
+
+    ``warm``: per class, an earlier fit's (θ, R0) on fewer of the same touches (post_shape's
+    previous candidates). Each is refitted from there first; one that then :func:`explains`
+    the touches is kept without trying the class's cold starts (an optimum moved by a few new
+    contacts), the others are fitted as if there were none.
 
     Raises:
         ValueError: fewer than MIN_CONTACTS contacts.
@@ -204,15 +213,21 @@ def select_class(touches: Touches, classes: tuple[str, ...] = CLASSES) -> Postul
     fits: dict[str, ClassFit] = {}
     screened: dict[str, ClassFit] = {}
     shared = ClassStarts(touches)  # every class's starts, their common pieces computed once
-    fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
-    if fits[classes[0]].chi2 > GOOD_FIT * m and len(classes) > 1:
+    for kind, (theta0, r0) in (warm or {}).items():
+        if kind in classes:
+            refit = fit_class(kind, touches, class_starts=shared, only=shared.add(kind, theta0, r0))
+            if explains(refit.chi2, touches, kind):
+                fits[kind] = refit
+    if classes[0] not in fits:
+        fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
+    if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
         # the first class does not explain the touches: the others, each from its nearest
         # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
         # explains the touches the rest are shown hopeless against it in a few iterations
         # instead of being fitted in full before it. The order decides which fit shows a class
         # hopeless, not the postulate: its posterior is 0 either way.
-        screened = screen(touches, classes[1:], shared)
-    rest = classes[1:]
+        screened = screen(touches, tuple(k for k in classes[1:] if k not in fits), shared)
+    rest = tuple(k for k in classes[1:] if k not in fits)
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
         # once some class fits, one far worse than it is hopeless (posterior ~ e^-HOPELESS/2):
