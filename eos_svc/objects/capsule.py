@@ -9,45 +9,18 @@ from typing import Any
 
 import coal
 import numpy as np
-import pinocchio as pin
 
-from eos_svc.objects.base import (
-    Array,
-    SurfaceObject,
-    across_axis_units,
-    norm,
-    perpendicular_unit,
-    positive,
-    unit,
-)
+from eos_svc.objects.axial import AxialObject
+from eos_svc.objects.base import Array, across_axis_units, norm, unit
 
 _X = np.array([1.0, 0.0, 0.0])
 
 
-class Capsule(SurfaceObject):
+class Capsule(AxialObject):
     """Capsule of ``radius`` m about a straight part of ``length`` m along local z."""
 
     kind = "capsule"
-    size_fields = ("radius", "length")
-    half_size_count = 2
-    orientation = "axis"
-
-    def __init__(self, radius: float, length: float, placement: pin.SE3 | None = None) -> None:
-        super().__init__(placement)
-        self.radius = positive("radius", radius)
-        self.length = positive("length", length)
-        self._geom = coal.Capsule(self.radius, self.length)
-
-    @property
-    def half_sizes(self) -> Array:
-        return np.array([self.radius, 0.5 * self.length])
-
-    @classmethod
-    def from_half_sizes(cls, half: Array, placement: pin.SE3 | None = None) -> Capsule:
-        return cls(float(half[0]), 2.0 * float(half[1]), placement)
-
-    def sizes(self) -> dict[str, Any]:
-        return {"radius": self.radius, "length": self.length}
+    coal_shape = coal.Capsule
 
     @staticmethod
     def local_distance(P: Array, half: Array) -> tuple[Array, Array]:
@@ -57,10 +30,6 @@ class Capsule(SurfaceObject):
         v[..., 2] -= np.clip(P[..., 2], -half[..., 1], half[..., 1])
         n = norm(v)
         return n - half[..., 0], unit(v, n, _X)
-
-    @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
 
     @property
     def diameter(self) -> float:
@@ -106,13 +75,6 @@ class Capsule(SurfaceObject):
         """Across the axis (its normals, the vertical's and the hand's y's parts across it); never
         along it: a capsule is always longer than wide."""
         return [("across the axis", g) for g in across_axis_units(self.rotation)]
-
-    def approach_options(self, closing: Array) -> list[Array | None]:
-        """The object's axes, and the direction across both the grip and the axis."""
-        return [
-            *super().approach_options(closing),
-            perpendicular_unit(np.cross(closing, self.rotation[:, 2]), closing),
-        ]
 
     @property
     def volume(self) -> float:

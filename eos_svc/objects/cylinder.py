@@ -8,46 +8,24 @@ from typing import Any
 
 import coal
 import numpy as np
-import pinocchio as pin
 
+from eos_svc.objects.axial import AxialObject
 from eos_svc.objects.base import (
     EDGE_TOLERANCE,
     TINY,
     Array,
     CurvatureUndefinedError,
-    SurfaceObject,
     across_axis_units,
-    perpendicular_unit,
-    positive,
 )
 
 _X = np.array([1.0, 0.0, 0.0])
 
 
-class Cylinder(SurfaceObject):
+class Cylinder(AxialObject):
     """Cylinder of ``radius`` m and ``length`` m along local z, centred (flat caps)."""
 
     kind = "cylinder"
-    size_fields = ("radius", "length")
-    half_size_count = 2
-    orientation = "axis"
-
-    def __init__(self, radius: float, length: float, placement: pin.SE3 | None = None) -> None:
-        super().__init__(placement)
-        self.radius = positive("radius", radius)
-        self.length = positive("length", length)
-        self._geom = coal.Cylinder(self.radius, self.length)
-
-    @property
-    def half_sizes(self) -> Array:
-        return np.array([self.radius, 0.5 * self.length])
-
-    @classmethod
-    def from_half_sizes(cls, half: Array, placement: pin.SE3 | None = None) -> Cylinder:
-        return cls(float(half[0]), 2.0 * float(half[1]), placement)
-
-    def sizes(self) -> dict[str, Any]:
-        return {"radius": self.radius, "length": self.length}
+    coal_shape = coal.Cylinder
 
     @staticmethod
     def local_distance(P: Array, half: Array) -> tuple[Array, Array]:
@@ -67,10 +45,6 @@ class Cylinder(SurfaceObject):
         g_out = (a[..., None] * radial + b[..., None] * axial) / np.maximum(out, TINY)[..., None]
         g_in = np.where((dr > dz)[..., None], radial, axial)
         return d, np.where((out > TINY)[..., None], g_out, g_in)
-
-    @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
 
     @property
     def diameter(self) -> float:
@@ -129,13 +103,6 @@ class Cylinder(SurfaceObject):
         if self.length <= 2.0 * self.radius:
             axes.append(("along the axis", axis))
         return axes
-
-    def approach_options(self, closing: Array) -> list[Array | None]:
-        """The object's axes, and the direction across both the grip and the axis."""
-        return [
-            *super().approach_options(closing),
-            perpendicular_unit(np.cross(closing, self.rotation[:, 2]), closing),
-        ]
 
     @property
     def volume(self) -> float:
