@@ -22,8 +22,8 @@ of the step's average velocity ``M (J q̇ + ½ dt J̇ q̇_prev)``, i.e. ``b − 
 slip per step is then O(dt³) instead of O(dt²).
 
 :func:`step_qp` gives the step as plain arrays (:class:`StepQP`; the runner solves most steps in
-closed form from them, :mod:`~.rolling_solvers`); :meth:`StepQP.problem` (and
-:func:`rolling_problem`) the same QP as a :class:`qpsolvers.Problem` for any qpsolvers backend.
+closed form from them, :mod:`~.rolling_solvers`); :meth:`StepQP.problem` the same QP as a
+:class:`qpsolvers.Problem` for any qpsolvers backend.
 """
 
 from __future__ import annotations
@@ -41,7 +41,6 @@ __all__ = [
     "JointBox",
     "StepQP",
     "contact_rows",
-    "rolling_problem",
     "step_qp",
     "steps_at_speed_limits",
     "velocity_bounds",
@@ -161,21 +160,3 @@ def step_qp(
         b = np.array((0.0 - h * m0, 0.0 - h * m1, gap_target - h * m2, wx - h * m3, wy - h * m4, wz - h * m5))
     lb, ub = bounds
     return StepQP(weights, M.dot(jacobian), b, lb, ub)
-
-
-def rolling_problem(
-    jacobian: np.ndarray,
-    drift: np.ndarray | None,
-    contact: Contact,
-    radius: float,
-    omega_axis: tuple[float, float, float],
-    q: np.ndarray,
-    box: JointBox,
-    weights: np.ndarray,
-    dt: float,
-    gap_gain: float,
-) -> qpsolvers.Problem:
-    """The QP of :func:`step_qp` at the active joints' positions ``q`` within ``box`` (the other
-    arguments: :func:`step_qp`'s) as a :class:`qpsolvers.Problem`."""
-    bounds = velocity_bounds(q, box, dt)
-    return step_qp(jacobian, drift, contact, radius, omega_axis, bounds, weights, dt, gap_gain).problem()
