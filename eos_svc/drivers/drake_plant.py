@@ -24,17 +24,14 @@ import numpy as np
 from pydrake.geometry import (
     AddCompliantHydroelasticProperties,
     AddCompliantHydroelasticPropertiesForHalfSpace,
-    AddContactMaterial,
     AddRigidHydroelasticProperties,
     CollisionFilterDeclaration,
     GeometrySet,
     HalfSpace,
-    ProximityProperties,
-    RoleAssign,
 )
 from pydrake.math import RigidTransform, RollPitchYaw
-from pydrake.multibody.plant import AddMultibodyPlant, CoulombFriction, MultibodyPlantConfig
-from pydrake.multibody.tree import PdControllerGains, SpatialInertia
+from pydrake.multibody.plant import AddMultibodyPlant, MultibodyPlantConfig
+from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
@@ -42,22 +39,11 @@ from eos_svc.kinematics import HandModel
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.validation.drake_hand import drake_urdf
-from eos_svc.validation.simulation import hand_parser, object_shapes, urdf_effort_limits, vec
+from eos_svc.validation.drake_scene import add_object, contact_material, set_hand_contact, vec
+from eos_svc.validation.simulation import hand_parser, urdf_effort_limits
 
 #: the object starts this far above the table, m
 DROP = 1e-4
-
-
-def contact_material(friction: float, stiffness: float) -> ProximityProperties:
-    """Proximity properties with Coulomb ``friction`` and a point-contact ``stiffness`` (N/m)."""
-    material = ProximityProperties()
-    AddContactMaterial(
-        dissipation=None,
-        point_stiffness=stiffness,
-        friction=CoulombFriction(friction, friction),
-        properties=material,
-    )
-    return material
 
 
 @dataclass(frozen=True)
@@ -161,12 +147,7 @@ class DrakeHandPlant:
         object_material = contact_material(friction, s.contact_stiffness)
         resolution = min(s.resolution, max(0.003, 0.1 * float(obj.diameter)))  # a sagitta < 0.2 mm
         AddRigidHydroelasticProperties(resolution, object_material)
-        shapes, unit_inertia = object_shapes(spec)  # a mesh: its convex pieces
-        instance = plant.AddModelInstance("object")
-        inertia = SpatialInertia(s.mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
-        body = plant.AddRigidBody("object", instance, inertia)
-        for i, shape in enumerate(shapes):
-            plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"object_{i}", object_material)
+        body = add_object(plant, spec, s.mass, object_material)  # a mesh: its convex pieces
         plant.set_gravity_enabled(model, False)
         plant.Finalize()
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(model)]
@@ -174,15 +155,12 @@ class DrakeHandPlant:
                 for f in hand.finger_names}  # fmt: skip
         tip_material = contact_material(friction, s.contact_stiffness)  # soft pads: torsional friction
         AddCompliantHydroelasticProperties(s.tip_resolution, s.tip_modulus, tip_material)
-        for b in hand_bodies:
-            chosen = tip_material if s.soft_tips and int(b.index()) in tips else material
-            for geometry in plant.GetCollisionGeometriesForBody(b):
-                scene_graph.AssignRole(plant.get_source_id(), geometry, chosen, RoleAssign.kReplace)
-        hand_set = plant.CollectRegisteredGeometries(hand_bodies)
-        manager = scene_graph.collision_filter_manager()
-        manager.Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
+        tip_materials = dict.fromkeys(tips, tip_material) if s.soft_tips else {}  # the rest: point contact
+        hand_set = set_hand_contact(plant, scene_graph, hand_bodies, material, tip_materials)
         if not s.hand_touches_table:
-            manager.Apply(CollisionFilterDeclaration().ExcludeBetween(hand_set, GeometrySet(table)))
+            scene_graph.collision_filter_manager().Apply(
+                CollisionFilterDeclaration().ExcludeBetween(hand_set, GeometrySet(table))
+            )
         self.plant, self.model, self.body = plant, model, body
         self.tip_bodies = {
             f: plant.GetFrameByName(hand.model.frames[hand.tip_frame_id(f)].name, model).body()

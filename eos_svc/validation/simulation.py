@@ -27,35 +27,26 @@ from __future__ import annotations
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
 
 import numpy as np
-from pydrake.geometry import (
-    AddContactMaterial,
-    Box,
-    CollisionFilterDeclaration,
-    ProximityProperties,
-    RoleAssign,
-    Shape,
-)
+from pydrake.geometry import Box
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
-    CoulombFriction,
     ExternallyAppliedSpatialForce,
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains, RotationalInertia, SpatialInertia
+from pydrake.multibody.tree import PdControllerGains
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
-from eos_svc import objects
 from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 from eos_svc.schema.request import ObjectSpec
+from eos_svc.validation.drake_scene import add_object, contact_material, set_hand_contact, vec
 
 #: name of the object's body and model instance in the plant
 #: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles
@@ -80,11 +71,6 @@ class SimulationError(EosError, RuntimeError):
     """Drake failed while building or simulating a grasp (the message says why)."""
 
 
-def vec(values: Sequence[float] | np.ndarray) -> Any:
-    """A float array for pydrake (its stubs type arrays in a way numpy's stubs reject)."""
-    return np.asarray(values, dtype=float)
-
-
 def urdf_effort_limits(urdf: Path) -> dict[str, float]:
     """Every joint's ``<limit effort>`` (N·m or N) in a URDF file, by joint name."""
     out = {}
@@ -93,17 +79,6 @@ def urdf_effort_limits(urdf: Path) -> dict[str, float]:
         if limit is not None and "effort" in limit.attrib:
             out[joint.attrib["name"]] = float(limit.attrib["effort"])
     return out
-
-
-def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
-    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
-    and the unit-mass solid inertia about its centre (scaled later), both from the object's
-    kind (:mod:`eos_svc.objects`)."""
-    obj = objects.make(spec.shape, spec.size, spec.position)
-    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
-    inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
-    return obj.drake_collision_shapes(), unit
 
 
 def hand_parser(plant: MultibodyPlant, package_dirs: Sequence[Path] = ()) -> Parser:
@@ -210,21 +185,8 @@ class GraspSimulation:
             actuator = plant.AddJointActuator(f"{name}_motor", joint, efforts[name])
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
 
-        material = ProximityProperties()
-        AddContactMaterial(
-            dissipation=None,
-            point_stiffness=contact_stiffness,
-            friction=CoulombFriction(friction, friction),
-            properties=material,
-        )
-        shapes, unit_inertia = object_shapes(obj)
-        instance = plant.AddModelInstance(OBJECT_NAME)
-        inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
-        body = plant.AddRigidBody(OBJECT_NAME, instance, inertia)
-        for i, shape in enumerate(shapes):
-            plant.RegisterCollisionGeometry(
-                body, RigidTransform(), shape, OBJECT_NAME if i == 0 else f"{OBJECT_NAME}_{i}", material
-            )
+        material = contact_material(friction, contact_stiffness)  # point contact: hand, object, table
+        body = add_object(plant, obj, mass, material, OBJECT_NAME)
         if table_height is not None:
             top = RigidTransform(vec((0.0, 0.0, table_height - 0.5 * TABLE_THICKNESS)))
             table = Box(TABLE_SIDE, TABLE_SIDE, TABLE_THICKNESS)
@@ -233,12 +195,7 @@ class GraspSimulation:
         plant.Finalize()
 
         hand_bodies = [plant.get_body(i) for i in plant.GetBodyIndices(hand)]
-        for b in hand_bodies:
-            for geometry in plant.GetCollisionGeometriesForBody(b):
-                scene_graph.AssignRole(plant.get_source_id(), geometry, material, RoleAssign.kReplace)
-        scene_graph.collision_filter_manager().Apply(
-            CollisionFilterDeclaration().ExcludeWithin(plant.CollectRegisteredGeometries(hand_bodies))
-        )
+        set_hand_contact(plant, scene_graph, hand_bodies, material)
         # hand parts: each finger (its bodies outboard of its first joint) and the palm (the rest)
         self._part: dict[int, str] = {int(b.index()): PALM_PART for b in hand_bodies}
         for finger in description.fingers:
