@@ -39,8 +39,14 @@ from eos_svc.kinematics import HandModel
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.validation.drake_hand import drake_urdf
-from eos_svc.validation.drake_scene import add_object, contact_material, set_hand_contact, vec
-from eos_svc.validation.simulation import hand_parser, urdf_effort_limits
+from eos_svc.validation.simulation import (
+    add_object,
+    contact_material,
+    hand_parser,
+    set_hand_contact,
+    urdf_effort_limits,
+    vec,
+)
 
 #: the object starts this far above the table, m
 DROP = 1e-4

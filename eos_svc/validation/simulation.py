@@ -18,6 +18,9 @@ made here in code, never in the URDF:
 - gravity is off: the object's weight is applied as an external force along one direction
   at a time.
 
+The scene's builders (:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`,
+:func:`hand_parser`) serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
+
 Reference: Drake, https://drake.mit.edu (MultibodyPlant, SAP: Castro et al., "An Unconstrained
 Convex Formulation of Compliant Contact", IEEE T-RO 2023).
 """
@@ -25,28 +28,39 @@ Convex Formulation of Compliant Contact", IEEE T-RO 2023).
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from pydrake.geometry import Box
+from pydrake.geometry import (
+    AddContactMaterial,
+    Box,
+    CollisionFilterDeclaration,
+    GeometrySet,
+    ProximityProperties,
+    RoleAssign,
+    SceneGraph,
+    Shape,
+)
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialForce
 from pydrake.multibody.parsing import Parser
 from pydrake.multibody.plant import (
     AddMultibodyPlant,
+    CoulombFriction,
     ExternallyAppliedSpatialForce,
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains
+from pydrake.multibody.tree import PdControllerGains, RigidBody, RotationalInertia, SpatialInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
+from eos_svc import objects
 from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 from eos_svc.schema.request import ObjectSpec
-from eos_svc.validation.drake_scene import add_object, contact_material, set_hand_contact, vec
 
 #: name of the object's body and model instance in the plant
 #: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles
@@ -69,6 +83,70 @@ PALM_PART = "palm"
 
 class SimulationError(EosError, RuntimeError):
     """Drake failed while building or simulating a grasp (the message says why)."""
+
+
+def vec(values: Sequence[float] | np.ndarray) -> Any:
+    """A float array for pydrake (its stubs type arrays in a way numpy's stubs reject)."""
+    return np.asarray(values, dtype=float)
+
+
+def contact_material(friction: float, stiffness: float) -> ProximityProperties:
+    """Proximity properties with Coulomb ``friction`` and a point-contact ``stiffness`` (N/m)."""
+    material = ProximityProperties()
+    AddContactMaterial(
+        dissipation=None,
+        point_stiffness=stiffness,
+        friction=CoulombFriction(friction, friction),
+        properties=material,
+    )
+    return material
+
+
+def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
+    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
+    and the unit-mass solid inertia about its centre (scaled later), both from the object's
+    kind (:mod:`eos_svc.objects`)."""
+    obj = objects.make(spec.shape, spec.size, spec.position)
+    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
+    inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
+    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
+    return obj.drake_collision_shapes(), unit
+
+
+def add_object(
+    plant: MultibodyPlant, spec: ObjectSpec, mass: float, material: ProximityProperties
+) -> RigidBody:
+    """The object as a free body (:data:`OBJECT_NAME`, its own model instance) of ``mass`` kg, its
+    collision shapes (:func:`object_shapes`) with ``material``."""
+    shapes, unit_inertia = object_shapes(spec)
+    inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
+    body = plant.AddRigidBody(OBJECT_NAME, plant.AddModelInstance(OBJECT_NAME), inertia)
+    for i, shape in enumerate(shapes):
+        plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{OBJECT_NAME}_{i}", material)
+    return body
+
+
+def set_hand_contact(
+    plant: MultibodyPlant,
+    scene_graph: SceneGraph,
+    hand_bodies: Sequence[RigidBody],
+    material: ProximityProperties,
+    body_materials: Mapping[int, ProximityProperties] | None = None,
+) -> GeometrySet:
+    """Give every collision geometry of ``hand_bodies`` ``material`` (or ``body_materials``'
+    entry for its body index) and filter out contact between hand bodies (the planner checks
+    only hand–object distances); returns the hand's geometries. Call after ``Finalize``."""
+    by_body = body_materials or {}
+    source = plant.get_source_id()
+    if source is None:
+        raise ValueError("plant: not registered with a SceneGraph")
+    for b in hand_bodies:
+        properties = by_body.get(int(b.index()), material)
+        for geometry in plant.GetCollisionGeometriesForBody(b):
+            scene_graph.AssignRole(source, geometry, properties, RoleAssign.kReplace)
+    hand_set = plant.CollectRegisteredGeometries(hand_bodies)
+    scene_graph.collision_filter_manager().Apply(CollisionFilterDeclaration().ExcludeWithin(hand_set))
+    return hand_set
 
 
 def urdf_effort_limits(urdf: Path) -> dict[str, float]:
@@ -186,7 +264,7 @@ class GraspSimulation:
             actuator.set_controller_gains(PdControllerGains(p=kp, d=kd))
 
         material = contact_material(friction, contact_stiffness)  # point contact: hand, object, table
-        body = add_object(plant, obj, mass, material, OBJECT_NAME)
+        body = add_object(plant, obj, mass, material)
         if table_height is not None:
             top = RigidTransform(vec((0.0, 0.0, table_height - 0.5 * TABLE_THICKNESS)))
             table = Box(TABLE_SIDE, TABLE_SIDE, TABLE_THICKNESS)
