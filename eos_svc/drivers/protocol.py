@@ -313,7 +313,8 @@ class HandDriver(Protocol):
         path_every: int,
     ) -> EP1Result:
         """EP1: roll ``finger``'s tip on the object without sliding (the rolling QP's
-        joint-velocity commands, a tactile reading each step) and estimate the curvature."""
+        joint-velocity commands, a tactile reading each step) and estimate the curvature; the
+        arguments (units, ranges) are :func:`~eos_svc.kinematics.ep1.run_ep1`'s."""
         ...
 
     # --- the referee -------------------------------------------------------------------------------
