@@ -20,8 +20,8 @@ the competing classes' surfaces differ, where a size or the pose is least known
 (:mod:`eos_svc.shape.probe_information`) — a line the hand cannot probe giving way to the next
 of the :data:`RANKED_LINES` best. EP2 stops when post_shape trusts its postulate.
 
-A **round over the whole surface** comes when there is no candidate line to probe (no fit yet,
-every line blocked or met nothing, the candidates agree everywhere, or after
+A **round over the whole surface** comes when there is no candidate line to probe (no fit yet on a
+table, every line blocked, the candidates agree everywhere, or after
 :data:`MAX_ACTIVE_ROUNDS` active rounds): around the current estimate (centre and half
 extents along the world axes: EP1's top and bottom contacts and the approach point at first,
 the fitted object after), probes of the front (+x), of both sides (±y), of the top (−z) and

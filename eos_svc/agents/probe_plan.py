@@ -105,7 +105,7 @@ def face_probes(
                     a = probe.angles.get(finger, 0.0) if angle is None else angle
                     yield Probe(label, finger, start, -normal, travel, a, group=group)
     if away:
-        yield from _side_probes(world, centre, normal, float(face["half"]), standoff, fingers, group)
+        yield from _side_probes(world, centre, normal, float(face["half"]), standoff, fingers, group, label)
 
 
 def _side_probes(
@@ -116,13 +116,15 @@ def _side_probes(
     standoff: float,
     fingers: tuple[str, str],
     group: int,
+    label: str = "open",
 ) -> list[Probe]:
     """Probes of a face turned away (outward ``normal``, fitted ``half`` size, m) with the wrist
     turned :data:`SIDE_TURN` either way about the vertical (within its yaw limits): the fingers
     point across the probe's direction, so the hand stays beside the object while the tip moves
     onto the face from behind it; each finger straight, from the reaches of
     :data:`REACH_FRACTIONS`, at the face's centre and :data:`SIDE_SHIFTS` toward the hand (the
-    finger's base, wider than its tip, then passes beside the face)."""
+    finger's base, wider than its tip, then passes beside the face); ``label``: the face name
+    their touches carry."""
     hand = world.hand
     yaw_q = hand.wrist_q_index[5]
     heading = float(np.arctan2(normal[1], normal[0]))
@@ -141,7 +143,7 @@ def _side_probes(
                 travel = 2.0 * reach + standoff
                 for finger in fingers:
                     angle = world.probe.angles.get(finger, 0.0)
-                    out.append(Probe("open", finger, start, -normal, travel, angle, group, yaw))
+                    out.append(Probe(label, finger, start, -normal, travel, angle, group, yaw))
     return out
 
 

@@ -200,7 +200,7 @@ def select_class(
     ``warm``: per class, an earlier fit's (θ, R0) on fewer of the same touches (post_shape's
     previous candidates). Each is refitted from there first; one that then :func:`explains`
     the touches is kept without trying the class's cold starts (an optimum moved by a few new
-    contacts), the others are fitted as if there were none.
+    contacts); for the others the class's cold starts run, the warm start among them.
 
     Raises:
         ValueError: fewer than MIN_CONTACTS contacts.

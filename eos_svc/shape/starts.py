@@ -143,7 +143,9 @@ class ClassStarts:
 
     def add(self, kind: str, theta0: np.ndarray, r0: np.ndarray) -> int:
         """Add a start of ``kind`` (e.g. from another kind's fit); its index."""
-        starts = self._of.setdefault(kind, self._starts(kind))
+        if kind not in self._of:
+            self._of[kind] = self._starts(kind)
+        starts = self._of[kind]
         starts.append((theta0, r0))
         return len(starts) - 1
 

@@ -86,7 +86,6 @@ def test_chromium_shows_the_postulate_from_its_cycle_on(result, tmp_path):
     assert after["object"][0] < 0.8 * before["object"][0]  # over the blue object
 
 
-@needs_chromium
 def union(a, b):
     """Two colour regions (pixel count, centroid) as one."""
     (na, ca), (nb, cb) = a, b
@@ -97,6 +96,7 @@ def union(a, b):
     return na + nb, tuple((na * x + nb * y) / (na + nb) for x, y in zip(ca, cb, strict=True))
 
 
+@needs_chromium
 def test_chromium_draws_the_hand_and_the_object_and_steps_the_animation(page, result, tmp_path):
     # from the first information cycle (the search's sweeps cross the whole workspace, out of
     # this close-up camera's frame) to the last
