@@ -124,7 +124,9 @@ class DrakeDriver(KinematicDriver):
     ) -> None:
         super().__init__(world)
         self._settings = settings or DrakeSettings()
-        self._plant = DrakeHandPlant(world.hand, spec, world.obj, friction, plant_settings)
+        self._plant = DrakeHandPlant(
+            world.hand, spec, world.obj, friction, plant_settings, table_height=world.table_height
+        )
         self._plant.set_hand_q(world.state.q)
         self._plant.simulator.Initialize()
         self._sim_wall = 0.0

@@ -31,6 +31,20 @@ def test_the_object_rests_on_the_table_under_gravity() -> None:
     assert abs(lowest - plant.table_top) < 5e-4  # sunk into the table's compliant layer by less than 0.5 mm
 
 
+def test_a_requested_table_below_the_object_is_where_the_object_comes_to_rest() -> None:
+    """The request's table (its top 20 mm under the ball) is the Drake world's: the ball falls
+    onto it and the planner's support height is that table's top."""
+    ball = REQUEST.obj
+    top = ball.position[2] - ball.size["radius"] - 0.02
+    request = PlanRequest.from_dict({**REQUEST.to_dict(), "table": {"height": top}})
+    driver = drake_driver(request)
+    plant = driver._plant
+    assert plant.table_top == pytest.approx(top)
+    assert driver.support_height == pytest.approx(top)
+    lowest = plant.object_pose().translation()[2] - ball.size["radius"]
+    assert abs(lowest - top) < 5e-4  # it fell 20 mm and rests on the requested table
+
+
 def test_a_guarded_finger_touch_reports_a_surface_point_and_a_positive_force() -> None:
     kinematic = plan(REQUEST)  # a grip the fingers reach from 0.3 rad more open
     driver = drake_driver()
