@@ -40,7 +40,7 @@ import pinocchio as pin
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.drivers.lift_test import GRAVITY, lift_test, squeeze_grip
+from eos_svc.drivers.lift_test import GRAVITY, SQUEEZE, lift_test, squeeze_grip
 from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
 
@@ -84,8 +84,6 @@ class DrakeSettings:
     press_steps: int = 150
 
 
-#: how much further every finger joint is closed for the grip the lift test starts from, rad
-SQUEEZE = 0.1
 #: the longest the object is given to come to rest on the table before the plan starts, s
 SETTLE_LIMIT = 3.0
 #: a guarded motion stops before a hand body pushes the resting object with more than this

@@ -38,6 +38,10 @@ LOADS: tuple[tuple[str, tuple[float, float, float] | None, tuple[float, float, f
 )
 
 
+#: how much further every finger joint is closed for the grip the lift test starts from, rad
+SQUEEZE = 0.1
+
+
 def _in_palm(plant: DrakeHandPlant, palm: str) -> np.ndarray:
     """The object's centre in the palm frame, m."""
     X_WP = plant.body_pose(palm)
@@ -45,7 +49,7 @@ def _in_palm(plant: DrakeHandPlant, palm: str) -> np.ndarray:
 
 
 def squeeze_grip(
-    plant: DrakeHandPlant, hand: HandModel, squeeze: float = 0.1, settle_s: float = 0.3
+    plant: DrakeHandPlant, hand: HandModel, squeeze: float = SQUEEZE, settle_s: float = 0.3
 ) -> np.ndarray:
     """Step 1: every finger joint's target ``squeeze`` rad further closed than where it is,
     settled for ``settle_s`` s (the grip the lift starts from); returns the joint targets."""

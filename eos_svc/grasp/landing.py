@@ -49,11 +49,11 @@ class Landing:
 
 
 def rotated_sweep_gaps(
-    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float, origin: np.ndarray
+    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float | np.ndarray, origin: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
     """The sweep's fingertip centres in the world (N, 3) and each one's gap to ``obj`` (m), from
-    the sweep's points turned by the palm's rotation R (``sweep.points @ R.T``) and the palm's
-    ``origin`` (world, m)."""
+    the sweep's points turned by the palm's rotation R (``sweep.points @ R.T``), the palm's
+    ``origin`` (world, m) and the tip's radius (m; one, or one per point)."""
     pts = rotated + origin
     return pts, obj.signed_distances(pts)[0] - tip_radius
 
@@ -163,10 +163,10 @@ def hand_landings(
     signed-distance query (an object's distance costs mostly per query, not per point: the
     ellipsoid's Newton iteration)."""
     names = list(tip_radii)
-    stacked = np.concatenate([sweeps[f].points for f in names]) @ rotation.T + origin
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)
-    gaps = obj.signed_distances(stacked)[0] - radii
+    rotated = np.concatenate([sweeps[f].points for f in names]) @ rotation.T
+    stacked, gaps = rotated_sweep_gaps(obj, rotated, radii, origin)
     ends = np.cumsum(sizes)
     out: dict[str, Landing | None] = {}
     for f, end, size in zip(names, ends.tolist(), sizes, strict=True):
