@@ -57,7 +57,7 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.probe_choice import next_probes, seed_probes
-from eos_svc.agents.probe_plan import Probe, targeted_probes
+from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, targeted_probes
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
@@ -120,7 +120,6 @@ class EP2Agent(GraspAgent):
         super().__init__("ep2", (INFO,), default, world)
         self.rounds = 0  # rounds over the whole surface
         self.active_rounds = 0
-        self.side_fingers = world.context.side_fingers
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -135,13 +134,12 @@ class EP2Agent(GraspAgent):
         world = self.world
         probe = world.probe
         top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
-        front = world.probe_finger("front")
         straight = probe.angles
         rng = world.rng
         f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
         cx, cy, cz = centre.tolist()
         hx, hy, hz = half.tolist()
-        ex, ey, ez = np.eye(3)
+        ez = np.array([0.0, 0.0, 1.0])
         probes: list[Probe] = []
         # front: along +x at the centre and off it
         for dy, dz in (
@@ -151,16 +149,12 @@ class EP2Agent(GraspAgent):
             (f(0.5) * hy, 0.0),
             (-f(0.5) * hy, 0.0),
         ):
-            start = np.array([cx - hx - STANDOFF, cy + dy, cz + dz])
-            probes.append(Probe("front", front, start, ex, 2.0 * hx + 2.0 * STANDOFF, straight[front]))
+            probes.append(front_probe(world, centre, half, dy, dz, STANDOFF))
         # sides: along +y (from −y) and −y (from +y), the leading finger of each, straight; in
         # front of the widest section (the links trail the tip toward −x)
         for sign in (+1, -1):
-            finger = self.side_fingers[sign] if world.table_height is None else front
             for dx in (-f(0.25) * hx, -f(0.6) * hx):
-                start = np.array([cx + dx, cy - sign * (hy + STANDOFF), cz])
-                travel = 2.0 * hy + 2.0 * STANDOFF
-                probes.append(Probe("side", finger, start, sign * ey, travel, straight.get(finger, 0.0)))
+                probes.append(side_probe(world, centre, half, sign, dx, STANDOFF))
         # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
         # bottom: along +z with the opposing finger
         for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):

@@ -25,7 +25,7 @@ from itertools import product
 
 import numpy as np
 
-from eos_svc.agents.probe_plan import Probe, face_probes
+from eos_svc.agents.probe_plan import Probe, face_probes, front_probe, side_probe
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.shape.probe_information import Candidate, choose, disagreement
 
@@ -95,33 +95,9 @@ def seed_probes(world: HandDriver, centre: np.ndarray, half: np.ndarray, standof
     at the estimate's middle, the sides in front of the widest section (the links trail the
     tip toward −x; a second start farther forward where the first cannot be reached), each
     its own group."""
-    angles = world.probe.angles
-    front = world.probe_finger("front")
-    cx, cy, cz = centre.tolist()
-    hx, hy, _ = half.tolist()
-    out = [
-        Probe(
-            "front",
-            front,
-            np.array([cx - hx - standoff, cy, cz]),
-            np.array([1.0, 0.0, 0.0]),
-            2.0 * hx + 2.0 * standoff,
-            angles[front],
-            group=0,
-        )
-    ]
-    for k, sign in enumerate((1.0, -1.0)):
-        finger = world.context.side_fingers[int(sign)] if world.table_height is None else front
+    hx = float(half[0])
+    out = [front_probe(world, centre, half, 0.0, 0.0, standoff, group=0)]
+    for k, sign in enumerate((1, -1)):
         for dx in (-0.25 * hx, -0.6 * hx):  # the second where the first cannot start
-            out.append(
-                Probe(
-                    "side",
-                    finger,
-                    np.array([cx + dx, cy - sign * (hy + standoff), cz]),
-                    np.array([0.0, sign, 0.0]),
-                    2.0 * hy + 2.0 * standoff,
-                    angles.get(finger, 0.0),
-                    group=k + 1,
-                )
-            )
+            out.append(side_probe(world, centre, half, sign, dx, standoff, group=k + 1))
     return out

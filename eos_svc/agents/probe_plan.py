@@ -67,6 +67,46 @@ class Probe:
     yaw: float = 0.0  #: the wrist's turn about the vertical during the probe (rad)
 
 
+def front_probe(
+    world: HandDriver,
+    centre: np.ndarray,
+    half: np.ndarray,
+    dy: float,
+    dz: float,
+    standoff: float,
+    group: int = -1,
+) -> Probe:
+    """A probe of the front along +x, ``(dy, dz)`` off the middle of the estimate (``centre``,
+    ``half`` extents along the world axes, m), from ``standoff`` before it."""
+    front = world.probe_finger("front")
+    cx, cy, cz = centre.tolist()
+    hx = float(half[0])
+    start = np.array([cx - hx - standoff, cy + dy, cz + dz])
+    direction, travel = np.array([1.0, 0.0, 0.0]), 2.0 * hx + 2.0 * standoff
+    return Probe("front", front, start, direction, travel, world.probe.angles[front], group)
+
+
+def side_probe(
+    world: HandDriver,
+    centre: np.ndarray,
+    half: np.ndarray,
+    sign: int,
+    dx: float,
+    standoff: float,
+    group: int = -1,
+) -> Probe:
+    """A probe of a side along ``sign`` · y (from the other side), ``dx`` along x from the
+    estimate's middle — in front of the widest section, the links trailing the tip toward −x —
+    with the finger leading that way, straight (the front finger on a table)."""
+    finger = world.context.side_fingers[sign] if world.table_height is None else world.probe_finger("front")
+    cx, cy, cz = centre.tolist()
+    hy = float(half[1])
+    start = np.array([cx + dx, cy - sign * (hy + standoff), cz])
+    direction = np.array([0.0, float(sign), 0.0])
+    travel = 2.0 * hy + 2.0 * standoff
+    return Probe("side", finger, start, direction, travel, world.probe.angles.get(finger, 0.0), group)
+
+
 def targeted_probes(
     world: HandDriver, faces: list[dict], standoff: float, label: str = "open", off_centre: bool = True
 ) -> list[Probe]:
