@@ -361,31 +361,46 @@ def fit_class(
     return ClassFit(kind, chi2, k, cov, theta, r0, index)
 
 
+def size_axis(fit: ClassFit, n: int) -> np.ndarray | None:
+    """The world direction along which ``fit``'s ``n``-th size lies, between two opposite faces:
+    a rotated kind's n-th axis, an axis-oriented kind's axis for its last size (the length);
+    None for a radius (no face of its own)."""
+    orientation = KINDS[fit.kind].orientation
+    R = fit.geometry.rotation
+    if orientation == "rotation":
+        return np.asarray(R[:, n])
+    if orientation == "axis" and n == len(SIZE_INDEX[fit.kind]) - 1:
+        return np.asarray(R[:, 2])
+    return None
+
+
+def face_moved(fit: ClassFit, n: int, factor: float, side: float, axis: np.ndarray) -> np.ndarray:
+    """``fit``'s parameters with its ``n``-th size times ``factor`` and the face toward
+    −``side`` · ``axis`` kept where it is (the centre shifted by the change; a zero ``axis``:
+    the size changes about the centre)."""
+    t = fit.theta.copy()
+    t[SIZE_INDEX[fit.kind][n]] += math.log(factor)
+    t[:3] += side * (factor - 1.0) * fit.geometry.half_sizes[n] * axis
+    return t
+
+
 def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.ndarray:
     """Per size of ``fit``: the largest likelihood ratio ``exp(−Δχ²/2)`` of the same object with
     that size ``step`` larger or smaller while one of its two faces along that direction stays
     put (the centre shifted by the change), against the fit. ≈ 0 when the touches bound the
     size on both sides; ≈ 1 when one side is free — a far face no contact or free sample sees
     (the least-squares covariance, a local quadratic, misses that)."""
-    kind, theta, r0 = fit.kind, fit.theta, fit.r0
-    half, R = fit.geometry.half_sizes, fit.geometry.rotation
-    orientation = KINDS[kind].orientation
+    kind = fit.kind
     variants, owners = [], []
-    for n, i in enumerate(SIZE_INDEX[kind]):
-        if orientation == "rotation":
-            axis = R[:, n]
-        elif orientation == "axis" and n == 1:
-            axis = R[:, 2]
-        else:
+    for n in range(len(SIZE_INDEX[kind])):
+        axis = size_axis(fit, n)
+        if axis is None:
             axis = np.zeros(3)  # a radius: both sides move together
         for factor in (1.0 + step, 1.0 - step):
             for side in (1.0, -1.0):
-                t = theta.copy()
-                t[i] = theta[i] + math.log(factor)
-                t[:3] = theta[:3] + side * (factor - 1.0) * half[n] * axis
-                variants.append(t)
+                variants.append(face_moved(fit, n, factor, side, axis))
                 owners.append(n)
-    Rv = batch_residuals(np.array(variants), kind, r0, touches)
+    Rv = batch_residuals(np.array(variants), kind, fit.r0, touches)
     delta = np.maximum(np.sum(Rv * Rv, axis=1) - fit.chi2, 0.0)
     ratios = np.zeros(len(SIZE_INDEX[kind]))
     for n, d in zip(owners, delta, strict=True):

@@ -8,13 +8,12 @@ so that EP2 can ask for exactly the surface that separates the candidate extents
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from eos_svc.objects import KINDS
-from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_residuals
+from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_residuals, face_moved, size_axis
 from eos_svc.shape.touches import Touches
 
 #: a face is open when moving it out by this fraction of its size changes χ² by less than
@@ -53,21 +52,14 @@ def open_faces(fit: ClassFit, touches: Touches) -> list[OpenFace]:
     if orientation == "none":
         return []
     geometry = fit.geometry
-    half, R = geometry.half_sizes, geometry.rotation
     variants, faces = [], []
-    for n, i in enumerate(SIZE_INDEX[kind]):
-        if orientation == "rotation":
-            axis = R[:, n]
-        elif n == len(SIZE_INDEX[kind]) - 1:  # an axis-oriented kind: its last size is along the axis
-            axis = R[:, 2]
-        else:
+    for n in range(len(SIZE_INDEX[kind])):
+        axis = size_axis(fit, n)
+        if axis is None:
             continue
         for side in (1.0, -1.0):
-            t = fit.theta.copy()
-            t[i] = fit.theta[i] + math.log(1.0 + OPEN_STEP)
-            t[:3] = fit.theta[:3] + side * OPEN_STEP * half[n] * axis
-            variants.append(t)
-            faces.append((side * axis, float(half[n])))
+            variants.append(face_moved(fit, n, 1.0 + OPEN_STEP, side, axis))
+            faces.append((side * axis, float(geometry.half_sizes[n])))
     if not variants:
         return []
     residuals = batch_residuals(np.array(variants), kind, fit.r0, touches)

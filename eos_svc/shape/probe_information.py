@@ -27,14 +27,13 @@ SI units: metres, radians.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from eos_svc.objects import FITTED_KINDS as KINDS
-from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry, batch_residuals
+from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry, batch_residuals, face_moved, size_axis
 from eos_svc.shape.selection import Postulate
 from eos_svc.shape.touches import Touches
 
@@ -139,26 +138,17 @@ def reaches_of(fit: ClassFit, touches: Touches) -> tuple[np.ndarray, np.ndarray]
     both ways — where the ratio ``exp(−Δχ²/2)`` is at least :data:`MIN_REACH_WEIGHT`: a face
     bounded on one side only (the touches stop at it, nothing touched beyond) may lie much
     farther than the fit's covariance, a local quadratic, says."""
-    kind, theta = fit.kind, fit.theta
-    orientation = KINDS[kind].orientation
-    half, R = fit.geometry.half_sizes, fit.geometry.rotation
-    variants = []
-    for n, i in enumerate(SIZE_INDEX[kind]):
-        if orientation == "rotation":
-            axis = R[:, n]
-        elif orientation == "axis" and n == len(half) - 1:
-            axis = R[:, 2]
-        else:
-            continue
-        for side in (1.0, -1.0):
-            t = theta.copy()
-            t[i] += math.log(1.0 + REACH_STEP)
-            t[:3] += side * REACH_STEP * half[n] * axis
-            variants.append(t)
+    axes = [(n, size_axis(fit, n)) for n in range(len(SIZE_INDEX[fit.kind]))]
+    variants = [
+        face_moved(fit, n, 1.0 + REACH_STEP, side, axis)
+        for n, axis in axes
+        if axis is not None
+        for side in (1.0, -1.0)
+    ]
     if not variants:
-        return np.zeros((0, len(theta))), np.zeros(0)
+        return np.zeros((0, len(fit.theta))), np.zeros(0)
     thetas = np.array(variants)
-    residuals = batch_residuals(thetas, kind, fit.r0, touches)
+    residuals = batch_residuals(thetas, fit.kind, fit.r0, touches)
     weights = np.exp(-0.5 * np.maximum(np.sum(residuals * residuals, axis=1) - fit.chi2, 0.0))
     keep = weights >= MIN_REACH_WEIGHT
     return thetas[keep], weights[keep]
