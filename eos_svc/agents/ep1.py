@@ -1,26 +1,14 @@
 """ep1: the exploratory procedure EP1 as an agent (paper §2.2).
 
-Each action rolls one fingertip on the object without sliding, along two
-tangent directions (``eos_svc.kinematics.ep1.run_ep1``), and adds the samples to
-that side's curvature estimator, so repeated EP1 runs sharpen one estimate.
+Each action rolls one fingertip on the object without sliding along two tangent directions
+(:func:`eos_svc.kinematics.ep1.run_ep1`) and adds the samples to that side's curvature
+estimator. The top is felt by an upper finger (:class:`~eos_svc.world.probing.ProbeChoice`), the
+bottom, when post_shape asks, by the opposing finger — on a table the bottom is the table's
+plane and the opposing finger feels the top. The other fingers stay open. The sensed contacts
+go on the board (``keys.EP1_CONTACT``); docs/planner.md has the detail.
 
-Where it touches: the object is explored from **above** by an upper finger
-(finger1 for hand3x3; :class:`~eos_svc.world.probing.ProbeChoice` picks it for
-any hand) — the hand lowers it onto the object's top, at the point found by
-moving 1 cm inside the surface point nearest the hand (proximity) and straight
-up — and, when post_shape asks for it (to size the object), from **below** by
-the opposing finger — unless the object rests on a table: its bottom is then the table's
-plane under the top contact, recorded without a probe from under it; and on a table the
-top is felt by the opposing finger too (the hand's lowest part, the rest of the hand above).
-The probing finger is set to its probe angle (straight, 0, for hand3x3); the other fingers
-are opened while exploring so they stay clear of the object. The sensed contact point and normal of each side
-go on the board (``keys.EP1_CONTACT``).
-
-Opportunistic sub-rating: after post_shape has pondered a new estimate and asks
-EP1 for the bottom or for more rolling (its curvature not trusted yet), the
-complement of the estimate's relative radius error, ``1 − σ_R/R`` (paper §2.2),
-floored at 0.05 so that EP1 keeps being chosen while its curvature is not
-trusted; 0 once post_shape asks for something else (EP2, or nothing).
+Opportunistic sub-rating: after post_shape asked for the bottom or for more rolling,
+1 − σ_R/R of the estimate (paper §2.2), floor 0.05; 0 once it asks for something else.
 """
 
 from __future__ import annotations

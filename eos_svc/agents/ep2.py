@@ -1,51 +1,18 @@
-"""ep2: the exploratory procedure EP2 as an agent — probe more of the surface (information).
+"""ep2: the exploratory procedure EP2 as an agent — guarded probes of more of the surface.
 
-EP1 feels the curvature at one contact (top, then bottom): it cannot tell a box's face from
-a large cylinder's side, nor give the object's depth or orientation. EP2 (Charlebois, Gupta
-and Payandeh, ICRA 1996: fingers dragged over the surface, "the surface approximated with a
-small number of sampled points") gathers more of it. Here each EP2 action is a round of
-**guarded probes** (:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves
-in a straight line toward the object and stops at first touch — a contact point (the tip's
-centre, from the kinematics) and a normal (from the tactile reading, with its noise); a
-probe that runs its whole travel touches nothing and tells where the object is *not* (its
-free path); one another part of the hand would touch first is abandoned. The hand never
-pushes the object.
+EP1 feels the curvature at one contact; EP2 (Charlebois, Gupta and Payandeh, ICRA 1996) gathers
+more of the surface. Each action is a round of guarded probes
+(:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves straight toward the
+object and stops at first touch (a point and a noisy normal); a probe that touches nothing tells
+where the object is not. An **active round** (:mod:`eos_svc.agents.probe_choice`) probes the
+lines where post_shape's candidates disagree most; a **round over the whole surface** (no line
+to probe, or after :data:`MAX_ACTIVE_ROUNDS`) probes the front, sides, top and bottom around
+the current estimate — the faces the fit leaves open first — and slides over the top until the
+tip drops over an edge. On a table every probe is the opposing finger's and none comes from
+below. The detail is in docs/planner.md.
 
-**Active touch** (:mod:`eos_svc.agents.probe_choice`): the first round is three probes (the
-front and both sides), which with EP1's top and bottom give post_shape five contacts to fit.
-While post_shape's postulate is not trusted it leaves its ``candidates`` (the likeliest
-classes, their fits' uncertainty and far-reaching faces), and each **active round** probes the
-:data:`ROUND_PROBES` lines where those candidates' predicted touches disagree most — where
-the competing classes' surfaces differ, where a size or the pose is least known
-(:mod:`eos_svc.shape.probe_information`) — a line the hand cannot probe giving way to the next
-of the :data:`RANKED_LINES` best. EP2 stops when post_shape trusts its postulate.
-
-A **round over the whole surface** comes when there is no candidate line to probe (no fit yet on a
-table, every line blocked, the candidates agree everywhere, or after
-:data:`MAX_ACTIVE_ROUNDS` active rounds): around the current estimate (centre and half
-extents along the world axes: EP1's top and bottom contacts and the approach point at first,
-the fitted object after), probes of the front (+x), of both sides (±y), of the top (−z) and
-of the bottom (+z), and *slides* over the top (toward the back and to both sides at first,
-along the postulated object's own horizontal axes once it has an orientation): short guarded
-probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the
-last contact is on the edge: the object's extent that way), a link would touch first (a
-curved top past its apex) or nothing is felt; a slide keeps the contact of every
-:data:`SLIDE_KEEP`-th step and its last. Later rounds shift the probe offsets by the run's
-generator, so repeated rounds feel new places. Once post_shape's fit leaves faces no touch
-bounds (``open_faces``, :mod:`eos_svc.shape.open_faces`), such a round probes those faces
-first — straight onto each, a finger hooked round the object for a face turned away from the
-hand (:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch;
-the whole surface again only when none of them is felt.
-When the object rests on a table there is no bottom probe, and every probe is the opposing
-finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
-rest of the hand stays above the table).
-The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
-class to them (:mod:`eos_svc.shape`).
-
-Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and
-asks for more of the surface (``needs: "surface"``: the class or the extent is ambiguous, or
-not yet precise), the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and
-after :data:`MAX_ROUNDS` rounds over the whole surface.
+Opportunistic sub-rating: right after post_shape asked for the surface (``needs: "surface"``),
+1 − confidence (floor :data:`RATING_FLOOR`); 0 after :data:`MAX_ROUNDS` whole-surface rounds.
 """
 
 from __future__ import annotations
@@ -53,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Callable, Iterable, Iterator
 
 import numpy as np
+import pinocchio as pin
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
@@ -130,7 +98,7 @@ class EP2Agent(GraspAgent):
         return max(RATING_FLOOR, min(1.0, 1.0 - float(shape["confidence"])))
 
     def plan_round(self, centre: np.ndarray, half: np.ndarray) -> list[Probe]:
-        """The probes of this round around the estimate (see the module docstring)."""
+        """The probes of a round over the whole surface around the estimate (docs/planner.md)."""
         world = self.world
         probe = world.probe
         top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
@@ -269,24 +237,15 @@ class EP2Agent(GraspAgent):
         """Horizontal directions to slide along: toward the back (+x) and to both sides (±y)
         at first; along the postulated object's own horizontal axes (both ways) once post_shape
         has fitted an oriented one, so that a slide crosses the edge it runs toward."""
-        obj = (board.get(keys.SHAPE) or {}).get("object")
-        if obj is None or not (board.get(keys.SHAPE) or {}).get("pose_known"):
-            return [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
-        r, p, y = obj["rpy"]
-        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-        R = np.array(
-            [
-                [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                [-sp, cp * sr, cp * cr],
-            ]
-        )
+        shape = board.get(keys.SHAPE) or {}
         axes = []
-        for k in range(3):
-            h = np.array([R[0, k], R[1, k], 0.0])
-            n = float(np.linalg.norm(h))
-            if n > 0.5:
-                axes.extend([h / n, -h / n])
+        if shape.get("object") is not None and shape.get("pose_known"):
+            R = pin.rpy.rpyToMatrix(*(float(a) for a in shape["object"]["rpy"]))
+            for k in range(3):
+                h = np.array([R[0, k], R[1, k], 0.0])
+                n = float(np.linalg.norm(h))
+                if n > 0.5:
+                    axes.extend([h / n, -h / n])
         return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
 
     def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> list[list[Probe]]:

@@ -1,22 +1,10 @@
-"""finger1, finger2, finger3: search moves, then close their finger in the grasping stage.
+"""The finger agents (hand3x3: finger1, finger2, finger3): search moves, then closing steps.
 
-One agent per finger of the hand, named after it (hand3x3: finger1, finger2, finger3; the
-Allegro: index, middle, ring, thumb).
-
-Grasping (paper §2.1, §5): a finger agent closes its finger by a small amount
-(every joint by ``WorldParameters.finger_step``), stopping at first touch. Its
-opportunistic sub-rating is d/h (estimated object diameter over hand height)
-while its fingertip is free and closing from where it is will *land on its
-chosen contact*: the finger's closing sweep, from its current angle and the
-hand's current pose, first touches the postulated object (grasp_points' target)
-within ``WorldParameters.landing_tolerance`` of the contact grasp_points chose
-for it (a finger that closed past that contact's angle without touching — the
-object is not quite where it was postulated — keeps closing until it touches or
-reaches its limit). Otherwise the agent does not know what to do: closing would land
-elsewhere — in front of the object's centre while the hand is still on its way,
-or not on the object at all — so if it is chosen it reports ``CANNOT_ACT``
-(paper §5: at the start of grasping with the opportunistic weight alone,
-finger1 is chosen and does not know where to begin).
+One agent per finger of the hand, named after it. Grasping (paper §2.1, §5): an action closes
+the finger's joints by ``WorldParameters.finger_step``, stopping at first touch. Opportunistic
+sub-rating: d/h while the tip is free and closing from where it is lands on the contact
+grasp_points chose for it (within ``WorldParameters.landing_tolerance``; a finger that closed
+past its contact keeps closing); otherwise 0, and ``CANNOT_ACT`` if chosen (paper §5).
 """
 
 from __future__ import annotations

@@ -1,23 +1,14 @@
 """grasp_points: chooses the grasp on the postulated object and places the hand before it.
 
-Grasp synthesis (:mod:`eos_svc.grasp.synthesis`; Miller, Knoop, Christensen, Allen, ICRA
-2003): from post_shape's postulate — its class, size and pose (``object``), or, for an older
-postulate without it, an upright object of its class sized by the vertical half-extent
-(:mod:`eos_svc.grasp.postulate`) — candidate grasps per primitive (approach direction and
-the hand's roll about it, using the whole wrist; contacts across the centre of mass) are
-simulated on the postulated object, kept when every fingertip lands from a collision-free
-pre-grasp, and scored by Ferrari–Canny ε; the best is chosen. The action turns the wrist to
-the grasp's orientation and moves the hand to the pre-grasp, ``approach_distance`` before
-the grasp along its approach, fingers open (a collision-free repositioning, counted as one
-information cycle), writes the target — wrist goal and rotation, the predicted contact of
-every finger, the postulated object — and completes the information stage. When the pose was
-assumed (no ``object``, or ``pose_known`` false) the cycle record says "pose assumed upright".
+Grasp synthesis (:mod:`eos_svc.grasp.synthesis`; Miller, Knoop, Christensen, Allen, ICRA 2003)
+on post_shape's postulate (:mod:`eos_svc.grasp.postulate`) scores candidate grasps by
+Ferrari–Canny ε. The action turns the wrist to the best one, moves the hand to its pre-grasp
+(``approach_distance`` before it, fingers open), writes the target and completes the
+information stage. An object larger than the hand height across every grip (d/h ≥ 1, paper
+§2.1), or no collision-free candidate, ends the run as failed.
 
-Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no target exists
-yet — or 60 % for an approximate postulate (the convex hull of the touches) once EP2 has no
-rounds left, planned on as it is; 0 otherwise. No candidate because the object is larger
-than the hand height across every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as
-failed, naming the postulated size; so does no collision-free candidate at all.
+Opportunistic sub-rating: post_shape's confidence once ≥ 60 % and no target yet (60 % for an
+approximate postulate once EP2 has no rounds left); 0 otherwise.
 """
 
 from __future__ import annotations

@@ -1,32 +1,12 @@
-"""The grasp planner: the paper's eight agents under the EOS controller, from one call.
+"""The grasp planner: the paper's eight agents (and ep2) under the EOS controller, from one call.
 
     from eos_svc.agents import PlanRequest, plan
     result = plan(PlanRequest(seed=3), on_cycle=print)
 
-Agent list (its order breaks ties, paper §5) and default sub-ratings:
-
-=============  ========================  =======
-agent          stages                    default
-=============  ========================  =======
-finger1        search, grasping          0.8
-finger2        search, grasping          0.7
-finger3        search, grasping          0.6
-wrist          search, grasping          0.9
-ep1            information               0.9
-ep2            information               0.8
-post_shape     information               0.7
-grasp_points   information               0.6
-end            grasping                  0.2
-=============  ========================  =======
-
-Another hand (``plan(request, hand=load_hand_named("allegro"))``) brings its own finger agents, one per
-finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
-extra finger (:func:`finger_ratings`); its world parameters are derived from it
-(:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
-:class:`~eos_svc.world.hand_context.HandContext` (give ``plan`` one to keep: ``plan(request,
-context=HandContext.build(hand))``).
-
-The same request with the same seed gives the same cycles and result.
+The agents and their default sub-ratings: :data:`DEFAULT_RATINGS` (the table in
+docs/planner.md). Another hand brings one finger agent per finger (:func:`finger_ratings`) and
+its own :class:`~eos_svc.world.hand_context.HandContext`. The same request with the same seed
+gives the same cycles and result.
 """
 
 from __future__ import annotations
@@ -80,7 +60,7 @@ from eos_svc.world.world import GraspWorld
 
 CycleCallback = Callable[[CycleRecord], None]
 
-#: default sub-ratings P(A|B_d), fixed at creation (see the module docstring); a hand with
+#: default sub-ratings P(A|B_d), fixed at creation (the table in docs/planner.md); a hand with
 #: other finger names rates its fingers by position (:func:`finger_ratings`)
 DEFAULT_RATINGS: dict[str, float] = {
     "finger1": 0.8,

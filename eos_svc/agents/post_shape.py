@@ -1,46 +1,18 @@
 """post_shape: postulates the object — class, size, pose and a calibrated confidence.
 
-Two sources, in the order the information stage gathers them:
+From **EP1 alone**: the class from the top's principal curvatures (:func:`classify`), the
+vertical half extent from the top and bottom contacts, the confidence
+:data:`EP1_CLASS_PROBABILITY` × P(size within ±10 %) — below 60 %, so it asks EP1 for the
+bottom (``needs: "bottom"``), for more rolling (``"curvature"``), then EP2 (``"surface"``).
+From **every contact**: every class fitted and chosen by model evidence (:mod:`eos_svc.shape`),
+the confidence P(class right and size within tolerance); below 60 %, or not precise to
+:data:`PRECISION` on fewer than :data:`PRECISION_CONTACTS` contacts, it asks EP2 again and
+leaves its ``candidates`` and ``open_faces``. When **no class explains the contacts** after
+EP2's last round (:data:`OUT_OF_CLASS`): their convex hull (:mod:`eos_svc.shape.hull`),
+``approximate``. The postulate's fields: :class:`~eos_svc.schema.board_entries.ShapeEntry`;
+docs/planner.md has the detail.
 
-1. **EP1 alone** (the top's curvature, then the bottom's contact): the class from the
-   principal curvatures k1 ≥ k2 and their σ (1/m) — ``plane`` (both flat), ``cylinder`` (k2
-   flat), ``sphere`` (|k1 − k2| within max(2σ, 15 % of the mean curvature)), else
-   ``ellipsoid`` — and the vertical half extent from the top and bottom contacts (the centre
-   between them, one half extent behind the surface point nearest the hand). Two curvature
-   readings cannot tell a sphere from an upright capsule or ellipsoid, nor a box's face from
-   a large cylinder, nor give depth or orientation: the class probability is
-   :data:`EP1_CLASS_PROBABILITY`, so the confidence (that times P(size within ±10 %) under the
-   estimate's σ — EP1's relative radius error for a sphere, the paper's criterion, else the
-   tactile noise over the half extent) stays below the 60 % the grasp needs. post_shape asks
-   EP1 for the bottom (``needs: "bottom"``), for more rolling while EP1's own size
-   confidence is under 60 % (``needs: "curvature"``: the paper's "EP1 repeats"), then for
-   more of the surface (``needs: "surface"``: EP2).
-2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
-   least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
-   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again — and, while
-   the postulate rests on fewer than :data:`PRECISION_CONTACTS` contacts, also while its sizes
-   and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
-   a few contacts fit five classes loosely) — leaving its ``candidates``
-   (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
-   The next fit starts each of those classes from its candidate (``select_class``'s ``warm``):
-   a few new contacts move an optimum little, so the class's cold starts are tried only when
-   that refit does not explain the touches to within the noise.
-3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
-   once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
-   ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
-   end agent counts a success only with a good grasp. (Before that, the best primitive is
-   postulated as always, asking EP2 for more.)
-
-The postulate (board entry ``keys.SHAPE``) keeps ``class``, ``confidence``,
-``grasp_radius`` (the vertical half extent, what the grasp closes on), ``diameter``,
-``centre``, ``needs``, ``principal_curvatures`` and ``curvature_radius`` (EP1's, on top), and
-adds ``object`` — the postulated object in the request's JSON form (shape, size fields,
-position, rpy), None for a plane or before the size is known — ``pose_known`` (False when the
-orientation is assumed upright), ``evidence`` (contacts used, fit residual, competing classes
-with their probabilities) and ``bounds`` (the object's world-axis bounds, m).
-
-Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new (a contact, or a probe's
-free path), else 0.
+Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
 """
 
 from __future__ import annotations
@@ -78,7 +50,8 @@ HULL = "hull"
 #: before the grasp (EP2's active touch is cheap; a few contacts fit five classes loosely)
 PRECISION_CONTACTS = 12
 PRECISION = 0.03
-#: probability that EP1's curvature class is right (see the module docstring)
+#: probability that EP1's curvature class is right: two readings cannot tell a sphere from an
+#: upright capsule or ellipsoid, nor a box from a large cylinder
 EP1_CLASS_PROBABILITY = 0.5
 
 

@@ -1,12 +1,9 @@
 """recall: tries the grasp remembered for objects like this one (the learned sub-rating, paper §7).
 
-In the grasping stage, when the grasp memory holds a grasp that worked for the
-postulated shape class and size band, recall's *learned* sub-rating is that
-grasp's smoothed success rate; its default and opportunistic sub-ratings are 0, so
-it is chosen only through the learned weight P(B_l). Its action pre-shapes the
-hand in one move: the wrist where it stood relative to the estimated centre, each
-finger two closing steps short of its remembered contact angle — the finger agents
-then close the last steps. It acts at most once per plan.
+Its learned sub-rating is the smoothed success rate of the remembered grasp of the postulated
+class and size band (default and opportunistic 0). Its one action pre-shapes the hand: the
+wrist where it stood relative to the centre, each finger two closing steps short of its
+remembered angle.
 """
 
 from __future__ import annotations

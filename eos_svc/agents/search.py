@@ -1,21 +1,10 @@
-"""The search stage's behaviour (paper §4): a seeded random search of a bounded workspace.
+"""The search stage's behaviour (paper §4): a seeded search of a bounded workspace.
 
-The paper's search picks a random direction and step each move; a random walk revisits
-places and has a long tail. Here each move goes straight to the next point of a coverage
-lattice over the workspace, visited once each in a seeded space-filling order
-(:mod:`eos_svc.world.coverage`, which also states which objects the search is guaranteed
-to find). The object is *located* when its surface comes within the hand's envelope
-(``WorldParameters.envelope_radius`` of the grasp centre, between the fingers) — a
-proximity sense of the palm, active all along a move (the move stops there), documented in
-``docs/planner.md``. Any of the motion agents (finger1–3, wrist) can make a
-search move: the finger agents lead the hand with their fingertip, the wrist
-moves it; the paper allows all four in the search stage.
-
-On a table the first search move first rolls the hand a quarter turn about its approach axis
-(:func:`roll_for_table`): upright, the hand is as tall as its finger spread (hand3x3: its palm
-reaches 75 mm below the grasp centre), so over a table its grasp centre could not come
-within the envelope of an object shorter than about 50 mm; rolled, its fingers lie side by
-side over the table and the grasp centre sweeps as low as the fingers' thickness allows.
+Each move sweeps the next column of a coverage lattice in a seeded space-filling order
+(:mod:`eos_svc.world.coverage`, which states what the search is sure to find) until the object
+is *located* (within ``WorldParameters.envelope_radius`` of the grasp centre). Any motion agent
+(the fingers, the wrist) can make a search move. On a table the first move rolls the hand a
+quarter turn about its approach (:func:`roll_for_table`) so its grasp centre sweeps low enough.
 """
 
 from __future__ import annotations

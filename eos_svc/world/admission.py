@@ -1,28 +1,12 @@
 """Admission: refuse, before any planning, the objects the grasp planner cannot plan for.
 
-:func:`check_plannable` is called first by :func:`eos_svc.agents.plan`, by ``eos plan`` and by
-the Zenoh service at admission, so a request the planner would refuse is refused at the edge
-with a :class:`~eos_svc.errors.ValidationError` naming the field and the reason. Three tests,
-each a real geometric query on the hand's model (coal distances, Pinocchio kinematics):
-
-* **reach** (``object.position``): the search moves the wrist inside the axis-aligned box
-  [``search_box_lo``, ``search_box_hi``] (world, m) without turning it, so the grasp centre
-  sweeps that box shifted by ``grasp_centre``. The object is *located* when its surface comes
-  within ``envelope_radius`` of the grasp centre; if the coal distance between the object and
-  the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
-* **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
-  object must clear every hand collision geometry by ``clearance`` (coal distances).
-* **size** (the size field of the object's thinnest grip): the object must fit between this
-  hand's fingertips along some axis — its width there below the widest opening at which every
-  finger still reaches a contact (across flat faces, the tip before its links; across curved
-  ones, the tips' reach and the planner's d/h < 1 rule), with room behind the contacts before
-  the palm. One rule, :func:`~eos_svc.world.fingertip_fit.fit_refusal`, on the hand's
-  :class:`~eos_svc.world.fingertip_fit.FingertipOpening`; not the hand's *span* (the largest
-  distance between two fingertips, :func:`~eos_svc.world.hand_context.hand_span`), which
-  fingers opened that wide no longer close on.
-
-With a table (``request.table``), a fourth: **on the table** (``object.position[2]``): the
-object may not reach into it (:func:`check_on_table`).
+:func:`check_plannable` runs first in :func:`eos_svc.agents.plan`, ``eos plan`` and the
+service, so a request the planner would refuse is refused at the edge with a
+:class:`~eos_svc.errors.ValidationError` naming the field. Real geometric queries on the hand's
+model: **reach** (the search's swept grasp-centre box comes within ``envelope_radius`` of the
+object), **overlap** (the object clears the start pose by ``clearance``), **size** (it fits
+between the fingertips along some grip: :func:`~eos_svc.world.fingertip_fit.fit_refusal`) and,
+with a table, **on the table** (:func:`check_on_table`).
 """
 
 from __future__ import annotations

@@ -1,36 +1,11 @@
 """The search's coverage plan: where the hand looks, in a seeded space-filling order.
 
-The search stage (paper §4) is a seeded random search of a bounded workspace. A random walk
-revisits places and has a long tail (some seeds need hundreds of moves). Here every search
-move is a *sweep*: the hand retreats to the back of the search box (−x), crosses to one
-column ``(y_j, z_k)`` of a lattice and sweeps forward (+x) through the whole box, sensing
-the object all the way (it stops where the object enters the envelope, or short of a
-contact). The columns are visited once each, in a seeded space-filling order:
-
-- **Columns.** A grid over the (y, z) face of the wrist's search box, its corners included,
-  at most ``√2·envelope_radius`` apart along y and z: every point of the grasp-centre box
-  ``B = [search_box_lo, search_box_hi] + grasp_centre`` is then within ``envelope_radius``
-  of a column's sweep line (half a cell's diagonal).
-- **Order.** The columns are visited in a seeded farthest-point (maximin) order: a first
-  column drawn by the run's generator, then always the column farthest from every column
-  swept so far, so the search looks everywhere coarsely before it looks anywhere finely —
-  no long tail — and another seed gives another order. (A scrambled Sobol order was tried
-  first: median 3 sweeps but p99 14 on the default object; maximin: median 5, max 9.) A
-  sweep stopped by a bump (a hand part within the clearance of the object) moves the column
-  nearest the bump to the front of the queue.
-
-**Findable** (what the search guarantees, :func:`findable`): the object's signed distance
-from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
-``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius`` (a sufficient
-closed form: the object reaches within ``envelope_radius − spacing/√2`` of ``B``, i.e. into
-``B`` with the default spacing), and the object lies wholly ahead of the hand's reach from
-the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``clearance``,
-0.042 m for hand3x3), so the crossings at the rear cannot bump into it, and its centre lies
-within ``B``'s height range (the upper and lower fingers would otherwise bump into it on every
-sweep). Objects closer to the rear are often found too, but a crossing the fingers cannot make
-may stall the search; the admission check (:mod:`eos_svc.world.admission`) refuses every
-object this rule does not promise, and a search that has swept every column twice without
-locating the object ends the run (``failed``) rather than sweeping on.
+Every search move is a *sweep*: back to the search box's rear (−x), across to one column
+``(y, z)`` of a lattice whose columns are at most ``√2·envelope_radius`` apart, and forward
+through the box. The columns are visited once each in a seeded farthest-point (maximin) order;
+a sweep stopped by a bump moves the column nearest the bump to the front. :func:`findable`
+states what the search is sure to find (docs/planner.md); admission
+(:mod:`eos_svc.world.admission`) refuses the rest.
 """
 
 from __future__ import annotations
@@ -179,7 +154,7 @@ def findable(
     samples_per_metre: int = 1000,
     exhaustive: bool = False,
 ) -> bool:
-    """Whether the search is guaranteed to locate ``obj`` (the rule of the module docstring):
+    """Whether the search is guaranteed to locate ``obj``:
 
     1. some sweep line passes within ``envelope_radius`` of the object (signed distance,
        sampled every ``1/samples_per_metre`` m along x), and

@@ -1,23 +1,11 @@
 """The simulated hand and its world, as the grasp agents see and move it.
 
-:class:`GraspWorld` holds the hand's context (:class:`~eos_svc.world.hand_context.HandContext`:
-the hand and what is derived from it), the scene (coal), the hand's state (Pinocchio), the
-tactile sensor and the run's random generator. It answers the agents' questions (where the
-wrist is, how far the object is, whether the hand is clear) and offers the few guarded motions
-they make: the search's sweeps and the wrist's steps (:mod:`eos_svc.world.wrist_motion`), EP2's
-guarded probes (:mod:`eos_svc.world.probe_motion`) and a finger closing step that stops at first
-touch (:mod:`eos_svc.world.finger_closing`). Agents keep what they *know* on the board; the world
-is what they act on.
-
-Conventions (hand3x3 and every hand the planner takes): world z up; the palm frame's x axis is
-the approach direction and its z axis the closing direction (the opposing finger below, the
-others above). The wrist keeps its rotation at zero in the search and while EP1 explores (the
-palm frame is then the world frame shifted by the wrist's translation, the hand approaching
-along +x); grasp_points turns it to the chosen grasp's orientation. SI units.
-
-Hand–object gaps are exact coal distances; the cheap lower bounds of
-:mod:`eos_svc.kinematics.gap_bounds` (each at most the exact gap, tested against coal) spare the
-exact queries that cannot change a minimum or a decision.
+:class:`GraspWorld` holds the hand's context, the scene (coal), the hand's state (Pinocchio),
+the tactile sensor and the run's generator; it answers the agents' questions and runs their
+guarded motions (:mod:`~eos_svc.world.wrist_motion`, :mod:`~eos_svc.world.probe_motion`,
+:mod:`~eos_svc.world.finger_closing`). Conventions: world z up; the palm's x axis is the
+approach, its z axis the closing direction. SI units. Gaps are exact coal distances, queried
+only where the lower bounds of :mod:`eos_svc.kinematics.gap_bounds` cannot decide.
 """
 
 from __future__ import annotations
