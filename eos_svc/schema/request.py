@@ -86,6 +86,13 @@ def _positive(value: object, name: str, upper: float) -> float:
     return v
 
 
+def _in_range(value: object, name: str, upper: float, unit: str = "") -> float:
+    v = _number(value, name)
+    if not 0.0 <= v <= upper:
+        raise ValidationError(name, f"must be in [0, {upper}]{unit}, got {v}")
+    return v
+
+
 def _vector3(value: object, name: str) -> tuple[float, float, float]:
     if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
         raise ValidationError(name, f"must be a list of 3 numbers, got {type(value).__name__}")
@@ -245,23 +252,14 @@ class ObjectSpec:
         shape = data["shape"]
         if not isinstance(shape, str):
             raise ValidationError(f"{prefix}.shape", f"must be a string, got {type(shape).__name__}")
-        if shape == MESH:
-            _check_keys(data, {"shape", "position", "rpy", *MESH_FIELDS}, prefix)
-            return cls(
-                shape=shape,
-                size={k: data[k] for k in MESH_FIELDS if k in data},
-                position=data.get("position", DEFAULT_OBJECT["position"]),
-                rpy=data.get("rpy", (0.0, 0.0, 0.0)),
-            )
-        size_fields = set(SHAPE_SIZE_FIELDS.get(shape, ()))
-        all_sizes = {k for v in SHAPE_SIZE_FIELDS.values() for k in v}
-        _check_keys(data, {"shape", "position", "rpy"} | all_sizes, prefix)
-        size = {k: data[k] for k in data if k in all_sizes}
-        extra = set(size) - size_fields
-        if shape in SHAPE_SIZE_FIELDS and extra:
-            key = sorted(extra)[0]
+        sizes = set(MESH_FIELDS) if shape == MESH else {k for v in SHAPE_SIZE_FIELDS.values() for k in v}
+        _check_keys(data, {"shape", "position", "rpy", *sizes}, prefix)
+        size = {k: data[k] for k in data if k in sizes}
+        extra = sorted(set(size) - set(SHAPE_SIZE_FIELDS.get(shape, size)))
+        if extra:
             raise ValidationError(
-                f"{prefix}.{key}", f"not a size of a {shape} (takes {', '.join(SHAPE_SIZE_FIELDS[shape])})"
+                f"{prefix}.{extra[0]}",
+                f"not a size of a {shape} (takes {', '.join(SHAPE_SIZE_FIELDS[shape])})",
             )
         return cls(
             shape=shape,
@@ -386,29 +384,20 @@ class PlanRequest:
         if not isinstance(self.weights, Weights):
             raise ValidationError("weights", f"must be a Weights, got {type(self.weights).__name__}")
         object.__setattr__(self, "seed", _integer(self.seed, "seed", 0, 2**63 - 1))
-        noise = _number(self.tactile_noise, "tactile_noise")
-        if not 0.0 <= noise <= MAX_TACTILE_NOISE:
-            raise ValidationError("tactile_noise", f"must be in [0, {MAX_TACTILE_NOISE}] m, got {noise}")
-        object.__setattr__(self, "tactile_noise", noise)
         object.__setattr__(self, "max_cycles", _integer(self.max_cycles, "max_cycles", 1, MAX_CYCLES_LIMIT))
         if self.deadline_s is not None:
             object.__setattr__(self, "deadline_s", _positive(self.deadline_s, "deadline_s", MAX_DEADLINE_S))
-        mu = _number(self.friction, "friction")
-        if not 0.0 <= mu <= MAX_FRICTION:
-            raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
-        object.__setattr__(self, "friction", mu)
+        for name, upper, unit in (
+            ("tactile_noise", MAX_TACTILE_NOISE, " m"),
+            ("friction", MAX_FRICTION, ""),
+            ("encoder_noise", MAX_ENCODER_NOISE, " rad"),
+            ("link_error", MAX_LINK_ERROR, " m"),
+        ):
+            object.__setattr__(self, name, _in_range(getattr(self, name), name, upper, unit))
         if self.world not in WORLDS:
             raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
         if self.agents:
             object.__setattr__(self, "agents", _plugin_names(self.agents))
-        for name, limit, unit in (
-            ("encoder_noise", MAX_ENCODER_NOISE, "rad"),
-            ("link_error", MAX_LINK_ERROR, "m"),
-        ):
-            value = _number(getattr(self, name), name)
-            if not 0.0 <= value <= limit:
-                raise ValidationError(name, f"must be in [0, {limit}] {unit}, got {value}")
-            object.__setattr__(self, name, value)
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
