@@ -52,6 +52,8 @@ class AgentRating(NamedTuple):
     skipped: str | None = None
 
 
+#: the JSON keys of an :class:`AgentRating` (its fields, ``name`` written ``agent``)
+_RATING_KEYS = ("agent", *AgentRating._fields[1:])
 #: why an agent is not eligible under the repeat rule (``AgentRating.skipped``)
 REPEAT_SKIP = "acted in this stage and not asked again (repeat rule)"
 
@@ -98,20 +100,7 @@ class CycleRecord(NamedTuple):
             "stage": self.stage,
             "stage_cycle": self.stage_cycle,
             "weights": self.weights.to_dict(),
-            "ratings": [
-                {
-                    "agent": r.name,
-                    "default": r.default,
-                    "opportunistic": r.opportunistic,
-                    "learned": r.learned,
-                    "total": r.total,
-                    "eligible": r.eligible,
-                    "where": r.where,
-                    "latency_s": r.latency_s,
-                    "skipped": r.skipped,
-                }
-                for r in self.ratings
-            ],
+            "ratings": [dict(zip(_RATING_KEYS, r)) for r in self.ratings],
             "chosen": self.chosen,
             "outcome": None if self.outcome is None else self.outcome.value,
             "detail": self.detail,

@@ -21,15 +21,7 @@ if TYPE_CHECKING:
     from eos_svc.schema.request import PlanRequest
 
 #: core run status -> plan status (a completed run is ``success`` only with a good grasp)
-PLAN_STATUS: dict[RunStatus, str] = {
-    RunStatus.COMPLETED: "completed",
-    RunStatus.FAILED: "failed",
-    RunStatus.STALLED: "stalled",
-    RunStatus.CYCLE_LIMIT: "cycle_limit",
-    RunStatus.DEADLINE: "deadline",
-    RunStatus.CANCELLED: "cancelled",
-    RunStatus.ERROR: "error",
-}
+PLAN_STATUS: dict[RunStatus, str] = {status: status.value for status in RunStatus}
 
 
 @dataclass(frozen=True)
