@@ -100,7 +100,7 @@ class CycleRecord(NamedTuple):
             "stage": self.stage,
             "stage_cycle": self.stage_cycle,
             "weights": self.weights.to_dict(),
-            "ratings": [dict(zip(_RATING_KEYS, r)) for r in self.ratings],
+            "ratings": [dict(zip(_RATING_KEYS, r, strict=True)) for r in self.ratings],
             "chosen": self.chosen,
             "outcome": None if self.outcome is None else self.outcome.value,
             "detail": self.detail,
