@@ -56,7 +56,6 @@ class EP1Agent(GraspAgent):
         self.solver = solver
         self.side: str | None = None
         self.estimators: dict[str, CurvatureEstimator] = {}
-        #: the hand state :meth:`_place` computes in (made on the first placement, then re-used)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -66,9 +65,6 @@ class EP1Agent(GraspAgent):
             return 0.0
         rating = float(board.get(keys.CURVATURE, {}).get("rating", 0.0))
         return max(RATING_FLOOR, min(1.0, rating))
-
-    def _finger_for(self, side: str) -> str:
-        return self.world.probe_finger(side)
 
     def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
         """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
@@ -131,7 +127,7 @@ class EP1Agent(GraspAgent):
         world = self.world
         shape = board.get(keys.SHAPE)
         side = "bottom" if shape is not None and shape.get("needs") == "bottom" else "top"
-        finger = self._finger_for(side)
+        finger = world.probe_finger(side)
         if side == "bottom" and world.support_height is not None:
             return self._table_bottom(board, finger)
         moved = ""
@@ -168,14 +164,13 @@ class EP1Agent(GraspAgent):
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
         reading = world.tactile(finger)
         point, normal = reading.point, reading.normal
-        summary = est.to_dict()
-        summary["finger"] = finger
-        summary["side"] = side
-        summary["max_slip_speed"] = float(result.max_slip_speed)
-        if side == "top":
-            board.set(keys.CURVATURE, summary)
-        else:
-            board.set(keys.CURVATURE_BOTTOM, summary)
+        summary = {
+            **est.to_dict(),
+            "finger": finger,
+            "side": side,
+            "max_slip_speed": float(result.max_slip_speed),
+        }
+        board.set(keys.CURVATURE if side == "top" else keys.CURVATURE_BOTTOM, summary)
         board.set(keys.EP1_RUNS, int(board.get(keys.EP1_RUNS, 0)) + 1)
         contacts = dict(board.get(keys.EP1_CONTACT, {}))
         contacts[side] = {
