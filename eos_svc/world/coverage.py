@@ -43,89 +43,35 @@ def wrist_columns(params: WorldParameters) -> np.ndarray:
     return np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
 
 
-def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
+def space_filling_order(
+    counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
+) -> list[tuple[int, int]]:
     """Every column index once, in a seeded farthest-point (maximin) order.
 
     The first column is drawn by ``rng``; each next one is the column farthest from every
     column visited so far (ties broken by a seeded jitter), so the visited columns cover the
     face ever more finely and evenly: after k columns every column is within the k-th
-    column's distance of a visited one, and that distance never grows.
-
-    The whole order at once: :class:`SpaceFillingOrder` (what the search uses) computes it a
-    column at a time, the same columns from the same draws of ``rng``.
+    column's distance of a visited one, and that distance never grows. ``lattice``:
+    :func:`lattice_of` ``(*counts)``, when the caller keeps it.
     """
-    return SpaceFillingOrder(counts, rng).pending()[:]
-
-
-class SpaceFillingOrder:
-    """The columns of :func:`space_filling_order`, each computed when the search asks for it.
-
-    The search seldom sweeps more than a few of the few dozen columns before it locates the
-    object, so the order is extended one farthest column at a time (a pass over the columns)
-    rather than all at once (one pass per column: ≈ 0.1 ms on hand3x3's 6 × 6 lattice, as much
-    as a search move). Same draws of ``rng`` at construction (the jitter, the first column) and
-    the same columns in the same order as the whole order computed at once (tested).
-
-    Scalar Python over the few dozen columns (a vectorised form costs ~40× more in numpy call
-    overhead); the lattice distances are square roots of exact integers, so the order is the
-    same as the vectorised form's (tested against it).
-    """
-
-    __slots__ = ("_distances", "_jitter", "_left", "_nearest", "_points", "_queue")
-
-    def __init__(
-        self, counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
-    ) -> None:
-        points, distances = lattice if lattice is not None else lattice_of(*counts)
-        self._points = points
-        self._distances = distances
-        self._jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
-        first = int(rng.integers(len(points)))
-        # each column's distance to the nearest column ordered so far (-1: ordered)
-        self._nearest = list(distances[first])
-        self._nearest[first] = -1.0
-        self._left = len(points) - 1  # columns not yet ordered
-        self._queue: list[tuple[int, int]] = [points[first]]  # ordered, not yet taken
-
-    def __len__(self) -> int:
-        """Columns not yet taken."""
-        return len(self._queue) + self._left
-
-    def _extend(self) -> None:
-        """Order one more column: the unordered column farthest from the ordered ones (the
-        first of equal scores, as argmax), then every column's nearest distance updated."""
-        nearest, jitter = self._nearest, self._jitter
-        k, best = 0, -math.inf
+    points, distances = lattice if lattice is not None else lattice_of(*counts)
+    jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
+    first = int(rng.integers(len(points)))
+    nearest = list(distances[first])  # each column's distance to the nearest ordered one (-1: ordered)
+    nearest[first] = -1.0
+    order = [points[first]]
+    for _ in range(len(points) - 1):
+        k, best = 0, -math.inf  # the unordered column farthest from the ordered ones (argmax)
         for n, d in enumerate(nearest):
             score = d + jitter[n] if d >= 0.0 else -1.0
             if score > best:
                 k, best = n, score
-        self._queue.append(self._points[k])
-        self._left -= 1
+        order.append(points[k])
         nearest[k] = -1.0
-        for n, to_k in enumerate(self._distances[k]):
+        for n, to_k in enumerate(distances[k]):
             if to_k < nearest[n]:  # never for an ordered column (-1)
                 nearest[n] = to_k
-
-    def take(self) -> tuple[int, int]:
-        """The next column (``IndexError`` when every column was taken)."""
-        if not self._queue:
-            if not self._left:
-                raise IndexError("every column was taken")
-            self._extend()
-        return self._queue.pop(0)
-
-    def pending(self) -> list[tuple[int, int]]:
-        """Every column not yet taken, in order (the whole rest ordered now; the list itself:
-        reorder it with :meth:`move_to_front`)."""
-        while self._left:
-            self._extend()
-        return self._queue
-
-    def move_to_front(self, index: int) -> None:
-        """Take the ``index``-th pending column next (the rest keep their order)."""
-        queue = self.pending()
-        queue.insert(0, queue.pop(index))
+    return order
 
 
 #: a lattice's column indices and their distances (see :func:`lattice_of`)

@@ -24,7 +24,6 @@ from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds
 from eos_svc.objects import SurfaceObject
 from eos_svc.world import finger_closing, probe_motion, wrist_motion
-from eos_svc.world.coverage import SpaceFillingOrder
 from eos_svc.world.hand_context import HandContext
 from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
@@ -61,8 +60,8 @@ class GraspWorld:
         # object is fixed for a world's lifetime (a plan never moves it)
         self.obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
         self.obj_radius = 0.5 * float(self.scene.object.diameter)
-        # the search's lattice order, drawn from rng at the first search move (see search_step)
-        self.search_order: SpaceFillingOrder | None = None
+        # the search's columns left, in order, drawn from rng at the first search move (search_step)
+        self.search_order: list[tuple[int, int]] = []
         self.search_columns = np.empty((0, 0, 2))
         self.table = None if self.table_height is None else table_shape(self.table_height)
 

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+from eos_svc.world.coverage import column_counts, space_filling_order, wrist_columns
 from eos_svc.world.table import clamp_above
 
 if TYPE_CHECKING:
@@ -26,12 +26,10 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
         (label of the column "(j, k)", length moved in m, blocked flag).
     """
     p = world.params
-    if world.search_order is None:
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
+    if not world.search_order:  # the first move, or every column swept: (again) in a new order
+        world.search_order = space_filling_order(column_counts(p), world.rng, world.context.lattice)
         world.search_columns = wrist_columns(p)
-    if not world.search_order:  # every column swept: sweep them again
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
-    j, k = world.search_order.take()
+    j, k = world.search_order.pop(0)
     y, z = (float(v) for v in world.search_columns[j, k])
     if world.table is not None:  # a column under the table's reach is swept as low as it allows
         z = max(z, world.wrist_xyz()[2] - (world.table_gap() - p.clearance) + 1e-6)
@@ -51,14 +49,14 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
 def _bumped(world: GraspWorld) -> None:
     """After a bump: sweep next the column that puts the grasp centre's line nearest the point of
     the object the hand bumped into (the object is there)."""
-    if not world.search_order:
+    order = world.search_order
+    if not order:
         return
-    order = world.search_order.pending()
     witness = np.asarray(world.scene.min_distance(world.state).point_object)
     cols = world.search_columns
     want = witness[1:] - np.asarray(world.params.grasp_centre)[1:]
     n = min(range(len(order)), key=lambda i: float(np.sum((cols[order[i]] - want) ** 2)))
-    world.search_order.move_to_front(n)
+    order.insert(0, order.pop(n))
 
 
 def guarded_wrist_move(

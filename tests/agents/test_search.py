@@ -13,7 +13,6 @@ from eos_svc.agents.planner import build_world, default_hand, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.world.coverage import (
-    SpaceFillingOrder,
     column_counts,
     coverage_spacing,
     findable,
@@ -46,8 +45,7 @@ def test_columns_cover_the_box():
 
 
 def vectorised_space_filling_order(counts, rng):
-    """The maximin order written with numpy arrays (the plain form space_filling_order's scalar
-    loop must agree with)."""
+    """The maximin order written with numpy arrays (space_filling_order's scalar loop must agree)."""
     ny, nz = counts
     points = np.array([(i, j) for i in range(ny) for j in range(nz)], dtype=float)
     jitter = rng.uniform(0.0, 1e-3, len(points))
@@ -71,36 +69,6 @@ def test_scalar_order_equals_the_vectorised_one(counts):
         plain = vectorised_space_filling_order(counts, np.random.default_rng(seed))
         assert fast == plain
         assert all(type(i) is int and type(j) is int for i, j in fast)
-
-
-@pytest.mark.parametrize("counts", [(6, 6), (1, 1), (3, 7)])
-def test_order_a_column_at_a_time_is_the_whole_order_and_draws_the_same(counts):
-    for seed in range(10):
-        whole_rng, lazy_rng = np.random.default_rng(seed), np.random.default_rng(seed)
-        whole = space_filling_order(counts, whole_rng)
-        lazy = SpaceFillingOrder(counts, lazy_rng)
-        assert whole_rng.random() == lazy_rng.random()  # the same draws, at construction
-        taken = []
-        while lazy:
-            assert len(lazy) == len(whole) - len(taken)
-            taken.append(lazy.take())
-        assert taken == whole
-        with pytest.raises(IndexError):
-            lazy.take()
-
-
-def test_pending_and_move_to_front_act_as_on_the_whole_list():
-    counts = (6, 6)
-    for seed, taken_first, index in ((0, 0, 5), (1, 3, 0), (2, 4, 30), (3, 35, 0)):
-        whole = space_filling_order(counts, np.random.default_rng(seed))
-        lazy = SpaceFillingOrder(counts, np.random.default_rng(seed))
-        for _ in range(taken_first):
-            lazy.take()
-        rest = whole[taken_first:]
-        assert lazy.pending() == rest
-        rest.insert(0, rest.pop(index))  # what the search did with the whole list after a bump
-        lazy.move_to_front(index)
-        assert [lazy.take() for _ in range(len(lazy))] == rest
 
 
 def test_order_visits_every_column_once_and_follows_the_seed():
