@@ -43,13 +43,9 @@ class FingerAgent(GraspAgent):
         self._tip_radius = world.hand.tip_radius(finger)
         self._sweep = world.sweeps[finger]
         self._sweep_angles = self._sweep.angles.tolist()
-        # (target entry, its postulated object); (wrist pose, target, the sweep's landings
-        # there); per first touching sample, the landing's distance to the chosen contact
+        # (target entry, its postulated object); (wrist pose, target, the sweep's landings there)
         self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
         self._landings_memo: tuple[object, object, SweepLandings | None] = (None, None, None)
-        self._miss_memo: dict[int, float] = {}
-        self._far_samples: set[tuple[int, float]] = set()  # (first touching sample, tolerance) past the bound
-        self._rotated: tuple[bytes, np.ndarray] = (b"", self._sweep.points)
         # the wrist's joint values, as a tuple, from the configuration list
         self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
 
@@ -67,29 +63,21 @@ class FingerAgent(GraspAgent):
 
     def landing_miss(self, board: Board) -> float | None:
         """How far (m) from its chosen contact this finger's tip lands on the postulated object
-        if it closes from where it is now; None when it would not land on it at all.
-
-        Memoised: per target and wrist pose, the gaps of the whole sweep to the object (they
-        change only when the wrist moves, :class:`~eos_svc.grasp.landing.SweepLandings`),
-        then per first touching sample the landing's distance to the chosen contact."""
+        if it closes from where it is now; None when it would not land on it at all."""
         found = self._landings(board)
         if found is None:
             return None
         landings, start, target = found
-        k = landings.first_touch(start)
-        if k is None:
+        hit = landings.landing(start)
+        if hit is None:
             return None
-        miss = self._miss_memo.get(k)
-        if miss is None:
-            hit = landings.landing(start)
-            assert hit is not None  # k is its first touching sample
-            chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-            miss = self._miss_memo[k] = float(np.linalg.norm(hit.point - chosen))
-        return miss
+        chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
+        return float(np.linalg.norm(hit.point - chosen))
 
     def _landings(self, board: Board) -> tuple[SweepLandings, int, dict] | None:
-        """(the sweep's landings on the postulated object at the current wrist pose, the
-        finger's start sample, the target), or None without a chosen contact or an object."""
+        """(the sweep's landings on the postulated object at the current wrist pose — kept while
+        the wrist and the target stay —, the finger's start sample, the target), or None
+        without a chosen contact or an object."""
         target = board.get(keys.TARGET)
         if target is None or self.finger not in target.get("contacts", {}):
             return None
@@ -102,50 +90,20 @@ class FingerAgent(GraspAgent):
             landings = None
             if obj is not None:
                 translation, rotation = world.palm_views()
-                rotated = self._rotated_sweep(rotation)
+                rotated = self._sweep.points @ rotation.T
                 pts, gaps = rotated_sweep_gaps(obj, rotated, self._tip_radius, translation)
                 landings = SweepLandings(obj, self._sweep, pts, gaps)
             self._landings_memo = (pose, target, landings)
-            self._miss_memo = {}
-            self._far_samples = set()
         if landings is None:
             return None
         return landings, start, target
-
-    def lands_within(self, board: Board, tolerance: float) -> bool:
-        """``landing_miss(board)`` is not None and ≤ ``tolerance`` (m), without the landing's
-        closest point when :meth:`SweepLandings.miss_lower_bound` already exceeds it (per
-        first touching sample, memoised like the miss)."""
-        found = self._landings(board)
-        if found is None:
-            return False
-        landings, start, target = found
-        k = landings.first_touch(start)
-        if k is None or (k, tolerance) in self._far_samples:
-            return False
-        miss = self._miss_memo.get(k)
-        if miss is None:
-            chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-            if landings.miss_lower_bound(start, self._tip_radius, chosen) > tolerance:
-                self._far_samples.add((k, tolerance))
-                return False
-            miss = self.landing_miss(board)
-            assert miss is not None  # k is its first touching sample
-        return miss <= tolerance
-
-    def _rotated_sweep(self, rotation: np.ndarray) -> np.ndarray:
-        """The sweep's points turned by the palm's ``rotation`` (``points @ rotation.T``), kept
-        while the palm keeps its rotation (the wrist approaches its grasp without turning)."""
-        key = rotation.tobytes()
-        if self._rotated[0] != key:
-            self._rotated = (key, self._sweep.points @ rotation.T)
-        return self._rotated[1]
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —
         or the finger has closed past it without touching (the object is not quite where it
         was postulated): then it keeps closing until it touches or reaches its limit."""
-        if self.lands_within(board, self.world.params.landing_tolerance):
+        miss = self.landing_miss(board)
+        if miss is not None and miss <= self.world.params.landing_tolerance:
             return True
         return self.passed_its_contact(board)
 
