@@ -140,17 +140,17 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
 
     # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
     # centre's distance to it and at least that minus the bounding radius: coal only in between.
+    obj = make_object(spec)
     centre = spec.position
-    radius = 0.5 * _diameter(spec)
+    radius = 0.5 * obj.diameter
     lo, hi = swept_box(params)
     outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
     centre_gap = math.sqrt(sum(d * d for d in outside))
-    shape: coal.ShapeBase | None = None
-    tf_obj: coal.Transform3s | None = None
+    shape = obj.geometry
+    tf_obj = coal.Transform3s(np.array(obj.placement.rotation), np.array(obj.placement.translation))
     if centre_gap > params.envelope_radius:
         gap, axis = centre_gap - radius, max(range(3), key=outside.__getitem__)
         if gap <= params.envelope_radius:  # undecided by the bounds: the exact distance
-            shape, tf_obj = _coal_object(spec)
             res = _distance(
                 shape,
                 tf_obj,
@@ -176,8 +176,6 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
         gx, gy, gz = g.centre
         if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
             continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
-        if shape is None or tf_obj is None:
-            shape, tf_obj = _coal_object(spec)
         d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)
         if d < params.clearance:
             raise ValidationError(
@@ -191,7 +189,7 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
     rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
     surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
-    if not surely and not findable(make_object(spec), params, reach_ahead):
+    if not surely and not findable(obj, params, reach_ahead):
         pos = ", ".join(f"{v:.3f}" for v in centre)
         raise ValidationError(
             "object.position",
@@ -200,16 +198,3 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
             f"{rear_limit:.3f} m "
             "(what the fingers reach from the rear of the search box)",
         )
-
-
-def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
-    """The object's coal shape and placement (as :func:`eos_svc.grasp.postulate.make_object` builds)."""
-    obj = make_object(spec)
-    return obj.geometry, coal.Transform3s(
-        np.array(obj.placement.rotation), np.array(obj.placement.translation)
-    )
-
-
-def _diameter(spec: ObjectSpec) -> float:
-    """Diameter of the smallest sphere about the object's centre that contains it (m)."""
-    return make_object(spec).diameter
