@@ -126,18 +126,8 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
         seq=data["seq"],
         stage=data["stage"],
         stage_cycle=data["stage_cycle"],
-        ratings=tuple(
-            AgentRating(
-                r["agent"],
-                r["default"],
-                r["opportunistic"],
-                r["learned"],
-                r["total"],
-                r.get("eligible", True),
-                r.get("where", "local"),
-                r.get("latency_s", 0.0),
-                r.get("skipped"),
-            )
+        ratings=tuple(  # the fields added since a record was written take their defaults
+            AgentRating(r["agent"], **{k: r[k] for k in AgentRating._fields[1:] if k in r})
             for r in data["ratings"]
         ),
         weights=Weights.from_dict(data["weights"]),
