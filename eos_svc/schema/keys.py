@@ -29,7 +29,6 @@ FINGER_STATE = "finger_state"  #: dict finger -> "open" | "closing" | "touching"
 FINGER_ANGLE = "finger_angle"  #: dict finger -> joint angle (rad)
 OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict
 FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the request; read by end)
-Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)
 HAND_Q = "hand_q"  #: tuple: the hand's configuration after the cycle (rad/m, 1e-7; written by PoseBoard)
 RECALLED = "recalled"  #: str: the grasp-memory key recall applied
 OBJECT_POSE = "object_pose"  #: list: the object's pose after the cycle, Drake world (by PoseBoard)
