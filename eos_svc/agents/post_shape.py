@@ -77,6 +77,16 @@ def classify(curvature: dict) -> tuple[str, float]:
     return "ellipsoid", 1.0 / mean
 
 
+def sized(centre: np.ndarray, half: np.ndarray) -> dict[str, Any]:
+    """A postulate's size fields from its centre and half extents along the world axes (m)."""
+    return {
+        "grasp_radius": round(float(half[2]), 6),
+        "diameter": round(2.0 * float(half[2]), 6),
+        "centre": np.round(centre, 6).tolist(),
+        "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
+    }
+
+
 def touches_from(board: Board, world: HandDriver) -> Touches:
     """EP1's and EP2's contacts and EP2's free samples as fit measurements."""
     centres, normals, radii = [], [], []
@@ -145,7 +155,11 @@ class PostShapeAgent(GraspAgent):
                 return self._from_touches(board, curvature, touches)
         return self._from_ep1(board, curvature, contacts)
 
-    def _write(self, board: Board, shape: dict[str, Any]) -> None:
+    def _write(self, board: Board, curvature: dict, shape: dict[str, Any]) -> None:
+        """Write the postulate, with EP1's curvature on top, and d/h once it is sized."""
+        radius = classify(curvature)[1]
+        shape["principal_curvatures"] = curvature["principal_curvatures"]
+        shape["curvature_radius"] = round(radius, 6) if math.isfinite(radius) else None
         board.set(keys.SHAPE, shape)
         if shape["grasp_radius"] is not None:
             board.set(keys.D_OVER_H, round(2.0 * shape["grasp_radius"] / self.world.hand.hand_height, 6))
@@ -168,7 +182,6 @@ class PostShapeAgent(GraspAgent):
                 return self._from_hull(board, curvature, touches, post.kind, hull)
         threshold = self.world.params.confidence_threshold
         fit = post.best
-        radius = classify(curvature)[1]
         precise = (
             fit is None
             or touches.count >= PRECISION_CONTACTS
@@ -183,8 +196,6 @@ class PostShapeAgent(GraspAgent):
             "diameter": None,
             "centre": None,
             "needs": None if trusted else "surface",
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": post.object(),
             "pose_known": fit is not None,
             "evidence": {
@@ -200,13 +211,8 @@ class PostShapeAgent(GraspAgent):
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
                 # the classes and extents EP2 should tell apart (its next probes)
                 shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]
-            g = fit.geometry
-            half = g.half_extents()
-            shape["grasp_radius"] = round(float(half[2]), 6)
-            shape["diameter"] = round(2.0 * float(half[2]), 6)
-            shape["centre"] = np.round(g.centre, 6).tolist()
-            shape["bounds"] = [np.round(g.centre - half, 6).tolist(), np.round(g.centre + half, 6).tolist()]
-        self._write(board, shape)
+            shape.update(sized(fit.geometry.centre, fit.geometry.half_extents()))
+        self._write(board, curvature, shape)
         rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
         ask = "" if trusted else "; asks EP2 for more of the surface"
         if post.confidence >= threshold and not precise:
@@ -223,17 +229,11 @@ class PostShapeAgent(GraspAgent):
     ) -> ActionResult:
         """The approximate postulate (:mod:`eos_svc.shape.hull`), once EP2 has felt all it
         will: grasp_points plans on it as it is."""
-        radius = classify(curvature)[1]
-        half, centre = hull.half_extents, hull.centre
         shape: dict[str, Any] = {
             "class": HULL,
             "confidence": round(hull.confidence, 6),
-            "grasp_radius": round(float(half[2]), 6),
-            "diameter": round(2.0 * float(half[2]), 6),
-            "centre": np.round(centre, 6).tolist(),
+            **sized(hull.centre, hull.half_extents),
             "needs": None,
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": hull.object,
             "pose_known": True,
             "approximate": True,
@@ -243,9 +243,8 @@ class PostShapeAgent(GraspAgent):
                 "on_hull": round(hull.on_hull, 6),
                 "source": "convex hull of the EP1 and EP2 contacts: no primitive explains them",
             },
-            "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
         }
-        self._write(board, shape)
+        self._write(board, curvature, shape)
         return ActionResult(
             Outcome.PROGRESS,
             f"no class explains the {touches.count} contacts (best: a {best}): the convex hull of the "
@@ -296,8 +295,6 @@ class PostShapeAgent(GraspAgent):
             "diameter": None if half is None else round(2.0 * half, 6),
             "centre": centre,
             "confidence": round(confidence, 6),
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "needs": needs,
             "object": obj,
             "pose_known": False,
@@ -309,7 +306,7 @@ class PostShapeAgent(GraspAgent):
             },
             "bounds": None,
         }
-        self._write(board, shape)
+        self._write(board, curvature, shape)
         size = "" if half is None else f", half-height {half * 1000:.2f} mm"
         asks = {
             "bottom": "asks EP1 to feel the bottom",
