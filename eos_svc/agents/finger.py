@@ -53,40 +53,24 @@ class FingerAgent(GraspAgent):
         """This finger's state on the board ("open" before grasping starts)."""
         return str(board.get(keys.FINGER_STATE, {}).get(self.finger, "open"))
 
-    def _postulated(self, target: dict) -> SurfaceObject | None:
-        """The postulated object of ``target`` (built once per target)."""
-        if self._object_memo[0] is not target:
-            spec = target.get("object")
-            obj = None if spec is None else make_object(ObjectSpec.from_dict(spec))
-            self._object_memo = (target, obj)
-        return self._object_memo[1]
-
     def landing_miss(self, board: Board) -> float | None:
         """How far (m) from its chosen contact this finger's tip lands on the postulated object
-        if it closes from where it is now; None when it would not land on it at all."""
-        found = self._landings(board)
-        if found is None:
-            return None
-        landings, start, target = found
-        hit = landings.landing(start)
-        if hit is None:
-            return None
-        chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-        return float(np.linalg.norm(hit.point - chosen))
-
-    def _landings(self, board: Board) -> tuple[SweepLandings, int, dict] | None:
-        """(the sweep's landings on the postulated object at the current wrist pose — kept while
-        the wrist and the target stay —, the finger's start sample, the target), or None
-        without a chosen contact or an object."""
+        if it closes from where it is now; None when it would not land on it at all. The
+        postulated object is kept per target, the sweep's landings on it while the wrist stays."""
         target = board.get(keys.TARGET)
         if target is None or self.finger not in target.get("contacts", {}):
             return None
         world = self.world
-        start = bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12)
         pose = self._wrist_pose(world.q_list())
         memo_pose, memo_target, landings = self._landings_memo
         if memo_pose != pose or memo_target is not target:
-            obj = self._postulated(target)
+            if self._object_memo[0] is not target:
+                spec = target.get("object")
+                self._object_memo = (
+                    target,
+                    None if spec is None else make_object(ObjectSpec.from_dict(spec)),
+                )
+            obj = self._object_memo[1]
             landings = None
             if obj is not None:
                 translation, rotation = world.palm_views()
@@ -96,7 +80,11 @@ class FingerAgent(GraspAgent):
             self._landings_memo = (pose, target, landings)
         if landings is None:
             return None
-        return landings, start, target
+        hit = landings.landing(bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12))
+        if hit is None:
+            return None
+        chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
+        return float(np.linalg.norm(hit.point - chosen))
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —
@@ -105,10 +93,6 @@ class FingerAgent(GraspAgent):
         miss = self.landing_miss(board)
         if miss is not None and miss <= self.world.params.landing_tolerance:
             return True
-        return self.passed_its_contact(board)
-
-    def passed_its_contact(self, board: Board) -> bool:
-        """The finger is closing, free, and already beyond its chosen contact's angle."""
         if self.finger_state(board) != "closing":
             return False
         chosen = board.get(keys.TARGET, {}).get("contacts", {}).get(self.finger)

@@ -23,13 +23,6 @@ def search_rating(board: Board) -> float:
     return 0.0 if board.get(keys.LOCATED) else 1.0
 
 
-def search_move_limit(world: HandDriver) -> int:
-    """Sweeps after which the search gives up: every column of the coverage lattice twice
-    (:func:`eos_svc.world.coverage.column_counts`)."""
-    ny, nz = column_counts(world.params)
-    return 2 * ny * nz
-
-
 def roll_for_table(world: HandDriver) -> bool:
     """Roll the hand a quarter turn about its approach axis (the wrist's roll joint to π/2),
     where it stands, when it is then clear of the object; whether it rolled."""
@@ -54,8 +47,8 @@ def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
         return ActionResult(Outcome.STAGE_COMPLETE, "object already within the hand's envelope")
     moves = int(board.get(keys.SEARCH_MOVES, 0))
-    limit = search_move_limit(world)
-    if moves >= limit:
+    ny, nz = column_counts(world.params)
+    if moves >= 2 * ny * nz:  # every column of the coverage lattice swept twice: give up
         return ActionResult(
             Outcome.FINISHED,
             f"object not located after sweeping every column of the search lattice twice "

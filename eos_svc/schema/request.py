@@ -86,13 +86,6 @@ def _positive(value: object, name: str, upper: float) -> float:
     return v
 
 
-def _in_range(value: object, name: str, upper: float, unit: str = "") -> float:
-    v = _number(value, name)
-    if not 0.0 <= v <= upper:
-        raise ValidationError(name, f"must be in [0, {upper}]{unit}, got {v}")
-    return v
-
-
 def _vector3(value: object, name: str) -> tuple[float, float, float]:
     if isinstance(value, (str, bytes)) or not isinstance(value, (list, tuple)):
         raise ValidationError(name, f"must be a list of 3 numbers, got {type(value).__name__}")
@@ -393,7 +386,10 @@ class PlanRequest:
             ("encoder_noise", MAX_ENCODER_NOISE, " rad"),
             ("link_error", MAX_LINK_ERROR, " m"),
         ):
-            object.__setattr__(self, name, _in_range(getattr(self, name), name, upper, unit))
+            value = _number(getattr(self, name), name)
+            if not 0.0 <= value <= upper:
+                raise ValidationError(name, f"must be in [0, {upper}]{unit}, got {value}")
+            object.__setattr__(self, name, value)
         if self.world not in WORLDS:
             raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
         if self.agents:

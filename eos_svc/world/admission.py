@@ -36,13 +36,6 @@ __all__ = [
 ]
 
 
-def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
-    """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
-    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
-    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
-    return lo, hi
-
-
 def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
     """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
     kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
@@ -143,7 +136,9 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     obj = make_object(spec)
     centre = spec.position
     radius = 0.5 * obj.diameter
-    lo, hi = swept_box(params)
+    # the box the grasp centre sweeps during the search (world, m)
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
     outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
     centre_gap = math.sqrt(sum(d * d for d in outside))
     shape = obj.geometry
