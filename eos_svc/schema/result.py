@@ -153,33 +153,9 @@ class PlanResult:
         list, tuple), so only those two conversions differ.
         """
         out = {
-            "status": self.status,
-            "reason": self.reason,
-            "cycles": self.cycles,
-            "cycles_per_stage": self.cycles_per_stage,
-            "stages_completed": list(self.stages_completed),
-            "final_stage": self.final_stage,
-            "shape": self.shape,
-            "curvature": self.curvature,
-            "ground_truth": self.ground_truth,
-            "contacts": self.contacts,
-            "good_grasp": self.good_grasp,
-            "force_closure": self.force_closure,
-            "epsilon": self.epsilon,
-            "friction": self.friction,
-            "quality": self.quality,
-            "q_final": self.q_final,
-            "diameter_angle_deg": self.diameter_angle_deg,
-            "d_over_h": self.d_over_h,
-            "hand_height": self.hand_height,
-            "ep1_runs": self.ep1_runs,
-            "touches": self.touches,
-            "probes": self.probes,
-            "seed": self.seed,
-            "weights": self.weights,
-            "wall_time_s": self.wall_time_s,
-            "request": self.request,
-            "validation": self.validation,
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if f.name not in ("trace", "world")
         }
         if self.world is not None:
             out["world"] = self.world
