@@ -147,11 +147,8 @@ class GraspWorld:
 
     # --- clearance -----------------------------------------------------------------------
     def hand_clearance(self) -> float:
-        """Smallest distance between any hand geometry and the object, m.
-
-        When the object is farther from the grasp centre than ``hand_bound`` no hand geometry
-        can be near it; the lower bound (gap − hand_bound) is returned without a collision query.
-        """
+        """Smallest distance between any hand geometry and the object, m; beyond ``hand_bound``
+        of the grasp centre its lower bound (gap − hand_bound), without a collision query."""
         value = self.memo.get("clearance")
         if value is None:
             gap = self.object_gap_to_grasp_centre()
@@ -163,17 +160,14 @@ class GraspWorld:
         return value
 
     def probe_finger(self, face: str) -> str:
-        """The finger that explores ``face`` ("top", "bottom", "front" or "side"; a side probe
-        along ±y is led by ``context.side_fingers``): :attr:`probe`'s choice, except on a table,
-        where every probe is the opposing finger's — the hand's lowest part, it keeps the rest
-        of the hand above the probed place."""
+        """The finger that explores ``face`` ("top", "bottom", "front" or "side"): :attr:`probe`'s
+        choice, except on a table, where every probe is the opposing finger's (the hand's lowest)."""
         if self.table is not None or face == "bottom":
             return self.probe.bottom
         return self.probe.top
 
     def table_gap(self) -> float:
-        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf``
-        without one (memoised per hand pose)."""
+        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf`` without one."""
         if self.table is None:
             return math.inf
         value = self.memo.get("table_gap")
@@ -208,9 +202,8 @@ class GraspWorld:
         return value
 
     def min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
-        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
-        query of a geometry whose lower bound already reaches the minimum (its gap is ≥ its
-        bound ≥ the minimum, so the result is the min over every geometry)."""
+        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the query of a
+        geometry whose lower bound already reaches the minimum."""
         return self.min_of(self.lower_bounds(geometry_ids), best)
 
     def min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
@@ -239,16 +232,14 @@ class GraspWorld:
         self.sync()
 
     def sync(self) -> None:
-        """Forget memoised values after ``state`` was moved directly (prefer
-        :meth:`direct_motion`, which cannot forget to)."""
+        """Forget memoised values after ``state`` was moved directly (prefer :meth:`direct_motion`)."""
         self.version += 1
         self.memo.clear()
 
     @contextlib.contextmanager
     def direct_motion(self) -> Iterator[HandState]:
-        """``with world.direct_motion() as state:`` — move ``state`` directly inside (e.g. EP1's
-        rolling QP integrates it); on leaving, normally or by an exception, the world forgets
-        what it had memoised about the old pose."""
+        """``with world.direct_motion() as state:`` — move ``state`` directly inside (EP1's rolling
+        QP); on leaving, even by an exception, the world forgets what it memoised."""
         try:
             yield self.state
         finally:
