@@ -54,7 +54,6 @@ class HandContext:
         probe_poses: the probe pose of every (finger, angle) EP2 probes with.
         angle_q: per finger, the q index of its first joint (its angle).
         finger_q: per finger, its joints' q indices (read-only).
-        tip_bound: per finger with a sphere tip, its tip frame id and radius (m).
         side_fingers: the upper finger leading a probe along +y (key ``+1``) and along −y (``-1``).
         span: the largest distance between two fingertips' surfaces over the joint ranges (m).
         neutral_geometries: the collision geometries at the start configuration.
@@ -73,7 +72,6 @@ class HandContext:
     probe_poses: dict[tuple[str, float], ProbePose]
     angle_q: dict[str, int]
     finger_q: dict[str, np.ndarray]
-    tip_bound: dict[str, tuple[int, float]]
     side_fingers: dict[int, str]
     span: float
     neutral_geometries: tuple[PlacedGeometry, ...]
@@ -101,7 +99,6 @@ class HandContext:
             probe_poses={(f, a): ProbePose.build(hand, f, a) for f, a in angles},
             angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
             finger_q={f: read_only(hand.finger_q_index(f)) for f in hand.finger_names},
-            tip_bound=sphere_tips(hand),
             side_fingers=sides,
             span=hand_span(hand),
             neutral_geometries=neutral_geometries(hand),
@@ -142,18 +139,6 @@ def side_fingers(hand: HandModel) -> dict[int, str]:
     state = hand.state(hand.neutral())
     y = {f: float(state.tip_position(f)[1]) for f in upper}
     return {+1: max(upper, key=lambda f: y[f]), -1: min(upper, key=lambda f: y[f])}
-
-
-def sphere_tips(hand: HandModel) -> dict[str, tuple[int, float]]:
-    """Per finger whose tip is a sphere (no tip geometry, or a coal sphere): its tip frame id and
-    radius (m)."""
-    geometries = hand.collision_model.geometryObjects
-    tips: dict[str, tuple[int, float]] = {}
-    for f in hand.finger_names:
-        gid = hand.tip_geometry_id(f)
-        if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
-            tips[f] = (hand.tip_frame_id(f), float(hand.tip_radius(f)))
-    return tips
 
 
 def hand_span(hand: HandModel) -> float:

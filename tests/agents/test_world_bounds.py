@@ -1,9 +1,8 @@
 """The grasp world's shortcuts give the answers of the exact queries they avoid.
 
 ``GraspWorld.lower_bounds`` must never exceed a geometry's exact gap (coal), for every
-hand geometry kind and object shape; ``hand_clear``, ``closing_clear`` and
-``FingerSweep.last_within`` must agree with ``hand_clearance``, ``closing_gap`` and
-``FingerSweep.reaches``.
+hand geometry kind and object shape; ``hand_clear`` and ``FingerSweep.last_within`` must agree
+with ``hand_clearance`` and ``FingerSweep.reaches``.
 """
 
 from __future__ import annotations
@@ -14,7 +13,6 @@ import pytest
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
 from eos_svc.hands import load_hand_named
-from eos_svc.world.finger_closing import closing_clear, closing_gap
 
 OBJECTS = [
     ObjectSpec("sphere", {"radius": 0.03}, (0.12, 0.0, 0.0)),
@@ -73,11 +71,6 @@ def test_shortcuts_agree_with_the_exact_answers(spec):
             fast = world.hand_clear(threshold)
             world.set_q(q)
             assert fast == (world.hand_clearance() >= threshold)
-        for finger in world.hand.finger_names:
-            world.set_q(q)
-            fast = closing_clear(world, finger)
-            world.set_q(q)
-            assert fast == (closing_gap(world, finger) > 0.0)
 
 
 def test_last_within_answers_reaches_for_every_angle():
