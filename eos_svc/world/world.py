@@ -176,19 +176,8 @@ class GraspWorld:
         return value
 
     def hand_clear(self, threshold: float) -> bool:
-        """``hand_clearance() >= threshold``, without the exact collision queries when the
-        geometries' lower bounds already reach ``threshold``."""
-        value = self.memo.get("clearance")
-        if value is None:
-            gap = self.object_gap_to_grasp_centre()
-            if gap <= self.params.hand_bound + self.params.clearance:  # the exact case
-                bounds = self.lower_bounds(range(len(self.context.bounds)))
-                if min(bounds)[0] >= threshold:  # every exact gap ≥ its bound ≥ threshold
-                    return True
-                value = self.memo["clearance"] = self.min_of(bounds, math.inf)
-            else:
-                value = self.hand_clearance()
-        return bool(value >= threshold)
+        """Whether :meth:`hand_clearance` is at least ``threshold`` (m)."""
+        return self.hand_clearance() >= threshold
 
     def exact_clearance(self) -> float:
         """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
@@ -204,12 +193,7 @@ class GraspWorld:
     def min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
         """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the query of a
         geometry whose lower bound already reaches the minimum."""
-        return self.min_of(self.lower_bounds(geometry_ids), best)
-
-    def min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
-        """:meth:`min_gap` from the geometries' ``(lower bound, id)`` (sorted in place)."""
-        bounds.sort()
-        for lower, gid in bounds:
+        for lower, gid in sorted(self.lower_bounds(geometry_ids)):
             if lower >= best:
                 break
             best = min(best, self.scene.gap(self.state, gid))
