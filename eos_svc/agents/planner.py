@@ -211,10 +211,9 @@ def plan(
     wanted = [*requested_plugins(request.agents, offered), *agents]
     extra = plugin_agents(driver, wanted, team, STAGES) if wanted else []
     team[-1:-1] = extra  # plug-ins join just before end (ties go to the built-in agents)
+    entry_check = None
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
-    entry_check = None
-    if check_board:
         own = plugin_entries(extra)
         entry_check = functools.partial(check_entry, extra=own) if own else check_entry
     controller = Controller(
@@ -249,11 +248,10 @@ def plan(
     truth["d_over_h"] = obj.diameter / model.hand.hand_height
     if request.obj.shape == "sphere":
         truth["radius"] = request.obj.size["radius"]
-    shape = board.get(keys.SHAPE)
-    result = PlanResult.from_run(
+    return PlanResult.from_run(
         run,
         request=request,
-        shape=shape,
+        shape=board.get(keys.SHAPE),
         curvature=board.get(keys.CURVATURE),
         ground_truth=truth,
         contacts=verdict["contacts"],
@@ -271,7 +269,6 @@ def plan(
         wall_time_s=time.perf_counter() - t0,
         world=report,
     )
-    return result
 
 
 def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:
