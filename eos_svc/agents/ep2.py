@@ -17,7 +17,7 @@ Opportunistic sub-rating: right after post_shape asked for the surface (``needs:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable
 
 import numpy as np
 import pinocchio as pin
@@ -134,19 +134,6 @@ class EP2Agent(GraspAgent):
         if world.table_height is not None:
             probes += self.table_scan(centre, half, f)
         return probes
-
-    def _with_fallback(
-        self,
-        planned: list[Probe],
-        estimate: tuple[np.ndarray, np.ndarray],
-        targeted: bool,
-        counts: dict[str, int],
-    ) -> Iterator[Probe]:
-        """The ``planned`` probes, then, when they were aimed at open faces and none touched
-        (``counts`` is filled as they run), this round's probes of the whole surface."""
-        yield from planned
-        if targeted and not counts:
-            yield from self.plan_round(*estimate)
 
     def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
         """On a table, probes straight down from above on a grid from the front face back
@@ -357,32 +344,24 @@ class EP2Agent(GraspAgent):
         # once a fit leaves faces open, the round probes those faces first, and the whole
         # surface only when none of them is felt
         planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
-        missed, blocked = self.run_probes(
-            self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts), touches, free, counts
-        )
+        missed, blocked = self.run_probes(planned, touches, free, counts)
+        if faces and not counts:
+            more_missed, more_blocked = self.run_probes(self.plan_round(*estimate), touches, free, counts)
+            missed, blocked = missed + more_missed, blocked + more_blocked
         # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
         # +x (toward the back), +y and −y until the tip drops over an edge, a link would
         # touch first, or nothing is felt
-        tops = [t for t in touches if t["face"] in ("top", "slide")] + [
-            {
-                "centre": list(
-                    np.asarray(c["point"]) + world.hand.tip_radius(c["finger"]) * np.asarray(c["normal"])
-                )
-            }
-            for side, c in board.get(keys.EP1_CONTACT, {}).items()
-            if side == "top"
-        ]
+        tops = [np.asarray(t["centre"], dtype=float) for t in touches if t["face"] in ("top", "slide")]
+        top = board.get(keys.EP1_CONTACT, {}).get("top")
+        if top is not None:  # EP1's top contact, as its tip's centre
+            tops.append(
+                np.asarray(top["point"]) + world.hand.tip_radius(top["finger"]) * np.asarray(top["normal"])
+            )
         if tops:
-            highest = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            highest = max(tops, key=lambda c: c[2])
             for axis, steps in self.slide_plan(board, faces):
                 # toward an open face: on from the top touch farthest that way
-                start = (
-                    highest
-                    if steps == SLIDE_STEPS
-                    else np.asarray(
-                        max(tops, key=lambda t: float(np.dot(t["centre"], axis)))["centre"], dtype=float
-                    )
-                )
+                start = highest if steps == SLIDE_STEPS else max(tops, key=lambda c: float(np.dot(c, axis)))
                 slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
                     touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))
