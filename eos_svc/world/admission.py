@@ -21,7 +21,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.coverage import findable
 from eos_svc.world.fingertip_fit import fit_refusal
 from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
 from eos_svc.world.parameters import WorldParameters
@@ -183,8 +183,7 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     # Findable: the search sweeps a lattice of columns and guarantees to locate only objects that
     # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
     rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
-    surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
-    if not surely and not findable(obj, params, reach_ahead):
+    if not findable(obj, params, reach_ahead):
         pos = ", ".join(f"{v:.3f}" for v in centre)
         raise ValidationError(
             "object.position",
