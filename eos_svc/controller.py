@@ -143,10 +143,6 @@ class Controller:
         Args:
             board: the information board (a new empty one when omitted).
             cancel: a token another thread may set to stop the run.
-
-        The per-cycle path (limits, rating, action, progress) is written inline on local
-        variables — it is the arbitration's cost (``benchmarks/bench_controller.py``); what runs
-        once per stage or once per run is in the helpers below.
         """
         board = board if board is not None else Board()
         weights = self.weights
