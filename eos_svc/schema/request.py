@@ -1,11 +1,6 @@
-"""Plan requests: what a caller asks the grasp planner for, validated at the edge.
-
-Pure data and validation (no Pinocchio, no Zenoh), shared by the library call,
-the ``eos plan`` command line and the Zenoh service. Every rejection is a
-:class:`~eos_svc.errors.ValidationError` naming the field (dotted path) and the
-reason.
-
-JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
+"""Plan requests, validated at the edge: pure data shared by the library, ``eos plan`` and the
+service; every rejection a :class:`~eos_svc.errors.ValidationError` naming the field and the
+reason. JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 
     {"object": {"shape": "sphere", "radius": 0.03, "position": [0.22, 0.0, 0.0]},
      "weights": {"default": 0.5, "opportunistic": 0.5},
@@ -294,10 +289,8 @@ _HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 
 @dataclass(frozen=True)
 class Table:
-    """A horizontal support surface under the object: its top at world z = ``height`` (m).
-
-    The planner knows it: no hand motion below it, no probe from under it, no grasp whose hand
-    would touch it; the Drake validation welds a box there."""
+    """A horizontal support surface under the object, its top at world z = ``height`` (m): no hand
+    motion, probe or grasp goes below it."""
 
     height: float
 
@@ -333,22 +326,17 @@ class PlanRequest:
         tactile_noise: standard deviation of the tactile contact location (m).
         max_cycles: cycle limit of the run.
         deadline_s: wall-clock budget of the run (s), or ``None``.
-        friction: Coulomb friction coefficient μ of the fingertip contacts, in
-            [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
-        world: where the hand acts, one of :data:`WORLDS`: ``"kinematic"`` (exact, the object
-            fixed) or ``"drake"`` (the object a free body on a table; success needs the lift
-            test). The JSON form carries it only when it is not ``"kinematic"``.
-        agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
-            point or ``module:attr``; a service instance takes only those it offers); at most
-            :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
-        encoder_noise: standard deviation of every finger joint encoder's reading (rad), in
-            [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
-        link_error: standard deviation of every finger link's length calibration error (m),
-            in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
-        hand: the name of a registered hand to plan with (``eos hands``; a service plans
-            with the hands it registered), or ``None`` for the planner's default hand.
-        table: the support surface the object rests on (``"table": {"height": z}``), or
-            ``None`` (the default, the paper's scene: the object floats, no support).
+        friction: Coulomb μ of the fingertip contacts, in [0, :data:`MAX_FRICTION`].
+        world: one of :data:`WORLDS`: ``"kinematic"`` (exact, the object fixed) or ``"drake"``
+            (the object a free body; success needs the lift test).
+        agents: names of plug-in agents to add (an ``eos_svc.agents`` entry point or
+            ``module:attr``), at most :data:`MAX_PLUGINS`, no name twice.
+        encoder_noise: σ of every finger joint encoder's reading (rad), in [0, :data:`MAX_ENCODER_NOISE`].
+        link_error: σ of every finger link's length error (m), in [0, :data:`MAX_LINK_ERROR`]
+            (:mod:`eos_svc.world.joint_sensing`).
+        hand: the name of a registered hand (``eos hands``), or ``None`` for the default hand.
+        table: the support surface the object rests on, or ``None`` (the paper's scene).
+    The JSON form leaves out ``world`` when kinematic and the others at their defaults.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
