@@ -32,14 +32,9 @@ class RunStatus(str, Enum):
 
 
 class AgentRating(NamedTuple):
-    """One agent's ratings in one cycle (a named tuple: cheap to build every cycle).
-
-    ``eligible`` is false for an agent that may not be chosen in this cycle; ``skipped`` says
-    why: the repeat rule (:data:`REPEAT_SKIP`, see :class:`~eos_svc.controller.RepeatPolicy`) or
-    the agent being unavailable (``"unavailable: ..."``: a remote agent late, gone or answering
-    nonsense; it then rates 0). ``where`` is the agent's :attr:`~eos_svc.agent.Agent.location`
-    (``"local"`` or ``"remote"``), ``latency_s`` the seconds its rating took this cycle.
-    """
+    """One agent's ratings in one cycle. ``skipped`` says why it is not ``eligible``: the repeat
+    rule (:data:`REPEAT_SKIP`) or ``"unavailable: ..."``; ``where`` is its
+    :attr:`~eos_svc.agent.Agent.location`, ``latency_s`` the seconds its rating took."""
 
     name: str
     default: float
@@ -166,12 +161,8 @@ class RunResult:
 
 
 def to_jsonable(value: Any) -> Any:
-    """Convert a board value to something ``json.dumps`` accepts.
-
-    Handles dataclasses, enums, mappings, sequences and array-likes (anything
-    with ``tolist()``, e.g. NumPy arrays) without importing NumPy. Non-finite
-    floats become ``None`` so the output stays strict JSON.
-    """
+    """A board value as strict JSON accepts it (dataclasses, enums, mappings, sequences, anything
+    with ``tolist()``; non-finite floats become ``None``), without importing NumPy."""
     if value is None or isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, float):
