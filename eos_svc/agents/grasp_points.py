@@ -44,17 +44,9 @@ def size_words(spec: ObjectSpec) -> str:
 
 
 class GraspPointsAgent(GraspAgent):
-    """Chooses the grasp and places the hand at the pre-grasp.
-
-    Args:
-        default: default sub-rating.
-        world: the world.
-        oracle: plan on this object instead of post_shape's postulate — the true object, for
-            measuring the grasp stage apart from recognition only (``plan(...,
-            oracle_postulate=True)``); never the planner's default.
-        name: the agent's name (a subclass with another sampler takes its own, see
-            :meth:`choose_candidates`).
-    """
+    """Chooses the grasp and places the hand at the pre-grasp. ``oracle``: plan on this object
+    instead of the postulate (measurement only); ``name``: a subclass's own (another sampler,
+    :meth:`choose_candidates`)."""
 
     reads = frozenset({keys.SHAPE, keys.TARGET, keys.FRICTION})
     writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})

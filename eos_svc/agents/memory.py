@@ -1,13 +1,7 @@
-"""Grasp memory: what earlier runs learned, for the learned sub-rating (paper §7).
-
-An embedded SQLite database keyed by what the system knows of an object when it is
-about to grasp — the postulated shape class and a size band of d/h — remembering
-the grasp that worked: where the wrist stood relative to the estimated object
-centre and the finger angles at contact, with counts of tries and successes.
-
-It survives restarts (a file) and stays consistent when several processes
-(service instances) share it: WAL journaling, a busy timeout, and every update a
-single atomic UPSERT, so concurrent writers never lose a count.
+"""Grasp memory for the learned sub-rating (paper §7): an SQLite file keyed by the postulated class
+and d/h band, remembering the grasp that worked (the wrist relative to the centre, the finger
+angles) and the tries and successes. Shared safely by processes: WAL journaling, a busy timeout,
+every update one atomic UPSERT.
 """
 
 from __future__ import annotations

@@ -100,22 +100,12 @@ def findable(
     samples_per_metre: int = 1000,
     exhaustive: bool = False,
 ) -> bool:
-    """Whether the search is guaranteed to locate ``obj``:
-
-    1. some sweep line passes within ``envelope_radius`` of the object (signed distance,
-       sampled every ``1/samples_per_metre`` m along x), and
-    2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
-       point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
-       rear never bump into it, and
-    3. its centre lies within the grasp-centre box's height range: the upper and lower fingers
-       sit above and below the grasp centre, so an object centred above or below that range is
-       bumped by them on every sweep before the grasp centre comes near it (measured: such
-       objects ran the search into the cycle limit).
-
-    Condition 1 holds at once when the object's centre lies in the grasp-centre box
-    (:func:`centre_in_grasp_box`); ``exhaustive=True`` samples every sweep line regardless
-    (the plain test the shortcut is checked against).
-    """
+    """Whether the search is guaranteed to locate ``obj``: (1) some sweep line passes within
+    ``envelope_radius`` of it (sampled every ``1/samples_per_metre`` m), (2) it lies wholly
+    ahead of the fingers' reach from the rear of the box (x > ``search_box_lo[0] +
+    forward_reach + clearance``) and (3) its centre lies within the grasp-centre box's height
+    range (else the fingers bump it on every sweep). (1) holds at once when the centre lies in
+    the grasp-centre box (:func:`centre_in_grasp_box`) unless ``exhaustive``."""
     gc = np.asarray(params.grasp_centre, dtype=float)
     lo, hi = params.search_box_lo[0], params.search_box_hi[0]
     c = np.asarray(obj.placement.translation, dtype=float)
@@ -138,10 +128,8 @@ def findable(
 
 
 def centre_in_grasp_box(centre: np.ndarray, params: WorldParameters) -> bool:
-    """Whether ``centre`` lies in the grasp-centre box ``B`` (m). Then some sweep line passes
-    within half a lattice cell's diagonal (≤ ``envelope_radius``) of it, and the object's
-    signed distance from that point is at most the distance to its centre: condition 1 of
-    :func:`findable` holds without sampling."""
+    """Whether ``centre`` lies in the grasp-centre box (m): then some sweep line passes within
+    ``envelope_radius`` of it (condition 1 of :func:`findable`)."""
     gc = params.grasp_centre
     lo, hi = params.search_box_lo, params.search_box_hi
     return all(lo[i] + gc[i] <= float(centre[i]) <= hi[i] + gc[i] for i in range(3))
