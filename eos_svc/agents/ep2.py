@@ -57,10 +57,8 @@ SCAN_ROWS = 7
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
-    """(centre, half extents along x, y, z) of the object as known now (world, m): the
-    postulated object's axis-aligned bounds when post_shape has fitted one, else EP1's top and
-    bottom contacts (height) and the approach point (front), the object taken as deep and as
-    wide as it is high."""
+    """(centre, half extents along x, y, z) of the object as known now (world, m): the postulate's
+    bounds, else from EP1's top and bottom and the approach point, as deep and wide as high."""
     shape = board.get(keys.SHAPE) or {}
     bounds = shape.get("bounds")
     if bounds is not None:
@@ -136,10 +134,9 @@ class EP2Agent(GraspAgent):
         return probes
 
     def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
-        """On a table, probes straight down from above on a grid from the front face back
-        :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
-        is (a height map), and where nothing stands down to the table — the back the front,
-        side and top probes cannot reach. The finger is opened to its limit, its tip lowest."""
+        """On a table, probes straight down on a grid from the front face back :data:`SCAN_DEPTH` m
+        (or four half extents) and across the width, the finger opened to its limit: a height map
+        reaching the back the other probes cannot."""
         world = self.world
         finger = world.probe_finger("top")
         cx, cy, cz = centre.tolist()
@@ -167,9 +164,8 @@ class EP2Agent(GraspAgent):
         }
 
     def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
-        """(horizontal axis, most steps) of each slide of this round: :meth:`slide_axes` with
-        SLIDE_STEPS each; once a fit leaves faces open, toward each open face with a
-        horizontal normal only, far enough to pass it by its fitted size."""
+        """(horizontal axis, most steps) of each slide: :meth:`slide_axes`, or toward each open face
+        with a horizontal normal, far enough to pass it."""
         if not faces:
             return [(axis, SLIDE_STEPS) for axis in self.slide_axes(board)]
         out = []
@@ -185,12 +181,10 @@ class EP2Agent(GraspAgent):
     def slide(
         self, start: np.ndarray, axis: np.ndarray, steps: int = SLIDE_STEPS
     ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
-        """Drag the top finger over the top from the tip centre ``start`` along the horizontal
-        ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
-        height. Returns the contacts (tip centre, sensed normal) up to and including the one
-        where the tip dropped by more than a step (an edge, or the surface curving away), and
-        the free tip path of the probe that ended the slide (nothing felt, or a link would
-        have touched first: the surface does not go on at that height)."""
+        """Drag the top finger from the tip centre ``start`` along the horizontal ``axis``: every
+        SLIDE_STEP a guarded probe down from 2 mm above the last contact. Returns the contacts
+        (tip centre, sensed normal) up to where the tip dropped by more than a step (an edge),
+        and the free tip path of the probe that ended the slide."""
         world = self.world
         finger = world.probe_finger("top")
         angle = world.probe.angles[finger]
@@ -221,9 +215,8 @@ class EP2Agent(GraspAgent):
 
     @staticmethod
     def slide_axes(board: Board) -> list[np.ndarray]:
-        """Horizontal directions to slide along: toward the back (+x) and to both sides (±y)
-        at first; along the postulated object's own horizontal axes (both ways) once post_shape
-        has fitted an oriented one, so that a slide crosses the edge it runs toward."""
+        """Horizontal directions to slide along: +x and ±y, or the oriented postulate's own
+        horizontal axes both ways (a slide then crosses the edge it runs toward)."""
         shape = board.get(keys.SHAPE) or {}
         axes = []
         if shape.get("object") is not None and shape.get("pose_known"):
@@ -237,9 +230,8 @@ class EP2Agent(GraspAgent):
 
     def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> list[list[Probe]]:
         """This round's active-touch lines, each its alternative probes
-        (:mod:`eos_svc.agents.probe_choice`): the seed probes before anything is felt (off a
-        table), the most informative lines while post_shape leaves candidates and active rounds
-        remain; none otherwise (a round of the whole surface)."""
+        (:mod:`eos_svc.agents.probe_choice`): the seed probes first (off a table), then the most
+        informative lines while candidates and active rounds remain; none otherwise."""
         world = self.world
         if self.active_rounds == 0 and keys.EP2_TOUCHES not in board and world.table_height is None:
             return [seed_probes(world, *estimate, STANDOFF)]
@@ -272,9 +264,8 @@ class EP2Agent(GraspAgent):
         counts: dict[str, int],
         miss_answers: bool = False,
     ) -> tuple[int, int]:
-        """Run ``probes`` (a group's alternatives after one of them touched — or, with
-        ``miss_answers``, ran its whole travel — are skipped), adding to ``touches``, ``free``
-        and the touches per face ``counts``; (missed, blocked)."""
+        """Run ``probes`` (skipping a group's alternatives once one touched, or with
+        ``miss_answers`` missed), adding to ``touches``, ``free`` and ``counts``; (missed, blocked)."""
         world = self.world
         missed = blocked = 0
         answered: set[int] = set()  # groups of alternatives already answered by a touch
