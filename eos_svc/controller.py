@@ -74,14 +74,11 @@ class Controller:
         repeat_policy: see :class:`RepeatPolicy`.
         keep_trace: keep every cycle record in :attr:`RunResult.trace`.
         callbacks: called with every :class:`CycleRecord` as it is made.
-        check_access: debug mode: hand each agent a board client limited to its declared
-            ``reads`` and ``writes`` (module docstring, rule 4).
-        entry_check: with ``check_access``, validates every value an agent writes:
-            ``entry_check(key, value)`` raises a :class:`~eos_svc.errors.ContractError`.
+        check_access: debug mode: each agent sees only its declared entries (rule 4).
+        entry_check: with ``check_access``, ``entry_check(key, value)`` validates every write.
 
     Raises:
-        ValidationError: on duplicate agent names, an agent allowed in an
-            unknown stage, no stages, a bad limit, or ``entry_check`` without ``check_access``.
+        ValidationError: naming the argument at fault (duplicate agents, unknown stages, …).
     """
 
     def __init__(

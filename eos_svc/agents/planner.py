@@ -132,10 +132,8 @@ def build_agents(
     memory: GraspMemory | None = None,
     oracle: ObjectSpec | None = None,
 ) -> list[Agent]:
-    """The paper's eight agents (one finger agent per finger of the hand) and ep2 in list order;
-    with a grasp memory, ``recall`` just before ``end`` (paper §7). ``oracle``: grasp_points
-    plans on this object instead of the postulate (measurement only). The agents get the hand
-    driver only (a :class:`GraspWorld` is wrapped in a KinematicDriver), never the object."""
+    """The paper's eight agents (a finger agent per finger) and ep2 in list order, ``recall`` before
+    ``end`` with a memory; they get the hand driver only (a :class:`GraspWorld` is wrapped)."""
     if isinstance(world, GraspWorld):
         world = KinematicDriver(world)
     fingers = world.hand.finger_names

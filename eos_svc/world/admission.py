@@ -61,20 +61,9 @@ def check_plannable(
     *,
     context: HandContext | None = None,
 ) -> None:
-    """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
-
-    Args:
-        request: a validated plan request.
-        hand: the hand (default: hand3x3); ignored when ``context`` is given.
-        params: world constants (default: the context's, ``WorldParameters.for_hand(hand)``).
-        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for` ``(hand)``:
-            give it when planning many requests with another hand).
-
-    Raises:
-        ValidationError: ``object.position`` when the object is out of reach or overlaps the
-            hand at its start configuration; the size field when it fits between the
-            fingertips along no axis.
-    """
+    """Raise :class:`ValidationError` (naming ``object.position``, the size field or the table's)
+    if the planner cannot plan ``request`` with ``context`` (default: ``context_for(hand)``; give
+    it when planning many requests with another hand), ``params`` overriding its own."""
     context = context_for(hand) if context is None else context
     verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
     if verdict:
@@ -89,9 +78,8 @@ TABLE_TOLERANCE = 1e-3
 
 
 def check_on_table(spec: ObjectSpec, height: float) -> None:
-    """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
-    :data:`TABLE_TOLERANCE` (its lowest point:
-    :meth:`~eos_svc.objects.base.SurfaceObject.depth_below_centre`)."""
+    """Refuse an object whose lowest point is below the table's top ``height`` (world z, m) by more
+    than :data:`TABLE_TOLERANCE`."""
     obj = make_object(spec)
     lowest = float(obj.centre[2] - obj.depth_below_centre())
     if lowest < height - TABLE_TOLERANCE:
@@ -114,8 +102,7 @@ def default_check() -> Callable[[PlanRequest], None]:
 
 
 def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]:
-    """The admission verdict on ``spec``: ``()`` when the planner can plan it, else the refusal's
-    ``(field, reason)`` (see :func:`check_plannable`)."""
+    """``()`` when the planner can plan ``spec``, else the refusal's ``(field, reason)``."""
     try:
         _check_object(spec, context)
     except ValidationError as exc:
