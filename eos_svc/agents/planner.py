@@ -133,7 +133,8 @@ def build_agents(
     oracle: ObjectSpec | None = None,
 ) -> list[Agent]:
     """The paper's eight agents (a finger agent per finger) and ep2 in list order, ``recall`` before
-    ``end`` with a memory; they get the hand driver only (a :class:`GraspWorld` is wrapped)."""
+    ``end`` with a memory; they get the hand driver only (a :class:`GraspWorld` is wrapped).
+    ``oracle``: the object grasp_points plans on instead of the postulate (measurement only)."""
     if isinstance(world, GraspWorld):
         world = KinematicDriver(world)
     fingers = world.hand.finger_names
