@@ -69,8 +69,7 @@ class CycleContext(NamedTuple):
         return any(change.key == key for change in self.events)
 
 
-# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
-# that documentation tools (pdoc) resolve its annotations here.
+# name the module of the named tuple's generated __new__, so that pdoc resolves its annotations
 CycleContext.__new__.__module__ = __name__
 
 

@@ -68,13 +68,7 @@ class Recording:
 
 
 def read_recording(path: str | Path) -> Recording:
-    """Parse a record file.
-
-    Raises:
-        RecordFileError: unreadable, not JSON lines, no header, unknown schema, cycles out
-            of order.
-        OSError: the file cannot be opened.
-    """
+    """Parse a record file (RecordFileError naming the line at fault; OSError)."""
     text = Path(path).read_text(encoding="utf-8")
     lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
     if not lines:

@@ -117,11 +117,8 @@ class LandingEntry(TypedDict):
 
 
 class TargetEntry(TypedDict):
-    """grasp_points' target (world, m and rad): the wrist's goal and angles, the pre-grasp, the
-    postulated centre, approach and closing directions, the grasp's label, its ε and angle
-    across the centre (deg), each finger's chosen contact, the postulated object (request
-    form), whether its pose was assumed upright, the postulate's source; ``repredicted`` once
-    the wrist re-predicted the contacts from where it had to stop."""
+    """grasp_points' target (world, m, rad; the angle across the centre in deg): the grasp, each
+    finger's chosen contact, the postulated object; ``repredicted`` once the wrist re-predicted."""
 
     wrist: Vector
     wrist_rpy: list[float]
@@ -150,10 +147,8 @@ class FingertipContact(TypedDict):
 
 
 class OutcomeEntry(TypedDict):
-    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`): contacts per finger,
-    whether all touch, the grip is good and about the diameter, the angle across the centre
-    (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
-    hand configuration judged."""
+    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`; the angle
+    across the centre in deg, ``None`` unless all touch)."""
 
     contacts: dict[str, FingertipContact]
     all_touching: bool
@@ -231,14 +226,8 @@ AFTER_RUN: frozenset[str] = frozenset(
 
 # --- the runtime check --------------------------------------------------------------------
 def check_entry(key: str, value: Any, extra: Mapping[str, Entry] | None = None) -> None:
-    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES`, or in
-    ``extra``: the entries plug-in agents declare for themselves).
-
-    Raises:
-        ContractError: ``field`` names the entry (``board.shape``) or the part at fault
-            (``board.shape.confidence``), ``reason`` says what is wrong; also for an entry
-            that neither declares.
-    """
+    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES` or ``extra``, the
+    plug-ins' own); a ContractError names the entry or the part at fault (``board.shape.confidence``)."""
     entry = ENTRIES.get(key)
     if entry is None and extra:
         entry = extra.get(key)

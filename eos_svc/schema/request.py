@@ -385,11 +385,8 @@ class PlanRequest:
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
-        """Validate and build from the JSON form; missing fields take their defaults.
-
-        Raises:
-            ValidationError: naming the first offending field.
-        """
+        """Validate and build from the JSON form (defaults for missing fields; a ValidationError
+        naming the first offending field)."""
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(
