@@ -43,15 +43,9 @@ def memory_key(shape: str, d_over_h: float) -> tuple[str, str, int]:
 
 @dataclass(frozen=True)
 class RememberedGrasp:
-    """A grasp that worked on objects of one key.
-
-    Attributes:
-        key: ``"<shape>/<band>"``.
-        tries: plans that reached grasping with this key; ``successes`` of them grasped.
-        offset: wrist position minus estimated object centre at the grasp (m, world).
-        angles: finger -> joint angle at contact (rad).
-        grasp_cycles: grasp-stage cycles of the last success.
-    """
+    """A grasp that worked on objects of one ``key`` (``"<shape>/<band>"``): the ``tries`` that
+    reached grasping and their ``successes``, the wrist's ``offset`` from the estimated centre (m,
+    world), the finger ``angles`` at contact (rad) and the last success's ``grasp_cycles``."""
 
     key: str
     tries: int
