@@ -29,15 +29,9 @@ class Outcome(str, Enum):
 
 @dataclass(frozen=True, slots=True)
 class ActionResult:
-    """The report of one action.
-
-    Attributes:
-        outcome: see :class:`Outcome`.
-        detail: what the agent did, in words (goes into the cycle record).
-        ratings: opportunistic sub-ratings this agent sets for other agents
-            (name -> value in [0, 1]); they apply in the next cycle of the same stage.
-        succeeded: with ``FINISHED``, whether the run's goal was met.
-    """
+    """The report of one action: its :class:`Outcome`, what it did in words (``detail``), the
+    opportunistic sub-ratings it sets for other agents in the stage's next cycle (``ratings``:
+    name -> [0, 1]) and, with ``FINISHED``, whether the run's goal was met (``succeeded``)."""
 
     outcome: Outcome
     detail: str = ""

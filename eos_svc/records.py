@@ -54,20 +54,10 @@ REPEAT_SKIP = "acted in this stage and not asked again (repeat rule)"
 
 
 class CycleRecord(NamedTuple):
-    """What happened in one cycle (an immutable named tuple).
-
-    Attributes:
-        seq: cycle number in the run, 1-based and contiguous.
-        stage: the stage the cycle ran in.
-        stage_cycle: 0-based cycle number within the stage.
-        ratings: every agent rated in this cycle, in list order.
-        weights: the weights used.
-        chosen: the agent whose action ran (``None`` when none was eligible).
-        outcome: what the action reported (``None`` when nothing ran).
-        detail: the action's own words, or why nothing ran.
-        changes: the board entries the action wrote.
-        elapsed_s: seconds since the run started, at the end of the cycle.
-    """
+    """What happened in one cycle: its ``seq`` (1-based) and ``stage_cycle`` (0-based), every
+    agent's ``ratings`` in list order, the ``chosen`` agent and its ``outcome`` (``None`` when
+    nothing ran), its words (``detail``), the board ``changes`` it made and ``elapsed_s``, the
+    seconds since the run started."""
 
     seq: int
     stage: str
@@ -112,18 +102,9 @@ CycleRecord.__new__.__module__ = __name__
 
 @dataclass(frozen=True)
 class RunResult:
-    """How a controller run ended.
-
-    Attributes:
-        status: see :class:`RunStatus`.
-        reason: why, in words.
-        cycles: number of cycles run.
-        cycles_per_stage: cycles run in each stage entered.
-        stages_completed: stages whose goal was reached, in order.
-        final_stage: the stage the run ended in.
-        trace: every cycle record (empty when ``keep_trace`` was off).
-        wall_time_s: seconds from start to end.
-    """
+    """How a controller run ended: its :class:`RunStatus` and ``reason``, the cycles run (in all
+    and per stage entered), the stages completed in order, the final stage, every cycle record
+    (``trace``, empty without ``keep_trace``) and the seconds it took."""
 
     status: RunStatus
     reason: str
