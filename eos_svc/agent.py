@@ -72,15 +72,8 @@ class Agent(ABC):
 
     A subclass declares the board entries it reads (:attr:`reads`) and writes (:attr:`writes`),
     as py_trees' blackboard clients do; ``Controller(check_access=True)`` holds it to them.
-
-    Args:
-        name: unique name of the agent in a controller.
-        stages: stages in which the agent may be rated and chosen.
-        default: default sub-rating P(A|B_d) in [0, 1], fixed for the agent's life.
-        learned: initial learned sub-rating P(A|B_l) in [0, 1].
-
-    Raises:
-        ValidationError: on a rating outside [0, 1] or NaN, an empty name or no stages.
+    ``name`` is unique in a controller; ``default`` P(A|B_d) and ``learned`` P(A|B_l) are in
+    [0, 1] (a ValidationError otherwise, or for an empty name or no stages).
     """
 
     __slots__ = ("_default", "_learned", "name", "stages")

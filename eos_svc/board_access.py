@@ -20,12 +20,8 @@ EntryCheck = Callable[[str, Any], None]
 class BoardClient(Board):
     """One agent's view of a :class:`~eos_svc.board.Board`, limited to its declared entries: a
     read outside ``reads`` or a write outside ``writes`` raises
-    :class:`~eos_svc.errors.BoardAccessError`; writes go to the board (recorded as its changes).
-
-    Args:
-        board: the board it views.
-        agent: the agent (its name, ``reads`` and ``writes``).
-        entry_check: called with every value written, before it is written.
+    :class:`~eos_svc.errors.BoardAccessError`; writes go to the board (recorded as its changes),
+    each value first passed to ``entry_check`` when given.
     """
 
     __slots__ = ("_board", "_check", "_name", "_reads", "_writes")

@@ -135,12 +135,8 @@ class Controller:
         self.callbacks.append(callback)
 
     def run(self, board: Board | None = None, *, cancel: CancelToken | None = None) -> RunResult:
-        """Run cycles until the run ends; never raises for a planning outcome.
-
-        Args:
-            board: the information board (a new empty one when omitted).
-            cancel: a token another thread may set to stop the run.
-        """
+        """Run cycles on ``board`` (default: a new one) until the run ends, or ``cancel`` stops it;
+        never raises for a planning outcome."""
         board = board if board is not None else Board()
         weights = self.weights
         wo, wl = weights.opportunistic, weights.learned

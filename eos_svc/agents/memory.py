@@ -61,11 +61,8 @@ class RememberedGrasp:
 
 
 class GraspMemory:
-    """The SQLite-backed memory. Thread-safe (one connection per thread); process-safe.
-
-    Args:
-        path: database file (created if missing), or ``":memory:"`` for a private one.
-    """
+    """The SQLite-backed memory at ``path`` (created if missing; ``":memory:"``: a private one).
+    Thread-safe (one connection per thread) and process-safe."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = str(path)

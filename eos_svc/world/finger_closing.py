@@ -10,14 +10,9 @@ if TYPE_CHECKING:
 
 
 def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[str, float]:
-    """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
-
-    Returns:
-        (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
-        object; the step was cut at the contact by regula falsi), ``"link"`` (another part
-        of the finger, or the table, touched first: not a precision grip) or ``"limit"`` (the joint
-        limit was reached without touching).
-    """
+    """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch; (event, new angle):
+    ``"moved"``, ``"touched"`` (the step cut at the contact by regula falsi), ``"link"`` (another
+    part of the finger, or the table, touched first) or ``"limit"`` (no touch to the limit)."""
     tol = world.params.contact_tolerance
     idx = world.context.finger_q[finger]
     q0 = world.state.q

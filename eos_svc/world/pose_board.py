@@ -23,12 +23,8 @@ def hand_q(world: HandDriver) -> tuple[float, ...]:
 
 class PoseBoard(Board):
     """A board that records the hand's configuration after every cycle that moved it, and the
-    object's pose (``keys.OBJECT_POSE``) in a world whose object moves (the Drake world's).
-
-    Args:
-        world: the driver of the hand recorded.
-        entries: initial entries (set up by the caller, not recorded as changes).
-        object_pose: the world's object pose now (x, y, z, qw, qx, qy, qz), or None.
+    object's pose (``keys.OBJECT_POSE``, read by ``object_pose()``: x, y, z, qw, qx, qy, qz) in a
+    world whose object moves (the Drake world's); ``entries``: set up, not recorded as changes.
     """
 
     __slots__ = ("_object_pose", "_world")
