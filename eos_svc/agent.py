@@ -40,16 +40,9 @@ class ActionResult:
 
 
 class CycleContext(NamedTuple):
-    """What an agent may know about the controller's state in this cycle (a named tuple).
-
-    Attributes:
-        seq: cycle number in the run (1-based).
-        stage: current stage name.
-        stage_cycle: cycles already run in this stage (0 at the stage's start).
-        events: board changes made by the previous cycle of this stage (empty at its start).
-        last_agent: the agent that acted in the previous cycle of this stage, or ``None``.
-        acted: how many times each agent has acted in this stage.
-    """
+    """What an agent may know of the controller's state in this cycle: ``seq`` (1-based), the
+    ``stage`` and ``stage_cycle`` (0 at its start), the board changes (``events``) and the agent
+    (``last_agent``) of the stage's previous cycle, and how often each agent ``acted`` in it."""
 
     seq: int
     stage: str

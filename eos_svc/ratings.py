@@ -28,13 +28,8 @@ def check_probability(value: float, field: str) -> float:
 
 @dataclass(frozen=True, slots=True)
 class Weights:
-    """Weights P(B_i) of the sub-ratings; each in [0, 1], summing to 1.
-
-    Args:
-        default: P(B_d), weight of the fixed default sub-rating.
-        opportunistic: P(B_o), weight of the state-driven sub-rating.
-        learned: P(B_l), weight of the learned sub-rating (0 in the paper).
-    """
+    """Weights P(B_i) of the ``default``, ``opportunistic`` and ``learned`` (0 in the paper)
+    sub-ratings; each in [0, 1], summing to 1."""
 
     default: float = 0.5
     opportunistic: float = 0.5

@@ -160,14 +160,9 @@ def mesh_size(size: Mapping[str, Any]) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class ObjectSpec:
-    """The object to grasp: a primitive shape at a pose (metres, radians).
-
-    Attributes:
-        shape: one of :data:`SHAPE_SIZE_FIELDS`, or :data:`MESH` (its fields: :func:`mesh_size`).
-        size: the shape's size fields, e.g. ``{"radius": 0.03}`` or
-            ``{"size": (0.05, 0.05, 0.05)}`` (box: full edge lengths).
-        position: centre in the world frame (m).
-        rpy: orientation as roll, pitch, yaw (rad).
+    """The object to grasp: a ``shape`` of :data:`SHAPE_SIZE_FIELDS` or :data:`MESH`
+    (:func:`mesh_size`), its ``size`` fields (m; e.g. ``{"radius": 0.03}``, a box's full edge
+    lengths ``{"size": (0.05, 0.05, 0.05)}``), its centre's world ``position`` (m) and ``rpy`` (rad).
     """
 
     shape: str = "sphere"

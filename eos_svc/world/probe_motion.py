@@ -32,10 +32,7 @@ def guarded_probe(
     each sub-step is at most the tip's and the other geometries' gaps beyond half the contact
     tolerance, so only the tip can touch and it never pushes the object; the others' exact gaps
     are queried only when their lower bound (:func:`_probe_floor_after`) does not fix the step.
-
-    Returns:
-        touched (tip centre, sensed normal), missed or blocked (another part of the hand would
-        touch first, or the wrist's limits), the last two with the free tip-centre path.
+    The outcome: touched, missed, or blocked (another part of the hand first, the wrist's limits).
     """
     p = world.params
     hand = world.hand
@@ -148,10 +145,8 @@ _PROBE_FLOOR_SLACK = (1e-6, 1e-7)
 
 
 def _probe_floor_after(floor: float, step: float) -> float:
-    """A lower bound of every hand geometry's gap to the object (m, less a constant) after a
-    pure wrist translation by ``step`` m from a pose where it was ``floor``: a translation
-    changes each distance by at most its length (less the slack of the distance queries'
-    accuracy, :data:`_PROBE_FLOOR_SLACK`). :meth:`GraspWorld.guarded_probe` skips the exact
-    queries of the other geometries while this bound alone fixes its step."""
+    """A lower bound of every hand geometry's gap to the object (m) after a wrist translation by
+    ``step`` m from a pose where it was ``floor``: a translation changes each distance by at most
+    its length (plus the queries' slack, :data:`_PROBE_FLOOR_SLACK`)."""
     per_metre, constant = _PROBE_FLOOR_SLACK
     return floor - step * (1.0 + per_metre) - constant
