@@ -66,14 +66,11 @@ class Controller:
     """Runs agents over stages until the run ends.
 
     Args:
-        agents: the agent list; its order breaks ties.
-        stages: stage names, in the order they are run.
+        agents, stages: the agents (their order breaks ties) and the stages, in order.
         weights: weights of the sub-ratings.
-        max_cycles: cycle limit (≥ 1).
-        deadline_s: wall-clock budget of a run in seconds, or ``None``.
+        max_cycles, deadline_s: the cycle limit (≥ 1) and a run's wall-clock budget (s) or ``None``.
         repeat_policy: see :class:`RepeatPolicy`.
-        keep_trace: keep every cycle record in :attr:`RunResult.trace`.
-        callbacks: called with every :class:`CycleRecord` as it is made.
+        keep_trace, callbacks: keep every cycle record in :attr:`RunResult.trace`; call these with each.
         check_access: debug mode: each agent sees only its declared entries (rule 4).
         entry_check: with ``check_access``, ``entry_check(key, value)`` validates every write.
 

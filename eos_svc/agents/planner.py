@@ -174,13 +174,12 @@ def plan(
 
     Args:
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
-        on_cycle: called with every cycle record as it happens.
-        cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: the hand ``request.hand`` names, else hand3x3).
-        params: world constants (default: ``WorldParameters.for_hand(hand)``).
+        on_cycle, cancel, keep_trace: a callback of every cycle record, a token another thread
+            may set to stop the plan, keep every cycle record in the result.
+        hand, params: the hand model (default: the one ``request.hand`` names, else hand3x3) and
+            the world's constants (default: the hand's own).
         context: the hand's :class:`~eos_svc.world.hand_context.HandContext`, built once by a
             caller planning many times with its own hand (``hand`` is then ignored).
-        keep_trace: keep every cycle record in the result.
         memory: a grasp memory: adds the ``recall`` agent and records how the grasp went.
         oracle_postulate: grasp_points plans on the true object (measurement only).
         check: run :func:`~eos_svc.world.admission.check_plannable` first.

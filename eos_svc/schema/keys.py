@@ -1,18 +1,12 @@
-"""Names of the information-board entries the grasp agents share.
-
-Keeping them in one place documents what the agents know and lets tests and
-clients read the board without guessing strings. Each entry's type, and which agent
-reads and writes it: :mod:`eos_svc.schema.board_entries`.
-"""
+"""Names of the information-board entries the grasp agents share (their types:
+:mod:`eos_svc.schema.board_entries`)."""
 
 from __future__ import annotations
 
 LOCATED = "located"  #: bool: the object is within the hand's envelope
 GAP = "gap_to_object"  #: float m: object surface to the grasp centre
 SEARCH_MOVES = "search_moves"  #: int: search moves (sweeps) made
-CURVATURE = (
-    "curvature"  #: dict: EP1's curvature estimate on the object's top (principal curvatures, σ, rating)
-)
+CURVATURE = "curvature"  #: dict: EP1's curvature estimate on the object's top (curvatures, σ, rating)
 CURVATURE_BOTTOM = "curvature_bottom"  #: dict: the same on the object's bottom, when explored
 EP1_RUNS = "ep1_runs"  #: int: EP1 runs so far
 EP1_CONTACT = "ep1_contact"  #: dict side -> {finger, point, normal}: sensed EP1 contact (world)
