@@ -67,11 +67,8 @@ class EP1Agent(GraspAgent):
         return max(RATING_FLOOR, min(1.0, rating))
 
     def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
-        """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
-
-        Returns the proximity point (the object's surface point nearest the hand) and the
-        unit direction from the hand toward it, both world.
-        """
+        """Bring ``finger`` onto the object's top (bottom), the other fingers opened; the object's
+        surface point nearest the hand and the unit direction toward it (world)."""
         world = self.world
         hand = world.hand
         q = world.joint_positions()
@@ -106,9 +103,8 @@ class EP1Agent(GraspAgent):
         )
 
     def _table_bottom(self, board: Board, finger: str) -> ActionResult:
-        """On a table the bottom cannot be felt (no probe from under it) and need not be: the
-        object rests on the table, so its bottom is the table's plane under the top contact
-        (normal −z), recorded as the bottom contact."""
+        """On a table the object's bottom is the table's plane under the top contact (normal −z),
+        recorded as the bottom contact without a probe from under it."""
         contacts = dict(board.get(keys.EP1_CONTACT, {}))
         top = contacts.get("top")
         if top is None:

@@ -140,9 +140,8 @@ class GraspPointsAgent(GraspAgent):
         )
 
     def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:
-        """The candidate grasps on the postulated object ``spec``, best first: the stock
-        synthesis's (:meth:`GraspSynthesis.candidates`). A grasp agent with another sampler
-        overrides this (``eos_svc.agents.plugins.sampled_grasp_points``)."""
+        """The candidate grasps on ``spec``, best first (a grasp agent with another sampler overrides
+        this: ``eos_svc.agents.plugins.sampled_grasp_points``)."""
         return synthesis.candidates()
 
     def _no_grasp(self, spec: ObjectSpec, synthesis: GraspSynthesis, note: str) -> ActionResult:

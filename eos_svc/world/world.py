@@ -33,10 +33,8 @@ from eos_svc.world.table import hand_table_gap, table_shape
 
 @dataclass
 class GraspWorld:
-    """The hand, the object and the run's randomness; guarded motions for the agents.
-
-    ``memo`` keeps values derived from the current hand pose (gaps, clearances); every move
-    clears it (:meth:`set_q`, :meth:`direct_motion`)."""
+    """The hand, the object and the run's randomness; guarded motions for the agents. ``memo``
+    keeps what is derived from the current hand pose until the next move."""
 
     context: HandContext
     scene: Scene
