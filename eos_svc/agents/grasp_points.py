@@ -58,8 +58,7 @@ class GraspPointsAgent(GraspAgent):
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it is confident enough and post_shape asks for nothing more
-        (or approximate, with nothing more to ask EP2 for), else None."""
+        """post_shape's postulate if it asks for nothing more and is confident (or approximate)."""
         shape = board.get(keys.SHAPE)
         if shape is None or shape.get("needs") is not None:
             return None
@@ -164,8 +163,8 @@ class GraspPointsAgent(GraspAgent):
         )
 
     def _place(self, cand: GraspCandidate, synthesis: GraspSynthesis) -> tuple[np.ndarray, float] | None:
-        """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object
-        there (the hand senses it); returns (pre-grasp wrist position, stand-off)."""
+        """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object there;
+        (pre-grasp wrist position, stand-off)."""
         world = self.world
         hand = world.hand
         pre = synthesis.pregrasp(cand)

@@ -24,8 +24,7 @@ def search_rating(board: Board) -> float:
 
 
 def roll_for_table(world: HandDriver) -> bool:
-    """Roll the hand a quarter turn about its approach axis (the wrist's roll joint to π/2),
-    where it stands, when it is then clear of the object; whether it rolled."""
+    """Roll the hand a quarter turn about its approach (wrist roll π/2) if it stays clear; whether it did."""
     hand = world.hand
     q = world.joint_positions()
     roll = hand.wrist_q_index[3]
@@ -40,8 +39,7 @@ def roll_for_table(world: HandDriver) -> bool:
 
 
 def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
-    """Make one search move and report whether the object is now located (on a table, the
-    hand rolled first: :func:`roll_for_table`)."""
+    """Make one search move (on a table, :func:`roll_for_table` first); is the object located now?"""
     if world.located():
         board.set(keys.LOCATED, True)
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))

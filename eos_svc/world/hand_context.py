@@ -59,8 +59,7 @@ class HandContext:
         neutral_geometries: the collision geometries at the start configuration.
         forward_reach: how far ahead of the wrist the fingers reach (m).
         lattice: the search's column lattice and its distances (from ``params``).
-        opening: the fingertips' widest openings that still reach a contact (admission's size
-            rule, :func:`~eos_svc.world.fingertip_fit.fit_refusal`).
+        opening: the fingertips' widest openings that still reach a contact (admission's size rule).
     """
 
     hand: HandModel
