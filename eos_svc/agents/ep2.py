@@ -157,7 +157,6 @@ class EP2Agent(GraspAgent):
         return {
             "face": face,
             "finger": finger,
-            # ndarray.round: np.round's operation without its dispatch wrapper
             "centre": np.asarray(centre).round(7).tolist(),
             "normal": np.asarray(normal).round(6).tolist(),
             "radius": self.world.hand.tip_radius(finger),
@@ -321,8 +320,7 @@ class EP2Agent(GraspAgent):
         touches = list(board.get(keys.EP2_TOUCHES, []))
         free = list(board.get(keys.EP2_FREE, []))
         counts: dict[str, int] = {}
-        # active touch: a few probes where the candidates disagree most; a round of the whole
-        # surface (below) when there is none to make, or none of them met or missed the object
+        # active touch where the candidates disagree most; else (or if nothing answered) a whole round
         active = self.active_plan(board, estimate)
         if active:
             missed, blocked = self.run_lines(active, touches, free, counts)
@@ -332,16 +330,13 @@ class EP2Agent(GraspAgent):
                     board, touches, free, counts, missed, blocked, f"active round {self.active_rounds}"
                 )
         faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
-        # once a fit leaves faces open, the round probes those faces first, and the whole
-        # surface only when none of them is felt
+        # the faces a fit leaves open first, the whole surface only when none of them is felt
         planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
         missed, blocked = self.run_probes(planned, touches, free, counts)
         if faces and not counts:
             more_missed, more_blocked = self.run_probes(self.plan_round(*estimate), touches, free, counts)
             missed, blocked = missed + more_missed, blocked + more_blocked
-        # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
-        # +x (toward the back), +y and −y until the tip drops over an edge, a link would
-        # touch first, or nothing is felt
+        # slides over the top from its highest touch, until the tip drops over an edge
         tops = [np.asarray(t["centre"], dtype=float) for t in touches if t["face"] in ("top", "slide")]
         top = board.get(keys.EP1_CONTACT, {}).get("top")
         if top is not None:  # EP1's top contact, as its tip's centre

@@ -45,9 +45,8 @@ MAX_FREE_SAMPLES = 60
 OUT_OF_CLASS = 1e-3
 #: the approximate postulate's class name
 HULL = "hull"
-#: the precision rule: while fewer contacts than this, a confident postulate is asked to be
-#: precise too — P(sizes and centre within ±PRECISION) at least the confidence threshold —
-#: before the grasp (EP2's active touch is cheap; a few contacts fit five classes loosely)
+#: the precision rule: on fewer contacts than this, a confident postulate must also have its sizes
+#: and centre within ±PRECISION with the confidence threshold's probability (a few contacts fit loosely)
 PRECISION_CONTACTS = 12
 PRECISION = 0.03
 #: probability that EP1's curvature class is right: two readings cannot tell a sphere from an
