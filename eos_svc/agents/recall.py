@@ -17,14 +17,12 @@ from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 
-RECALLED = keys.RECALLED  #: board entry: the memory key recall applied
-
 
 class RecallAgent(GraspAgent):
     """Pre-shapes the hand to a remembered grasp."""
 
-    reads = frozenset({keys.SHAPE, keys.D_OVER_H, RECALLED})
-    writes = frozenset({RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
+    reads = frozenset({keys.SHAPE, keys.D_OVER_H, keys.RECALLED})
+    writes = frozenset({keys.RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
 
     def __init__(self, world: HandDriver, memory: GraspMemory) -> None:
         super().__init__("recall", (GRASP,), 0.0, world)
@@ -43,7 +41,7 @@ class RecallAgent(GraspAgent):
         return self._cache[1]
 
     def learned_rating(self, board: Board, ctx: CycleContext) -> float:
-        if RECALLED in board:
+        if keys.RECALLED in board:
             return 0.0
         entry = self.remembered(board)
         return 0.0 if entry is None else entry.reliability
@@ -70,7 +68,7 @@ class RecallAgent(GraspAgent):
                 break
         else:
             return ActionResult(Outcome.CANNOT_ACT, f"the grasp remembered for {entry.key} collides here")
-        board.set(RECALLED, entry.key)
+        board.set(keys.RECALLED, entry.key)
         board.set(keys.AT_TARGET, True)
         board.set(keys.FINGER_STATE, dict.fromkeys(hand.finger_names, "closing"))
         return ActionResult(
