@@ -9,7 +9,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import check_probability
@@ -117,10 +117,6 @@ class Agent(ABC):
     @abstractmethod
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         """Run the agent's action against the board and report the outcome."""
-
-    def describe(self) -> dict[str, Any]:
-        """JSON-friendly description of the agent."""
-        return {"name": self.name, "stages": sorted(self.stages), "default": self._default}
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, default={self._default})"

@@ -126,15 +126,10 @@ class RunResult:
 
     def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
         """JSON-friendly form (the trace only when asked)."""
-        out: dict[str, Any] = {
-            "status": self.status.value,
-            "reason": self.reason,
-            "cycles": self.cycles,
-            "cycles_per_stage": dict(self.cycles_per_stage),
-            "stages_completed": list(self.stages_completed),
-            "final_stage": self.final_stage,
-            "wall_time_s": self.wall_time_s,
-        }
+        out: dict[str, Any] = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "trace"}
+        out["status"] = self.status.value
+        out["cycles_per_stage"] = dict(self.cycles_per_stage)
+        out["stages_completed"] = list(self.stages_completed)
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]
         return out
