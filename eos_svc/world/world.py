@@ -33,7 +33,8 @@ from eos_svc.world.table import hand_table_gap, table_shape
 
 @dataclass
 class GraspWorld:
-    """The hand, the object and the run's randomness; guarded motions for the agents. ``memo``
+    """The hand, the object and the run's randomness; guarded motions for the agents. ``hand``,
+    ``params``, ``sweeps`` and ``probe`` are the context's, ``obj`` the scene's object; ``memo``
     keeps what is derived from the current hand pose until the next move."""
 
     context: HandContext
@@ -47,6 +48,11 @@ class GraspWorld:
     table_height: float | None = None
 
     def __post_init__(self) -> None:
+        self.hand: HandModel = self.context.hand
+        self.params: WorldParameters = self.context.params
+        self.sweeps: dict[str, FingerSweep] = self.context.sweeps
+        self.probe: ProbeChoice = self.context.probe
+        self.obj: SurfaceObject = self.scene.object
         # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
         self.encoders: JointSensing = self.sensing if self.sensing is not None else JointSensing(self.hand)
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
@@ -62,32 +68,6 @@ class GraspWorld:
         self.search_order: list[tuple[int, int]] = []
         self.search_columns = np.empty((0, 0, 2))
         self.table = None if self.table_height is None else table_shape(self.table_height)
-
-    # --- what the world is made of ---------------------------------------------------
-    @property
-    def hand(self) -> HandModel:
-        """The hand model."""
-        return self.context.hand
-
-    @property
-    def params(self) -> WorldParameters:
-        """The world's constants."""
-        return self.context.params
-
-    @property
-    def sweeps(self) -> dict[str, FingerSweep]:
-        """Each finger's closing sweep (palm frame)."""
-        return self.context.sweeps
-
-    @property
-    def probe(self) -> ProbeChoice:
-        """Which finger explores the object's top and bottom, and at which angle."""
-        return self.context.probe
-
-    @property
-    def obj(self) -> SurfaceObject:
-        """The object."""
-        return self.scene.object
 
     # --- reading the world -------------------------------------------------------------
     def wrist_position(self) -> np.ndarray:
