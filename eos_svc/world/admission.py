@@ -32,15 +32,7 @@ __all__ = [
     "default_check",
     "hand_span",
     "plannable_verdict",
-    "smallest_width",
 ]
-
-
-def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
-    """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
-    kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
-    width, size_field = make_object(spec).smallest_width()
-    return width, f"object.{size_field}"
 
 
 def _distance(

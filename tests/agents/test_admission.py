@@ -11,8 +11,9 @@ import pytest
 
 from eos_svc.agents.planner import default_hand, plan
 from eos_svc.errors import ValidationError
+from eos_svc.grasp.postulate import make_object
 from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.world.admission import check_plannable, hand_span, smallest_width
+from eos_svc.world.admission import check_plannable, hand_span
 from eos_svc.world.hand_context import context_for
 
 PARAMS = context_for().params
@@ -104,7 +105,8 @@ def test_span_covers_the_fingers_opening():
     ],
 )
 def test_too_large_in_every_direction_names_the_size_field(spec, width, field):
-    assert smallest_width(spec) == (pytest.approx(width), field)
+    smallest, size_field = make_object(spec).smallest_width()
+    assert (smallest, f"object.{size_field}") == (pytest.approx(width), field)
     err = refusal(spec)
     assert err is not None and err.field == field
 
