@@ -72,14 +72,19 @@ class GraspPointsAgent(GraspAgent):
             return 0.0
         return max(float(shape["confidence"]), self.world.params.confidence_threshold)
 
+    def postulate(self, shape: dict) -> Postulate | None:
+        """The object to plan on (the oracle's when given)."""
+        if self.oracle is not None:
+            return Postulate(self.oracle, True, False, source="oracle")
+        return read_postulate(shape)
+
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         shape = self.confident_shape(board)
         if shape is None:
             why = unsure(board.get(keys.SHAPE), self.world.params.confidence_threshold)
             return ActionResult(Outcome.CANNOT_ACT, f"no shape postulated with enough confidence yet{why}")
         try:
-            oracle = None if self.oracle is None else Postulate(self.oracle, True, False, source="oracle")
-            postulate = oracle or read_postulate(shape)
+            postulate = self.postulate(shape)
         except ValidationError as exc:
             why = f"the postulated object is not valid: {exc.field}: {exc.reason}"
             return ActionResult(Outcome.FINISHED, why, succeeded=False)
