@@ -1,7 +1,7 @@
 """Hostile traffic against a running service instance, with what each should get back.
 
 Each probe sends real queries on an open Zenoh session to one instance and counts what
-came back; :mod:`eos_svc.service.reliability` runs them against ``eos serve`` processes
+came back; ``benchmarks/reliability.py`` runs them against ``eos serve`` processes
 and prints one table. The probes:
 
 - :func:`big_payloads`: plan requests far over the size limit (``payload_too_large``, one

@@ -1,11 +1,11 @@
 """Reliability runs of the service on loopback, bounded in count and time.
 
-    python -m eos_svc.service.reliability load   [--instances 2 --clients 4 --plans 25]
-    python -m eos_svc.service.reliability fault  # two instances, one SIGKILLed mid-load
-    python -m eos_svc.service.reliability freeze # two instances, one SIGSTOPped mid-load
-    python -m eos_svc.service.reliability abuse  # big and mutated requests, wildcard, stranger, squatter
-    python -m eos_svc.service.reliability slow-watcher  # others' plan times with a watcher that never drains
-    python -m eos_svc.service.reliability all    # every run above, one table
+    python benchmarks/reliability.py load   [--instances 2 --clients 4 --plans 25]
+    python benchmarks/reliability.py fault  # two instances, one SIGKILLed mid-load
+    python benchmarks/reliability.py freeze # two instances, one SIGSTOPped mid-load
+    python benchmarks/reliability.py abuse  # big and mutated requests, wildcard, stranger, squatter
+    python benchmarks/reliability.py slow-watcher  # others' plan times with a watcher that never drains
+    python benchmarks/reliability.py all    # every run above, one table
 
 Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
 scouting off), N client threads (each its own Zenoh session) sending M plans
@@ -30,17 +30,17 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from typing import Any
 
+import abuse
 import zenoh
+from serve_processes import counters_consistent, start_servers, stop_servers
+from slow_watcher import run_slow_watcher
 
 from eos_svc.errors import ValidationError
 from eos_svc.schema.request import PlanRequest
-from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient
 from eos_svc.service.plan_attempt import PlanOutcome
-from eos_svc.service.serve_processes import counters_consistent, start_servers, stop_servers
 from eos_svc.service.session import direct_callback, loopback, make_config
-from eos_svc.service.slow_watcher import run_slow_watcher
 
 
 @dataclass
@@ -289,9 +289,7 @@ def print_table(rows: list[abuse.Probe]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: run one mode (or all) and print one table."""
-    parser = argparse.ArgumentParser(
-        prog="python -m eos_svc.service.reliability", description=__doc__.splitlines()[0]
-    )
+    parser = argparse.ArgumentParser(prog="benchmarks/reliability.py", description=__doc__.splitlines()[0])
     parser.add_argument("mode", choices=("load", "fault", "freeze", "abuse", "slow-watcher", "all"))
     parser.add_argument("--instances", type=int, default=2, help="service processes (fault/freeze: ≥ 2)")
     parser.add_argument("--clients", type=int, default=4, help="concurrent clients, each its own session")
