@@ -1,15 +1,5 @@
-"""``eos client`` — talk to running ``eos serve`` instances.
-
-eos client list                             # instances alive (liveliness tokens)
-eos client plan --seed 7                    # one plan, cycles printed live, then the result
-eos client plan --json --quiet              # the result only, as JSON
-eos client plan --goal-id g1 --cancel-token SECRET   # a goal another shell can cancel
-eos client cancel g1 --token SECRET         # cancel it (only with the goal's token)
-eos client watch                            # every cycle and status on the network
-eos client watch --view                     # and a live 3-D view of the plans (URL on stderr)
-
-By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
-"""
+"""``eos client list|plan|cancel|watch``: talk to running ``eos serve`` instances (a peer
+connecting to ``tcp/127.0.0.1:7447`` by default; examples: ``docs/service.md``)."""
 
 from __future__ import annotations
 
@@ -134,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
             fail(f"{'GOAL_ID' if args.action == 'cancel' else '--goal-id'}: {exc.reason}")
     request: Any = None
     if args.action == "plan":
-        from eos_svc.cli.plan import FIELD_OPTIONS
+        from eos_svc.cli.plan import fail_field
         from eos_svc.schema.request import PlanRequest
 
         if args.request is not None:
@@ -149,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
             try:
                 request = PlanRequest.from_dict(request_dict(args))
             except ValidationError as exc:
-                fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+                fail_field(exc)
     token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
     if token is not None and not proto.is_token(token):
         fail(

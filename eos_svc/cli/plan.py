@@ -1,24 +1,11 @@
-"""``eos plan``: one grasp plan on a scene, with a live trace of the cycles.
-
-eos plan                                  # default scene: a 3 cm sphere, seed 1
-eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
-eos plan --json                           # the result as JSON (no trace)
-eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
-eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
-eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
-eos plan --hand allegro                   # a registered hand (eos hands), or a description file
-eos plan --hand my_hand.toml
-eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
-eos plan --html plan.html                 # the plan animated in 3-D, one self-contained page
-eos plan --view                           # a live 3-D view on localhost (URL on stderr)
-"""
+"""``eos plan``: one grasp plan on a scene, with a live trace of the cycles (options: README,
+"Planning", and ``eos plan --help``)."""
 
 from __future__ import annotations
 
 import argparse
 import sqlite3
-import sys
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
@@ -144,12 +131,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
     view_options.add_html_argument(out)  # --html (3-D page of the plan)
     view_options.add_view_arguments(out)  # --view, --view-port, --view-wait, --view-hold
-    add_validate_argument(out)
-
-
-def add_validate_argument(group: argparse._ArgumentGroup) -> None:
-    """``--validate``: simulate the final grasp in Drake (see ``eos validate``)."""
-    group.add_argument(
+    out.add_argument(
         "--validate",
         action="store_true",
         help="simulate the final grasp in Drake (with the plan's hand) and add the verdict to the result; "
@@ -186,7 +168,8 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
-        "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
+        # 10 s; 600 s in the Drake world
+        "deadline_s": args.deadline or (600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0),
         "friction": args.friction,
         **({"world": args.world} if getattr(args, "world", "kinematic") != "kinematic" else {}),
         **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
@@ -194,11 +177,6 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         **({"link_error": args.link_error} if args.link_error else {}),
         **({} if args.table is None else {"table": {"height": args.table}}),
     }
-
-
-def default_deadline(args: argparse.Namespace) -> float:
-    """The wall-clock budget when ``--deadline`` is not given: 10 s, 600 s in the Drake world."""
-    return 600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0
 
 
 def format_world(world: dict) -> str:
@@ -295,34 +273,31 @@ def format_result(result: Any) -> str:
     return "\n".join(lines)
 
 
-def admit(request: Any, hand: Any) -> None:
-    """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
-    overlapping the hand, wider than its span (:func:`eos_svc.world.admission.check_plannable`)."""
-    from eos_svc.world.admission import check_plannable
-
-    try:
-        check_plannable(request, hand)
-    except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+def fail_field(exc: ValidationError) -> NoReturn:
+    """Exit 2 naming the command-line option of the request field ``exc`` names."""
+    fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
 
 
 def run(args: argparse.Namespace) -> int:
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
     from eos_svc.recording import cycle_line, header_line, result_line
+    from eos_svc.world.admission import check_plannable
 
     try:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
+        fail_field(exc)
     hand = chosen_hand(args)
-    admit(request, hand)
+    try:
+        check_plannable(request, hand)  # out of reach, overlapping the hand, wider than its span
+    except ValidationError as exc:
+        fail_field(exc)
     record_file: IO[str] | None = None
     if args.record:
         try:
             record_file = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed below
         except OSError as exc:
             fail(f"--record: cannot write {args.record!r}: {exc.strerror}")
-            raise  # unreachable: fail() exits
         record_file.write(header_line(request, getattr(args, "hand", "hand3x3")) + "\n")
 
     def on_cycle(record: CycleRecord) -> None:
@@ -350,12 +325,12 @@ def run(args: argparse.Namespace) -> int:
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
-            check=False,  # admit() has just run check_plannable on this request and hand
+            check=False,  # check_plannable has just run on this request and hand
         )
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+        fail_field(exc)
     finally:
         if record_file is not None:
             record_file.close()
@@ -383,11 +358,5 @@ def run(args: argparse.Namespace) -> int:
 
 
 def plan_exit_code(status: str) -> int:
-    """Exit code of a plan: 0 only for ``success`` (the end agent judged the grasp good); 1 for
-    every other status (completed with a grip that is not good, failed, stalled, …); bad
-    input exits 2 before planning."""
+    """0 for ``success`` (the end agent judged the grasp good), 1 for any other status."""
     return 0 if status == "success" else 1
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(run(argparse.Namespace()))

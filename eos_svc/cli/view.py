@@ -1,10 +1,4 @@
-"""The 3-D view options of ``eos plan``, ``eos replay`` and ``eos client watch`` (:mod:`eos_svc.view`).
-
-eos plan --html plan.html                 # the whole plan animated in one self-contained page
-eos replay run.jsonl --html plan.html     # the same from a recording
-eos plan --view                           # a live MeshCat page on localhost following the cycles
-eos client watch --view                   # the same for the plans of the service, over Zenoh
-"""
+"""The 3-D view options of ``eos plan``, ``eos replay`` and ``eos client watch`` (:mod:`eos_svc.view`)."""
 
 from __future__ import annotations
 
