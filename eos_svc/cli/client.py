@@ -53,54 +53,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser("plan", help="request one plan; print its cycles live, then the result")
     c = sub.add_parser("cancel", help="cancel a goal by id")
     c.add_argument("goal_id", metavar="GOAL_ID")
-    c.add_argument(
-        "--token",
-        required=True,
-        metavar="TOKEN",
-        help="the goal's cancel token (given to eos client plan --cancel-token, or printed by it)",
-    )
+    c.add_argument("--token", required=True, help="the goal's cancel token (eos client plan prints it)")
     w = sub.add_parser("watch", help="print every cycle and status message on the network (Ctrl-C to stop)")
     for sp in (lst, p, c, w):
         add_connection_arguments(sp, default_listen=False)
         sp.add_argument(
             "--timeout",
             type=positive_float,
-            default=None,
             metavar="S",
-            help="seconds to wait for an answer (plan: the request's deadline + 10, per instance asked: "
-            "one that does not answer in time is given up for another; watch: stop after S s)",
+            help="s to wait for an answer (plan: its deadline + 10, per instance asked; watch: stop after S)",
         )
     from eos_svc.cli.view import add_view_arguments
 
     add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
+    g.add_argument("--hand", metavar="NAME", help="a hand the service has (eos hands; eos serve --hand)")
+    g.add_argument("--goal-id", metavar="ID", help="goal id (default: random)")
+    g.add_argument("--instance", metavar="ID", help="ask this instance only")
     g.add_argument(
-        "--hand",
-        default=None,
-        metavar="NAME",
-        help="the hand to plan with: one the service has (eos hands; eos serve --hand FILE) (its default)",
+        "--cancel-token", metavar="TOKEN", help="the goal's secret (16-128 of A-Z a-z 0-9 _ -; random)"
     )
-    g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
-    g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
-    g.add_argument(
-        "--cancel-token",
-        default=None,
-        metavar="TOKEN",
-        help="the goal's secret for eos client cancel (16-128 of A-Z a-z 0-9 _ -; default: random, printed)",
-    )
-    g.add_argument(
-        "--request",
-        default=None,
-        metavar="FILE",
-        help="send this JSON request file (schema/goal_id added) instead of the options",
-    )
+    g.add_argument("--request", metavar="FILE", help="send this JSON request file instead of the options")
     g.add_argument(
         "--repeat",
         type=int_at_least(1),
         default=1,
         metavar="N",
-        help="send the request N times, one after the other (goal ids ID-1 .. ID-N; a load generator); "
-        "with --json one line per plan",
+        help="send the request N times in turn (goal ids ID-1 .. ID-N); with --json one line per plan",
     )
     g.add_argument("--json", action="store_true", help="print the result as JSON")
     g.add_argument("--quiet", action="store_true", help="do not print the cycles")

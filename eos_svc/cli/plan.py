@@ -66,19 +66,10 @@ def add_request_arguments(
     g = parser.add_argument_group("run")
     g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
-    g.add_argument(
-        "--encoder-noise",
-        type=finite_float,
-        default=0.0,
-        help="joint-encoder noise std of the simulated hand, rad (0)",
-    )
-    g.add_argument(
-        "--link-error", type=finite_float, default=0.0, help="link-length calibration error std, m (0)"
-    )
+    g.add_argument("--encoder-noise", type=finite_float, default=0.0, help="joint-encoder noise std, rad (0)")
+    g.add_argument("--link-error", type=finite_float, default=0.0, help="link-length error std, m (0)")
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
-    g.add_argument(
-        "--deadline", type=positive_float, help="wall-clock budget, s (10; 600 with --world drake)"
-    )
+    g.add_argument("--deadline", type=positive_float, help="wall-clock budget, s (10; --world drake 600)")
     g.add_argument(
         "--friction",
         type=finite_float,
@@ -93,7 +84,7 @@ def add_request_arguments(
         default=None,
         metavar="NAME",
         help="add a plug-in agent, repeatable: an eos_svc.agents entry point or module:attr "
-        "(a service takes only those its instance offers, see eos serve --agent)",
+        "(a service: one it offers)",
     )
     return g
 
@@ -105,27 +96,24 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--world",
         choices=WORLDS,
         default="kinematic",
-        help="where the hand acts: kinematic (exact, the object fixed) or drake (the object a free "
-        "body on a table under gravity; success needs the lift test) (kinematic)",
+        help="kinematic (the object fixed; default) or drake (a free body on a table; needs the lift test)",
     )
     g.add_argument(
         "--memory",
         metavar="DB",
-        help="grasp memory (SQLite file, created if missing): adds the recall agent and records this plan; "
-        "give a learned weight, e.g. --w-default 0.25 --w-opportunistic 0.25 --w-learned 0.5",
+        help="grasp memory (SQLite file): adds the recall agent (give it a --w-learned) and records the plan",
     )
     g.add_argument(
         "--check-board",
         action="store_true",
-        help="debug mode: every agent may touch only the board entries it declares, every value "
-        "written is checked against its type; a breach ends the plan with status error",
+        help="every agent held to the board entries it declares and their types (a breach: status error)",
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
     out.add_argument(
         "--record",
         metavar="FILE",
-        help="write the request, every cycle record and the result to FILE as JSON lines (see eos replay)",
+        help="write the request, every cycle record and the result as JSON lines (eos replay)",
     )
     out.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")

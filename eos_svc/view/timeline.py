@@ -54,16 +54,9 @@ class CycleSpan:
 
 @dataclass
 class Timeline:
-    """Keyframes of the hand, cycle spans, postulates and the grasp verdict.
-
-    Attributes:
-        keyframes: ``(frame, q)`` in increasing frame order; q holds every joint of the hand.
-        spans: one per cycle.
-        postulates: ``(frame, postulate dict)`` for every cycle that wrote ``keys.SHAPE``, at
-            the cycle's end.
-        verdict: ``(frame, verdict dict)`` of the end agent's ``keys.OUTCOME``, or None.
-        fps: frames per second.
-    """
+    """Keyframes ``(frame, q)`` of the hand in frame order, one span per cycle, ``(frame,
+    postulate)`` at the end of every cycle that wrote ``keys.SHAPE``, ``(frame, verdict)`` of the
+    end agent's ``keys.OUTCOME`` (or None), at ``fps`` frames per second."""
 
     keyframes: list[tuple[int, tuple[float, ...]]] = field(default_factory=list)
     spans: list[CycleSpan] = field(default_factory=list)
@@ -127,12 +120,7 @@ def changes_of(record: Mapping[str, Any]) -> dict[str, Any]:
 
 
 class TimelineBuilder:
-    """Builds a :class:`Timeline` cycle by cycle.
-
-    Args:
-        q0: the hand's configuration before the first cycle.
-        fps: frames per second.
-    """
+    """Builds a :class:`Timeline` cycle by cycle, the hand at ``q0`` before the first."""
 
     def __init__(self, q0: Sequence[float] | Any, fps: int = FPS) -> None:
         self.q = tuple(float(x) for x in q0)
