@@ -147,10 +147,14 @@ def run(args: argparse.Namespace) -> int:
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
-            from eos_svc.cli.view import open_stream_view, watch_until
+            from eos_svc.cli.view import open_view, watch_until
 
             stop = threading.Event()
-            stream = open_stream_view(args)  # --view: a live page of the plans watched
+            view, stream = open_view(args), None  # --view: a live page of the plans watched
+            if view is not None:
+                from eos_svc.view.live import StreamView
+
+                stream = StreamView(view)
 
             def on_message(kind: str, msg: dict[str, Any]) -> None:
                 print(format_cycle(msg) if kind == "cycle" else format_status(msg), flush=True)

@@ -293,6 +293,8 @@ def run(args: argparse.Namespace) -> int:
             record_file.write(cycle_line(record) + "\n")
         if not args.json and not args.quiet:
             print(format_cycle(record), flush=True)
+        if view is not None:
+            view.cycle(record)
 
     memory = None
     if getattr(args, "memory", None):
@@ -309,7 +311,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = plan(
             request,
-            on_cycle=view_options.with_view(on_cycle, view),
+            on_cycle=on_cycle,
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
