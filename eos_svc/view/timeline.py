@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from eos_svc.schema import keys
@@ -40,16 +40,9 @@ class CycleSpan:
     end: int
 
     def to_dict(self, fps: int) -> dict[str, Any]:
-        """JSON form for the page (times in s)."""
-        return {
-            "seq": self.seq,
-            "stage": self.stage,
-            "chosen": self.chosen,
-            "outcome": self.outcome,
-            "detail": self.detail,
-            "t0": self.start / fps,
-            "t1": self.end / fps,
-        }
+        """JSON form for the page (times ``t0``, ``t1`` in s)."""
+        what = {k: v for k, v in asdict(self).items() if k not in ("start", "end")}
+        return {**what, "t0": self.start / fps, "t1": self.end / fps}
 
 
 @dataclass
@@ -112,11 +105,11 @@ def as_q(value: Any, nq: int) -> tuple[float, ...] | None:
 
 def changes_of(record: Mapping[str, Any]) -> dict[str, Any]:
     """The board entries a cycle record (JSON form) wrote: key -> new value."""
-    out: dict[str, Any] = {}
-    for change in record.get("changes") or ():
-        if isinstance(change, Mapping) and isinstance(change.get("key"), str):
-            out[change["key"]] = change.get("new")
-    return out
+    return {
+        c["key"]: c.get("new")
+        for c in record.get("changes") or ()
+        if isinstance(c, Mapping) and isinstance(c.get("key"), str)
+    }
 
 
 class TimelineBuilder:
