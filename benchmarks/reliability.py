@@ -1,21 +1,12 @@
-"""Reliability runs of the service on loopback, bounded in count and time.
+"""Reliability runs of the service on loopback, bounded in count and time (``docs/service.md``).
 
-    python benchmarks/reliability.py load   [--instances 2 --clients 4 --plans 25]
-    python benchmarks/reliability.py fault  # two instances, one SIGKILLed mid-load
-    python benchmarks/reliability.py freeze # two instances, one SIGSTOPped mid-load
-    python benchmarks/reliability.py abuse  # big and mutated requests, wildcard, stranger, squatter
-    python benchmarks/reliability.py slow-watcher  # others' plan times with a watcher that never drains
-    python benchmarks/reliability.py all    # every run above, one table
+    .venv/bin/python benchmarks/reliability.py load|fault|freeze|abuse|slow-watcher|all [--help]
 
-Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
-scouting off), N client threads (each its own Zenoh session) sending M plans
-each, and an observer session subscribed to every cycle and status. It checks
-that every request is answered exactly once, that every answered plan's cycle
-stream is complete and contiguous (seq 1..n as seen by the client, and by the
-observer), and prints the counts. ``abuse`` runs the probes of
-:mod:`eos_svc.service.abuse` against two ``eos serve`` processes and measures
-the first one's memory (RSS) before and after. Every mode prints one table,
-one row per check. Exit code 0 when every check holds.
+``eos serve`` subprocesses on 127.0.0.1; N client threads (each its own session) send M plans
+each while an observer session counts every cycle and status. Checks: every request answered
+exactly once, every cycle stream complete and contiguous, every instance's counters consistent
+(``abuse``: the probes of ``abuse.py`` and the server's memory). One table, one row per check;
+exit code 0 when every check holds.
 """
 
 from __future__ import annotations
