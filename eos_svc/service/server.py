@@ -119,7 +119,6 @@ class PlanService:
         # bounded by admission: at most workers + queue_size goals active (running or waiting)
         self._jobs: queue.SimpleQueue[Goal | None] = queue.SimpleQueue()
         self._goals = GoalTable(workers + queue_size, self.instance)
-        self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._entities: list[Any] = []
         self._peers = PeerInstances(self.prefix, self.instance)
@@ -170,20 +169,16 @@ class PlanService:
             )
         for t in self._threads:
             t.start()
-        # the other instances (their tokens): who answers a plan query that names no single instance
-        self._entities.append(
+        self._entities += [  # declared in this order
+            # the other instances (their tokens): who answers a plan query that names no single instance
             s.liveliness().declare_subscriber(
                 proto.instance_key(self.prefix), direct_callback(self._peers.on_token), history=True
-            )
-        )
-        self._entities.append(
-            s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
-        )
-        self._entities.append(
-            s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel))
-        )
-        # the token last: a client that sees it can use the queryables
-        self._entities.append(s.liveliness().declare_token(proto.instance_key(self.prefix, self.instance)))
+            ),
+            s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True),
+            s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel)),
+            # the token last: a client that sees it can use the queryables
+            s.liveliness().declare_token(proto.instance_key(self.prefix, self.instance)),
+        ]
         log.info("eos service %s serving under %s", self.instance, self.prefix)
         return self
 
