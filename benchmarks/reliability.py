@@ -140,7 +140,6 @@ def run(
     observer_session = zenoh.open(make_config(connect=endpoints))
     observer = Observer(observer_session, proto.prefix())
     lock = threading.Lock()
-    done_count = [0]
     try:
         for _ in range(clients):
             c = EosClient.open(make_config(connect=endpoints, lease_ms=lease), timeout_margin_s=10.0)
@@ -165,7 +164,6 @@ def run(
                     continue
                 with lock:
                     report.answered += 1
-                    done_count[0] += 1
                     report.statuses[out.status] += 1
                     report.cycles_received += len(out.cycles)
                     report.retried += out.attempts > 1
@@ -177,12 +175,12 @@ def run(
             t.start()
         if mode in ("fault", "freeze"):
             # strike once a share of the plans is done, so the victim has plans in flight
-            while done_count[0] < event_after * report.requested and time.monotonic() < deadline:
+            while report.answered < event_after * report.requested and time.monotonic() < deadline:
                 time.sleep(0.01)
             victim = servers[-1]
             if mode == "fault":
                 victim.proc.send_signal(signal.SIGKILL)
-                report.event = f"SIGKILL {victim.instance} after {done_count[0]} plans answered"
+                report.event = f"SIGKILL {victim.instance} after {report.answered} plans answered"
             else:
                 victim.proc.send_signal(signal.SIGSTOP)
                 t_stop = time.monotonic()
@@ -190,7 +188,7 @@ def run(
                 while victim.instance in watcher.instances() and time.monotonic() < t_stop + 30:
                     time.sleep(0.01)
                 report.event = (
-                    f"SIGSTOP {victim.instance} after {done_count[0]} plans answered; token gone "
+                    f"SIGSTOP {victim.instance} after {report.answered} plans answered; token gone "
                     f"after {time.monotonic() - t_stop:.2f} s (lease {lease_ms} ms)"
                 )
         for t in threads:

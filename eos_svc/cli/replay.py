@@ -28,12 +28,8 @@ from eos_svc.recording import (
 
 
 def resolve_hand(name: str) -> Any:
-    """The hand called ``name``: ``None`` (the planner's default) for ``hand3x3``, else the
-    registered hand of that name or the description file at that path (``eos hands``).
-
-    Raises:
-        RecordFileError: no such hand, or its description is bad.
-    """
+    """The hand called ``name`` (``eos hands``; None for the default hand3x3); RecordFileError
+    when there is no such hand or its description is bad."""
     if name == DEFAULT_HAND:
         return None
     from eos_svc.errors import ValidationError
@@ -47,12 +43,8 @@ def resolve_hand(name: str) -> Any:
 
 def verify(recording: Recording, hand: Any = DEFAULT_HAND) -> Verification:
     """Re-run the recorded request (with ``hand``, by default the recorded one) and compare it
-    cycle by cycle, then the result (:func:`eos_svc.recording.compare_run`).
-
-    Raises:
-        RecordFileError: the recorded hand is unknown.
-        ValidationError: the recorded request is not valid (any more).
-    """
+    cycle by cycle, then the result (:func:`eos_svc.recording.compare_run`). Raises
+    RecordFileError (an unknown hand) or ValidationError (a request not valid any more)."""
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
     from eos_svc.world.pose_board import view_entries_as_recorded
 

@@ -40,11 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def read_result(path: str) -> tuple[dict[str, Any], str | None]:
-    """The plan result in ``path`` (a JSON object, or the result line of a record file) and the
-    hand a record file names (None for a plain result).
-
-    Exits with status 2 and a message naming the problem when the file is unusable.
-    """
+    """The plan result in ``path`` (a JSON object, or a record file's result line) and the hand a
+    record file names (None for a plain result); exit 2 naming the problem when it is unusable."""
     from eos_svc.recording import MARK, RecordFileError, read_recording
 
     try:
