@@ -1,25 +1,10 @@
 """EP1, the exploratory procedure: roll one fingertip on the object and estimate its curvature.
 
-Procedure (:func:`run_ep1`), from a configuration where the fingertip touches the object
-(:func:`place_hand_for_ep1` makes one):
-
-1. Contact frame ``F`` at the start contact: ``z`` = the fingertip's outward normal (into
-   the object), ``x`` = world z (or world y when the normal is nearly vertical) projected on
-   the tangent plane, ``y = z × x``. The estimate's form is expressed in ``(x, y)``.
-2. For each tangent direction ``a = cos φ x + sin φ y`` (φ = 0°, 90°, 45°, 135°; at least
-   the first two): roll about the fixed world axis ``a`` by ``+θ/2``, then ``−θ``, then
-   ``+θ/2`` — back at the start, so EP1 can be repeated in place. Every leg is one
-   :class:`~.rolling.RollingQP` (set up once, warm-started each step) and every step gives a
-   tactile reading.
-3. The readings (fingertip frame) are mapped to geodesic coordinates on the fingertip sphere
-   around the start contact (exact arc lengths, not chords), in the basis ``(x, y)``; the net
-   roll angle ``ϑ`` of each reading is known. Readings of the outward half-legs and of the
-   sweep back are two independent sets; each gives, by a least-squares fit
-   ``c(ϑ) = c₀ + s ϑ + s₂ ϑ²``, the contact's displacement over the fingertip per radian at
-   the start point, ``s`` [m/rad]. Each fit is one :class:`~.curvature.CurvatureSample`
-   ``(ω_xy = (cos φ, sin φ), u = s, K_f = I/r_f)`` — Montana's equation in increments.
-4. :class:`~.curvature.CurvatureEstimator` solves for ``K_o`` over all samples (including
-   those of earlier EP1 runs when an estimator is passed in).
+From a configuration where the fingertip touches the object (:func:`place_hand_for_ep1`),
+:func:`run_ep1` rolls it about tangent axes (+θ/2, −θ, +θ/2 each: back at the start) with one
+:class:`~.rolling.RollingQP`, maps the tactile readings to geodesic coordinates on the fingertip,
+fits the contact's displacement per radian, and solves Montana's equation for the object's
+curvature form (:class:`~.curvature.CurvatureEstimator`). The procedure: ``docs/ep1.md``.
 """
 
 from __future__ import annotations
@@ -169,7 +154,7 @@ def place_hand_for_ep1(
 def _log3(R: np.ndarray) -> np.ndarray:
     """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
     v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = _row_norms(v)  # 2 sin θ
+    s2 = np.linalg.norm(v, axis=1)  # 2 sin θ
     c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
     theta = np.arctan2(0.5 * s2, c)
     # θ / (2 sin θ) → ½ as θ → 0
@@ -183,21 +168,14 @@ def _log_chart(
 ) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere of radius ``r`` around the unit ``b``, in
     the tangent basis ex, ey at b, m (``directions``: the points normalised, when known)."""
-    d = points / _row_norms(points)[:, None] if directions is None else directions
+    d = points / np.linalg.norm(points, axis=1)[:, None] if directions is None else directions
     cosang = d @ b
     v = d - np.outer(cosang, b)
-    sin_ang = _row_norms(v)
+    sin_ang = np.linalg.norm(v, axis=1)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
     return np.array((v @ ex, v @ ey)).T
-
-
-def _row_norms(x: np.ndarray) -> np.ndarray:
-    """The rows' Euclidean lengths: ``np.linalg.norm(x, axis=1)``'s arithmetic, without its checks
-    (microseconds on the few points of a leg)."""
-    out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1))
-    return out
 
 
 def _chart_at_mean(
@@ -205,19 +183,16 @@ def _chart_at_mean(
 ) -> np.ndarray:
     """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with the
     frame's x (``ex_tip``, tip frame) projected on the tangent plane at b as the chart's first axis."""
-    b = np.add.reduce(P, axis=0) / len(P)  # P.mean(axis=0)
-    b /= math.sqrt(b.dot(b))  # np.linalg.norm(b), the same arithmetic
+    b = P.mean(axis=0)
+    b /= np.linalg.norm(b)
     ex = ex_tip - (ex_tip @ b) * b
-    ex /= math.sqrt(ex.dot(ex))
-    (b0, b1, b2), (e0, e1, e2) = b.tolist(), ex.tolist()
-    ey = np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0))  # b × ex
-    return _log_chart(P, b, ex, ey, r, directions)
+    ex /= np.linalg.norm(ex)
+    return _log_chart(P, b, ex, np.cross(b, ex), r, directions)
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates), from the
-    normal equations ``XᵀX p = Xᵀc`` by Cholesky (three unknowns, ϑ of order 0.1 rad: XᵀX is well
-    enough conditioned; ``lstsq`` costs ~25 µs a call, this ~5 µs)."""
+    normal equations ``XᵀX p = Xᵀc`` (three unknowns, ϑ of order 0.1 rad: well conditioned)."""
     X = np.array((np.ones_like(theta), theta, theta * theta))  # Xᵀ
     _, p, info = lapack.dposv(X.dot(X.T), X.dot(c))
     if info != 0:

@@ -1,35 +1,16 @@
-"""The formulation of one rolling-without-sliding step: a QP over joint velocities.
+"""The formulation of one rolling-without-sliding step: a QP over joint velocities q̇ of the active
+joints (the wrist, then the rolling finger), as ``docs/ep1.md`` derives it::
 
-For a sphere fingertip (radius r_f) touching the object with unit normal ``n`` (object →
-fingertip) and signed gap ``d``, the step asks of the joint velocities ``q̇`` of the active joints
-(the wrist, then the rolling finger)::
+    minimise ½ q̇ᵀ W q̇  subject to  M (J q̇ + ½ dt J̇ q̇_prev) = (0, 0, −β d/dt, ω a),  lb ≤ q̇ ≤ ub
 
-    minimise    ½ q̇ᵀ W q̇
-    subject to  t₁ᵀ J_p q̇ = 0,  t₂ᵀ J_p q̇ = 0          no slip of the material point at the contact
-                nᵀ J_p q̇ = −β d / dt                   keep contact, the gap corrected by β per step
-                J_ω q̇ = ω a                            roll about the fixed tangent axis a, no spin
-                max(−q̇_max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇_max, (q_max − q)/dt)
-
-``J = [J_v; J_ω]`` is the tip frame's Jacobian (LOCAL_WORLD_ALIGNED), ``J_p = J_v − [p]ₓ J_ω`` the
-Jacobian of the material point at ``p = −r_f n`` from the tip centre, ``(t₁, t₂, n)`` the tangent
-frame of :func:`~eos_svc.kinematics.geometry.tangent_pair`. The equality rows are ``M J`` with
-
-    M = [[t₁ᵀ, −r_f t₂ᵀ], [t₂ᵀ, r_f t₁ᵀ], [nᵀ, 0], [0, I₃]]
-
-(the rows ``[dᵀ, (p × d)ᵀ]`` for d = t₁, t₂, n: ``p × t₁ = −r_f t₂``, ``p × t₂ = r_f t₁``).
-Second order: ``q̇`` is held for ``dt``, so the targets are asked
-of the step's average velocity ``M (J q̇ + ½ dt J̇ q̇_prev)``, i.e. ``b − ½ dt M J̇ q̇_prev``; the
-slip per step is then O(dt³) instead of O(dt²).
-
-:func:`step_qp` gives the step as plain arrays (:class:`StepQP`; the runner solves most steps in
-closed form from them, :mod:`~.rolling_solvers`); :meth:`StepQP.problem` the same QP as a
-:class:`qpsolvers.Problem` for any qpsolvers backend.
+``J`` is the tip frame's Jacobian (LOCAL_WORLD_ALIGNED), ``M`` (:func:`contact_rows`) picks the
+no-slip rows (t₁, t₂) and the contact-keeping row (n) of the material point at the contact and
+the angular velocity (ω a: roll about the tangent axis a, no spin).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
 
 import numpy as np
 import qpsolvers
@@ -37,18 +18,7 @@ import qpsolvers
 from .geometry import tangent_pair
 from .scene import Contact
 
-__all__ = [
-    "JointBox",
-    "StepQP",
-    "contact_rows",
-    "step_qp",
-    "steps_at_speed_limits",
-    "velocity_bounds",
-]
-
-#: the most a solver's q̇ may exceed a velocity bound, as a fraction of the limit (plus 1e-6):
-#: what :func:`steps_at_speed_limits` allows for each step
-SPEED_MARGIN = 0.01
+__all__ = ["JointBox", "StepQP", "contact_rows", "step_qp", "velocity_bounds"]
 
 
 @dataclass(frozen=True)
@@ -59,27 +29,17 @@ class JointBox:
     upper: np.ndarray
     velocity: np.ndarray
 
-    @cached_property
-    def position_limits(self) -> np.ndarray:
-        """``[lower; upper]`` (2×n), derived once per box."""
-        return np.stack((self.lower, self.upper))
 
-    @cached_property
-    def velocity_floor(self) -> np.ndarray:
-        """``−velocity``, derived once per box."""
-        return -self.velocity
-
-
+@dataclass(slots=True)
 class StepQP:
     """The QP of one step as plain arrays: minimise ``½ xᵀ diag(weights) x`` subject to
     ``A x = b`` and ``lb ≤ x ≤ ub`` (x: the active joints' velocities, SI)."""
 
-    __slots__ = ("A", "b", "lb", "ub", "weights")
-
-    def __init__(
-        self, weights: np.ndarray, A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray
-    ) -> None:
-        self.weights, self.A, self.b, self.lb, self.ub = weights, A, b, lb, ub
+    weights: np.ndarray
+    A: np.ndarray
+    b: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
 
     def problem(self) -> qpsolvers.Problem:
         """The same QP as a :class:`qpsolvers.Problem` (for a qpsolvers backend)."""
@@ -110,20 +70,7 @@ def contact_rows(normal: np.ndarray, radius: float) -> np.ndarray:
 def velocity_bounds(q: np.ndarray, box: JointBox, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """``(lb, ub)``: the velocity limits, tightened so that ``q + q̇ dt`` stays within the position
     limits."""
-    reach = (box.position_limits - q) / dt  # the velocities that reach each position limit in dt
-    return np.maximum(box.velocity_floor, reach[0]), np.minimum(box.velocity, reach[1])
-
-
-def steps_at_speed_limits(q: np.ndarray, box: JointBox, dt: float) -> int:
-    """How many steps from ``q``, this one included, :func:`velocity_bounds` surely stays the
-    velocity limits ``∓q̇max`` (no position limit within a step's reach): 0 when a position limit
-    binds now. Each step moves a joint by at most ``q̇ dt`` with ``|q̇| ≤ q̇max`` (plus
-    :data:`SPEED_MARGIN` for a solver's tolerance), so its slack ``(q − q_min)/dt − q̇max`` (and
-    ``(q_max − q)/dt − q̇max``) falls by at most that much per step."""
-    slack = np.minimum((q - box.lower) / dt, (box.upper - q) / dt) - box.velocity
-    per_step = box.velocity * (1.0 + SPEED_MARGIN) + 1e-6
-    steps = float((slack / per_step).min())
-    return int(steps) + 1 if steps >= 0.0 else 0
+    return np.maximum(-box.velocity, (box.lower - q) / dt), np.minimum(box.velocity, (box.upper - q) / dt)
 
 
 def step_qp(
