@@ -1,10 +1,6 @@
-"""Whether a candidate grasp can be reached without collision on the postulated object.
-
-The hand is placed in an imagined scene with the postulated object (never the true one) and
-checked with coal distances: at the pre-grasp, along the straight approach with the fingers
-open, and while the fingers close with only the fingertips allowed to touch.
-
-SI units: metres, radians.
+"""Whether a candidate grasp can be reached without collision on the postulated object: coal
+distances at the pre-grasp, along the straight approach (fingers open) and while the fingers
+close (only the tips may touch). SI units.
 """
 
 from __future__ import annotations

@@ -1,13 +1,8 @@
 """Where a closing fingertip lands on an object: its *landing*.
 
-A finger closes along its sweep (:class:`~eos_svc.grasp.sweeps.FingerSweep`: fingertip-centre
-positions in the palm frame, joint angle increasing). With the palm at a pose, each sample's
-*gap* is the object's signed distance at the tip centre less the tip radius; the fingertip
-lands between the last free sample and the first touching one, where the gap, interpolated
-linearly, is zero. The contact is the object's surface point closest to the tip centre there,
-its normal runs from the contact to the tip centre.
-
-SI units: metres, radians.
+Along the finger's sweep (palm frame) each sample's gap is the object's signed distance at the
+tip centre less the tip radius; the tip lands where the gap, interpolated linearly between the
+last free sample and the first touching one, is zero. SI units.
 """
 
 from __future__ import annotations

@@ -1,13 +1,7 @@
-"""The postulated object: what grasp synthesis plans on, from post_shape's postulate.
-
-post_shape's postulate (board entry ``shape``) carries ``object``, the postulated object in
-the request's own JSON form (``ObjectSpec.from_dict``), and ``pose_known``. An older
-postulate without ``object`` knows only the class, the vertical half-extent
-``grasp_radius`` and the ``centre``: it becomes an *upright* object (rpy = 0) whose every
-extent is the known one — a ball of radius ``grasp_radius`` for the curved classes (sphere,
-ellipsoid, cylinder, capsule: their top and bottom are curved, and a ball meets the fingers
-there as they do), a cube of edge 2·``grasp_radius`` for the flat ones (plane, box) — and,
-its size being known along the vertical only, it is grasped across the vertical.
+"""The postulated object grasp synthesis plans on, from post_shape's postulate (board ``shape``):
+its ``object`` in the request's JSON form, or for an older postulate an upright ball (curved
+classes) or cube (plane, box) of its vertical half-extent ``grasp_radius``, grasped across the
+vertical.
 """
 
 from __future__ import annotations

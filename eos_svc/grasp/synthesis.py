@@ -1,19 +1,10 @@
 """Grasp synthesis on a postulated primitive (Miller, Knoop, Christensen, Allen, ICRA 2003).
 
-A *candidate grasp* is a palm orientation (the approach direction and the hand's roll about
-it: :mod:`~eos_svc.grasp.frames`, GraspIt's rules per primitive) and a depth (the object's
-centre on the palm's x axis, that far ahead of the palm). Each candidate is simulated on the
-*postulated* object (never the true one): every finger's closing sweep is run against the
-object's signed distance until the fingertip touches (its landing,
-:mod:`~eos_svc.grasp.landing`). A candidate is kept when the wrist can take its pose (joint
-limits), every fingertip lands from the open hand, the contacts lie about the centre (the end
-agent's Fig. 2 test with a margin), the object is smaller than the hand height across the grip
-(paper §2.1: d/h < 1), and the hand reaches it without collision
-(:mod:`~eos_svc.grasp.clearance`). The kept candidates are scored by the Ferrari–Canny ε of
-their predicted contacts on the postulated object (:mod:`~eos_svc.grasp.quality`) and the best
-is chosen; ties (a sphere's symmetric grasps) go to the least wrist rotation.
-
-SI units throughout: metres, radians.
+Candidate palm orientations (:mod:`~eos_svc.grasp.frames`) at their best depth are simulated on
+the *postulated* object (finger landings, :mod:`~eos_svc.grasp.landing`), kept when reachable,
+about the centre, smaller than the hand (d/h < 1) and collision-free
+(:mod:`~eos_svc.grasp.clearance`), and scored by ε (:mod:`~eos_svc.grasp.quality`); ties go to
+the least wrist rotation. The rules: ``docs/planner.md`` (Grasp synthesis). SI units.
 """
 
 from __future__ import annotations

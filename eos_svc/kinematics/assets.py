@@ -1,10 +1,5 @@
-"""Data files the package loads: the three-finger hand's URDF.
-
-An installed ``eos_svc`` (wheel, ``pip install .``) carries the URDF as the data package
-``eos_svc.data`` and reads it through :mod:`importlib.resources`. A source checkout used without
-installing (``PYTHONPATH=<checkout>``, or an editable install) has no such package; the file is
-then the checkout's ``urdf/hand3x3.urdf`` — the one copy in git, which the wheel build maps onto
-``eos_svc.data`` (``setup.py``).
+"""Data files the package loads: the three-finger hand's URDF, from the installed data package
+``eos_svc.data`` or, in a source checkout, the repository's ``urdf/``.
 """
 
 from __future__ import annotations

@@ -1,14 +1,10 @@
 """Curvature estimation from rolling contact (EP1): Montana's first equation with v = 0.
 
-Contact frame ``C``: origin at the contact, ``z`` the *fingertip's* outward normal (minus
-:attr:`Contact.normal`), ``x × y = z``. ``ω = (ω_x, ω_y)``: the fingertip's angular velocity
-relative to the object, tangential, rad/s; ``u``: the contact point's velocity over the fingertip
-surface (what the tactile sensor measures), m/s; ``K_f``, ``K_o``: curvature forms (2×2, 1/m,
-positive for convex). Rolling without sliding gives ``K_o u = [-ω_y, ω_x]ᵀ - K_f u``; it is linear
-and homogeneous in (ω, u), so increments over one interval (rad, m) serve as well as rates. Two
-rows per sample in the three unknowns of ``K_o``: rolls along two independent directions
-determine it, solved by least squares with covariance ``s² (AᵀA)⁻¹``. The convention and its
-proofs: ``docs/ep1.md``.
+In the contact frame (``z`` the fingertip's outward normal), rolling without sliding gives
+``K_o u = [−ω_y, ω_x]ᵀ − K_f u`` (``ω``: tangential angular velocity, ``u``: the contact's
+velocity over the fingertip, ``K``: curvature forms, 1/m, positive convex), linear in (ω, u) so
+increments serve as rates; rolls along two directions determine ``K_o`` by least squares. The
+convention and its proofs: ``docs/ep1.md``.
 """
 
 from __future__ import annotations

@@ -1,8 +1,7 @@
-"""Cheap lower bounds on the gap between a hand's collision geometries and an object's
-bounding ball (pure geometry, no coal query): the distance from the ball's centre to each
-geometry's primitive (box, segment of a cylinder or capsule, sphere) less the ball's radius.
-A guarded motion asks coal for an exact gap only where a bound cannot decide (see
-:meth:`eos_svc.world.world.GraspWorld.hand_clear`)."""
+"""Cheap lower bounds (pure geometry, no coal query) on the gap between a hand's collision
+geometries and an object's bounding ball: where a bound cannot decide, a guarded motion asks
+coal (:meth:`eos_svc.world.world.GraspWorld.hand_clear`).
+"""
 
 from __future__ import annotations
 

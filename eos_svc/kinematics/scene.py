@@ -1,12 +1,7 @@
-"""Contact queries between the hand's collision geometry and one object (coal).
-
-Signed distances (negative = penetration), witness points and the normal, in world
-coordinates (m). For a separated sphere fingertip, coal's sphere–primitive algorithms give
-exact witnesses and normal (sphere, box, capsule, cylinder; GJK-accurate, a few µm, for the
-ellipsoid — ``Scene(..., exact_tips=True)`` makes those exact too). When a sphere fingertip
-penetrates the object, the contact comes from the object's analytic closest point instead:
-coal's penetration depth is approximate for curved shapes (its sphere–cylinder depth ignores
-the caps; EPA converges to a tolerance).
+"""Contact queries between the hand's collision geometry and one object (coal): signed distances
+(negative = penetration), witness points and the normal, world coordinates (m). A penetrating
+sphere fingertip's contact comes from the object's analytic closest point (coal's depth is
+approximate for curved shapes).
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""A tactile sensor on a spherical fingertip: where on the fingertip the contact is.
-
-The reading is expressed in the fingertip frame (origin at the sphere centre, m). Gaussian
-noise of ``noise_std`` m per axis is added in the tangent plane of the fingertip surface and
-the point is re-projected onto the sphere; an optional taxel ``pitch`` (m) then rounds each
-coordinate to the nearest multiple of the pitch and re-projects onto the sphere. The rng is
-seeded, so readings are reproducible.
+"""A tactile sensor on a spherical fingertip: where on the fingertip the contact is (fingertip
+frame, m), with seeded Gaussian noise in the tangent plane and an optional taxel pitch, each
+re-projected onto the sphere.
 """
 
 from __future__ import annotations

@@ -1,18 +1,7 @@
 """The fit's whitened residuals as one compiled loop (numba): the optional accelerator of
-:func:`eos_svc.shape.fit.whitened_residuals`.
-
-The same quantities as the numpy version — the parameters' geometry
-(:func:`~eos_svc.shape.fit.batch_geometry`), each kind's signed distance and gradient
-(:meth:`~eos_svc.objects.base.SurfaceObject.local_distance` of :mod:`eos_svc.objects`) and the
-whitening — written point by point, so that a fit's many small evaluations (a few parameter
-vectors at a few dozen touches) cost one call instead of a hundred small numpy operations.
-They agree with the numpy version to rounding (``tests/shape/test_compiled.py`` states the
-tolerance); which one runs changes how fast a fit is, not what it finds. The one difference
-of method: the ellipsoid's Newton iteration stops per point instead of per call (either stops
-at a step below 1e-12 relative, after which the root is exact to rounding).
-
-Imported only by :func:`eos_svc.shape.kernels.load` (numba is an optional dependency, the
-``fast`` extra); compiled on first load and cached on disk by numba.
+:func:`eos_svc.shape.fit.whitened_residuals`, the same quantities point by point (the
+ellipsoid's Newton iteration stops per point), equal to the numpy version to rounding
+(``tests/shape/test_compiled.py``). Imported only by :func:`eos_svc.shape.kernels.load`.
 """
 
 from __future__ import annotations

@@ -1,24 +1,11 @@
-"""Least-squares fit of one object kind to the touches (scipy.optimize.least_squares).
+"""Least-squares fit of one object kind to the touches (scipy.optimize).
 
-Parameters per kind (sizes as logarithms, so they stay positive and their σ is relative):
-
-=========  ==================================================  ==
-kind       parameters                                          k
-=========  ==================================================  ==
-sphere     centre (3), log radius                               4
-ellipsoid  centre (3), rotation (3), log semi-axes (3)          9
-box        centre (3), rotation (3), log half sides (3)         9
-cylinder   centre (3), axis tilt (2), log radius, log half len  7
-capsule    centre (3), axis tilt (2), log radius, log half len  7
-=========  ==================================================  ==
-
-Rotations are local charts about a start orientation ``R0``: ``R = R0·exp([ω]×)`` for the
-kinds oriented by a rotation (box, ellipsoid); for those oriented by an axis (cylinder,
-capsule) the axis is ``R0·(α, β, 1)/‖·‖``. The residuals are the object kind's signed
-distance at the touches (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`),
-whitened by the touches' noise model (:class:`~eos_svc.shape.touches.Touches`), so χ² is a
-log-likelihood and the fit's covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds
-1). Each kind is fitted from a few starts (:mod:`~eos_svc.shape.starts`) and the lowest χ² kept.
+Parameters: the centre (3), the orientation (none for a sphere; a rotation vector about a
+start orientation ``R0`` for a box or ellipsoid; an axis tilt ``R0·(α, β, 1)`` for a cylinder or
+capsule), then the log half sizes. The residuals are the kind's signed distance and gradient at
+the touches (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`), whitened by the noise
+model (:class:`~eos_svc.shape.touches.Touches`), so the covariance is ``(JᵀJ)⁻¹`` (inflated by
+χ²/dof above 1). Each kind is fitted from a few starts (:mod:`~eos_svc.shape.starts`).
 """
 
 from __future__ import annotations

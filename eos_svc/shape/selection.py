@@ -1,23 +1,10 @@
-"""Choose the class by model evidence and state how sure we are.
+"""Choose the class by model evidence and state how sure we are (``docs/planner.md``).
 
-Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`); its Bayesian information
-criterion ``BIC = χ² + k·ln m`` (m whitened contact residuals) approximates −2 log of its
-evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``. Once one class
-explains the touches, a class far worse than it (χ² beyond :data:`HOPELESS`, posterior 0) is
-only fitted for a few iterations; when the sphere, fitted first, does not explain them, a
-brief fit of each other class from its nearest start (:func:`screen`) decides which is
-fitted in full next, so that the others need not be.
-
-The **confidence** of the postulate is the probability that the class is right *and* the
-object's size and centre are within tolerance: ``P(class) · Π erf(tol/(√2·σ))`` over the
-fitted sizes (relative tolerance :data:`SIZE_TOLERANCE`) and centre coordinates (tolerance
-``SIZE_TOLERANCE`` × the mean half size), with σ from the fit's covariance — a direction
-the touches do not constrain (a box's unseen back) has a large σ and drags the confidence
-down. A best fit far worse than the noise model allows (:func:`fit_probability`) drags it
-down too. ``eos experiment recognition`` checks that it is calibrated.
-
-A **plane** is postulated when every sensed normal lies within :data:`PLANE_ANGLE` of their
-mean: a single face, too large for the probes to bound; it has no object.
+Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`, a class far worse than the best
+only briefly); with equal priors ``P(class) ∝ exp(−BIC/2)``, ``BIC = χ² + k·ln m``. The
+**confidence** is P(class right and sizes and centre within :data:`SIZE_TOLERANCE`) from the
+fit's covariance, lowered by faces no touch bounds and by a best fit worse than the noise
+allows. A **plane**: every sensed normal within :data:`PLANE_ANGLE` of their mean.
 """
 
 from __future__ import annotations

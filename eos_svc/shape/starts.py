@@ -1,10 +1,6 @@
-"""Where each kind's fit starts: parameters and orientations from the touches.
-
-The sphere's centre is the point nearest the normal lines, the mean distance its radius; the
-ellipsoid is centred there too, about the normals' scatter axes and the world axes; the box
-about frames of orthogonal groups of normals, the world axes and the scatter axes, centred
-mid-bounds; the cylinder and the capsule along each distinct scatter and world axis. The
-parameter layout is :mod:`~eos_svc.shape.fit`'s.
+"""Where each kind's fit starts: parameters and orientations from the touches (the sphere at the
+point nearest the normal lines; the others about the normals' scatter axes, groups of normals
+and the world axes). The parameter layout is :mod:`~eos_svc.shape.fit`'s.
 """
 
 from __future__ import annotations
