@@ -20,7 +20,7 @@ from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
-from eos_svc.shape.starts import ClassStarts
+from eos_svc.shape.starts import ClassStarts, frame_with_z
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -120,10 +120,7 @@ def canonical_pose(
         level = abs(z[2]) < 1e-6
         if (not level and z[2] < 0.0) or (level and z[int(np.argmax(np.abs(z)))] < 0.0):
             z = -z
-        ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        x = ref - (ref @ z) * z
-        x /= np.linalg.norm(x)
-        return np.column_stack([x, np.cross(z, x), z]), sizes
+        return frame_with_z(z), sizes
     return np.eye(3), sizes
 
 
