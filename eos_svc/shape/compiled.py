@@ -158,7 +158,7 @@ def residuals(
     """Whitened residuals (K, m) of K parameter vectors ``thetas`` (K, k) of the kind ``code``
     (:data:`eos_svc.shape.kernels.KIND_CODES`; its log sizes from index ``first``), each about
     its start orientation ``r0s`` (K, 3, 3), at the touches (``points``: the contacts' tip centres, then
-    the free samples'; the rest as :class:`eos_svc.shape.fit.FitData`)."""
+    the free samples'; the rest as :class:`eos_svc.shape.touches.Touches`)."""
     K, N = thetas.shape[0], points.shape[0]
     out = np.empty((K, 4 * count + N - count))
     half = np.empty(3)
@@ -188,13 +188,12 @@ def residuals(
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) :func:`residuals`: one call per kind."""
-    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX, FitData
+    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX
     from eos_svc.shape.kernels import KIND_CODES
     from eos_svc.shape.touches import Touches
 
     radii, free = np.full(3, 0.01), np.array([[0.0, 0.0, 0.2]])
     touches = Touches(np.eye(3) * 0.05, np.eye(3), radii, free, radii[:1])
-    data = FitData.of(touches)
     for kind, code in KIND_CODES.items():
         theta = np.zeros((1, N_PARAMS[kind]))
         theta[:, SIZE_INDEX[kind][0] :] = math.log(0.04)
@@ -204,12 +203,12 @@ def warm_up() -> None:
             theta,
             np.eye(3)[None],
             (-9.0, 0.0),
-            data.points,
-            data.count,
-            data.radii,
-            data.normals,
-            data.free_radii,
-            data.gap_offset,
-            data.sigma_distance,
-            data.sigma_normal,
+            touches.points,
+            touches.count,
+            touches.radii,
+            touches.normals,
+            touches.free_radii,
+            touches.gap_offset,
+            touches.sigma_distance,
+            touches.sigma_normal,
         )

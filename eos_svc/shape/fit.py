@@ -84,36 +84,7 @@ def batch_geometry(
     return thetas[:, :3], rotations, half
 
 
-@dataclass(frozen=True)
-class FitData:
-    """What the residuals need of the touches: the contacts' and free samples' tip centres
-    as one array of points (m), the radii (m), the sensed normals and the noise model."""
-
-    points: np.ndarray
-    count: int
-    radii: np.ndarray
-    normals: np.ndarray
-    free_radii: np.ndarray
-    gap_offset: float
-    sigma_distance: float
-    sigma_normal: float
-
-    @classmethod
-    def of(cls, touches: Touches) -> FitData:
-        """The fit data of ``touches``."""
-        return cls(
-            np.concatenate([touches.centres, touches.free]),
-            touches.count,
-            touches.radii,
-            touches.normals,
-            touches.free_radii,
-            touches.gap_offset,
-            touches.sigma_distance,
-            touches.sigma_normal,
-        )
-
-
-def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors: per contact the tip centre's distance
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
     ``min(sd(f) − r, 0)/σ_d``. Computed by the compiled loop once it is loaded in this process
@@ -121,7 +92,7 @@ def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitD
     :func:`numpy_residuals`; the two agree to rounding."""
     compiled = kernels.compiled_residuals()
     if compiled is None or kind not in kernels.KIND_CODES:
-        return numpy_residuals(thetas, kind, r0, data)
+        return numpy_residuals(thetas, kind, r0, touches)
     thetas = np.ascontiguousarray(thetas, dtype=float)
     r0s = np.empty((len(thetas), 3, 3))
     r0s[:] = r0
@@ -131,35 +102,30 @@ def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitD
         thetas,
         r0s,
         LOG_SIZE_RANGE,
-        data.points,
-        data.count,
-        data.radii,
-        data.normals,
-        data.free_radii,
-        data.gap_offset,
-        data.sigma_distance,
-        data.sigma_normal,
+        touches.points,
+        touches.count,
+        touches.radii,
+        touches.normals,
+        touches.free_radii,
+        touches.gap_offset,
+        touches.sigma_distance,
+        touches.sigma_normal,
     )
     return out
 
 
-def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """:func:`whitened_residuals` in numpy, with the kinds' own distances
     (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`): the plain version."""
     centres, rotations, half = batch_geometry(kind, thetas, r0)
-    local = (data.points[None] - centres[:, None]) @ rotations
+    local = (touches.points[None] - centres[:, None]) @ rotations
     d, g = KINDS[kind].local_distance(local, half[:, None, :])
     g = g @ rotations.transpose(0, 2, 1)
-    n = data.count
-    r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
-    r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(len(thetas), -1)
-    r_f = np.minimum(d[:, n:] - data.free_radii, 0.0) / data.sigma_distance
+    n, sigma = touches.count, touches.sigma_distance
+    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / sigma
+    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(len(thetas), -1)
+    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / sigma
     return np.concatenate([r_d, r_n, r_f], axis=1)
-
-
-def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
-    """:func:`whitened_residuals` of the touches."""
-    return whitened_residuals(thetas, kind, r0, FitData.of(touches))
 
 
 def residual_count(touches: Touches) -> int:
@@ -182,8 +148,8 @@ class Problem:
     one batch, and every point evaluated is remembered (a refit from the same start finds its
     first steps known)."""
 
-    def __init__(self, kind: str, r0: np.ndarray, data: FitData) -> None:
-        self.kind, self.r0, self.data = kind, r0, data
+    def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
+        self.kind, self.r0, self.touches = kind, r0, touches
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
     def evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -193,7 +159,7 @@ class Problem:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
             thetas = np.repeat(theta[None], len(theta) + 1, axis=0)  # θ, then θ + h_i e_i
             thetas[1:][np.diag_indices(len(theta))] += h
-            R = whitened_residuals(thetas, self.kind, self.r0, self.data)
+            R = whitened_residuals(thetas, self.kind, self.r0, self.touches)
             self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
         return self.known[key]
 
@@ -249,14 +215,14 @@ def explains(chi2: float, touches: Touches, kind: str) -> bool:
     return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
 
 
-def nearest_order(kind: str, starts: ClassStarts, data: FitData) -> list[int]:
+def nearest_order(kind: str, starts: ClassStarts) -> list[int]:
     """Indices of ``kind``'s starts from the lowest χ² at the start itself (ties in order)."""
     candidates = starts.of(kind)
     if len(candidates) < 2:
         return list(range(len(candidates)))
     thetas = np.array([theta0 for theta0, _ in candidates])
     r0s = np.array([r0 for _, r0 in candidates])
-    chi2 = np.sum(whitened_residuals(thetas, kind, r0s, data) ** 2, axis=1)
+    chi2 = np.sum(whitened_residuals(thetas, kind, r0s, starts.touches) ** 2, axis=1)
     return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
@@ -317,15 +283,14 @@ def fit_class(
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k, m = N_PARAMS[kind], residual_count(touches)
     shared = ClassStarts(touches) if class_starts is None else class_starts
-    data = shared.fit_data(FitData.of)
     candidates = shared.of(kind)
-    order = nearest_order(kind, shared, data) if nearest_first else range(len(candidates))
+    order = nearest_order(kind, shared) if nearest_first else range(len(candidates))
     if only is not None:
         order = [only]
     best = None
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
-        problem = shared.problem(kind, index, partial(Problem, kind, r0, data))
+        problem = shared.problem(kind, index, partial(Problem, kind, r0, touches))
         theta, fun = _minimise(problem, theta0, max_nfev, levenberg_marquardt=m >= k)
         chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
@@ -380,7 +345,7 @@ def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.nda
             for side in (1.0, -1.0):
                 variants.append(face_moved(fit, n, factor, side, axis))
                 owners.append(n)
-    Rv = batch_residuals(np.array(variants), kind, fit.r0, touches)
+    Rv = whitened_residuals(np.array(variants), kind, fit.r0, touches)
     delta = np.maximum(np.sum(Rv * Rv, axis=1) - fit.chi2, 0.0)
     ratios = np.zeros(len(SIZE_INDEX[kind]))
     for n, d in zip(owners, delta, strict=True):

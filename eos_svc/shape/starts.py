@@ -94,7 +94,7 @@ class ClassStarts:
     """Every kind's start parameters and orientations ``(theta0, r0)`` from one set of touches,
     each kind's computed on first use, and the pieces several kinds share (the scatter axes,
     the normal lines' nearest point, the axial frames) once for all of them. It also keeps,
-    for the fits of one selection, the touches' fit data and each start's least-squares
+    for the fits of one selection, each start's least-squares
     problem (:class:`~eos_svc.shape.fit.Problem`, which remembers the points it evaluated)."""
 
     def __init__(self, touches: Touches) -> None:
@@ -103,13 +103,6 @@ class ClassStarts:
         self.surface, self.mid = S, 0.5 * (S.min(axis=0) + S.max(axis=0))
         self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
         self._problems: dict[tuple[str, int], Any] = {}
-        self._fit_data: Any = None
-
-    def fit_data(self, make: Callable[[Touches], Any]) -> Any:
-        """The touches' fit data, made by ``make`` on first use."""
-        if self._fit_data is None:
-            self._fit_data = make(self.touches)
-        return self._fit_data
 
     def problem(self, kind: str, index: int, make: Callable[[], Any]) -> Any:
         """The least-squares problem of ``kind`` from its start ``index``, made by ``make`` on

@@ -42,7 +42,7 @@ def test_compiled_residuals_match_numpy_near_and_far_from_the_fit(kind, compiled
     touches = touches_on(obj, rng, n=16).merged(
         Touches(np.empty((0, 3)), np.empty((0, 3)), 0.01, obj.centre + rng.normal(0.0, 0.05, (12, 3)), 0.01)
     )
-    data = fit.FitData.of(touches)
+    data = touches
     for theta0, r0 in ClassStarts(touches).of(kind):
         thetas = (
             theta0 + rng.normal(0.0, 0.4, (40, len(theta0))) * np.r_[[0.03] * 3, [1.0] * (len(theta0) - 3)]
@@ -61,7 +61,7 @@ def test_compiled_ellipsoid_near_its_centre_and_surface(compiled):
         np.eye(3)[[0, 1, 2, 0, 1]],
         0.01,
     )
-    data = fit.FitData.of(touches)
+    data = touches
     rng = np.random.default_rng(5)
     thetas = np.concatenate(
         [rng.normal(0.0, 1e-3, (6, 3)), rng.normal(0.0, 0.3, (6, 3)), np.log([[0.035, 0.03, 0.022]] * 6)],
