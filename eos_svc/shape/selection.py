@@ -86,20 +86,13 @@ class Postulate:
         return out
 
 
-def _signed_permutations() -> list[np.ndarray]:
-    """The 24 proper rotations that permute and flip the coordinate axes."""
-    out = []
-    for perm in itertools.permutations(range(3)):
-        for signs in itertools.product((1.0, -1.0), repeat=3):
-            P = np.zeros((3, 3))
-            for col, (row, sign) in enumerate(zip(perm, signs, strict=True)):
-                P[row, col] = sign
-            if np.linalg.det(P) > 0:
-                out.append(P)
-    return out
-
-
-_SYMMETRIES = _signed_permutations()
+#: the 24 proper rotations that permute and flip the coordinate axes
+_SYMMETRIES = [
+    P
+    for perm in itertools.permutations(range(3))
+    for signs in itertools.product((1.0, -1.0), repeat=3)
+    if np.linalg.det(P := np.eye(3)[:, list(perm)] * np.array(signs)) > 0
+]
 
 
 def canonical_pose(
@@ -179,16 +172,10 @@ def select_class(
     classes: tuple[str, ...] = CLASSES,
     warm: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> Postulate:
-    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors).
-
-    ``warm``: per class, an earlier fit's (θ, R0) on fewer of the same touches (post_shape's
-    previous candidates). Each is refitted from there first; one that then :func:`explains`
-    the touches is kept without trying the class's cold starts (an optimum moved by a few new
-    contacts); for the others the class's cold starts run, the warm start among them.
-
-    Raises:
-        ValueError: fewer than MIN_CONTACTS contacts.
-    """
+    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors); ValueError
+    below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
+    same touches, refitted first: one that then :func:`explains` the touches is kept without the
+    class's cold starts."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     if is_plane(touches):
@@ -205,12 +192,14 @@ def select_class(
     if classes[0] not in fits:
         fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
-        # the first class does not explain the touches: the others, each from its nearest
-        # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
-        # explains the touches the rest are shown hopeless against it in a few iterations
-        # instead of being fitted in full before it. The order decides which fit shows a class
-        # hopeless, not the postulate: its posterior is 0 either way.
-        screened = screen(touches, tuple(k for k in classes[1:] if k not in fits), shared)
+        # the first class does not explain the touches: the others, each fitted briefly from its
+        # nearest start (a screening), are fitted from the likeliest, so that once one explains
+        # the touches the rest are shown hopeless against it in a few iterations
+        screened = {
+            k: fit_class(k, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
+            for k in classes[1:]
+            if k not in fits
+        }
     rest = tuple(k for k in classes[1:] if k not in fits)
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
@@ -220,11 +209,20 @@ def select_class(
         if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
             fits[kind] = fit_class(kind, touches, class_starts=shared)
             continue
-        quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind), shared)
-        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+        hopeless = best + HOPELESS
+        # a screening fit from the class's first start is the quick fit when it is hopeless,
+        # explains the touches, or the class has one start
+        quick = screened.get(kind)
+        if (
+            quick is None
+            or quick.start != 0
+            or not (quick.chi2 > hopeless or explains(quick.chi2, touches, kind) or len(shared.of(kind)) == 1)
+        ):
+            quick = fit_class(kind, touches, QUICK_NFEV, hopeless, class_starts=shared)
+        if quick.chi2 > hopeless or quick.chi2 <= GOOD_FIT * m:
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
-        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, class_starts=shared)
+        fits[kind] = fit_class(kind, touches, hopeless=hopeless, class_starts=shared)
     best_kind = min(fits, key=lambda k: fits[k].chi2)
     for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
         if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
@@ -273,47 +271,9 @@ def sibling_start(fit: ClassFit, kind: str) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([g.centre, orientation, np.log(half)]), np.array(g.rotation)
 
 
-def screen(
-    touches: Touches, classes: tuple[str, ...], class_starts: ClassStarts | None = None
-) -> dict[str, ClassFit]:
-    """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.nearest_order`)
-    for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²).
-    ``class_starts``: the touches' starts, if already at hand."""
-    shared = ClassStarts(touches) if class_starts is None else class_starts
-    return {
-        kind: fit_class(kind, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
-        for kind in classes
-    }
-
-
-def quick_fit(
-    kind: str,
-    touches: Touches,
-    hopeless: float,
-    screened: ClassFit | None = None,
-    class_starts: ClassStarts | None = None,
-) -> ClassFit:
-    """``fit_class(kind, touches, QUICK_NFEV, hopeless)``. A screening fit (:func:`screen`)
-    from the class's first start *is* that fit when it is above ``hopeless``, explains the
-    touches, or the class has one start (see :func:`~eos_svc.shape.fit.fit_class`): it is
-    reused then. ``class_starts``: the touches' starts, if already at hand."""
-    shared = ClassStarts(touches) if class_starts is None else class_starts
-    if screened is None or screened.start != 0:
-        return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
-    if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(shared.of(kind)) == 1:
-        return screened
-    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
-
-
 def fit_probability(fit: ClassFit, m: int) -> float:
     """How plausible the best fit's χ² is under the noise model, taken FIT_SLACK times
     looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
     even the best class misses them (an object none of the classes describes)."""
-    dof = max(m - fit.n_params, 1)
-    return chi2_survival(fit.chi2 / FIT_SLACK, dof)
-
-
-def chi2_survival(x: float, dof: int) -> float:
-    """``scipy.stats.chi2.sf(x, dof)`` — the same function, ``scipy.special.chdtrc``, without
-    the distribution object's argument handling (≈ 30× its cost): 1 at and below 0."""
-    return 1.0 if x <= 0.0 else float(special.chdtrc(dof, x))
+    x = fit.chi2 / FIT_SLACK  # scipy.stats.chi2.sf(x, dof) without the distribution object
+    return 1.0 if x <= 0.0 else float(special.chdtrc(max(m - fit.n_params, 1), x))
