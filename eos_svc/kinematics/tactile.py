@@ -65,38 +65,20 @@ class TactileSensor:
         self.noise_std = float(noise_std)
         self.pitch = None if pitch is None else float(pitch)
         self.contact_tolerance = float(contact_tolerance)
-        self._rng: np.random.Generator | None = None
-        self._seed: np.random.SeedSequence | int | None = None
-        self.rng = rng  # checked and kept (see the setter)
-
-    @property
-    def rng(self) -> np.random.Generator:
-        """The position noise's generator (made from the seed given on first use)."""
-        rng = self._rng
-        if rng is None:
-            rng = self._rng = np.random.default_rng(self._seed)
-        return rng
-
-    @rng.setter
-    def rng(self, rng: np.random.Generator | np.random.SeedSequence | int | None) -> None:
-        """A generator, or a seed (an int ≥ 0 or a ``SeedSequence``: the generator is made from
-        it on first use), or None (fresh entropy on first use).
-
-        Raises:
-            KinematicsError: anything else.
-        """
-        if isinstance(rng, np.random.Generator):
-            self._rng, self._seed = rng, None
-            return
-        if not (
-            rng is None
-            or isinstance(rng, np.random.SeedSequence)
-            or (isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0)
-        ):
+        seed = isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0
+        if not (rng is None or seed or isinstance(rng, (np.random.Generator, np.random.SeedSequence))):
             raise KinematicsError(
                 "rng", f"must be a numpy Generator, a SeedSequence, an int ≥ 0 or None, got {rng!r}"
             )
-        self._rng, self._seed = None, rng
+        self._seed = rng
+        self._rng = rng if isinstance(rng, np.random.Generator) else None
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The position noise's generator (made from the seed on first use)."""
+        if self._rng is None:
+            self._rng = np.random.default_rng(self._seed)
+        return self._rng
 
     def read(self, state: HandState, contact: Contact) -> TactileReading:
         """The reading of ``contact.finger``'s sensor for this contact (``state`` at the same q)."""
