@@ -28,22 +28,6 @@ class FingerSweep:
         """Index of the first sample at or beyond ``angle``."""
         return int(np.searchsorted(self.angles, angle - 1e-12))
 
-    def reaches(self, angle: float, centre_palm: np.ndarray, radius: float) -> bool:
-        """Whether closing from ``angle`` brings the tip centre within ``radius`` of ``centre_palm``."""
-        rest = self.points[self.index_at(angle) :]
-        if len(rest) == 0:
-            return False
-        d = rest - centre_palm
-        return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
-
-    def last_within(self, centre_palm: np.ndarray, radius: float) -> int:
-        """Index of the last sample within ``radius`` of ``centre_palm`` (−1 if none): closing
-        from ``angle`` reaches it (:meth:`reaches`) iff ``index_at(angle) <= last_within(...)``,
-        so one evaluation per centre serves every angle."""
-        d = self.points - centre_palm
-        within = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= radius * radius)
-        return int(within[-1]) if len(within) else -1
-
 
 #: sweep resolution of a finger with a prismatic joint (m): about the tip travel of 0.01 rad at
 #: a 0.1 m lever, the resolution of a revolute finger
