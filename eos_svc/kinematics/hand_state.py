@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 import pinocchio as pin
 
-from .errors import ConfigurationError, WorkspaceError
+from .errors import ConfigurationError, UnknownNameError, WorkspaceError
 
 if TYPE_CHECKING:
     from .hand_model import HandModel
@@ -42,6 +42,7 @@ class HandState:
         "_geometry_views",
         "_jac_stale",
         "_q",
+        "_tips",
         "data",
         "hand",
         "model",
@@ -57,6 +58,14 @@ class HandState:
         # live views into data.oMf / the geometry data's oMg, made on first use (see frame_views)
         self._frame_views: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._geometry_views: list[tuple[np.ndarray, np.ndarray]] | None = None
+        # per finger (read from Python, data.oMf[i] costs µs): the tip frame, its body's joint and
+        # that joint's placement, the tip centre (live views), and a placement to compute in
+        self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
+        for f in hand.finger_names:
+            fid = hand.tip_frame_id(f)
+            jid = int(hand.model.frames[fid].parentJoint)
+            centre = read_only(self.data.oMf[fid].translation)
+            self._tips[f] = (fid, jid, self.data.oMi[jid], centre, pin.SE3.Identity())
         self._q = hand.neutral()
         self.update(self._q if q is None else q)
 
@@ -108,7 +117,15 @@ class HandState:
     def tip_centre_view(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m, as a live read-only view that
         follows every :meth:`update`."""
-        return self.frame_views(self.hand.tip_frame_id(finger))[0]
+        return self._tip(finger)[3]
+
+    def _tip(self, finger: str) -> tuple[int, int, pin.SE3, np.ndarray, pin.SE3]:
+        try:
+            return self._tips[finger]
+        except KeyError:
+            raise UnknownNameError(
+                "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
+            ) from None
 
     def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
         """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
@@ -142,19 +159,21 @@ class HandState:
     def tip_jacobian(self, finger: str) -> np.ndarray:
         """6×nv Jacobian of the tip frame origin (the fingertip sphere's centre) and of the
         fingertip's orientation."""
-        fid = self.hand.tip_frame_id(finger)
-        self.joint_jacobians()
+        fid = self._tip(finger)[0]
+        if self._jac_stale:
+            self.joint_jacobians()
         return pin.getFrameJacobian(self.model, self.data, fid, _LWA)
 
     def tip_point_jacobian(self, finger: str, point_world: np.ndarray) -> np.ndarray:
         """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
         is currently at ``point_world`` (m), per unit joint velocity."""
-        jid = self.model.frames[self.hand.tip_frame_id(finger)].parentJoint
+        _, jid, oMi, _, local = self._tip(finger)
         point = np.asarray(point_world, dtype=float)
         if point.shape != (3,):
             raise ConfigurationError("point_world", f"must be a 3-vector, got {point_world!r}")
-        local = pin.SE3(np.eye(3), self.data.oMi[jid].actInv(point))  # the point in the joint's frame
-        self.joint_jacobians()
+        local.translation = oMi.actInv(point)  # the point in the tip body's joint frame
+        if self._jac_stale:
+            self.joint_jacobians()
         out: np.ndarray = pin.getFrameJacobian(self.model, self.data, jid, local, _LWA)[:3]
         return out
 
