@@ -15,7 +15,7 @@ import qpsolvers
 
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
-from .rolling_problem import JointBox, StepQP, step_qp, velocity_bounds
+from .rolling_problem import JointBox, StepQP, step_qp, steps_at_speed_limits, velocity_bounds
 from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -115,6 +115,10 @@ class RollingQP:
         #: the active joints' indices in q and q̇ (the same: every joint is 1-DoF)
         self.active = np.concatenate([hand.wrist_v_index, hand.finger_v_index(finger)])
         self.nx = len(self.active)
+        # the active columns of the Jacobian: a slice (a view) when they are contiguous
+        first = int(self.active[0])
+        contiguous = self.active.tolist() == list(range(first, first + self.nx))
+        self._columns: slice | np.ndarray = slice(first, first + self.nx) if contiguous else self.active
         self.box = JointBox(
             hand.lower[self.active], hand.upper[self.active], hand.velocity_limit[self.active]
         )
@@ -130,6 +134,8 @@ class RollingQP:
         self._qdot = np.zeros(hand.nv)
         self._zero = np.zeros(hand.nv)
         self._qp: StepQP | None = None  # the QP of the last step (or of build)
+        #: steps for which the velocity bounds are surely ∓q̇max (steps_at_speed_limits)
+        self._steps_at_speed_limits = 0
         self._state = state
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
@@ -148,6 +154,7 @@ class RollingQP:
                 self._state.update(self._state.q)
             self._use(state)
         self._qdot[:] = 0.0
+        self._steps_at_speed_limits = 0
         self._kinematics()
         self._probe.place_object(self.scene.object.placement)
         n = self._probe.measure(self._centre).normal
@@ -163,7 +170,8 @@ class RollingQP:
         self._omega_axis = (wx, wy, wz)
 
     def _use(self, state: HandState) -> None:
-        """Roll from ``state``'s configuration on its Pinocchio data (live views of the tip)."""
+        """Roll from ``state``'s configuration on its Pinocchio data (a new one costs ~50 µs,
+        a few % of an EP1 run); live views of the tip's world translation and rotation."""
         self._state, self._q, self._data = state, state.q, state.data
         tip = self._data.oMf[self._fid]
         self._centre, self._rotation = tip.translation, tip.rotation
@@ -180,13 +188,13 @@ class RollingQP:
         return self._state
 
     def _kinematics(self) -> tuple[np.ndarray, np.ndarray]:
-        """Forward kinematics at q with the last q̇: the tip's Jacobian over the active joints and
-        ``J̇ q̇`` (LOCAL_WORLD_ALIGNED)."""
+        """Forward kinematics at q with the last q̇; the tip's placement (seen through the live
+        views), its Jacobian over the active joints and ``J̇ q̇`` (LOCAL_WORLD_ALIGNED)."""
         model, data = self.hand.model, self._data
         pin.forwardKinematics(model, data, self._q, self._qdot, self._zero)
         pin.computeJointJacobians(model, data)
         # getFrameJacobian also places the tip frame (data.oMf[fid], the live views)
-        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA)[:, self.active]
+        jacobian = pin.getFrameJacobian(model, data, self._fid, _LWA)[:, self._columns]
         drift = pin.getFrameClassicalAcceleration(model, data, self._fid, _LWA).vector
         return jacobian, drift
 
@@ -195,6 +203,18 @@ class RollingQP:
         """The QP of the last step (or of :meth:`build`) as a :class:`qpsolvers.Problem` (a new one
         on each read; None before the first step)."""
         return None if self._qp is None else self._qp.problem()
+
+    def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The velocity bounds at q: ``∓q̇max`` while every position limit is out of a step's
+        reach (:func:`~.rolling_problem.steps_at_speed_limits`, evaluated again when that many
+        steps are taken), else :func:`~.rolling_problem.velocity_bounds`."""
+        box = self.box
+        if self._steps_at_speed_limits > 0:
+            self._steps_at_speed_limits -= 1
+            return box.velocity_floor, box.velocity
+        q = self._q[self.active]
+        self._steps_at_speed_limits = max(steps_at_speed_limits(q, box, self.dt) - 1, 0)  # after this one
+        return velocity_bounds(q, box, self.dt)
 
     def _build(self) -> tuple[StepQP, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""
@@ -206,7 +226,7 @@ class RollingQP:
             contact,
             self.radius,
             self._omega_axis,
-            velocity_bounds(self._q[self.active], self.box, self.dt),
+            self._bounds(),
             self.weights,
             self.dt,
             self.gap_gain,
@@ -224,7 +244,7 @@ class RollingQP:
         rotation = np.array(self._rotation)
         reading = None if self.tactile is None else self.tactile.read_tip(contact, rotation, self.radius)
         x, closed = solve_rolling_qp(qp, self.solver, self.closed_form)
-        self._qdot[self.active] = x
+        self._qdot[self._columns] = x  # the active joints (a slice when contiguous)
         self._q += self._qdot * self.dt  # the other joints' q̇ is 0
         e0, e1, e2, e3, e4, e5 = (qp.A.dot(x) - qp.b).tolist()
         return RollingStep(

@@ -11,6 +11,7 @@ the angular velocity (ω a: roll about the tangent axis a, no spin).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import qpsolvers
@@ -18,7 +19,18 @@ import qpsolvers
 from .geometry import tangent_pair
 from .scene import Contact
 
-__all__ = ["JointBox", "StepQP", "contact_rows", "step_qp", "velocity_bounds"]
+__all__ = [
+    "JointBox",
+    "StepQP",
+    "contact_rows",
+    "step_qp",
+    "steps_at_speed_limits",
+    "velocity_bounds",
+]
+
+#: the most a solver's q̇ may exceed a velocity bound, as a fraction of the limit (plus 1e-6):
+#: what :func:`steps_at_speed_limits` allows for each step
+SPEED_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -28,6 +40,16 @@ class JointBox:
     lower: np.ndarray
     upper: np.ndarray
     velocity: np.ndarray
+
+    @cached_property
+    def position_limits(self) -> np.ndarray:
+        """``[lower; upper]`` (2×n), derived once per box."""
+        return np.stack((self.lower, self.upper))
+
+    @cached_property
+    def velocity_floor(self) -> np.ndarray:
+        """``−velocity``, derived once per box."""
+        return -self.velocity
 
 
 @dataclass(slots=True)
@@ -70,7 +92,20 @@ def contact_rows(normal: np.ndarray, radius: float) -> np.ndarray:
 def velocity_bounds(q: np.ndarray, box: JointBox, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """``(lb, ub)``: the velocity limits, tightened so that ``q + q̇ dt`` stays within the position
     limits."""
-    return np.maximum(-box.velocity, (box.lower - q) / dt), np.minimum(box.velocity, (box.upper - q) / dt)
+    reach = (box.position_limits - q) / dt  # the velocities that reach each position limit in dt
+    return np.maximum(box.velocity_floor, reach[0]), np.minimum(box.velocity, reach[1])
+
+
+def steps_at_speed_limits(q: np.ndarray, box: JointBox, dt: float) -> int:
+    """How many steps from ``q``, this one included, :func:`velocity_bounds` surely stays the
+    velocity limits ``∓q̇max`` (no position limit within a step's reach): 0 when a position limit
+    binds now. Each step moves a joint by at most ``q̇ dt`` with ``|q̇| ≤ q̇max`` (plus
+    :data:`SPEED_MARGIN` for a solver's tolerance), so its slack ``(q − q_min)/dt − q̇max`` (and
+    ``(q_max − q)/dt − q̇max``) falls by at most that much per step."""
+    slack = np.minimum((q - box.lower) / dt, (box.upper - q) / dt) - box.velocity
+    per_step = box.velocity * (1.0 + SPEED_MARGIN) + 1e-6
+    steps = float((slack / per_step).min())
+    return int(steps) + 1 if steps >= 0.0 else 0
 
 
 def step_qp(
