@@ -26,16 +26,10 @@ PREGRASP_TRIES = 4
 
 
 class HandClearance:
-    """Collision checks of one hand against one postulated object.
-
-    Args:
-        hand: the hand model.
-        sweeps: its fingers' closing sweeps (the open hand: every finger at its first sample).
-        params: world constants (approach stand-off, clearance, contact tolerance).
-        obj: the postulated object.
-        table_height: the table's height (world z, m) when the object rests on one: no hand
-            geometry may come nearer it than the threshold of each check.
-    """
+    """Collision checks of one hand (its closing sweeps: the open hand at their first samples)
+    against one postulated object, with the world constants' stand-off, clearance and contact
+    tolerance; ``table_height`` (world z, m): no hand geometry may come nearer the table than
+    each check's threshold."""
 
     def __init__(
         self,

@@ -56,17 +56,10 @@ def rotated_sweep_gaps(
 class SweepLandings:
     """The landings of one sweep on an object, the palm at one pose, from any start sample.
 
-    A finger between samples ``start`` − 1 and ``start``, not touching, closes from the former:
-    it lands at the first touching sample at or after ``max(0, start − 1)``, unless it already
-    touches there (then there is no landing). The landing depends on ``start`` only through
-    that sample, so a finger closing step by step asks for the same landing again: it is found
-    once per touching sample.
-
-    Args:
-        obj: the object.
-        sweep: the finger's closing sweep.
-        pts: the sweep's fingertip centres at this pose (world, m; :func:`rotated_sweep_gaps`).
-        gaps: their gaps to ``obj`` (m; :func:`rotated_sweep_gaps`).
+    A finger closing from ``start`` lands at the first touching sample at or after
+    ``max(0, start − 1)`` unless it touches there already; each landing is found once per
+    touching sample. ``pts``, ``gaps``: the sweep's tip centres at this pose (world, m) and their
+    gaps (m), from :func:`rotated_sweep_gaps`.
     """
 
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:

@@ -76,24 +76,12 @@ def primitive_wrenches(
     torque_scale: float | None = None,
     patch_radius: float = 0.0,
 ) -> tuple[np.ndarray, float, int]:
-    """The primitive contact wrenches (see the module docstring for the convention).
-
-    Args:
-        points: (k, 3) or (k, 2) contact points on the object (m).
-        normals: same shape: outward surface normals (need not be unit length).
-        centre: torque reference, the object's centre (None: the contacts' centroid).
-        mu: Coulomb friction coefficient (≥ 0).
-        edges: edges per linearised 3-D cone (≥ 3; ignored in 2-D).
-        torque_scale: characteristic length L (default: the largest ``‖p_i − c‖``, or 1).
-        patch_radius: soft-finger contact patch radius a (m, ≥ 0; 0: hard point contacts).
-
-    Returns:
-        (wrenches of shape (k·w, 6) or (k·w, 3), the torque scale used, wrenches per contact w:
-        the cone's edges, plus two with a soft-finger patch).
-
-    Raises:
-        ValueError: naming the malformed argument.
-    """
+    """The primitive contact wrenches (k·w, 6) — (k·w, 3) in 2-D —, the torque scale used and
+    the wrenches per contact w (the cone's edges, plus two with a soft-finger patch), of (k, 3)
+    or (k, 2) contact ``points`` (m) with outward ``normals`` (any length), torques about
+    ``centre`` (None: the centroid) over ``torque_scale`` (default: the largest ``‖p_i − c‖``),
+    Coulomb ``mu`` ≥ 0, ``edges`` ≥ 3 per 3-D cone and a ``patch_radius`` (m, 0: hard contacts).
+    A malformed argument raises :class:`ValidationError` naming it."""
     p, n = _array(points, "points"), _array(normals, "normals")
     if p.ndim != 2 or p.shape[1] not in (2, 3):
         raise ValidationError("points", f"must have shape (k, 3) or (k, 2), got {p.shape}")

@@ -47,20 +47,10 @@ MAX_D_OVER_H = 1.0
 
 
 class GraspSynthesis:
-    """Candidate grasps of one hand on one postulated object, checked and scored.
-
-    Args:
-        hand: the hand model.
-        sweeps: its fingers' closing sweeps (palm frame).
-        params: world constants (approach stand-off, clearance).
-        obj: the postulated object.
-        friction: Coulomb μ for ε.
-        vertical_only: the postulate's size is known along the vertical only (grasp across it).
-        table_height: the table under the object (world z, m), or None: candidates whose hand
-            would touch it are rejected (:class:`~eos_svc.grasp.clearance.HandClearance`).
-
-    Attributes:
-        rejections: per reason (in words), how many candidates it rejected.
+    """Candidate grasps of one hand (its closing sweeps, palm frame; world constants) on one
+    postulated object, checked and scored by ε at ``friction`` μ. ``vertical_only``: the size is
+    known along the vertical only; ``table_height`` (world z, m): a hand touching the table is
+    rejected. :attr:`rejections` counts the rejected candidates per reason (in words).
     """
 
     def __init__(
@@ -86,17 +76,10 @@ class GraspSynthesis:
         self.rejections[why] = self.rejections.get(why, 0) + 1
 
     def candidates(self) -> list[GraspCandidate]:
-        """The best candidates, best first.
-
-        Candidate orientations are simulated at their best depth from the least wrist rotation
-        up, a group of equal rotations at a time; of those about the centre, the ``SCORED``
-        least-rotated that are collision-free (one for a sphere, whose grasps about its
-        diameters are all alike) are scored by ε; the best ε wins, and candidates within
-        ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first. The
-        orientations rotated more than the last one scored cannot change the choice and are
-        not simulated. When none about the centre is collision-free, the collision-free one
-        closest to it is returned alone (the best the hand can do; its ``about_centre`` is
-        False)."""
+        """The best candidates, best first: orientations simulated from the least wrist rotation
+        up; the ``SCORED`` least-rotated collision-free ones about the centre (one for a sphere)
+        scored by ε, those within ``EPSILON_TIE`` of the best counted equal (least rotation
+        first). None about the centre: the collision-free one closest to it, alone."""
         wanted = 1 if isinstance(self.obj, Sphere) else SCORED
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []

@@ -55,24 +55,13 @@ class RollingStep:
 class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
-    Args:
-        state: the hand state at the start; the roller steps on its Pinocchio data (the state's
-            placements are those of the roll until :attr:`state` is read, which brings
-            ``state`` up to date).
-        finger: the rolling finger (its tip must be a sphere).
-        axis: world rolling axis, tangent at the contact (its normal component is removed
-            unless ``project_axis`` is False: EP1 keeps one axis over several legs).
-        omega: rolling rate about ``axis``, rad/s (sign gives the direction).
-        dt: time step, s (> 0).
-        solver: the qpsolvers backend for steps with an active bound (``available_solvers()``).
-        scene: the hand and the object (keyword).
-        tactile: optional sensor; each step then carries a reading of its contact.
-        weights: diagonal of W over the active joints (wrist then finger), default 1.
-        gap_gain: β of the gap correction, in (0, 1].
-        second_order: targets of the step's average velocity (see :mod:`~.rolling_problem`).
-        closed_form: the closed form when no bound is active (see :mod:`~.rolling_solvers`).
-
-    :meth:`retarget` starts another roll with the same roller (EP1 rolls six legs with one).
+    The roller steps on ``state``'s Pinocchio data (:attr:`state` brings the state up to date).
+    ``axis``: world, tangent at the contact (its normal part removed unless ``project_axis`` is
+    False); ``omega``: rad/s (signed); ``dt``: s; ``solver``: the qpsolvers backend for steps
+    with an active bound; ``tactile``: a sensor read at every step; ``weights``: diagonal of W
+    over the active joints (wrist, then finger); ``gap_gain``: β in (0, 1]; ``second_order``,
+    ``closed_form``: see :mod:`~.rolling_problem`, :mod:`~.rolling_solvers`. :meth:`retarget`
+    starts another roll with the same roller.
     """
 
     def __init__(

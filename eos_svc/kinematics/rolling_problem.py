@@ -119,18 +119,10 @@ def step_qp(
     dt: float,
     gap_gain: float,
 ) -> StepQP:
-    """The QP of one step (module docstring) over the active joints.
-
-    Args:
-        jacobian: the tip frame's 6×nx Jacobian over the active joints (LOCAL_WORLD_ALIGNED).
-        drift: ``J̇ q̇_prev`` (the tip's classical acceleration at the last q̇ with q̈ = 0, 6,
-            LOCAL_WORLD_ALIGNED), or None for first-order targets.
-        contact: the measured contact (its normal, object → tip, and signed gap, m).
-        radius: the tip sphere's radius, m. omega_axis: ω a, the commanded angular velocity, rad/s.
-        bounds: ``(lb, ub)`` of the active joints' velocities (:func:`velocity_bounds`);
-        weights: the diagonal of W (nx).
-        dt: the step, s; gap_gain: β in (0, 1].
-    """
+    """The QP of one step (module docstring) from the tip frame's 6×nx Jacobian over the active
+    joints, ``drift`` = ``J̇ q̇_prev`` (None: first-order targets), the measured contact, the tip
+    radius (m), ``omega_axis`` = ω a (rad/s), the velocity ``bounds``, W's diagonal, ``dt`` (s)
+    and β."""
     M = contact_rows(contact.normal, radius)
     wx, wy, wz = omega_axis
     gap_target = -gap_gain * contact.distance / dt

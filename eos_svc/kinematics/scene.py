@@ -39,16 +39,9 @@ class Contact:
 
 
 class Scene:
-    """A hand and one object. Reuses coal requests/results/transforms across calls.
-
-    Args:
-        hand: the hand model.
-        obj: the object.
-        exact_tips: when True, sphere-fingertip contacts always come from the object's
-            analytic closest point (exact witnesses, slower: ~10–50 µs); when False (default)
-            from coal (~1–5 µs), whose GJK witness on curved objects such as the ellipsoid is
-            within a few µm tangentially (distance within ~1e-8 m).
-    """
+    """A hand and one object (coal requests, results and transforms reused across calls).
+    ``exact_tips``: sphere-fingertip contacts from the object's analytic closest point (exact,
+    ~10× slower) instead of coal's (GJK: within a few µm tangentially on an ellipsoid)."""
 
     def __init__(self, hand: HandModel, obj: SurfaceObject, exact_tips: bool = False) -> None:
         if not isinstance(hand, HandModel):

@@ -40,13 +40,10 @@ class TactileReading:
 class TactileSensor:
     """Tactile reading for a spherical fingertip from a :class:`~.scene.Contact`.
 
-    Args:
-        noise_std: standard deviation of the tangential position noise, m (≥ 0).
-        pitch: taxel pitch, m (> 0), or None for a continuous sensor.
-        contact_tolerance: distances ≤ this (m) count as contact.
-        rng: a numpy Generator, or a seed (an int or a ``SeedSequence``: the generator is made
-            from it on the first noisy reading; a plan that never touches makes none), or None
-            (fresh entropy).
+    ``noise_std``: σ of the tangential position noise, m; ``pitch``: taxel pitch, m (None:
+    continuous); ``contact_tolerance``: distances ≤ this (m) count as contact; ``rng``: a numpy
+    Generator, a seed (an int ≥ 0 or a ``SeedSequence``; the generator is made at the first noisy
+    reading) or None (fresh entropy).
     """
 
     def __init__(

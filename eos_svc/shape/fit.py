@@ -148,12 +148,9 @@ def object_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> SurfaceObject:
 
 
 class Problem:
-    """One fit's residuals — one kind, one start orientation, one set of touches — and their
-    forward-difference Jacobian (forward, as MINPACK's: the box's and cylinder's distances
-    have kinks a central difference straddles). MINPACK asks for the Jacobian at every point
-    whose residuals it accepts, so both are evaluated together, the point and its k steps in
-    one batch, and every point evaluated is remembered (a refit from the same start finds its
-    first steps known)."""
+    """One fit's residuals (one kind, start orientation and set of touches) and their forward
+    difference Jacobian (the box's and cylinder's kinks defeat a central one), evaluated in one
+    batch and remembered per point: a refit from the same start finds its first steps known."""
 
     def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
         self.kind, self.r0, self.touches = kind, r0, touches
@@ -277,15 +274,10 @@ def fit_class(
     class_starts: ClassStarts | None = None,
     only: int | None = None,
 ) -> ClassFit:
-    """The least-squares fit of ``kind`` (the best of its starts).
-
-    ``hopeless``: a χ² above which the kind cannot compete with a kind already fitted: once a
-    start ends above it, the remaining starts are skipped. ``max_starts``: try at most that
-    many starts (all by default). ``nearest_first``: try the starts from the nearest to the
-    touches (:func:`nearest_order`). ``class_starts``: the touches' starts (shared by the
-    fits of several kinds to the same touches), else computed here; ``only``: fit from that
-    start alone. A start that :func:`explains` the touches ends the search (:func:`_minimise`
-    from each start)."""
+    """The least-squares fit of ``kind``, the best of its starts (:func:`_minimise` from each) up
+    to one that :func:`explains` the touches or ends above ``hopeless`` (χ²). ``max_starts``: at
+    most that many; ``nearest_first``: from the nearest (:func:`nearest_order`); ``class_starts``:
+    the touches' starts, shared by several kinds' fits; ``only``: that start alone."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k, m = N_PARAMS[kind], residual_count(touches)
