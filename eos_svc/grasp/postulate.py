@@ -29,15 +29,9 @@ def make_object(spec: ObjectSpec) -> SurfaceObject:
 
 @dataclass(frozen=True)
 class Postulate:
-    """The object grasp synthesis plans on.
-
-    Attributes:
-        spec: the postulated object (request form).
-        pose_known: its orientation was sensed (False: assumed upright, rpy = 0).
-        vertical_only: its size is known along the vertical only (an older postulate):
-            grasp across the vertical.
-        source: ``"post_shape"`` or ``"oracle"`` (the true object, for measurements only).
-    """
+    """The object grasp synthesis plans on (request form), whether its orientation was sensed
+    (else upright), whether its size is known along the vertical only (grasp across it), and its
+    source: ``"post_shape"`` or ``"oracle"`` (the true object, for measurements only)."""
 
     spec: ObjectSpec
     pose_known: bool

@@ -56,15 +56,9 @@ def _mat2(name: str, value: ArrayLike) -> Array:
 
 @dataclass(frozen=True)
 class CurvatureSample:
-    """One rolling observation in the contact frame (see the module's sign convention).
-
-    Attributes:
-        omega_xy: tangential angular velocity of the fingertip w.r.t. the object
-            [rad/s] (or rotation increment [rad]).
-        contact_velocity: velocity of the contact point over the fingertip [m/s]
-            (or displacement over the same interval [m]).
-        K_f: fingertip curvature form [1/m] (``I / r_f`` for a sphere tip).
-    """
+    """One rolling observation in the contact frame: the fingertip's tangential angular velocity
+    relative to the object ``omega_xy`` [rad/s] (or increment [rad]), the contact's velocity over
+    the fingertip [m/s] (or displacement [m]) and the fingertip's curvature form ``K_f`` [1/m]."""
 
     omega_xy: Array
     contact_velocity: Array

@@ -18,16 +18,9 @@ __all__ = ["FingerDescription", "HandDescription"]
 
 @dataclass(frozen=True)
 class FingerDescription:
-    """One finger.
-
-    Attributes:
-        name: finger name (``"finger1"``).
-        joints: its joint names, from the palm outward (each a 1-DoF joint).
-        tip_frame: frame at the fingertip sphere centre.
-        tip_radius: fingertip sphere radius, m (> 0).
-        tip_geometry: collision geometry name of the tip in the GeometryModel (or None: the
-            tip then has no geometry of its own and contacts use a sphere of ``tip_radius``).
-    """
+    """One finger: its name, its 1-DoF joints from the palm outward, the frame at its fingertip
+    sphere's centre, the sphere's radius (m) and the tip's collision geometry (None: contacts use
+    a sphere of ``tip_radius``)."""
 
     name: str
     joints: tuple[str, ...]

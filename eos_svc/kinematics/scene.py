@@ -21,15 +21,9 @@ __all__ = ["Contact", "Scene"]
 
 @dataclass(slots=True)
 class Contact:
-    """Closest-point result between one hand geometry and the object.
-
-    Attributes:
-        finger: finger name (or the geometry name for :meth:`Scene.distance`).
-        distance: signed distance, m (negative = penetration depth).
-        point_tip: world witness point on the hand geometry (fingertip surface), m.
-        point_object: world witness point on the object surface, m.
-        normal: world unit normal, from the object toward the fingertip.
-    """
+    """Closest points of one hand geometry (``finger``: the finger's or the geometry's name) and
+    the object: signed ``distance`` (m, negative = penetration), world witness points on the hand
+    and on the object (m), and the world unit ``normal`` from the object toward the hand."""
 
     finger: str
     distance: float

@@ -178,16 +178,9 @@ class Problem:
 
 @dataclass(frozen=True)
 class ClassFit:
-    """The best fit of one kind.
-
-    Attributes:
-        kind: the kind.
-        chi2: Σ of the squared whitened residuals at the optimum.
-        n_params: k.
-        covariance: (k, k) covariance of the parameters.
-        theta: the parameters; ``r0``: their start orientation.
-        start: which of the kind's starts the fit began from.
-    """
+    """The best fit of one kind: χ² (Σ of the squared whitened residuals at the optimum), its k
+    parameters ``theta`` about the start orientation ``r0`` with their (k, k) covariance, and the
+    index of the start it began from."""
 
     kind: str
     chi2: float

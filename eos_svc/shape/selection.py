@@ -44,15 +44,9 @@ MIN_CONTACTS = 4
 
 @dataclass(frozen=True)
 class Postulate:
-    """The chosen class, its confidence and the object, with the evidence behind them.
-
-    Attributes:
-        kind: sphere, ellipsoid, cylinder, capsule, box or plane.
-        confidence: P(class right and size within tolerance).
-        probabilities: posterior of every class fitted.
-        fits: the class fits (empty for a plane).
-        contacts: number of contacts used.
-    """
+    """The chosen class (a fitted kind or ``plane``), its confidence (P(class right and size
+    within tolerance)), every class's posterior and fit (none for a plane), and the contacts
+    used."""
 
     kind: str
     confidence: float
