@@ -16,12 +16,12 @@ import qpsolvers
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
 from .rolling_problem import JointBox, StepQP, step_qp, steps_at_speed_limits, velocity_bounds
-from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
+from .rolling_solvers import RollingQPError, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
 from .tip_contact import SphereTipProbe
 
-__all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
+__all__ = ["RollingQP", "RollingQPError", "RollingStep"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
@@ -90,7 +90,8 @@ class RollingQP:
             raise KinematicsError("gap_gain", f"must be in (0, 1], got {gap_gain!r}")
         if solver not in qpsolvers.available_solvers:
             raise KinematicsError(
-                "solver", f"unknown or uninstalled QP solver {solver!r}; available: {available_solvers()}"
+                "solver",
+                f"unknown or uninstalled QP solver {solver!r}; available: {qpsolvers.available_solvers}",
             )
         gid = hand.tip_geometry_id(finger)  # raises UnknownNameError
         if gid is not None and not isinstance(

@@ -19,7 +19,7 @@ from eos_svc.errors import ComputationError
 
 from .rolling_problem import StepQP
 
-__all__ = ["BOUND_TOLERANCE", "RollingQPError", "available_solvers", "equality_optimum", "solve_rolling_qp"]
+__all__ = ["BOUND_TOLERANCE", "RollingQPError", "equality_optimum", "solve_rolling_qp"]
 
 #: tolerance on the bounds, rad/s or m/s, of the closed form (OSQP's own tolerance below)
 BOUND_TOLERANCE = 1e-7
@@ -28,11 +28,6 @@ BOUND_TOLERANCE = 1e-7
 BACKEND_SETTINGS: dict[str, dict[str, Any]] = {
     "osqp": {"eps_abs": 1e-7, "eps_rel": 1e-7, "polishing": False, "max_iter": 20000, "raise_error": False},
 }
-
-
-def available_solvers() -> list[str]:
-    """Installed qpsolvers backends (any of them can solve the rolling QP)."""
-    return list(qpsolvers.available_solvers)
 
 
 class RollingQPError(ComputationError):

@@ -124,10 +124,6 @@ class Scene:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
         return tuple(self.contact(state, f) for f in self.hand.finger_names)
 
-    def contacts(self, state: HandState) -> dict[str, Contact]:
-        """:meth:`contact` for every finger."""
-        return dict(zip(self.hand.finger_names, self.tip_contacts(state), strict=True))
-
     def distance(self, state: HandState, geometry_name: str) -> Contact:
         """Closest points between any hand collision geometry (by name) and the object;
         ``Contact.finger`` holds the geometry name."""
