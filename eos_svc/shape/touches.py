@@ -97,16 +97,3 @@ class Touches:
         """σ of each normal component (rad)."""
         r = float(np.mean(self.radii)) if len(self.radii) else 0.01
         return max(self.tactile_noise / r, MIN_NORMAL_SIGMA)
-
-    def merged(self, other: Touches) -> Touches:
-        """These touches and ``other``'s (noise model of ``self``)."""
-        return Touches(
-            np.vstack([self.centres, other.centres]),
-            np.vstack([self.normals, other.normals]),
-            np.concatenate([self.radii, other.radii]),
-            np.vstack([self.free, other.free]),
-            np.concatenate([self.free_radii, other.free_radii]),
-            self.tactile_noise,
-            self.contact_tolerance,
-            self.kinematic_sigma,
-        )
