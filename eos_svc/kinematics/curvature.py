@@ -113,14 +113,6 @@ class CurvatureEstimate:
         """True when both principal curvatures are flat."""
         return self.flat[0] and self.flat[1]
 
-    @property
-    def sigma_radii(self) -> tuple[float, float]:
-        """σ of the principal radii by first-order propagation, σ_k / k² [m]."""
-        return tuple(  # type: ignore[return-value]
-            math.inf if r == math.inf else s * r * r
-            for r, s in zip(self.radii, self.sigma_curvatures, strict=True)
-        )
-
     def to_dict(self) -> dict[str, object]:
         """JSON-friendly form (``inf`` becomes ``None``)."""
 
@@ -167,10 +159,6 @@ class CurvatureEstimator:
     def n_samples(self) -> int:
         """Number of samples."""
         return len(self._samples)
-
-    def reset(self) -> None:
-        """Forget every sample."""
-        self._samples.clear()
 
     def add_sample(
         self, omega_xy: ArrayLike, contact_velocity_tip: ArrayLike, K_f: ArrayLike
