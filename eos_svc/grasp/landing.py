@@ -146,10 +146,8 @@ def hand_landings(
     rotation: np.ndarray,
     origin: np.ndarray,
 ) -> dict[str, Landing | None]:
-    """The :func:`landing` closing from open (sample 0) of every finger of ``tip_radii`` (in its
-    order), the palm at (``rotation``, ``origin``): the fingers' sweeps stacked into one
-    signed-distance query (an object's distance costs mostly per query, not per point: the
-    ellipsoid's Newton iteration)."""
+    """The :func:`landing` from open of every finger of ``tip_radii``, the palm at (``rotation``,
+    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
     names = list(tip_radii)
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)

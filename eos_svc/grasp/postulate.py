@@ -16,11 +16,8 @@ from eos_svc.schema.request import ObjectSpec
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:
-    """The kinematics object for a validated :class:`ObjectSpec` (its kind from the registry).
-
-    Raises:
-        ValidationError: ``object.<field>`` when the object cannot be built (a mesh file that
-            cannot be read, a flat mesh)."""
+    """The kinematics object for a validated :class:`ObjectSpec`; :class:`ObjectSizeError`
+    naming ``object.<field>`` when it cannot be built (an unreadable or flat mesh)."""
     try:
         return objects.make(spec.shape, spec.size, spec.position, spec.rpy)
     except ObjectSizeError as exc:
@@ -60,12 +57,8 @@ def upright_from_legacy(shape: Mapping[str, Any]) -> ObjectSpec | None:
 
 
 def read_postulate(shape: Mapping[str, Any]) -> Postulate | None:
-    """The postulate's object (``object`` when present, else the upright one), or None
-    when neither is known (a plane, or a size not yet measured).
-
-    Raises:
-        ValidationError: ``object`` is present but not a valid object (naming the field).
-    """
+    """The postulate's object (``object`` when present, else the upright one), or None when
+    neither is known; a :class:`ValidationError` naming the field of an invalid ``object``."""
     obj = shape.get("object")
     if obj is not None:
         spec = ObjectSpec.from_dict(obj, prefix="shape.object")

@@ -143,11 +143,8 @@ def primitive_wrenches(
 
 
 def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
-    """Ferrari–Canny ε of a primitive wrench set, and the set's rank.
-
-    0 when the origin is not strictly inside the convex hull (including rank-deficient and
-    empty sets). Never raises on degenerate geometry.
-    """
+    """Ferrari–Canny ε of a primitive wrench set and the set's rank: ε = 0 when the origin is not
+    strictly inside the convex hull (rank-deficient and empty sets too; never raises)."""
     w = np.asarray(wrenches, dtype=float)
     if w.ndim != 2 or len(w) == 0:
         return 0.0, 0

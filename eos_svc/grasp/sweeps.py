@@ -35,11 +35,8 @@ PRISMATIC_RESOLUTION = 0.001
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
-    """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
-
-    Computed once per hand at the neutral wrist (palm = world); ``resolution`` in rad, or
-    :data:`PRISMATIC_RESOLUTION` m for a finger with a prismatic joint.
-    """
+    """Tip-centre paths in the palm frame of every finger closing from its lower to its upper
+    limit, every ``resolution`` rad (:data:`PRISMATIC_RESOLUTION` m for a prismatic finger)."""
     state = hand.state(hand.neutral())
     palm = state.palm_placement()
     sweeps: dict[str, FingerSweep] = {}

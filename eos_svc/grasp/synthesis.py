@@ -105,11 +105,9 @@ class GraspSynthesis:
         return kept
 
     def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
-        """Another sampler's orientations, checked and scored as :meth:`candidates` checks them:
-        each ``(label, palm rotation)`` simulated at its best depth, kept when its contacts lie
-        about the centre and the hand reaches it collision-free, scored by ε; best ε first (no
-        preference for little wrist rotation). The hook for grasp agents with a sampler of
-        their own (``docs/extending.md``)."""
+        """Another sampler's ``(label, palm rotation)`` pairs, checked as :meth:`candidates` checks
+        them and scored by ε, best first: the hook for grasp agents with a sampler of their own
+        (``docs/extending.md``)."""
         kept = []
         for label, R in frames:
             cand = self._at_best_depth(label, R)

@@ -137,11 +137,8 @@ class CurvatureEstimate:
 
 @dataclass
 class CurvatureEstimator:
-    """Accumulates rolling samples and solves for the object's curvature form.
-
-    Samples from several EP1 runs at the same contact (expressed in the same
-    contact frame) may be accumulated into one estimator.
-    """
+    """Accumulates rolling samples (several EP1 runs' at one contact, in one contact frame) and
+    solves for the object's curvature form."""
 
     flat_curvature: float = DEFAULT_FLAT_CURVATURE
     _samples: list[CurvatureSample] = field(default_factory=list, repr=False)

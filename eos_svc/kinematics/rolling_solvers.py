@@ -31,12 +31,8 @@ BACKEND_SETTINGS: dict[str, dict[str, Any]] = {
 
 
 class RollingQPError(ComputationError):
-    """The rolling QP failed (infeasible, not solved).
-
-    Attributes:
-        problem: the :class:`qpsolvers.Problem` that failed.
-        solver: backend name; ``status``: the backend's status text.
-    """
+    """The rolling QP failed (infeasible, not solved): the :class:`qpsolvers.Problem`, the
+    backend's name and its status text."""
 
     def __init__(self, message: str, problem: qpsolvers.Problem, solver: str, status: str) -> None:
         super().__init__(f"rolling QP ({solver}): {message} [status: {status}]")

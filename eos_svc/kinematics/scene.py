@@ -115,11 +115,8 @@ class Scene:
         return Contact(finger, sd - r, c - r * n, p_obj, n)
 
     def tip_contacts(self, state: HandState) -> tuple[Contact, ...]:
-        """:meth:`contact` of every finger, in ``hand.finger_names`` order.
-
-        Raises:
-            KinematicsError: ``state`` belongs to another hand model.
-        """
+        """:meth:`contact` of every finger, in ``hand.finger_names`` order (:class:`KinematicsError`
+        when ``state`` belongs to another hand model)."""
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
         return tuple(self.contact(state, f) for f in self.hand.finger_names)

@@ -18,13 +18,8 @@ __all__ = ["SphereTipProbe"]
 
 
 class SphereTipProbe:
-    """Signed distance, witness points and normal between a sphere tip and one object.
-
-    Args:
-        finger: the finger's name (written into each :class:`Contact`).
-        radius: the tip sphere's radius, m.
-        object_shape: the object's coal shape; place it with :meth:`place_object`.
-    """
+    """Signed distance, witness points and normal between ``finger``'s sphere tip (``radius``
+    m) and one object's coal shape (placed by :meth:`place_object`)."""
 
     def __init__(self, finger: str, radius: float, object_shape: Any) -> None:
         self.finger = finger

@@ -94,9 +94,8 @@ def batch_geometry(
 def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors: per contact the tip centre's distance
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
-    ``min(sd(f) − r, 0)/σ_d``. Computed by the compiled loop once it is loaded in this process
-    (:mod:`eos_svc.shape.kernels`, the one place that chooses), else by
-    :func:`numpy_residuals`; the two agree to rounding."""
+    ``min(sd(f) − r, 0)/σ_d``: by the compiled loop once loaded (:mod:`eos_svc.shape.kernels`),
+    else by :func:`numpy_residuals`."""
     compiled = kernels.compiled_residuals()
     if compiled is None or kind not in kernels.KIND_CODES:
         return numpy_residuals(thetas, kind, r0, touches)
@@ -226,11 +225,10 @@ def nearest_order(kind: str, starts: ClassStarts) -> list[int]:
 def _minimise(
     problem: Problem, theta0: np.ndarray, max_nfev: int, levenberg_marquardt: bool
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(θ, whitened residuals at θ) minimising the residuals' squares from ``theta0`` in at most
-    ``max_nfev`` evaluations: Levenberg–Marquardt (MINPACK's ``lmder``, the Jacobian's own
-    scaling: what ``least_squares(method="lm", x_scale="jac")`` runs, called without its
-    per-evaluation wrappers) where there are at least as many residuals as parameters, else
-    the trust-region reflective method (``least_squares(method="trf")``)."""
+    """(θ, whitened residuals at θ) minimising their squares from ``theta0`` in at most
+    ``max_nfev`` evaluations: MINPACK's Levenberg–Marquardt (``leastsq``, what
+    ``least_squares(method="lm", x_scale="jac")`` runs) when ``levenberg_marquardt`` (at least
+    as many residuals as parameters), else ``least_squares(method="trf")``."""
     if levenberg_marquardt:
         theta, _, info, _, _ = leastsq(
             problem.residuals,

@@ -104,11 +104,9 @@ def distinct(axes: list[np.ndarray], angle: float = GROUP_ANGLE) -> list[np.ndar
 
 
 class ClassStarts:
-    """Every kind's start parameters and orientations ``(theta0, r0)`` from one set of touches,
-    each kind's computed on first use, and the pieces several kinds share (the scatter axes,
-    the normal lines' nearest point, the axial frames) once for all of them. It also keeps,
-    for the fits of one selection, each start's least-squares
-    problem (:class:`~eos_svc.shape.fit.Problem`, which remembers the points it evaluated)."""
+    """Every kind's starts ``(theta0, r0)`` from one set of touches (each kind's on first use;
+    the pieces kinds share once), and, for the fits of one selection, each start's
+    least-squares problem (:class:`~eos_svc.shape.fit.Problem`)."""
 
     def __init__(self, touches: Touches) -> None:
         self.touches = touches
