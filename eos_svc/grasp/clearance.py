@@ -70,9 +70,7 @@ class HandClearance:
 
     def clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
         """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
-        asked) is at least ``threshold`` m from the object. A geometry whose lower bound
-        (:func:`~eos_svc.kinematics.gap_bounds.ball_gap_lower_bounds`) reaches the threshold
-        needs no exact query."""
+        asked) is at least ``threshold`` m from the object (coal where a lower bound cannot tell)."""
         state = self.state
         state.update(q)
         state.geometry_data  # noqa: B018 -- brings the geometry placements up to date

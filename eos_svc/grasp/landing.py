@@ -20,14 +20,9 @@ from eos_svc.objects import SurfaceObject
 
 @dataclass(frozen=True)
 class Landing:
-    """Where a closing fingertip first touches the object.
-
-    Attributes:
-        index: sweep sample at which the tip touches (the finger's angle is ``sweep.angles[index]``).
-        angle: the joint angle of the touch, between samples ``index`` − 1 and ``index`` (rad).
-        point: contact point on the object (world, m).
-        normal: the object's outward unit normal there (world).
-    """
+    """Where a closing fingertip first touches the object: the first touching sweep sample, the
+    joint angle of the touch between it and the sample before (rad), the contact point on the
+    object and its outward unit normal (world, m)."""
 
     index: int
     angle: float

@@ -56,9 +56,8 @@ def ball_gap_lower_bounds(
 ) -> list[tuple[float, int]]:
     """``(lower bound of the gap, id)`` (m) of every geometry in ``geometry_ids`` to the ball of
     ``radius`` about ``centre`` (world, m): ``table[id]`` is the geometry's :func:`shape_bound`,
-    ``views[id]`` its world (translation, rotation). Each bound is at most the exact gap coal
-    would return (tested against coal), so a geometry whose bound reaches a threshold needs no
-    exact query. Arithmetic on floats: numpy costs ~0.5 µs a call on 3-vectors."""
+    ``views[id]`` its world (translation, rotation). Each bound is at most coal's exact gap
+    (tested), so a geometry whose bound reaches a threshold needs no exact query."""
     obj_radius = radius + BOUND_MARGIN
     c = np.asarray(centre, dtype=float)
     bounds = []

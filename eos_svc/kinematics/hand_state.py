@@ -206,13 +206,9 @@ class HandState:
         drpy: np.ndarray | None = None,
         clip: bool = False,
     ) -> np.ndarray:
-        """New q with the wrist translated by ``dp_world`` (m, world axes) and its roll, pitch,
-        yaw joints changed by ``drpy`` (rad).
-
-        The first three wrist joints must be the x, y, z prismatic joints and the next three
-        the roll, pitch, yaw joints (hand3x3). Leaving the joint limits raises
-        :class:`WorkspaceError`, or clips when ``clip`` is True.
-        """
+        """New q with the wrist's x, y, z joints (the first three) moved by ``dp_world`` (m, world
+        axes) and its roll, pitch, yaw joints (the next three) by ``drpy`` (rad); leaving the
+        joint limits raises :class:`WorkspaceError`, or clips when ``clip``."""
         widx = self.hand._wrist_q
         if len(widx) < 3:
             raise WorkspaceError("wrist_joints", "this hand has no x, y, z wrist joints")

@@ -90,8 +90,7 @@ class TactileSensor:
     def read_tip(self, contact: Contact, rotation: np.ndarray, radius: float) -> TactileReading:
         """The reading of ``contact`` on a sphere tip of ``radius`` m whose frame has the world
         ``rotation`` (3×3): the contact point on the tip, ``−radius Rᵀ n``, moved by the noise in
-        the tangent plane and re-projected on the sphere, then rounded to the taxel pitch.
-        Arithmetic on floats (numpy costs microseconds per call on 3-vectors)."""
+        the tangent plane and re-projected on the sphere, then rounded to the taxel pitch."""
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
         n0, n1, n2 = contact.normal.tolist()
         r = radius

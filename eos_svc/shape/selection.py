@@ -251,9 +251,8 @@ def siblings(kind: str, classes: tuple[str, ...]) -> list[str]:
 
 def sibling_start(fit: ClassFit, kind: str) -> tuple[np.ndarray, np.ndarray]:
     """A start ``(theta0, r0)`` of ``kind`` (a :func:`siblings` of the fit's) at the fitted
-    object's centre and orientation with its extents: the same half sizes, except along an
-    axis-oriented kind's axis, where the half length is set so the extent matches (a capsule's
-    caps reach one radius past its straight part)."""
+    object's centre, orientation and extents (an axis-oriented kind's half length set so the
+    extent along the axis matches: a capsule's caps reach one radius past its straight part)."""
     g = fit.geometry
     half = np.array(g.half_sizes, dtype=float)
     if KINDS[kind].orientation == "axis":
