@@ -137,6 +137,8 @@ class SurfaceObject(ABC):
     #: the shape fit fits this kind to touches (a primitive with half sizes); False: a mesh
     fittable: ClassVar[bool] = True
 
+    _geom: coal.ShapeBase
+
     def __init__(self, placement: pin.SE3 | None = None) -> None:
         if placement is None:
             placement = pin.SE3.Identity()
@@ -166,9 +168,9 @@ class SurfaceObject(ABC):
         (..., N, 3) of the instances with half sizes ``half`` (..., 1, s)."""
 
     @property
-    @abstractmethod
     def geometry(self) -> coal.ShapeBase:
-        """The coal shape (object frame)."""
+        """The coal shape (object frame): the ``_geom`` each kind builds."""
+        return self._geom
 
     @property
     @abstractmethod
