@@ -58,15 +58,12 @@ class Scene:
         # the hand's collision shapes by geometry id (reading them through the geometry model's
         # vector from Python costs ~3 µs a query)
         self._hand_shapes = [go.geometry for go in hand.collision_model.geometryObjects]
-        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere)
-        self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
+        # per finger: radius, tip shape (a sphere of that radius when the tip has no geometry)
+        self._tips: dict[str, tuple[float, coal.ShapeBase, bool]] = {}
         for name in hand.finger_names:
-            gid = hand.tip_geometry_id(name)
-            r = hand.tip_radius(name)
-            geom = hand.collision_model.geometryObjects[gid].geometry if gid is not None else None
-            is_sphere = geom is None or isinstance(geom, coal.Sphere)
-            shape = geom if geom is not None else coal.Sphere(r)
-            self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
+            gid, r = hand.tip_geometry_id(name), hand.tip_radius(name)
+            shape = coal.Sphere(r) if gid is None else self._hand_shapes[gid]
+            self._tips[name] = (r, shape, isinstance(shape, coal.Sphere))
 
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
@@ -81,7 +78,7 @@ class Scene:
         """Closest points between finger ``finger``'s tip and the object."""
         if finger not in self._tips:
             raise UnknownNameError("finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}")
-        _, r, shape, is_sphere = self._tips[finger]
+        r, shape, is_sphere = self._tips[finger]
         res = self._res
         res.clear()
         if is_sphere:
