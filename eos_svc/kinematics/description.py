@@ -46,15 +46,9 @@ class FingerDescription:
 
 @dataclass(frozen=True)
 class HandDescription:
-    """Which joints make which finger, the fingertips, the opposing finger, the palm.
-
-    Attributes:
-        fingers: the fingers; their order is the order of :attr:`HandModel.finger_names`.
-        wrist_joints: joints that move the palm (may be empty for a fixed-base hand).
-        opposing_finger: the finger opposing the others (the thumb; finger3 for hand3x3).
-        palm_frame: frame of the palm.
-        height_axis: unit axis in the palm frame along which the hand height is measured.
-    """
+    """A hand: its fingers (in :attr:`HandModel.finger_names` order), the joints that move the
+    palm (none for a fixed base), the finger opposing the others (the thumb), the palm frame and
+    the unit axis in it along which the hand height is measured."""
 
     fingers: tuple[FingerDescription, ...]
     wrist_joints: tuple[str, ...]

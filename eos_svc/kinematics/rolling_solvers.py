@@ -57,13 +57,9 @@ def equality_optimum(qp: StepQP, tolerance: float = BOUND_TOLERANCE) -> np.ndarr
 
 
 def solve_rolling_qp(qp: StepQP, solver: str = "osqp", closed_form: bool = True) -> tuple[np.ndarray, bool]:
-    """The joint velocities that solve ``qp``, and whether the closed form gave them:
-    :func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
-    backend ``solver`` on :meth:`StepQP.problem`.
-
-    Raises:
-        RollingQPError: the bounds are inconsistent or the backend finds no finite solution.
-    """
+    """The joint velocities that solve ``qp`` and whether the closed form gave them
+    (:func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
+    backend ``solver``); :class:`RollingQPError` when there is no finite solution."""
     if closed_form:
         x = equality_optimum(qp)
         if x is not None:
