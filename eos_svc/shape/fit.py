@@ -140,12 +140,6 @@ def residual_count(touches: Touches) -> int:
     return 4 * touches.count + len(touches.free)
 
 
-def object_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> SurfaceObject:
-    """The object of parameters ``theta`` about start orientation ``r0``."""
-    centres, rotations, half = batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0)
-    return KINDS[kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
-
-
 class Problem:
     """One fit's residuals (one kind, start orientation and set of touches) and their forward
     difference Jacobian (the box's and cylinder's kinks defeat a central one), evaluated in one
@@ -192,7 +186,8 @@ class ClassFit:
     @cached_property
     def geometry(self) -> SurfaceObject:
         """The fitted object (made when first asked for: a selection needs the chosen kind's)."""
-        return object_from(self.kind, self.theta, self.r0)
+        centres, rotations, half = batch_geometry(self.kind, self.theta[None], self.r0)
+        return KINDS[self.kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""
