@@ -44,18 +44,6 @@ class Postulate:
         return "" if self.pose_known else "pose assumed upright"
 
 
-def upright_from_legacy(shape: Mapping[str, Any]) -> ObjectSpec | None:
-    """An upright ball or cube (see the module docstring) from the postulate's class, vertical
-    half-extent and centre (None when either is unknown)."""
-    g, centre = shape.get("grasp_radius"), shape.get("centre")
-    if g is None or centre is None:
-        return None
-    g = float(g)
-    if str(shape.get("class")) in ("plane", "box"):
-        return ObjectSpec("box", {"size": (2.0 * g, 2.0 * g, 2.0 * g)}, tuple(centre))
-    return ObjectSpec("sphere", {"radius": g}, tuple(centre))
-
-
 def read_postulate(shape: Mapping[str, Any]) -> Postulate | None:
     """The postulate's object (``object`` when present, else the upright one), or None when
     neither is known; a :class:`ValidationError` naming the field of an invalid ``object``."""
@@ -63,5 +51,10 @@ def read_postulate(shape: Mapping[str, Any]) -> Postulate | None:
     if obj is not None:
         spec = ObjectSpec.from_dict(obj, prefix="shape.object")
         return Postulate(spec, bool(shape.get("pose_known", True)), False)
-    legacy = upright_from_legacy(shape)
-    return None if legacy is None else Postulate(legacy, False, True)
+    g, centre = shape.get("grasp_radius"), shape.get("centre")
+    if g is None or centre is None:
+        return None
+    g = float(g)  # an older postulate: an upright cube or ball of its vertical half-extent
+    if str(shape.get("class")) in ("plane", "box"):
+        return Postulate(ObjectSpec("box", {"size": (2.0 * g, 2.0 * g, 2.0 * g)}, tuple(centre)), False, True)
+    return Postulate(ObjectSpec("sphere", {"radius": g}, tuple(centre)), False, True)

@@ -43,7 +43,9 @@ def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerS
     for finger in hand.finger_names:
         idx = hand.finger_q_index(finger)
         lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
-        step = PRISMATIC_RESOLUTION if has_prismatic_joint(hand, finger) else resolution
+        joints = [hand.model.joints[hand.model.getJointId(j)] for j in hand.description.finger(finger).joints]
+        prismatic = any(j.shortname().startswith("JointModelP") for j in joints)
+        step = PRISMATIC_RESOLUTION if prismatic else resolution
         n = max(2, math.ceil((hi - lo) / step) + 1)
         angles = np.linspace(lo, hi, n)
         points = np.empty((n, 3))
@@ -54,13 +56,6 @@ def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerS
             points[k] = palm.actInv(state.tip_position(finger))
         sweeps[finger] = FingerSweep(angles, points)
     return sweeps
-
-
-def has_prismatic_joint(hand: HandModel, finger: str) -> bool:
-    """Whether one of ``finger``'s joints is prismatic (its coordinate in m, not rad)."""
-    model = hand.model
-    joints = hand.description.finger(finger).joints
-    return any(model.joints[model.getJointId(j)].shortname().startswith("JointModelP") for j in joints)
 
 
 def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:

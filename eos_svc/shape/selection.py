@@ -151,16 +151,6 @@ def tolerance_probability(
     return p_size * p_centre
 
 
-def is_plane(touches: Touches) -> bool:
-    """Every sensed normal within PLANE_ANGLE of their mean."""
-    mean = touches.normals.mean(axis=0)
-    norm = float(np.linalg.norm(mean))
-    if norm < 1e-9:
-        return False
-    cos = touches.normals @ (mean / norm)
-    return bool(np.all(cos >= math.cos(PLANE_ANGLE)))
-
-
 def select_class(
     touches: Touches,
     classes: tuple[str, ...] = CLASSES,
@@ -172,8 +162,10 @@ def select_class(
     class's cold starts."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
-    if is_plane(touches):
-        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
+    mean = touches.normals.mean(axis=0)
+    norm = float(np.linalg.norm(mean))
+    if norm >= 1e-9 and np.all(touches.normals @ (mean / norm) >= math.cos(PLANE_ANGLE)):
+        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)  # one face, no object
     m = 3 * touches.count
     fits: dict[str, ClassFit] = {}
     screened: dict[str, ClassFit] = {}
