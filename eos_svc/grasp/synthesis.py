@@ -83,7 +83,10 @@ class GraspSynthesis:
         wanted = 1 if isinstance(self.obj, Sphere) else SCORED
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
-        for group in _turn_groups(candidate_frames(self.obj, self.vertical_only, self.on_table)):
+        groups: dict[float, list[tuple[str, np.ndarray]]] = {}  # by wrist rotation, least first
+        for label, R in candidate_frames(self.obj, self.vertical_only, self.on_table):
+            groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
+        for group in (groups[turn] for turn in sorted(groups)):
             fresh = [c for label, R in group if (c := self._at_best_depth(label, R)) is not None]
             simulated += fresh
             for cand in sorted((c for c in fresh if c.about_centre), key=lambda c: (-c.angle_deg, c.label)):
@@ -229,12 +232,3 @@ class GraspSynthesis:
             self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)
-
-
-def _turn_groups(frames: Iterable[tuple[str, np.ndarray]]) -> list[list[tuple[str, np.ndarray]]]:
-    """The candidate frames ``(label, R)`` in groups of equal wrist rotation (:func:`palm_turn`
-    rounded to 1e-6 rad), the least-rotated group first, each group in the frames' order."""
-    groups: dict[float, list[tuple[str, np.ndarray]]] = {}
-    for label, R in frames:
-        groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
-    return [groups[turn] for turn in sorted(groups)]

@@ -188,20 +188,6 @@ def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     return out
 
 
-def _checked_ep1_arguments(omega: float, steps: int, dt: float, directions: Sequence[float]) -> list[float]:
-    """:func:`run_ep1`'s scalar arguments checked (:class:`EP1Error` names the bad one)."""
-    if not (math.isfinite(omega) and omega > 0):
-        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
-    if not (isinstance(steps, int) and steps >= 8):
-        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps!r}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
-    dirs = [float(d) for d in directions]
-    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
-        raise EP1Error("directions", "need at least two finite directions (degrees)")
-    return dirs
-
-
 def run_ep1(
     scene: Scene,
     state: HandState,
@@ -226,7 +212,15 @@ def run_ep1(
     ``path_every`` > 0: keep every that many steps' q in :attr:`EP1Result.path`. Raises
     :class:`EP1Error` (no contact, bad parameters) or :class:`RollingQPError`.
     """
-    dirs = _checked_ep1_arguments(omega, steps_per_direction, dt, directions)
+    if not (math.isfinite(omega) and omega > 0):
+        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
+    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
+        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
+    dirs = [float(d) for d in directions]
+    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
+        raise EP1Error("directions", "need at least two finite directions (degrees)")
     hand: HandModel = scene.hand
     ct0 = scene.contact(state, finger)
     if abs(ct0.distance) > CONTACT_TOLERANCE:
