@@ -5,7 +5,7 @@ of ``tests/agents/test_guarded_probe.py``), interleaved in the same run.
 
     .venv/bin/python benchmarks/bench_probes.py [--rounds 40]
 
-The default plan (``PlanRequest()``) is planned once and every ``GraspWorld.guarded_probe`` call
+The default plan (``PlanRequest()``) is planned once and every ``probe_motion.guarded_probe`` call
 it makes is recorded (world and arguments; a probe sets the whole configuration it moves from, so
 a replay does the same work). Each round replays all probes with one version, then the other (the
 machine is shared: only same-run ratios mean much); the outcomes of both are compared. Prints the
@@ -46,7 +46,7 @@ def recorded_probes() -> tuple[list[tuple[Any, tuple[Any, ...]]], np.ndarray]:
     configuration before the first (a probe's start depends on where the hand was, to the bit)."""
     calls: list[tuple[Any, tuple[Any, ...]]] = []
     first: list[np.ndarray] = []
-    current = world_module.GraspWorld.guarded_probe
+    current = probe_motion.guarded_probe
 
     def record(self: Any, *args: Any) -> Any:
         if not calls:
@@ -54,11 +54,11 @@ def recorded_probes() -> tuple[list[tuple[Any, tuple[Any, ...]]], np.ndarray]:
         calls.append((self, args))
         return current(self, *args)
 
-    world_module.GraspWorld.guarded_probe = record  # type: ignore[method-assign]
+    probe_motion.guarded_probe = record
     try:
         plan(PlanRequest())
     finally:
-        world_module.GraspWorld.guarded_probe = current  # type: ignore[method-assign]
+        probe_motion.guarded_probe = current
     return calls, first[0]
 
 

@@ -33,7 +33,9 @@ def guarded_probe(
     tolerance, so only the tip can touch and it never pushes the object; the others' exact gaps
     are queried only when their lower bound (:func:`_probe_floor_after`) does not fix the step.
     The outcome: touched, missed, or blocked (another part of the hand first, the wrist's limits).
+    Counted in ``world.probes``.
     """
+    world.probes += 1
     p = world.params
     hand = world.hand
     d = np.asarray(direction, dtype=float)

@@ -16,7 +16,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
-from eos_svc.world.probe_motion import _probe_floor_after
+from eos_svc.world.probe_motion import _probe_floor_after, guarded_probe
 from eos_svc.world.probing import ProbeOutcome, densify
 
 OBJECTS = [
@@ -154,7 +154,7 @@ def test_guarded_probe_is_the_plain_advancement(spec):
     fast_world.min_gap = counted
     plain_world.min_gap = plain_counted
     for probe in random_probes(fast_world, np.random.default_rng(7), 40):
-        fast = fast_world.guarded_probe(*probe)
+        fast = guarded_probe(fast_world, *probe)
         plain = plain_guarded_probe(plain_world, *probe, queries=plain_queries)
         assert_same_outcome(fast, plain)
         np.testing.assert_allclose(fast_world.state.q, plain_world.state.q, rtol=0.0, atol=TOLERANCE)
