@@ -37,13 +37,10 @@ class GraspSetup:
 
 
 def _field(result: Any, name: str) -> Any:
-    if isinstance(result, Mapping):
-        if name not in result:
-            raise ValidationError(name, "is missing from the plan result")
-        return result[name]
-    if not hasattr(result, name):
-        raise ValidationError(name, f"is missing: {type(result).__name__} is not a plan result")
-    return getattr(result, name)
+    found = name in result if isinstance(result, Mapping) else hasattr(result, name)
+    if not found:
+        raise ValidationError(name, "is missing from the plan result")
+    return result[name] if isinstance(result, Mapping) else getattr(result, name)
 
 
 def _q_final(value: Any, joints: int) -> tuple[float, ...]:
@@ -128,23 +125,16 @@ def load_directions(directions: int | Sequence[str]) -> tuple[str, ...]:
     Raises:
         ValidationError: ``directions`` names an unknown or repeated direction, or is out of 1…6.
     """
-    if isinstance(directions, bool):
-        raise ValidationError("directions", "must be a count 1…6 or a list of +x, -x, +y, -y, +z, -z")
-    if isinstance(directions, int):
+    if isinstance(directions, int) and not isinstance(directions, bool):
         if not 1 <= directions <= len(DIRECTIONS):
             raise ValidationError("directions", f"must be in [1, {len(DIRECTIONS)}], got {directions}")
         return DIRECTIONS[:directions]
-    if isinstance(directions, str) or not isinstance(directions, Sequence) or not directions:
+    if isinstance(directions, (str, bool)) or not isinstance(directions, Sequence) or not directions:
         raise ValidationError(
             "directions", "must be a count 1…6 or a non-empty list of +x, -x, +y, -y, +z, -z"
         )
-    out = []
-    for d in directions:
-        if d not in DIRECTIONS:
-            raise ValidationError(
-                "directions", f"unknown direction {d!r} (choose from {', '.join(DIRECTIONS)})"
-            )
-        if d in out:
-            raise ValidationError("directions", f"direction {d!r} given twice")
-        out.append(d)
-    return tuple(out)
+    for i, d in enumerate(directions):
+        if d not in DIRECTIONS or d in directions[:i]:
+            why = "given twice" if d in DIRECTIONS else f"unknown (choose from {', '.join(DIRECTIONS)})"
+            raise ValidationError("directions", f"direction {d!r}: {why}")
+    return tuple(directions)

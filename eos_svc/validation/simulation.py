@@ -1,25 +1,11 @@
 """The grasp in Drake: a hand welded at its planned wrist pose, fingers squeezing, a free object.
 
-Built with Drake's ``MultibodyPlant`` (discrete, SAP solver, point contact) from the same URDF
-the planner loads with Pinocchio (for a described hand, the URDF text its description makes:
-:class:`~eos_svc.hands.DescribedHand`), parsed by Drake's own ``Parser``. Drake-only adjustments are
-made here in code, never in the URDF:
-
-- the six wrist joints are removed and the palm is welded to the world at the pose Drake's
-  own forward kinematics gives for the planned wrist coordinates (the links between world and
-  palm, which carry no geometry, are welded too);
-- a joint actuator with an implicit PD controller (gains ``kp``, ``kd``, the URDF's effort
-  limit) is added to every finger joint, and to every joint a pre-shape holds (the URDF
-  declares no transmissions);
-- collisions between hand bodies are filtered out (the planner checks only hand–object
-  distances, and the finger links are not meant to touch one another);
-- every hand and object collision geometry gets the request's Coulomb μ and one point-contact
-  stiffness;
-- gravity is off: the object's weight is applied as an external force along one direction
-  at a time.
-
-The scene's builders (:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`,
-:func:`hand_parser`) serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
+Drake's ``MultibodyPlant`` (discrete, SAP, point contact) parses the URDF the planner loads
+with Pinocchio; the Drake-only adjustments (welded wrist, PD finger actuators, hand-hand
+collisions filtered, the request's μ, gravity off and the weight applied along one direction at
+a time) are made here in code, never in the URDF: ``docs/validation.md``. The scene's builders
+(:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`, :func:`hand_parser`)
+serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
 
 Reference: Drake, https://drake.mit.edu (MultibodyPlant, SAP: Castro et al., "An Unconstrained
 Convex Formulation of Compliant Contact", IEEE T-RO 2023).
@@ -41,7 +27,6 @@ from pydrake.geometry import (
     ProximityProperties,
     RoleAssign,
     SceneGraph,
-    Shape,
 )
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialForce
@@ -53,7 +38,7 @@ from pydrake.multibody.plant import (
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains, RigidBody, RotationalInertia, SpatialInertia
+from pydrake.multibody.tree import PdControllerGains, RigidBody, SpatialInertia, UnitInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
@@ -62,7 +47,6 @@ from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 from eos_svc.schema.request import ObjectSpec
 
-#: name of the object's body and model instance in the plant
 #: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles
 #: (rad), finger PD gains (N·m/rad, N·m·s/rad), point-contact stiffness (N/m), plant step (s)
 DEFAULT_MASS = 0.1
@@ -72,6 +56,7 @@ DEFAULT_KD = 0.05
 DEFAULT_CONTACT_STIFFNESS = 2e4
 DEFAULT_TIME_STEP = 1e-3
 
+#: name of the object's body and model instance in the plant
 OBJECT_NAME = "object"
 #: the table's geometry name, side (m) and thickness (m): a slab whose top is the table's height
 TABLE_NAME = "table"
@@ -102,26 +87,17 @@ def contact_material(friction: float, stiffness: float) -> ProximityProperties:
     return material
 
 
-def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
-    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
-    and the unit-mass solid inertia about its centre (scaled later), both from the object's
-    kind (:mod:`eos_svc.objects`)."""
-    obj = objects.make(spec.shape, spec.size, spec.position)
-    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
-    inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
-    return obj.drake_collision_shapes(), unit
-
-
 def add_object(
     plant: MultibodyPlant, spec: ObjectSpec, mass: float, material: ProximityProperties
 ) -> RigidBody:
-    """The object as a free body (:data:`OBJECT_NAME`, its own model instance) of ``mass`` kg, its
-    collision shapes (:func:`object_shapes`) with ``material``."""
-    shapes, unit_inertia = object_shapes(spec)
-    inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
+    """The object as a free body (:data:`OBJECT_NAME`, its own model instance) of ``mass`` kg,
+    the solid's inertia, its kind's collision shapes (:mod:`eos_svc.objects`) with ``material``."""
+    obj = objects.make(spec.shape, spec.size, spec.position)
+    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
+    unit = UnitInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
+    inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit)
     body = plant.AddRigidBody(OBJECT_NAME, plant.AddModelInstance(OBJECT_NAME), inertia)
-    for i, shape in enumerate(shapes):
+    for i, shape in enumerate(obj.drake_collision_shapes()):
         plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{OBJECT_NAME}_{i}", material)
     return body
 
@@ -283,10 +259,7 @@ class GraspSimulation:
 
         self.plant = plant
         self.body = body
-        self.hand = hand
-        self.mass = mass
-        self.diagram = builder.Build()
-        self.simulator = Simulator(self.diagram)
+        self.simulator = Simulator(builder.Build())
         self.context = self.simulator.get_mutable_context()
         self._plant_context = plant.GetMyMutableContextFromRoot(self.context)
         pc = self._plant_context

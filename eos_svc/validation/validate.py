@@ -1,15 +1,11 @@
 """``validate_grasp``: does the planned grasp hold the object in a physics engine?
 
-Recipe (see ``docs/validation.md``): the hand at the plan's final configuration with its wrist
-welded, its finger joints squeezing (PD toward the planned angles plus ``squeeze``), the real
-object a free rigid body of ``mass``; after ``settle_seconds`` of squeeze, the object's weight
-pulls along each direction in turn for ``seconds``. Held = in every direction the object's
-centre stays within ``hold_tolerance`` of where the squeeze left it and at least ``min_parts``
-hand parts (palm, fingers) still touch it.
+The recipe, its numbers and what is not modelled: ``docs/validation.md``.
 """
 
 from __future__ import annotations
 
+import contextlib
 import math
 import time
 from collections.abc import Mapping, Sequence
@@ -103,57 +99,15 @@ def validate_grasp(
     """
     t_start = time.perf_counter()
     settings = dict(getattr(hand, "drake", {})) if hand is not None else {}
-    options: dict[str, Any] = {
-        "directions": directions,
-        "seconds": seconds,
-        "mass": mass,
-        "squeeze": settings.get("squeeze", DEFAULT_SQUEEZE) if squeeze is None else squeeze,
-        "kp": settings.get("kp", DEFAULT_KP) if kp is None else kp,
-        "kd": settings.get("kd", DEFAULT_KD) if kd is None else kd,
-        "settle_seconds": settle_seconds,
-        "hold_tolerance": hold_tolerance,
-        "min_parts": min_parts,
-        "contact_stiffness": contact_stiffness,
-        "time_step": time_step,
-        "stop_distance": stop_distance,
-    }
+    squeeze = settings.get("squeeze", DEFAULT_SQUEEZE) if squeeze is None else squeeze
     if hand is None:
-        return _validate(
-            result, t_start, Path(urdf), description or HandDescription.hand3x3(), None, (), **options
-        )
-    with drake_urdf(hand) as (path, package_dirs):
-        return _validate(
-            result, t_start, path, hand.description, model_joint_names(hand), package_dirs, **options
-        )
-
-
-def _validate(
-    result: PlanResult | Mapping[str, Any],
-    t_start: float,
-    urdf: Path,
-    description: HandDescription,
-    joint_names: Sequence[str] | None,
-    package_dirs: Sequence[Path],
-    *,
-    directions: int | Sequence[str],
-    seconds: float,
-    mass: float,
-    squeeze: float,
-    kp: float,
-    kd: float,
-    settle_seconds: float,
-    hold_tolerance: float,
-    min_parts: int,
-    contact_stiffness: float,
-    time_step: float,
-    stop_distance: float,
-) -> GraspValidation:
-    """:func:`validate_grasp` once the hand's URDF file, description and joints are known."""
-    joints = (
-        len(joint_names)
-        if joint_names is not None
-        else (len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers))
-    )
+        description = description or HandDescription.hand3x3()
+        joint_names = None
+        joints = len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers)
+    else:
+        description = hand.description
+        joint_names = model_joint_names(hand)
+        joints = len(joint_names)
     setup = grasp_setup(result, joints)
     names = load_directions(directions)
     seconds = _positive(seconds, "seconds", MAX_SECONDS)
@@ -162,45 +116,47 @@ def _validate(
     hold_tolerance = _positive(hold_tolerance, "hold_tolerance", 1.0)
     time_step = _positive(time_step, "time_step", 0.01)
     stop_distance = max(_positive(stop_distance, "stop_distance", 10.0), hold_tolerance)
-    kp, kd = _positive(kp, "kp", 1e4), _positive(kd, "kd", 1e3)
+    kp = _positive(settings.get("kp", DEFAULT_KP) if kp is None else kp, "kp", 1e4)
+    kd = _positive(settings.get("kd", DEFAULT_KD) if kd is None else kd, "kd", 1e3)
     contact_stiffness = _positive(contact_stiffness, "contact_stiffness", 1e9)
     if isinstance(squeeze, bool) or not isinstance(squeeze, (int, float)) or not abs(squeeze) <= 0.5:
         raise ValidationError("squeeze", f"must be a number in [-0.5, 0.5] rad, got {squeeze!r}")
     if isinstance(min_parts, bool) or not isinstance(min_parts, int) or min_parts < 1:
         raise ValidationError("min_parts", f"must be an integer ≥ 1, got {min_parts!r}")
-    path = Path(urdf)
-    if not path.is_file():
-        raise ValidationError("urdf", f"no such file: {path}")
+    if hand is None and not Path(urdf).is_file():
+        raise ValidationError("urdf", f"no such file: {urdf}")
 
-    try:
-        sim = GraspSimulation(
-            path,
-            description,
-            setup.q_final,
-            setup.obj,
-            friction=setup.friction,
-            joint_names=joint_names,
-            package_dirs=package_dirs,
-            mass=mass,
-            squeeze=float(squeeze),
-            kp=kp,
-            kd=kd,
-            contact_stiffness=contact_stiffness,
-            time_step=time_step,
-            table_height=setup.table_height,
-        )
-        settled = sim.settle(settle_seconds)
-        settle_touching = sim.touching()
-        outcomes = []
-        for name in names:
-            axis = np.zeros(3)
-            axis["xyz".index(name[1])] = 1.0 if name[0] == "+" else -1.0
-            largest, final, early = sim.load(axis, mass * GRAVITY, seconds, SAMPLE_S, stop_distance)
-            touching = sim.touching()
-            held = largest < hold_tolerance and len(touching) >= min_parts
-            outcomes.append(DirectionOutcome(name, largest, final, touching, held, early))
-    except RuntimeError as exc:  # Drake's own failures (e.g. the contact solver not converging)
-        raise SimulationError(f"Drake could not simulate the grasp: {exc}") from exc
+    hand_files = contextlib.nullcontext((Path(urdf), [])) if hand is None else drake_urdf(hand)
+    with hand_files as (path, package_dirs):
+        try:
+            sim = GraspSimulation(
+                path,
+                description,
+                setup.q_final,
+                setup.obj,
+                friction=setup.friction,
+                joint_names=joint_names,
+                package_dirs=package_dirs,
+                mass=mass,
+                squeeze=float(squeeze),
+                kp=kp,
+                kd=kd,
+                contact_stiffness=contact_stiffness,
+                time_step=time_step,
+                table_height=setup.table_height,
+            )
+            settled = sim.settle(settle_seconds)
+            settle_touching = sim.touching()
+            outcomes = []
+            for name in names:
+                axis = np.zeros(3)
+                axis["xyz".index(name[1])] = 1.0 if name[0] == "+" else -1.0
+                largest, final, early = sim.load(axis, mass * GRAVITY, seconds, SAMPLE_S, stop_distance)
+                touching = sim.touching()
+                held = largest < hold_tolerance and len(touching) >= min_parts
+                outcomes.append(DirectionOutcome(name, largest, final, touching, held, early))
+        except RuntimeError as exc:  # Drake's own failures (e.g. the contact solver not converging)
+            raise SimulationError(f"Drake could not simulate the grasp: {exc}") from exc
     dropped = [o for o in outcomes if not o.held]
     if not dropped:
         reason = "held in every direction"
@@ -215,8 +171,9 @@ def _validate(
         reason = f"dropped along {first.direction}: {why} (dropped along {every})"
     return GraspValidation(
         held=not dropped,
-        outcomes=tuple(outcomes),
+        reason=reason,
         seconds=seconds,
+        outcomes=tuple(outcomes),
         settle_seconds=settle_seconds,
         settle_displacement_m=float(np.linalg.norm(settled - sim.start)),
         settle_touching=settle_touching,
@@ -230,5 +187,4 @@ def _validate(
         min_parts=min_parts,
         time_step=time_step,
         wall_time_s=time.perf_counter() - t_start,
-        reason=reason,
     )
