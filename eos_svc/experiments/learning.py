@@ -22,14 +22,7 @@ import numpy as np
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.cli.common import int_at_least
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 from eos_svc.ratings import Weights
 
 ACROSS = (math.pi / 2, 0.0, 0.0)
@@ -61,8 +54,10 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     memory = GraspMemory(db)
     names = stream(repeats, seed)
     requests = [PlanRequest(obj=OBJECTS[name], seed=seed * 1000 + i) for i, name in enumerate(names)]
-    base = run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
-    learned = run_plans([replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory)
+    base = common.run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
+    learned = common.run_plans(
+        [replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory
+    )
     rows: list[dict[str, Any]] = [
         {
             "index": i,
@@ -92,16 +87,15 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
         [r for r in rows if not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"]]
     )
     data = {"repeats": repeats, "seed": seed, "rows": rows, "summary": summary, "memory": str(db)}
-    write_json(out / "learning.json", data)
-    write_csv(out / "learning.csv", rows)
+    common.write_json(out / "learning.json", data)
+    common.write_csv(out / "learning.csv", rows)
     plot(rows, out / "learning.png")
     return data
 
 
 def plot(rows: list[dict], path: Path) -> Path:
     """Grasp cycles per plan along the stream, with and without learning."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 3.8), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(7.0, 3.8), dpi=120)
     x = [r["index"] for r in rows]
     ax.plot(x, [r["grasp_cycles_without"] for r in rows], "o-", label="without learning", alpha=0.8)
     ax.plot(x, [r["grasp_cycles_with"] for r in rows], "s-", label="with learning", alpha=0.8)
@@ -112,7 +106,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     ax.set_ylabel("grasp-stage cycles")
     ax.set_title("Learned sub-rating: grasp cycles on new and repeated objects")
     ax.legend(fontsize=8)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -134,7 +128,7 @@ def report(data: dict) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment learning [options]``."""
-    parser = experiment_parser("learning", __doc__, "results/learning")
+    parser = common.experiment_parser("learning", __doc__, "results/learning")
     parser.add_argument("--repeats", type=int_at_least(1), default=3, help="times each object appears (3)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
     args = parser.parse_args(argv)

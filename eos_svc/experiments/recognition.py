@@ -25,14 +25,7 @@ from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.cli.common import int_at_least
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 
 CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
 POSTULATES = (*CLASSES, "plane", "none")
@@ -125,7 +118,7 @@ def run(
             for _, _, spec in specs
             for seed in range(1, seeds + 1)
         ]
-        results = run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
+        results = common.run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
         for request, result in zip(requests, results, strict=True):
             shape = result.shape or {}
             guess = shape.get("class", "none")
@@ -155,11 +148,11 @@ def run(
             )
     lengths = search_lengths(search_seeds)
     data = summarize(rows, noises, lengths)
-    write_csv(out / "recognition.csv", [{**r, "object": str(r["object"])} for r in rows])
+    common.write_csv(out / "recognition.csv", [{**r, "object": str(r["object"])} for r in rows])
     strict = [
         {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in r.items()} for r in rows
     ]
-    write_json(out / "recognition.json", {**data, "rows": strict})  # NaN as None: strict JSON
+    common.write_json(out / "recognition.json", {**data, "rows": strict})  # NaN as None: strict JSON
     plot_confusion(data, out / "recognition_confusion.png")
     plot_calibration(data, out / "recognition_calibration.png")
     plot_search(lengths, out / "recognition_search.png")
@@ -227,7 +220,9 @@ def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list
 def plot_confusion(data: dict[str, Any], path: Path) -> Path:
     """One confusion matrix per noise level."""
     noises = list(data["per_noise"])
-    fig, axes = pyplot().subplots(1, len(noises), figsize=(4.2 * len(noises), 3.6), dpi=110, squeeze=False)
+    fig, axes = common.pyplot().subplots(
+        1, len(noises), figsize=(4.2 * len(noises), 3.6), dpi=110, squeeze=False
+    )
     for ax, noise in zip(axes[0], noises, strict=True):
         conf = data["per_noise"][noise]["confusion"]
         m = np.array([[conf[t][p] for p in POSTULATES] for t in CLASSES])
@@ -239,12 +234,12 @@ def plot_confusion(data: dict[str, Any], path: Path) -> Path:
         ax.set_title(f"noise {float(noise) * 1000:.1f} mm", fontsize=9)
         ax.set_xlabel("postulated", fontsize=8)
     axes[0][0].set_ylabel("truth", fontsize=8)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def plot_calibration(data: dict[str, Any], path: Path) -> Path:
     """Accuracy against confidence (bins), with the diagonal."""
-    fig, ax = pyplot().subplots(figsize=(4.5, 4.0), dpi=110)
+    fig, ax = common.pyplot().subplots(figsize=(4.5, 4.0), dpi=110)
     bins = [b for b in data["calibration"] if b["n"]]
     ax.plot([0, 1], [0, 1], ":", color="grey")
     ax.plot([b["mean_confidence"] for b in bins], [b["accuracy"] for b in bins], "o-")
@@ -255,16 +250,16 @@ def plot_calibration(data: dict[str, Any], path: Path) -> Path:
         xlabel="confidence", ylabel="fraction right (class and ≤ 10 % error)", xlim=(0, 1.02), ylim=(0, 1.02)
     )
     ax.set_title("Calibration of post_shape's confidence", fontsize=9)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def plot_search(lengths: list[int], path: Path) -> Path:
     """Histogram of search moves over seeds."""
-    fig, ax = pyplot().subplots(figsize=(4.5, 3.2), dpi=110)
+    fig, ax = common.pyplot().subplots(figsize=(4.5, 3.2), dpi=110)
     ax.hist(lengths, bins=range(1, max(lengths) + 2), color="tab:blue")
     ax.set(xlabel="search moves to locate the default object", ylabel="seeds")
     ax.set_title(f"{len(lengths)} seeds: median {np.median(lengths):.0f}, max {max(lengths)}", fontsize=9)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict[str, Any]) -> str:
@@ -295,7 +290,7 @@ def report(data: dict[str, Any]) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment recognition [options]``."""
-    parser = experiment_parser("recognition", __doc__, "results/recognition")
+    parser = common.experiment_parser("recognition", __doc__, "results/recognition")
     parser.add_argument("--seeds", type=int_at_least(1), default=3, help="seeds per object and noise (3)")
     parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
     parser.add_argument("--search-seeds", type=int_at_least(1), default=100, help="search run seeds (100)")

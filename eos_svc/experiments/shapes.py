@@ -23,14 +23,7 @@ import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.cli.common import int_at_least
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 
 ACROSS = (math.pi / 2, 0.0, 0.0)  # cylinder/capsule axis along y: across the approach (x)
 
@@ -63,7 +56,7 @@ def run(
     for label, shape, size, rpy in OBJECTS:
         spec = ObjectSpec(shape, size, position, rpy)
         requests = [PlanRequest(obj=spec, seed=s) for s in range(1, seeds + 1)]
-        results = run_plans(requests, label, quiet)
+        results = common.run_plans(requests, label, quiet)
         classes = [r.shape["class"] if r.shape else "none" for r in results]
         rows.append(
             {
@@ -79,20 +72,19 @@ def run(
             }
         )
         if oracle:
-            truth = run_plans(requests, f"{label} (oracle postulate)", quiet, oracle_postulate=True)
+            truth = common.run_plans(requests, f"{label} (oracle postulate)", quiet, oracle_postulate=True)
             rows[-1]["oracle_success_rate"] = float(np.mean([r.status == "success" for r in truth]))
             rows[-1]["oracle_statuses"] = ",".join(sorted({r.status for r in truth}))
     data = {"seeds": seeds, "rows": rows}
-    write_json(out / "shapes.json", data)
-    write_csv(out / "shapes.csv", rows)
+    common.write_json(out / "shapes.json", data)
+    common.write_csv(out / "shapes.csv", rows)
     plot(rows, out / "shapes.png")
     return data
 
 
 def plot(rows: list[dict], path: Path) -> Path:
     """Precision-grip and success (good grasp) rates per object (horizontal bars)."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 6.0), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(7.0, 6.0), dpi=120)
     y = np.arange(len(rows))
     bars = [("grip_rate", "precision grip (all tips touch)"), ("success_rate", "success (good grasp)")]
     if all("oracle_success_rate" in r for r in rows):
@@ -107,7 +99,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     ax.set_xlabel("rate over seeds")
     ax.set_title("Every shape end to end")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -128,7 +120,7 @@ def report(data: dict) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment shapes [options]``."""
-    parser = experiment_parser("shapes", __doc__, "results/shapes")
+    parser = common.experiment_parser("shapes", __doc__, "results/shapes")
     parser.add_argument("--seeds", type=int_at_least(1), default=5, help="seeds per object (5)")
     parser.add_argument(
         "--oracle",
