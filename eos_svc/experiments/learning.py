@@ -1,10 +1,8 @@
 """The learned sub-rating (paper §7): a stream of objects with repeats, with and without learning.
 
-Without learning: weights (0.5, 0.5, 0), no memory. With learning: weights
-(0.25, 0.25, 0.5) and a grasp memory (SQLite file in the output folder, fresh for the
-run) that the ``recall`` agent reads through its learned sub-rating. The same seeded
-stream is planned both ways; the grasp-stage cycles of first sightings ("new") and of
-repeats are compared.
+The same seeded stream planned with weights (0.5, 0.5, 0) and no memory, then with weights
+(0.25, 0.25, 0.5) and a fresh grasp memory (SQLite, in the output folder) that ``recall``
+reads; the grasp-stage cycles of first sightings and of repeats compared (``docs/planner.md``).
 
     eos experiment learning --out results/learning
 """
@@ -83,8 +81,8 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     }
     rep = summary["repeated"]
     summary["repeated_reduction"] = 1.0 - rep["with"] / rep["without"] if rep["without"] else None
-    summary["new_worse"] = len(
-        [r for r in rows if not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"]]
+    summary["new_worse"] = sum(
+        not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"] for r in rows
     )
     data = {"repeats": repeats, "seed": seed, "rows": rows, "summary": summary, "memory": str(db)}
     common.write_json(out / "learning.json", data)

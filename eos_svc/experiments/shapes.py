@@ -1,12 +1,9 @@
 """Every shape end to end: precision-grip and success (good grasp) rates per object class.
 
-Spheres, ellipsoids, cylinders and capsules (lying across the approach, upright, along the
-approach, at an angle) and boxes (several aspect ratios and yaws) at the default position,
-several seeds each, weights (0.5, 0.5). ``success`` is a good grasp (the end agent's
-verdict); ``grip`` a precision grip (all fingertips touch). With ``--oracle`` every object is
-planned a second time with grasp_points planning on the true object instead of post_shape's
-postulate (``plan(..., oracle_postulate=True)``): the grasp stage measured apart from
-recognition (its column is *not* the planner's result).
+Every class in several sizes and poses at the default position, several seeds each, weights
+(0.5, 0.5). With ``--oracle`` every object is planned again with grasp_points on the true
+object instead of post_shape's postulate (``plan(..., oracle_postulate=True)``): the grasp
+stage apart from recognition, *not* the planner's result. The figures: ``docs/planner.md``.
 
     eos experiment shapes --seeds 5 --out results/shapes
     eos experiment shapes --seeds 5 --oracle
@@ -123,9 +120,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = common.experiment_parser("shapes", __doc__, "results/shapes")
     parser.add_argument("--seeds", type=int_at_least(1), default=5, help="seeds per object (5)")
     parser.add_argument(
-        "--oracle",
-        action="store_true",
-        help="also plan every object with grasp_points on the true object (the grasp stage alone)",
+        "--oracle", action="store_true", help="also plan on the true object (grasp stage alone)"
     )
     args = parser.parse_args(argv)
     data = run(args.seeds, args.out, oracle=args.oracle)

@@ -5,17 +5,15 @@ The recipe, its numbers and what is not modelled: ``docs/validation.md``.
 
 from __future__ import annotations
 
-import contextlib
 import math
 import time
 from collections.abc import Mapping, Sequence
-from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from eos_svc.errors import ValidationError
-from eos_svc.kinematics.hand import HAND3X3_URDF, HandDescription, HandModel
+from eos_svc.kinematics.hand import HandModel
 from eos_svc.validation.drake_hand import drake_urdf, model_joint_names
 from eos_svc.validation.report import DirectionOutcome, GraspValidation
 from eos_svc.validation.setup import grasp_setup, load_directions
@@ -29,6 +27,7 @@ from eos_svc.validation.simulation import (
     GraspSimulation,
     SimulationError,
 )
+from eos_svc.world.hand_context import default_context
 
 if TYPE_CHECKING:
     from eos_svc.schema.result import PlanResult
@@ -65,8 +64,6 @@ def validate_grasp(
     contact_stiffness: float = DEFAULT_CONTACT_STIFFNESS,
     time_step: float = DEFAULT_TIME_STEP,
     stop_distance: float = 0.05,
-    urdf: str | Path = HAND3X3_URDF,
-    description: HandDescription | None = None,
     hand: HandModel | None = None,
 ) -> GraspValidation:
     """Simulate a plan's final grasp in Drake and say whether it holds the object.
@@ -89,26 +86,19 @@ def validate_grasp(
         contact_stiffness: point-contact stiffness (N/m).
         time_step: discrete step of the plant (s).
         stop_distance: a direction stops early once the object is this far away (m).
-        urdf, description: the hand (default hand3x3), when ``hand`` is not given.
-        hand: the hand model the plan used: its URDF (a described hand's composite text), its
-            description and its joints in the model's order.
+        hand: the hand model the plan used (default hand3x3): its URDF (a described hand's
+            composite text), its description and its joints in the model's order.
 
     Raises:
         ValidationError: naming the bad field of ``result`` or the bad argument.
         SimulationError: Drake failed while simulating (an :class:`~eos_svc.errors.EosError`).
     """
     t_start = time.perf_counter()
-    settings = dict(getattr(hand, "drake", {})) if hand is not None else {}
+    hand = default_context().hand if hand is None else hand
+    settings = dict(getattr(hand, "drake", {}))
     squeeze = settings.get("squeeze", DEFAULT_SQUEEZE) if squeeze is None else squeeze
-    if hand is None:
-        description = description or HandDescription.hand3x3()
-        joint_names = None
-        joints = len(description.wrist_joints) + sum(len(f.joints) for f in description.fingers)
-    else:
-        description = hand.description
-        joint_names = model_joint_names(hand)
-        joints = len(joint_names)
-    setup = grasp_setup(result, joints)
+    joint_names = model_joint_names(hand)
+    setup = grasp_setup(result, len(joint_names))
     names = load_directions(directions)
     seconds = _positive(seconds, "seconds", MAX_SECONDS)
     mass = _positive(mass, "mass", 100.0)
@@ -123,15 +113,12 @@ def validate_grasp(
         raise ValidationError("squeeze", f"must be a number in [-0.5, 0.5] rad, got {squeeze!r}")
     if isinstance(min_parts, bool) or not isinstance(min_parts, int) or min_parts < 1:
         raise ValidationError("min_parts", f"must be an integer ≥ 1, got {min_parts!r}")
-    if hand is None and not Path(urdf).is_file():
-        raise ValidationError("urdf", f"no such file: {urdf}")
 
-    hand_files = contextlib.nullcontext((Path(urdf), [])) if hand is None else drake_urdf(hand)
-    with hand_files as (path, package_dirs):
+    with drake_urdf(hand) as (path, package_dirs):
         try:
             sim = GraspSimulation(
                 path,
-                description,
+                hand.description,
                 setup.q_final,
                 setup.obj,
                 friction=setup.friction,
