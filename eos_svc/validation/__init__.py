@@ -11,9 +11,8 @@ See ``docs/validation.md`` for what is modelled and what is not.
 """
 
 from eos_svc.validation.report import DIRECTIONS, DirectionOutcome, GraspValidation
-from eos_svc.validation.setup import GraspSetup, grasp_setup
 from eos_svc.validation.simulation import SimulationError
-from eos_svc.validation.validate import validate_grasp
+from eos_svc.validation.validate import GraspSetup, grasp_setup, validate_grasp
 
 __all__ = [
     "DIRECTIONS",

@@ -1,6 +1,9 @@
 """``validate_grasp``: does the planned grasp hold the object in a physics engine?
 
-The recipe, its numbers and what is not modelled: ``docs/validation.md``.
+What it reads from a plan result (a :class:`~eos_svc.agents.PlanResult` or its JSON form, as
+``eos plan --json`` prints it: ``q_final``, ``ground_truth``, ``friction``) is checked at the
+edge, every problem a :class:`~eos_svc.errors.ValidationError` naming the field. The recipe, its
+numbers and what is not modelled: ``docs/validation.md``.
 """
 
 from __future__ import annotations
@@ -8,15 +11,16 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from eos_svc.errors import ValidationError
 from eos_svc.kinematics.hand import HandModel
+from eos_svc.schema.request import MAX_FRICTION, MESH_FIELDS, SHAPE_SIZE_FIELDS, ObjectSpec, Table
 from eos_svc.validation.drake_hand import drake_urdf, model_joint_names
-from eos_svc.validation.report import DirectionOutcome, GraspValidation
-from eos_svc.validation.setup import grasp_setup, load_directions
+from eos_svc.validation.report import DIRECTIONS, DirectionOutcome, GraspValidation
 from eos_svc.validation.simulation import (
     DEFAULT_CONTACT_STIFFNESS,
     DEFAULT_KD,
@@ -40,13 +44,120 @@ SAMPLE_S = 0.1
 MAX_SECONDS = 60.0
 
 
-def _positive(value: object, name: str, upper: float = math.inf) -> float:
+def _positive(value: object, name: str, upper: float = math.inf, zero: bool = False) -> float:
+    """``value`` as a number in (0, ``upper``] (in [0, ``upper``] when ``zero`` is allowed)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValidationError(name, f"must be a number, got {type(value).__name__}")
     v = float(value)
-    if not (math.isfinite(v) and 0.0 < v <= upper):
-        raise ValidationError(name, f"must be in (0, {upper}], got {value!r}")
+    if not (math.isfinite(v) and (v >= 0.0 if zero else v > 0.0) and v <= upper):
+        raise ValidationError(name, f"must be in {'[' if zero else '('}0, {upper}], got {value!r}")
     return v
+
+
+@dataclass(frozen=True)
+class GraspSetup:
+    """The grasp to simulate.
+
+    Attributes:
+        q_final: every joint of the hand in the planner's order (hand3x3: wrist x, y, z (m),
+            roll, pitch, yaw (rad), then each finger's joints from the palm out (rad)).
+        obj: the real object, shape, size and pose.
+        friction: Coulomb μ of the hand–object contacts.
+        table_height: the table the object rests on (world z of its top, m), or None.
+    """
+
+    q_final: tuple[float, ...]
+    obj: ObjectSpec
+    friction: float
+    table_height: float | None = None
+
+
+def _field(result: Any, name: str) -> Any:
+    found = name in result if isinstance(result, Mapping) else hasattr(result, name)
+    if not found:
+        raise ValidationError(name, "is missing from the plan result")
+    return result[name] if isinstance(result, Mapping) else getattr(result, name)
+
+
+def _q_final(value: Any, joints: int) -> tuple[float, ...]:
+    if value is None:
+        raise ValidationError(
+            "q_final", "is null: the plan has no final hand configuration (the end agent never judged it)"
+        )
+    if isinstance(value, (str, bytes, Mapping)) or not isinstance(value, Sequence):
+        raise ValidationError("q_final", f"must be a list of {joints} numbers, got {type(value).__name__}")
+    if len(value) != joints:
+        raise ValidationError(
+            "q_final",
+            f"must have {joints} joint values (wrist then fingers), got {len(value)}: is this another "
+            "hand's plan (e.g. --hand allegro)? Validate it with its hand (validate_grasp(..., hand=...), "
+            "eos validate --hand NAME)",
+        )
+    out = []
+    for i, v in enumerate(value):
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+            raise ValidationError(f"q_final[{i}]", f"must be a finite number, got {v!r}")
+        out.append(float(v))
+    return tuple(out)
+
+
+def _object(value: Any) -> ObjectSpec:
+    if not isinstance(value, Mapping):
+        raise ValidationError("ground_truth", f"must be an object, got {type(value).__name__}")
+    sizes = {k for fields in SHAPE_SIZE_FIELDS.values() for k in fields} | set(MESH_FIELDS)
+    # ground_truth also carries derived fields (diameter, d_over_h): keep what a request has
+    spec = {k: v for k, v in value.items() if k in sizes | {"shape", "position", "rpy"}}
+    if "position" not in spec:
+        raise ValidationError("ground_truth.position", "is required")
+    try:
+        return ObjectSpec.from_dict(spec, prefix="ground_truth")
+    except ValidationError as exc:  # size checks name the request's "object.*" fields
+        where = "ground_truth" + exc.field[len("object") :] if exc.field.startswith("object") else exc.field
+        raise ValidationError(where, exc.reason) from None
+
+
+def grasp_setup(result: Any, joints: int) -> GraspSetup:
+    """The grasp of a plan result (object or JSON dict) with ``joints`` hand joints.
+
+    Raises:
+        ValidationError: naming the missing or malformed field (``q_final``,
+            ``ground_truth.radius``, ``friction``, …).
+    """
+    if not isinstance(result, Mapping) and not hasattr(result, "q_final"):
+        raise ValidationError(
+            "result", f"must be a plan result or its JSON object, got {type(result).__name__}"
+        )
+    q = _q_final(_field(result, "q_final"), joints)
+    obj = _object(_field(result, "ground_truth"))
+    friction = _positive(_field(result, "friction"), "friction", MAX_FRICTION, zero=True)
+    # the table of the plan's request (none, or a result without its request: no table)
+    request = result.get("request") if isinstance(result, Mapping) else getattr(result, "request", None)
+    table = request.get("table") if isinstance(request, Mapping) else None
+    try:
+        return GraspSetup(q, obj, friction, None if table is None else Table.from_dict(table).height)
+    except ValidationError as exc:
+        raise ValidationError(f"request.{exc.field}", exc.reason) from None
+
+
+def load_directions(directions: int | Sequence[str]) -> tuple[str, ...]:
+    """The load directions: the first ``n`` of :data:`DIRECTIONS` or named ones (``"+x"``, …).
+
+    Raises:
+        ValidationError: ``directions`` names an unknown or repeated direction, or is out of 1…6.
+    """
+    if isinstance(directions, int) and not isinstance(directions, bool):
+        if not 1 <= directions <= len(DIRECTIONS):
+            raise ValidationError("directions", f"must be in [1, {len(DIRECTIONS)}], got {directions}")
+        return DIRECTIONS[:directions]
+    if isinstance(directions, (str, bool)) or not isinstance(directions, Sequence) or not directions:
+        raise ValidationError(
+            "directions", "must be a count 1…6 or a non-empty list of +x, -x, +y, -y, +z, -z"
+        )
+    for i, d in enumerate(directions):
+        if d not in DIRECTIONS or d in directions[:i]:
+            why = "given twice" if d in DIRECTIONS else f"unknown (choose from {', '.join(DIRECTIONS)})"
+            raise ValidationError("directions", f"direction {d!r}: {why}")
+    return tuple(directions)
 
 
 def validate_grasp(
