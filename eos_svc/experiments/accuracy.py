@@ -126,8 +126,8 @@ def run_noisy(
             steps.append(total)
             ratings.append(e.rating)
         med = float(np.median(errs))
-        medians = (float(np.median(values)) for values in (runs, steps, ratings))
-        rows.append(NoisyRow(R, seeds, med, float(np.max(errs)), *medians, med <= 0.05))
+        n_runs, n_steps, rating = (float(np.median(values)) for values in (runs, steps, ratings))
+        rows.append(NoisyRow(R, seeds, med, float(np.max(errs)), n_runs, n_steps, rating, med <= 0.05))
     return rows
 
 

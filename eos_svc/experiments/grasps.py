@@ -132,24 +132,23 @@ def run(
     name: str = "grasps",
     quiet: bool = False,
     validation: dict[str, Any] | None = None,
-    validate: bool = True,
     hand: HandModel | None = None,
     options: dict[str, Any] | None = None,
     world: str = "kinematic",
 ) -> dict:
-    """Plan (and, with ``validate``, validate in Drake) every object over ``seeds`` seeds — a
-    drawn object once, with its own seed — with the request ``options`` and ``hand`` (default
-    hand3x3); write ``name``.json, .csv, ``name``_runs.csv and ``name``.png into ``out``."""
+    """Plan every object over ``seeds`` seeds — a drawn object once, with its own seed — with the
+    request ``options`` and ``hand`` (default hand3x3), and validate every plan in Drake with the
+    ``validation`` arguments (None: plan only); write ``name``.json, .csv, ``name``_runs.csv and
+    ``name``.png into ``out``."""
     objects = list(fixed_suite() if objects is None else objects)
     context = None if hand is None else HandContext.build(hand)
-    checks = dict(validation or {}) if validate else None
     jobs = [
         (obj, seed)
         for obj in objects
         for seed in ([obj.seed] if isinstance(obj, DrawnObject) else range(1, seeds + 1))
     ]
     runs = [
-        plan_and_validate(o, seed, checks, context, options, world)
+        plan_and_validate(o, seed, validation, context, options, world)
         for o, seed in with_progress(jobs, name, quiet)
     ]
     rows, totals = summarise(objects, runs)
@@ -158,7 +157,7 @@ def run(
         "hand": "hand3x3" if hand is None else getattr(hand, "name", str(hand)),
         "seeds": seeds,
         "options": dict(options or {}),
-        "validation": checks,
+        "validation": validation,
         "objects": [{"label": o.label, **o.spec.to_dict()} for o in objects],
         "rows": rows,
         "totals": totals,
@@ -256,8 +255,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.seeds or (2 if args.quick else 5),
         args.out,
         name,
-        validation={"seconds": args.seconds},
-        validate=not args.no_validate,
+        validation=None if args.no_validate else {"seconds": args.seconds},
         hand=hand,
         options=options,
         world=args.world,

@@ -86,18 +86,16 @@ def pose_and_size_error(truth: ObjectSpec, postulate: dict | None) -> tuple[floa
 
 def search_lengths(seeds: int = 100, limit: int = 2000) -> list[int]:
     """Search moves to locate the default object for seeds 1…``seeds`` (``limit + 1`` if not)."""
-    out = []
-    for seed in range(1, seeds + 1):
-        world = KinematicDriver(build_world(PlanRequest(seed=seed)))
-        board = Board()
-        n = limit + 1
+
+    def moves(seed: int) -> int:
+        world, board = KinematicDriver(build_world(PlanRequest(seed=seed))), Board()
         for k in range(1, limit + 1):
             search_move(world, board, "wrist")
             if board.get(keys.LOCATED):
-                n = k
-                break
-        out.append(n)
-    return out
+                return k
+        return limit + 1
+
+    return [moves(seed) for seed in range(1, seeds + 1)]
 
 
 def run(

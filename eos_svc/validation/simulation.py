@@ -177,11 +177,8 @@ class GraspSimulation:
         package_dirs: directories of the packages the URDF's ``package://`` URIs name.
         obj: the object (shape, size, pose).
         friction: Coulomb μ of every contact.
-        mass: object mass (kg).
-        squeeze: added to the planned finger angles as the PD target (rad; closing is +).
-        kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
-        contact_stiffness: point-contact stiffness of every geometry (N/m).
-        time_step: the discrete plant's step (s).
+        mass, squeeze, kp, kd, contact_stiffness, time_step: as
+            :func:`~eos_svc.validation.validate_grasp`'s (kg, rad, N·m/rad, N·m·s/rad, N/m, s).
         table_height: the table's top (world z, m): a box welded to the world under it, in
             contact with the hand and the object like them (None: no table).
     """
@@ -207,9 +204,7 @@ class GraspSimulation:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]
         names = list(joint_names) if joint_names is not None else [*wrist, *finger_joints]
-        if len(q_final) != len(names):
-            raise ValidationError("q_final", f"must have {len(names)} values")
-        value = dict(zip(names, (float(v) for v in q_final), strict=True))
+        value = dict(zip(names, (float(v) for v in q_final), strict=True))  # validate_grasp checked the count
         held_joints = [j for j in names if j not in wrist]  # finger joints and the pre-shape
         efforts = urdf_effort_limits(urdf)
         self.effort_limit = min(efforts.get(j, np.inf) for j in finger_joints)
@@ -288,7 +283,7 @@ class GraspSimulation:
 
     def position(self) -> np.ndarray:
         """The object's centre in the world (m)."""
-        return np.array(self.plant.EvalBodyPoseInWorld(self._plant_context, self.body).translation())
+        return self.body_position(OBJECT_NAME)
 
     def body_position(self, name: str) -> np.ndarray:
         """The origin of the plant's body ``name`` in the world now (m)."""
