@@ -40,8 +40,6 @@ from eos_svc.experiments.grasps_report import CONFIDENCE_RULE, plot, report, sum
 from eos_svc.experiments.pybullet_objects import WorldObject, named_objects, parse_ids, random_objects
 from eos_svc.experiments.recognition import surface_error
 from eos_svc.kinematics import HandModel
-from eos_svc.schema.request import ObjectSpec
-from eos_svc.schema.result import PlanResult
 from eos_svc.validation import SimulationError, validate_grasp
 from eos_svc.validation.validate import MAX_SECONDS
 from eos_svc.world.hand_context import HandContext
@@ -50,25 +48,6 @@ from eos_svc.world.hand_context import HandContext
 DRAKE_DEADLINE_S = 600.0
 #: the request options the command line sets, by their flag (``--noise`` is ``tactile_noise``)
 SENSING_FLAGS = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error"}
-
-
-def recognition(spec: ObjectSpec, result: PlanResult) -> dict[str, Any]:
-    """What the plan knew of the object: the postulated class, whether it is right, its
-    confidence, the shape error (:func:`~eos_svc.experiments.recognition.surface_error`), and
-    the touches and probes it took."""
-    shape = result.shape or {}
-    guess = shape.get("class", "none")
-    error = surface_error(spec, shape.get("object"), np.random.default_rng(result.seed))
-    return {
-        "postulate": guess,
-        "class_right": guess == spec.shape,
-        "confidence": float(shape.get("confidence", 0.0)),
-        "shape_error": error if math.isfinite(error) else None,
-        "touches": result.touches,
-        "probes": result.probes,
-        "grasped_unsure": "grasping" in result.cycles_per_stage
-        and float(shape.get("confidence", 0.0)) < CONFIDENCE_RULE,
-    }
 
 
 def plan_and_validate(
@@ -80,9 +59,10 @@ def plan_and_validate(
     world: str = "kinematic",
 ) -> dict[str, Any]:
     """One run as a flat row: plan the object with ``seed`` (the hand of ``context``, default
-    hand3x3; the request ``options``, e.g. ``tactile_noise``), then validate the final grasp
-    with that hand (``held`` None when ``validation`` is None; in the Drake world, the plan's
-    lift test)."""
+    hand3x3; the request ``options``, e.g. ``tactile_noise``), say what the plan knew of the
+    object (its postulate; the shape error: :func:`~eos_svc.experiments.recognition.surface_error`),
+    then validate the final grasp with that hand (``held`` None when ``validation`` is None; in
+    the Drake world, the plan's lift test)."""
     row: dict[str, Any] = {"object": obj.label, "shape": obj.spec.shape, "seed": seed}
     drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
     try:
@@ -93,9 +73,24 @@ def plan_and_validate(
     except ValidationError as exc:  # the planner refuses the request: not a run
         refused = {"status": "rejected", "reason": str(exc), "refused_field": exc.field}
         return row | refused | {"good_grasp": None, "held": None}
-    row |= recognition(obj.spec, result)
-    row |= {"status": result.status, "reason": result.reason, "good_grasp": bool(result.good_grasp)}
-    row |= {"held": None, "epsilon": result.epsilon, "plan_time_s": result.wall_time_s}
+    shape = result.shape or {}  # what the plan knew of the object
+    guess, confidence = shape.get("class", "none"), float(shape.get("confidence", 0.0))
+    error = surface_error(obj.spec, shape.get("object"), np.random.default_rng(result.seed))
+    row |= {
+        "postulate": guess,
+        "class_right": guess == obj.spec.shape,
+        "confidence": confidence,
+        "shape_error": error if math.isfinite(error) else None,
+        "touches": result.touches,
+        "probes": result.probes,
+        "grasped_unsure": "grasping" in result.cycles_per_stage and confidence < CONFIDENCE_RULE,
+        "status": result.status,
+        "reason": result.reason,
+        "good_grasp": bool(result.good_grasp),
+        "held": None,
+        "epsilon": result.epsilon,
+        "plan_time_s": result.wall_time_s,
+    }
     if result.world is not None:
         lift = result.world.get("lift") or {}
         return row | {

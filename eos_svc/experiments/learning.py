@@ -53,9 +53,8 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     names = stream(repeats, seed)
     requests = [PlanRequest(obj=OBJECTS[name], seed=seed * 1000 + i) for i, name in enumerate(names)]
     base = common.run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
-    learned = common.run_plans(
-        [replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory
-    )
+    with_memory = [replace(r, weights=WITH) for r in requests]
+    learned = common.run_plans(with_memory, "with learning", quiet, memory=memory)
     rows: list[dict[str, Any]] = [
         {
             "index": i,
@@ -100,8 +99,7 @@ def plot(rows: list[dict], path: Path) -> Path:
     for r in rows:
         if r["repeat"]:
             ax.axvspan(r["index"] - 0.4, r["index"] + 0.4, color="0.9", zorder=0)
-    ax.set_xlabel("plan in the stream (shaded: an object seen before)")
-    ax.set_ylabel("grasp-stage cycles")
+    ax.set(xlabel="plan in the stream (shaded: an object seen before)", ylabel="grasp-stage cycles")
     ax.set_title("Learned sub-rating: grasp cycles on new and repeated objects")
     ax.legend(fontsize=8)
     return common.save_figure(fig, path)

@@ -92,9 +92,7 @@ def plot(rows: list[dict], path: Path) -> Path:
         ax.barh(y + offset, [r[key] for r in rows], height=height, label=label)
     ax.set_yticks(y, [r["object"] for r in rows], fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlim(0, 1.05)
-    ax.set_xlabel("rate over seeds")
-    ax.set_title("Every shape end to end")
+    ax.set(xlim=(0, 1.05), xlabel="rate over seeds", title="Every shape end to end")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
     return common.save_figure(fig, path)
 
