@@ -36,10 +36,11 @@ BOX_YAWS_DEG = (0.0, 30.0, 60.0)
 
 
 class SuiteObject(NamedTuple):
-    """One object of a suite: a readable label and the object."""
+    """One object of a suite: a readable label, the object and, drawn at random, its plan seed."""
 
     label: str
     spec: ObjectSpec
+    seed: int | None = None
 
 
 def default_position() -> tuple[float, float, float]:
@@ -129,17 +130,9 @@ DRAW_POSITION_SPREAD = (0.10, 0.12, 0.12)
 DRAW_CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
 
 
-class DrawnObject(NamedTuple):
-    """One object of a random draw and the plan seed drawn with it."""
-
-    label: str
-    spec: ObjectSpec
-    seed: int
-
-
 def random_draw(
     count: int, draw_seed: int, sizes: tuple[float, float] = (0.15, 0.50), span: float | None = None
-) -> list[DrawnObject]:
+) -> list[SuiteObject]:
     """``count`` objects from a seeded generator (``draw_seed``), none filtered (admission
     decides): the class uniform over :data:`DRAW_CLASSES`; every full width (a radius or half a
     length: half of one) uniform in ``sizes`` (low, high) × ``span`` (m; default hand3x3's span,
@@ -176,5 +169,5 @@ def random_draw(
             tuple(round(float(v), 4) for v in position),  # type: ignore[arg-type]
             tuple(round(float(v), 4) for v in rpy),  # type: ignore[arg-type]
         )
-        out.append(DrawnObject(f"draw {draw_seed}:{i} {shape}", spec, seed))
+        out.append(SuiteObject(f"draw {draw_seed}:{i} {shape}", spec, seed))
     return out

@@ -29,7 +29,6 @@ from eos_svc.drivers.worlds import WORLDS
 from eos_svc.errors import ValidationError
 from eos_svc.experiments.common import experiment_parser, with_progress, write_csv, write_json
 from eos_svc.experiments.grasp_suite import (
-    DrawnObject,
     SuiteObject,
     fixed_suite,
     held_back_suite,
@@ -51,7 +50,7 @@ SENSING_FLAGS = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise",
 
 
 def plan_and_validate(
-    obj: SuiteObject | DrawnObject | WorldObject,
+    obj: SuiteObject | WorldObject,
     seed: int,
     validation: dict[str, Any] | None,
     context: HandContext | None = None,
@@ -121,7 +120,7 @@ def plan_and_validate(
 
 
 def run(
-    objects: Sequence[SuiteObject | DrawnObject | WorldObject] | None = None,
+    objects: Sequence[SuiteObject | WorldObject] | None = None,
     seeds: int = 5,
     out: Path = Path("results/grasps"),
     name: str = "grasps",
@@ -137,11 +136,12 @@ def run(
     ``name``.png into ``out``."""
     objects = list(fixed_suite() if objects is None else objects)
     context = None if hand is None else HandContext.build(hand)
-    jobs = [
-        (obj, seed)
-        for obj in objects
-        for seed in ([obj.seed] if isinstance(obj, DrawnObject) else range(1, seeds + 1))
-    ]
+
+    def seeds_of(obj: SuiteObject | WorldObject) -> Sequence[int]:
+        drawn = getattr(obj, "seed", None)  # a drawn object once, with its own seed
+        return range(1, seeds + 1) if drawn is None else [drawn]
+
+    jobs = [(obj, seed) for obj in objects for seed in seeds_of(obj)]
     runs = [
         plan_and_validate(o, seed, validation, context, options, world)
         for o, seed in with_progress(jobs, name, quiet)
@@ -202,7 +202,7 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def chosen_objects(args: argparse.Namespace) -> tuple[Sequence[SuiteObject | DrawnObject | WorldObject], str]:
+def chosen_objects(args: argparse.Namespace) -> tuple[Sequence[SuiteObject | WorldObject], str]:
     """The objects the options ask for and the name of the experiment's files."""
     if args.objects == "pybullet-named":
         objects, name = named_objects(), "grasps_pybullet_named"
