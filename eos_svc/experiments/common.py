@@ -19,15 +19,13 @@ T = TypeVar("T")
 def with_progress(items: Sequence[T], label: str, quiet: bool = False) -> Iterator[T]:
     """Yield every item, printing after each how many are done and the time left to stderr
     (one line, updated; nothing when ``quiet``)."""
-    t0 = time.perf_counter()
+    t0, n = time.perf_counter(), len(items)
     for i, item in enumerate(items, 1):
         yield item
         if not quiet:
             elapsed = time.perf_counter() - t0
-            eta = elapsed / i * (len(items) - i)
-            print(
-                f"\r{label}: {i}/{len(items)}, {elapsed:.1f} s, ~{eta:.0f} s left   ", end="", file=sys.stderr
-            )
+            eta = elapsed / i * (n - i)
+            print(f"\r{label}: {i}/{n}, {elapsed:.1f} s, ~{eta:.0f} s left   ", end="", file=sys.stderr)
     if not quiet:
         print(file=sys.stderr)
 
