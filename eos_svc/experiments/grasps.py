@@ -210,14 +210,12 @@ def chosen_objects(args: argparse.Namespace) -> tuple[Sequence[SuiteObject | Wor
         span = parse_ids(args.ids)
         objects, left = random_objects(span)
         name = f"grasps_pybullet_{span.start}_{span.stop - 1}"
-        print(
-            f"pybullet random objects {args.ids}: {len(objects)} the hand can span, left out {left}",
-            file=sys.stderr,
-        )
+        kept = f"{len(objects)} the hand can span, left out {left}"
+        print(f"pybullet random objects {args.ids}: {kept}", file=sys.stderr)
     elif args.random is not None:
         lo, hi = args.sizes
-        seeds = f"{args.random} objects, draw seed {args.draw_seed}"
-        print(f"random draw: {seeds}, widths {lo:g}-{hi:g} of the span", file=sys.stderr)
+        drawn = f"{args.random} objects, draw seed {args.draw_seed}"
+        print(f"random draw: {drawn}, widths {lo:g}-{hi:g} of the span", file=sys.stderr)
         return random_draw(args.random, args.draw_seed, (lo, hi)), "grasps_random"
     elif args.held_back:
         return held_back_suite(1 if args.quick else 3), "grasps_held_back"
