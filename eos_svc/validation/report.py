@@ -15,13 +15,11 @@ class DirectionOutcome:
 
     Attributes:
         direction: ``"+x"`` … ``"-z"`` (world axes).
-        displacement_m: largest distance (m) of the object's centre from where the squeeze
-            left it, sampled during the load.
+        displacement_m: largest distance (m) of the object's centre from where the squeeze left it.
         final_displacement_m: that distance at the end of the load (or when it stopped early).
         touching: hand parts (``palm`` or a finger name) in contact with the object at the end.
         held: ``displacement_m`` < the hold tolerance and at least ``min_parts`` parts touch.
-        stopped_early: the object was so far away (``stop_distance``) that the rest of the
-            load was not simulated.
+        stopped_early: the object got ``stop_distance`` away; the rest of the load was skipped.
     """
 
     direction: str
