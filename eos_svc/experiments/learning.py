@@ -70,9 +70,9 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     ]
     memory.close()
 
-    def mean(key: str, repeat: bool) -> float:
+    def mean(key: str, repeat: bool) -> float | None:  # None: no such plan (no repeats)
         values = [r[key] for r in rows if r["repeat"] == repeat]
-        return float(np.mean(values)) if values else float("nan")
+        return float(np.mean(values)) if values else None
 
     summary: dict[str, Any] = {
         "new": {"without": mean("grasp_cycles_without", False), "with": mean("grasp_cycles_with", False)},
@@ -114,10 +114,12 @@ def report(data: dict) -> str:
             f"  {r['index']:>2}  {r['object']:<14} {'yes' if r['repeat'] else 'no':<5} "
             f"{r['grasp_cycles_without']:>7}  {r['grasp_cycles_with']:>4}  {r['recalled']}"
         )
+    rep, fewer = s["repeated"], s["repeated_reduction"]
+    repeated = "none" if rep["without"] is None else f"{rep['without']:.1f} without, {rep['with']:.1f} with"
     lines.append(
         f"mean grasp cycles — new: {s['new']['without']:.1f} without, {s['new']['with']:.1f} with; "
-        f"repeated: {s['repeated']['without']:.1f} without, {s['repeated']['with']:.1f} with "
-        f"({s['repeated_reduction']:.0%} fewer); new objects worse with learning: {s['new_worse']}"
+        f"repeated: {repeated} ({'-' if fewer is None else f'{fewer:.0%}'} fewer); "
+        f"new objects worse with learning: {s['new_worse']}"
     )
     return "\n".join(lines)
 
