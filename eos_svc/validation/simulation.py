@@ -293,15 +293,12 @@ class GraspSimulation:
     def touching(self) -> tuple[str, ...]:
         """The hand parts (palm, finger names) in contact with the object now, sorted."""
         results = self.plant.get_contact_results_output_port().Eval(self._plant_context)
-        me = self.body.index()
-        parts = set()
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
+        me, parts = self.body.index(), set()
+        for info in (results.point_pair_contact_info(i) for i in range(results.num_point_pair_contacts())):
             a, b = info.bodyA_index(), info.bodyB_index()
-            if me in (a, b):
-                other = int(b if a == me else a)
-                if other in self._part:
-                    parts.add(self._part[other])
+            other = int(b if a == me else a) if me in (a, b) else None
+            if other in self._part:
+                parts.add(self._part[other])
         return tuple(sorted(parts))
 
     def settle(self, seconds: float) -> np.ndarray:
