@@ -108,13 +108,11 @@ def run(
 ) -> dict[str, Any]:
     """Run the experiment; write recognition.csv, recognition.json and three PNGs into ``out``."""
     rng = np.random.default_rng(20261201)
-    specs = [(k, s, random_object(k, s, rng)) for k in CLASSES for s in range(sizes)]
+    specs = [random_object(k, s, rng) for k in CLASSES for s in range(sizes)]
     rows: list[dict[str, Any]] = []
     for noise in noises:
         requests = [
-            PlanRequest(obj=spec, seed=seed, tactile_noise=noise)
-            for _, _, spec in specs
-            for seed in range(1, seeds + 1)
+            PlanRequest(obj=o, seed=seed, tactile_noise=noise) for o in specs for seed in range(1, seeds + 1)
         ]
         results = common.run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
         for request, result in zip(requests, results, strict=True):
