@@ -197,7 +197,9 @@ def build_agents(
     r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
     # where a touch may push the object, a check of where it is before the grasp (agents.relocate)
-    relocate: list[Agent] = [] if world.object_fixed else [RelocateAgent(r.get("relocate", RELOCATE_RATING), world)]
+    relocate: list[Agent] = (
+        [] if world.object_fixed else [RelocateAgent(r.get("relocate", RELOCATE_RATING), world)]
+    )
     return [
         *(FingerAgent(finger, r[finger], world) for finger in fingers),
         WristAgent(r["wrist"], world),

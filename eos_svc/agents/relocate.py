@@ -88,7 +88,9 @@ class RelocateAgent(GraspAgent):
                 f"check touches on the postulated {spec.shape}: {len(checks)} within "
                 f"{1000 * worst:.1f} mm of the predicted surface: it is where it was postulated",
             )
-        what = "a check probe missed it" if lost else f"a check touch {1000 * worst:.1f} mm off the prediction"
+        what = (
+            "a check probe missed it" if lost else f"a check touch {1000 * worst:.1f} mm off the prediction"
+        )
         if self.rounds >= MAX_ROUNDS:
             shape["located"] = {"moved": True, "checks": self.rounds, "verified": False}
             board.set(keys.SHAPE, shape)

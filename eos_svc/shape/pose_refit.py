@@ -129,4 +129,6 @@ def refit_pose(
     x = best[1]
     place(x)
     rms = float(np.sqrt(np.mean(touch_misses(obj, centres, radii) ** 2)))
-    return Relocation(moved_spec(spec, x[:3], pin.exp3(x[3:])), x[:3].copy(), float(np.linalg.norm(x[3:])), rms)
+    return Relocation(
+        moved_spec(spec, x[:3], pin.exp3(x[3:])), x[:3].copy(), float(np.linalg.norm(x[3:])), rms
+    )

@@ -180,3 +180,43 @@ def test_a_light_touch_leaves_a_resting_box_where_it_was() -> None:
         )
         assert outcome.event == "touched"
     assert driver.object_moved() < 1e-4  # three touches at 0.05 N: less than 0.1 mm
+
+
+def test_only_a_world_whose_object_can_move_checks_where_it_is() -> None:
+    """The relocate agent joins the Drake world's team, never the kinematic world's (whose plans
+    stay those of the paper's experiments)."""
+    from eos_svc.agents import build_agents
+
+    assert "relocate" not in [a.name for a in build_agents(build_world(REQUEST))]
+    assert "relocate" in [a.name for a in build_agents(drake_driver())]
+
+
+@pytest.mark.slow
+def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_it_went() -> None:
+    """Once the postulate is confident, the ball is pushed 12 mm sideways (an outside push): the
+    check touches find it off, the refit re-locates it, and the grasp planned on the re-located
+    ball is about its true new place (within 2 mm) and lifts it."""
+    import re
+
+    request = PlanRequest(seed=1, deadline_s=900, world="drake")
+    driver = drake_driver(request)
+    pushed, at_grasp = [], []
+
+    def push_once(record: object) -> None:
+        detail = str(getattr(record, "detail", ""))
+        confident = re.search(r"confidence (\d+)%", detail)
+        chosen = getattr(record, "chosen", None)
+        if not pushed and chosen == "post_shape" and confident and int(confident.group(1)) >= 60:
+            driver.displace_object(np.array([0.0, 0.012, 0.0]))
+            pushed.append(driver.object_pose()[:3])
+        if chosen == "grasp_points" and not at_grasp:
+            at_grasp.append(driver.object_pose()[:3])
+
+    result = plan(request, driver=driver, on_cycle=push_once)
+    assert pushed and at_grasp
+    details = " ".join(c.detail for c in result.trace if c.chosen == "relocate")
+    assert "re-located" in details  # the check noticed the push
+    assert result.shape is not None and result.shape["located"]["moved"] is False  # and the last check agreed
+    planned_on = np.asarray(result.shape["object"]["position"])
+    assert np.linalg.norm(planned_on - np.asarray(at_grasp[0])) < 0.002
+    assert result.status == "success" and result.world is not None and result.world["lift"]["held"]

@@ -13,7 +13,9 @@ from eos_svc.shape.pose_refit import moved_spec, refit_pose, touch_misses
 TIP = 0.008  # fingertip radius, m
 
 
-def touches_on(spec: ObjectSpec, directions: list[tuple[float, float, float]]) -> tuple[np.ndarray, np.ndarray]:
+def touches_on(
+    spec: ObjectSpec, directions: list[tuple[float, float, float]]
+) -> tuple[np.ndarray, np.ndarray]:
     """Fingertip centres one tip radius off the surface of ``spec`` where rays from its centre
     along ``directions`` leave it, and the outward normals there."""
     obj = make_object(spec)
@@ -28,7 +30,14 @@ def touches_on(spec: ObjectSpec, directions: list[tuple[float, float, float]]) -
     return np.array(centres), np.array(normals)
 
 
-RAYS = [(-1.0, 0.0, 0.0), (-1.0, 0.0, 0.4), (0.0, 0.0, 1.0), (0.0, 1.0, 0.0), (0.0, -1.0, 0.0), (-1, 0.5, -0.3)]
+RAYS = [
+    (-1.0, 0.0, 0.0),
+    (-1.0, 0.0, 0.4),
+    (0.0, 0.0, 1.0),
+    (0.0, 1.0, 0.0),
+    (0.0, -1.0, 0.0),
+    (-1, 0.5, -0.3),
+]
 
 
 @pytest.mark.parametrize(
@@ -60,7 +69,9 @@ def test_a_toppled_capsule_is_found_lying() -> None:
     """An upright capsule fell over onto its side (its axis now along y): the quarter-turn starts
     find it lying, its surface within 0.2 mm of every touch."""
     upright = ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, (0.2, 0.0, 0.025))
-    lying = ObjectSpec("capsule", {"radius": 0.02, "length": 0.05}, (0.215, 0.01, -0.0175), (np.pi / 2, 0.0, 0.0))
+    lying = ObjectSpec(
+        "capsule", {"radius": 0.02, "length": 0.05}, (0.215, 0.01, -0.0175), (np.pi / 2, 0.0, 0.0)
+    )
     centres, normals = touches_on(lying, RAYS)
     radii = np.full(len(centres), TIP)
     fit = refit_pose(upright, centres, normals, radii, support_height=-0.0375, noise=1e-4)
