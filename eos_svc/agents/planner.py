@@ -362,9 +362,11 @@ def moved_words(report: dict, shape: dict | None) -> str:
     located = (shape or {}).get("located")
     if located is None:
         return f"{moved}, more than the 2 mm the plan tolerates: the grasp aimed where it had been"
+    relocations = int((shape or {}).get("relocations", 0))
     if located.get("verified", True):
-        return f"{moved}; touched where the postulate put it before the grasp ({located['checks']} checks)"
-    return f"{moved}; re-located before the grasp, but the last check still found it off by more than 2 mm"
+        how = f"re-located by touch {relocations} time(s), then" if relocations else "its pose"
+        return f"{moved}; {how} checked within 2 mm by touch before the grasp"
+    return f"{moved}; re-located before the grasp, but the last check still found it more than 2 mm off"
 
 
 def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:

@@ -90,6 +90,8 @@ ShapeEntry = TypedDict(
         "open_faces": NotRequired[list[dict[str, Any]]],
         "candidates": NotRequired[list[dict[str, Any]]],
         "approximate": NotRequired[bool],
+        "located": NotRequired[dict[str, Any]],
+        "relocations": NotRequired[int],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -106,7 +108,10 @@ fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` 
 (while the postulate is not trusted: the likeliest classes, each its ``class``,
 ``probability``, fitted ``parameters``, ``start_rotation`` and ``sigma_steps``, from which EP2
 chooses its next probes, :mod:`eos_svc.shape.probe_information`)
-and ``approximate`` (True: the convex hull of the touches, no primitive explaining them).
+and ``approximate`` (True: the convex hull of the touches, no primitive explaining them); in
+a world whose object can move, the relocate agent's ``located`` (what its check touches found:
+``moved``, ``checks``, ``verified``) and ``relocations`` (how often it refitted the pose,
+:mod:`eos_svc.agents.relocate`).
 """
 
 
