@@ -12,6 +12,7 @@ from eos_svc.drivers.drake_world import DrakeDriver
 from eos_svc.drivers.lift_test import GRAVITY, lift_test, squeeze_grip
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
+from eos_svc.schema.request import ObjectSpec
 
 REQUEST = PlanRequest(seed=1)
 
@@ -192,31 +193,38 @@ def test_only_a_world_whose_object_can_move_checks_where_it_is() -> None:
 
 
 @pytest.mark.slow
-def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_it_went() -> None:
-    """Once the postulate is confident, the ball is pushed 12 mm sideways (an outside push): the
-    check touches find it off, the refit re-locates it, and the grasp planned on the re-located
-    ball is about its true new place (within 2 mm) and lifts it."""
-    import re
+def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_it_went(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """When the exploration is over, just before the first check, the ball is pushed 12 mm
+    sideways (an outside push the planner is not told of): the check touches find it off, the
+    refit re-locates it, and the grasp planned on the re-located ball is about its true new
+    place (within 2 mm) and lifts it."""
+    from eos_svc.agents.relocate import RelocateAgent
 
     request = PlanRequest(seed=1, deadline_s=900, world="drake")
     driver = drake_driver(request)
-    pushed, at_grasp = [], []
+    pushed: list[list[float]] = []
+    at_grasp: list[list[float]] = []
+    check = RelocateAgent.act
 
-    def push_once(record: object) -> None:
-        detail = str(getattr(record, "detail", ""))
-        confident = re.search(r"confidence (\d+)%", detail)
-        chosen = getattr(record, "chosen", None)
-        if not pushed and chosen == "post_shape" and confident and int(confident.group(1)) >= 60:
+    def pushed_then_checked(self: RelocateAgent, board: object, ctx: object) -> object:
+        if not pushed:
             driver.displace_object(np.array([0.0, 0.012, 0.0]))
             pushed.append(driver.object_pose()[:3])
-        if chosen == "grasp_points" and not at_grasp:
+        return check(self, board, ctx)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(RelocateAgent, "act", pushed_then_checked)
+
+    def watch(record: object) -> None:
+        if getattr(record, "chosen", None) == "grasp_points" and not at_grasp:
             at_grasp.append(driver.object_pose()[:3])
 
-    result = plan(request, driver=driver, on_cycle=push_once)
+    result = plan(request, driver=driver, on_cycle=watch)
     assert pushed and at_grasp
     details = " ".join(c.detail for c in result.trace if c.chosen == "relocate")
     assert "re-located" in details  # the check noticed the push
-    assert result.shape is not None and result.shape["located"]["moved"] is False  # and the last check agreed
-    planned_on = np.asarray(result.shape["object"]["position"])
+    assert result.shape is not None and result.shape["located"]["moved"] is False  # the last check agreed
+    planned_on = np.asarray(make_object(ObjectSpec.from_dict(result.shape["object"])).centre)
     assert np.linalg.norm(planned_on - np.asarray(at_grasp[0])) < 0.002
     assert result.status == "success" and result.world is not None and result.world["lift"]["held"]
