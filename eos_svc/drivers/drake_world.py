@@ -72,9 +72,6 @@ class DrakeSettings:
             wrist; a finger presses on by ``finger_press_limit`` rad).
         finger_press_limit: the most a finger's touch presses on, rad.
         press_steps: a press advances in this many plant steps (its force read at each).
-        final_zone, final_joint_zone: the last part of a motion planned to end in a touch (m of
-            the wrist, rad of a joint) that runs slowly, its contacts read every plant step.
-        final_speed, final_joint_speed: the speeds there (m/s, rad/s).
     """
 
     free_speed: float = 0.5
@@ -86,10 +83,6 @@ class DrakeSettings:
     press_limit: float = 0.003
     finger_press_limit: float = 0.05
     press_steps: int = 150
-    final_zone: float = 0.0015
-    final_joint_zone: float = 0.03
-    final_speed: float = 0.01
-    final_joint_speed: float = 0.2
 
 
 #: the longest the object is given to come to rest on the table before the plan starts, s
@@ -226,67 +219,28 @@ class DrakeDriver(KinematicDriver):
         return float(np.linalg.norm(self._plant.object_pose().translation() - self._start))
 
     def _execute(
-        self,
-        q_from: np.ndarray,
-        q_to: np.ndarray,
-        speed: float,
-        guard: float | None = None,
-        touches: bool = False,
+        self, q_from: np.ndarray, q_to: np.ndarray, speed: float, guard: float | None = None
     ) -> bool:
         """Place the hand at ``q_from`` (a transfer), then ramp to ``q_to`` in Drake, the wrist
         at ``speed`` m/s; stops early when a hand body pushes the object harder than
-        ``guard`` N (default: the stop force; a touch's motion: the touch force). A motion
-        planned to end in a touch (``touches``) runs its last :attr:`DrakeSettings.final_zone`
-        slowly (:attr:`DrakeSettings.final_speed`), its contacts read every plant step, so that
-        it stops at the first light contact. Returns whether it stopped early."""
+        ``guard`` N (default: the stop force; a touch's motion: the touch force). Returns whether
+        it stopped early."""
         plant, s = self._plant, self._settings
         q_from, q_to = np.asarray(q_from, dtype=float), np.asarray(q_to, dtype=float)
         if np.max(np.abs(plant.hand_q() - q_from)) > 1e-6:
             self._transfer(q_from)
-        limit = self._stop if guard is None else guard
-        if not touches:
-            stopped = self._ramp(q_from, q_to, speed, s.joint_speed, s.chunk, limit)
-        else:  # fast to the slow zone, then slowly onto the object
-            delta = q_to - q_from
-            xyz = self._world.wrist_xyz_q
-            rest = np.ones(len(delta), dtype=bool)
-            rest[xyz] = False
-            zones = (float(np.linalg.norm(delta[xyz])) / s.final_zone,
-                     float(np.max(np.abs(delta[rest]), initial=0.0)) / s.final_joint_zone)  # fmt: skip
-            fast = max(0.0, 1.0 - 1.0 / max(max(zones), 1e-12))
-            q_mid = q_from + fast * delta
-            step = plant.settings.time_step
-            stopped = fast > 0.0 and self._ramp(q_from, q_mid, speed, s.joint_speed, s.chunk, limit)
-            if not stopped:
-                stopped = self._ramp(q_mid, q_to, s.final_speed, s.final_joint_speed, step, limit)
-        self._sync()
-        return stopped
-
-    def _ramp(
-        self,
-        q_from: np.ndarray,
-        q_to: np.ndarray,
-        speed: float,
-        joint_speed: float,
-        chunk: float,
-        limit: float,
-    ) -> bool:
-        """Ramp the PD targets from ``q_from`` to ``q_to`` (the wrist at ``speed`` m/s, a
-        rotation at ``joint_speed`` rad/s, a smoothstep profile), the contacts read every
-        ``chunk`` s; stops when a hand body pushes the object harder than ``limit`` N (returns
-        True then)."""
-        plant = self._plant
         delta = q_to - q_from
         xyz = self._world.wrist_xyz_q
         rest = np.ones(len(delta), dtype=bool)
         rest[xyz] = False
         turn = float(np.max(np.abs(delta[rest]), initial=0.0))
-        duration = max(float(np.linalg.norm(delta[xyz])) / speed, turn / joint_speed)
+        duration = max(float(np.linalg.norm(delta[xyz])) / speed, turn / s.joint_speed)
         if duration < 1e-9:
             return False
         duration *= 1.5  # a smoothstep profile: its peak speed is 1.5 times its mean
-        steps = max(1, int(np.ceil(duration / chunk)))
+        steps = max(1, int(np.ceil(duration / s.chunk)))
         stopped = False
+        limit = self._stop if guard is None else guard
 
         def run() -> None:
             nonlocal stopped
@@ -300,9 +254,10 @@ class DrakeDriver(KinematicDriver):
                     plant.command(plant.hand_q())
                     stopped = True
                     return
-            plant.advance(chunk)  # the hand comes to rest at the target
+            plant.advance(s.chunk)  # the hand comes to rest at the target
 
         self._timed(run)
+        self._sync()
         return stopped
 
     def _transfer(self, q: np.ndarray) -> None:
@@ -383,8 +338,7 @@ class DrakeDriver(KinematicDriver):
         world = self._world
         q0 = world.state.q
         step = super().close_finger_step(finger, dtheta)
-        touched = step.event == "touched"
-        self._execute(q0, world.state.q, self._settings.approach_speed, self._settings.touch_force, touched)
+        self._execute(q0, world.state.q, self._settings.approach_speed, self._settings.touch_force)
         if step.event != "touched":
             return step
         direction = np.zeros(len(q0))
@@ -409,8 +363,7 @@ class DrakeDriver(KinematicDriver):
         unit = np.asarray(direction, dtype=float) / float(np.linalg.norm(direction))
         q_start = q_end.copy()
         q_start[world.wrist_xyz_q] -= outcome.travelled * unit
-        touched = outcome.event == "touched"
-        self._execute(q_start, q_end, self._settings.approach_speed, self._settings.touch_force, touched)
+        self._execute(q_start, q_end, self._settings.approach_speed, self._settings.touch_force)
         if outcome.event == "touched":
             push = np.zeros(len(q_end))
             push[world.wrist_xyz_q] = unit * self._settings.press_limit
