@@ -225,6 +225,12 @@ def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_
     details = " ".join(c.detail for c in result.trace if c.chosen == "relocate")
     assert "re-located" in details  # the check noticed the push
     assert result.shape is not None and result.shape["located"]["moved"] is False  # the last check agreed
-    planned_on = np.asarray(make_object(ObjectSpec.from_dict(result.shape["object"])).centre)
-    assert np.linalg.norm(planned_on - np.asarray(at_grasp[0])) < 0.002
+    # the surface the grasp was planned on (a primitive or the touches' hull) lies on the ball where
+    # Drake has it when the grasp is chosen: its points, nearest to 26 far points around it
+    planned = make_object(ObjectSpec.from_dict(result.shape["object"]))
+    ball = make_object(ObjectSpec("sphere", dict(request.obj.size), tuple(at_grasp[0])))
+    around = [np.array(u, dtype=float) for u in np.ndindex(3, 3, 3) if u != (1, 1, 1)]
+    surface = np.array([planned.closest_surface_point(ball.centre + 0.2 * (u - 1.0)) for u in around])
+    off = np.abs(ball.signed_distances(surface)[0])
+    assert np.median(off) < 0.002 and np.max(off) < 0.006  # a hull of touches made as the ball crept
     assert result.status == "success" and result.world is not None and result.world["lift"]["held"]
