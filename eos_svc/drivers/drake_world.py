@@ -312,7 +312,7 @@ class DrakeDriver(KinematicDriver):
         """One search sweep, planned on the model and executed in Drake."""
         self._motion = "search"
         q0 = self._world.state.q
-        out = self._world.search_step()
+        out = super().search_step()
         self._execute(q0, self._world.state.q, self._settings.free_speed)
         return out
 
