@@ -186,7 +186,6 @@ class DrakeDriver(KinematicDriver):
         world = self._world
         pose = self._plant.object_pose()
         world.scene.set_object_placement(pin.SE3(np.asarray(pose.rotation().matrix()), pose.translation()))
-        world.obj_centre = tuple(float(x) for x in pose.translation())
         if hand:
             model = world.hand
             world.set_q(np.clip(self._plant.hand_q(), model.lower, model.upper))

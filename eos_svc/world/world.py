@@ -4,8 +4,7 @@
 the tactile sensor and the run's generator; it answers the agents' questions and runs their
 guarded motions (:mod:`~eos_svc.world.wrist_motion`, :mod:`~eos_svc.world.probe_motion`,
 :mod:`~eos_svc.world.finger_closing`). Conventions: world z up; the palm's x axis is the
-approach, its z axis the closing direction. SI units. Gaps are exact coal distances, queried
-only where the lower bounds of :mod:`eos_svc.kinematics.gap_bounds` cannot decide.
+approach, its z axis the closing direction. SI units. Gaps are exact coal distances.
 """
 
 from __future__ import annotations
@@ -21,7 +20,6 @@ import numpy as np
 from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel, HandState, Scene, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
-from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds
 from eos_svc.objects import SurfaceObject
 from eos_svc.world.hand_context import HandContext
 from eos_svc.world.joint_sensing import JointSensing
@@ -59,10 +57,6 @@ class GraspWorld:
         self.version = 0  # bumped on every move
         self.probes = 0  # guarded probes run so far (EP2's straight moves, touched or not)
         self.memo: dict[object, Any] = {}
-        # the object's bounding ball (centre, m; radius, m) for the gaps' lower bounds: the
-        # object is fixed for a world's lifetime (a plan never moves it)
-        self.obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
-        self.obj_radius = 0.5 * float(self.scene.object.diameter)
         # the search's columns left, in order, drawn from rng at the first search move (search_step)
         self.search_order: list[tuple[int, int]] = []
         self.search_columns = np.empty((0, 0, 2))
@@ -168,23 +162,8 @@ class GraspWorld:
         return value
 
     def min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
-        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the query of a
-        geometry whose lower bound already reaches the minimum."""
-        for lower, gid in sorted(self.lower_bounds(geometry_ids)):
-            if lower >= best:
-                break
-            best = min(best, self.scene.gap(self.state, gid))
-        return best
-
-    def lower_bounds(self, geometry_ids: Iterable[int]) -> list[tuple[float, int]]:
-        """``(lower bound of the gap, id)`` of every geometry in ``geometry_ids`` to the
-        object's bounding ball (m)."""
-        state = self.state
-        state.geometry_data  # noqa: B018 -- brings the placements (and the views below) up to date
-        views = state.geometry_views()  # live views of every geometry's placement
-        return ball_gap_lower_bounds(
-            self.context.bounds, views, geometry_ids, self.obj_centre, self.obj_radius
-        )
+        """min(best, exact gap of every geometry in ``geometry_ids``) (m)."""
+        return min([best, *(self.scene.gap(self.state, gid) for gid in geometry_ids)])
 
     # --- moving it -------------------------------------------------------------------------
     def set_q(self, q: np.ndarray) -> None:
