@@ -38,7 +38,7 @@ def guarded_probe(
     p = world.params
     hand = world.hand
     d = np.asarray(direction, dtype=float)
-    d = d / math.sqrt(d.dot(d))  # = d / np.linalg.norm(d) (sqrt of the dot product)
+    d = d / np.linalg.norm(d)
     pose = world.context.probe_pose(finger, angle, yaw)  # wrist rotation (0, 0, yaw), the fingers set
     q = world.state.q
     pose.apply(q)
@@ -52,8 +52,7 @@ def guarded_probe(
     others = pose.others
     for back in (0.0, 0.02, 0.04, 0.06):
         wrist = start - back * d - offset
-        wx, wy, wz = wrist.tolist()  # np.any(wrist < lo) or np.any(wrist > hi), in floats
-        if wx < lo[0] or wy < lo[1] or wz < lo[2] or wx > hi[0] or wy > hi[1] or wz > hi[2]:
+        if np.any(wrist < lo) or np.any(wrist > hi):
             return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
         q[xyz] = wrist
         world.set_q(q)
@@ -74,10 +73,7 @@ def guarded_probe(
             travel = min(travel, table_room / -d[2])
     tol = p.contact_tolerance
     half_tol = 0.5 * tol
-    # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
-    w0, w1, w2 = q[xyz].tolist()
-    d0, d1, d2 = d.tolist()
-    i0, i1, i2 = pose.wrist_xyz
+    wrist0 = q[xyz].copy()
     travelled = 0.0
     tip = state.tip_centre_view(finger)  # live view of the tip centre (world)
     free = [tip.copy()]
@@ -101,7 +97,7 @@ def guarded_probe(
                 why="another part of the hand would touch first",
             )
         travelled += min(travel - travelled, tip_gap - half_tol, other)
-        q[i0], q[i1], q[i2] = w0 + d0 * travelled, w1 + d1 * travelled, w2 + d2 * travelled
+        q[xyz] = wrist0 + d * travelled
         world.set_q(q)
         free.append(tip.copy())
         if travelled >= travel - 1e-12:

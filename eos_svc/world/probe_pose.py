@@ -16,12 +16,11 @@ from eos_svc.kinematics import HandModel
 class ProbePose:
     """What a probe of ``finger`` at joint angle ``angle`` sets and checks: the ``values`` (rad)
     of the wrist's roll, pitch, yaw and every finger joint at ``indices`` (the probing finger at
-    the angle, the others open), the wrist's x, y, z indices and limits (m), and the collision
+    the angle, the others open), the wrist's x, y, z limits (m), and the collision
     geometries ``others`` than the probing tip."""
 
     indices: np.ndarray
     values: np.ndarray
-    wrist_xyz: list[int]
     wrist_lo: list[float]
     wrist_hi: list[float]
     others: list[int]
@@ -49,7 +48,6 @@ class ProbePose:
         return cls(
             indices=indices,
             values=values,
-            wrist_xyz=[int(i) for i in xyz],
             wrist_lo=hand.lower[xyz].tolist(),
             wrist_hi=hand.upper[xyz].tolist(),
             others=[g for g in range(n_geoms) if g != tip_gid],
