@@ -5,7 +5,8 @@ Success when all fingertips touch (a precision grip). The verdict is the world's
 holds the object). The grasp is *good* (paper Fig. 2) when the contacts lie about the
 object's diameter: the opposing finger's contact and the middle of the other contacts are on opposite sides of
 the object's centre — the angle between them, seen from the centre, at least
-150° — *and* the contacts are in force closure under Coulomb friction (μ from the board's
+150° (a mesh: not asked, see :mod:`eos_svc.drivers.grip_verdict`) — *and* the contacts are
+in force closure under Coulomb friction (μ from the board's
 ``friction`` entry, the request's; see :mod:`eos_svc.drivers.grip_verdict` for the linearised
 cones and the Ferrari–Canny ε, reported with the verdict). Opportunistic sub-rating: 1
 when every finger is done (touching, missed, or stopped by a link contact), else 0. When
@@ -47,7 +48,7 @@ class EndAgent(GraspAgent):
             q = verdict["quality"]
             if verdict["good"]:
                 judgement = "good"
-            elif verdict["about_diameter"]:
+            elif verdict["about_diameter"] or verdict["centre_rule"] == "force closure":
                 judgement = "not good (no force closure)"
             else:
                 judgement = "not good (not about the diameter)"

@@ -165,7 +165,8 @@ class FingertipContact(TypedDict):
 
 class OutcomeEntry(TypedDict):
     """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`): contacts per finger,
-    whether all touch, the grip is good and about the diameter, the angle across the centre
+    whether all touch, the grip is good and about the diameter, the rule that judges the centre
+    (``"diameter"``, or ``"force closure"`` for a mesh), the angle across the centre
     (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
     hand configuration judged."""
 
@@ -173,6 +174,7 @@ class OutcomeEntry(TypedDict):
     all_touching: bool
     good: bool
     about_diameter: bool
+    centre_rule: str
     diameter_angle_deg: float | None
     quality: dict[str, Any]
     q_final: list[float]
