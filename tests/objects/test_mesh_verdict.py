@@ -65,7 +65,7 @@ def test_drake_holds_the_off_centre_grip(box_grip):
     pytest.importorskip("pydrake")
     from eos_svc.validation import validate_grasp
 
-    box, _, result, q = box_grip
+    _, _, result, q = box_grip
     planned = {**result.to_dict(), "q_final": q.tolist()}
     check = validate_grasp(planned)
     assert check.held, check.reason
