@@ -156,10 +156,21 @@ class FingerAgent(GraspAgent):
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —
         or the finger has closed past it without touching (the object is not quite where it
-        was postulated): then it keeps closing until it touches or reaches its limit."""
+        was postulated): then it keeps closing until it touches or reaches its limit — or
+        another fingertip already touches, so the hand will not move again, and closing lands
+        on the postulated object at all (short of its grasp position, the hand stopped when a
+        finger in reach there touched: landing near the chosen contact is then better than
+        none)."""
         if self.lands_within(board, self.world.params.landing_tolerance):
             return True
-        return self.passed_its_contact(board)
+        if self.passed_its_contact(board):
+            return True
+        return self.hand_held(board) and self.landing_miss(board) is not None
+
+    def hand_held(self, board: Board) -> bool:
+        """Another fingertip touches the object: the wrist holds the hand where it is."""
+        states = board.get(keys.FINGER_STATE, {})
+        return any(state == "touching" for finger, state in states.items() if finger != self.finger)
 
     def passed_its_contact(self, board: Board) -> bool:
         """The finger is closing, free, and already beyond its chosen contact's angle."""

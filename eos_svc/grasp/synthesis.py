@@ -29,6 +29,7 @@ from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import hand_landings
 from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.support import TouchSupport
 from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel
 from eos_svc.objects import Sphere, SurfaceObject
@@ -48,6 +49,8 @@ GOOD_ENOUGH_ANGLE_DEG = 172.0
 EPSILON_TIE = 0.05
 #: collision-free candidates about the centre scored by ε, the least-rotated first
 SCORED = 4
+#: ... on an approximate postulate, ranked by the touches' support first (:mod:`~eos_svc.grasp.support`)
+SUPPORT_SCORED = 12
 #: how far past a wrist joint's limit (rad) an angle still counts as at it: URDF limits are
 #: written rounded (1.570796 for π/2), and a grasp from above needs a yaw of exactly π/2
 LIMIT_SLACK = 1e-6
@@ -67,6 +70,8 @@ class GraspSynthesis:
         vertical_only: the postulate's size is known along the vertical only (grasp across it).
         table_height: the table under the object (world z, m), or None: candidates whose hand
             would touch it are rejected (:class:`~eos_svc.grasp.clearance.HandClearance`).
+        support: the touches an approximate postulate was made of, or None: candidates are
+            then ranked by how many of their contacts the touches support, before ε.
 
     Attributes:
         rejections: per reason (in words), how many candidates it rejected.
@@ -81,6 +86,7 @@ class GraspSynthesis:
         friction: float,
         vertical_only: bool = False,
         table_height: float | None = None,
+        support: TouchSupport | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
         self.friction = friction
@@ -90,6 +96,7 @@ class GraspSynthesis:
         self.tip_radii = {f: hand.tip_radius(f) for f in hand.finger_names}
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
+        self.support = support
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -103,10 +110,12 @@ class GraspSynthesis:
         diameters are all alike) are scored by ε; the best ε wins, and candidates within
         ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first. The
         orientations rotated more than the last one scored cannot change the choice and are
-        not simulated. When none about the centre is collision-free, the collision-free one
+        not simulated. With the touches' ``support`` (an approximate postulate) the
+        ``SUPPORT_SCORED`` least-rotated are ranked by how many of their contacts the touches
+        support first. When none about the centre is collision-free, the collision-free one
         closest to it is returned alone (the best the hand can do; its ``about_centre`` is
         False)."""
-        wanted = 1 if isinstance(self.obj, Sphere) else SCORED
+        wanted = 1 if isinstance(self.obj, Sphere) else (SCORED if self.support is None else SUPPORT_SCORED)
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
         for group in _turn_groups(candidate_frames(self.obj, self.vertical_only, self.on_table)):
@@ -126,9 +135,14 @@ class GraspSynthesis:
             if len(rest) > 0:
                 self._reject("contacts not about the centre")
             return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
-        top = max(c.epsilon for c in kept)
-        kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
-        return kept
+        if self.support is None:
+            return _by_epsilon(kept)
+        # the candidates with the most supported contacts first, each level by the ε rule
+        counts = [self.support.rank(c, self.opposing) for c in kept]
+        levels = sorted(set(counts), reverse=True)
+        return [
+            c for n in levels for c in _by_epsilon([k for k, m in zip(kept, counts, strict=True) if m == n])
+        ]
 
     def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
         """Another sampler's orientations, checked and scored as :meth:`candidates` checks them:
@@ -257,6 +271,13 @@ class GraspSynthesis:
             self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)
+
+
+def _by_epsilon(kept: list[GraspCandidate]) -> list[GraspCandidate]:
+    """``kept`` best first: the best ε, and those within ``EPSILON_TIE`` (relative) of it as
+    equal, the least wrist rotation first."""
+    top = max(c.epsilon for c in kept)
+    return sorted(kept, key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
 
 
 def _turn_groups(frames: Iterable[tuple[str, np.ndarray]]) -> list[list[tuple[str, np.ndarray]]]:
