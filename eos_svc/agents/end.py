@@ -11,7 +11,9 @@ in force closure under Coulomb friction (μ from the board's
 cones and the Ferrari–Canny ε, reported with the verdict). Opportunistic sub-rating: 1
 when every finger is done (touching, missed, or stopped by a link contact), else 0. When
 chosen with a finger still open (nothing else can act), it ends the run as failed, saying
-which fingers never reached the object.
+which fingers never reached the object. On an approximate postulate (the hull of the touches) a
+grip whose fingertips feel no force closure is first let go and planned again
+(:mod:`eos_svc.agents.regrip`).
 """
 
 from __future__ import annotations
@@ -19,6 +21,9 @@ from __future__ import annotations
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, GraspAgent
 from eos_svc.agents.finger import DONE_STATES
+from eos_svc.agents.regrip import READS as REGRIP_READS
+from eos_svc.agents.regrip import WRITES as REGRIP_WRITES
+from eos_svc.agents.regrip import Regrip
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
@@ -28,11 +33,12 @@ from eos_svc.schema.request import DEFAULT_FRICTION
 class EndAgent(GraspAgent):
     """Judges the grasp and ends the run."""
 
-    reads = frozenset({keys.FINGER_STATE, keys.FRICTION})
-    writes = frozenset({keys.OUTCOME})
+    reads = frozenset({keys.FINGER_STATE, keys.FRICTION}) | REGRIP_READS
+    writes = frozenset({keys.OUTCOME}) | REGRIP_WRITES
 
     def __init__(self, default: float, world: HandDriver) -> None:
         super().__init__("end", (GRASP,), default, world)
+        self.regrip = Regrip(world)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         states = board.get(keys.FINGER_STATE)
@@ -41,6 +47,9 @@ class EndAgent(GraspAgent):
         return 0.0
 
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
+        regripped = self.regrip.attempt(board)  # an approximate postulate's grip felt not to close
+        if regripped is not None:
+            return ActionResult(Outcome.PROGRESS, regripped)
         verdict = self.world.judge_grip(float(board.get(keys.FRICTION, DEFAULT_FRICTION)))
         board.set(keys.OUTCOME, verdict)
         states = board.get(keys.FINGER_STATE, {})

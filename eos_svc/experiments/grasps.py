@@ -105,7 +105,7 @@ def plan_and_validate(
         drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
         result = plan(
             PlanRequest(
-                obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})
+                obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **{**drake, **(options or {})}
             ),
             keep_trace=False,
             context=context,
@@ -287,6 +287,13 @@ def build_parser() -> argparse.ArgumentParser:
         help="the simulated hand's link-length calibration error (standard deviation, m; default 0)",
     )
     parser.add_argument(
+        "--deadline",
+        type=positive_float,
+        default=None,
+        metavar="S",
+        help="the requests' wall-clock budget per plan (s; default 10): more on a loaded machine",
+    )
+    parser.add_argument(
         "--world",
         choices=WORLDS,
         default="kinematic",
@@ -346,7 +353,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if hand is not None:
         name = f"{name}_{hand.name}"
     options: dict[str, Any] = {}
-    flags = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error"}
+    flags = {"tactile_noise": "--noise", "encoder_noise": "--encoder-noise", "link_error": "--link-error",
+             "deadline_s": "--deadline"}  # fmt: skip
     for key, flag in flags.items():
         value = getattr(args, flag[2:].replace("-", "_"))
         if value is not None:
