@@ -72,12 +72,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import zenoh
+from serve_processes import Server, start_servers, stop_servers
 
 from eos_svc.agents.planner import plan
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import EosClient, free_port, loopback, make_config
 from eos_svc.service import protocol as proto
-from eos_svc.service.serve_processes import Server, start_servers, stop_servers
 from eos_svc.service.session import direct_callback
 from eos_svc.service.wire_json import encode_result
 from eos_svc.shape import kernels

@@ -58,9 +58,9 @@ def suite_touches() -> list[Touches]:
     seen: list[Touches] = []
     fit = post_shape.select_class
 
-    def keep(touches: Touches) -> object:
+    def keep(touches: Touches, **options: object) -> object:
         seen.append(touches)
-        return fit(touches)
+        return fit(touches, **options)  # type: ignore[arg-type]
 
     post_shape.select_class = keep  # type: ignore[assignment]
     try:

@@ -1,15 +1,5 @@
-"""``eos client`` — talk to running ``eos serve`` instances.
-
-eos client list                             # instances alive (liveliness tokens)
-eos client plan --seed 7                    # one plan, cycles printed live, then the result
-eos client plan --json --quiet              # the result only, as JSON
-eos client plan --goal-id g1 --cancel-token SECRET   # a goal another shell can cancel
-eos client cancel g1 --token SECRET         # cancel it (only with the goal's token)
-eos client watch                            # every cycle and status on the network
-eos client watch --view                     # and a live 3-D view of the plans (URL on stderr)
-
-By default the client is a peer connecting to ``tcp/127.0.0.1:7447``.
-"""
+"""``eos client list|plan|cancel|watch``: talk to running ``eos serve`` instances (a peer
+connecting to ``tcp/127.0.0.1:7447`` by default; examples: ``docs/service.md``)."""
 
 from __future__ import annotations
 
@@ -63,54 +53,33 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     p = sub.add_parser("plan", help="request one plan; print its cycles live, then the result")
     c = sub.add_parser("cancel", help="cancel a goal by id")
     c.add_argument("goal_id", metavar="GOAL_ID")
-    c.add_argument(
-        "--token",
-        required=True,
-        metavar="TOKEN",
-        help="the goal's cancel token (given to eos client plan --cancel-token, or printed by it)",
-    )
+    c.add_argument("--token", required=True, help="the goal's cancel token (eos client plan prints it)")
     w = sub.add_parser("watch", help="print every cycle and status message on the network (Ctrl-C to stop)")
     for sp in (lst, p, c, w):
         add_connection_arguments(sp, default_listen=False)
         sp.add_argument(
             "--timeout",
             type=positive_float,
-            default=None,
             metavar="S",
-            help="seconds to wait for an answer (plan: the request's deadline + 10, per instance asked: "
-            "one that does not answer in time is given up for another; watch: stop after S s)",
+            help="s to wait for an answer (plan: its deadline + 10, per instance asked; watch: stop after S)",
         )
     from eos_svc.cli.view import add_view_arguments
 
     add_view_arguments(w.add_argument_group("view"), waits=False)  # watch --view
     g = add_request_arguments(p, friction_default=None)
+    g.add_argument("--hand", metavar="NAME", help="a hand the service has (eos hands; eos serve --hand)")
+    g.add_argument("--goal-id", metavar="ID", help="goal id (default: random)")
+    g.add_argument("--instance", metavar="ID", help="ask this instance only")
     g.add_argument(
-        "--hand",
-        default=None,
-        metavar="NAME",
-        help="the hand to plan with: one the service has (eos hands; eos serve --hand FILE) (its default)",
+        "--cancel-token", metavar="TOKEN", help="the goal's secret (16-128 of A-Z a-z 0-9 _ -; random)"
     )
-    g.add_argument("--goal-id", default=None, metavar="ID", help="goal id (default: random)")
-    g.add_argument("--instance", default=None, metavar="ID", help="ask this instance only")
-    g.add_argument(
-        "--cancel-token",
-        default=None,
-        metavar="TOKEN",
-        help="the goal's secret for eos client cancel (16-128 of A-Z a-z 0-9 _ -; default: random, printed)",
-    )
-    g.add_argument(
-        "--request",
-        default=None,
-        metavar="FILE",
-        help="send this JSON request file (schema/goal_id added) instead of the options",
-    )
+    g.add_argument("--request", metavar="FILE", help="send this JSON request file instead of the options")
     g.add_argument(
         "--repeat",
         type=int_at_least(1),
         default=1,
         metavar="N",
-        help="send the request N times, one after the other (goal ids ID-1 .. ID-N; a load generator); "
-        "with --json one line per plan",
+        help="send the request N times in turn (goal ids ID-1 .. ID-N); with --json one line per plan",
     )
     g.add_argument("--json", action="store_true", help="print the result as JSON")
     g.add_argument("--quiet", action="store_true", help="do not print the cycles")
@@ -134,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
             fail(f"{'GOAL_ID' if args.action == 'cancel' else '--goal-id'}: {exc.reason}")
     request: Any = None
     if args.action == "plan":
-        from eos_svc.cli.plan import FIELD_OPTIONS
+        from eos_svc.cli.plan import fail_field
         from eos_svc.schema.request import PlanRequest
 
         if args.request is not None:
@@ -149,7 +118,7 @@ def run(args: argparse.Namespace) -> int:
             try:
                 request = PlanRequest.from_dict(request_dict(args))
             except ValidationError as exc:
-                fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+                fail_field(exc)
     token = getattr(args, "cancel_token", None) or getattr(args, "token", None)
     if token is not None and not proto.is_token(token):
         fail(
@@ -178,10 +147,14 @@ def run(args: argparse.Namespace) -> int:
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
         if args.action == "watch":
-            from eos_svc.cli.view import open_stream_view, watch_until
+            from eos_svc.cli.view import open_view, watch_until
 
             stop = threading.Event()
-            stream = open_stream_view(args)  # --view: a live page of the plans watched
+            view, stream = open_view(args), None  # --view: a live page of the plans watched
+            if view is not None:
+                from eos_svc.view.live import StreamView
+
+                stream = StreamView(view)
 
             def on_message(kind: str, msg: dict[str, Any]) -> None:
                 print(format_cycle(msg) if kind == "cycle" else format_status(msg), flush=True)

@@ -1,10 +1,4 @@
-"""``eos ep1``: run EP1 alone — roll a fingertip on an object and estimate its curvature.
-
-Examples::
-
-    eos ep1 --shape sphere --radius 0.04
-    eos ep1 --shape cylinder --radius 0.02 --noise 2e-4 --seed 3 --json
-"""
+"""``eos ep1``: run EP1 alone — roll a fingertip on an object and estimate its curvature."""
 
 from __future__ import annotations
 
@@ -15,8 +9,6 @@ import sys
 from typing import Any
 
 from eos_svc.cli.common import fraction, int_at_least, non_negative_float, positive_float
-
-__all__ = ["add_arguments", "run"]
 
 SHAPES = ("sphere", "plane", "cylinder", "ellipsoid")
 

@@ -1,24 +1,11 @@
-"""``eos plan``: one grasp plan on a scene, with a live trace of the cycles.
-
-eos plan                                  # default scene: a 3 cm sphere, seed 1
-eos plan --shape sphere --radius 0.02 --position 0.25 0.03 -0.02 --seed 7
-eos plan --json                           # the result as JSON (no trace)
-eos plan --record run.jsonl               # request, every cycle record, result as JSON lines
-eos plan --picture grasp.png              # draw the final grasp (hand, object, contacts)
-eos plan --friction 0.3                   # Coulomb μ for the grasp-quality test
-eos plan --hand allegro                   # a registered hand (eos hands), or a description file
-eos plan --hand my_hand.toml
-eos plan --validate                       # and simulate the final grasp in Drake (eos validate)
-eos plan --html plan.html                 # the plan animated in 3-D, one self-contained page
-eos plan --view                           # a live 3-D view on localhost (URL on stderr)
-"""
+"""``eos plan``: one grasp plan on a scene, with a live trace of the cycles (options: README,
+"Planning", and ``eos plan --help``)."""
 
 from __future__ import annotations
 
 import argparse
 import sqlite3
-import sys
-from typing import IO, Any
+from typing import IO, Any, NoReturn
 
 from eos_svc.cli import view as view_options
 from eos_svc.cli.common import add_weight_arguments, fail, finite_float, positive_float
@@ -79,19 +66,10 @@ def add_request_arguments(
     g = parser.add_argument_group("run")
     g.add_argument("--seed", type=int, default=1, help="seed of the search and the tactile noise (1)")
     g.add_argument("--noise", type=finite_float, default=2e-4, help="tactile noise std, m (2e-4)")
-    g.add_argument(
-        "--encoder-noise",
-        type=finite_float,
-        default=0.0,
-        help="joint-encoder noise std of the simulated hand, rad (0)",
-    )
-    g.add_argument(
-        "--link-error", type=finite_float, default=0.0, help="link-length calibration error std, m (0)"
-    )
+    g.add_argument("--encoder-noise", type=finite_float, default=0.0, help="joint-encoder noise std, rad (0)")
+    g.add_argument("--link-error", type=finite_float, default=0.0, help="link-length error std, m (0)")
     g.add_argument("--max-cycles", type=int, default=2000, help="cycle limit (2000)")
-    g.add_argument(
-        "--deadline", type=positive_float, help="wall-clock budget, s (10; 600 with --world drake)"
-    )
+    g.add_argument("--deadline", type=positive_float, help="wall-clock budget, s (10; --world drake 600)")
     g.add_argument(
         "--friction",
         type=finite_float,
@@ -106,7 +84,7 @@ def add_request_arguments(
         default=None,
         metavar="NAME",
         help="add a plug-in agent, repeatable: an eos_svc.agents entry point or module:attr "
-        "(a service takes only those its instance offers, see eos serve --agent)",
+        "(a service: one it offers)",
     )
     return g
 
@@ -118,38 +96,30 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--world",
         choices=WORLDS,
         default="kinematic",
-        help="where the hand acts: kinematic (exact, the object fixed) or drake (the object a free "
-        "body on a table under gravity; success needs the lift test) (kinematic)",
+        help="kinematic (the object fixed; default) or drake (a free body on a table; needs the lift test)",
     )
     g.add_argument(
         "--memory",
         metavar="DB",
-        help="grasp memory (SQLite file, created if missing): adds the recall agent and records this plan; "
-        "give a learned weight, e.g. --w-default 0.25 --w-opportunistic 0.25 --w-learned 0.5",
+        help="grasp memory (SQLite file): adds the recall agent (give it a --w-learned) and records the plan",
     )
     g.add_argument(
         "--check-board",
         action="store_true",
-        help="debug mode: every agent may touch only the board entries it declares, every value "
-        "written is checked against its type; a breach ends the plan with status error",
+        help="every agent held to the board entries it declares and their types (a breach: status error)",
     )
     out = parser.add_argument_group("output")
     out.add_argument("--json", action="store_true", help="print the result as JSON instead of the trace")
     out.add_argument(
         "--record",
         metavar="FILE",
-        help="write the request, every cycle record and the result to FILE as JSON lines (see eos replay)",
+        help="write the request, every cycle record and the result as JSON lines (eos replay)",
     )
     out.add_argument("--picture", metavar="PNG", help="draw the final grasp to PNG")
     out.add_argument("--quiet", action="store_true", help="no live trace, only the result")
     view_options.add_html_argument(out)  # --html (3-D page of the plan)
     view_options.add_view_arguments(out)  # --view, --view-port, --view-wait, --view-hold
-    add_validate_argument(out)
-
-
-def add_validate_argument(group: argparse._ArgumentGroup) -> None:
-    """``--validate``: simulate the final grasp in Drake (see ``eos validate``)."""
-    group.add_argument(
+    out.add_argument(
         "--validate",
         action="store_true",
         help="simulate the final grasp in Drake (with the plan's hand) and add the verdict to the result; "
@@ -186,7 +156,8 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "tactile_noise": args.noise,
         "max_cycles": args.max_cycles,
-        "deadline_s": args.deadline if args.deadline is not None else default_deadline(args),
+        # 10 s; 600 s in the Drake world
+        "deadline_s": args.deadline or (600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0),
         "friction": args.friction,
         **({"world": args.world} if getattr(args, "world", "kinematic") != "kinematic" else {}),
         **({"agents": list(args.agent)} if getattr(args, "agent", None) else {}),
@@ -194,11 +165,6 @@ def request_dict(args: argparse.Namespace) -> dict[str, Any]:
         **({"link_error": args.link_error} if args.link_error else {}),
         **({} if args.table is None else {"table": {"height": args.table}}),
     }
-
-
-def default_deadline(args: argparse.Namespace) -> float:
-    """The wall-clock budget when ``--deadline`` is not given: 10 s, 600 s in the Drake world."""
-    return 600.0 if getattr(args, "world", "kinematic") == "drake" else 10.0
 
 
 def format_world(world: dict) -> str:
@@ -295,34 +261,31 @@ def format_result(result: Any) -> str:
     return "\n".join(lines)
 
 
-def admit(request: Any, hand: Any) -> None:
-    """Refuse (exit 2, naming the option) a request the planner cannot plan: out of reach,
-    overlapping the hand, wider than its span (:func:`eos_svc.world.admission.check_plannable`)."""
-    from eos_svc.world.admission import check_plannable
-
-    try:
-        check_plannable(request, hand)
-    except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+def fail_field(exc: ValidationError) -> NoReturn:
+    """Exit 2 naming the command-line option of the request field ``exc`` names."""
+    fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
 
 
 def run(args: argparse.Namespace) -> int:
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when planning
     from eos_svc.recording import cycle_line, header_line, result_line
+    from eos_svc.world.admission import check_plannable
 
     try:
         request = PlanRequest.from_dict(request_dict(args))
     except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field, exc.field)}: {exc.reason}")
+        fail_field(exc)
     hand = chosen_hand(args)
-    admit(request, hand)
+    try:
+        check_plannable(request, hand)  # out of reach, overlapping the hand, wider than its span
+    except ValidationError as exc:
+        fail_field(exc)
     record_file: IO[str] | None = None
     if args.record:
         try:
             record_file = open(args.record, "w", encoding="utf-8")  # noqa: SIM115 - closed below
         except OSError as exc:
             fail(f"--record: cannot write {args.record!r}: {exc.strerror}")
-            raise  # unreachable: fail() exits
         record_file.write(header_line(request, getattr(args, "hand", "hand3x3")) + "\n")
 
     def on_cycle(record: CycleRecord) -> None:
@@ -330,6 +293,8 @@ def run(args: argparse.Namespace) -> int:
             record_file.write(cycle_line(record) + "\n")
         if not args.json and not args.quiet:
             print(format_cycle(record), flush=True)
+        if view is not None:
+            view.cycle(record)
 
     memory = None
     if getattr(args, "memory", None):
@@ -346,16 +311,16 @@ def run(args: argparse.Namespace) -> int:
     try:
         result = plan(
             request,
-            on_cycle=view_options.with_view(on_cycle, view),
+            on_cycle=on_cycle,
             hand=hand,
             memory=memory,
             check_board=getattr(args, "check_board", False),
-            check=False,  # admit() has just run check_plannable on this request and hand
+            check=False,  # check_plannable has just run on this request and hand
         )
         if record_file is not None:
             record_file.write(result_line(result) + "\n")
     except ValidationError as exc:
-        fail(f"{FIELD_OPTIONS.get(exc.field.split('[')[0], exc.field)}: {exc.reason}")
+        fail_field(exc)
     finally:
         if record_file is not None:
             record_file.close()
@@ -383,11 +348,5 @@ def run(args: argparse.Namespace) -> int:
 
 
 def plan_exit_code(status: str) -> int:
-    """Exit code of a plan: 0 only for ``success`` (the end agent judged the grasp good); 1 for
-    every other status (completed with a grip that is not good, failed, stalled, …); bad
-    input exits 2 before planning."""
+    """0 for ``success`` (the end agent judged the grasp good), 1 for any other status."""
     return 0 if status == "success" else 1
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(run(argparse.Namespace()))

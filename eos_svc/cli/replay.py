@@ -1,15 +1,8 @@
-"""``eos replay FILE``: replay a recorded plan and check that it is deterministic.
+"""``eos replay FILE``: print a recorded plan (:mod:`eos_svc.recording`), re-run it and compare.
 
-eos plan --record run.jsonl               # record a run
-eos replay run.jsonl                      # print its trace and result, re-run it, compare
-eos replay run.jsonl --no-verify          # only print what was recorded
-eos replay run.jsonl --picture grasp.png  # and draw the final grasp
-eos replay run.jsonl --html plan.html     # and write the plan animated in 3-D (one HTML page)
-
-The record file's format is :mod:`eos_svc.recording`. Verification re-runs the recorded request
-(same seed, same hand) and compares cycle by cycle and then the result, ignoring only
-wall-clock fields. The first divergence is reported with the cycle, the field path and both
-values. Exit status: 0 when identical (or not verified), 1 on a divergence, 2 on a bad file.
+The re-run (same request, seed and hand) is compared cycle by cycle, then the result, ignoring
+wall-clock fields; the first divergence is reported with its cycle, field path and both values.
+Exit status: 0 identical (or not verified), 1 a divergence, 2 a bad file.
 """
 
 from __future__ import annotations
@@ -35,12 +28,8 @@ from eos_svc.recording import (
 
 
 def resolve_hand(name: str) -> Any:
-    """The hand called ``name``: ``None`` (the planner's default) for ``hand3x3``, else the
-    registered hand of that name or the description file at that path (``eos hands``).
-
-    Raises:
-        RecordFileError: no such hand, or its description is bad.
-    """
+    """The hand called ``name`` (``eos hands``; None for the default hand3x3); RecordFileError
+    when there is no such hand or its description is bad."""
     if name == DEFAULT_HAND:
         return None
     from eos_svc.errors import ValidationError
@@ -54,12 +43,8 @@ def resolve_hand(name: str) -> Any:
 
 def verify(recording: Recording, hand: Any = DEFAULT_HAND) -> Verification:
     """Re-run the recorded request (with ``hand``, by default the recorded one) and compare it
-    cycle by cycle, then the result (:func:`eos_svc.recording.compare_run`).
-
-    Raises:
-        RecordFileError: the recorded hand is unknown.
-        ValidationError: the recorded request is not valid (any more).
-    """
+    cycle by cycle, then the result (:func:`eos_svc.recording.compare_run`). Raises
+    RecordFileError (an unknown hand) or ValidationError (a request not valid any more)."""
     from eos_svc.agents import PlanRequest, plan  # heavy imports only when verifying
     from eos_svc.world.pose_board import view_entries_as_recorded
 

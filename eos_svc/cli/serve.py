@@ -27,41 +27,25 @@ def add_connection_arguments(parser: argparse.ArgumentParser, *, default_listen:
     """Zenoh session options shared by ``eos serve`` and ``eos client``."""
     g = parser.add_argument_group("Zenoh session")
     g.add_argument(
-        "--config",
-        type=Path,
-        metavar="FILE",
-        help="Zenoh JSON5 configuration file (mode, endpoints, TLS, access control)",
+        "--config", type=Path, metavar="FILE", help="Zenoh JSON5 configuration (mode, endpoints, TLS, ACL)"
     )
-    g.add_argument(
-        "--mode",
-        choices=("peer", "client", "router"),
-        default=None,
-        help="session mode when no --config (default: peer)",
-    )
+    g.add_argument("--mode", choices=("peer", "client", "router"), help="without --config (default: peer)")
+    default = "default: tcp/127.0.0.1:7447 without --config"
     if default_listen:
-        g.add_argument(
-            "--listen",
-            action="append",
-            metavar="ENDPOINT",
-            default=None,
-            help="endpoint to listen on, repeatable (default: tcp/127.0.0.1:7447 without --config)",
-        )
+        g.add_argument("--listen", action="append", metavar="ENDPOINT", help=f"repeatable ({default})")
     g.add_argument(
         "--connect",
         action="append",
         metavar="ENDPOINT",
-        default=None,
-        help="endpoint to connect to, repeatable"
-        + ("" if default_listen else " (default: tcp/127.0.0.1:7447 without --config)"),
+        help="repeatable" + ("" if default_listen else f" ({default})"),
     )
     g.add_argument(
         "--lease-ms",
         type=_positive_int,
-        default=None,
         metavar="MS",
         help="transport lease: a silent peer is dropped after it (Zenoh default 10000)",
     )
-    g.add_argument("--namespace", default=None, metavar="NS", help="namespace under eos/@v1")
+    g.add_argument("--namespace", metavar="NS", help="namespace under eos/@v1")
 
 
 def session_config(args: argparse.Namespace, *, serving: bool) -> Any:
@@ -95,60 +79,48 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Options of ``eos serve``."""
     add_connection_arguments(parser, default_listen=True)
     s = parser.add_argument_group("service")
-    s.add_argument("--instance", default=None, metavar="ID", help="instance id (default: <pid>-<random>)")
-    s.add_argument(
-        "--workers", type=_positive_int, default=2, metavar="N", help="plans run at once (threads; default 2)"
-    )
-    s.add_argument(
-        "--queue",
-        type=_natural,
-        default=16,
-        metavar="N",
-        help="plans waiting beyond the running ones before 'busy' (default 16)",
-    )
+    s.add_argument("--instance", metavar="ID", help="instance id (default: <pid>-<random>)")
+    s.add_argument("--workers", type=_positive_int, default=2, metavar="N", help="plans run at once (2)")
+    s.add_argument("--queue", type=_natural, default=16, metavar="N", help="plans waiting before 'busy' (16)")
     s.add_argument(
         "--max-request-bytes",
         type=_positive_int,
         default=64 * 1024,
         metavar="B",
-        help="largest request accepted (default 65536)",
+        help="largest request (65536)",
     )
     s.add_argument(
         "--max-deadline",
         type=positive_float,
         default=600.0,
         metavar="S",
-        help="deadline of a plan whose request gives none or a longer one (s; default 600, at most 3600)",
+        help="deadline of a plan whose request gives none or a longer one (s; 600, at most 3600)",
     )
     s.add_argument(
         "--planner",
         choices=("grasp", "root"),
         default="grasp",
-        help="grasp: the grasp planner (default); root: the core's root-finding demo "
-        "(transport tests without Pinocchio)",
+        help="grasp (default) or root: the core's root-finding demo (transport tests, no Pinocchio)",
     )
     s.add_argument(
         "--cycle-delay",
         type=positive_float,
-        default=None,
         metavar="S",
-        help="sleep S seconds in every cycle (testing cancellation and failover)",
+        help="sleep S s in every cycle (tests of cancellation)",
     )
     s.add_argument(
         "--hand",
         action="append",
         default=[],
         metavar="FILE",
-        help="register a hand description file (repeatable); requests name a hand by its "
-        "name (field hand), any registered one (eos hands) or these",
+        help="register a hand description file, repeatable (requests name any registered hand)",
     )
     s.add_argument(
         "--agent",
         action="append",
         default=[],
         metavar="SPEC",
-        help="offer a plug-in agent, repeatable: NAME=module:attr, module:attr or an eos_svc.agents "
-        "entry point; requests name it in their 'agents' field (grasp planner only)",
+        help="offer a plug-in agent, repeatable: NAME=module:attr, module:attr or an entry point",
     )
     s.add_argument("--log-level", choices=("debug", "info", "warning", "error"), default="info")
 

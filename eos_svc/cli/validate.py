@@ -1,15 +1,7 @@
 """``eos validate FILE``: simulate a planned grasp in Drake and say whether it holds.
 
-eos plan --json > result.json && eos validate result.json
-eos plan --record run.jsonl && eos validate run.jsonl
-eos validate result.json --json            # the result with a "validation" entry, as JSON
-eos validate result.json --mass 0.2 --seconds 3
-eos plan --hand trifinger --json > r.json && eos validate r.json --hand trifinger
-
-FILE is what ``eos plan --json`` prints (one JSON object) or an ``eos plan --record`` file
-(its result line is validated, with the hand its header names unless ``--hand`` is given).
-Exit status: 0 held, 1 dropped, 2 bad file or bad field.
-``eos plan --validate`` runs the same check right after planning.
+FILE is what ``eos plan --json`` prints or an ``eos plan --record`` file (its result line, with the
+hand its header names unless ``--hand`` is given). Exit status: 0 held, 1 dropped, 2 bad input.
 """
 
 from __future__ import annotations
@@ -48,11 +40,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def read_result(path: str) -> tuple[dict[str, Any], str | None]:
-    """The plan result in ``path`` (a JSON object, or the result line of a record file) and the
-    hand a record file names (None for a plain result).
-
-    Exits with status 2 and a message naming the problem when the file is unusable.
-    """
+    """The plan result in ``path`` (a JSON object, or a record file's result line) and the hand a
+    record file names (None for a plain result); exit 2 naming the problem when it is unusable."""
     from eos_svc.recording import MARK, RecordFileError, read_recording
 
     try:
@@ -71,10 +60,8 @@ def read_result(path: str) -> tuple[dict[str, Any], str | None]:
         recording = read_recording(path)
     except RecordFileError as exc:
         fail(f"FILE: {path!r} is neither a plan result (eos plan --json) nor a record file: {exc}")
-        raise  # unreachable
     if recording.result is None:
         fail(f"FILE: {path!r} has no result line (the recorded run was interrupted)")
-    assert recording.result is not None
     return recording.result, recording.hand
 
 
@@ -106,10 +93,8 @@ def validate_or_fail(result: Any, **options: Any) -> Any:
         return validate_grasp(result, **options)
     except ValidationError as exc:
         fail(f"{OPTION_NAMES.get(exc.field, exc.field)}: {exc.reason}")
-        raise  # unreachable
     except SimulationError as exc:
         fail(f"validation: {exc}", code=1)
-        raise  # unreachable
 
 
 def run(args: argparse.Namespace) -> int:

@@ -1,17 +1,11 @@
-"""The 3-D view options of ``eos plan``, ``eos replay`` and ``eos client watch`` (:mod:`eos_svc.view`).
-
-eos plan --html plan.html                 # the whole plan animated in one self-contained page
-eos replay run.jsonl --html plan.html     # the same from a recording
-eos plan --view                           # a live MeshCat page on localhost following the cycles
-eos client watch --view                   # the same for the plans of the service, over Zenoh
-"""
+"""The 3-D view options of ``eos plan``, ``eos replay`` and ``eos client watch`` (:mod:`eos_svc.view`)."""
 
 from __future__ import annotations
 
 import argparse
 import sys
 import time
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from typing import Any
 
 from eos_svc.cli.common import fail, non_negative_float, positive_float
@@ -71,17 +65,6 @@ def open_view(args: argparse.Namespace, hand: Any = None) -> Any:
     return view
 
 
-def open_stream_view(args: argparse.Namespace) -> Any:
-    """``eos client watch --view``: a :class:`~eos_svc.view.live.StreamView` fed by the watched
-    messages (its URL printed), or None without ``--view``."""
-    view = open_view(args)
-    if view is None:
-        return None
-    from eos_svc.view.live import StreamView
-
-    return StreamView(view)
-
-
 def watch_until(stop: Any, stream: Any, seconds: float | None) -> None:
     """``eos client watch``: wait until ``stop`` is set or ``seconds`` pass (None: until Ctrl-C),
     drawing the watched messages meanwhile when there is a view (``stream``)."""
@@ -101,19 +84,6 @@ def wait_for_browser(view: Any, seconds: float | None) -> None:
     end = time.monotonic() + seconds
     while view.meshcat.GetNumActiveConnections() == 0 and time.monotonic() < end:
         time.sleep(0.05)
-
-
-def with_view(on_cycle: Callable[[Any], None], view: Any) -> Callable[[Any], None]:
-    """``on_cycle`` followed by the view's (unchanged without a view)."""
-    if view is None:
-        return on_cycle
-    follow = view.cycle
-
-    def both(record: Any) -> None:
-        on_cycle(record)
-        follow(record)
-
-    return both
 
 
 def hold_view(view: Any, seconds: float | None) -> None:

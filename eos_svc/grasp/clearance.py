@@ -1,10 +1,6 @@
-"""Whether a candidate grasp can be reached without collision on the postulated object.
-
-The hand is placed in an imagined scene with the postulated object (never the true one) and
-checked with coal distances: at the pre-grasp, along the straight approach with the fingers
-open, and while the fingers close with only the fingertips allowed to touch.
-
-SI units: metres, radians.
+"""Whether a candidate grasp can be reached without collision on the postulated object: coal
+distances at the pre-grasp, along the straight approach (fingers open) and while the fingers
+close (only the tips may touch). SI units.
 """
 
 from __future__ import annotations
@@ -30,16 +26,10 @@ PREGRASP_TRIES = 4
 
 
 class HandClearance:
-    """Collision checks of one hand against one postulated object.
-
-    Args:
-        hand: the hand model.
-        sweeps: its fingers' closing sweeps (the open hand: every finger at its first sample).
-        params: world constants (approach stand-off, clearance, contact tolerance).
-        obj: the postulated object.
-        table_height: the table's height (world z, m) when the object rests on one: no hand
-            geometry may come nearer it than the threshold of each check.
-    """
+    """Collision checks of one hand (its closing sweeps: the open hand at their first samples)
+    against one postulated object, with the world constants' stand-off, clearance and contact
+    tolerance; ``table_height`` (world z, m): no hand geometry may come nearer the table than
+    each check's threshold."""
 
     def __init__(
         self,
@@ -80,9 +70,7 @@ class HandClearance:
 
     def clear(self, q: np.ndarray, threshold: float, skip_tips: bool) -> bool:
         """Whether every collision geometry of the hand at ``q`` (the fingertips skipped when
-        asked) is at least ``threshold`` m from the object. A geometry whose lower bound
-        (:func:`~eos_svc.kinematics.gap_bounds.ball_gap_lower_bounds`) reaches the threshold
-        needs no exact query."""
+        asked) is at least ``threshold`` m from the object (coal where a lower bound cannot tell)."""
         state = self.state
         state.update(q)
         state.geometry_data  # noqa: B018 -- brings the geometry placements up to date

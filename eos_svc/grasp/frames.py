@@ -1,21 +1,9 @@
 """Candidate palm orientations per primitive, and the wrist angles that give them.
 
-The hand closes its fingers along the palm frame's z axis (the opposing finger below, the
-others above) and approaches along its x axis. A candidate orientation puts the closing axis
-through the object's centre of mass across the object, as GraspIt's primitive rules do
-(Miller, Knoop, Christensen, Allen, ICRA 2003):
-
-- sphere: about a diameter (vertical and horizontal closing, approach from the hand's side);
-- ellipsoid: across each of its two shorter axes;
-- cylinder and capsule: across the axis (closing along the axis' normals, approach along the
-  other normal, the axis, or from the hand's side), and along the axis when it is short;
-- box: across each pair of opposite faces, approach along the other face normals.
-
-Each closing axis is taken in both senses (the opposing finger on either side), with every
-approach across it. On a table (``on_table``) the object is also grasped **from above**: the
-approach straight down (the palm facing the table, the fingers closing about the object above
-it), or the downward direction across a tilted closing axis; no approach climbs from under the
-table, and no closing axis is vertical (a finger would go under the object). Angles in radians.
+The hand closes along the palm frame's z axis and approaches along its x axis. A candidate puts
+the closing axis through the object's centre across it (the kind's own rule, GraspIt's:
+Miller, Knoop, Christensen, Allen, ICRA 2003), in both senses, with every approach across it;
+on a table also from above, never from under it nor closing vertically. Angles in radians.
 """
 
 from __future__ import annotations

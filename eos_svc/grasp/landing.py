@@ -1,13 +1,8 @@
 """Where a closing fingertip lands on an object: its *landing*.
 
-A finger closes along its sweep (:class:`~eos_svc.grasp.sweeps.FingerSweep`: fingertip-centre
-positions in the palm frame, joint angle increasing). With the palm at a pose, each sample's
-*gap* is the object's signed distance at the tip centre less the tip radius; the fingertip
-lands between the last free sample and the first touching one, where the gap, interpolated
-linearly, is zero. The contact is the object's surface point closest to the tip centre there,
-its normal runs from the contact to the tip centre.
-
-SI units: metres, radians.
+Along the finger's sweep (palm frame) each sample's gap is the object's signed distance at the
+tip centre less the tip radius; the tip lands where the gap, interpolated linearly between the
+last free sample and the first touching one, is zero. SI units.
 """
 
 from __future__ import annotations
@@ -25,14 +20,9 @@ from eos_svc.objects import SurfaceObject
 
 @dataclass(frozen=True)
 class Landing:
-    """Where a closing fingertip first touches the object.
-
-    Attributes:
-        index: sweep sample at which the tip touches (the finger's angle is ``sweep.angles[index]``).
-        angle: the joint angle of the touch, between samples ``index`` − 1 and ``index`` (rad).
-        point: contact point on the object (world, m).
-        normal: the object's outward unit normal there (world).
-    """
+    """Where a closing fingertip first touches the object: the first touching sweep sample, the
+    joint angle of the touch between it and the sample before (rad), the contact point on the
+    object and its outward unit normal (world, m)."""
 
     index: int
     angle: float
@@ -61,17 +51,10 @@ def rotated_sweep_gaps(
 class SweepLandings:
     """The landings of one sweep on an object, the palm at one pose, from any start sample.
 
-    A finger between samples ``start`` − 1 and ``start``, not touching, closes from the former:
-    it lands at the first touching sample at or after ``max(0, start − 1)``, unless it already
-    touches there (then there is no landing). The landing depends on ``start`` only through
-    that sample, so a finger closing step by step asks for the same landing again: it is found
-    once per touching sample.
-
-    Args:
-        obj: the object.
-        sweep: the finger's closing sweep.
-        pts: the sweep's fingertip centres at this pose (world, m; :func:`rotated_sweep_gaps`).
-        gaps: their gaps to ``obj`` (m; :func:`rotated_sweep_gaps`).
+    A finger closing from ``start`` lands at the first touching sample at or after
+    ``max(0, start − 1)`` unless it touches there already; each landing is found once per
+    touching sample. ``pts``, ``gaps``: the sweep's tip centres at this pose (world, m) and their
+    gaps (m), from :func:`rotated_sweep_gaps`.
     """
 
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
@@ -158,10 +141,8 @@ def hand_landings(
     rotation: np.ndarray,
     origin: np.ndarray,
 ) -> dict[str, Landing | None]:
-    """The :func:`landing` closing from open (sample 0) of every finger of ``tip_radii`` (in its
-    order), the palm at (``rotation``, ``origin``): the fingers' sweeps stacked into one
-    signed-distance query (an object's distance costs mostly per query, not per point: the
-    ellipsoid's Newton iteration)."""
+    """The :func:`landing` from open of every finger of ``tip_radii``, the palm at (``rotation``,
+    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
     names = list(tip_radii)
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)

@@ -1,13 +1,7 @@
-"""The postulated object: what grasp synthesis plans on, from post_shape's postulate.
-
-post_shape's postulate (board entry ``shape``) carries ``object``, the postulated object in
-the request's own JSON form (``ObjectSpec.from_dict``), and ``pose_known``. An older
-postulate without ``object`` knows only the class, the vertical half-extent
-``grasp_radius`` and the ``centre``: it becomes an *upright* object (rpy = 0) whose every
-extent is the known one — a ball of radius ``grasp_radius`` for the curved classes (sphere,
-ellipsoid, cylinder, capsule: their top and bottom are curved, and a ball meets the fingers
-there as they do), a cube of edge 2·``grasp_radius`` for the flat ones (plane, box) — and,
-its size being known along the vertical only, it is grasped across the vertical.
+"""The postulated object grasp synthesis plans on, from post_shape's postulate (board ``shape``):
+its ``object`` in the request's JSON form, or for an older postulate an upright ball (curved
+classes) or cube (plane, box) of its vertical half-extent ``grasp_radius``, grasped across the
+vertical.
 """
 
 from __future__ import annotations
@@ -22,11 +16,8 @@ from eos_svc.schema.request import ObjectSpec
 
 
 def make_object(spec: ObjectSpec) -> SurfaceObject:
-    """The kinematics object for a validated :class:`ObjectSpec` (its kind from the registry).
-
-    Raises:
-        ValidationError: ``object.<field>`` when the object cannot be built (a mesh file that
-            cannot be read, a flat mesh)."""
+    """The kinematics object for a validated :class:`ObjectSpec`; :class:`ObjectSizeError`
+    naming ``object.<field>`` when it cannot be built (an unreadable or flat mesh)."""
     try:
         return objects.make(spec.shape, spec.size, spec.position, spec.rpy)
     except ObjectSizeError as exc:
@@ -35,15 +26,9 @@ def make_object(spec: ObjectSpec) -> SurfaceObject:
 
 @dataclass(frozen=True)
 class Postulate:
-    """The object grasp synthesis plans on.
-
-    Attributes:
-        spec: the postulated object (request form).
-        pose_known: its orientation was sensed (False: assumed upright, rpy = 0).
-        vertical_only: its size is known along the vertical only (an older postulate):
-            grasp across the vertical.
-        source: ``"post_shape"`` or ``"oracle"`` (the true object, for measurements only).
-    """
+    """The object grasp synthesis plans on (request form), whether its orientation was sensed
+    (else upright), whether its size is known along the vertical only (grasp across it), and its
+    source: ``"post_shape"`` or ``"oracle"`` (the true object, for measurements only)."""
 
     spec: ObjectSpec
     pose_known: bool
@@ -59,28 +44,17 @@ class Postulate:
         return "" if self.pose_known else "pose assumed upright"
 
 
-def upright_from_legacy(shape: Mapping[str, Any]) -> ObjectSpec | None:
-    """An upright ball or cube (see the module docstring) from the postulate's class, vertical
-    half-extent and centre (None when either is unknown)."""
-    g, centre = shape.get("grasp_radius"), shape.get("centre")
-    if g is None or centre is None:
-        return None
-    g = float(g)
-    if str(shape.get("class")) in ("plane", "box"):
-        return ObjectSpec("box", {"size": (2.0 * g, 2.0 * g, 2.0 * g)}, tuple(centre))
-    return ObjectSpec("sphere", {"radius": g}, tuple(centre))
-
-
 def read_postulate(shape: Mapping[str, Any]) -> Postulate | None:
-    """The postulate's object (``object`` when present, else the upright one), or None
-    when neither is known (a plane, or a size not yet measured).
-
-    Raises:
-        ValidationError: ``object`` is present but not a valid object (naming the field).
-    """
+    """The postulate's object (``object`` when present, else the upright one), or None when
+    neither is known; a :class:`ValidationError` naming the field of an invalid ``object``."""
     obj = shape.get("object")
     if obj is not None:
         spec = ObjectSpec.from_dict(obj, prefix="shape.object")
         return Postulate(spec, bool(shape.get("pose_known", True)), False)
-    legacy = upright_from_legacy(shape)
-    return None if legacy is None else Postulate(legacy, False, True)
+    g, centre = shape.get("grasp_radius"), shape.get("centre")
+    if g is None or centre is None:
+        return None
+    g = float(g)  # an older postulate: an upright cube or ball of its vertical half-extent
+    if str(shape.get("class")) in ("plane", "box"):
+        return Postulate(ObjectSpec("box", {"size": (2.0 * g, 2.0 * g, 2.0 * g)}, tuple(centre)), False, True)
+    return Postulate(ObjectSpec("sphere", {"radius": g}, tuple(centre)), False, True)

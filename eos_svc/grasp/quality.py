@@ -1,47 +1,10 @@
 """Grasp quality: force closure under Coulomb friction and the Ferrari–Canny ε metric.
 
-Pure NumPy/SciPy (no Pinocchio): contacts in, a :class:`GraspQuality` out.
-
-Conventions
------------
-- Contacts are hard-finger point contacts (no torsional friction). Each contact ``i`` has a
-  point ``p_i`` on the object and the object's *outward* unit surface normal ``n_i`` (object
-  → fingertip, as :class:`~eos_svc.kinematics.Contact` reports it). The finger pushes along
-  ``−n_i``.
-- The Coulomb cone of half-angle ``atan μ`` is linearised by ``m`` edges (3-D contacts)::
-
-      f_ij = −n_i + μ (cos θ_j t1_i + sin θ_j t2_i),   θ_j = 2π j / m,  j = 0 … m−1
-
-  (a unit normal component; an inner approximation of the cone). In the plane (2-D points)
-  the cone has exactly two edges ``−n_i ± μ t_i`` — no approximation. With μ = 0 each
-  contact gives the one wrench along its normal.
-- Soft-finger contacts (optional, ``patch_radius`` a > 0, 3-D only): a contact pressing over a
-  small circular patch of radius ``a`` also resists a torque about its normal of up to
-  ``γ f_n``, γ = (2/3) μ a (uniform pressure over the patch); each contact then adds the two
-  wrenches of its normal force with torque ``± γ (−n_i)`` — an inner approximation of its
-  limit surface. Two antipodal soft contacts (a parallel jaw's pads) are in force closure.
-- Primitive wrenches ``w_ij = [f_ij ; (p_i − c) × f_ij / L]`` with torques about the
-  object's centre ``c`` divided by a characteristic length ``L`` (default: the largest
-  contact distance from ``c``; the planner uses the object's half diameter, the radius of a
-  sphere), so forces and scaled torques share units. In 3-D, wrenches are 6-vectors; in 2-D,
-  ``(f_x, f_y, τ_z / L)``.
-- **Force closure** ⇔ the origin is strictly inside the convex hull ``W`` of the primitive
-  wrenches (equivalently: they positively span wrench space).
-- **ε (Ferrari–Canny, "Q1")** = radius of the largest origin-centred ball inside ``W`` =
-  min over hull facets of the origin's distance to the facet plane; 0 when the grasp is not
-  in force closure. It is the smallest wrench (force units, torque/L) the grasp can resist in
-  its worst direction when the contact normal forces sum to 1. ε is invariant to translating
-  the whole grasp, scales with the torque convention, and grows with μ.
-- Degenerate inputs (no contacts, coincident/collinear/coplanar contact sets, μ = 0 on a
-  sphere…) give a wrench set of rank below the wrench-space dimension: no force closure,
-  ε = 0, never an exception. Malformed inputs (wrong shapes, NaN, μ < 0, zero normals) raise
-  :class:`~eos_svc.errors.ValidationError` (a ``ValueError``) naming the argument.
-
-Closed forms checked by the tests: two antipodal contacts on a disc of radius ``r`` (2-D,
-``L = r``) have ``ε = μ / √(2 + μ²)``; any frictionless grasp of a sphere, and any set of at
-most six frictionless contacts in 3-D, is not in force closure; two antipodal hard contacts
-in 3-D never are (the torque about the line through them is unresisted), three contacts at
-120° on a sphere's equator are for every μ > 0.
+Pure NumPy/SciPy: contacts (points on the object, its outward normals; the finger pushes along
+``−n``) in, a :class:`GraspQuality` out. Cones linearised by ``m`` edges (exactly two in 2-D),
+optional soft-finger patches, wrenches ``[f ; (p − c) × f / L]``; ε is the radius of the largest
+origin-centred ball inside their convex hull, 0 without force closure (degenerate sets never
+raise). Conventions and the closed forms the tests check: ``docs/planner.md`` (Grasp quality).
 """
 
 from __future__ import annotations
@@ -113,24 +76,12 @@ def primitive_wrenches(
     torque_scale: float | None = None,
     patch_radius: float = 0.0,
 ) -> tuple[np.ndarray, float, int]:
-    """The primitive contact wrenches (see the module docstring for the convention).
-
-    Args:
-        points: (k, 3) or (k, 2) contact points on the object (m).
-        normals: same shape: outward surface normals (need not be unit length).
-        centre: torque reference, the object's centre (None: the contacts' centroid).
-        mu: Coulomb friction coefficient (≥ 0).
-        edges: edges per linearised 3-D cone (≥ 3; ignored in 2-D).
-        torque_scale: characteristic length L (default: the largest ``‖p_i − c‖``, or 1).
-        patch_radius: soft-finger contact patch radius a (m, ≥ 0; 0: hard point contacts).
-
-    Returns:
-        (wrenches of shape (k·w, 6) or (k·w, 3), the torque scale used, wrenches per contact w:
-        the cone's edges, plus two with a soft-finger patch).
-
-    Raises:
-        ValueError: naming the malformed argument.
-    """
+    """The primitive contact wrenches (k·w, 6) — (k·w, 3) in 2-D —, the torque scale used and
+    the wrenches per contact w (the cone's edges, plus two with a soft-finger patch), of (k, 3)
+    or (k, 2) contact ``points`` (m) with outward ``normals`` (any length), torques about
+    ``centre`` (None: the centroid) over ``torque_scale`` (default: the largest ``‖p_i − c‖``),
+    Coulomb ``mu`` ≥ 0, ``edges`` ≥ 3 per 3-D cone and a ``patch_radius`` (m, 0: hard contacts).
+    A malformed argument raises :class:`ValidationError` naming it."""
     p, n = _array(points, "points"), _array(normals, "normals")
     if p.ndim != 2 or p.shape[1] not in (2, 3):
         raise ValidationError("points", f"must have shape (k, 3) or (k, 2), got {p.shape}")
@@ -192,11 +143,8 @@ def primitive_wrenches(
 
 
 def epsilon_of_wrenches(wrenches: ArrayLike) -> tuple[float, int]:
-    """Ferrari–Canny ε of a primitive wrench set, and the set's rank.
-
-    0 when the origin is not strictly inside the convex hull (including rank-deficient and
-    empty sets). Never raises on degenerate geometry.
-    """
+    """Ferrari–Canny ε of a primitive wrench set and the set's rank: ε = 0 when the origin is not
+    strictly inside the convex hull (rank-deficient and empty sets too; never raises)."""
     w = np.asarray(wrenches, dtype=float)
     if w.ndim != 2 or len(w) == 0:
         return 0.0, 0

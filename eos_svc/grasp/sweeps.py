@@ -28,22 +28,6 @@ class FingerSweep:
         """Index of the first sample at or beyond ``angle``."""
         return int(np.searchsorted(self.angles, angle - 1e-12))
 
-    def reaches(self, angle: float, centre_palm: np.ndarray, radius: float) -> bool:
-        """Whether closing from ``angle`` brings the tip centre within ``radius`` of ``centre_palm``."""
-        rest = self.points[self.index_at(angle) :]
-        if len(rest) == 0:
-            return False
-        d = rest - centre_palm
-        return bool(np.min(np.einsum("ij,ij->i", d, d)) <= radius * radius)
-
-    def last_within(self, centre_palm: np.ndarray, radius: float) -> int:
-        """Index of the last sample within ``radius`` of ``centre_palm`` (−1 if none): closing
-        from ``angle`` reaches it (:meth:`reaches`) iff ``index_at(angle) <= last_within(...)``,
-        so one evaluation per centre serves every angle."""
-        d = self.points - centre_palm
-        within = np.flatnonzero(np.einsum("ij,ij->i", d, d) <= radius * radius)
-        return int(within[-1]) if len(within) else -1
-
 
 #: sweep resolution of a finger with a prismatic joint (m): about the tip travel of 0.01 rad at
 #: a 0.1 m lever, the resolution of a revolute finger
@@ -51,18 +35,17 @@ PRISMATIC_RESOLUTION = 0.001
 
 
 def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerSweep]:
-    """Tip-centre paths in the palm frame for every finger closing from its lower to its upper limit.
-
-    Computed once per hand at the neutral wrist (palm = world); ``resolution`` in rad, or
-    :data:`PRISMATIC_RESOLUTION` m for a finger with a prismatic joint.
-    """
+    """Tip-centre paths in the palm frame of every finger closing from its lower to its upper
+    limit, every ``resolution`` rad (:data:`PRISMATIC_RESOLUTION` m for a prismatic finger)."""
     state = hand.state(hand.neutral())
     palm = state.palm_placement()
     sweeps: dict[str, FingerSweep] = {}
     for finger in hand.finger_names:
         idx = hand.finger_q_index(finger)
         lo, hi = float(np.max(hand.lower[idx])), float(np.min(hand.upper[idx]))
-        step = PRISMATIC_RESOLUTION if has_prismatic_joint(hand, finger) else resolution
+        joints = [hand.model.joints[hand.model.getJointId(j)] for j in hand.description.finger(finger).joints]
+        prismatic = any(j.shortname().startswith("JointModelP") for j in joints)
+        step = PRISMATIC_RESOLUTION if prismatic else resolution
         n = max(2, math.ceil((hi - lo) / step) + 1)
         angles = np.linspace(lo, hi, n)
         points = np.empty((n, 3))
@@ -73,13 +56,6 @@ def build_sweeps(hand: HandModel, resolution: float = 0.01) -> dict[str, FingerS
             points[k] = palm.actInv(state.tip_position(finger))
         sweeps[finger] = FingerSweep(angles, points)
     return sweeps
-
-
-def has_prismatic_joint(hand: HandModel, finger: str) -> bool:
-    """Whether one of ``finger``'s joints is prismatic (its coordinate in m, not rad)."""
-    model = hand.model
-    joints = hand.description.finger(finger).joints
-    return any(model.joints[model.getJointId(j)].shortname().startswith("JointModelP") for j in joints)
 
 
 def forward_reach(hand: HandModel, sweeps: dict[str, FingerSweep]) -> float:

@@ -1,19 +1,10 @@
 """Grasp synthesis on a postulated primitive (Miller, Knoop, Christensen, Allen, ICRA 2003).
 
-A *candidate grasp* is a palm orientation (the approach direction and the hand's roll about
-it: :mod:`~eos_svc.grasp.frames`, GraspIt's rules per primitive) and a depth (the object's
-centre on the palm's x axis, that far ahead of the palm). Each candidate is simulated on the
-*postulated* object (never the true one): every finger's closing sweep is run against the
-object's signed distance until the fingertip touches (its landing,
-:mod:`~eos_svc.grasp.landing`). A candidate is kept when the wrist can take its pose (joint
-limits), every fingertip lands from the open hand, the contacts lie about the centre (the end
-agent's Fig. 2 test with a margin), the object is smaller than the hand height across the grip
-(paper §2.1: d/h < 1), and the hand reaches it without collision
-(:mod:`~eos_svc.grasp.clearance`). The kept candidates are scored by the Ferrari–Canny ε of
-their predicted contacts on the postulated object (:mod:`~eos_svc.grasp.quality`) and the best
-is chosen; ties (a sphere's symmetric grasps) go to the least wrist rotation.
-
-SI units throughout: metres, radians.
+Candidate palm orientations (:mod:`~eos_svc.grasp.frames`) at their best depth are simulated on
+the *postulated* object (finger landings, :mod:`~eos_svc.grasp.landing`), kept when reachable,
+about the centre, smaller than the hand (d/h < 1) and collision-free
+(:mod:`~eos_svc.grasp.clearance`), and scored by ε (:mod:`~eos_svc.grasp.quality`); ties go to
+the least wrist rotation. The rules: ``docs/planner.md`` (Grasp synthesis). SI units.
 """
 
 from __future__ import annotations
@@ -59,22 +50,12 @@ MAX_D_OVER_H = 1.0
 
 
 class GraspSynthesis:
-    """Candidate grasps of one hand on one postulated object, checked and scored.
-
-    Args:
-        hand: the hand model.
-        sweeps: its fingers' closing sweeps (palm frame).
-        params: world constants (approach stand-off, clearance).
-        obj: the postulated object.
-        friction: Coulomb μ for ε.
-        vertical_only: the postulate's size is known along the vertical only (grasp across it).
-        table_height: the table under the object (world z, m), or None: candidates whose hand
-            would touch it are rejected (:class:`~eos_svc.grasp.clearance.HandClearance`).
-        support: the touches an approximate postulate was made of, or None: candidates are
-            then ranked by how many of their contacts the touches support, before ε.
-
-    Attributes:
-        rejections: per reason (in words), how many candidates it rejected.
+    """Candidate grasps of one hand (its closing sweeps, palm frame; world constants) on one
+    postulated object, checked and scored by ε at ``friction`` μ. ``vertical_only``: the size is
+    known along the vertical only; ``table_height`` (world z, m): a hand touching the table is
+    rejected. ``support``: the touches of an approximate postulate, which then rank the candidates
+    first (:mod:`~eos_svc.grasp.support`). :attr:`rejections` counts the rejected candidates per
+    reason (in words).
     """
 
     def __init__(
@@ -102,23 +83,18 @@ class GraspSynthesis:
         self.rejections[why] = self.rejections.get(why, 0) + 1
 
     def candidates(self) -> list[GraspCandidate]:
-        """The best candidates, best first.
-
-        Candidate orientations are simulated at their best depth from the least wrist rotation
-        up, a group of equal rotations at a time; of those about the centre, the ``SCORED``
-        least-rotated that are collision-free (one for a sphere, whose grasps about its
-        diameters are all alike) are scored by ε; the best ε wins, and candidates within
-        ``EPSILON_TIE`` (relative) of it count as equal, the least wrist rotation first. The
-        orientations rotated more than the last one scored cannot change the choice and are
-        not simulated. With the touches' ``support`` (an approximate postulate) the
-        ``SUPPORT_SCORED`` least-rotated are ranked by how many of their contacts the touches
-        support first. When none about the centre is collision-free, the collision-free one
-        closest to it is returned alone (the best the hand can do; its ``about_centre`` is
-        False)."""
+        """The best candidates, best first: orientations simulated from the least wrist rotation
+        up; the ``SCORED`` least-rotated collision-free ones about the centre (one for a sphere)
+        scored by ε, those within ``EPSILON_TIE`` of the best counted equal (least rotation
+        first); with ``support``, the ``SUPPORT_SCORED`` least-rotated, ranked by the touches'
+        support first. None about the centre: the collision-free one closest to it, alone."""
         wanted = 1 if isinstance(self.obj, Sphere) else (SCORED if self.support is None else SUPPORT_SCORED)
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
-        for group in _turn_groups(candidate_frames(self.obj, self.vertical_only, self.on_table)):
+        groups: dict[float, list[tuple[str, np.ndarray]]] = {}  # by wrist rotation, least first
+        for label, R in candidate_frames(self.obj, self.vertical_only, self.on_table):
+            groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
+        for group in (groups[turn] for turn in sorted(groups)):
             fresh = [c for label, R in group if (c := self._at_best_depth(label, R)) is not None]
             simulated += fresh
             for cand in sorted((c for c in fresh if c.about_centre), key=lambda c: (-c.angle_deg, c.label)):
@@ -145,11 +121,9 @@ class GraspSynthesis:
         ]
 
     def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
-        """Another sampler's orientations, checked and scored as :meth:`candidates` checks them:
-        each ``(label, palm rotation)`` simulated at its best depth, kept when its contacts lie
-        about the centre and the hand reaches it collision-free, scored by ε; best ε first (no
-        preference for little wrist rotation). The hook for grasp agents with a sampler of
-        their own (``docs/extending.md``)."""
+        """Another sampler's ``(label, palm rotation)`` pairs, checked as :meth:`candidates` checks
+        them and scored by ε, best first: the hook for grasp agents with a sampler of their own
+        (``docs/extending.md``)."""
         kept = []
         for label, R in frames:
             cand = self._at_best_depth(label, R)
@@ -278,12 +252,3 @@ def _by_epsilon(kept: list[GraspCandidate]) -> list[GraspCandidate]:
     equal, the least wrist rotation first."""
     top = max(c.epsilon for c in kept)
     return sorted(kept, key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
-
-
-def _turn_groups(frames: Iterable[tuple[str, np.ndarray]]) -> list[list[tuple[str, np.ndarray]]]:
-    """The candidate frames ``(label, R)`` in groups of equal wrist rotation (:func:`palm_turn`
-    rounded to 1e-6 rad), the least-rotated group first, each group in the frames' order."""
-    groups: dict[float, list[tuple[str, np.ndarray]]] = {}
-    for label, R in frames:
-        groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
-    return [groups[turn] for turn in sorted(groups)]

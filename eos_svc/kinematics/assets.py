@@ -1,16 +1,9 @@
-"""Data files the package loads: the three-finger hand's URDF.
-
-An installed ``eos_svc`` (wheel, ``pip install .``) carries the URDF as the data package
-``eos_svc.data`` and reads it through :mod:`importlib.resources`. A source checkout used without
-installing (``PYTHONPATH=<checkout>``, or an editable install) has no such package; the file is
-then the checkout's ``urdf/hand3x3.urdf`` — the one copy in git, which the wheel build maps onto
-``eos_svc.data`` (``setup.py``).
+"""Data files the package loads: the three-finger hand's URDF, from the installed data package
+``eos_svc.data`` or, in a source checkout, the repository's ``urdf/``.
 """
 
 from __future__ import annotations
 
-import atexit
-import contextlib
 import importlib.resources
 from pathlib import Path
 
@@ -21,24 +14,13 @@ DATA_PACKAGE = "eos_svc.data"
 #: where the same files are in a source checkout (the repository's top-level ``urdf/``)
 CHECKOUT_DATA_DIR = Path(__file__).resolve().parents[2] / "urdf"
 
-_extracted = contextlib.ExitStack()  # files extracted from a zipped install, removed at exit
-atexit.register(_extracted.close)
-
 
 def data_file(name: str) -> Path:
-    """A file system path to data file ``name`` (e.g. ``"hand3x3.urdf"``).
-
-    Looked up through :mod:`importlib.resources` in :data:`DATA_PACKAGE`; when the package is
-    not installed (a source checkout), in :data:`CHECKOUT_DATA_DIR`. A file inside a zipped
-    install is extracted to a temporary file kept until the interpreter exits (Pinocchio reads
-    paths). Returns the path whether or not it exists: the loaders report a missing file.
-    """
+    """A file system path to data file ``name`` (e.g. ``"hand3x3.urdf"``): in :data:`DATA_PACKAGE`
+    when it is installed (as files: Pinocchio reads paths), else in :data:`CHECKOUT_DATA_DIR`.
+    Returns the path whether or not it exists: the loaders report a missing file."""
     try:
         resource = importlib.resources.files(DATA_PACKAGE).joinpath(name)
     except ModuleNotFoundError:
         return CHECKOUT_DATA_DIR / name
-    if not resource.is_file():
-        return CHECKOUT_DATA_DIR / name
-    if isinstance(resource, Path):
-        return resource
-    return Path(_extracted.enter_context(importlib.resources.as_file(resource)))
+    return resource if isinstance(resource, Path) and resource.is_file() else CHECKOUT_DATA_DIR / name

@@ -1,14 +1,10 @@
 """Curvature estimation from rolling contact (EP1): Montana's first equation with v = 0.
 
-Contact frame ``C``: origin at the contact, ``z`` the *fingertip's* outward normal (minus
-:attr:`Contact.normal`), ``x × y = z``. ``ω = (ω_x, ω_y)``: the fingertip's angular velocity
-relative to the object, tangential, rad/s; ``u``: the contact point's velocity over the fingertip
-surface (what the tactile sensor measures), m/s; ``K_f``, ``K_o``: curvature forms (2×2, 1/m,
-positive for convex). Rolling without sliding gives ``K_o u = [-ω_y, ω_x]ᵀ - K_f u``; it is linear
-and homogeneous in (ω, u), so increments over one interval (rad, m) serve as well as rates. Two
-rows per sample in the three unknowns of ``K_o``: rolls along two independent directions
-determine it, solved by least squares with covariance ``s² (AᵀA)⁻¹``. The convention and its
-proofs: ``docs/ep1.md``.
+In the contact frame (``z`` the fingertip's outward normal), rolling without sliding gives
+``K_o u = [−ω_y, ω_x]ᵀ − K_f u`` (``ω``: tangential angular velocity, ``u``: the contact's
+velocity over the fingertip, ``K``: curvature forms, 1/m, positive convex), linear in (ω, u) so
+increments serve as rates; rolls along two directions determine ``K_o`` by least squares. The
+convention and its proofs: ``docs/ep1.md``.
 """
 
 from __future__ import annotations
@@ -60,15 +56,9 @@ def _mat2(name: str, value: ArrayLike) -> Array:
 
 @dataclass(frozen=True)
 class CurvatureSample:
-    """One rolling observation in the contact frame (see the module's sign convention).
-
-    Attributes:
-        omega_xy: tangential angular velocity of the fingertip w.r.t. the object
-            [rad/s] (or rotation increment [rad]).
-        contact_velocity: velocity of the contact point over the fingertip [m/s]
-            (or displacement over the same interval [m]).
-        K_f: fingertip curvature form [1/m] (``I / r_f`` for a sphere tip).
-    """
+    """One rolling observation in the contact frame: the fingertip's tangential angular velocity
+    relative to the object ``omega_xy`` [rad/s] (or increment [rad]), the contact's velocity over
+    the fingertip [m/s] (or displacement [m]) and the fingertip's curvature form ``K_f`` [1/m]."""
 
     omega_xy: Array
     contact_velocity: Array
@@ -123,14 +113,6 @@ class CurvatureEstimate:
         """True when both principal curvatures are flat."""
         return self.flat[0] and self.flat[1]
 
-    @property
-    def sigma_radii(self) -> tuple[float, float]:
-        """σ of the principal radii by first-order propagation, σ_k / k² [m]."""
-        return tuple(  # type: ignore[return-value]
-            math.inf if r == math.inf else s * r * r
-            for r, s in zip(self.radii, self.sigma_curvatures, strict=True)
-        )
-
     def to_dict(self) -> dict[str, object]:
         """JSON-friendly form (``inf`` becomes ``None``)."""
 
@@ -155,11 +137,8 @@ class CurvatureEstimate:
 
 @dataclass
 class CurvatureEstimator:
-    """Accumulates rolling samples and solves for the object's curvature form.
-
-    Samples from several EP1 runs at the same contact (expressed in the same
-    contact frame) may be accumulated into one estimator.
-    """
+    """Accumulates rolling samples (several EP1 runs' at one contact, in one contact frame) and
+    solves for the object's curvature form."""
 
     flat_curvature: float = DEFAULT_FLAT_CURVATURE
     _samples: list[CurvatureSample] = field(default_factory=list, repr=False)
@@ -177,10 +156,6 @@ class CurvatureEstimator:
     def n_samples(self) -> int:
         """Number of samples."""
         return len(self._samples)
-
-    def reset(self) -> None:
-        """Forget every sample."""
-        self._samples.clear()
 
     def add_sample(
         self, omega_xy: ArrayLike, contact_velocity_tip: ArrayLike, K_f: ArrayLike

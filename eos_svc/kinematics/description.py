@@ -18,16 +18,9 @@ __all__ = ["FingerDescription", "HandDescription"]
 
 @dataclass(frozen=True)
 class FingerDescription:
-    """One finger.
-
-    Attributes:
-        name: finger name (``"finger1"``).
-        joints: its joint names, from the palm outward (each a 1-DoF joint).
-        tip_frame: frame at the fingertip sphere centre.
-        tip_radius: fingertip sphere radius, m (> 0).
-        tip_geometry: collision geometry name of the tip in the GeometryModel (or None: the
-            tip then has no geometry of its own and contacts use a sphere of ``tip_radius``).
-    """
+    """One finger: its name, its 1-DoF joints from the palm outward, the frame at its fingertip
+    sphere's centre, the sphere's radius (m) and the tip's collision geometry (None: contacts use
+    a sphere of ``tip_radius``)."""
 
     name: str
     joints: tuple[str, ...]
@@ -53,15 +46,9 @@ class FingerDescription:
 
 @dataclass(frozen=True)
 class HandDescription:
-    """Which joints make which finger, the fingertips, the opposing finger, the palm.
-
-    Attributes:
-        fingers: the fingers; their order is the order of :attr:`HandModel.finger_names`.
-        wrist_joints: joints that move the palm (may be empty for a fixed-base hand).
-        opposing_finger: the finger opposing the others (the thumb; finger3 for hand3x3).
-        palm_frame: frame of the palm.
-        height_axis: unit axis in the palm frame along which the hand height is measured.
-    """
+    """A hand: its fingers (in :attr:`HandModel.finger_names` order), the joints that move the
+    palm (none for a fixed base), the finger opposing the others (the thumb), the palm frame and
+    the unit axis in it along which the hand height is measured."""
 
     fingers: tuple[FingerDescription, ...]
     wrist_joints: tuple[str, ...]

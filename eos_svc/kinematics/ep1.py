@@ -1,25 +1,10 @@
 """EP1, the exploratory procedure: roll one fingertip on the object and estimate its curvature.
 
-Procedure (:func:`run_ep1`), from a configuration where the fingertip touches the object
-(:func:`place_hand_for_ep1` makes one):
-
-1. Contact frame ``F`` at the start contact: ``z`` = the fingertip's outward normal (into
-   the object), ``x`` = world z (or world y when the normal is nearly vertical) projected on
-   the tangent plane, ``y = z × x``. The estimate's form is expressed in ``(x, y)``.
-2. For each tangent direction ``a = cos φ x + sin φ y`` (φ = 0°, 90°, 45°, 135°; at least
-   the first two): roll about the fixed world axis ``a`` by ``+θ/2``, then ``−θ``, then
-   ``+θ/2`` — back at the start, so EP1 can be repeated in place. Every leg is one
-   :class:`~.rolling.RollingQP` (set up once, warm-started each step) and every step gives a
-   tactile reading.
-3. The readings (fingertip frame) are mapped to geodesic coordinates on the fingertip sphere
-   around the start contact (exact arc lengths, not chords), in the basis ``(x, y)``; the net
-   roll angle ``ϑ`` of each reading is known. Readings of the outward half-legs and of the
-   sweep back are two independent sets; each gives, by a least-squares fit
-   ``c(ϑ) = c₀ + s ϑ + s₂ ϑ²``, the contact's displacement over the fingertip per radian at
-   the start point, ``s`` [m/rad]. Each fit is one :class:`~.curvature.CurvatureSample`
-   ``(ω_xy = (cos φ, sin φ), u = s, K_f = I/r_f)`` — Montana's equation in increments.
-4. :class:`~.curvature.CurvatureEstimator` solves for ``K_o`` over all samples (including
-   those of earlier EP1 runs when an estimator is passed in).
+From a configuration where the fingertip touches the object (:func:`place_hand_for_ep1`),
+:func:`run_ep1` rolls it about tangent axes (+θ/2, −θ, +θ/2 each: back at the start) with one
+:class:`~.rolling.RollingQP`, maps the tactile readings to geodesic coordinates on the fingertip,
+fits the contact's displacement per radian, and solves Montana's equation for the object's
+curvature form (:class:`~.curvature.CurvatureEstimator`). The procedure: ``docs/ep1.md``.
 """
 
 from __future__ import annotations
@@ -67,22 +52,11 @@ class EP1Error(KinematicsError):
 
 @dataclass(frozen=True)
 class EP1Result:
-    """Outcome of one EP1 run.
-
-    Attributes:
-        estimate: the estimator's estimate after this run's samples (and earlier ones when an
-            estimator was passed in).
-        q_final: configuration at the end (= the start, up to integration drift).
-        steps: rolling steps taken.
-        samples: this run's samples (add them to another estimator to accumulate).
-        max_slip_speed: largest no-slip residual over the run, m/s.
-        max_gap: largest |gap| measured at the contact over the run, m.
-        frame: 3×3 world contact frame (columns x, y, z) the form is expressed in.
-        contact_point: world contact point (object side) at the start, m.
-        normal: world object normal at the start (object → fingertip).
-        path: configurations along the roll, every ``path_every`` steps from the start (empty
-            unless asked): what a viewer animates.
-    """
+    """Outcome of one EP1 run: the estimate (this run's samples and the estimator's earlier
+    ones), the final q (the start, up to drift), the steps, this run's samples, the largest
+    no-slip residual (m/s) and |gap| (m), the world contact frame (columns x, y, z) the form is
+    in, the start's contact point (m) and object normal, and the configurations every
+    ``path_every`` steps (empty unless asked)."""
 
     estimate: CurvatureEstimate
     q_final: np.ndarray
@@ -97,11 +71,8 @@ class EP1Result:
 
 
 def contact_frame(normal: np.ndarray) -> np.ndarray:
-    """The EP1 contact frame (columns x, y, z) for the object normal ``normal`` (world).
-
-    ``z = −normal`` (the fingertip's outward normal); ``x`` = world z projected on the
-    tangent plane (world y if the normal is within ~25° of vertical); ``y = z × x``.
-    """
+    """The EP1 contact frame (columns x, y, z) for the world object ``normal``: ``z = −normal``,
+    ``x`` world z on the tangent plane (world y near vertical), ``y = z × x``."""
     z = -np.asarray(normal, dtype=float)
     z = z / np.linalg.norm(z)
     x, y = tangent_basis(z, prefer=2)
@@ -121,18 +92,11 @@ def place_hand_for_ep1(
     *,
     scratch: HandState | None = None,
 ) -> np.ndarray:
-    """A configuration where ``finger``'s tip touches the object with zero gap.
-
-    Translates the wrist (x, y, z) of ``q`` (default: neutral) so the fingertip sphere
-    centre sits at ``s + r_f n``, with ``s`` the object's surface point closest to ``point``
-    (default: closest to the fingertip centre) and ``n`` its outward normal (on an edge or a
-    corner, the direction from ``s`` to ``point``). ``scratch``: a state of the scene's hand to
-    compute in (it is moved; a caller placing often keeps one), default a new one.
-
-    Raises:
-        WorkspaceError: the wrist would leave its workspace.
-        KinematicsError: ``scratch`` belongs to another hand.
-    """
+    """A configuration where ``finger``'s tip touches the object with zero gap: the wrist of ``q``
+    (default neutral) translated so the tip centre sits at ``s + r_f n`` (``s`` the surface point
+    closest to ``point``, default to the tip; ``n`` its normal, or the direction from ``s`` to
+    ``point`` on an edge). ``scratch``: a state of the scene's hand to compute in (it is moved).
+    Raises :class:`WorkspaceError` (the wrist leaves its workspace) or :class:`KinematicsError`."""
     hand = scene.hand
     if scratch is None:
         st = hand.state(q)
@@ -148,8 +112,7 @@ def place_hand_for_ep1(
     try:
         n = obj.surface_normal(target)
     except CurvatureUndefinedError:
-        # an edge or a corner (a tilted box's ridge seen from above): the tip touches it along
-        # the direction from the edge to the target, the normal of the tip's contact
+        # an edge or a corner: the tip touches it along the direction from the edge to the target
         away = target - s
         n = away / np.linalg.norm(away)
     if point is None and obj.signed_distance(c) < 0:
@@ -194,7 +157,7 @@ def _log_chart(
 
 
 def _row_norms(x: np.ndarray) -> np.ndarray:
-    """The rows' Euclidean lengths: ``np.linalg.norm(x, axis=1)``'s arithmetic, without its checks
+    """The rows' Euclidean lengths: ``np.linalg.norm(x, axis=1)``'s arithmetic without its checks
     (microseconds on the few points of a leg)."""
     out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1))
     return out
@@ -216,31 +179,13 @@ def _chart_at_mean(
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
     """Slope at ϑ = 0 of c(ϑ) = c₀ + s ϑ + s₂ ϑ² by least squares (both coordinates), from the
-    normal equations ``XᵀX p = Xᵀc`` by Cholesky (three unknowns, ϑ of order 0.1 rad: XᵀX is well
-    enough conditioned; ``lstsq`` costs ~25 µs a call, this ~5 µs)."""
+    normal equations ``XᵀX p = Xᵀc`` (three unknowns, ϑ of order 0.1 rad: well conditioned)."""
     X = np.array((np.ones_like(theta), theta, theta * theta))  # Xᵀ
     _, p, info = lapack.dposv(X.dot(X.T), X.dot(c))
     if info != 0:
         raise EP1Error("state", "the roll's angles do not determine the fit (too few distinct ones)")
     out: np.ndarray = p[1]
     return out
-
-
-def _checked_ep1_arguments(
-    omega: float, steps_per_direction: int, dt: float, directions: Sequence[float]
-) -> list[float]:
-    """:func:`run_ep1`'s scalar arguments checked (:class:`EP1Error` names the bad one); the
-    directions as floats."""
-    if not (math.isfinite(omega) and omega > 0):
-        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
-    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
-        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
-    if not (math.isfinite(dt) and dt > 0):
-        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
-    dirs = [float(d) for d in directions]
-    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
-        raise EP1Error("directions", "need at least two finite directions (degrees)")
-    return dirs
 
 
 def run_ep1(
@@ -257,24 +202,25 @@ def run_ep1(
     estimator: CurvatureEstimator | None = None,
     path_every: int = 0,
 ) -> EP1Result:
-    """Run EP1 from ``state`` (the fingertip must touch the object), estimate the curvature.
+    """Run EP1 from ``state`` (updated to the final q; ``finger``'s tip must touch the object)
+    and estimate the curvature.
 
-    Args:
-        scene: hand and object; state: start configuration (updated to the final q).
-        finger: the rolling finger; tactile_sensor: its sensor (noise, seed).
-        omega: rolling rate, rad/s (> 0). steps_per_direction: steps of the full sweep of one
-            direction (the sweep covers ``omega · dt · steps_per_direction`` rad, centred on the
-            start); each direction takes twice this many steps.
-        dt: time step, s. directions: roll directions, degrees in the tangent plane (≥ 2
-            independent ones). solver: QP backend (see :class:`~.rolling.RollingQP`).
-        estimator: accumulate into this estimator (repeated EP1); default: a new one.
-        path_every: > 0: keep the configuration every this many steps in
-            :attr:`EP1Result.path` (it does not change the roll).
-
-    Raises:
-        EP1Error: no contact at the start or bad parameters; RollingQPError: the QP failed.
+    ``omega``: rolling rate, rad/s; ``steps_per_direction``: steps of one direction's full sweep
+    (``omega · dt · steps_per_direction`` rad about the start; each direction takes twice this);
+    ``dt``: time step, s; ``directions``: degrees in the tangent plane (≥ 2 independent);
+    ``solver``: QP backend (:class:`~.rolling.RollingQP`); ``estimator``: accumulate into it;
+    ``path_every`` > 0: keep every that many steps' q in :attr:`EP1Result.path`. Raises
+    :class:`EP1Error` (no contact, bad parameters) or :class:`RollingQPError`.
     """
-    dirs = _checked_ep1_arguments(omega, steps_per_direction, dt, directions)
+    if not (math.isfinite(omega) and omega > 0):
+        raise EP1Error("omega", f"must be a finite number > 0 rad/s, got {omega!r}")
+    if not (isinstance(steps_per_direction, int) and steps_per_direction >= 8):
+        raise EP1Error("steps_per_direction", f"must be an integer >= 8, got {steps_per_direction!r}")
+    if not (math.isfinite(dt) and dt > 0):
+        raise EP1Error("dt", f"must be a finite number > 0 s, got {dt!r}")
+    dirs = [float(d) for d in directions]
+    if len(dirs) < 2 or not all(math.isfinite(d) for d in dirs):
+        raise EP1Error("directions", "need at least two finite directions (degrees)")
     hand: HandModel = scene.hand
     ct0 = scene.contact(state, finger)
     if abs(ct0.distance) > CONTACT_TOLERANCE:
@@ -370,11 +316,8 @@ def repeat_ep1(
     estimator: CurvatureEstimator | None = None,
     **kwargs: Any,
 ) -> tuple[EP1Result, int, int]:
-    """Repeat EP1 in place, accumulating samples, until ``estimate.rating >= target_rating``
-    (the relative radius error is at most ``1 − target_rating``) or ``max_runs`` runs.
-
-    Returns ``(last result, runs, total steps)``; the last result's estimate covers all runs.
-    """
+    """Repeat EP1 in place, accumulating samples, until ``estimate.rating >= target_rating`` or
+    ``max_runs`` runs: ``(last result, whose estimate covers all runs; runs; total steps)``."""
     if not (0.0 <= target_rating <= 1.0):
         raise EP1Error("target_rating", f"must be in [0, 1], got {target_rating!r}")
     if not (isinstance(max_runs, int) and max_runs >= 1):
@@ -390,8 +333,6 @@ def repeat_ep1(
             return res, runs, total
 
 
-# --------------------------------------------------------------------------- scenes
-
 #: Shapes :func:`ep1_scene` builds.
 SHAPES = ("sphere", "plane", "cylinder", "ellipsoid")
 
@@ -403,12 +344,9 @@ def ep1_scene(
     hand: HandModel | None = None,
     finger: str = "finger1",
 ) -> Scene:
-    """An object in front of ``finger``'s tip (hand at neutral) for EP1.
-
-    ``sphere``: radius ``size``; ``plane``: the −x face of a box (``size`` is ignored);
-    ``cylinder``: radius ``size``, axis along world z, touched on its side; ``ellipsoid``:
-    semi-axes ``size · (1, 0.75, 0.6)``, turned so the touched point is off its axes.
-    """
+    """An object in front of ``finger``'s tip (hand at neutral) for EP1: a sphere of radius
+    ``size``, a box's −x face (``plane``), a cylinder of radius ``size`` (axis world z) or an
+    ellipsoid of semi-axes ``size · (1, 0.75, 0.6)`` turned so the touched point is off its axes."""
     from .hand import load_hand
 
     if not (isinstance(size, (int, float)) and math.isfinite(size) and size > 0):

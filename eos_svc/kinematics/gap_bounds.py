@@ -1,8 +1,7 @@
-"""Cheap lower bounds on the gap between a hand's collision geometries and an object's
-bounding ball (pure geometry, no coal query): the distance from the ball's centre to each
-geometry's primitive (box, segment of a cylinder or capsule, sphere) less the ball's radius.
-A guarded motion asks coal for an exact gap only where a bound cannot decide (see
-:meth:`eos_svc.world.world.GraspWorld.hand_clear`)."""
+"""Cheap lower bounds (pure geometry, no coal query) on the gap between a hand's collision
+geometries and an object's bounding ball: where a bound cannot decide, a guarded motion asks
+coal (:meth:`eos_svc.world.world.GraspWorld.hand_clear`).
+"""
 
 from __future__ import annotations
 
@@ -57,9 +56,8 @@ def ball_gap_lower_bounds(
 ) -> list[tuple[float, int]]:
     """``(lower bound of the gap, id)`` (m) of every geometry in ``geometry_ids`` to the ball of
     ``radius`` about ``centre`` (world, m): ``table[id]`` is the geometry's :func:`shape_bound`,
-    ``views[id]`` its world (translation, rotation). Each bound is at most the exact gap coal
-    would return (tested against coal), so a geometry whose bound reaches a threshold needs no
-    exact query. Arithmetic on floats: numpy costs ~0.5 µs a call on 3-vectors."""
+    ``views[id]`` its world (translation, rotation). Each bound is at most coal's exact gap
+    (tested), so a geometry whose bound reaches a threshold needs no exact query."""
     obj_radius = radius + BOUND_MARGIN
     c = np.asarray(centre, dtype=float)
     bounds = []

@@ -1,12 +1,8 @@
-"""Small geometry on 3-vectors: the tangent basis of a normal.
+"""Small geometry on 3-vectors: the tangent basis of a normal, one convention everywhere.
 
-One convention everywhere (tactile noise, the rolling QP's no-slip rows, the EP1 contact frame,
-curvature ground truth, friction cones): for a unit normal ``n``, ``t1`` is a preferred world
-axis ``e_k`` projected onto the plane ⟂ ``n`` and normalised — world ``y`` instead when ``n``
-is within ~25° of ``e_k`` (``|n_k| ≥ 0.9``) — and ``t2 = n × t1``, so ``(t1, t2, n)`` is a
-right-handed orthonormal frame.
-
-``tangent_pair`` gives the six floats, ``tangent_basis`` two arrays.
+For a unit normal ``n``, ``t1`` is a preferred world axis projected on the plane ⟂ ``n`` and
+normalised (world y when ``n`` is within ~25° of it) and ``t2 = n × t1``: ``(t1, t2, n)`` is
+right-handed.
 """
 
 from __future__ import annotations

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import coal
@@ -22,11 +23,24 @@ __all__ = ["HandModel"]
 _F64 = np.dtype(np.float64)
 
 
+@dataclass(frozen=True)
+class _Finger:
+    """What the model knows of one finger: its joints' indices in q and v, (q index, lower,
+    upper) of each, its tip frame, radius (m) and collision geometry (or None)."""
+
+    q_index: np.ndarray
+    v_index: np.ndarray
+    limits: tuple[tuple[int, float, float], ...]
+    tip_frame: int
+    tip_radius: float
+    tip_geometry: int | None
+
+
 class HandModel:
     """A hand: Pinocchio model, collision GeometryModel and the description that names its parts.
 
-    Build with :func:`load_hand`. Immutable in use: per-configuration data lives in
-    :class:`HandState` (``hand.state(q)``).
+    Build with :func:`load_hand`; per-configuration data lives in :class:`HandState`
+    (``hand.state(q)``).
     """
 
     def __init__(
@@ -44,33 +58,23 @@ class HandModel:
         self.load_warnings = load_warnings
         self.nq: int = int(model.nq)
         self.nv: int = int(model.nv)
-        self._q_shape = (self.nq,)
         self.finger_names: tuple[str, ...] = description.finger_names
         self.opposing_finger: str = description.opposing_finger
-
-        self._q_index: dict[str, np.ndarray] = {}
-        self._joint_limits: dict[str, tuple[tuple[int, float, float], ...]] = {}
-        self._v_index: dict[str, np.ndarray] = {}
-        for f in description.fingers:
-            qi, vi = self._joint_indices(f.joints, f"{f.name}.joints")
-            self._q_index[f.name], self._v_index[f.name] = qi, vi
-        self._wrist_q, self._wrist_v = self._joint_indices(description.wrist_joints, "wrist_joints")
-
-        self._tip_fid: dict[str, int] = {}
-        self._tip_radius: dict[str, float] = {}
-        self._tip_gid: dict[str, int | None] = {}
-        for f in description.fingers:
-            fid = self._frame_id(f.tip_frame, f"{f.name}.tip_frame")
-            self._tip_fid[f.name] = fid
-            self._tip_radius[f.name] = f.tip_radius
-            self._tip_gid[f.name] = self._check_tip_geometry(f, fid)
-        self.palm_frame_id: int = self._frame_id(description.palm_frame, "palm_frame")
-
         self.lower: np.ndarray = np.array(model.lowerPositionLimit, dtype=float)
         self.upper: np.ndarray = np.array(model.upperPositionLimit, dtype=float)
         self.velocity_limit: np.ndarray = np.array(model.velocityLimit, dtype=float)
         self.effort_limit: np.ndarray = np.array(model.effortLimit, dtype=float)
-        for name, idx in [*self._q_index.items(), ("wrist", self._wrist_q)]:
+        self._wrist_q, self._wrist_v = self._joint_indices(description.wrist_joints, "wrist_joints")
+        self._fingers: dict[str, _Finger] = {}
+        for f in description.fingers:
+            qi, vi = self._joint_indices(f.joints, f"{f.name}.joints")
+            fid = self._frame_id(f.tip_frame, f"{f.name}.tip_frame")
+            limits = tuple((int(i), float(self.lower[i]), float(self.upper[i])) for i in qi)
+            self._fingers[f.name] = _Finger(
+                qi, vi, limits, fid, f.tip_radius, self._check_tip_geometry(f, fid)
+            )
+        self.palm_frame_id: int = self._frame_id(description.palm_frame, "palm_frame")
+        for name, idx in [*((n, f.q_index) for n, f in self._fingers.items()), ("wrist", self._wrist_q)]:
             lo, hi = self.lower[idx], self.upper[idx]
             if not (np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)) and np.all(lo < hi)):
                 raise HandDescriptionError(
@@ -78,7 +82,6 @@ class HandModel:
                 )
         self.hand_height: float = self._compute_hand_height()
 
-    # -- construction helpers
     def _joint_indices(self, joints: Sequence[str], field: str) -> tuple[np.ndarray, np.ndarray]:
         qi, vi = [], []
         for j in joints:
@@ -143,28 +146,23 @@ class HandModel:
         return float(abs(ax @ (np.mean(others, axis=0) - opp)))
 
     # -- queries
-    def _check_finger(self, name: str) -> None:
-        if name not in self._q_index:
-            raise UnknownNameError("finger", f"unknown finger {name!r}; known: {self.finger_names}")
+    def _finger(self, name: str) -> _Finger:
+        try:
+            return self._fingers[name]
+        except KeyError:
+            raise UnknownNameError("finger", f"unknown finger {name!r}; known: {self.finger_names}") from None
 
     def finger_q_index(self, name: str) -> np.ndarray:
         """Indices in q of the finger's joints (palm outward)."""
-        self._check_finger(name)
-        return self._q_index[name].copy()
+        return self._finger(name).q_index.copy()
 
     def finger_joint_limits(self, name: str) -> tuple[tuple[int, float, float], ...]:
-        """(q index, lower, upper) of each of the finger's joints, palm outward (cached)."""
-        limits = self._joint_limits.get(name)
-        if limits is None:
-            self._check_finger(name)
-            limits = tuple((int(i), float(self.lower[i]), float(self.upper[i])) for i in self._q_index[name])
-            self._joint_limits[name] = limits
-        return limits
+        """(q index, lower, upper) of each of the finger's joints, palm outward."""
+        return self._finger(name).limits
 
     def finger_v_index(self, name: str) -> np.ndarray:
         """Indices in v of the finger's joints (palm outward)."""
-        self._check_finger(name)
-        return self._v_index[name].copy()
+        return self._finger(name).v_index.copy()
 
     @property
     def wrist_q_index(self) -> np.ndarray:
@@ -178,18 +176,15 @@ class HandModel:
 
     def tip_radius(self, name: str) -> float:
         """Fingertip sphere radius of finger ``name``, m."""
-        self._check_finger(name)
-        return self._tip_radius[name]
+        return self._finger(name).tip_radius
 
     def tip_frame_id(self, name: str) -> int:
         """Pinocchio frame id of finger ``name``'s tip (sphere centre)."""
-        self._check_finger(name)
-        return self._tip_fid[name]
+        return self._finger(name).tip_frame
 
     def tip_geometry_id(self, name: str) -> int | None:
         """Collision geometry index of finger ``name``'s tip, or None."""
-        self._check_finger(name)
-        return self._tip_gid[name]
+        return self._finger(name).tip_geometry
 
     def frame_id(self, name: str) -> int:
         """Pinocchio frame id of any frame; raises :class:`UnknownNameError` if absent."""
@@ -219,7 +214,7 @@ class HandModel:
         if (
             type(q) is np.ndarray
             and q.dtype is _F64
-            and q.shape == self._q_shape
+            and q.shape == (self.nq,)
             and math.isfinite(sum(q.tolist()))  # fast path; overflow falls through to the check
         ):
             return q.copy()

@@ -31,9 +31,8 @@ def read_only(array: np.ndarray) -> np.ndarray:
 class HandState:
     """q, Pinocchio data and geometry data of one hand, kept consistent.
 
-    :meth:`update` runs forward kinematics and frame placements once; the joint Jacobians and
-    the geometry placements are computed once when first needed at that q (most updates only
-    need the tips); every query afterwards reads those results.
+    :meth:`update` runs forward kinematics and frame placements; the joint Jacobians and the
+    geometry placements are computed when first needed at that q.
     """
 
     __slots__ = (
@@ -41,7 +40,6 @@ class HandState:
         "_gdata",
         "_geom_stale",
         "_geometry_views",
-        "_gmodel",
         "_jac_stale",
         "_q",
         "_tips",
@@ -54,27 +52,20 @@ class HandState:
         self.hand = hand
         self.model = hand.model
         self.data = hand.model.createData()
-        self._gmodel = hand.collision_model
         self._gdata = pin.GeometryData(hand.collision_model)
         self._geom_stale = True
         self._jac_stale = True
-        # Per finger, cached once (Python access to data.oMf[i] costs ~2 µs): frame id, parent
-        # joint id, the joint placement (a live reference into data.oMi), the tip translation
-        # (a live read-only view into data.oMf), and a reusable point placement.
-        self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
-        for name in hand.finger_names:
-            fid = hand.tip_frame_id(name)
-            jid = int(hand.model.frames[fid].parentJoint)
-            self._tips[name] = (
-                fid,
-                jid,
-                self.data.oMi[jid],
-                read_only(self.data.oMf[fid].translation),
-                pin.SE3.Identity(),
-            )
         # live views into data.oMf / the geometry data's oMg, made on first use (see frame_views)
         self._frame_views: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._geometry_views: list[tuple[np.ndarray, np.ndarray]] | None = None
+        # per finger (read from Python, data.oMf[i] costs µs): the tip frame, its body's joint and
+        # that joint's placement, the tip centre (live views), and a placement to compute in
+        self._tips: dict[str, tuple[int, int, pin.SE3, np.ndarray, pin.SE3]] = {}
+        for f in hand.finger_names:
+            fid = hand.tip_frame_id(f)
+            jid = int(hand.model.frames[fid].parentJoint)
+            centre = read_only(self.data.oMf[fid].translation)
+            self._tips[f] = (fid, jid, self.data.oMi[jid], centre, pin.SE3.Identity())
         self._q = hand.neutral()
         self.update(self._q if q is None else q)
 
@@ -84,29 +75,16 @@ class HandState:
         return self._q.copy()
 
     def update(self, q: object) -> None:
-        """Set ``q`` (validated: length, finite) and recompute the kinematics (joint and frame
-        placements); the joint Jacobians follow on first use of a Jacobian
-        (:meth:`joint_jacobians`), the geometry placements on first use of :attr:`geometry_data`."""
-        hand = self.hand
-        qa = hand.validate_q(q)
-        model, data = self.model, self.data
-        pin.framesForwardKinematics(model, data, qa)  # data.oMi and data.oMf
-        # joint Jacobians and geometry placements are computed on first use (most updates only
-        # need the tips' placements)
+        """Set ``q`` (validated: length, finite) and recompute the joint and frame placements; the
+        joint Jacobians and geometry placements follow on first use."""
+        self._q = self.hand.validate_q(q)
+        pin.framesForwardKinematics(self.model, self.data, self._q)
         self._jac_stale = True
         self._geom_stale = True
-        self._q = qa
 
     def joint_jacobians(self) -> None:
         """Compute the joint Jacobians (``data.J``, world frame) at the current q, once per
-        :meth:`update`: the Jacobian queries call it; call it before reading ``data.J`` or
-        calling Pinocchio's Jacobian getters on :attr:`data` directly.
-
-        ``computeJointJacobians`` without q builds them from the joint placements that
-        :meth:`update`'s forward kinematics left — the same values, to the bit, as the eager
-        ``computeJointJacobians(model, data, q)`` (tested), which costs ~1.5 µs more per update
-        on hand3x3 and ran at every update whether a Jacobian was asked for or not.
-        """
+        :meth:`update` (from the placements it left): call it before reading ``data.J``."""
         if self._jac_stale:
             pin.computeJointJacobians(self.model, self.data)
             self._jac_stale = False
@@ -115,7 +93,7 @@ class HandState:
     def geometry_data(self) -> pin.GeometryData:
         """Pinocchio geometry data (collision placements ``oMg``) at the current q."""
         if self._geom_stale:
-            pin.updateGeometryPlacements(self.model, self.data, self._gmodel, self._gdata)
+            pin.updateGeometryPlacements(self.model, self.data, self.hand.collision_model, self._gdata)
             self._geom_stale = False
         return self._gdata
 
@@ -134,56 +112,12 @@ class HandState:
 
     def tip_position(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m (a copy)."""
-        out: np.ndarray = self.data.oMf[self.hand.tip_frame_id(finger)].translation.copy()
-        return out
+        return self.tip_centre_view(finger).copy()
 
     def tip_centre_view(self, finger: str) -> np.ndarray:
         """World position of the fingertip sphere centre, m, as a live read-only view that
-        follows every :meth:`update` (no copy: for loops that read it after each move)."""
+        follows every :meth:`update`."""
         return self._tip(finger)[3]
-
-    def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
-        """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
-        follow every :meth:`update` (copy what must outlive a move). Made once per state:
-        reading ``data.oMf[i]`` from Python costs µs (tens in a process that has idled)."""
-        views = self._frame_views.get(frame_id)
-        if views is None:
-            placement = self.data.oMf[frame_id]
-            views = (read_only(placement.translation), read_only(placement.rotation))
-            self._frame_views[frame_id] = views
-        return views
-
-    def geometry_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
-        """Live read-only views of every collision geometry's world translation (m) and rotation,
-        by geometry id: they hold the placements :attr:`geometry_data` last computed (read it
-        after an update first). Made once per state, like :meth:`frame_views`."""
-        views = self._geometry_views
-        if views is None:
-            oMg = self._gdata.oMg
-            views = self._geometry_views = [
-                (read_only(oMg[i].translation), read_only(oMg[i].rotation)) for i in range(len(oMg))
-            ]
-        return views
-
-    def palm_placement(self) -> pin.SE3:
-        """World placement of the palm frame, a copy."""
-        return pin.SE3(self.data.oMf[self.hand.palm_frame_id])
-
-    def geometry_placement(self, name: str) -> pin.SE3:
-        """World placement of a collision geometry, a copy."""
-        return pin.SE3(self.geometry_data.oMg[self.hand.geometry_id(name)])
-
-    # -- Jacobians
-    def tip_jacobian(self, finger: str) -> np.ndarray:
-        """6×nv Jacobian of the tip frame origin (the fingertip sphere's centre, a material point
-        of the fingertip body) and of the fingertip's orientation, LOCAL_WORLD_ALIGNED
-        ([v; ω] in world axes)."""
-        tip = self._tips.get(finger)
-        if tip is None:
-            tip = self._tip(finger)  # raises UnknownNameError
-        if self._jac_stale:
-            self.joint_jacobians()
-        return pin.getFrameJacobian(self.model, self.data, tip[0], _LWA)
 
     def _tip(self, finger: str) -> tuple[int, int, pin.SE3, np.ndarray, pin.SE3]:
         try:
@@ -193,40 +127,65 @@ class HandState:
                 "finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}"
             ) from None
 
+    def frame_views(self, frame_id: int) -> tuple[np.ndarray, np.ndarray]:
+        """Live read-only views of frame ``frame_id``'s world translation (m) and rotation: they
+        follow every :meth:`update` (copy what must outlive a move)."""
+        views = self._frame_views.get(frame_id)
+        if views is None:
+            placement = self.data.oMf[frame_id]
+            views = self._frame_views[frame_id] = (
+                read_only(placement.translation),
+                read_only(placement.rotation),
+            )
+        return views
+
+    def geometry_views(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Live read-only views of every collision geometry's world translation (m) and rotation,
+        by geometry id, as :attr:`geometry_data` last computed them (read it after an update)."""
+        if self._geometry_views is None:
+            oMg = self._gdata.oMg
+            self._geometry_views = [(read_only(M.translation), read_only(M.rotation)) for M in oMg]
+        return self._geometry_views
+
+    def palm_placement(self) -> pin.SE3:
+        """World placement of the palm frame, a copy."""
+        return pin.SE3(self.data.oMf[self.hand.palm_frame_id])
+
+    def geometry_placement(self, name: str) -> pin.SE3:
+        """World placement of a collision geometry, a copy."""
+        return pin.SE3(self.geometry_data.oMg[self.hand.geometry_id(name)])
+
+    # -- Jacobians (LOCAL_WORLD_ALIGNED: [v; ω] in world axes)
+    def tip_jacobian(self, finger: str) -> np.ndarray:
+        """6×nv Jacobian of the tip frame origin (the fingertip sphere's centre) and of the
+        fingertip's orientation."""
+        fid = self._tip(finger)[0]
+        if self._jac_stale:
+            self.joint_jacobians()
+        return pin.getFrameJacobian(self.model, self.data, fid, _LWA)
+
     def tip_point_jacobian(self, finger: str, point_world: np.ndarray) -> np.ndarray:
         """3×nv Jacobian: world linear velocity of the material point of the fingertip body that
         is currently at ``point_world`` (m), per unit joint velocity."""
-        tip = self._tips.get(finger)
-        if tip is None:
-            tip = self._tip(finger)  # raises UnknownNameError
-        _, jid, oMi, _, M = tip
-        if type(point_world) is not np.ndarray or point_world.shape != (3,):
-            point_world = np.asarray(point_world, dtype=float)
-            if point_world.shape != (3,):
-                raise ConfigurationError("point_world", f"must be a 3-vector, got {point_world!r}")
-        M.translation = oMi.actInv(point_world)  # the point in the tip body's joint frame
+        _, jid, oMi, _, local = self._tip(finger)
+        point = np.asarray(point_world, dtype=float)
+        if point.shape != (3,):
+            raise ConfigurationError("point_world", f"must be a 3-vector, got {point_world!r}")
+        local.translation = oMi.actInv(point)  # the point in the tip body's joint frame
         if self._jac_stale:
             self.joint_jacobians()
-        J = pin.getFrameJacobian(self.model, self.data, jid, M, pin.LOCAL_WORLD_ALIGNED)
-        out: np.ndarray = J[:3]
+        out: np.ndarray = pin.getFrameJacobian(self.model, self.data, jid, local, _LWA)[:3]
         return out
 
     def tip_angular_jacobian(self, finger: str) -> np.ndarray:
         """3×nv Jacobian of the fingertip body's angular velocity in world axes."""
-        self.joint_jacobians()
-        J = pin.getFrameJacobian(
-            self.model, self.data, self.hand.tip_frame_id(finger), pin.LOCAL_WORLD_ALIGNED
-        )
-        out: np.ndarray = J[3:].copy()
+        out: np.ndarray = self.tip_jacobian(finger)[3:].copy()
         return out
 
     # -- motions (return a new q; the state is not changed)
     def close_finger(self, finger: str, dtheta: float) -> tuple[np.ndarray, bool]:
         """New q with every joint of ``finger`` changed by ``dtheta`` rad (positive closes),
-        clipped to the joint limits; the flag is True when a limit was hit.
-
-        Scalar arithmetic over the finger's few joints: it is on the planner's hot path.
-        """
+        clipped to the joint limits; the flag is True when a limit was hit."""
         if not math.isfinite(dtheta):
             raise ConfigurationError("dtheta", f"must be finite, got {dtheta!r}")
         q = self._q.copy()
@@ -247,13 +206,9 @@ class HandState:
         drpy: np.ndarray | None = None,
         clip: bool = False,
     ) -> np.ndarray:
-        """New q with the wrist translated by ``dp_world`` (m, world axes) and its roll, pitch,
-        yaw joints changed by ``drpy`` (rad).
-
-        The first three wrist joints must be the x, y, z prismatic joints and the next three
-        the roll, pitch, yaw joints (hand3x3). Leaving the joint limits raises
-        :class:`WorkspaceError`, or clips when ``clip`` is True.
-        """
+        """New q with the wrist's x, y, z joints (the first three) moved by ``dp_world`` (m, world
+        axes) and its roll, pitch, yaw joints (the next three) by ``drpy`` (rad); leaving the
+        joint limits raises :class:`WorkspaceError`, or clips when ``clip``."""
         widx = self.hand._wrist_q
         if len(widx) < 3:
             raise WorkspaceError("wrist_joints", "this hand has no x, y, z wrist joints")

@@ -1,11 +1,6 @@
 """Rolling a sphere fingertip on the object without sliding (EP1's motion), a differential-IK
-loop in the manner of pink. Each :meth:`RollingQP.step` computes the tip's placement, Jacobian
-(wrist, then the rolling finger) and ``J̇ q̇`` with Pinocchio, measures the contact with coal,
-reads the tactile sensor, builds the QP of :mod:`~.rolling_problem` (plain arrays), solves it with
-:func:`~.rolling_solvers.solve_rolling_qp` (in closed form unless a bound is active) and integrates
-``q ← q + q̇ dt`` (the other fingers keep still). The step's QP as a :class:`qpsolvers.Problem`
-(:attr:`RollingQP.problem`, :meth:`RollingQP.build`) is made only when asked for or when a backend
-solves it. A failed QP raises :class:`RollingQPError` carrying the problem.
+loop in the manner of pink: per step, Pinocchio kinematics, a coal contact, the QP of
+:mod:`~.rolling_problem` solved by :mod:`~.rolling_solvers`, ``q ← q + q̇ dt`` (``docs/ep1.md``).
 """
 
 from __future__ import annotations
@@ -21,21 +16,19 @@ import qpsolvers
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
 from .rolling_problem import JointBox, StepQP, step_qp, steps_at_speed_limits, velocity_bounds
-from .rolling_solvers import RollingQPError, available_solvers, solve_rolling_qp
+from .rolling_solvers import RollingQPError, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
 from .tip_contact import SphereTipProbe
 
-__all__ = ["RollingQP", "RollingQPError", "RollingStep", "available_solvers"]
+__all__ = ["RollingQP", "RollingQPError", "RollingStep"]
 
 _LWA = pin.LOCAL_WORLD_ALIGNED
 
 
 @dataclass(slots=True)
 class RollingStep:
-    """Outcome of one rolling step (a plain record, as :class:`~.scene.Contact` and
-    :class:`~.tactile.TactileReading`: made at every step, where a frozen dataclass's
-    ``__init__`` costs ~0.5 µs more).
+    """Outcome of one rolling step.
 
     Attributes:
         contact: the contact measured at the start of the step (configuration before it).
@@ -62,24 +55,13 @@ class RollingStep:
 class RollingQP:
     """Roll ``finger``'s tip on the scene's object about a fixed world axis at rate ``omega``.
 
-    Args:
-        state: the hand state at the start; the roller steps on its Pinocchio data (the state's
-            placements are those of the roll until :attr:`state` is read, which brings
-            ``state`` up to date).
-        finger: the rolling finger (its tip must be a sphere).
-        axis: world rolling axis, tangent at the contact (its normal component is removed
-            unless ``project_axis`` is False: EP1 keeps one axis over several legs).
-        omega: rolling rate about ``axis``, rad/s (sign gives the direction).
-        dt: time step, s (> 0).
-        solver: the qpsolvers backend for steps with an active bound (``available_solvers()``).
-        scene: the hand and the object (keyword).
-        tactile: optional sensor; each step then carries a reading of its contact.
-        weights: diagonal of W over the active joints (wrist then finger), default 1.
-        gap_gain: β of the gap correction, in (0, 1].
-        second_order: targets of the step's average velocity (see :mod:`~.rolling_problem`).
-        closed_form: the closed form when no bound is active (see :mod:`~.rolling_solvers`).
-
-    :meth:`retarget` starts another roll with the same roller (EP1 rolls six legs with one).
+    The roller steps on ``state``'s Pinocchio data (:attr:`state` brings the state up to date).
+    ``axis``: world, tangent at the contact (its normal part removed unless ``project_axis`` is
+    False); ``omega``: rad/s (signed); ``dt``: s; ``solver``: the qpsolvers backend for steps
+    with an active bound; ``tactile``: a sensor read at every step; ``weights``: diagonal of W
+    over the active joints (wrist, then finger); ``gap_gain``: β in (0, 1]; ``second_order``,
+    ``closed_form``: see :mod:`~.rolling_problem`, :mod:`~.rolling_solvers`. :meth:`retarget`
+    starts another roll with the same roller.
     """
 
     def __init__(
@@ -108,7 +90,8 @@ class RollingQP:
             raise KinematicsError("gap_gain", f"must be in (0, 1], got {gap_gain!r}")
         if solver not in qpsolvers.available_solvers:
             raise KinematicsError(
-                "solver", f"unknown or uninstalled QP solver {solver!r}; available: {available_solvers()}"
+                "solver",
+                f"unknown or uninstalled QP solver {solver!r}; available: {qpsolvers.available_solvers}",
             )
         gid = hand.tip_geometry_id(finger)  # raises UnknownNameError
         if gid is not None and not isinstance(
@@ -168,7 +151,7 @@ class RollingQP:
         a = unit_vector("axis", axis)
         if project_axis:
             a = a - (a @ n) * n
-        norm = math.sqrt(float(a @ a))  # np.linalg.norm's own arithmetic, without its checks
+        norm = math.sqrt(float(a @ a))
         if norm < 1e-6 or abs(a @ n) > 0.5 * norm:
             raise KinematicsError("axis", "is (nearly) parallel to the contact normal: no roll")
         self.axis = a / norm

@@ -1,29 +1,11 @@
-"""The formulation of one rolling-without-sliding step: a QP over joint velocities.
+"""The formulation of one rolling-without-sliding step: a QP over joint velocities q̇ of the active
+joints (the wrist, then the rolling finger), as ``docs/ep1.md`` derives it::
 
-For a sphere fingertip (radius r_f) touching the object with unit normal ``n`` (object →
-fingertip) and signed gap ``d``, the step asks of the joint velocities ``q̇`` of the active joints
-(the wrist, then the rolling finger)::
+    minimise ½ q̇ᵀ W q̇  subject to  M (J q̇ + ½ dt J̇ q̇_prev) = (0, 0, −β d/dt, ω a),  lb ≤ q̇ ≤ ub
 
-    minimise    ½ q̇ᵀ W q̇
-    subject to  t₁ᵀ J_p q̇ = 0,  t₂ᵀ J_p q̇ = 0          no slip of the material point at the contact
-                nᵀ J_p q̇ = −β d / dt                   keep contact, the gap corrected by β per step
-                J_ω q̇ = ω a                            roll about the fixed tangent axis a, no spin
-                max(−q̇_max, (q_min − q)/dt) ≤ q̇ ≤ min(q̇_max, (q_max − q)/dt)
-
-``J = [J_v; J_ω]`` is the tip frame's Jacobian (LOCAL_WORLD_ALIGNED), ``J_p = J_v − [p]ₓ J_ω`` the
-Jacobian of the material point at ``p = −r_f n`` from the tip centre, ``(t₁, t₂, n)`` the tangent
-frame of :func:`~eos_svc.kinematics.geometry.tangent_pair`. The equality rows are ``M J`` with
-
-    M = [[t₁ᵀ, −r_f t₂ᵀ], [t₂ᵀ, r_f t₁ᵀ], [nᵀ, 0], [0, I₃]]
-
-(the rows ``[dᵀ, (p × d)ᵀ]`` for d = t₁, t₂, n: ``p × t₁ = −r_f t₂``, ``p × t₂ = r_f t₁``).
-Second order: ``q̇`` is held for ``dt``, so the targets are asked
-of the step's average velocity ``M (J q̇ + ½ dt J̇ q̇_prev)``, i.e. ``b − ½ dt M J̇ q̇_prev``; the
-slip per step is then O(dt³) instead of O(dt²).
-
-:func:`step_qp` gives the step as plain arrays (:class:`StepQP`; the runner solves most steps in
-closed form from them, :mod:`~.rolling_solvers`); :meth:`StepQP.problem` the same QP as a
-:class:`qpsolvers.Problem` for any qpsolvers backend.
+``J`` is the tip frame's Jacobian (LOCAL_WORLD_ALIGNED), ``M`` (:func:`contact_rows`) picks the
+no-slip rows (t₁, t₂) and the contact-keeping row (n) of the material point at the contact and
+the angular velocity (ω a: roll about the tangent axis a, no spin).
 """
 
 from __future__ import annotations
@@ -70,16 +52,16 @@ class JointBox:
         return -self.velocity
 
 
+@dataclass(slots=True)
 class StepQP:
     """The QP of one step as plain arrays: minimise ``½ xᵀ diag(weights) x`` subject to
     ``A x = b`` and ``lb ≤ x ≤ ub`` (x: the active joints' velocities, SI)."""
 
-    __slots__ = ("A", "b", "lb", "ub", "weights")
-
-    def __init__(
-        self, weights: np.ndarray, A: np.ndarray, b: np.ndarray, lb: np.ndarray, ub: np.ndarray
-    ) -> None:
-        self.weights, self.A, self.b, self.lb, self.ub = weights, A, b, lb, ub
+    weights: np.ndarray
+    A: np.ndarray
+    b: np.ndarray
+    lb: np.ndarray
+    ub: np.ndarray
 
     def problem(self) -> qpsolvers.Problem:
         """The same QP as a :class:`qpsolvers.Problem` (for a qpsolvers backend)."""
@@ -137,18 +119,10 @@ def step_qp(
     dt: float,
     gap_gain: float,
 ) -> StepQP:
-    """The QP of one step (module docstring) over the active joints.
-
-    Args:
-        jacobian: the tip frame's 6×nx Jacobian over the active joints (LOCAL_WORLD_ALIGNED).
-        drift: ``J̇ q̇_prev`` (the tip's classical acceleration at the last q̇ with q̈ = 0, 6,
-            LOCAL_WORLD_ALIGNED), or None for first-order targets.
-        contact: the measured contact (its normal, object → tip, and signed gap, m).
-        radius: the tip sphere's radius, m. omega_axis: ω a, the commanded angular velocity, rad/s.
-        bounds: ``(lb, ub)`` of the active joints' velocities (:func:`velocity_bounds`);
-        weights: the diagonal of W (nx).
-        dt: the step, s; gap_gain: β in (0, 1].
-    """
+    """The QP of one step (module docstring) from the tip frame's 6×nx Jacobian over the active
+    joints, ``drift`` = ``J̇ q̇_prev`` (None: first-order targets), the measured contact, the tip
+    radius (m), ``omega_axis`` = ω a (rad/s), the velocity ``bounds``, W's diagonal, ``dt`` (s)
+    and β."""
     M = contact_rows(contact.normal, radius)
     wx, wy, wz = omega_axis
     gap_target = -gap_gain * contact.distance / dt

@@ -19,7 +19,7 @@ from eos_svc.errors import ComputationError
 
 from .rolling_problem import StepQP
 
-__all__ = ["BOUND_TOLERANCE", "RollingQPError", "available_solvers", "equality_optimum", "solve_rolling_qp"]
+__all__ = ["BOUND_TOLERANCE", "RollingQPError", "equality_optimum", "solve_rolling_qp"]
 
 #: tolerance on the bounds, rad/s or m/s, of the closed form (OSQP's own tolerance below)
 BOUND_TOLERANCE = 1e-7
@@ -30,18 +30,9 @@ BACKEND_SETTINGS: dict[str, dict[str, Any]] = {
 }
 
 
-def available_solvers() -> list[str]:
-    """Installed qpsolvers backends (any of them can solve the rolling QP)."""
-    return list(qpsolvers.available_solvers)
-
-
 class RollingQPError(ComputationError):
-    """The rolling QP failed (infeasible, not solved).
-
-    Attributes:
-        problem: the :class:`qpsolvers.Problem` that failed.
-        solver: backend name; ``status``: the backend's status text.
-    """
+    """The rolling QP failed (infeasible, not solved): the :class:`qpsolvers.Problem`, the
+    backend's name and its status text."""
 
     def __init__(self, message: str, problem: qpsolvers.Problem, solver: str, status: str) -> None:
         super().__init__(f"rolling QP ({solver}): {message} [status: {status}]")
@@ -66,13 +57,9 @@ def equality_optimum(qp: StepQP, tolerance: float = BOUND_TOLERANCE) -> np.ndarr
 
 
 def solve_rolling_qp(qp: StepQP, solver: str = "osqp", closed_form: bool = True) -> tuple[np.ndarray, bool]:
-    """The joint velocities that solve ``qp``, and whether the closed form gave them:
-    :func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
-    backend ``solver`` on :meth:`StepQP.problem`.
-
-    Raises:
-        RollingQPError: the bounds are inconsistent or the backend finds no finite solution.
-    """
+    """The joint velocities that solve ``qp`` and whether the closed form gave them
+    (:func:`equality_optimum` when ``closed_form`` and no bound is active, else the qpsolvers
+    backend ``solver``); :class:`RollingQPError` when there is no finite solution."""
     if closed_form:
         x = equality_optimum(qp)
         if x is not None:

@@ -1,12 +1,7 @@
-"""Contact queries between the hand's collision geometry and one object (coal).
-
-Signed distances (negative = penetration), witness points and the normal, in world
-coordinates (m). For a separated sphere fingertip, coal's sphere–primitive algorithms give
-exact witnesses and normal (sphere, box, capsule, cylinder; GJK-accurate, a few µm, for the
-ellipsoid — ``Scene(..., exact_tips=True)`` makes those exact too). When a sphere fingertip
-penetrates the object, the contact comes from the object's analytic closest point instead:
-coal's penetration depth is approximate for curved shapes (its sphere–cylinder depth ignores
-the caps; EPA converges to a tolerance).
+"""Contact queries between the hand's collision geometry and one object (coal): signed distances
+(negative = penetration), witness points and the normal, world coordinates (m). A penetrating
+sphere fingertip's contact comes from the object's analytic closest point (coal's depth is
+approximate for curved shapes).
 """
 
 from __future__ import annotations
@@ -26,15 +21,9 @@ __all__ = ["Contact", "Scene"]
 
 @dataclass(slots=True)
 class Contact:
-    """Closest-point result between one hand geometry and the object.
-
-    Attributes:
-        finger: finger name (or the geometry name for :meth:`Scene.distance`).
-        distance: signed distance, m (negative = penetration depth).
-        point_tip: world witness point on the hand geometry (fingertip surface), m.
-        point_object: world witness point on the object surface, m.
-        normal: world unit normal, from the object toward the fingertip.
-    """
+    """Closest points of one hand geometry (``finger``: the finger's or the geometry's name) and
+    the object: signed ``distance`` (m, negative = penetration), world witness points on the hand
+    and on the object (m), and the world unit ``normal`` from the object toward the hand."""
 
     finger: str
     distance: float
@@ -44,16 +33,9 @@ class Contact:
 
 
 class Scene:
-    """A hand and one object. Reuses coal requests/results/transforms across calls.
-
-    Args:
-        hand: the hand model.
-        obj: the object.
-        exact_tips: when True, sphere-fingertip contacts always come from the object's
-            analytic closest point (exact witnesses, slower: ~10–50 µs); when False (default)
-            from coal (~1–5 µs), whose GJK witness on curved objects such as the ellipsoid is
-            within a few µm tangentially (distance within ~1e-8 m).
-    """
+    """A hand and one object (coal requests, results and transforms reused across calls).
+    ``exact_tips``: sphere-fingertip contacts from the object's analytic closest point (exact,
+    ~10× slower) instead of coal's (GJK: within a few µm tangentially on an ellipsoid)."""
 
     def __init__(self, hand: HandModel, obj: SurfaceObject, exact_tips: bool = False) -> None:
         if not isinstance(hand, HandModel):
@@ -76,15 +58,12 @@ class Scene:
         # the hand's collision shapes by geometry id (reading them through the geometry model's
         # vector from Python costs ~3 µs a query)
         self._hand_shapes = [go.geometry for go in hand.collision_model.geometryObjects]
-        # Per finger: frame id, radius, sphere shape (from the URDF when it is a sphere)
-        self._tips: dict[str, tuple[int, float, coal.ShapeBase, bool]] = {}
+        # per finger: radius, tip shape (a sphere of that radius when the tip has no geometry)
+        self._tips: dict[str, tuple[float, coal.ShapeBase, bool]] = {}
         for name in hand.finger_names:
-            gid = hand.tip_geometry_id(name)
-            r = hand.tip_radius(name)
-            geom = hand.collision_model.geometryObjects[gid].geometry if gid is not None else None
-            is_sphere = geom is None or isinstance(geom, coal.Sphere)
-            shape = geom if geom is not None else coal.Sphere(r)
-            self._tips[name] = (hand.tip_frame_id(name), r, shape, is_sphere)
+            gid, r = hand.tip_geometry_id(name), hand.tip_radius(name)
+            shape = coal.Sphere(r) if gid is None else self._hand_shapes[gid]
+            self._tips[name] = (r, shape, isinstance(shape, coal.Sphere))
 
     def set_object_placement(self, placement: pin.SE3) -> None:
         """Move the object (world ← object). Use this rather than assigning
@@ -99,7 +78,7 @@ class Scene:
         """Closest points between finger ``finger``'s tip and the object."""
         if finger not in self._tips:
             raise UnknownNameError("finger", f"unknown finger {finger!r}; known: {self.hand.finger_names}")
-        _, r, shape, is_sphere = self._tips[finger]
+        r, shape, is_sphere = self._tips[finger]
         res = self._res
         res.clear()
         if is_sphere:
@@ -133,18 +112,11 @@ class Scene:
         return Contact(finger, sd - r, c - r * n, p_obj, n)
 
     def tip_contacts(self, state: HandState) -> tuple[Contact, ...]:
-        """:meth:`contact` of every finger, in ``hand.finger_names`` order.
-
-        Raises:
-            KinematicsError: ``state`` belongs to another hand model.
-        """
+        """:meth:`contact` of every finger, in ``hand.finger_names`` order (:class:`KinematicsError`
+        when ``state`` belongs to another hand model)."""
         if state.hand is not self.hand:
             raise KinematicsError("state", "belongs to another hand model than the scene's")
         return tuple(self.contact(state, f) for f in self.hand.finger_names)
-
-    def contacts(self, state: HandState) -> dict[str, Contact]:
-        """:meth:`contact` for every finger."""
-        return dict(zip(self.hand.finger_names, self.tip_contacts(state), strict=True))
 
     def distance(self, state: HandState, geometry_name: str) -> Contact:
         """Closest points between any hand collision geometry (by name) and the object;

@@ -1,10 +1,6 @@
-"""A tactile sensor on a spherical fingertip: where on the fingertip the contact is.
-
-The reading is expressed in the fingertip frame (origin at the sphere centre, m). Gaussian
-noise of ``noise_std`` m per axis is added in the tangent plane of the fingertip surface and
-the point is re-projected onto the sphere; an optional taxel ``pitch`` (m) then rounds each
-coordinate to the nearest multiple of the pitch and re-projects onto the sphere. The rng is
-seeded, so readings are reproducible.
+"""A tactile sensor on a spherical fingertip: where on the fingertip the contact is (fingertip
+frame, m), with seeded Gaussian noise in the tangent plane and an optional taxel pitch, each
+re-projected onto the sphere.
 """
 
 from __future__ import annotations
@@ -44,13 +40,10 @@ class TactileReading:
 class TactileSensor:
     """Tactile reading for a spherical fingertip from a :class:`~.scene.Contact`.
 
-    Args:
-        noise_std: standard deviation of the tangential position noise, m (≥ 0).
-        pitch: taxel pitch, m (> 0), or None for a continuous sensor.
-        contact_tolerance: distances ≤ this (m) count as contact.
-        rng: a numpy Generator, or a seed (an int or a ``SeedSequence``: the generator is made
-            from it on the first noisy reading; a plan that never touches makes none), or None
-            (fresh entropy).
+    ``noise_std``: σ of the tangential position noise, m; ``pitch``: taxel pitch, m (None:
+    continuous); ``contact_tolerance``: distances ≤ this (m) count as contact; ``rng``: a numpy
+    Generator, a seed (an int ≥ 0 or a ``SeedSequence``; the generator is made at the first noisy
+    reading) or None (fresh entropy).
     """
 
     def __init__(
@@ -69,38 +62,20 @@ class TactileSensor:
         self.noise_std = float(noise_std)
         self.pitch = None if pitch is None else float(pitch)
         self.contact_tolerance = float(contact_tolerance)
-        self._rng: np.random.Generator | None = None
-        self._seed: np.random.SeedSequence | int | None = None
-        self.rng = rng  # checked and kept (see the setter)
-
-    @property
-    def rng(self) -> np.random.Generator:
-        """The position noise's generator (made from the seed given on first use)."""
-        rng = self._rng
-        if rng is None:
-            rng = self._rng = np.random.default_rng(self._seed)
-        return rng
-
-    @rng.setter
-    def rng(self, rng: np.random.Generator | np.random.SeedSequence | int | None) -> None:
-        """A generator, or a seed (an int ≥ 0 or a ``SeedSequence``: the generator is made from
-        it on first use), or None (fresh entropy on first use).
-
-        Raises:
-            KinematicsError: anything else.
-        """
-        if isinstance(rng, np.random.Generator):
-            self._rng, self._seed = rng, None
-            return
-        if not (
-            rng is None
-            or isinstance(rng, np.random.SeedSequence)
-            or (isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0)
-        ):
+        seed = isinstance(rng, (int, np.integer)) and not isinstance(rng, bool) and rng >= 0
+        if not (rng is None or seed or isinstance(rng, (np.random.Generator, np.random.SeedSequence))):
             raise KinematicsError(
                 "rng", f"must be a numpy Generator, a SeedSequence, an int ≥ 0 or None, got {rng!r}"
             )
-        self._rng, self._seed = None, rng
+        self._seed = rng
+        self._rng = rng if isinstance(rng, np.random.Generator) else None
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The position noise's generator (made from the seed on first use)."""
+        if self._rng is None:
+            self._rng = np.random.default_rng(self._seed)
+        return self._rng
 
     def read(self, state: HandState, contact: Contact) -> TactileReading:
         """The reading of ``contact.finger``'s sensor for this contact (``state`` at the same q)."""
@@ -115,8 +90,7 @@ class TactileSensor:
     def read_tip(self, contact: Contact, rotation: np.ndarray, radius: float) -> TactileReading:
         """The reading of ``contact`` on a sphere tip of ``radius`` m whose frame has the world
         ``rotation`` (3×3): the contact point on the tip, ``−radius Rᵀ n``, moved by the noise in
-        the tangent plane and re-projected on the sphere, then rounded to the taxel pitch.
-        Arithmetic on floats (numpy costs microseconds per call on 3-vectors)."""
+        the tangent plane and re-projected on the sphere, then rounded to the taxel pitch."""
         (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = rotation.tolist()
         n0, n1, n2 = contact.normal.tolist()
         r = radius

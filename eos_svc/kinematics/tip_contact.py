@@ -1,10 +1,6 @@
-"""The contact of a sphere fingertip with the object, measured by coal.
-
-:class:`SphereTipProbe` holds one ``coal.ComputeDistance`` functor, its transforms, request and
-result for one fingertip and one object: the rolling QP measures the same pair at every step.
-Its contact is the exact one of :meth:`~eos_svc.kinematics.scene.Scene.contact` with
-``exact_tips`` (``tests/kinematics/test_tip_contact.py``): the normal is the direction from the
-object's witness point to the sphere centre (coal's GJK tolerance at 1e-12).
+"""The contact of a sphere fingertip with the object, measured by one ``coal.ComputeDistance``
+functor (the rolling QP measures the same pair at every step); the normal runs from the
+object's witness point to the sphere centre.
 """
 
 from __future__ import annotations
@@ -22,13 +18,8 @@ __all__ = ["SphereTipProbe"]
 
 
 class SphereTipProbe:
-    """Signed distance, witness points and normal between a sphere tip and one object.
-
-    Args:
-        finger: the finger's name (written into each :class:`Contact`).
-        radius: the tip sphere's radius, m.
-        object_shape: the object's coal shape; place it with :meth:`place_object`.
-    """
+    """Signed distance, witness points and normal between ``finger``'s sphere tip (``radius``
+    m) and one object's coal shape (placed by :meth:`place_object`)."""
 
     def __init__(self, finger: str, radius: float, object_shape: Any) -> None:
         self.finger = finger

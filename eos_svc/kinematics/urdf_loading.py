@@ -58,17 +58,10 @@ def load_hand(
     description: HandDescription | None = None,
     package_dirs: Sequence[str | os.PathLike[str]] = (),
 ) -> HandModel:
-    """Load a hand from a URDF and its description (default: hand3x3).
-
-    Args:
-        urdf_path: the URDF file.
-        description: the hand description; ``None`` means :meth:`HandDescription.hand3x3`.
-        package_dirs: directories Pinocchio searches to resolve ``package://`` mesh URIs.
-
-    Raises:
-        UrdfLoadError: the file is missing or Pinocchio cannot parse it.
-        HandDescriptionError / UnknownNameError: the description does not match the URDF.
-    """
+    """Load a hand from a URDF and its description (default: :meth:`HandDescription.hand3x3`);
+    ``package_dirs`` resolve ``package://`` mesh URIs. Raises :class:`UrdfLoadError` (missing
+    or unparsable file), :class:`HandDescriptionError` or :class:`UnknownNameError` (the
+    description does not match the URDF)."""
     path = Path(urdf_path)
     if not path.is_file():
         raise UrdfLoadError("urdf_path", f"no such file: {path}")

@@ -1,12 +1,6 @@
-"""The objects to grasp: one file per kind, each the one owner of everything about its kind.
-
-- :mod:`~eos_svc.objects.base`: :class:`SurfaceObject`, the abstract kind.
-- :mod:`~eos_svc.objects.sphere`, :mod:`~eos_svc.objects.ellipsoid`,
-  :mod:`~eos_svc.objects.cylinder`, :mod:`~eos_svc.objects.capsule`,
-  :mod:`~eos_svc.objects.box`: the primitives; :mod:`~eos_svc.objects.mesh`: a triangle mesh.
-- :mod:`~eos_svc.objects.axial`: :class:`~eos_svc.objects.axial.AxialObject`, what the cylinder
-  and the capsule share.
-- :mod:`~eos_svc.objects.registry`: the kinds by name (:data:`KINDS`). See ``docs/objects.md``.
+"""The objects to grasp: one file per kind, each the one owner of everything about its kind
+(:mod:`~eos_svc.objects.base` the abstract kind, :mod:`~eos_svc.objects.registry` the kinds by
+name). See ``docs/objects.md``.
 """
 
 from eos_svc.objects.base import CurvatureUndefinedError, ObjectSizeError, SurfaceObject

@@ -38,10 +38,6 @@ class AxialObject(SurfaceObject):
     def sizes(self) -> dict[str, Any]:
         return {"radius": self.radius, "length": self.length}
 
-    @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
-
     def approach_options(self, closing: Array) -> list[Array | None]:
         """The object's axes, and the direction across both the grip and the axis."""
         return [

@@ -1,25 +1,10 @@
 """The abstract object kind: a rigid convex primitive at a pose, and what every kind provides.
 
-Local frames follow coal's conventions: every shape is centred at its placement's origin;
-cylinders and capsules have their axis along local z. SI units (m, kg, kg·m²) throughout.
-
-Every kind gives:
-
-- its parameters in the request's JSON form (:meth:`SurfaceObject.from_dict`,
-  :meth:`SurfaceObject.to_dict`) and as the shape fit's half sizes (:attr:`half_sizes`);
-- its signed distance (m, negative inside) and gradient (the unit outward normal at the
-  closest surface point), batched over points (:meth:`local_distance`, the one
-  implementation), point-wise (:meth:`signed_distance`) and the closest surface point;
-- its differential geometry at a surface point (:meth:`principal_curvatures`,
-  :meth:`curvature_form`): the ground truth for EP1's curvature estimate;
-- its extents and smallest width (:meth:`smallest_width`), its coal shape (:attr:`geometry`),
-  its Drake / MeshCat shape (:meth:`drake_shape`: the drawing; :meth:`drake_collision_shapes`:
-  what Drake's contact engine takes) and its mass properties (:meth:`mass_properties`);
-- its grasp rules (:meth:`closing_axes`, :meth:`approach_options`): the axes grasp synthesis
-  closes the hand across (GraspIt's primitive rules, Miller et al., ICRA 2003).
-
-Where the curvature is not defined (box edges and corners, cylinder rims) a
-:class:`CurvatureUndefinedError` is raised.
+Local frames follow coal's (centred; cylinders and capsules along local z); SI units. Every kind
+gives its JSON form and half sizes, its signed distance and gradient (:meth:`local_distance`,
+the one implementation), its curvature (EP1's ground truth; :class:`CurvatureUndefinedError`
+on edges and rims), extents, coal and Drake shapes, mass properties and grasp rules
+(``docs/objects.md``).
 """
 
 from __future__ import annotations
@@ -155,6 +140,8 @@ class SurfaceObject(ABC):
     #: :mod:`eos_svc.drivers.grip_verdict`); False: force closure about the centre of mass decides
     grasp_about_diameter: ClassVar[bool] = True
 
+    _geom: coal.ShapeBase
+
     def __init__(self, placement: pin.SE3 | None = None) -> None:
         if placement is None:
             placement = pin.SE3.Identity()
@@ -184,9 +171,9 @@ class SurfaceObject(ABC):
         (..., N, 3) of the instances with half sizes ``half`` (..., 1, s)."""
 
     @property
-    @abstractmethod
     def geometry(self) -> coal.ShapeBase:
-        """The coal shape (object frame)."""
+        """The coal shape (object frame): the ``_geom`` each kind builds."""
+        return self._geom
 
     @property
     @abstractmethod

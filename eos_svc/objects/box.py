@@ -62,10 +62,6 @@ class Box(SurfaceObject):
         return d, np.where((out > TINY)[..., None], g_out, g_in)
 
     @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
-
-    @property
     def diameter(self) -> float:
         return float(np.linalg.norm(self.size))
 

@@ -113,10 +113,6 @@ class Ellipsoid(SurfaceObject):
         return sign * dist, g
 
     @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
-
-    @property
     def diameter(self) -> float:
         return float(2.0 * self.radii.max())
 

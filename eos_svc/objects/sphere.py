@@ -45,10 +45,6 @@ class Sphere(SurfaceObject):
         return n - half[..., 0], unit(P, n, _UP)
 
     @property
-    def geometry(self) -> coal.ShapeBase:
-        return self._geom
-
-    @property
     def diameter(self) -> float:
         return 2.0 * self.radius
 

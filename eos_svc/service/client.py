@@ -5,15 +5,11 @@
     with EosClient.open(make_config(connect=["tcp/127.0.0.1:7447"])) as client:
         client.wait_for_instances(1)
         outcome = client.plan(PlanRequest(), on_cycle=lambda msg: print(msg["seq"]))
-        print(outcome.result["status"])
 
-The client keeps the live set of service instances from their liveliness tokens
-(:mod:`eos_svc.service.instances`), sends each plan to one instance by its own key (spreading
-plans over instances: the one with the fewest plans in flight from this client, ties in turn),
-watches the goal's cycle stream (:mod:`eos_svc.service.plan_attempt`), and retries on another
-instance when the one it asked disappears (its token goes, or the query ends without a reply)
-or is busy. Zenoh callbacks only enqueue; the user's ``on_cycle`` runs in the thread that
-called :meth:`EosClient.plan`.
+Each plan goes to one live instance (:mod:`~eos_svc.service.instances`: the fewest of this
+client's plans in flight, ties in turn), its cycles are watched (:mod:`~eos_svc.service.plan_attempt`)
+and it is retried on another instance when the one asked is lost or busy. ``on_cycle`` runs in
+the thread that called :meth:`EosClient.plan`.
 """
 
 from __future__ import annotations
@@ -127,25 +123,16 @@ class EosClient:
 
         Args:
             request: the plan request (default: ``PlanRequest()``); a mapping is sent as is.
-            goal_id: the goal id (default: a fresh random one, :func:`new_goal_id`, unguessable; a
-                ``duplicate_goal`` refusal of it is retried with another, up to 3 times).
+            goal_id: the goal id (default: :func:`new_goal_id`, drawn again on ``duplicate_goal``).
             on_cycle: called with every cycle message, in order, in this thread.
             instance: ask this instance only (no spreading, no retry elsewhere).
-            watch: subscribe to the goal's cycles and status (needed for ``on_cycle``). The
-                request says so (its ``watch`` hint), so the instance need not ask Zenoh
-                whether anyone watches: ``False`` tells it this session has no subscriber of
-                the goal — one declared on :attr:`session` directly is counted only once
-                Zenoh notifies the instance (a goal may start unseen by it). Once this client
-                has called :meth:`watch` (for good: it does not know when that subscriber
-                goes), its requests leave the hint out and the instance asks.
-            timeout: seconds to wait for one instance's answer (default: the
-                request's deadline + ``timeout_margin_s``). An instance that does not answer
-                in time is not asked again by this call; the plan goes to another, so the
-                whole call may wait up to ``max_attempts × timeout`` (and the instance given up
-                may still be running the plan).
+            watch: subscribe to the goal's cycles and status (needed for ``on_cycle``), and tell
+                the instance so in the request (left out once :meth:`watch` was called: then
+                the instance asks Zenoh whether anyone watches).
+            timeout: seconds to wait for one instance's answer (default: the request's deadline
+                + ``timeout_margin_s``); one that does not answer in time is not asked again.
             max_attempts: instances to try before giving up.
-            cancel_token: the goal's secret for :meth:`cancel` (default: a fresh random one,
-                kept by this client while the plan runs; never published by the service).
+            cancel_token: the goal's secret for :meth:`cancel` (default: a fresh random one).
 
         Raises:
             RequestError: the service refused the request (code, field, reason).
@@ -236,9 +223,7 @@ class EosClient:
     # ------------------------------------------------------------------ cancel / watch
     def cancel(self, goal_id: str, timeout: float = 2.0, *, cancel_token: str | None = None) -> bool:
         """Cancel a queued or running goal on whichever instance has it; True when one had it.
-
-        Only the goal's owner can: the cancel carries the goal's ``cancel_token`` (default: the
-        one this client sent with the plan, while it runs).
+        The cancel carries ``cancel_token`` (default: the one this client sent with the plan).
 
         Raises:
             RequestError: ``forbidden`` — the instance running the goal refused the token.
@@ -261,8 +246,7 @@ class EosClient:
         return found
 
     def _cancel_query(self, goal_id: str, payload: bytes | None, timeout: float) -> Any:
-        """A query on ``P/cancel/<goal_id>`` that every live instance answers (target ``ALL``, no
-        consolidation): its replies, as Zenoh hands them (``timeout`` in seconds)."""
+        """The replies of every live instance to a query on ``P/cancel/<goal_id>`` (``timeout`` in s)."""
         return self.session.get(
             proto.cancel_key(self.prefix, goal_id),
             payload=payload,
@@ -278,18 +262,11 @@ class EosClient:
         *,
         sync_timeout: float | None = 2.0,
     ) -> Any:
-        """Subscribe to cycle and status messages (of every goal by default).
+        """Subscribe to cycle and status messages (of every goal by default); returns the subscriber.
 
-        ``callback(kind, message)`` runs in a Zenoh callback thread with ``kind``
-        ``"cycle"`` or ``"status"``; keep it short. Returns the subscriber
-        (``undeclare()`` it to stop).
-
-        A subscriber's declaration travels to each instance on its own, unacknowledged: a
-        plan another client sends right after could start on an instance that does not know
-        the watcher yet, and that goal's first messages (its ``running`` status) would be
-        missed. So unless ``sync_timeout`` is ``None`` this returns only after a round trip
-        to every live instance (see :meth:`sync_with_instances`), at most ``sync_timeout``
-        seconds: from then on every goal they start is seen from its first message.
+        ``callback(kind, message)`` runs in a Zenoh thread, ``kind`` ``"cycle"`` or ``"status"``.
+        Unless ``sync_timeout`` is ``None``, returns after :meth:`sync_with_instances` (at most
+        ``sync_timeout`` s), so every goal the instances start from then on is seen from its start.
         """
 
         def on_sample(sample: zenoh.Sample) -> None:
@@ -309,13 +286,8 @@ class EosClient:
         return subscriber
 
     def sync_with_instances(self, timeout: float = 2.0) -> list[str]:
-        """Make a round trip to every live instance; return the instances that answered (sorted).
-
-        Zenoh delivers one session's messages to a peer in the order they were sent, so an
-        instance that answers has already received everything this session declared before
-        the call (subscribers above all). The round trip is a cancel query for a goal id no
-        client uses: each instance answers ``found: false`` and nothing else happens.
-        """
+        """A round trip to every live instance (a cancel of a goal id nobody uses); the instances
+        that answered (sorted), which have then received every subscriber declared before."""
         answered: set[str] = set()
         for reply in self._cancel_query(f"sync-{secrets.token_hex(8)}", None, timeout):
             if reply.ok is not None:

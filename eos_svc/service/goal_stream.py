@@ -1,13 +1,9 @@
 """What one goal publishes while it runs: its ``running`` status, every cycle, its ``done`` status.
 
-Every message starts with ``{"schema", "goal_id", "instance"}``. A message is built and put only
-while someone watches (:class:`~eos_svc.service.goal_watchers.GoalWatchers`): from the start when
-the goal is watched then, otherwise from the moment a watcher comes; cycles are numbered all the
-same, so a watcher that comes in the middle gets the rest, numbered from where the plan is.
-
-Every message is put with ``CongestionControl.DROP``: a subscriber whose queue is full (one that
-does not drain) loses it alone, at once, and no plan waits for it; what it lost shows as gaps in
-``seq``. The requester gets the ``done`` status as its reply, which Zenoh sends reliably.
+Every message starts with ``{"schema", "goal_id", "instance"}`` and is built and put only while
+someone watches (:class:`~eos_svc.service.goal_watchers.GoalWatchers`); cycles are numbered all the
+same. Puts use ``CongestionControl.DROP``: a subscriber that does not drain loses messages alone
+(gaps in ``seq``), no plan waits for it; the requester gets the ``done`` status as its reply.
 """
 
 from __future__ import annotations
@@ -27,16 +23,8 @@ _DROP = zenoh.CongestionControl.DROP
 
 
 class GoalStream:
-    """The messages of one goal on one instance.
-
-    Args:
-        session: the service's Zenoh session.
-        prefix: the service's key prefix.
-        instance: the instance's id.
-        goal_id: the goal's id.
-        watchers: the instance's watchers flag.
-        watched: whether the goal is watched from its start (see :meth:`GoalWatchers.watched`).
-    """
+    """The messages of goal ``goal_id`` on ``instance``, ``watched`` from its start or not
+    (:meth:`GoalWatchers.watched`), later while ``watchers`` says anyone watches."""
 
     def __init__(
         self,

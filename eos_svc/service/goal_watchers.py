@@ -18,30 +18,14 @@ from eos_svc.service.session import direct_callback
 
 
 class GoalWatchers:
-    """Whether any subscriber matches ``P/goal/*/*`` (the cycles and status of any goal).
+    """Whether any subscriber matches ``P/goal/*/*``, from a publisher declared there and never
+    used to put (the reasoning: ``docs/service.md``, "Key expressions and messages").
 
-    A publisher declared on that key and never used to put. Two answers:
-
-    - :meth:`now`: its matching status read from Zenoh's routing tables at this moment (the
-      tables that would route a put), exact: a client's subscriber declared before it sends
-      the plan query reaches the service before the query (in order on the same link), so a
-      goal watched from the start gets every message. A few µs warm, tens of µs in a process
-      that has been idle (cold caches): asked once per plan whose request does not say
-      whether its sender watches, and only when ``any`` is false.
-    - :attr:`any`: a Python bool, free to read before every cycle. A matching listener's
-      notice that says "matching" sets it at once (a put too many costs little; nothing is
-      woken on the request's path); one that says "nobody" asks for :meth:`refresh`
-      (``on_notice``: the service's dispatcher thread runs it), which sets it to the routing
-      tables' answer. The service also refreshes it after every plan that ends with it set or
-      with Zenoh's last notice saying "matching" (after the reply), and before answering every
-      cancel query. Readings are taken one at a time (a lock), so an older one never overwrites
-      a newer one, and a "matching" notice that comes during a reading makes it read again. So
-      the flag turns false only from an exact reading, never from a notice Zenoh delivered late
-      or out of order (it delivers them from tasks it spawns); a stale "matching" lasts until
-      the first plan that ends after it (plans running meanwhile publish to nobody). It lags a
-      new subscriber by the notice's delay (well under a millisecond to a few): enough for a
-      watcher that comes in the middle of a plan; a watcher that syncs with the instance
-      (:meth:`~eos_svc.service.EosClient.watch`: a cancel query) is counted from then on.
+    - :meth:`now`: the publisher's matching status read from Zenoh's routing tables (exact).
+    - :attr:`any`: a bool free to read before every cycle. A "matching" notice sets it at once;
+      a "nobody" notice calls ``on_notice`` (the service's dispatcher then runs :meth:`refresh`,
+      which sets it from the tables). So it turns false only from an exact reading, never from a
+      notice Zenoh delivered late or out of order.
     - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
 
@@ -94,11 +78,9 @@ class GoalWatchers:
         return bool(getattr(status, "matching", status))
 
     def refresh(self) -> None:
-        """Set :attr:`any` to the routing tables' answer now (from our threads, never from
-        Zenoh's). One reading at a time: Zenoh releases the GIL while it reads, so without the
-        lock a worker's "nobody" could be stored after the dispatcher's newer "matching" (a
-        watcher's sync). A "matching" notice that comes while the tables are read makes it read
-        them again, so a "nobody" read before that notice never overwrites it."""
+        """Set :attr:`any` to the routing tables' answer now (from our threads, never Zenoh's).
+        One reading at a time (a lock: an older "nobody" never overwrites a newer "matching"); a
+        "matching" notice during the reading makes it read again."""
         with self._reading:  # never taken in Zenoh's threads: waiting on it cannot block them
             while True:
                 mark = self._matching_notices

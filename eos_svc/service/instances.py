@@ -62,13 +62,9 @@ class LiveInstances:
             return sorted(self._live)
 
     def discover(self, timeout: float = 1.0) -> list[str]:
-        """The instances alive now (sorted): the answers to a liveliness query on their tokens,
-        together with the tokens the liveliness subscriber holds.
-
-        Both, because through a router on a loaded machine Zenoh (1.x) now and then answers a
-        liveliness query with nothing while the tokens are alive and the subscriber has them.
-        With neither holding any token, this waits for the subscriber up to ``timeout`` seconds.
-        """
+        """The instances alive now (sorted): a liveliness query's answers and the subscriber's
+        tokens (through a loaded router Zenoh 1.x may answer the query with nothing); with
+        neither, waits for the subscriber up to ``timeout`` s."""
         end = time.monotonic() + timeout
         found = set()
         for reply in self._session.liveliness().get(proto.instance_key(self._prefix), timeout=timeout):

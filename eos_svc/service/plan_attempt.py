@@ -1,10 +1,8 @@
 """One attempt of a plan: its query to one instance, its goal's messages, its outcome.
 
-The query's replies and its end (``_END``) come into one event queue from Zenoh's thread (and a
-``lost`` notice when the instance's liveliness token goes, :class:`~.instances.LiveInstances`);
-the goal's cycle and status messages come from a subscriber declared before the query (the
-declaration travels ahead of the query on the same link, so the first cycle is not missed).
-The thread that called :meth:`EosClient.plan` waits on the queue and runs ``on_cycle``.
+The query's replies, its end and a ``lost`` notice (:class:`~.instances.LiveInstances`) come into
+one event queue, which the thread that called :meth:`EosClient.plan` drains (running ``on_cycle``);
+the goal's messages come from a subscriber declared before the query (so no cycle is missed).
 """
 
 from __future__ import annotations
@@ -121,25 +119,14 @@ class _Stream:
         return msg
 
     def on_sample(self, sample: zenoh.Sample) -> None:
-        """Zenoh callback when there is no ``on_cycle``: cycles are parsed and kept right here, in
-        Zenoh's thread (pure Python, never blocks), so the waiting thread is woken only by the reply."""
+        """Zenoh callback without ``on_cycle``: cycles kept in Zenoh's thread (never blocks)."""
         self.accept(sample.payload.to_bytes())
 
 
 @dataclass
 class Attempt:
-    """One plan query to one instance, with what to do with its goal's messages.
-
-    Attributes:
-        session: the client's Zenoh session.
-        prefix: the service's key prefix.
-        iid: the instance asked.
-        goal_id: the goal's id.
-        payload: the encoded request.
-        on_cycle: called with every cycle message, in order, in the calling thread.
-        watch: subscribe to the goal's messages.
-        timeout: the query's timeout (s).
-    """
+    """One plan query (``payload``, timeout in s) for goal ``goal_id`` to instance ``iid``; with
+    ``watch``, its goal's messages subscribed to and ``on_cycle`` run in the calling thread."""
 
     session: zenoh.Session
     prefix: str

@@ -1,31 +1,11 @@
-"""Wire protocol of the EOS planning service: key expressions and messages.
+"""Wire protocol of the EOS planning service: key expressions, error codes, the request and cancel messages.
 
-Every message is UTF-8 JSON carrying ``"schema": 1``, read strictly
-(:mod:`eos_svc.service.wire_json`). Every error reply is bounded: the field and reason it echoes
-are clipped (:data:`MAX_FIELD_JSON`, :data:`MAX_REASON_JSON`), so a reply stays under 4 KiB
-whatever the request. Key expressions live under a versioned prefix ``eos/@v1`` (``@v1`` is a
-verbatim chunk: wildcards never cross it), with an optional namespace: ``eos/@v1/<namespace>``.
-With ``P`` the prefix:
-
-=================================  =========================  ==========================================
-key expression                     Zenoh entity               message
-=================================  =========================  ==========================================
-``P/instance/<iid>``               liveliness token           (none) — one per service instance
-``P/plan/<iid>``                   queryable (one/instance)   request: :func:`encode_request`; reply: the
-                                                              plan result, or an error reply
-                                                              (:class:`RequestError`)
-``P/cancel/<goal_id>``             queryable ``P/cancel/*``   request: :func:`encode_cancel` (the goal's
-                                                              ``cancel_token``); reply: ``{"goal_id",
-                                                              "instance", "found"}`` or ``forbidden``
-``P/goal/<goal_id>/cycle``         publication (DROP)         ``{"schema", "goal_id", "instance", "seq",
-                                                              "record"}`` — one per cycle, seq 1, 2, ...
-``P/goal/<goal_id>/status``        publication (DROP)         ``{"schema", "goal_id", "instance", "state",
-                                                              ...}`` — ``running`` with the ``request``,
-                                                              then ``done`` with ``status``, ``cycles``
-                                                              and ``result`` (also the plan's reply)
-=================================  =========================  ==========================================
-
-This module is pure (no Zenoh import) so the decoder can be fuzzed alone.
+Every message is UTF-8 JSON with ``"schema": 1``, read strictly (:mod:`eos_svc.service.wire_json`);
+an error reply's field and reason are clipped so it stays under 4 KiB. Keys live under the prefix
+``P`` = ``eos/@v1[/<namespace>]`` (``@v1`` is verbatim: no wildcard crosses it): ``P/instance/<iid>``
+(liveliness token), ``P/plan/<iid>`` (plan queryable), ``P/cancel/<goal_id>``, and the publications
+``P/goal/<goal_id>/cycle`` and ``P/goal/<goal_id>/status`` (the messages: ``docs/service.md``).
+Pure (no Zenoh import), so the decoder can be fuzzed alone.
 """
 
 from __future__ import annotations
@@ -34,8 +14,9 @@ import hmac
 import re
 import secrets
 from collections.abc import Mapping
+from dataclasses import dataclass
 from json.encoder import encode_basestring_ascii as _json_str
-from typing import Any, NamedTuple
+from typing import Any
 
 import msgspec
 
@@ -235,14 +216,10 @@ def encode_request(
     cancel_token: str | None = None,
     watch: bool | None = None,
 ) -> bytes:
-    """A plan request on the wire: ``{"schema": 1, "goal_id": ..., ["cancel_token": ...,]
-    ["watch": ...,] <PlanRequest fields>}``. Without a ``cancel_token`` nobody can cancel the
-    goal. ``watch``: whether the requester subscribes to the goal's messages before sending
-    (see :class:`Envelope`); ``None`` leaves it out and the service asks Zenoh instead.
-
-    A :class:`PlanRequest` (validated: every number finite) is written by msgspec (floats in
-    their shortest round-trip digits); a mapping is sent as given (its fields win over the
-    envelope's), through the strict encoder (NaN or Infinity in it raise ``ValueError``)."""
+    """A plan request on the wire: ``{"schema": 1, "goal_id", ["cancel_token",] ["watch",] <fields>}``
+    (no ``cancel_token``: nobody can cancel it; ``watch``: see :class:`Envelope`). A
+    :class:`PlanRequest` is written by msgspec; a mapping is sent as given, through the strict
+    encoder (its fields win over the envelope's; NaN or Infinity raise ``ValueError``)."""
     envelope: dict[str, Any] = {"schema": SCHEMA_VERSION, "goal_id": goal_id}
     if cancel_token is not None:
         envelope["cancel_token"] = cancel_token
@@ -253,27 +230,17 @@ def encode_request(
     return dumps({**envelope, **dict(request)})
 
 
-class Envelope(NamedTuple):
+@dataclass(frozen=True)
+class Envelope:
     """A decoded plan request: its goal id, the request, the owner's cancel token (or ``None``)
-    and the requester's ``watch`` hint: ``True`` when it subscribed to the goal's messages before
-    sending (the service publishes them from the start without asking Zenoh), ``False`` when it
-    did not (the service publishes them only for the other watchers it knows of), ``None`` when
-    the request does not say (the service asks Zenoh's routing tables)."""
+    and the requester's ``watch`` hint (``True``: it subscribed to the goal before sending;
+    ``False``: it did not; ``None``: not said, the service asks Zenoh's routing tables)."""
 
     goal_id: str
     request: PlanRequest
     cancel_token: str | None = None
     watch: bool | None = None
 
-
-# the generated constructor's annotations as objects: namedtuple builds it in a namespace of its
-# own, where the module's postponed annotations (strings) cannot be resolved (pdoc reads them)
-Envelope.__new__.__annotations__ = {
-    "goal_id": str,
-    "request": PlanRequest,
-    "cancel_token": str | None,
-    "watch": bool | None,
-}
 
 #: the envelope's keys around a plan request's own fields
 _ENVELOPE_KEYS = frozenset(("schema", "goal_id", "cancel_token", "watch"))

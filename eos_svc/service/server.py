@@ -1,29 +1,15 @@
-"""The EOS planning service on Zenoh.
+"""The EOS planning service on Zenoh: :class:`PlanService`, one service instance.
 
-One :class:`PlanService` is one service instance. It declares, under its
-prefix ``P`` (see :mod:`eos_svc.service.protocol`):
+Under its prefix ``P`` (:mod:`eos_svc.service.protocol`) it declares a liveliness token
+``P/instance/<iid>``, a queryable ``P/plan/<iid>`` (a plan request in, exactly one reply out; a
+wildcard query reaching several instances is answered by the first of them by id, with an error
+naming the keys to use) and a queryable ``P/cancel/*``; it publishes every goal's messages
+(:mod:`~eos_svc.service.goal_stream`) while someone watches (:mod:`~eos_svc.service.goal_watchers`).
 
-- a liveliness token ``P/instance/<iid>`` (discovery);
-- a queryable ``P/plan/<iid>`` — a plan request in, exactly one reply out
-  (the result, or an error reply with a code, the field and the reason); a query
-  whose key is not exactly this one (``P/plan/*``) reaches every instance it
-  matches: of those, only the first by id answers, with an error naming the keys
-  to use (each instance follows the others' liveliness tokens);
-- a queryable ``P/cancel/*`` — cancel a queued or running goal by id, with the
-  goal's secret ``cancel_token``;
-
-and publishes every goal's messages (:mod:`eos_svc.service.goal_stream`) while someone
-watches (:mod:`eos_svc.service.goal_watchers`).
-
-Threads: the queryables' callbacks run in Zenoh's own thread and never block
-nor call Zenoh (see :func:`~eos_svc.service.session.direct_callback`): the plan
-callback decodes and validates the request and either queues it for the
-``workers`` worker threads that run the planner (at most ``workers +
-queue_size`` goals held, :class:`~eos_svc.service.goals.GoalTable`; past that a
-``busy`` error) or hands the refusal to a dispatcher thread, which sends the error
-reply (it also serves cancel). Every query on this instance's key ends in exactly
-one ``reply`` or ``reply_err`` and is dropped (a wildcard one another instance
-answers is only dropped).
+Threads: the queryables' callbacks run in Zenoh's thread and never block nor call Zenoh: the plan
+callback decodes and admits the request (at most ``workers + queue_size`` goals held, past that
+``busy``) and queues it for the worker threads, or hands the refusal to a dispatcher thread,
+which sends the error reply (and serves cancels). Every query ends in exactly one reply.
 """
 
 from __future__ import annotations
@@ -78,23 +64,18 @@ class PlanService:
     """A service instance on an open Zenoh session.
 
     Args:
-        session: the Zenoh session to serve on (not closed by :meth:`stop`
-            unless the service opened it, see :meth:`open`).
+        session: the Zenoh session (closed by :meth:`stop` only if :meth:`open` opened it).
         namespace: optional namespace under the versioned prefix.
         instance: this instance's id (default: ``<pid>-<random hex>``).
-        planner: ``plan(request, *, on_cycle, cancel) -> result`` with
-            ``result.to_dict()``; default the grasp planner (imported lazily).
+        planner: ``plan(request, *, on_cycle, cancel) -> result``; default the grasp planner.
         workers: threads running plans concurrently (≥ 1).
         queue_size: accepted plans waiting for a worker before ``busy`` (≥ 0).
         max_request_bytes: largest request payload accepted (bytes).
         max_deadline_s: the deadline of a goal whose request gives none or a longer one (s).
-        admission: called with every decoded request before it is queued; a
-            ``ValidationError`` it raises is an ``invalid_request`` reply naming the field.
-            Default: :func:`~eos_svc.world.admission.check_plannable` when the planner is
-            the grasp planner, none otherwise.
-        plugins: the plug-in agents this instance offers, by the name requests give them
-            (``PlanRequest.agents``; see :mod:`eos_svc.service.plugins`); a request naming another
-            is refused. Default: none.
+        admission: checks every decoded request before it is queued (a ``ValidationError`` is an
+            ``invalid_request`` naming the field); default: the grasp planner's
+            :func:`~eos_svc.world.admission.check_plannable`, none for another planner.
+        plugins: the plug-in agents requests may name (:mod:`eos_svc.service.plugins`); default none.
     """
 
     def __init__(
@@ -138,7 +119,6 @@ class PlanService:
         # bounded by admission: at most workers + queue_size goals active (running or waiting)
         self._jobs: queue.SimpleQueue[Goal | None] = queue.SimpleQueue()
         self._goals = GoalTable(workers + queue_size, self.instance)
-        self._lock = threading.Lock()
         self._threads: list[threading.Thread] = []
         self._entities: list[Any] = []
         self._peers = PeerInstances(self.prefix, self.instance)
@@ -189,20 +169,16 @@ class PlanService:
             )
         for t in self._threads:
             t.start()
-        # the other instances (their tokens): who answers a plan query that names no single instance
-        self._entities.append(
+        self._entities += [  # declared in this order
+            # the other instances (their tokens): who answers a plan query that names no single instance
             s.liveliness().declare_subscriber(
                 proto.instance_key(self.prefix), direct_callback(self._peers.on_token), history=True
-            )
-        )
-        self._entities.append(
-            s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True)
-        )
-        self._entities.append(
-            s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel))
-        )
-        # the token last: a client that sees it can use the queryables
-        self._entities.append(s.liveliness().declare_token(proto.instance_key(self.prefix, self.instance)))
+            ),
+            s.declare_queryable(self._plan_key, direct_callback(self._on_plan), complete=True),
+            s.declare_queryable(proto.cancel_key(self.prefix), direct_callback(self._on_cancel)),
+            # the token last: a client that sees it can use the queryables
+            s.liveliness().declare_token(proto.instance_key(self.prefix, self.instance)),
+        ]
         log.info("eos service %s serving under %s", self.instance, self.prefix)
         return self
 
@@ -235,11 +211,7 @@ class PlanService:
 
     # ------------------------------------------------------------------ Zenoh callbacks
     def _on_plan(self, query: zenoh.Query) -> None:
-        """In Zenoh's thread: decode and admit at once (pure Python: never blocks, never calls Zenoh).
-
-        An admitted plan goes straight to the workers' queue; a refusal goes to the dispatcher
-        thread, which sends the error reply.
-        """
+        """In Zenoh's thread: decode and admit at once; a refusal goes to the dispatcher."""
         self.stats.add(received=1)
         try:
             if str(query.key_expr) != self._plan_key_text:  # a wildcard: it reached every instance it names
@@ -277,17 +249,17 @@ class PlanService:
                 proto.E_TOO_LARGE, "request", f"{size} bytes > limit {self.max_request_bytes}"
             )
         try:
-            goal_id, request, token, watch = proto.decode_envelope(
+            env = proto.decode_envelope(
                 b"" if payload is None else payload.to_bytes(), self.max_request_bytes
             )
         except proto.RequestError as err:
             return err.with_traceback(None)  # no frames (and their copy of the payload) kept alive
         if self._admission is not None:
             try:
-                self._admission(request)
+                self._admission(env.request)
             except ValidationError as exc:  # the planner could not plan it: refused here, named
-                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, goal_id)
-        return Goal(query, goal_id, request, token, watch=watch)
+                return proto.RequestError(proto.E_INVALID, exc.field, exc.reason, env.goal_id)
+        return Goal(query, env.goal_id, env.request, env.cancel_token, watch=env.watch)
 
     # ------------------------------------------------------------------ dispatcher: refusals, cancels
     def _reply_err(self, query: zenoh.Query, err: proto.RequestError) -> None:
@@ -341,12 +313,9 @@ class PlanService:
                 log.warning("could not read whether anyone watches the goals", exc_info=True)
 
     def _cancel(self, query: zenoh.Query) -> None:
-        """Cancel a goal of this instance if the query carries the goal's cancel token.
-
-        Every instance answers: ``found`` false when it does not have the goal, a ``forbidden``
-        error when it has it and the token is missing or wrong (goal ids are public: anyone
-        subscribed to ``P/goal/*/status`` learns them; the token is the owner's secret).
-        """
+        """Cancel a goal of this instance if the query carries the goal's cancel token (else
+        ``forbidden``: goal ids are public, the token is the owner's secret); ``found`` false
+        when this instance does not have the goal."""
         # a watcher syncing with this instance (EosClient.watch) sends such a query after its
         # subscriber: counted from now on, before the answer lets it go on
         self._refresh_watchers()
@@ -457,8 +426,7 @@ class PlanService:
                 self._refresh_watchers()
 
     def _done_anyway(self, stream: GoalStream | None, **fields: Any) -> None:
-        """Close a goal that ended without a result (the planner refused it, or failed): ``done``
-        with ``fields``, published whether or not anyone watches (a rare path, kept simple)."""
+        """Publish ``done`` with ``fields`` for a goal that ended without a result, watched or not."""
         if stream is None:
             return
         try:

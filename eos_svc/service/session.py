@@ -29,17 +29,9 @@ def make_config(
     lease_ms: int | None = None,
     base: str | Path | None = None,
 ) -> zenoh.Config:
-    """A Zenoh configuration: a ``peer`` with multicast scouting off unless a file says otherwise.
-
-    Args:
-        mode: ``"peer"``, ``"client"`` or ``"router"`` (ignored when ``base`` is given).
-        listen: endpoints to listen on, e.g. ``"tcp/127.0.0.1:7447"``.
-        connect: endpoints to connect to.
-        lease_ms: transport lease (ms): a silent (frozen) peer is dropped after it;
-            Zenoh's default is 10 000.
-        base: a Zenoh JSON5 configuration file; ``listen``/``connect``/``lease_ms``
-            override its values when given.
-    """
+    """A Zenoh configuration: a ``mode`` session (``peer``, ``client``, ``router``) with multicast
+    scouting off, or the JSON5 file ``base``; ``listen``/``connect`` endpoints (e.g.
+    ``"tcp/127.0.0.1:7447"``) and ``lease_ms`` (ms: a silent peer is dropped after it) override it."""
     if base is not None:
         conf = zenoh.Config.from_file(str(base))
     else:
@@ -62,17 +54,9 @@ def loopback(port: int) -> str:
 
 
 def direct_callback(callback: Callable[[Any], None], drop: Callable[[], None] | None = None) -> Any:
-    """A Zenoh callback handler run directly in Zenoh's own thread.
-
-    Only for callbacks that never block and never call Zenoh — here they only
-    put into a ``queue.SimpleQueue`` drained by our own threads (zenoh-python
-    releases the GIL in its blocking calls, so a Zenoh thread waiting for the
-    GIL cannot deadlock with them). Why not the default (``indirect``)
-    callback: it runs in a Python thread of zenoh-python's — one is started
-    per query (≈ 1 ms each), and a process that exits with such an entity
-    still declared hangs at interpreter shutdown. ``indirect`` is marked
-    unstable in zenoh-python 1.x; without it the default handler is used.
-    """
+    """A Zenoh callback handler run directly in Zenoh's own thread, for callbacks that never
+    block nor call Zenoh (the default runs in a Python thread started per query, ≈ 1 ms each,
+    and hangs interpreter shutdown while declared; ``docs/service.md``, "Server")."""
     try:
         return zenoh.handlers.Callback(callback, drop, indirect=False)
     except TypeError:  # pragma: no cover - a zenoh-python without the option

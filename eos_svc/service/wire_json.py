@@ -1,16 +1,10 @@
-"""Strict JSON of the service's wire: one reader, two writers.
+"""Strict JSON of the service's wire (UTF-8, RFC 8259); pure (no Zenoh import).
 
-Everything on the wire is UTF-8 JSON (RFC 8259). What anyone may send the service (a plan or
-cancel request, a request file) is read strictly by :func:`loads_strict`: UTF-8 only (a leading
-UTF-8 byte-order mark is ignored; UTF-16/32 and invalid bytes such as encoded surrogates are
-refused), no NaN/Infinity, no duplicate keys in an object, no integer beyond ±2**64 (refused
-naming its field; such literals are never converted). What the service writes (replies, cycles,
-status) a client reads with :func:`loads_message` (msgspec: strict UTF-8, no NaN/Infinity; a
-repeated key keeps its last value). Written by :func:`dumps` (the stdlib's strict encoder:
-messages the service builds itself) or :func:`encode_result` (msgspec: a plan result or cycle
-record, non-finite floats as ``null``).
-
-This module is pure (no Zenoh import).
+What anyone may send the service is read by :func:`loads_strict`: UTF-8 only (a leading BOM
+ignored), no NaN/Infinity, no duplicate keys, no integer beyond ±2**64 (refused naming its field,
+never converted). What the service writes a client reads with :func:`loads_message` (msgspec).
+Written by :func:`dumps` (strict: the service's own messages) or :func:`encode_result` (msgspec:
+a plan result or cycle record, non-finite floats as ``null``).
 """
 
 from __future__ import annotations
@@ -53,8 +47,8 @@ class _HugeInt:
 
 
 def _parse_int(literal: str) -> Any:
-    """``int`` for literals up to 21 characters (all ≤ 2**64 need); longer ones are never converted
-    (Python refuses > 4,300 digits, and big ones cost quadratic time): a :class:`_HugeInt`."""
+    """``int`` for literals up to 21 characters (all ≤ 2**64 need); longer ones (never converted:
+    Python refuses > 4,300 digits, and big ones cost quadratic time) a :class:`_HugeInt`."""
     return int(literal) if len(literal) <= 21 else _HugeInt(literal)
 
 
@@ -130,8 +124,7 @@ def loads_strict(data: bytes | bytearray | str) -> Any:
 
 
 def loads_message(data: bytes) -> Any:
-    """Parse a message the service wrote (a reply, a cycle, a status) — msgspec, in C: strict
-    UTF-8, no NaN/Infinity, no trailing data. Raises ``ValueError`` (``msgspec.DecodeError``)."""
+    """Parse a message the service wrote (msgspec: strict UTF-8, no NaN/Infinity; ValueError)."""
     return msgspec.json.decode(data)
 
 
@@ -141,9 +134,8 @@ def dumps(obj: Any) -> bytes:
 
 
 def encode_result(obj: Any) -> bytes:
-    """A plan result or cycle record as compact JSON bytes (msgspec; non-finite floats become
-    ``null``); values msgspec cannot encode (NumPy scalars and arrays, objects with ``to_dict``)
-    go through :func:`~eos_svc.records.to_jsonable` first."""
+    """A plan result or cycle record as compact JSON (msgspec; non-finite floats ``null``; what
+    msgspec cannot encode, e.g. NumPy values, through :func:`~eos_svc.records.to_jsonable` first)."""
     try:
         return msgspec.json.encode(obj)
     except (TypeError, ValueError, OverflowError, msgspec.EncodeError):

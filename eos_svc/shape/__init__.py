@@ -1,14 +1,6 @@
-"""Knowing the object by touch: fit the object kinds to sensed contacts and choose one.
-
-- :mod:`~eos_svc.shape.touches`: the measurements (fingertip-centre contacts with sensed
-  normals, free-space samples) and their noise model.
-- :mod:`~eos_svc.shape.starts`: where each kind's fit starts.
-- :mod:`~eos_svc.shape.fit`: least-squares fit of one kind on its signed distance
-  (scipy.optimize.least_squares; the distances are the kinds' own, :mod:`eos_svc.objects`).
-- :mod:`~eos_svc.shape.selection`: fit every kind, posterior over kinds from BIC, the
-  calibrated confidence and the postulated object in the request's JSON form.
-- :mod:`~eos_svc.shape.probe_information`: the candidate postulates' predicted touches along
-  a probe's line, and the probes of largest expected information (active touch).
+"""Knowing the object by touch: the touches (:mod:`~eos_svc.shape.touches`), the fits' starts
+(:mod:`~eos_svc.shape.starts`), the least-squares fit of one kind (:mod:`~eos_svc.shape.fit`)
+and the choice of kind with its confidence (:mod:`~eos_svc.shape.selection`).
 """
 
 from eos_svc.shape.fit import ClassFit, fit_class

@@ -1,18 +1,7 @@
 """The fit's whitened residuals as one compiled loop (numba): the optional accelerator of
-:func:`eos_svc.shape.fit.whitened_residuals`.
-
-The same quantities as the numpy version — the parameters' geometry
-(:func:`~eos_svc.shape.fit.batch_geometry`), each kind's signed distance and gradient
-(:meth:`~eos_svc.objects.base.SurfaceObject.local_distance` of :mod:`eos_svc.objects`) and the
-whitening — written point by point, so that a fit's many small evaluations (a few parameter
-vectors at a few dozen touches) cost one call instead of a hundred small numpy operations.
-They agree with the numpy version to rounding (``tests/shape/test_compiled.py`` states the
-tolerance); which one runs changes how fast a fit is, not what it finds. The one difference
-of method: the ellipsoid's Newton iteration stops per point instead of per call (either stops
-at a step below 1e-12 relative, after which the root is exact to rounding).
-
-Imported only by :func:`eos_svc.shape.kernels.load` (numba is an optional dependency, the
-``fast`` extra); compiled on first load and cached on disk by numba.
+:func:`eos_svc.shape.fit.whitened_residuals`, the same quantities point by point (the
+ellipsoid's Newton iteration stops per point), equal to the numpy version to rounding
+(``tests/shape/test_compiled.py``). Imported only by :func:`eos_svc.shape.kernels.load`.
 """
 
 from __future__ import annotations
@@ -169,7 +158,7 @@ def residuals(
     """Whitened residuals (K, m) of K parameter vectors ``thetas`` (K, k) of the kind ``code``
     (:data:`eos_svc.shape.kernels.KIND_CODES`; its log sizes from index ``first``), each about
     its start orientation ``r0s`` (K, 3, 3), at the touches (``points``: the contacts' tip centres, then
-    the free samples'; the rest as :class:`eos_svc.shape.fit.FitData`)."""
+    the free samples'; the rest as :class:`eos_svc.shape.touches.Touches`)."""
     K, N = thetas.shape[0], points.shape[0]
     out = np.empty((K, 4 * count + N - count))
     half = np.empty(3)
@@ -199,13 +188,12 @@ def residuals(
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) :func:`residuals`: one call per kind."""
-    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX, FitData
+    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX
     from eos_svc.shape.kernels import KIND_CODES
     from eos_svc.shape.touches import Touches
 
     radii, free = np.full(3, 0.01), np.array([[0.0, 0.0, 0.2]])
     touches = Touches(np.eye(3) * 0.05, np.eye(3), radii, free, radii[:1])
-    data = FitData.of(touches)
     for kind, code in KIND_CODES.items():
         theta = np.zeros((1, N_PARAMS[kind]))
         theta[:, SIZE_INDEX[kind][0] :] = math.log(0.04)
@@ -215,12 +203,12 @@ def warm_up() -> None:
             theta,
             np.eye(3)[None],
             (-9.0, 0.0),
-            data.points,
-            data.count,
-            data.radii,
-            data.normals,
-            data.free_radii,
-            data.gap_offset,
-            data.sigma_distance,
-            data.sigma_normal,
+            touches.points,
+            touches.count,
+            touches.radii,
+            touches.normals,
+            touches.free_radii,
+            touches.gap_offset,
+            touches.sigma_distance,
+            touches.sigma_normal,
         )

@@ -1,24 +1,11 @@
-"""Least-squares fit of one object kind to the touches (scipy.optimize.least_squares).
+"""Least-squares fit of one object kind to the touches (scipy.optimize).
 
-Parameters per kind (sizes as logarithms, so they stay positive and their σ is relative):
-
-=========  ==================================================  ==
-kind       parameters                                          k
-=========  ==================================================  ==
-sphere     centre (3), log radius                               4
-ellipsoid  centre (3), rotation (3), log semi-axes (3)          9
-box        centre (3), rotation (3), log half sides (3)         9
-cylinder   centre (3), axis tilt (2), log radius, log half len  7
-capsule    centre (3), axis tilt (2), log radius, log half len  7
-=========  ==================================================  ==
-
-Rotations are local charts about a start orientation ``R0``: ``R = R0·exp([ω]×)`` for the
-kinds oriented by a rotation (box, ellipsoid); for those oriented by an axis (cylinder,
-capsule) the axis is ``R0·(α, β, 1)/‖·‖``. The residuals are the object kind's signed
-distance at the touches (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`),
-whitened by the touches' noise model (:class:`~eos_svc.shape.touches.Touches`), so χ² is a
-log-likelihood and the fit's covariance is ``(JᵀJ)⁻¹`` (inflated by χ²/dof when that exceeds
-1). Each kind is fitted from a few starts (:mod:`~eos_svc.shape.starts`) and the lowest χ² kept.
+Parameters: the centre (3), the orientation (none for a sphere; a rotation vector about a
+start orientation ``R0`` for a box or ellipsoid; an axis tilt ``R0·(α, β, 1)`` for a cylinder or
+capsule), then the log half sizes. The residuals are the kind's signed distance and gradient at
+the touches (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`), whitened by the noise
+model (:class:`~eos_svc.shape.touches.Touches`), so the covariance is ``(JᵀJ)⁻¹`` (inflated by
+χ²/dof above 1). Each kind is fitted from a few starts (:mod:`~eos_svc.shape.starts`).
 """
 
 from __future__ import annotations
@@ -56,7 +43,7 @@ _X, _Y = np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])
 
 
 def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Row-wise u × v of (K, 3) arrays."""
+    """Row-wise u × v of (K, 3) arrays (np.cross's axis handling costs more than the product)."""
     ux, uy, uz = u.T
     vx, vy, vz = v.T
     return np.stack([uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx], axis=1)
@@ -104,44 +91,14 @@ def batch_geometry(
     return thetas[:, :3], rotations, half
 
 
-@dataclass(frozen=True)
-class FitData:
-    """What the residuals need of the touches: the contacts' and free samples' tip centres
-    as one array of points (m), the radii (m), the sensed normals and the noise model."""
-
-    points: np.ndarray
-    count: int
-    radii: np.ndarray
-    normals: np.ndarray
-    free_radii: np.ndarray
-    gap_offset: float
-    sigma_distance: float
-    sigma_normal: float
-
-    @classmethod
-    def of(cls, touches: Touches) -> FitData:
-        """The fit data of ``touches``."""
-        return cls(
-            np.concatenate([touches.centres, touches.free]),
-            touches.count,
-            touches.radii,
-            touches.normals,
-            touches.free_radii,
-            touches.gap_offset,
-            touches.sigma_distance,
-            touches.sigma_normal,
-        )
-
-
-def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """Whitened residuals (K, m) of K parameter vectors: per contact the tip centre's distance
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
-    ``min(sd(f) − r, 0)/σ_d``. Computed by the compiled loop once it is loaded in this process
-    (:mod:`eos_svc.shape.kernels`, the one place that chooses), else by
-    :func:`numpy_residuals`; the two agree to rounding."""
+    ``min(sd(f) − r, 0)/σ_d``: by the compiled loop once loaded (:mod:`eos_svc.shape.kernels`),
+    else by :func:`numpy_residuals`."""
     compiled = kernels.compiled_residuals()
     if compiled is None or kind not in kernels.KIND_CODES:
-        return numpy_residuals(thetas, kind, r0, data)
+        return numpy_residuals(thetas, kind, r0, touches)
     thetas = np.ascontiguousarray(thetas, dtype=float)
     r0s = np.empty((len(thetas), 3, 3))
     r0s[:] = r0
@@ -151,35 +108,30 @@ def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitD
         thetas,
         r0s,
         LOG_SIZE_RANGE,
-        data.points,
-        data.count,
-        data.radii,
-        data.normals,
-        data.free_radii,
-        data.gap_offset,
-        data.sigma_distance,
-        data.sigma_normal,
+        touches.points,
+        touches.count,
+        touches.radii,
+        touches.normals,
+        touches.free_radii,
+        touches.gap_offset,
+        touches.sigma_distance,
+        touches.sigma_normal,
     )
     return out
 
 
-def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, data: FitData) -> np.ndarray:
+def numpy_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
     """:func:`whitened_residuals` in numpy, with the kinds' own distances
     (:meth:`~eos_svc.objects.base.SurfaceObject.local_distance`): the plain version."""
     centres, rotations, half = batch_geometry(kind, thetas, r0)
-    local = (data.points[None] - centres[:, None]) @ rotations
+    local = (touches.points[None] - centres[:, None]) @ rotations
     d, g = KINDS[kind].local_distance(local, half[:, None, :])
     g = g @ rotations.transpose(0, 2, 1)
-    n = data.count
-    r_d = (d[:, :n] - data.radii - data.gap_offset) / data.sigma_distance
-    r_n = ((g[:, :n] - data.normals) / data.sigma_normal).reshape(len(thetas), -1)
-    r_f = np.minimum(d[:, n:] - data.free_radii, 0.0) / data.sigma_distance
+    n, sigma = touches.count, touches.sigma_distance
+    r_d = (d[:, :n] - touches.radii - touches.gap_offset) / sigma
+    r_n = ((g[:, :n] - touches.normals) / touches.sigma_normal).reshape(len(thetas), -1)
+    r_f = np.minimum(d[:, n:] - touches.free_radii, 0.0) / sigma
     return np.concatenate([r_d, r_n, r_f], axis=1)
-
-
-def batch_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches) -> np.ndarray:
-    """:func:`whitened_residuals` of the touches."""
-    return whitened_residuals(thetas, kind, r0, FitData.of(touches))
 
 
 def residual_count(touches: Touches) -> int:
@@ -188,22 +140,13 @@ def residual_count(touches: Touches) -> int:
     return 4 * touches.count + len(touches.free)
 
 
-def object_from(kind: str, theta: np.ndarray, r0: np.ndarray) -> SurfaceObject:
-    """The object of parameters ``theta`` about start orientation ``r0``."""
-    centres, rotations, half = batch_geometry(kind, np.asarray(theta, dtype=float)[None], r0)
-    return KINDS[kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
-
-
 class Problem:
-    """One fit's residuals — one kind, one start orientation, one set of touches — and their
-    forward-difference Jacobian (forward, as MINPACK's: the box's and cylinder's distances
-    have kinks a central difference straddles). MINPACK asks for the Jacobian at every point
-    whose residuals it accepts, so both are evaluated together, the point and its k steps in
-    one batch, and every point evaluated is remembered (a refit from the same start finds its
-    first steps known)."""
+    """One fit's residuals (one kind, start orientation and set of touches) and their forward
+    difference Jacobian (the box's and cylinder's kinks defeat a central one), evaluated in one
+    batch and remembered per point: a refit from the same start finds its first steps known."""
 
-    def __init__(self, kind: str, r0: np.ndarray, data: FitData) -> None:
-        self.kind, self.r0, self.data = kind, r0, data
+    def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
+        self.kind, self.r0, self.touches = kind, r0, touches
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
 
     def evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -213,7 +156,7 @@ class Problem:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
             thetas = np.repeat(theta[None], len(theta) + 1, axis=0)  # θ, then θ + h_i e_i
             thetas[1:][np.diag_indices(len(theta))] += h
-            R = whitened_residuals(thetas, self.kind, self.r0, self.data)
+            R = whitened_residuals(thetas, self.kind, self.r0, self.touches)
             self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
         return self.known[key]
 
@@ -228,16 +171,9 @@ class Problem:
 
 @dataclass(frozen=True)
 class ClassFit:
-    """The best fit of one kind.
-
-    Attributes:
-        kind: the kind.
-        chi2: Σ of the squared whitened residuals at the optimum.
-        n_params: k.
-        covariance: (k, k) covariance of the parameters.
-        theta: the parameters; ``r0``: their start orientation.
-        start: which of the kind's starts the fit began from.
-    """
+    """The best fit of one kind: χ² (Σ of the squared whitened residuals at the optimum), its k
+    parameters ``theta`` about the start orientation ``r0`` with their (k, k) covariance, and the
+    index of the start it began from."""
 
     kind: str
     chi2: float
@@ -250,7 +186,8 @@ class ClassFit:
     @cached_property
     def geometry(self) -> SurfaceObject:
         """The fitted object (made when first asked for: a selection needs the chosen kind's)."""
-        return object_from(self.kind, self.theta, self.r0)
+        centres, rotations, half = batch_geometry(self.kind, self.theta[None], self.r0)
+        return KINDS[self.kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""
@@ -269,25 +206,24 @@ def explains(chi2: float, touches: Touches, kind: str) -> bool:
     return chi2 <= GOOD_FIT * max(residual_count(touches) - N_PARAMS[kind], 1)
 
 
-def nearest_order(kind: str, starts: ClassStarts, data: FitData) -> list[int]:
+def nearest_order(kind: str, starts: ClassStarts) -> list[int]:
     """Indices of ``kind``'s starts from the lowest χ² at the start itself (ties in order)."""
     candidates = starts.of(kind)
     if len(candidates) < 2:
         return list(range(len(candidates)))
     thetas = np.array([theta0 for theta0, _ in candidates])
     r0s = np.array([r0 for _, r0 in candidates])
-    chi2 = np.sum(whitened_residuals(thetas, kind, r0s, data) ** 2, axis=1)
+    chi2 = np.sum(whitened_residuals(thetas, kind, r0s, starts.touches) ** 2, axis=1)
     return sorted(range(len(candidates)), key=lambda i: float(chi2[i]))
 
 
 def _minimise(
     problem: Problem, theta0: np.ndarray, max_nfev: int, levenberg_marquardt: bool
 ) -> tuple[np.ndarray, np.ndarray]:
-    """(θ, whitened residuals at θ) minimising the residuals' squares from ``theta0`` in at most
-    ``max_nfev`` evaluations: Levenberg–Marquardt (MINPACK's ``lmder``, the Jacobian's own
-    scaling: what ``least_squares(method="lm", x_scale="jac")`` runs, called without its
-    per-evaluation wrappers) where there are at least as many residuals as parameters, else
-    the trust-region reflective method (``least_squares(method="trf")``)."""
+    """(θ, whitened residuals at θ) minimising their squares from ``theta0`` in at most
+    ``max_nfev`` evaluations: MINPACK's Levenberg–Marquardt (``leastsq``, what
+    ``least_squares(method="lm", x_scale="jac")`` runs) when ``levenberg_marquardt`` (at least
+    as many residuals as parameters), else ``least_squares(method="trf")``."""
     if levenberg_marquardt:
         theta, _, info, _, _ = leastsq(
             problem.residuals,
@@ -324,28 +260,22 @@ def fit_class(
     class_starts: ClassStarts | None = None,
     only: int | None = None,
 ) -> ClassFit:
-    """The least-squares fit of ``kind`` (the best of its starts).
-
-    ``hopeless``: a χ² above which the kind cannot compete with a kind already fitted: once a
-    start ends above it, the remaining starts are skipped. ``max_starts``: try at most that
-    many starts (all by default). ``nearest_first``: try the starts from the nearest to the
-    touches (:func:`nearest_order`). ``class_starts``: the touches' starts (shared by the
-    fits of several kinds to the same touches), else computed here; ``only``: fit from that
-    start alone. A start that :func:`explains` the touches ends the search (:func:`_minimise`
-    from each start)."""
+    """The least-squares fit of ``kind``, the best of its starts (:func:`_minimise` from each) up
+    to one that :func:`explains` the touches or ends above ``hopeless`` (χ²). ``max_starts``: at
+    most that many; ``nearest_first``: from the nearest (:func:`nearest_order`); ``class_starts``:
+    the touches' starts, shared by several kinds' fits; ``only``: that start alone."""
     if kind not in N_PARAMS:
         raise ValueError(f"unknown class {kind!r} (choose from {', '.join(N_PARAMS)})")
     k, m = N_PARAMS[kind], residual_count(touches)
     shared = ClassStarts(touches) if class_starts is None else class_starts
-    data = shared.fit_data(FitData.of)
     candidates = shared.of(kind)
-    order = nearest_order(kind, shared, data) if nearest_first else range(len(candidates))
+    order = nearest_order(kind, shared) if nearest_first else range(len(candidates))
     if only is not None:
         order = [only]
     best = None
     for index in list(order)[:max_starts]:
         theta0, r0 = candidates[index]
-        problem = shared.problem(kind, index, partial(Problem, kind, r0, data))
+        problem = shared.problem(kind, index, partial(Problem, kind, r0, touches))
         theta, fun = _minimise(problem, theta0, max_nfev, levenberg_marquardt=m >= k)
         chi2 = float(fun @ fun)
         if best is None or chi2 < best[0]:
@@ -400,7 +330,7 @@ def extent_ratios(fit: ClassFit, touches: Touches, step: float = 0.10) -> np.nda
             for side in (1.0, -1.0):
                 variants.append(face_moved(fit, n, factor, side, axis))
                 owners.append(n)
-    Rv = batch_residuals(np.array(variants), kind, fit.r0, touches)
+    Rv = whitened_residuals(np.array(variants), kind, fit.r0, touches)
     delta = np.maximum(np.sum(Rv * Rv, axis=1) - fit.chi2, 0.0)
     ratios = np.zeros(len(SIZE_INDEX[kind]))
     for n, d in zip(owners, delta, strict=True):

@@ -1,14 +1,7 @@
 """The one seam that chooses how the fit's residuals are computed: numpy (the default) or the
-compiled loop of :mod:`eos_svc.shape.compiled` once it is loaded in this process.
-
-The compiled residuals need numba (the optional ``fast`` extra, which ``dev`` includes).
-Loading them takes ≈ 1 s from numba's on-disk cache (≈ 10 s to compile on a new install) —
-more than one plan's whole fit — so nothing loads them implicitly: a process that keeps
-planning loads them once, before its first plan (:func:`load`: ``eos experiment``, the
-benchmarks) or while it starts serving (:func:`load_in_background`: the service). Until then,
-and wherever numba is missing, the fit runs in numpy. Both give the same residuals to rounding
-(``tests/shape/test_compiled.py``), so the choice changes how fast a fit runs, not what it
-finds.
+compiled loop of :mod:`eos_svc.shape.compiled` (numba, the ``fast`` extra) once :func:`load`
+has run in this process (≈ 1 s from numba's cache: the service, ``eos experiment``, the
+benchmarks load it; ``docs/objects.md``). Both agree to rounding (``tests/shape/test_compiled.py``).
 """
 
 from __future__ import annotations

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from eos_svc.objects import KINDS
-from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_residuals, face_moved, size_axis
+from eos_svc.shape.fit import SIZE_INDEX, ClassFit, face_moved, size_axis, whitened_residuals
 from eos_svc.shape.touches import Touches
 
 #: a face is open when moving it out by this fraction of its size changes χ² by less than
@@ -62,7 +62,7 @@ def open_faces(fit: ClassFit, touches: Touches) -> list[OpenFace]:
             faces.append((side * axis, float(geometry.half_sizes[n])))
     if not variants:
         return []
-    residuals = batch_residuals(np.array(variants), kind, fit.r0, touches)
+    residuals = whitened_residuals(np.array(variants), kind, fit.r0, touches)
     delta = np.sum(residuals * residuals, axis=1) - fit.chi2
     centre = np.asarray(geometry.placement.translation, dtype=float)
     out = []

@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 
 from eos_svc.objects import FITTED_KINDS as KINDS
-from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry, batch_residuals, face_moved, size_axis
+from eos_svc.shape.fit import SIZE_INDEX, ClassFit, batch_geometry, face_moved, size_axis, whitened_residuals
 from eos_svc.shape.selection import Postulate
 from eos_svc.shape.touches import Touches
 
@@ -148,7 +148,7 @@ def reaches_of(fit: ClassFit, touches: Touches) -> tuple[np.ndarray, np.ndarray]
     if not variants:
         return np.zeros((0, len(fit.theta))), np.zeros(0)
     thetas = np.array(variants)
-    residuals = batch_residuals(thetas, fit.kind, fit.r0, touches)
+    residuals = whitened_residuals(thetas, fit.kind, fit.r0, touches)
     weights = np.exp(-0.5 * np.maximum(np.sum(residuals * residuals, axis=1) - fit.chi2, 0.0))
     keep = weights >= MIN_REACH_WEIGHT
     return thetas[keep], weights[keep]

@@ -1,23 +1,10 @@
-"""Choose the class by model evidence and state how sure we are.
+"""Choose the class by model evidence and state how sure we are (``docs/planner.md``).
 
-Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`); its Bayesian information
-criterion ``BIC = χ² + k·ln m`` (m whitened contact residuals) approximates −2 log of its
-evidence, so with equal priors the posterior is ``P(class) ∝ exp(−BIC/2)``. Once one class
-explains the touches, a class far worse than it (χ² beyond :data:`HOPELESS`, posterior 0) is
-only fitted for a few iterations; when the sphere, fitted first, does not explain them, a
-brief fit of each other class from its nearest start (:func:`screen`) decides which is
-fitted in full next, so that the others need not be.
-
-The **confidence** of the postulate is the probability that the class is right *and* the
-object's size and centre are within tolerance: ``P(class) · Π erf(tol/(√2·σ))`` over the
-fitted sizes (relative tolerance :data:`SIZE_TOLERANCE`) and centre coordinates (tolerance
-``SIZE_TOLERANCE`` × the mean half size), with σ from the fit's covariance — a direction
-the touches do not constrain (a box's unseen back) has a large σ and drags the confidence
-down. A best fit far worse than the noise model allows (:func:`fit_probability`) drags it
-down too. ``eos experiment recognition`` checks that it is calibrated.
-
-A **plane** is postulated when every sensed normal lies within :data:`PLANE_ANGLE` of their
-mean: a single face, too large for the probes to bound; it has no object.
+Every class is fitted (:func:`~eos_svc.shape.fit.fit_class`, a class far worse than the best
+only briefly); with equal priors ``P(class) ∝ exp(−BIC/2)``, ``BIC = χ² + k·ln m``. The
+**confidence** is P(class right and sizes and centre within :data:`SIZE_TOLERANCE`) from the
+fit's covariance, lowered by faces no touch bounds and by a best fit worse than the noise
+allows. A **plane**: every sensed normal within :data:`PLANE_ANGLE` of their mean.
 """
 
 from __future__ import annotations
@@ -33,7 +20,7 @@ from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
-from eos_svc.shape.starts import ClassStarts
+from eos_svc.shape.starts import ClassStarts, frame_with_z
 from eos_svc.shape.touches import Touches
 
 #: the classes fitted, in the order ties are broken
@@ -57,15 +44,9 @@ MIN_CONTACTS = 4
 
 @dataclass(frozen=True)
 class Postulate:
-    """The chosen class, its confidence and the object, with the evidence behind them.
-
-    Attributes:
-        kind: sphere, ellipsoid, cylinder, capsule, box or plane.
-        confidence: P(class right and size within tolerance).
-        probabilities: posterior of every class fitted.
-        fits: the class fits (empty for a plane).
-        contacts: number of contacts used.
-    """
+    """The chosen class (a fitted kind or ``plane``), its confidence (P(class right and size
+    within tolerance)), every class's posterior and fit (none for a plane), and the contacts
+    used."""
 
     kind: str
     confidence: float
@@ -99,20 +80,13 @@ class Postulate:
         return out
 
 
-def _signed_permutations() -> list[np.ndarray]:
-    """The 24 proper rotations that permute and flip the coordinate axes."""
-    out = []
-    for perm in itertools.permutations(range(3)):
-        for signs in itertools.product((1.0, -1.0), repeat=3):
-            P = np.zeros((3, 3))
-            for col, (row, sign) in enumerate(zip(perm, signs, strict=True)):
-                P[row, col] = sign
-            if np.linalg.det(P) > 0:
-                out.append(P)
-    return out
-
-
-_SYMMETRIES = _signed_permutations()
+#: the 24 proper rotations that permute and flip the coordinate axes
+_SYMMETRIES = [
+    P
+    for perm in itertools.permutations(range(3))
+    for signs in itertools.product((1.0, -1.0), repeat=3)
+    if np.linalg.det(P := np.eye(3)[:, list(perm)] * np.array(signs)) > 0
+]
 
 
 def canonical_pose(
@@ -133,10 +107,7 @@ def canonical_pose(
         level = abs(z[2]) < 1e-6
         if (not level and z[2] < 0.0) or (level and z[int(np.argmax(np.abs(z)))] < 0.0):
             z = -z
-        ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        x = ref - (ref @ z) * z
-        x /= np.linalg.norm(x)
-        return np.column_stack([x, np.cross(z, x), z]), sizes
+        return frame_with_z(z), sizes
     return np.eye(3), sizes
 
 
@@ -180,35 +151,21 @@ def tolerance_probability(
     return p_size * p_centre
 
 
-def is_plane(touches: Touches) -> bool:
-    """Every sensed normal within PLANE_ANGLE of their mean."""
-    mean = touches.normals.mean(axis=0)
-    norm = float(np.linalg.norm(mean))
-    if norm < 1e-9:
-        return False
-    cos = touches.normals @ (mean / norm)
-    return bool(np.all(cos >= math.cos(PLANE_ANGLE)))
-
-
 def select_class(
     touches: Touches,
     classes: tuple[str, ...] = CLASSES,
     warm: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
 ) -> Postulate:
-    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors).
-
-    ``warm``: per class, an earlier fit's (θ, R0) on fewer of the same touches (post_shape's
-    previous candidates). Each is refitted from there first; one that then :func:`explains`
-    the touches is kept without trying the class's cold starts (an optimum moved by a few new
-    contacts); for the others the class's cold starts run, the warm start among them.
-
-    Raises:
-        ValueError: fewer than MIN_CONTACTS contacts.
-    """
+    """Fit every class to ``touches`` and choose by posterior (BIC, equal priors); ValueError
+    below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
+    same touches, refitted first: one that then :func:`explains` the touches is kept without the
+    class's cold starts."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
-    if is_plane(touches):
-        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)
+    mean = touches.normals.mean(axis=0)
+    norm = float(np.linalg.norm(mean))
+    if norm >= 1e-9 and np.all(touches.normals @ (mean / norm) >= math.cos(PLANE_ANGLE)):
+        return Postulate("plane", 0.0, {"plane": 1.0}, {}, touches.count)  # one face, no object
     m = 3 * touches.count
     fits: dict[str, ClassFit] = {}
     screened: dict[str, ClassFit] = {}
@@ -221,12 +178,14 @@ def select_class(
     if classes[0] not in fits:
         fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
-        # the first class does not explain the touches: the others, each from its nearest
-        # start, briefly (:func:`screen`), are then fitted from the likeliest, so that once one
-        # explains the touches the rest are shown hopeless against it in a few iterations
-        # instead of being fitted in full before it. The order decides which fit shows a class
-        # hopeless, not the postulate: its posterior is 0 either way.
-        screened = screen(touches, tuple(k for k in classes[1:] if k not in fits), shared)
+        # the first class does not explain the touches: the others, each fitted briefly from its
+        # nearest start (a screening), are fitted from the likeliest, so that once one explains
+        # the touches the rest are shown hopeless against it in a few iterations
+        screened = {
+            k: fit_class(k, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
+            for k in classes[1:]
+            if k not in fits
+        }
     rest = tuple(k for k in classes[1:] if k not in fits)
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
@@ -236,11 +195,20 @@ def select_class(
         if best > GOOD_FIT * m:  # no class explains the touches yet: every class gets every start
             fits[kind] = fit_class(kind, touches, class_starts=shared)
             continue
-        quick = quick_fit(kind, touches, best + HOPELESS, screened.get(kind), shared)
-        if quick.chi2 > best + HOPELESS or quick.chi2 <= GOOD_FIT * m:
+        hopeless = best + HOPELESS
+        # a screening fit from the class's first start is the quick fit when it is hopeless,
+        # explains the touches, or the class has one start
+        quick = screened.get(kind)
+        if (
+            quick is None
+            or quick.start != 0
+            or not (quick.chi2 > hopeless or explains(quick.chi2, touches, kind) or len(shared.of(kind)) == 1)
+        ):
+            quick = fit_class(kind, touches, QUICK_NFEV, hopeless, class_starts=shared)
+        if quick.chi2 > hopeless or quick.chi2 <= GOOD_FIT * m:
             fits[kind] = quick  # hopeless, or already explaining the touches as well as the noise allows
             continue
-        fits[kind] = fit_class(kind, touches, hopeless=best + HOPELESS, class_starts=shared)
+        fits[kind] = fit_class(kind, touches, hopeless=hopeless, class_starts=shared)
     best_kind = min(fits, key=lambda k: fits[k].chi2)
     for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
         if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
@@ -275,9 +243,8 @@ def siblings(kind: str, classes: tuple[str, ...]) -> list[str]:
 
 def sibling_start(fit: ClassFit, kind: str) -> tuple[np.ndarray, np.ndarray]:
     """A start ``(theta0, r0)`` of ``kind`` (a :func:`siblings` of the fit's) at the fitted
-    object's centre and orientation with its extents: the same half sizes, except along an
-    axis-oriented kind's axis, where the half length is set so the extent matches (a capsule's
-    caps reach one radius past its straight part)."""
+    object's centre, orientation and extents (an axis-oriented kind's half length set so the
+    extent along the axis matches: a capsule's caps reach one radius past its straight part)."""
     g = fit.geometry
     half = np.array(g.half_sizes, dtype=float)
     if KINDS[kind].orientation == "axis":
@@ -289,47 +256,9 @@ def sibling_start(fit: ClassFit, kind: str) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate([g.centre, orientation, np.log(half)]), np.array(g.rotation)
 
 
-def screen(
-    touches: Touches, classes: tuple[str, ...], class_starts: ClassStarts | None = None
-) -> dict[str, ClassFit]:
-    """Each class fitted from its nearest start (:func:`~eos_svc.shape.fit.nearest_order`)
-    for QUICK_NFEV evaluations: which class to fit in full first (the lowest χ²).
-    ``class_starts``: the touches' starts, if already at hand."""
-    shared = ClassStarts(touches) if class_starts is None else class_starts
-    return {
-        kind: fit_class(kind, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
-        for kind in classes
-    }
-
-
-def quick_fit(
-    kind: str,
-    touches: Touches,
-    hopeless: float,
-    screened: ClassFit | None = None,
-    class_starts: ClassStarts | None = None,
-) -> ClassFit:
-    """``fit_class(kind, touches, QUICK_NFEV, hopeless)``. A screening fit (:func:`screen`)
-    from the class's first start *is* that fit when it is above ``hopeless``, explains the
-    touches, or the class has one start (see :func:`~eos_svc.shape.fit.fit_class`): it is
-    reused then. ``class_starts``: the touches' starts, if already at hand."""
-    shared = ClassStarts(touches) if class_starts is None else class_starts
-    if screened is None or screened.start != 0:
-        return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
-    if screened.chi2 > hopeless or explains(screened.chi2, touches, kind) or len(shared.of(kind)) == 1:
-        return screened
-    return fit_class(kind, touches, max_nfev=QUICK_NFEV, hopeless=hopeless, class_starts=shared)
-
-
 def fit_probability(fit: ClassFit, m: int) -> float:
     """How plausible the best fit's χ² is under the noise model, taken FIT_SLACK times
     looser: ``P(χ²_dof·FIT_SLACK ≥ χ²)``. ≈ 1 for a class that fits the touches, → 0 when
     even the best class misses them (an object none of the classes describes)."""
-    dof = max(m - fit.n_params, 1)
-    return chi2_survival(fit.chi2 / FIT_SLACK, dof)
-
-
-def chi2_survival(x: float, dof: int) -> float:
-    """``scipy.stats.chi2.sf(x, dof)`` — the same function, ``scipy.special.chdtrc``, without
-    the distribution object's argument handling (≈ 30× its cost): 1 at and below 0."""
-    return 1.0 if x <= 0.0 else float(special.chdtrc(dof, x))
+    x = fit.chi2 / FIT_SLACK  # scipy.stats.chi2.sf(x, dof) without the distribution object
+    return 1.0 if x <= 0.0 else float(special.chdtrc(max(m - fit.n_params, 1), x))

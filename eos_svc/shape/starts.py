@@ -1,10 +1,6 @@
-"""Where each kind's fit starts: parameters and orientations from the touches.
-
-The sphere's centre is the point nearest the normal lines, the mean distance its radius; the
-ellipsoid is centred there too, about the normals' scatter axes and the world axes; the box
-about frames of orthogonal groups of normals, the world axes and the scatter axes, centred
-mid-bounds; the cylinder and the capsule along each distinct scatter and world axis. The
-parameter layout is :mod:`~eos_svc.shape.fit`'s.
+"""Where each kind's fit starts: parameters and orientations from the touches (the sphere at the
+point nearest the normal lines; the others about the normals' scatter axes, groups of normals
+and the world axes). The parameter layout is :mod:`~eos_svc.shape.fit`'s.
 """
 
 from __future__ import annotations
@@ -33,7 +29,7 @@ def columns(x: np.ndarray, y: np.ndarray, z: np.ndarray) -> np.ndarray:
 
 
 def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """u × v of 3-vectors (np.cross's axis handling costs ten times the product here)."""
+    """u × v of 3-vectors (np.cross's axis handling costs thirty times the product here)."""
     (u0, u1, u2), (v0, v1, v2) = u.tolist(), v.tolist()
     return np.array([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0])
 
@@ -108,11 +104,9 @@ def distinct(axes: list[np.ndarray], angle: float = GROUP_ANGLE) -> list[np.ndar
 
 
 class ClassStarts:
-    """Every kind's start parameters and orientations ``(theta0, r0)`` from one set of touches,
-    each kind's computed on first use, and the pieces several kinds share (the scatter axes,
-    the normal lines' nearest point, the axial frames) once for all of them. It also keeps,
-    for the fits of one selection, the touches' fit data and each start's least-squares
-    problem (:class:`~eos_svc.shape.fit.Problem`, which remembers the points it evaluated)."""
+    """Every kind's starts ``(theta0, r0)`` from one set of touches (each kind's on first use;
+    the pieces kinds share once), and, for the fits of one selection, each start's
+    least-squares problem (:class:`~eos_svc.shape.fit.Problem`)."""
 
     def __init__(self, touches: Touches) -> None:
         self.touches = touches
@@ -120,13 +114,6 @@ class ClassStarts:
         self.surface, self.mid = S, 0.5 * (S.min(axis=0) + S.max(axis=0))
         self._of: dict[str, list[tuple[np.ndarray, np.ndarray]]] = {}
         self._problems: dict[tuple[str, int], Any] = {}
-        self._fit_data: Any = None
-
-    def fit_data(self, make: Callable[[Touches], Any]) -> Any:
-        """The touches' fit data, made by ``make`` on first use."""
-        if self._fit_data is None:
-            self._fit_data = make(self.touches)
-        return self._fit_data
 
     def problem(self, kind: str, index: int, make: Callable[[], Any]) -> Any:
         """The least-squares problem of ``kind`` from its start ``index``, made by ``make`` on

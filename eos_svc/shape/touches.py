@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
@@ -29,7 +30,7 @@ MIN_DISTANCE_SIGMA = 2e-5
 
 @dataclass
 class Touches:
-    """Contacts and free-space samples in world coordinates (m).
+    """Contacts and free-space samples in world coordinates (m), not changed once made.
 
     Attributes:
         centres: (N, 3) fingertip-sphere centres at the contacts.
@@ -74,33 +75,25 @@ class Touches:
         out: np.ndarray = self.centres - self.radii[:, None] * self.normals
         return out
 
-    @property
+    @cached_property
+    def points(self) -> np.ndarray:
+        """The contacts' tip centres, then the free samples', (N + M, 3) (the fit's points)."""
+        return np.concatenate([self.centres, self.free])
+
+    @cached_property
     def sigma_distance(self) -> float:
         """σ of the tip-centre distance residual (m): the gap's spread at first touch, and the
         reported tip centre's own error (:attr:`kinematic_sigma`) when there is one."""
         gap = max(self.contact_tolerance / math.sqrt(12.0), MIN_DISTANCE_SIGMA)
         return gap if self.kinematic_sigma == 0.0 else math.hypot(gap, self.kinematic_sigma)
 
-    @property
+    @cached_property
     def gap_offset(self) -> float:
         """Mean gap at first touch (m)."""
         return 0.5 * self.contact_tolerance
 
-    @property
+    @cached_property
     def sigma_normal(self) -> float:
         """σ of each normal component (rad)."""
         r = float(np.mean(self.radii)) if len(self.radii) else 0.01
         return max(self.tactile_noise / r, MIN_NORMAL_SIGMA)
-
-    def merged(self, other: Touches) -> Touches:
-        """These touches and ``other``'s (noise model of ``self``)."""
-        return Touches(
-            np.vstack([self.centres, other.centres]),
-            np.vstack([self.normals, other.normals]),
-            np.concatenate([self.radii, other.radii]),
-            np.vstack([self.free, other.free]),
-            np.concatenate([self.free_radii, other.free_radii]),
-            self.tactile_noise,
-            self.contact_tolerance,
-            self.kinematic_sigma,
-        )

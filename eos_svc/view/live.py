@@ -1,17 +1,12 @@
 """A live 3-D view of plans: a Drake MeshCat page on localhost that follows the cycles.
 
-    view = LiveView()                      # prints nothing; view.url is the page
+    view = LiveView()                      # view.url is the page
     view.start(request)                    # the object, the hand at its start
     result = plan(request, on_cycle=view.cycle)
     view.finish(result.to_dict())          # final grasp, contacts, and the whole plan animated
 
-``eos plan --view`` feeds it from the planner; ``eos client watch --view`` from the service's
-cycle stream over Zenoh (:class:`StreamView`), so a remote plan can be watched.
-
-While no browser is connected a cycle only keeps what the final animation needs; with one, the
-hand is re-posed at most :data:`MAX_UPDATES_PER_S` times a second. Every MeshCat call happens in
-the thread that made the view (Drake's Meshcat requires it): :class:`StreamView` queues the
-messages Zenoh delivers and draws them in :meth:`StreamView.pump`.
+``eos plan --view`` feeds it from the planner, ``eos client watch --view`` from the service's
+messages (:class:`StreamView`, which queues them: every MeshCat call happens in the view's thread).
 """
 
 from __future__ import annotations
@@ -69,27 +64,12 @@ def light_record(record: Any) -> dict[str, Any]:
     }
 
 
-def cycle_label(record: Mapping[str, Any]) -> str:
-    """One line about a cycle: number, stage, chosen agent, outcome."""
-    return (
-        f"cycle {record.get('seq')} {record.get('stage')}: "
-        f"{record.get('chosen') or '-'} [{record.get('outcome') or '-'}]"
-    )
-
-
 class LiveView:
     """A MeshCat server showing one plan at a time, updated cycle by cycle.
 
-    Args:
-        hand: the hand planned with (default hand3x3).
-        port: TCP port of the page (default: Drake's choice, the first free one of 7000–7099).
-        host: interface to listen on (default localhost only).
-
-    Attributes:
-        url: the page's address.
-        cycles_seen: cycles given to :meth:`cycle` since :meth:`start`.
-        updates_sent: hand poses sent to connected browsers since :meth:`start`.
-        q: the hand's latest configuration (property).
+    Serves ``url`` on ``host`` (``port`` None: the first free one of 7000–7099) for ``hand``
+    (default hand3x3). Counts since :meth:`start`: ``cycles_seen``, ``updates_sent`` (hand poses
+    sent to connected browsers, at most :data:`MAX_UPDATES_PER_S` a second).
     """
 
     def __init__(
@@ -115,13 +95,8 @@ class LiveView:
 
     # --- what a plan does to the view ----------------------------------------------------------
     def start(self, request: PlanRequest | Mapping[str, Any] | None = None) -> None:
-        """Show a new plan: the hand at its start, no contacts or postulate, and its object
-        (when the request is known; else from :meth:`show_object` or the result later).
-
-        Raises:
-            ValidationError: the request is not a valid plan request (the view is reset, with
-                no object).
-        """
+        """Show a new plan: the hand at its start, no contacts or postulate, its object when the
+        request is given (ValidationError when it is not valid: the view stays reset)."""
         mc = self.meshcat
         mc.Delete(CONTACTS)
         mc.Delete(POSTULATE)
@@ -141,11 +116,7 @@ class LiveView:
             self.show_object(request)
 
     def show_object(self, request: PlanRequest | Mapping[str, Any]) -> None:
-        """Draw the plan's object and look at it.
-
-        Raises:
-            ValidationError: the request is not a valid plan request.
-        """
+        """Draw the plan's object and look at it (ValidationError: not a valid request)."""
         req = request if isinstance(request, PlanRequest) else PlanRequest.from_dict(dict(request))
         self.request = req
         add_object(self.meshcat, OBJECT, req.obj, OBJECT_RGBA)
@@ -205,7 +176,9 @@ class LiveView:
     def _push(self, light: Mapping[str, Any]) -> None:
         self.drawing.pose_in(self.meshcat, self.q)
         self._draw_postulate()
-        self._show_label(cycle_label(light))
+        self._show_label(
+            f"cycle {light['seq']} {light['stage']}: {light['chosen'] or '-'} [{light['outcome'] or '-'}]"
+        )
         self.updates_sent += 1
 
     def _draw_postulate(self) -> None:

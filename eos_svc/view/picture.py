@@ -1,13 +1,7 @@
-"""Pictures of a final grasp: the hand's collision geometry, the object, the contacts.
-
-    from eos_svc.agents import plan
-    from eos_svc.view.picture import draw_result
-    draw_result(plan(), "grasp.png")
-
-One figure: a 3-D view and three orthographic views (top x–y, side x–z, front y–z) in mm. Every
-primitive is convex: drawn as the convex hull of points on its surface, in the orthographic views
-as the outline of their projection, back to front. Each touching contact is a red dot with an
-arrow along the force direction (into the object). Uses matplotlib's Agg canvas directly.
+"""Pictures of a final grasp (``draw_result(plan(), "grasp.png")``): a 3-D view and three
+orthographic views in mm of the hand's collision geometry, the object and the contacts (a red dot
+and an arrow into the object). Every primitive is drawn as the convex hull of points on its
+surface, in the orthographic views as the outline of their projection, back to front.
 """
 
 from __future__ import annotations
@@ -101,11 +95,8 @@ def bounding_box_mesh(shape: coal.CollisionGeometry) -> list[np.ndarray]:
 
 
 def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) -> list[Solid]:
-    """Every solid to draw: (name, world polygons in m, colour, alpha), object first.
-
-    Fingertips are coloured per finger (in the hand's finger order), palms darker; a
-    geometry that is not a primitive is drawn as its local bounding box.
-    """
+    """Every solid to draw: (name, world polygons in m, colour, alpha), object first; a hand
+    geometry that is not a primitive is drawn as its local bounding box."""
     hand = hand or default_hand()
     obj = make_object(request.obj)
     placed = obj.placement
@@ -202,11 +193,7 @@ def draw_grasp(
     title: str = "",
     hand: HandModel | None = None,
 ) -> Path:
-    """Draw the hand at ``q``, the request's object and the touching ``contacts`` to ``path`` (PNG).
-
-    Returns:
-        the path written.
-    """
+    """Draw the hand at ``q``, the request's object and the touching ``contacts`` to ``path`` (PNG)."""
     solids = scene_solids(q, request, hand)
     touches = touching_contacts(contacts)
     allpts = np.vstack([np.vstack(polys) for _, polys, _, _ in solids]) * MM
@@ -243,12 +230,8 @@ def result_title(result: Mapping[str, Any]) -> str:
 
 
 def draw_result(result: Any, path: str | Path, hand: HandModel | None = None) -> Path:
-    """Draw a plan's final grasp from a :class:`~eos_svc.agents.PlanResult` or its JSON form.
-
-    Raises:
-        ValueError: the result holds no final hand configuration (the end agent never
-            judged the grasp, or the trace was not kept).
-    """
+    """Draw a plan's final grasp from a :class:`~eos_svc.agents.PlanResult` or its JSON form
+    (ValidationError when it has no final hand configuration)."""
     data = result.to_dict() if hasattr(result, "to_dict") else dict(result)
     q = data.get("q_final")
     if q is None:

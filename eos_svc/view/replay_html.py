@@ -55,12 +55,8 @@ def _same(a: Any, b: Any) -> bool:
 
 
 def animate_hand(anim: MeshcatAnimation, drawing: HandDrawing, timeline: Timeline) -> int:
-    """Put the hand's keyframes in ``anim``: a key per part only where its pose changes, plus
-    a hold key where it starts moving after a rest (so it does not drift across the rest).
-
-    Returns:
-        the number of transform keys written.
-    """
+    """Put the hand's keyframes in ``anim``: a key per part only where its pose changes, plus a
+    hold key where it starts moving after a rest (no drift across it); returns the keys written."""
     paths = [p.path for p in drawing.parts]
     last: list[tuple[int, Any] | None] = [None] * len(paths)
     prev_frame = -1
@@ -132,14 +128,8 @@ def _result_text(request: PlanRequest, result: Mapping[str, Any] | None) -> str:
 
 @dataclass
 class PlanScene:
-    """A plan drawn and animated in a MeshCat instance (before it is written as a page).
-
-    Attributes:
-        meshcat: the instance holding the scene and the animation.
-        timeline: the plan's timeline.
-        info: what the page's panel shows (title, duration, one entry per cycle).
-        postulates: postulated objects drawn; contacts: touching contacts drawn.
-    """
+    """A plan drawn and animated in ``meshcat``: its ``timeline``, what the page's panel shows
+    (``info``: title, duration, one entry per cycle), how many postulates and contacts were drawn."""
 
     meshcat: Meshcat
     timeline: Timeline
@@ -154,18 +144,9 @@ def plan_scene(
     result: Mapping[str, Any] | None = None,
     hand: HandModel | None = None,
 ) -> PlanScene:
-    """Draw and animate a plan in a new MeshCat instance.
-
-    Args:
-        request: the plan request (JSON form or :class:`PlanRequest`).
-        records: the cycle records in their JSON form, in order.
-        result: the plan result's JSON form (its ``contacts`` and ``friction`` are drawn), or
-            None (the contacts come from the end agent's verdict in the records, if any).
-        hand: the hand planned with (default hand3x3).
-
-    Raises:
-        ValidationError: the request is not a valid plan request.
-    """
+    """Draw and animate a plan (its request, its cycle records' JSON form in order, its result's
+    JSON form or None: then the contacts of the end agent's verdict) in a new MeshCat instance;
+    ``hand`` default hand3x3. Raises ValidationError for a request that is not valid."""
     req = request if isinstance(request, PlanRequest) else PlanRequest.from_dict(dict(request))
     hand = hand or default_hand()
     records = list(records)
@@ -203,17 +184,13 @@ def plan_page(
     result: Mapping[str, Any] | None = None,
     hand: HandModel | None = None,
 ) -> str:
-    """The self-contained HTML page of a plan (arguments as :func:`plan_scene`)."""
+    """The self-contained HTML page of a plan (arguments as :func:`plan_scene`): MeshCat's static
+    page with the plan panel (``panel.html``, ``panel.js`` beside this module, the plan's JSON)."""
     scene = plan_scene(request, records, result, hand)
-    return inject_panel(scene.meshcat.StaticHtml(), scene.info)
-
-
-def inject_panel(page: str, info: Mapping[str, Any]) -> str:
-    """``page`` with the plan panel (``panel.html``, ``panel.js`` beside this module, and the
-    plan's JSON) before ``</body>``."""
-    data = json.dumps(info, allow_nan=False).replace("</", "<\\/")
+    page = scene.meshcat.StaticHtml()
+    data = json.dumps(scene.info, allow_nan=False).replace("</", "<\\/")
     here = resources.files("eos_svc.view")
-    title = html.escape(str(info.get("title", "")))
+    title = html.escape(str(scene.info["title"]))
     panel = (
         "\n"
         + here.joinpath("panel.html").read_text(encoding="utf-8").replace("@TITLE@", title)
@@ -221,8 +198,6 @@ def inject_panel(page: str, info: Mapping[str, Any]) -> str:
         + f"<script>\n{here.joinpath('panel.js').read_text(encoding='utf-8')}</script>\n"
     )
     at = page.rfind("</body>")
-    if at < 0:
-        raise ValueError("not a MeshCat page: no </body>")
     return page[:at] + panel + page[at:]
 
 
@@ -233,22 +208,14 @@ def write_plan_html(
     result: Mapping[str, Any] | None = None,
     hand: HandModel | None = None,
 ) -> Path:
-    """Write :func:`plan_page` to ``path`` (UTF-8); returns the path.
-
-    Raises:
-        OSError: the file cannot be written.
-    """
+    """Write :func:`plan_page` to ``path`` (UTF-8; OSError when it cannot); returns the path."""
     out = Path(path)
     out.write_text(plan_page(request, records, result, hand), encoding="utf-8")
     return out
 
 
 def write_result_html(result: Any, path: str | Path, hand: HandModel | None = None) -> Path:
-    """Write the page of a :class:`~eos_svc.agents.PlanResult` (its trace must be kept).
-
-    Raises:
-        ValueError: the result has no trace (planned with ``keep_trace=False``).
-    """
+    """Write the page of a :class:`~eos_svc.agents.PlanResult` (ValueError: it kept no trace)."""
     trace: Sequence[Any] = result.trace
     if not trace and result.cycles:
         raise ValueError("the result holds no trace: plan with keep_trace=True to draw it")

@@ -1,8 +1,6 @@
-"""What a plan's 3-D view draws in Drake's MeshCat (world frame, z up, metres): the hand's
-collision geometries at a configuration, the object, the postulated object and the contacts
-with their force lines and friction cones (``docs/view.md``, "What is drawn"). Shared by the
-replay page (:mod:`eos_svc.view.replay_html`) and the live view (:mod:`eos_svc.view.live`);
-its colours also paint the PNG pictures (:mod:`eos_svc.view.picture`).
+"""What a plan's 3-D view draws in Drake's MeshCat (world frame, z up, m): the hand, the object,
+the postulated object, the contacts (``docs/view.md``, "What is drawn"); its colours also paint
+the PNG pictures (:mod:`eos_svc.view.picture`).
 """
 
 from __future__ import annotations
@@ -68,9 +66,8 @@ CONE_HEIGHT = 0.02
 
 
 def new_meshcat(host: str = "localhost", port: int | None = None) -> Meshcat:
-    """A MeshCat server without its stats plot, grid or axes; ``port`` None: Drake's choice (the
-    first free one of 7000–7099), 0: an ephemeral port (for building a page only). Drake's
-    "Meshcat listening" log line is silenced."""
+    """A MeshCat server without its stats plot, grid, axes or log line; ``port`` None: the first
+    free one of 7000–7099, 0: an ephemeral one (for building a page only)."""
     params = MeshcatParams()
     params.host = host
     params.show_stats_plot = False
@@ -102,17 +99,15 @@ def vec(values: Any) -> Any:
 
 
 def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:
-    """The MeshCat primitive of an object (its kind's :meth:`~eos_svc.objects.base.SurfaceObject.drake_shape`)
-    and its pose in the world."""
+    """The MeshCat primitive of an object (its kind's ``drake_shape``) and its pose in the world."""
     shape = objects.make(spec.shape, spec.size, spec.position, spec.rpy).drake_shape()
     pose = RigidTransform(RollPitchYaw(*spec.rpy), vec(spec.position))
     return shape, pose
 
 
 def postulated_object(shape: Mapping[str, Any] | None) -> ObjectSpec | None:
-    """The object a post_shape postulate describes: its ``object`` entry (request JSON form)
-    when present and valid, else ``None`` (the class is a plane, the size is not known yet,
-    or an older postulate without ``object``)."""
+    """The object a post_shape postulate describes (its ``object`` entry, request JSON form), or
+    ``None`` when it has no valid one (a plane, a size not known yet, an older postulate)."""
     if not isinstance(shape, Mapping):
         return None
     data = shape.get("object")
@@ -125,10 +120,8 @@ def postulated_object(shape: Mapping[str, Any] | None) -> ObjectSpec | None:
 
 
 def drawn_postulate(spec: ObjectSpec) -> ObjectSpec:
-    """The postulated object as drawn: its sizes ×:data:`POSTULATE_INFLATION`, so that where it
-    coincides with the true object its translucent surface lies just outside the truth's
-    instead of flickering through it (z-fighting); a size field that is not a number or a
-    list of numbers is kept."""
+    """The postulated object as drawn: its numeric sizes ×:data:`POSTULATE_INFLATION`, so that
+    where it coincides with the true object it lies just outside it (no z-fighting)."""
 
     def grown(value: Any) -> Any:
         if isinstance(value, (int, float)):
@@ -183,11 +176,7 @@ class HandPart:
 
 
 class HandDrawing:
-    """The hand's collision geometries as MeshCat objects, and their poses at a configuration.
-
-    Args:
-        hand: the hand model (Pinocchio model and GeometryModel).
-    """
+    """The collision geometries of ``hand`` as MeshCat objects, and their poses at a configuration."""
 
     def __init__(self, hand: HandModel) -> None:
         self.hand = hand
@@ -252,12 +241,8 @@ def touching_contacts(contacts: Mapping[str, Any] | None) -> list[tuple[str, np.
 
 
 def add_contacts(meshcat: Meshcat, contacts: Mapping[str, Any] | None, friction: object) -> list[str]:
-    """Draw every touching contact (dot, force line, friction cone) under :data:`CONTACTS`;
-    the cone's μ is ``friction`` (the request's default when it is not a positive number).
-
-    Returns:
-        the scene paths drawn, one per contact (each a folder).
-    """
+    """Draw every touching contact (dot, force line, friction cone of μ ``friction``, the
+    request's default when not a positive number) under :data:`CONTACTS`; returns their paths."""
     number = isinstance(friction, (int, float)) and not isinstance(friction, bool)
     mu = float(friction) if number else math.nan  # type: ignore[arg-type]
     if not (math.isfinite(mu) and mu > 0):

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass, field
 from typing import Any
 
 from eos_svc.schema import keys
@@ -40,30 +40,16 @@ class CycleSpan:
     end: int
 
     def to_dict(self, fps: int) -> dict[str, Any]:
-        """JSON form for the page (times in s)."""
-        return {
-            "seq": self.seq,
-            "stage": self.stage,
-            "chosen": self.chosen,
-            "outcome": self.outcome,
-            "detail": self.detail,
-            "t0": self.start / fps,
-            "t1": self.end / fps,
-        }
+        """JSON form for the page (times ``t0``, ``t1`` in s)."""
+        what = {k: v for k, v in asdict(self).items() if k not in ("start", "end")}
+        return {**what, "t0": self.start / fps, "t1": self.end / fps}
 
 
 @dataclass
 class Timeline:
-    """Keyframes of the hand, cycle spans, postulates and the grasp verdict.
-
-    Attributes:
-        keyframes: ``(frame, q)`` in increasing frame order; q holds every joint of the hand.
-        spans: one per cycle.
-        postulates: ``(frame, postulate dict)`` for every cycle that wrote ``keys.SHAPE``, at
-            the cycle's end.
-        verdict: ``(frame, verdict dict)`` of the end agent's ``keys.OUTCOME``, or None.
-        fps: frames per second.
-    """
+    """Keyframes ``(frame, q)`` of the hand in frame order, one span per cycle, ``(frame,
+    postulate)`` at the end of every cycle that wrote ``keys.SHAPE``, ``(frame, verdict)`` of the
+    end agent's ``keys.OUTCOME`` (or None), at ``fps`` frames per second."""
 
     keyframes: list[tuple[int, tuple[float, ...]]] = field(default_factory=list)
     spans: list[CycleSpan] = field(default_factory=list)
@@ -119,20 +105,15 @@ def as_q(value: Any, nq: int) -> tuple[float, ...] | None:
 
 def changes_of(record: Mapping[str, Any]) -> dict[str, Any]:
     """The board entries a cycle record (JSON form) wrote: key -> new value."""
-    out: dict[str, Any] = {}
-    for change in record.get("changes") or ():
-        if isinstance(change, Mapping) and isinstance(change.get("key"), str):
-            out[change["key"]] = change.get("new")
-    return out
+    return {
+        c["key"]: c.get("new")
+        for c in record.get("changes") or ()
+        if isinstance(c, Mapping) and isinstance(c.get("key"), str)
+    }
 
 
 class TimelineBuilder:
-    """Builds a :class:`Timeline` cycle by cycle.
-
-    Args:
-        q0: the hand's configuration before the first cycle.
-        fps: frames per second.
-    """
+    """Builds a :class:`Timeline` cycle by cycle, the hand at ``q0`` before the first."""
 
     def __init__(self, q0: Sequence[float] | Any, fps: int = FPS) -> None:
         self.q = tuple(float(x) for x in q0)

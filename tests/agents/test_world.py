@@ -68,22 +68,6 @@ def test_search_steps_stay_in_the_box_and_follow_the_seed():
     np.testing.assert_array_equal(paths[0], paths[1])
 
 
-def test_sweep_reach_matches_brute_force():
-    world = world_with_sphere()
-    sweep = world.sweeps["finger3"]
-    rng = np.random.default_rng(0)
-    for _ in range(50):
-        centre = rng.uniform([0.0, -0.05, -0.1], [0.2, 0.05, 0.1])
-        radius = rng.uniform(0.01, 0.06)
-        angle = rng.uniform(-0.3, 1.8)
-        expected = any(
-            np.linalg.norm(p - centre) <= radius
-            for a, p in zip(sweep.angles, sweep.points, strict=True)
-            if a >= angle - 1e-12
-        )
-        assert sweep.reaches(angle, centre, radius) == expected
-
-
 def test_hand_bound_contains_the_hand():
     # The collision-query shortcut assumes every hand part lies within hand_bound of the grasp centre.
     world = world_with_sphere()

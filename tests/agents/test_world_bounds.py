@@ -1,9 +1,8 @@
 """The grasp world's shortcuts give the answers of the exact queries they avoid.
 
 ``GraspWorld.lower_bounds`` must never exceed a geometry's exact gap (coal), for every
-hand geometry kind and object shape; ``hand_clear``, ``closing_clear`` and
-``FingerSweep.last_within`` must agree with ``hand_clearance``, ``closing_gap`` and
-``FingerSweep.reaches``.
+hand geometry kind and object shape; ``hand_clear`` and ``closing_clear`` must agree with
+``hand_clearance`` and ``closing_gap``.
 """
 
 from __future__ import annotations
@@ -78,15 +77,3 @@ def test_shortcuts_agree_with_the_exact_answers(spec):
             fast = closing_clear(world, finger)
             world.set_q(q)
             assert fast == (closing_gap(world, finger) > 0.0)
-
-
-def test_last_within_answers_reaches_for_every_angle():
-    world = build_world(PlanRequest())
-    rng = np.random.default_rng(7)
-    for sweep in world.sweeps.values():
-        for _ in range(200):
-            centre = rng.uniform([0.0, -0.08, -0.08], [0.2, 0.08, 0.08])
-            radius = float(rng.uniform(0.005, 0.05))
-            last = sweep.last_within(centre, radius)
-            for angle in rng.uniform(sweep.angles[0] - 0.1, sweep.angles[-1] + 0.1, 10):
-                assert (sweep.index_at(angle) <= last) == sweep.reaches(angle, centre, radius)

@@ -12,7 +12,7 @@ import qpsolvers
 from eos_svc.kinematics import TactileSensor
 from eos_svc.kinematics.ep1 import contact_frame, ep1_scene, place_hand_for_ep1
 from eos_svc.kinematics.hand import KinematicsError
-from eos_svc.kinematics.rolling import RollingQP, RollingQPError, available_solvers
+from eos_svc.kinematics.rolling import RollingQP, RollingQPError
 from eos_svc.kinematics.rolling_solvers import BACKEND_SETTINGS
 
 R_F = 0.01
@@ -137,7 +137,7 @@ def test_arc_rate_matches_closed_form_and_no_slip(R):
     assert arc_obj == pytest.approx(R_F * ang.sum(), rel=1e-3)
 
 
-@pytest.mark.parametrize("solver", [s for s in available_solvers() if s != "osqp"])
+@pytest.mark.parametrize("solver", [s for s in qpsolvers.available_solvers if s != "osqp"])
 def test_other_backends_agree_with_osqp(sphere_setup, solver):
     sc, st, F = sphere_setup
     a = RollingQP(st.copy(), "finger1", F[:, 0], 0.5, 0.01, scene=sc, closed_form=False)
@@ -148,7 +148,7 @@ def test_other_backends_agree_with_osqp(sphere_setup, solver):
         assert sb.slip_speed < 1e-9
 
 
-@pytest.mark.parametrize("solver", available_solvers())
+@pytest.mark.parametrize("solver", qpsolvers.available_solvers)
 def test_infeasible_qp_raises_with_the_problem(sphere_setup, solver):
     sc, st, F = sphere_setup
     rq = RollingQP(st.copy(), "finger1", F[:, 0], 200.0, 0.01, solver, scene=sc)  # beyond the limits

@@ -132,9 +132,9 @@ def test_any_geometry_and_min_distance(hand: HandModel) -> None:
     assert palm.distance == pytest.approx(0.05 - 0.01 - R, abs=1e-7)
     best = scene.min_distance(st)
     assert best.finger == "palm_0" and best.distance == pytest.approx(palm.distance)
-    contacts = scene.contacts(st)
-    assert set(contacts) == set(hand.finger_names)
-    assert all(c.distance > palm.distance for c in contacts.values())
+    contacts = scene.tip_contacts(st)
+    assert [c.finger for c in contacts] == list(hand.finger_names)
+    assert all(c.distance > palm.distance for c in contacts)
 
 
 def test_link_geometry_distance_closed_form(hand: HandModel) -> None:

@@ -1,12 +1,18 @@
-"""Quick bounded versions of the reliability runs (the full ones: python -m eos_svc.service.reliability)."""
+"""Quick bounded versions of the reliability runs (the full ones: python benchmarks/reliability.py)."""
 
 from __future__ import annotations
+
+import sys
+from pathlib import Path
 
 import pytest
 
 from eos_svc.service import protocol as proto
-from eos_svc.service.reliability import RSS_BOUND_MB, print_table, run, run_abuse
-from eos_svc.service.slow_watcher import run_slow_watcher
+
+# the reliability runs are a developer's harness in benchmarks/, importing each other as scripts do
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+from reliability import RSS_BOUND_MB, print_table, run, run_abuse
+from slow_watcher import run_slow_watcher
 
 
 def test_quick_load_every_request_answered_once_nothing_lost():

@@ -69,3 +69,17 @@ def touches_on(
     return Touches(
         np.array(centres), np.array(normals), TIP, tactile_noise=noise, contact_tolerance=gap_tolerance
     )
+
+
+def with_free(touches: Touches, free: np.ndarray, free_radius: float) -> Touches:
+    """``touches`` with the free tip samples ``free`` (radius ``free_radius``) added."""
+    return Touches(
+        touches.centres,
+        touches.normals,
+        touches.radii,
+        np.vstack([touches.free, free]),
+        np.concatenate([touches.free_radii, np.full(len(free), free_radius)]),
+        touches.tactile_noise,
+        touches.contact_tolerance,
+        touches.kinematic_sigma,
+    )

@@ -9,7 +9,7 @@ from eos_svc.agents.planner import make_object
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.shape import Touches, fit_class, select_class
 from eos_svc.shape.selection import object_dict
-from tests.shape.synthetic import TIP, objects, touches_on
+from tests.shape.synthetic import TIP, objects, touches_on, with_free
 
 
 @pytest.mark.parametrize("seed", [1, 2])
@@ -61,6 +61,6 @@ def test_free_space_bounds_a_box_that_no_contact_bounds():
     free = np.column_stack(
         [np.full(n, 0.2 + 0.025 + TIP + 0.001), rng.uniform(-0.03, 0.03, n), rng.uniform(-0.02, 0.02, n)]
     )
-    bounded = fit_class("box", t.merged(Touches(free=free, free_radii=TIP)))
+    bounded = fit_class("box", with_free(t, free, TIP))
     assert alone.size_sigmas()[0] > 0.5  # depth unknown from the front alone
     assert object_dict(bounded)["size"][0] <= 0.05 + 2e-3  # the free samples bound it

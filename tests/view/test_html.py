@@ -9,10 +9,10 @@ import pytest
 
 from eos_svc.agents import PlanRequest, keys, plan
 from eos_svc.view import write_plan_html, write_result_html
-from eos_svc.view.browser import dump_dom, find_chromium, screenshot
 from eos_svc.view.replay_html import plan_scene
 from eos_svc.view.scene import CONTACTS, OBJECT, POSTULATE
 
+from .browser import dump_dom, find_chromium, screenshot
 from .pixels import colour_regions, distance, mean_difference
 
 needs_chromium = pytest.mark.skipif(

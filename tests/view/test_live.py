@@ -17,10 +17,10 @@ from eos_svc.agents import PlanRequest, plan
 from eos_svc.service.client import EosClient
 from eos_svc.service.server import PlanService
 from eos_svc.service.session import free_port, loopback, make_config
-from eos_svc.view.browser import find_chromium, screenshot, screenshot_command
 from eos_svc.view.live import LiveView, StreamView
 from eos_svc.view.scene import CONTACTS, OBJECT
 
+from .browser import find_chromium, screenshot, screenshot_command
 from .pixels import colour_regions, distance
 
 

@@ -16,12 +16,12 @@ import time
 from collections import Counter
 
 import zenoh
+from abuse import Probe
+from serve_processes import counters_consistent, start_servers, stop_servers
 
 from eos_svc.schema.request import PlanRequest
 from eos_svc.service import protocol as proto
-from eos_svc.service.abuse import Probe
 from eos_svc.service.client import EosClient
-from eos_svc.service.serve_processes import counters_consistent, start_servers, stop_servers
 from eos_svc.service.session import loopback, make_config
 
 #: what the slow watcher's callback blocks per sample (s)

@@ -1,20 +1,8 @@
-"""Hostile traffic against a running service instance, with what each should get back.
+"""Hostile traffic against a running service instance, with what each probe should get back.
 
-Each probe sends real queries on an open Zenoh session to one instance and counts what
-came back; :mod:`eos_svc.service.reliability` runs them against ``eos serve`` processes
-and prints one table. The probes:
-
-- :func:`big_payloads`: plan requests far over the size limit (``payload_too_large``, one
-  reply each, the server's memory flat);
-- :func:`mutated_requests`: a valid request with random bytes overwritten (one reply each,
-  never ``internal_error``);
-- :func:`wildcard_plan`: a plan query on ``P/plan/*`` (one error reply, no plan run);
-- :func:`stranger_cancel`: a second session that learned a running goal's id from its status
-  tries to cancel it (``forbidden``; the owner's cancel works);
-- :func:`unplannable`: objects out of reach, overlapping the hand, too large
-  (``invalid_request`` naming the field);
-- :func:`squatter`: a second session that read the owner's goal ids from the status topic
-  holds the ids that would come next were they a counter; the owner's next plans all succeed.
+Each probe sends real queries on an open Zenoh session and counts the replies (big payloads,
+mutated requests, a wildcard plan query, a stranger's cancel, unplannable objects, a squatter of
+goal ids: ``docs/service.md``, "Reliability runs"); ``reliability.py abuse`` runs them.
 """
 
 from __future__ import annotations

@@ -1,21 +1,12 @@
-"""Reliability runs of the service on loopback, bounded in count and time.
+"""Reliability runs of the service on loopback, bounded in count and time (``docs/service.md``).
 
-    python -m eos_svc.service.reliability load   [--instances 2 --clients 4 --plans 25]
-    python -m eos_svc.service.reliability fault  # two instances, one SIGKILLed mid-load
-    python -m eos_svc.service.reliability freeze # two instances, one SIGSTOPped mid-load
-    python -m eos_svc.service.reliability abuse  # big and mutated requests, wildcard, stranger, squatter
-    python -m eos_svc.service.reliability slow-watcher  # others' plan times with a watcher that never drains
-    python -m eos_svc.service.reliability all    # every run above, one table
+    .venv/bin/python benchmarks/reliability.py load|fault|freeze|abuse|slow-watcher|all [--help]
 
-Each run starts ``eos serve`` subprocesses on 127.0.0.1 (peers, multicast
-scouting off), N client threads (each its own Zenoh session) sending M plans
-each, and an observer session subscribed to every cycle and status. It checks
-that every request is answered exactly once, that every answered plan's cycle
-stream is complete and contiguous (seq 1..n as seen by the client, and by the
-observer), and prints the counts. ``abuse`` runs the probes of
-:mod:`eos_svc.service.abuse` against two ``eos serve`` processes and measures
-the first one's memory (RSS) before and after. Every mode prints one table,
-one row per check. Exit code 0 when every check holds.
+``eos serve`` subprocesses on 127.0.0.1; N client threads (each its own session) send M plans
+each while an observer session counts every cycle and status. Checks: every request answered
+exactly once, every cycle stream complete and contiguous, every instance's counters consistent
+(``abuse``: the probes of ``abuse.py`` and the server's memory). One table, one row per check;
+exit code 0 when every check holds.
 """
 
 from __future__ import annotations
@@ -30,17 +21,17 @@ from collections import Counter, defaultdict
 from dataclasses import dataclass, field
 from typing import Any
 
+import abuse
 import zenoh
+from serve_processes import counters_consistent, start_servers, stop_servers
+from slow_watcher import run_slow_watcher
 
 from eos_svc.errors import ValidationError
 from eos_svc.schema.request import PlanRequest
-from eos_svc.service import abuse
 from eos_svc.service import protocol as proto
 from eos_svc.service.client import EosClient
 from eos_svc.service.plan_attempt import PlanOutcome
-from eos_svc.service.serve_processes import counters_consistent, start_servers, stop_servers
 from eos_svc.service.session import direct_callback, loopback, make_config
-from eos_svc.service.slow_watcher import run_slow_watcher
 
 
 @dataclass
@@ -149,7 +140,6 @@ def run(
     observer_session = zenoh.open(make_config(connect=endpoints))
     observer = Observer(observer_session, proto.prefix())
     lock = threading.Lock()
-    done_count = [0]
     try:
         for _ in range(clients):
             c = EosClient.open(make_config(connect=endpoints, lease_ms=lease), timeout_margin_s=10.0)
@@ -174,7 +164,6 @@ def run(
                     continue
                 with lock:
                     report.answered += 1
-                    done_count[0] += 1
                     report.statuses[out.status] += 1
                     report.cycles_received += len(out.cycles)
                     report.retried += out.attempts > 1
@@ -186,12 +175,12 @@ def run(
             t.start()
         if mode in ("fault", "freeze"):
             # strike once a share of the plans is done, so the victim has plans in flight
-            while done_count[0] < event_after * report.requested and time.monotonic() < deadline:
+            while report.answered < event_after * report.requested and time.monotonic() < deadline:
                 time.sleep(0.01)
             victim = servers[-1]
             if mode == "fault":
                 victim.proc.send_signal(signal.SIGKILL)
-                report.event = f"SIGKILL {victim.instance} after {done_count[0]} plans answered"
+                report.event = f"SIGKILL {victim.instance} after {report.answered} plans answered"
             else:
                 victim.proc.send_signal(signal.SIGSTOP)
                 t_stop = time.monotonic()
@@ -199,7 +188,7 @@ def run(
                 while victim.instance in watcher.instances() and time.monotonic() < t_stop + 30:
                     time.sleep(0.01)
                 report.event = (
-                    f"SIGSTOP {victim.instance} after {done_count[0]} plans answered; token gone "
+                    f"SIGSTOP {victim.instance} after {report.answered} plans answered; token gone "
                     f"after {time.monotonic() - t_stop:.2f} s (lease {lease_ms} ms)"
                 )
         for t in threads:
@@ -289,9 +278,7 @@ def print_table(rows: list[abuse.Probe]) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Command line: run one mode (or all) and print one table."""
-    parser = argparse.ArgumentParser(
-        prog="python -m eos_svc.service.reliability", description=__doc__.splitlines()[0]
-    )
+    parser = argparse.ArgumentParser(prog="benchmarks/reliability.py", description=__doc__.splitlines()[0])
     parser.add_argument("mode", choices=("load", "fault", "freeze", "abuse", "slow-watcher", "all"))
     parser.add_argument("--instances", type=int, default=2, help="service processes (fault/freeze: ≥ 2)")
     parser.add_argument("--clients", type=int, default=4, help="concurrent clients, each its own session")
