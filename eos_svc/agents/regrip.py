@@ -36,8 +36,8 @@ from eos_svc.shape.hull import hull_postulate
 
 #: how many times one plan lets go and grips again
 MAX_REGRIPS = 2
-#: a candidate whose wrist is within this distance (m) of a tried grasp's, turned alike, was tried
-SAME_WRIST = 0.003
+#: a palm turned within this angle (deg) of a tried grasp's grips across the same axis: left out
+SAME_TURN_DEG = 20.0
 #: what the regrip reads and writes on the board (the end agent declares them)
 READS = frozenset(
     {keys.SHAPE, keys.TARGET, keys.FINGER_STATE, keys.EP1_CONTACT, keys.EP2_TOUCHES, keys.EP2_FREE}
@@ -143,8 +143,7 @@ class Regrip:
         return rotation_from_rpy(*target["wrist_rpy"])
 
     def _was_tried(self, cand: GraspCandidate) -> bool:
-        """``cand`` grips as a grasp already tried did (the same wrist pose)."""
-        return any(
-            np.linalg.norm(cand.wrist - wrist) < SAME_WRIST and np.allclose(cand.rotation, R, atol=1e-6)
-            for wrist, R in self.tried
-        )
+        """``cand`` grips as a grasp already tried did (the palm turned alike: the same grasp
+        axis and approach, wherever the remade hull puts its centre)."""
+        cos_same = 2.0 * np.cos(np.radians(SAME_TURN_DEG)) + 1.0  # trace(R1ᵀ R2) at that angle
+        return any(float(np.trace(cand.rotation.T @ R)) > cos_same for _, R in self.tried)
