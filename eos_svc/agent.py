@@ -1,11 +1,7 @@
-"""The agent contract (paper §2.1, §3).
-
-An agent has a name, the stages in which it may act, a *default* sub-rating
-fixed at creation, an *opportunistic* sub-rating set every cycle from the state
-(by its own precondition test, :meth:`Agent.opportunistic`, or by the agent
-that acted in the previous cycle, :attr:`ActionResult.ratings`), a *learned*
-sub-rating slot, and an action (:meth:`Agent.act`) that reports its outcome.
-"""
+"""The agent contract (paper §2.1, §3): a name, the stages it may act in, a *default* sub-rating
+fixed at creation, an *opportunistic* one set every cycle from the state (its precondition test,
+:meth:`Agent.opportunistic`, or the previous action's :attr:`ActionResult.ratings`), a *learned*
+one, and an action (:meth:`Agent.act`) that reports its outcome."""
 
 from __future__ import annotations
 
@@ -13,7 +9,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from enum import Enum
-from typing import TYPE_CHECKING, Any, ClassVar, NamedTuple
+from typing import TYPE_CHECKING, ClassVar, NamedTuple
 
 from eos_svc.errors import ValidationError
 from eos_svc.ratings import check_probability
@@ -23,34 +19,19 @@ if TYPE_CHECKING:
 
 
 class Outcome(str, Enum):
-    """What an action achieved.
+    """What an action achieved."""
 
-    - ``PROGRESS``: it did something; the stage goes on.
-    - ``STAGE_COMPLETE``: the current stage's goal is reached; the controller
-      moves to the next stage (or completes the run after the last one).
-    - ``FINISHED``: the agent ends the run (successfully or not, see
-      :attr:`ActionResult.succeeded`).
-    - ``CANNOT_ACT``: the agent does not know what to do in this situation;
-      the run stalls (paper §5).
-    """
-
-    PROGRESS = "progress"
-    STAGE_COMPLETE = "stage_complete"
-    FINISHED = "finished"
-    CANNOT_ACT = "cannot_act"
+    PROGRESS = "progress"  #: it did something; the stage goes on
+    STAGE_COMPLETE = "stage_complete"  #: the stage's goal is reached: the next stage (or the run completes)
+    FINISHED = "finished"  #: the agent ends the run (:attr:`ActionResult.succeeded` says how)
+    CANNOT_ACT = "cannot_act"  #: the agent does not know what to do: the run stalls (paper §5)
 
 
 @dataclass(frozen=True, slots=True)
 class ActionResult:
-    """The report of one action.
-
-    Attributes:
-        outcome: see :class:`Outcome`.
-        detail: what the agent did, in words (goes into the cycle record).
-        ratings: opportunistic sub-ratings this agent sets for other agents
-            (name -> value in [0, 1]); they apply in the next cycle of the same stage.
-        succeeded: with ``FINISHED``, whether the run's goal was met.
-    """
+    """The report of one action: its :class:`Outcome`, what it did in words (``detail``), the
+    opportunistic sub-ratings it sets for other agents in the stage's next cycle (``ratings``:
+    name -> [0, 1]) and, with ``FINISHED``, whether the run's goal was met (``succeeded``)."""
 
     outcome: Outcome
     detail: str = ""
@@ -59,20 +40,9 @@ class ActionResult:
 
 
 class CycleContext(NamedTuple):
-    """What an agent may know about the controller's state in this cycle.
-
-    A named tuple (immutable, cheap to build once per cycle).
-
-    Attributes:
-        seq: cycle number in the run (1-based).
-        stage: current stage name.
-        stage_cycle: cycles already run in this stage (0 at the stage's start).
-        events: board changes made by the previous cycle of this stage (empty
-            at a stage's start) — what precondition tests react to.
-        last_agent: name of the agent that acted in the previous cycle of this
-            stage, or ``None``.
-        acted: how many times each agent has acted in this stage.
-    """
+    """What an agent may know of the controller's state in this cycle: ``seq`` (1-based), the
+    ``stage`` and ``stage_cycle`` (0 at its start), the board changes (``events``) and the agent
+    (``last_agent``) of the stage's previous cycle, and how often each agent ``acted`` in it."""
 
     seq: int
     stage: str
@@ -86,31 +56,17 @@ class CycleContext(NamedTuple):
         return any(change.key == key for change in self.events)
 
 
-# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
-# that documentation tools (pdoc) resolve its annotations here.
+# name the module of the named tuple's generated __new__, so that pdoc resolves its annotations
 CycleContext.__new__.__module__ = __name__
 
 
 class Agent(ABC):
-    """Base class of every agent.
+    """Base class of every agent: subclasses implement :meth:`act`, and usually :meth:`opportunistic`.
 
-    Subclasses implement :meth:`act`, and usually :meth:`opportunistic`.
-
-    Board contract (as py_trees' blackboard clients register their keys): a subclass declares
-    the board entries its precondition test, learned hook and action read (:attr:`reads`) and
-    write (:attr:`writes`, deletions included); both are empty by default. A controller made
-    with ``check_access=True`` hands each agent a view of the board that raises
-    :class:`~eos_svc.errors.BoardAccessError` on any other entry
-    (:class:`~eos_svc.board_access.BoardClient`).
-
-    Args:
-        name: unique name of the agent in a controller.
-        stages: stages in which the agent may be rated and chosen.
-        default: default sub-rating P(A|B_d) in [0, 1], fixed for the agent's life.
-        learned: initial learned sub-rating P(A|B_l) in [0, 1].
-
-    Raises:
-        ValidationError: on a rating outside [0, 1] or NaN, an empty name or no stages.
+    A subclass declares the board entries it reads (:attr:`reads`) and writes (:attr:`writes`),
+    as py_trees' blackboard clients do; ``Controller(check_access=True)`` holds it to them.
+    ``name`` is unique in a controller; ``default`` P(A|B_d) and ``learned`` P(A|B_l) are in
+    [0, 1] (a ValidationError otherwise, or for an empty name or no stages).
     """
 
     __slots__ = ("_default", "_learned", "name", "stages")
@@ -148,14 +104,10 @@ class Agent(ABC):
         self._learned = check_probability(value, f"agents.{self.name}.learned")
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
-        """Precondition test: the opportunistic sub-rating in [0, 1] from the state.
+        """Precondition test: the opportunistic sub-rating in [0, 1] from the state, every cycle.
 
-        Return ``None`` for "no opinion" (keeps what the previous action set,
-        else 0). Called every cycle, a stage's first included (``ctx.stage_cycle``
-        is then 0 and ``ctx.events`` empty). Raise
-        :class:`~eos_svc.errors.AgentUnavailableError` when the agent cannot rate itself this cycle
-        (it is then skipped, rated 0, the reason in the record).
-        """
+        ``None``: no opinion (what the previous action set, else 0). Raise
+        :class:`~eos_svc.errors.AgentUnavailableError` to be skipped in this cycle."""
         return None
 
     def learned_rating(self, board: Board, ctx: CycleContext) -> float:
@@ -165,10 +117,6 @@ class Agent(ABC):
     @abstractmethod
     def act(self, board: Board, ctx: CycleContext) -> ActionResult:
         """Run the agent's action against the board and report the outcome."""
-
-    def describe(self) -> dict[str, Any]:
-        """JSON-friendly description of the agent."""
-        return {"name": self.name, "stages": sorted(self.stages), "default": self._default}
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}(name={self.name!r}, default={self._default})"

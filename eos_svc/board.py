@@ -19,15 +19,8 @@ _MISSING: Any = object()
 
 @dataclass(frozen=True, slots=True)
 class BoardChange:
-    """One entry written during a cycle.
-
-    Attributes:
-        key: the entry's name.
-        old: value before the cycle (``None`` when the entry was created).
-        new: value after the write (``None`` when the entry was removed).
-        created: the entry did not exist before.
-        removed: the entry was deleted.
-    """
+    """One entry written during a cycle: its ``old`` value (``None`` when ``created``) and its
+    ``new`` one (``None`` when ``removed``)."""
 
     key: str
     old: Any

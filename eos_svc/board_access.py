@@ -1,11 +1,6 @@
-"""Checked board access: each agent sees the board through a client limited to what it declares.
-
-In the controller's debug mode (``Controller(..., check_access=True)``) every agent gets a
-:class:`BoardClient` instead of the board, as py_trees' blackboard clients: reading an entry not
-in the agent's ``reads`` or writing one not in its ``writes`` raises
-:class:`~eos_svc.errors.BoardAccessError`, and an optional ``entry_check`` validates every value
-written (:class:`~eos_svc.errors.BoardEntryError`); the run then ends with status ``error``.
-:func:`access_map` lists, per entry, who writes and who reads it.
+"""Checked board access (``Controller(..., check_access=True)``): each agent sees the board through
+a :class:`BoardClient` limited to its declared ``reads`` and ``writes``, as py_trees' blackboard
+clients; :func:`access_map` lists, per entry, who writes and who reads it.
 """
 
 from __future__ import annotations
@@ -23,17 +18,10 @@ EntryCheck = Callable[[str, Any], None]
 
 
 class BoardClient(Board):
-    """One agent's view of a :class:`~eos_svc.board.Board`, limited to its declared entries.
-
-    Reads (``client[key]``, ``get``, ``key in client``) need the entry in ``reads``; writes
-    (``set``, ``update``, ``delete``) need it in ``writes``, and go to the board (so they are
-    recorded as the board's changes). Iterating the client lists only the readable entries
-    present. It is a :class:`Board`, so agents annotated with ``Board`` take it unchanged.
-
-    Args:
-        board: the board it views.
-        agent: the agent (its name, ``reads`` and ``writes``).
-        entry_check: called with every value written, before it is written.
+    """One agent's view of a :class:`~eos_svc.board.Board`, limited to its declared entries: a
+    read outside ``reads`` or a write outside ``writes`` raises
+    :class:`~eos_svc.errors.BoardAccessError`; writes go to the board (recorded as its changes),
+    each value first passed to ``entry_check`` when given.
     """
 
     __slots__ = ("_board", "_check", "_name", "_reads", "_writes")

@@ -1,47 +1,19 @@
-"""The EOS controller (paper §2.1, §3, §5).
+"""The EOS controller (paper §2.1, §3, §5): rate, choose, act, record — every cycle.
 
-Each cycle the controller rates every agent allowed in the current stage,
-chooses the highest total P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties go to the agent
-listed first), runs its action against the board, and records the cycle.
+Each cycle it rates every agent allowed in the current stage, chooses the highest total
+P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties go to the agent listed first), runs its action against the
+board and records the cycle. The rules the paper leaves open (docs/planner.md, docs/extending.md):
 
-Rules the paper leaves open, fixed here (and visible in every cycle record):
-
-1. **Opportunistic sub-ratings are reset every cycle.** They start at 0; then
-   the ratings set by the agent that acted in the previous cycle of the stage
-   (:attr:`ActionResult.ratings`) apply, and every agent's precondition test
-   (:meth:`Agent.opportunistic`) may raise its own — the larger value counts.
-   Every test runs every cycle, a stage's first included (the previous
-   cycle's ratings do not carry into a new stage). An agent family that wants
-   the paper's §5 rule — "at the beginning of a new stage all opportunistic
-   sub-ratings are zero" — says so in its own test (the grasp agents do: see
-   :class:`eos_svc.agents.base.GraspAgent`).
-2. **Repeat rule** (:class:`RepeatPolicy`, default ``ONCE_UNLESS_ASKED``): the
-   default sub-rating encodes a pre-defined order in which every agent acts
-   once per stage; an agent that has already acted in the stage is eligible
-   again only while its variable part, P(A|B_o)·P(B_o) + P(A|B_l)·P(B_l), is
-   positive — i.e. while the state asks for it. With the opportunistic weight
-   at 0 this yields the paper's fixed sequence (§4.1: each agent once, then
-   the run stops). ``ALWAYS`` makes every allowed agent eligible every cycle.
-3. **Ends.** ``CANNOT_ACT`` from the chosen agent stalls the run, as does a
-   cycle in which no agent is eligible. ``STAGE_COMPLETE`` moves to the next
-   stage (after the last one the run completes). ``FINISHED`` ends the run as
-   the agent says, and the stage it ended in counts as completed (the run
-   exited it gracefully). Cancellation, the cycle limit and the deadline are checked
-   before every cycle. An exception raised by an agent ends the run with status
-   ``error`` and the exception in the reason; nothing escapes :meth:`run`.
-4. **Board contract (debug mode).** With ``check_access=True`` every agent reads and writes
-   the board through a :class:`~eos_svc.board_access.BoardClient` limited to its declared
-   ``reads`` and ``writes``: an undeclared access raises
-   :class:`~eos_svc.errors.BoardAccessError` in the agent, and the run ends with status
-   ``error`` naming the agent and the entry (rule 3). ``entry_check`` validates every value
-   written as well. Off by default (agents get the board itself); the choices are the same
-   either way.
-5. **Unavailable agents.** An agent whose precondition test raises
-   :class:`~eos_svc.errors.AgentUnavailableError` (a remote agent late, gone or answering nonsense)
-   rates 0 and is skipped in that cycle, its record row saying why (``skipped``); one whose
-   action raises it is recorded as chosen with no outcome, the reason in the cycle's detail,
-   nothing else changes, and the next cycle rates again. Every row also says where the agent
-   runs (``where``) and how long its rating took (``latency_s``).
+1. Opportunistic sub-ratings are reset every cycle; the ratings the previous action of the stage
+   set apply, and every agent's precondition test may raise its own (the larger counts).
+2. Repeat rule (:class:`RepeatPolicy`): an agent that has acted in the stage is eligible again
+   only while its opportunistic and learned part is positive.
+3. Ends: ``CANNOT_ACT`` or no eligible agent stalls the run; ``STAGE_COMPLETE`` moves on;
+   ``FINISHED`` ends it (its stage completed). An exception in an agent ends it with ``error``.
+4. Board contract (``check_access``): each agent sees a board client limited to its declared
+   ``reads`` and ``writes``; ``entry_check`` validates every value written.
+5. An agent raising :class:`~eos_svc.errors.AgentUnavailableError` rates 0 (or its action does
+   not run) for that cycle, its record row saying why.
 """
 
 from __future__ import annotations
@@ -49,7 +21,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from enum import Enum
 from typing import Any
 
@@ -94,22 +66,16 @@ class Controller:
     """Runs agents over stages until the run ends.
 
     Args:
-        agents: the agent list; its order breaks ties.
-        stages: stage names, in the order they are run.
+        agents, stages: the agents (their order breaks ties) and the stages, in order.
         weights: weights of the sub-ratings.
-        max_cycles: cycle limit (≥ 1).
-        deadline_s: wall-clock budget of a run in seconds, or ``None``.
+        max_cycles, deadline_s: the cycle limit (≥ 1) and a run's wall-clock budget (s) or ``None``.
         repeat_policy: see :class:`RepeatPolicy`.
-        keep_trace: keep every cycle record in :attr:`RunResult.trace`.
-        callbacks: called with every :class:`CycleRecord` as it is made.
-        check_access: debug mode: hand each agent a board client limited to its declared
-            ``reads`` and ``writes`` (module docstring, rule 4).
-        entry_check: with ``check_access``, validates every value an agent writes:
-            ``entry_check(key, value)`` raises a :class:`~eos_svc.errors.ContractError`.
+        keep_trace, callbacks: keep every cycle record in :attr:`RunResult.trace`; call these with each.
+        check_access: debug mode: each agent sees only its declared entries (rule 4).
+        entry_check: with ``check_access``, ``entry_check(key, value)`` validates every write.
 
     Raises:
-        ValidationError: on duplicate agent names, an agent allowed in an
-            unknown stage, no stages, a bad limit, or ``entry_check`` without ``check_access``.
+        ValidationError: naming the argument at fault (duplicate agents, unknown stages, …).
     """
 
     def __init__(
@@ -160,36 +126,14 @@ class Controller:
             raise ValidationError("entry_check", "checks entries only with check_access=True")
         self.check_access = check_access
         self.entry_check = entry_check
-        # Per stage: the allowed agents in list order, with flags telling whether
-        # they override the precondition / learned hooks (skip the call if not).
-        self._by_stage: dict[str, tuple[tuple[Agent, bool, bool], ...]] = {
-            stage: tuple(
-                (
-                    a,
-                    type(a).opportunistic is not Agent.opportunistic,
-                    type(a).learned_rating is not Agent.learned_rating,
-                )
-                for a in self.agents
-                if stage in a.stages
-            )
-            for stage in self.stages
-        }
 
     def add_callback(self, callback: CycleCallback) -> None:
         """Register a per-cycle callback (like py_trees' post-tick handlers)."""
         self.callbacks.append(callback)
 
     def run(self, board: Board | None = None, *, cancel: CancelToken | None = None) -> RunResult:
-        """Run cycles until the run ends; never raises for a planning outcome.
-
-        Args:
-            board: the information board (a new empty one when omitted).
-            cancel: a token another thread may set to stop the run.
-
-        The per-cycle path (limits, rating, action, progress) is written inline on local
-        variables — it is the arbitration's cost (``benchmarks/bench_controller.py``); what runs
-        once per stage or once per run is in the helpers below.
-        """
+        """Run cycles on ``board`` (default: a new one) until the run ends, or ``cancel`` stops it;
+        never raises for a planning outcome."""
         board = board if board is not None else Board()
         weights = self.weights
         wo, wl = weights.opportunistic, weights.learned
@@ -290,7 +234,10 @@ class Controller:
                     raise ContractError(
                         f"agents.{name}.act", f"must return an ActionResult, got {type(result).__name__}"
                     )
-                new_hints = _checked_hints(name, result.ratings) if result.ratings else {}
+                new_hints = {  # the opportunistic sub-ratings the action set for others, checked
+                    target: check_probability(value, f"agents.{name}.ratings.{target}")
+                    for target, value in result.ratings.items()
+                }
             except AgentUnavailableError as exc:  # rule 5: the action did not run; the plan carries on
                 changes = board.end_cycle()
                 detail = f"agent {name!r} unavailable: {exc}; its action did not run"
@@ -332,10 +279,10 @@ class Controller:
 
     # --- once per run or per stage ----------------------------------------------------
     def _stage_tables(self, board: Board) -> dict[str, tuple[tuple, ...]]:
-        """Per stage, per allowed agent, what does not change during a run: (agent, name,
-        default, weighted default, has a precondition test, has a learned hook, learned, the
-        board as the agent sees it — the board itself, or its client in debug mode —, where it
-        runs)."""
+        """Per stage, its allowed agents in list order, each with what does not change during a
+        run: (agent, name, default, weighted default, overrides the precondition test, overrides
+        the learned hook (a hook not overridden is not called), learned, the board as the agent
+        sees it — the board itself, or its client in debug mode —, where it runs)."""
         wd = self.weights.default
         views: dict[str, Any] = {}
         if self.check_access:
@@ -347,15 +294,16 @@ class Controller:
                     a.name,
                     a._default,
                     a._default * wd,
-                    pre,
-                    lea,
+                    type(a).opportunistic is not Agent.opportunistic,
+                    type(a).learned_rating is not Agent.learned_rating,
                     a._learned,
                     views.get(a.name, board),
                     a.location,
                 )
-                for a, pre, lea in rows
+                for a in self.agents
+                if stage in a.stages
             )
-            for stage, rows in self._by_stage.items()
+            for stage in self.stages
         }
 
     @staticmethod
@@ -398,14 +346,6 @@ def _action_end(name: str, stage: str, result: ActionResult, completed: list[str
         status = RunStatus.COMPLETED if result.succeeded else RunStatus.FAILED
         return status, result.detail or f"finished by agent {name!r}"
     return RunStatus.ERROR, f"agent {name!r} returned unknown outcome {outcome!r}"  # pragma: no cover
-
-
-def _checked_hints(name: str, ratings: Mapping[str, float]) -> dict[str, float]:
-    """The opportunistic sub-ratings an action set for other agents, each checked."""
-    return {
-        target: check_probability(value, f"agents.{name}.ratings.{target}")
-        for target, value in ratings.items()
-    }
 
 
 class _CycleLog:

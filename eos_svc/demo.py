@@ -1,19 +1,10 @@
 """A small non-grasping problem solved by the EOS core: find a root of f(x).
 
-It shows how another planner embeds the controller with its own agents:
-
-- stage ``bracket``: ``scan`` samples the search interval once (pre-defined
-  order), ``widen`` doubles the interval while no sign change is known (its
-  opportunistic sub-rating is 1 once a scan found none, until one is found);
-- stage ``refine``: ``bisect`` halves the bracket (steady default),
-  ``secant`` jumps to the secant root and is rated opportunistically by how
-  much its last step shrank |f|, and ``done`` finishes when the bracket is
-  narrower than the tolerance.
-
-Each agent declares the board entries it reads and writes (``reads`` / ``writes``);
-``solve_root(..., check_access=True)`` holds them to it.
-
-Domain-free: only the standard library and the EOS core.
+How another planner embeds the controller: stage ``bracket`` (``scan`` samples the interval,
+``widen`` doubles it while no sign change is known), stage ``refine`` (``bisect``, ``secant``
+rated by how much its last step shrank |f|, ``done`` once the bracket is narrow enough). Each
+agent declares its ``reads`` / ``writes``; ``solve_root(..., check_access=True)`` holds them to
+it. Domain-free: the standard library and the EOS core only.
 """
 
 from __future__ import annotations

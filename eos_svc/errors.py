@@ -1,13 +1,7 @@
-"""Exceptions of eos_svc: one tree under :class:`EosError`.
-
-Planning outcomes (stalled, cycle limit, ...) are never exceptions: they are a
-:class:`~eos_svc.records.RunStatus`. Exceptions are for bad input, broken
-contracts and failed computations. Every exception class of the package derives
-from :class:`EosError` and keeps the standard base a caller would expect
-(``ValueError`` for a bad value, ``TypeError`` for a value of the wrong kind,
-``RuntimeError`` for a computation that failed), so both ``except EosError`` and
-the usual ``except ValueError`` work. Those about one input name it: ``field``
-(dotted name) and ``reason`` (words).
+"""Exceptions of eos_svc: one tree under :class:`EosError`, each keeping the standard base a caller
+expects (``ValueError``, ``TypeError``, ``RuntimeError``); those about one input name its
+``field`` and the ``reason``. Planning outcomes are never exceptions: they are a
+:class:`~eos_svc.records.RunStatus`.
 """
 
 from __future__ import annotations
@@ -48,9 +42,8 @@ class ContractError(FieldError, TypeError):
 
 
 class BoardAccessError(ContractError):
-    """An agent read or wrote a board entry it does not declare (``Agent.reads`` /
-    ``Agent.writes``); raised only when the controller checks board access
-    (``Controller(..., check_access=True)``). Made by :meth:`undeclared`.
+    """An agent read or wrote a board entry it does not declare (``Agent.reads`` / ``writes``),
+    under ``Controller(..., check_access=True)``. Made by :meth:`undeclared`.
 
     Attributes:
         agent: the agent's name.
@@ -79,9 +72,8 @@ class BoardAccessError(ContractError):
 
 
 class BoardEntryError(ContractError):
-    """A board entry written with a value that does not have the entry's declared type; raised
-    only when the controller checks entries. ``field`` is the entry (``board.shape``) or the
-    part of it at fault (``board.shape.confidence``).
+    """A board entry written with a value not of its declared type (when entries are checked);
+    ``field``: the entry or the part at fault (``board.shape.confidence``).
 
     Attributes:
         agent: the agent that wrote it ("" when written outside a run).
@@ -103,7 +95,5 @@ class ComputationError(EosError, RuntimeError):
 
 
 class AgentUnavailableError(EosError):
-    """An agent that cannot take part in this cycle — a remote agent late, gone or answering
-    nonsense. Raised from its precondition test, the agent rates 0 for the cycle and is skipped
-    (the record says why); raised from its action, the cycle records that the action did not
-    run and the plan carries on. Any other exception from an agent ends the run as ``error``."""
+    """An agent that cannot take part in this cycle (a remote agent late, gone or answering
+    nonsense): it is skipped, or its action does not run, and the plan carries on."""

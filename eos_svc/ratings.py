@@ -1,12 +1,6 @@
-"""Ratings and weights: the paper's eq. (4)-(6).
-
-    P(A_j) = sum_i P(A_j | B_i) * P(B_i)
-
-with three sub-ratings B_i: *default* (fixed when the agent is created),
-*opportunistic* (reset every cycle, set from the state) and *learned*
-(experience from earlier runs, paper §7). Every sub-rating and every weight is
-a probability in [0, 1] and the weights sum to 1. Values outside are rejected
-with a :class:`~eos_svc.errors.ValidationError`, never clipped.
+"""Ratings and weights, the paper's eq. (4)-(6): P(A_j) = sum_i P(A_j | B_i) * P(B_i) over the
+*default*, *opportunistic* and *learned* sub-ratings. Every one and every weight is a probability
+in [0, 1], the weights summing to 1; other values are rejected, never clipped.
 """
 
 from __future__ import annotations
@@ -21,12 +15,7 @@ WEIGHT_SUM_TOLERANCE = 1e-9
 
 
 def check_probability(value: float, field: str) -> float:
-    """Return ``value`` as a float if it is a finite number in [0, 1], else raise.
-
-    Raises:
-        ValidationError: naming ``field`` when ``value`` is not a number, NaN,
-            infinite or outside [0, 1].
-    """
+    """``value`` as a float if it is a number in [0, 1], else a ValidationError naming ``field``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise ValidationError(field, f"must be a number in [0, 1], got {type(value).__name__}")
     v = float(value)
@@ -39,13 +28,8 @@ def check_probability(value: float, field: str) -> float:
 
 @dataclass(frozen=True, slots=True)
 class Weights:
-    """Weights P(B_i) of the sub-ratings; each in [0, 1], summing to 1.
-
-    Args:
-        default: P(B_d), weight of the fixed default sub-rating.
-        opportunistic: P(B_o), weight of the state-driven sub-rating.
-        learned: P(B_l), weight of the learned sub-rating (0 in the paper).
-    """
+    """Weights P(B_i) of the ``default``, ``opportunistic`` and ``learned`` (0 in the paper)
+    sub-ratings; each in [0, 1], summing to 1."""
 
     default: float = 0.5
     opportunistic: float = 0.5
@@ -72,11 +56,7 @@ class Weights:
 
     @classmethod
     def from_dict(cls, data: object, field: str = "weights") -> Weights:
-        """Build from a mapping with keys default/opportunistic/learned (missing learned = 0).
-
-        Raises:
-            ValidationError: on a non-mapping, unknown keys or bad values.
-        """
+        """Build from a mapping with keys default/opportunistic/learned (missing learned = 0)."""
         if not isinstance(data, dict):
             raise ValidationError(field, f"must be an object, got {type(data).__name__}")
         unknown = set(data) - {"default", "opportunistic", "learned"}

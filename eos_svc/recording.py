@@ -1,20 +1,10 @@
-"""The record file of a plan: its format, written by ``eos plan --record`` and read by
-``eos replay`` (and by any program: the module is domain-free, JSON and the core's records only).
+"""The record file of a plan, written by ``eos plan --record`` and read by ``eos replay``.
 
-A record file is JSON lines:
-
-- line 1, the header: ``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``
-  — the plan request in its JSON form (``PlanRequest.to_dict()``) and the hand's name
-  (``hand3x3``, the default, a registered hand's name — ``eos hands`` — or the path of the
-  hand description file it was planned with);
-- one line per cycle: exactly :meth:`CycleRecord.to_dict` (no ``eos_record`` key);
-- last line, the result: ``{"eos_record": "result", "result": {...}}`` —
-  ``PlanResult.to_dict()`` without the trace (absent when the run was interrupted).
-
-Two runs are compared cycle by cycle and then by their results, ignoring only wall-clock fields
-(``elapsed_s``, ``wall_time_s``, ``latency_s``), and the fields added since a record was
-written (:data:`ADDED_FIELDS`): :func:`compare_run` gives every divergence with the cycle, the
-field path and both values.
+JSON lines (domain-free: JSON and the core's records only): a header
+``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``, one
+:meth:`CycleRecord.to_dict` per cycle, and last ``{"eos_record": "result", "result": {...}}``
+(absent when the run was interrupted). :func:`compare_run` compares two runs cycle by cycle,
+ignoring wall-clock fields and those added since a record was written (:data:`ADDED_FIELDS`).
 """
 
 from __future__ import annotations
@@ -78,13 +68,7 @@ class Recording:
 
 
 def read_recording(path: str | Path) -> Recording:
-    """Parse a record file.
-
-    Raises:
-        RecordFileError: unreadable, not JSON lines, no header, unknown schema, cycles out
-            of order.
-        OSError: the file cannot be opened.
-    """
+    """Parse a record file (RecordFileError naming the line at fault; OSError)."""
     text = Path(path).read_text(encoding="utf-8")
     lines = [(i + 1, line) for i, line in enumerate(text.splitlines()) if line.strip()]
     if not lines:
@@ -136,18 +120,8 @@ def record_from_dict(data: dict[str, Any]) -> CycleRecord:
         seq=data["seq"],
         stage=data["stage"],
         stage_cycle=data["stage_cycle"],
-        ratings=tuple(
-            AgentRating(
-                r["agent"],
-                r["default"],
-                r["opportunistic"],
-                r["learned"],
-                r["total"],
-                r.get("eligible", True),
-                r.get("where", "local"),
-                r.get("latency_s", 0.0),
-                r.get("skipped"),
-            )
+        ratings=tuple(  # the fields added since a record was written take their defaults
+            AgentRating(r["agent"], **{k: r[k] for k in AgentRating._fields[1:] if k in r})
             for r in data["ratings"]
         ),
         weights=Weights.from_dict(data["weights"]),

@@ -32,14 +32,9 @@ class RunStatus(str, Enum):
 
 
 class AgentRating(NamedTuple):
-    """One agent's ratings in one cycle (a named tuple: cheap to build every cycle).
-
-    ``eligible`` is false for an agent that may not be chosen in this cycle; ``skipped`` says
-    why: the repeat rule (:data:`REPEAT_SKIP`, see :class:`~eos_svc.controller.RepeatPolicy`) or
-    the agent being unavailable (``"unavailable: ..."``: a remote agent late, gone or answering
-    nonsense; it then rates 0). ``where`` is the agent's :attr:`~eos_svc.agent.Agent.location`
-    (``"local"`` or ``"remote"``), ``latency_s`` the seconds its rating took this cycle.
-    """
+    """One agent's ratings in one cycle. ``skipped`` says why it is not ``eligible``: the repeat
+    rule (:data:`REPEAT_SKIP`) or ``"unavailable: ..."``; ``where`` is its
+    :attr:`~eos_svc.agent.Agent.location`, ``latency_s`` the seconds its rating took."""
 
     name: str
     default: float
@@ -52,25 +47,17 @@ class AgentRating(NamedTuple):
     skipped: str | None = None
 
 
+#: the JSON keys of an :class:`AgentRating` (its fields, ``name`` written ``agent``)
+_RATING_KEYS = ("agent", *AgentRating._fields[1:])
 #: why an agent is not eligible under the repeat rule (``AgentRating.skipped``)
 REPEAT_SKIP = "acted in this stage and not asked again (repeat rule)"
 
 
 class CycleRecord(NamedTuple):
-    """What happened in one cycle (an immutable named tuple).
-
-    Attributes:
-        seq: cycle number in the run, 1-based and contiguous.
-        stage: the stage the cycle ran in.
-        stage_cycle: 0-based cycle number within the stage.
-        ratings: every agent rated in this cycle, in list order.
-        weights: the weights used.
-        chosen: the agent whose action ran (``None`` when none was eligible).
-        outcome: what the action reported (``None`` when nothing ran).
-        detail: the action's own words, or why nothing ran.
-        changes: the board entries the action wrote.
-        elapsed_s: seconds since the run started, at the end of the cycle.
-    """
+    """What happened in one cycle: its ``seq`` (1-based) and ``stage_cycle`` (0-based), every
+    agent's ``ratings`` in list order, the ``chosen`` agent and its ``outcome`` (``None`` when
+    nothing ran), its words (``detail``), the board ``changes`` it made and ``elapsed_s``, the
+    seconds since the run started."""
 
     seq: int
     stage: str
@@ -98,20 +85,7 @@ class CycleRecord(NamedTuple):
             "stage": self.stage,
             "stage_cycle": self.stage_cycle,
             "weights": self.weights.to_dict(),
-            "ratings": [
-                {
-                    "agent": r.name,
-                    "default": r.default,
-                    "opportunistic": r.opportunistic,
-                    "learned": r.learned,
-                    "total": r.total,
-                    "eligible": r.eligible,
-                    "where": r.where,
-                    "latency_s": r.latency_s,
-                    "skipped": r.skipped,
-                }
-                for r in self.ratings
-            ],
+            "ratings": [dict(zip(_RATING_KEYS, r, strict=True)) for r in self.ratings],
             "chosen": self.chosen,
             "outcome": None if self.outcome is None else self.outcome.value,
             "detail": self.detail,
@@ -122,25 +96,15 @@ class CycleRecord(NamedTuple):
         }
 
 
-# The named tuple's generated __new__ says it belongs to a synthetic module; name this one, so
-# that documentation tools (pdoc) resolve its annotations here.
+# name the module of the named tuple's generated __new__, so that pdoc resolves its annotations
 CycleRecord.__new__.__module__ = __name__
 
 
 @dataclass(frozen=True)
 class RunResult:
-    """How a controller run ended.
-
-    Attributes:
-        status: see :class:`RunStatus`.
-        reason: why, in words.
-        cycles: number of cycles run.
-        cycles_per_stage: cycles run in each stage entered.
-        stages_completed: stages whose goal was reached, in order.
-        final_stage: the stage the run ended in.
-        trace: every cycle record (empty when ``keep_trace`` was off).
-        wall_time_s: seconds from start to end.
-    """
+    """How a controller run ended: its :class:`RunStatus` and ``reason``, the cycles run (in all
+    and per stage entered), the stages completed in order, the final stage, every cycle record
+    (``trace``, empty without ``keep_trace``) and the seconds it took."""
 
     status: RunStatus
     reason: str
@@ -162,27 +126,18 @@ class RunResult:
 
     def to_dict(self, include_trace: bool = False) -> dict[str, Any]:
         """JSON-friendly form (the trace only when asked)."""
-        out: dict[str, Any] = {
-            "status": self.status.value,
-            "reason": self.reason,
-            "cycles": self.cycles,
-            "cycles_per_stage": dict(self.cycles_per_stage),
-            "stages_completed": list(self.stages_completed),
-            "final_stage": self.final_stage,
-            "wall_time_s": self.wall_time_s,
-        }
+        out: dict[str, Any] = {f.name: getattr(self, f.name) for f in fields(self) if f.name != "trace"}
+        out["status"] = self.status.value
+        out["cycles_per_stage"] = dict(self.cycles_per_stage)
+        out["stages_completed"] = list(self.stages_completed)
         if include_trace:
             out["trace"] = [r.to_dict() for r in self.trace]
         return out
 
 
 def to_jsonable(value: Any) -> Any:
-    """Convert a board value to something ``json.dumps`` accepts.
-
-    Handles dataclasses, enums, mappings, sequences and array-likes (anything
-    with ``tolist()``, e.g. NumPy arrays) without importing NumPy. Non-finite
-    floats become ``None`` so the output stays strict JSON.
-    """
+    """A board value as strict JSON accepts it (dataclasses, enums, mappings, sequences, anything
+    with ``tolist()``; non-finite floats become ``None``), without importing NumPy."""
     if value is None or isinstance(value, (bool, int, str)):
         return value
     if isinstance(value, float):

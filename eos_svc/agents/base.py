@@ -20,9 +20,8 @@ PreconditionTest = Callable[[Any, Board, CycleContext], "float | None"]
 
 
 def zero_at_stage_start(test: PreconditionTest) -> PreconditionTest:
-    """Wrap a precondition test so that it gives 0 at a stage's first cycle (``stage_cycle`` 0)
-    and asks ``test`` from the second cycle on: paper §5, "at the beginning of a new stage all
-    opportunistic sub-ratings are zero" — nothing has happened in the stage yet."""
+    """Wrap a precondition test to give 0 at a stage's first cycle (paper §5: "at the beginning of
+    a new stage all opportunistic sub-ratings are zero")."""
 
     @functools.wraps(test)
     def opportunistic(self: Any, board: Board, ctx: CycleContext) -> float | None:
@@ -34,15 +33,10 @@ def zero_at_stage_start(test: PreconditionTest) -> PreconditionTest:
 
 
 class GraspAgent(Agent):
-    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` bound to a hand
-    driver (:class:`~eos_svc.drivers.protocol.HandDriver`: the agent senses and acts only
-    through it and never holds the true object).
-
-    The grasp agents keep the paper's rule that every opportunistic sub-rating is 0 at a
-    stage's first cycle (§5; the §4.1 ablation and Fig. 3 depend on it): the core asks every
-    precondition test every cycle, so each subclass's own :meth:`opportunistic` is wrapped
-    with :func:`zero_at_stage_start` when the class is defined.
-    """
+    """An agent of the grasp planner: a core :class:`~eos_svc.agent.Agent` acting only through a
+    hand driver (:class:`~eos_svc.drivers.protocol.HandDriver`). Each subclass's
+    :meth:`opportunistic` is wrapped with :func:`zero_at_stage_start` (paper §5; the §4.1
+    ablation and Fig. 3 depend on it)."""
 
     def __init_subclass__(cls, **kwargs: Any) -> None:
         super().__init_subclass__(**kwargs)

@@ -1,12 +1,7 @@
-"""The table of the grasp planner's board entries: type, meaning, who writes and reads each.
+"""The table of the grasp planner's board entries (type, meaning, writers, readers), generated
+from the declarations into ``docs/planner.md`` (a test fails when it no longer matches)::
 
-Generated from the declarations — :data:`~eos_svc.schema.board_entries.ENTRIES` and the agents'
-``reads`` / ``writes`` — into ``docs/planner.md``, between two marker lines:
-
-    python -m eos_svc.agents.board_table docs/planner.md   # rewrite the table there
-    python -m eos_svc.agents.board_table                   # print it
-
-``tests/agents/test_board_contract.py`` fails when the table there no longer matches.
+    python -m eos_svc.agents.board_table [docs/planner.md]   # print it, or rewrite it there
 """
 
 from __future__ import annotations
@@ -26,10 +21,7 @@ def access_table(agents: Iterable[Agent], entries: Mapping[str, Entry] = ENTRIES
     agents' declarations; :data:`OUTSIDE_WRITERS` write some, ``plan result`` reads
     :data:`AFTER_RUN`)."""
     access = access_map(agents)
-    lines = [
-        "| entry | type | meaning | written by | read by |",
-        "|---|---|---|---|---|",
-    ]
+    lines = ["| entry | type | meaning | written by | read by |", "|---|---|---|---|---|"]
     for key in sorted(entries):
         writers, readers = access.get(key, ([], []))
         if key in OUTSIDE_WRITERS:
@@ -60,11 +52,7 @@ TABLE_BEGIN, TABLE_END = "<!-- board-entries:begin -->", "<!-- board-entries:end
 
 def update_table(path: str) -> bool:
     """Replace the table between :data:`TABLE_BEGIN` and :data:`TABLE_END` in the Markdown file
-    ``path`` with :func:`planner_access_table`; returns whether the file changed.
-
-    Raises:
-        ValidationError: the file lacks the two marker lines.
-    """
+    ``path`` (a ValidationError without them); whether the file changed."""
     file = Path(path)
     text = file.read_text(encoding="utf-8")
     head, begin, rest = text.partition(TABLE_BEGIN + "\n")

@@ -1,19 +1,12 @@
 """end: finishes the run when the grasp is complete or can no longer progress.
 
-Success when all fingertips touch (a precision grip). The verdict is the world's
-(:meth:`~eos_svc.drivers.protocol.HandDriver.judge_grip`, the referee: the agent never
-holds the object). The grasp is *good* (paper Fig. 2) when the contacts lie about the
-object's diameter: the opposing finger's contact and the middle of the other contacts are on opposite sides of
-the object's centre — the angle between them, seen from the centre, at least
-150° (a mesh: not asked, see :mod:`eos_svc.drivers.grip_verdict`) — *and* the contacts are
-in force closure under Coulomb friction (μ from the board's
-``friction`` entry, the request's; see :mod:`eos_svc.drivers.grip_verdict` for the linearised
-cones and the Ferrari–Canny ε, reported with the verdict). Opportunistic sub-rating: 1
-when every finger is done (touching, missed, or stopped by a link contact), else 0. When
-chosen with a finger still open (nothing else can act), it ends the run as failed, saying
-which fingers never reached the object. On an approximate postulate (the hull of the touches) a
-grip whose fingertips feel no force closure is first let go and planned again
-(:mod:`eos_svc.agents.regrip`).
+The verdict is the world's (:meth:`~eos_svc.drivers.protocol.HandDriver.judge_grip`): success
+when all fingertips touch; *good* (paper Fig. 2) when the opposing contact and the middle of
+the others are ≥ 150° apart seen from the centre (not asked of a mesh) and the contacts are in
+force closure (:mod:`eos_svc.drivers.grip_verdict`, μ from the board's ``friction``).
+Opportunistic sub-rating: 1 when every finger is done, else 0; chosen with a finger still open,
+it fails the run naming it. On the hull of the touches a grip the fingertips feel is not in
+force closure is first let go and planned again (:mod:`eos_svc.agents.regrip`).
 """
 
 from __future__ import annotations

@@ -1,26 +1,14 @@
 """ep1: the exploratory procedure EP1 as an agent (paper §2.2).
 
-Each action rolls one fingertip on the object without sliding, along two
-tangent directions (``eos_svc.kinematics.ep1.run_ep1``), and adds the samples to
-that side's curvature estimator, so repeated EP1 runs sharpen one estimate.
+Each action rolls one fingertip on the object without sliding along two tangent directions
+(:func:`eos_svc.kinematics.ep1.run_ep1`) and adds the samples to that side's curvature
+estimator. The top is felt by an upper finger (:class:`~eos_svc.world.probing.ProbeChoice`), the
+bottom, when post_shape asks, by the opposing finger — on a table the bottom is the table's
+plane and the opposing finger feels the top. The other fingers stay open. The sensed contacts
+go on the board (``keys.EP1_CONTACT``); docs/planner.md has the detail.
 
-Where it touches: the object is explored from **above** by an upper finger
-(finger1 for hand3x3; :class:`~eos_svc.world.probing.ProbeChoice` picks it for
-any hand) — the hand lowers it onto the object's top, at the point found by
-moving 1 cm inside the surface point nearest the hand (proximity) and straight
-up — and, when post_shape asks for it (to size the object), from **below** by
-the opposing finger — unless the object rests on a table: its bottom is then the table's
-plane under the top contact, recorded without a probe from under it; and on a table the
-top is felt by the opposing finger too (the hand's lowest part, the rest of the hand above).
-The probing finger is set to its probe angle (straight, 0, for hand3x3); the other fingers
-are opened while exploring so they stay clear of the object. The sensed contact point and normal of each side
-go on the board (``keys.EP1_CONTACT``).
-
-Opportunistic sub-rating: after post_shape has pondered a new estimate and asks
-EP1 for the bottom or for more rolling (its curvature not trusted yet), the
-complement of the estimate's relative radius error, ``1 − σ_R/R`` (paper §2.2),
-floored at 0.05 so that EP1 keeps being chosen while its curvature is not
-trusted; 0 once post_shape asks for something else (EP2, or nothing).
+Opportunistic sub-rating: after post_shape asked for the bottom or for more rolling,
+1 − σ_R/R of the estimate (paper §2.2), floor 0.05; 0 once it asks for something else.
 """
 
 from __future__ import annotations
@@ -68,7 +56,6 @@ class EP1Agent(GraspAgent):
         self.solver = solver
         self.side: str | None = None
         self.estimators: dict[str, CurvatureEstimator] = {}
-        #: the hand state :meth:`_place` computes in (made on the first placement, then re-used)
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = board.get(keys.SHAPE)
@@ -79,15 +66,9 @@ class EP1Agent(GraspAgent):
         rating = float(board.get(keys.CURVATURE, {}).get("rating", 0.0))
         return max(RATING_FLOOR, min(1.0, rating))
 
-    def _finger_for(self, side: str) -> str:
-        return self.world.probe_finger(side)
-
     def _place(self, side: str, finger: str) -> tuple[np.ndarray, np.ndarray]:
-        """Bring ``finger`` onto the object's top (bottom), the other fingers opened.
-
-        Returns the proximity point (the object's surface point nearest the hand) and the
-        unit direction from the hand toward it, both world.
-        """
+        """Bring ``finger`` onto the object's top (bottom), the other fingers opened; the object's
+        surface point nearest the hand and the unit direction toward it (world)."""
         world = self.world
         hand = world.hand
         q = world.joint_positions()
@@ -122,9 +103,8 @@ class EP1Agent(GraspAgent):
         )
 
     def _table_bottom(self, board: Board, finger: str) -> ActionResult:
-        """On a table the bottom cannot be felt (no probe from under it) and need not be: the
-        object rests on the table, so its bottom is the table's plane under the top contact
-        (normal −z), recorded as the bottom contact."""
+        """On a table the object's bottom is the table's plane under the top contact (normal −z),
+        recorded as the bottom contact without a probe from under it."""
         contacts = dict(board.get(keys.EP1_CONTACT, {}))
         top = contacts.get("top")
         if top is None:
@@ -143,7 +123,7 @@ class EP1Agent(GraspAgent):
         world = self.world
         shape = board.get(keys.SHAPE)
         side = "bottom" if shape is not None and shape.get("needs") == "bottom" else "top"
-        finger = self._finger_for(side)
+        finger = world.probe_finger(side)
         if side == "bottom" and world.support_height is not None:
             return self._table_bottom(board, finger)
         moved = ""
@@ -180,14 +160,13 @@ class EP1Agent(GraspAgent):
         # Where the contact is, as the fingertip senses it (noisy tactile reading).
         reading = world.tactile(finger)
         point, normal = reading.point, reading.normal
-        summary = est.to_dict()
-        summary["finger"] = finger
-        summary["side"] = side
-        summary["max_slip_speed"] = float(result.max_slip_speed)
-        if side == "top":
-            board.set(keys.CURVATURE, summary)
-        else:
-            board.set(keys.CURVATURE_BOTTOM, summary)
+        summary = {
+            **est.to_dict(),
+            "finger": finger,
+            "side": side,
+            "max_slip_speed": float(result.max_slip_speed),
+        }
+        board.set(keys.CURVATURE if side == "top" else keys.CURVATURE_BOTTOM, summary)
         board.set(keys.EP1_RUNS, int(board.get(keys.EP1_RUNS, 0)) + 1)
         contacts = dict(board.get(keys.EP1_CONTACT, {}))
         contacts[side] = {

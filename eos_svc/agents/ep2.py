@@ -1,58 +1,26 @@
-"""ep2: the exploratory procedure EP2 as an agent — probe more of the surface (information).
+"""ep2: the exploratory procedure EP2 as an agent — guarded probes of more of the surface.
 
-EP1 feels the curvature at one contact (top, then bottom): it cannot tell a box's face from
-a large cylinder's side, nor give the object's depth or orientation. EP2 (Charlebois, Gupta
-and Payandeh, ICRA 1996: fingers dragged over the surface, "the surface approximated with a
-small number of sampled points") gathers more of it. Here each EP2 action is a round of
-**guarded probes** (:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves
-in a straight line toward the object and stops at first touch — a contact point (the tip's
-centre, from the kinematics) and a normal (from the tactile reading, with its noise); a
-probe that runs its whole travel touches nothing and tells where the object is *not* (its
-free path); one another part of the hand would touch first is abandoned. The hand never
-pushes the object.
+EP1 feels the curvature at one contact; EP2 (Charlebois, Gupta and Payandeh, ICRA 1996) gathers
+more of the surface. Each action is a round of guarded probes
+(:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves straight toward the
+object and stops at first touch (a point and a noisy normal); a probe that touches nothing tells
+where the object is not. An **active round** (:mod:`eos_svc.agents.probe_choice`) probes the
+lines where post_shape's candidates disagree most; a **round over the whole surface** (no line
+to probe, or after :data:`MAX_ACTIVE_ROUNDS`) probes the front, sides, top and bottom around
+the current estimate — the faces the fit leaves open first — and slides over the top until the
+tip drops over an edge. On a table every probe is the opposing finger's and none comes from
+below. The detail is in docs/planner.md.
 
-**Active touch** (:mod:`eos_svc.agents.probe_choice`): the first round is three probes (the
-front and both sides), which with EP1's top and bottom give post_shape five contacts to fit.
-While post_shape's postulate is not trusted it leaves its ``candidates`` (the likeliest
-classes, their fits' uncertainty and far-reaching faces), and each **active round** probes the
-:data:`ROUND_PROBES` lines where those candidates' predicted touches disagree most — where
-the competing classes' surfaces differ, where a size or the pose is least known
-(:mod:`eos_svc.shape.probe_information`) — a line the hand cannot probe giving way to the next
-of the :data:`RANKED_LINES` best. EP2 stops when post_shape trusts its postulate.
-
-A **round over the whole surface** comes when there is no candidate line to probe (no fit yet on a
-table, every line blocked, the candidates agree everywhere, or after
-:data:`MAX_ACTIVE_ROUNDS` active rounds): around the current estimate (centre and half
-extents along the world axes: EP1's top and bottom contacts and the approach point at first,
-the fitted object after), probes of the front (+x), of both sides (±y), of the top (−z) and
-of the bottom (+z), and *slides* over the top (toward the back and to both sides at first,
-along the postulated object's own horizontal axes once it has an orientation): short guarded
-probes every 3 mm, the fingertip dragged over the surface, until it drops over an edge (the
-last contact is on the edge: the object's extent that way), a link would touch first (a
-curved top past its apex) or nothing is felt; a slide keeps the contact of every
-:data:`SLIDE_KEEP`-th step and its last. Later rounds shift the probe offsets by the run's
-generator, so repeated rounds feel new places. Once post_shape's fit leaves faces no touch
-bounds (``open_faces``, :mod:`eos_svc.shape.open_faces`), such a round probes those faces
-first — straight onto each, a finger hooked round the object for a face turned away from the
-hand (:mod:`eos_svc.agents.probe_plan`) — and slides toward them from the farthest top touch;
-the whole surface again only when none of them is felt.
-When the object rests on a table there is no bottom probe, and every probe is the opposing
-finger's (:meth:`~eos_svc.world.world.GraspWorld.probe_finger`: the hand's lowest part, so the
-rest of the hand stays above the table).
-The touches go on the board (``keys.EP2_TOUCHES``, ``keys.EP2_FREE``); post_shape fits every
-class to them (:mod:`eos_svc.shape`).
-
-Opportunistic sub-rating: when post_shape has just pondered (even to the same postulate) and
-asks for more of the surface (``needs: "surface"``: the class or the extent is ambiguous, or
-not yet precise), the postulate's ambiguity ``1 − confidence`` (floor 0.05); 0 otherwise and
-after :data:`MAX_ROUNDS` rounds over the whole surface.
+Opportunistic sub-rating: right after post_shape asked for the surface (``needs: "surface"``),
+1 − confidence (floor :data:`RATING_FLOOR`); 0 after :data:`MAX_ROUNDS` whole-surface rounds.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Callable, Iterable
 
 import numpy as np
+import pinocchio as pin
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
@@ -89,10 +57,8 @@ SCAN_ROWS = 7
 
 
 def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
-    """(centre, half extents along x, y, z) of the object as known now (world, m): the
-    postulated object's axis-aligned bounds when post_shape has fitted one, else EP1's top and
-    bottom contacts (height) and the approach point (front), the object taken as deep and as
-    wide as it is high."""
+    """(centre, half extents along x, y, z) of the object as known now (world, m): the postulate's
+    bounds, else from EP1's top and bottom and the approach point, as deep and wide as high."""
     shape = board.get(keys.SHAPE) or {}
     bounds = shape.get("bounds")
     if bounds is not None:
@@ -130,7 +96,7 @@ class EP2Agent(GraspAgent):
         return max(RATING_FLOOR, min(1.0, 1.0 - float(shape["confidence"])))
 
     def plan_round(self, centre: np.ndarray, half: np.ndarray) -> list[Probe]:
-        """The probes of this round around the estimate (see the module docstring)."""
+        """The probes of a round over the whole surface around the estimate (docs/planner.md)."""
         world = self.world
         probe = world.probe
         top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
@@ -167,24 +133,10 @@ class EP2Agent(GraspAgent):
             probes += self.table_scan(centre, half, f)
         return probes
 
-    def _with_fallback(
-        self,
-        planned: list[Probe],
-        estimate: tuple[np.ndarray, np.ndarray],
-        targeted: bool,
-        counts: dict[str, int],
-    ) -> Iterator[Probe]:
-        """The ``planned`` probes, then, when they were aimed at open faces and none touched
-        (``counts`` is filled as they run), this round's probes of the whole surface."""
-        yield from planned
-        if targeted and not counts:
-            yield from self.plan_round(*estimate)
-
     def table_scan(self, centre: np.ndarray, half: np.ndarray, f: Callable[[float], float]) -> list[Probe]:
-        """On a table, probes straight down from above on a grid from the front face back
-        :data:`SCAN_DEPTH` m (or four half extents, if more) and across the width: where the top
-        is (a height map), and where nothing stands down to the table — the back the front,
-        side and top probes cannot reach. The finger is opened to its limit, its tip lowest."""
+        """On a table, probes straight down on a grid from the front face back :data:`SCAN_DEPTH` m
+        (or four half extents) and across the width, the finger opened to its limit: a height map
+        reaching the back the other probes cannot."""
         world = self.world
         finger = world.probe_finger("top")
         cx, cy, cz = centre.tolist()
@@ -205,16 +157,14 @@ class EP2Agent(GraspAgent):
         return {
             "face": face,
             "finger": finger,
-            # ndarray.round: np.round's operation without its dispatch wrapper
             "centre": np.asarray(centre).round(7).tolist(),
             "normal": np.asarray(normal).round(6).tolist(),
             "radius": self.world.hand.tip_radius(finger),
         }
 
     def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
-        """(horizontal axis, most steps) of each slide of this round: :meth:`slide_axes` with
-        SLIDE_STEPS each; once a fit leaves faces open, toward each open face with a
-        horizontal normal only, far enough to pass it by its fitted size."""
+        """(horizontal axis, most steps) of each slide: :meth:`slide_axes`, or toward each open face
+        with a horizontal normal, far enough to pass it."""
         if not faces:
             return [(axis, SLIDE_STEPS) for axis in self.slide_axes(board)]
         out = []
@@ -230,12 +180,10 @@ class EP2Agent(GraspAgent):
     def slide(
         self, start: np.ndarray, axis: np.ndarray, steps: int = SLIDE_STEPS
     ) -> tuple[list[tuple[np.ndarray, np.ndarray]], list[np.ndarray]]:
-        """Drag the top finger over the top from the tip centre ``start`` along the horizontal
-        ``axis``: every SLIDE_STEP a guarded probe down from 2 mm above the last contact
-        height. Returns the contacts (tip centre, sensed normal) up to and including the one
-        where the tip dropped by more than a step (an edge, or the surface curving away), and
-        the free tip path of the probe that ended the slide (nothing felt, or a link would
-        have touched first: the surface does not go on at that height)."""
+        """Drag the top finger from the tip centre ``start`` along the horizontal ``axis``: every
+        SLIDE_STEP a guarded probe down from 2 mm above the last contact. Returns the contacts
+        (tip centre, sensed normal) up to where the tip dropped by more than a step (an edge),
+        and the free tip path of the probe that ended the slide."""
         world = self.world
         finger = world.probe_finger("top")
         angle = world.probe.angles[finger]
@@ -266,34 +214,23 @@ class EP2Agent(GraspAgent):
 
     @staticmethod
     def slide_axes(board: Board) -> list[np.ndarray]:
-        """Horizontal directions to slide along: toward the back (+x) and to both sides (±y)
-        at first; along the postulated object's own horizontal axes (both ways) once post_shape
-        has fitted an oriented one, so that a slide crosses the edge it runs toward."""
-        obj = (board.get(keys.SHAPE) or {}).get("object")
-        if obj is None or not (board.get(keys.SHAPE) or {}).get("pose_known"):
-            return [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
-        r, p, y = obj["rpy"]
-        cr, sr, cp, sp, cy, sy = np.cos(r), np.sin(r), np.cos(p), np.sin(p), np.cos(y), np.sin(y)
-        R = np.array(
-            [
-                [cy * cp, cy * sp * sr - sy * cr, cy * sp * cr + sy * sr],
-                [sy * cp, sy * sp * sr + cy * cr, sy * sp * cr - cy * sr],
-                [-sp, cp * sr, cp * cr],
-            ]
-        )
+        """Horizontal directions to slide along: +x and ±y, or the oriented postulate's own
+        horizontal axes both ways (a slide then crosses the edge it runs toward)."""
+        shape = board.get(keys.SHAPE) or {}
         axes = []
-        for k in range(3):
-            h = np.array([R[0, k], R[1, k], 0.0])
-            n = float(np.linalg.norm(h))
-            if n > 0.5:
-                axes.extend([h / n, -h / n])
+        if shape.get("object") is not None and shape.get("pose_known"):
+            R = pin.rpy.rpyToMatrix(*(float(a) for a in shape["object"]["rpy"]))
+            for k in range(3):
+                h = np.array([R[0, k], R[1, k], 0.0])
+                n = float(np.linalg.norm(h))
+                if n > 0.5:
+                    axes.extend([h / n, -h / n])
         return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
 
     def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> list[list[Probe]]:
         """This round's active-touch lines, each its alternative probes
-        (:mod:`eos_svc.agents.probe_choice`): the seed probes before anything is felt (off a
-        table), the most informative lines while post_shape leaves candidates and active rounds
-        remain; none otherwise (a round of the whole surface)."""
+        (:mod:`eos_svc.agents.probe_choice`): the seed probes first (off a table), then the most
+        informative lines while candidates and active rounds remain; none otherwise."""
         world = self.world
         if self.active_rounds == 0 and keys.EP2_TOUCHES not in board and world.table_height is None:
             return [seed_probes(world, *estimate, STANDOFF)]
@@ -326,9 +263,8 @@ class EP2Agent(GraspAgent):
         counts: dict[str, int],
         miss_answers: bool = False,
     ) -> tuple[int, int]:
-        """Run ``probes`` (a group's alternatives after one of them touched — or, with
-        ``miss_answers``, ran its whole travel — are skipped), adding to ``touches``, ``free``
-        and the touches per face ``counts``; (missed, blocked)."""
+        """Run ``probes`` (skipping a group's alternatives once one touched, or with
+        ``miss_answers`` missed), adding to ``touches``, ``free`` and ``counts``; (missed, blocked)."""
         world = self.world
         missed = blocked = 0
         answered: set[int] = set()  # groups of alternatives already answered by a touch
@@ -384,8 +320,7 @@ class EP2Agent(GraspAgent):
         touches = list(board.get(keys.EP2_TOUCHES, []))
         free = list(board.get(keys.EP2_FREE, []))
         counts: dict[str, int] = {}
-        # active touch: a few probes where the candidates disagree most; a round of the whole
-        # surface (below) when there is none to make, or none of them met or missed the object
+        # active touch where the candidates disagree most; else (or if nothing answered) a whole round
         active = self.active_plan(board, estimate)
         if active:
             missed, blocked = self.run_lines(active, touches, free, counts)
@@ -395,35 +330,24 @@ class EP2Agent(GraspAgent):
                     board, touches, free, counts, missed, blocked, f"active round {self.active_rounds}"
                 )
         faces = (board.get(keys.SHAPE) or {}).get("open_faces") or []
-        # once a fit leaves faces open, the round probes those faces first, and the whole
-        # surface only when none of them is felt
+        # the faces a fit leaves open first, the whole surface only when none of them is felt
         planned = targeted_probes(world, faces, STANDOFF) if faces else self.plan_round(*estimate)
-        missed, blocked = self.run_probes(
-            self._with_fallback(planned, estimate, targeted=bool(faces), counts=counts), touches, free, counts
-        )
-        # slides: from the highest touch on top, short guarded probes every SLIDE_STEP along
-        # +x (toward the back), +y and −y until the tip drops over an edge, a link would
-        # touch first, or nothing is felt
-        tops = [t for t in touches if t["face"] in ("top", "slide")] + [
-            {
-                "centre": list(
-                    np.asarray(c["point"]) + world.hand.tip_radius(c["finger"]) * np.asarray(c["normal"])
-                )
-            }
-            for side, c in board.get(keys.EP1_CONTACT, {}).items()
-            if side == "top"
-        ]
+        missed, blocked = self.run_probes(planned, touches, free, counts)
+        if faces and not counts:
+            more_missed, more_blocked = self.run_probes(self.plan_round(*estimate), touches, free, counts)
+            missed, blocked = missed + more_missed, blocked + more_blocked
+        # slides over the top from its highest touch, until the tip drops over an edge
+        tops = [np.asarray(t["centre"], dtype=float) for t in touches if t["face"] in ("top", "slide")]
+        top = board.get(keys.EP1_CONTACT, {}).get("top")
+        if top is not None:  # EP1's top contact, as its tip's centre
+            tops.append(
+                np.asarray(top["point"]) + world.hand.tip_radius(top["finger"]) * np.asarray(top["normal"])
+            )
         if tops:
-            highest = np.asarray(max(tops, key=lambda t: t["centre"][2])["centre"], dtype=float)
+            highest = max(tops, key=lambda c: c[2])
             for axis, steps in self.slide_plan(board, faces):
                 # toward an open face: on from the top touch farthest that way
-                start = (
-                    highest
-                    if steps == SLIDE_STEPS
-                    else np.asarray(
-                        max(tops, key=lambda t: float(np.dot(t["centre"], axis)))["centre"], dtype=float
-                    )
-                )
+                start = highest if steps == SLIDE_STEPS else max(tops, key=lambda c: float(np.dot(c, axis)))
                 slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
                     touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))

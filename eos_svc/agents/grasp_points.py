@@ -1,23 +1,14 @@
 """grasp_points: chooses the grasp on the postulated object and places the hand before it.
 
-Grasp synthesis (:mod:`eos_svc.grasp.synthesis`; Miller, Knoop, Christensen, Allen, ICRA
-2003): from post_shape's postulate — its class, size and pose (``object``), or, for an older
-postulate without it, an upright object of its class sized by the vertical half-extent
-(:mod:`eos_svc.grasp.postulate`) — candidate grasps per primitive (approach direction and
-the hand's roll about it, using the whole wrist; contacts across the centre of mass) are
-simulated on the postulated object, kept when every fingertip lands from a collision-free
-pre-grasp, and scored by Ferrari–Canny ε; the best is chosen. The action turns the wrist to
-the grasp's orientation and moves the hand to the pre-grasp, ``approach_distance`` before
-the grasp along its approach, fingers open (a collision-free repositioning, counted as one
-information cycle), writes the target — wrist goal and rotation, the predicted contact of
-every finger, the postulated object — and completes the information stage. When the pose was
-assumed (no ``object``, or ``pose_known`` false) the cycle record says "pose assumed upright".
+Grasp synthesis (:mod:`eos_svc.grasp.synthesis`; Miller, Knoop, Christensen, Allen, ICRA 2003)
+on post_shape's postulate (:mod:`eos_svc.grasp.postulate`) scores candidate grasps by
+Ferrari–Canny ε. The action turns the wrist to the best one, moves the hand to its pre-grasp
+(``approach_distance`` before it, fingers open), writes the target and completes the
+information stage. An object larger than the hand height across every grip (d/h ≥ 1, paper
+§2.1), or no collision-free candidate, ends the run as failed.
 
-Opportunistic sub-rating: post_shape's confidence once it is ≥ 60 % and no target exists
-yet — or 60 % for an approximate postulate (the convex hull of the touches) once EP2 has no
-rounds left, planned on as it is; 0 otherwise. No candidate because the object is larger
-than the hand height across every grip (paper §2.1: d/h ≥ 1 is too big) ends the run as
-failed, naming the postulated size; so does no collision-free candidate at all.
+Opportunistic sub-rating: post_shape's confidence once ≥ 60 % and no target yet (60 % for an
+approximate postulate once EP2 has no rounds left); 0 otherwise.
 """
 
 from __future__ import annotations
@@ -55,17 +46,9 @@ def size_words(spec: ObjectSpec) -> str:
 
 
 class GraspPointsAgent(GraspAgent):
-    """Chooses the grasp and places the hand at the pre-grasp.
-
-    Args:
-        default: default sub-rating.
-        world: the world.
-        oracle: plan on this object instead of post_shape's postulate — the true object, for
-            measuring the grasp stage apart from recognition only (``plan(...,
-            oracle_postulate=True)``); never the planner's default.
-        name: the agent's name (a subclass with another sampler takes its own, see
-            :meth:`choose_candidates`).
-    """
+    """Chooses the grasp and places the hand at the pre-grasp. ``oracle``: plan on this object
+    instead of the postulate (measurement only); ``name``: a subclass's own (another sampler,
+    :meth:`choose_candidates`)."""
 
     reads = frozenset(
         {keys.SHAPE, keys.TARGET, keys.FRICTION, keys.EP1_CONTACT, keys.EP2_TOUCHES, keys.EP2_FREE}
@@ -79,8 +62,7 @@ class GraspPointsAgent(GraspAgent):
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it is confident enough and post_shape asks for nothing more
-        (or approximate, with nothing more to ask EP2 for), else None."""
+        """post_shape's postulate if it asks for nothing more and is confident (or approximate)."""
         shape = board.get(keys.SHAPE)
         if shape is None or shape.get("needs") is not None:
             return None
@@ -168,9 +150,8 @@ class GraspPointsAgent(GraspAgent):
         )
 
     def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:
-        """The candidate grasps on the postulated object ``spec``, best first: the stock
-        synthesis's (:meth:`GraspSynthesis.candidates`). A grasp agent with another sampler
-        overrides this (``eos_svc.agents.plugins.sampled_grasp_points``)."""
+        """The candidate grasps on ``spec``, best first (a grasp agent with another sampler overrides
+        this: ``eos_svc.agents.plugins.sampled_grasp_points``)."""
         return synthesis.candidates()
 
     def _no_grasp(self, spec: ObjectSpec, synthesis: GraspSynthesis, note: str) -> ActionResult:
@@ -193,8 +174,8 @@ class GraspPointsAgent(GraspAgent):
         )
 
     def _place(self, cand: GraspCandidate, synthesis: GraspSynthesis) -> tuple[np.ndarray, float] | None:
-        """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object
-        there (the hand senses it); returns (pre-grasp wrist position, stand-off)."""
+        """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object there;
+        (pre-grasp wrist position, stand-off)."""
         world = self.world
         hand = world.hand
         pre = synthesis.pregrasp(cand)

@@ -1,13 +1,7 @@
-"""Grasp memory: what earlier runs learned, for the learned sub-rating (paper §7).
-
-An embedded SQLite database keyed by what the system knows of an object when it is
-about to grasp — the postulated shape class and a size band of d/h — remembering
-the grasp that worked: where the wrist stood relative to the estimated object
-centre and the finger angles at contact, with counts of tries and successes.
-
-It survives restarts (a file) and stays consistent when several processes
-(service instances) share it: WAL journaling, a busy timeout, and every update a
-single atomic UPSERT, so concurrent writers never lose a count.
+"""Grasp memory for the learned sub-rating (paper §7): an SQLite file keyed by the postulated class
+and d/h band, remembering the grasp that worked (the wrist relative to the centre, the finger
+angles) and the tries and successes. Shared safely by processes: WAL journaling, a busy timeout,
+every update one atomic UPSERT.
 """
 
 from __future__ import annotations
@@ -49,15 +43,9 @@ def memory_key(shape: str, d_over_h: float) -> tuple[str, str, int]:
 
 @dataclass(frozen=True)
 class RememberedGrasp:
-    """A grasp that worked on objects of one key.
-
-    Attributes:
-        key: ``"<shape>/<band>"``.
-        tries: plans that reached grasping with this key; ``successes`` of them grasped.
-        offset: wrist position minus estimated object centre at the grasp (m, world).
-        angles: finger -> joint angle at contact (rad).
-        grasp_cycles: grasp-stage cycles of the last success.
-    """
+    """A grasp that worked on objects of one ``key`` (``"<shape>/<band>"``): the ``tries`` that
+    reached grasping and their ``successes``, the wrist's ``offset`` from the estimated centre (m,
+    world), the finger ``angles`` at contact (rad) and the last success's ``grasp_cycles``."""
 
     key: str
     tries: int
@@ -73,11 +61,8 @@ class RememberedGrasp:
 
 
 class GraspMemory:
-    """The SQLite-backed memory. Thread-safe (one connection per thread); process-safe.
-
-    Args:
-        path: database file (created if missing), or ``":memory:"`` for a private one.
-    """
+    """The SQLite-backed memory at ``path`` (created if missing; ``":memory:"``: a private one).
+    Thread-safe (one connection per thread) and process-safe."""
 
     def __init__(self, path: str | Path) -> None:
         self.path = str(path)

@@ -1,32 +1,12 @@
-"""The grasp planner: the paper's eight agents under the EOS controller, from one call.
+"""The grasp planner: the paper's eight agents (and ep2) under the EOS controller, from one call.
 
     from eos_svc.agents import PlanRequest, plan
     result = plan(PlanRequest(seed=3), on_cycle=print)
 
-Agent list (its order breaks ties, paper §5) and default sub-ratings:
-
-=============  ========================  =======
-agent          stages                    default
-=============  ========================  =======
-finger1        search, grasping          0.8
-finger2        search, grasping          0.7
-finger3        search, grasping          0.6
-wrist          search, grasping          0.9
-ep1            information               0.9
-ep2            information               0.8
-post_shape     information               0.7
-grasp_points   information               0.6
-end            grasping                  0.2
-=============  ========================  =======
-
-Another hand (``plan(request, hand=load_hand_named("allegro"))``) brings its own finger agents, one per
-finger in the hand's order, named after the finger and rated 0.8, 0.7, 0.6, then 0.1 less per
-extra finger (:func:`finger_ratings`); its world parameters are derived from it
-(:meth:`WorldParameters.for_hand`), with everything else derived from the hand once, in its
-:class:`~eos_svc.world.hand_context.HandContext` (give ``plan`` one to keep: ``plan(request,
-context=HandContext.build(hand))``).
-
-The same request with the same seed gives the same cycles and result.
+The agents and their default sub-ratings: :data:`DEFAULT_RATINGS` (the table in
+docs/planner.md). Another hand brings one finger agent per finger (:func:`finger_ratings`) and
+its own :class:`~eos_svc.world.hand_context.HandContext`. The same request with the same seed
+gives the same cycles and result.
 """
 
 from __future__ import annotations
@@ -58,13 +38,8 @@ from eos_svc.drivers.protocol import HandDriver
 from eos_svc.drivers.worlds import check_world, make_driver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
-from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.hands import DEFAULT_HAND, load_hand_named
-from eos_svc.kinematics import (
-    HandModel,
-    Scene,
-    TactileSensor,
-)
+from eos_svc.kinematics import HandModel, Scene, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.records import CycleRecord
 from eos_svc.schema import keys
@@ -80,7 +55,7 @@ from eos_svc.world.world import GraspWorld
 
 CycleCallback = Callable[[CycleRecord], None]
 
-#: default sub-ratings P(A|B_d), fixed at creation (see the module docstring); a hand with
+#: default sub-ratings P(A|B_d), fixed at creation (the table in docs/planner.md); a hand with
 #: other finger names rates its fingers by position (:func:`finger_ratings`)
 DEFAULT_RATINGS: dict[str, float] = {
     "finger1": 0.8,
@@ -117,16 +92,6 @@ def default_hand() -> HandModel:
     return default_context().hand
 
 
-def finger_sweeps(hand: HandModel) -> dict[str, FingerSweep]:
-    """Each finger's closing sweep (palm frame): ``context_for(hand).sweeps``."""
-    return context_for(hand).sweeps
-
-
-def parameters_for(hand: HandModel) -> WorldParameters:
-    """``WorldParameters.for_hand(hand)``: ``context_for(hand).params``."""
-    return context_for(hand).params
-
-
 def build_world(
     request: PlanRequest,
     hand: HandModel | None = None,
@@ -137,28 +102,17 @@ def build_world(
 ) -> GraspWorld:
     """The world of one plan: hand at its start pose, the object, seeded randomness.
 
-    Args:
-        hand, params: the hand and the world's constants (defaults: hand3x3, the hand's own);
-            ignored when ``context`` is given.
-        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` when
-            the caller already has).
-        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for`).
-
-    Raises:
-        ValidationError: the object is out of reach, overlaps the hand or is too large
-            (see :mod:`eos_svc.world.admission`).
+    ``hand`` and ``params`` (default: hand3x3, its own) are ignored when ``context`` is given;
+    ``check`` runs :func:`~eos_svc.world.admission.check_plannable` first (its ValidationError).
     """
     context = context if context is not None else context_for(hand, params)
     if check:
         check_plannable(request, context=context)
     hand = context.hand
-    # SeedSequence(seed).spawn(2)'s two children, made directly (the sensor's generator is made
-    # only if it takes a noisy reading)
-    search_seed = np.random.SeedSequence(request.seed, spawn_key=(0,))
-    sensor_seed = np.random.SeedSequence(request.seed, spawn_key=(1,))
-    # the joint encoders' noise and the links' calibration error draw from a third child (only
-    # when asked for: the default plan draws nothing more)
-    sensing_seed = np.random.SeedSequence(request.seed, spawn_key=(2,))
+    # SeedSequence(seed).spawn(3)'s children: the search, the tactile sensor, the joint sensing
+    search_seed, sensor_seed, sensing_seed = (
+        np.random.SeedSequence(request.seed, spawn_key=(k,)) for k in range(3)
+    )
     return GraspWorld(
         context=context,
         scene=Scene(hand, make_object(request.obj)),
@@ -178,16 +132,9 @@ def build_agents(
     memory: GraspMemory | None = None,
     oracle: ObjectSpec | None = None,
 ) -> list[Agent]:
-    """The paper's eight agents and ep2 (the paper's EP2, its future work) in list order (ties
-    go to the first); with a grasp memory, ``recall`` joins them just before ``end`` (learned
-    sub-rating, paper §7). ``oracle``: grasp_points plans on this object instead of
-    post_shape's postulate (measurement only).
-
-    One finger agent per finger of the world's hand, in the hand's order, named after the
-    finger (finger1, finger2, finger3 for hand3x3: the paper's eight agents).
-
-    The agents get the world's hand driver only (a :class:`GraspWorld` is wrapped in its
-    :class:`~eos_svc.drivers.kinematic.KinematicDriver`): they never hold the true object."""
+    """The paper's eight agents (a finger agent per finger) and ep2 in list order, ``recall`` before
+    ``end`` with a memory; they get the hand driver only (a :class:`GraspWorld` is wrapped).
+    ``oracle``: the object grasp_points plans on instead of the postulate (measurement only)."""
     if isinstance(world, GraspWorld):
         world = KinematicDriver(world)
     fingers = world.hand.finger_names
@@ -223,56 +170,31 @@ def plan(
     agents: Sequence[PluginSpec] = (),
     offered: Mapping[str, PluginSpec] | None = None,
 ) -> PlanResult:
-    """Plan one grasp: search, information (EP1), grasping, under the EOS controller.
+    """Plan one grasp: search, information, grasping, under the EOS controller.
 
     Args:
         request: what to grasp and how (default: :class:`PlanRequest` defaults).
-        on_cycle: called with every cycle record as it happens.
-        cancel: a token another thread may set to stop the plan within one cycle.
-        hand: the hand model (default: the hand ``request.hand`` names, else hand3x3), e.g.
-            ``load_hand_named("allegro")`` (:mod:`eos_svc.hands`); its context is built for this
-            plan (≈ 30 ms) unless it is the default hand or ``context`` is given.
-        params: world constants (default: ``WorldParameters.for_hand(hand)``: the defaults
-            for hand3x3, hand-dependent fields derived for another hand).
-        context: the hand's context (:class:`~eos_svc.world.hand_context.HandContext`), built
-            once by a caller that plans many times with a hand of its own; ``hand`` is then
-            ignored.
-        keep_trace: keep every cycle record in the result.
-        memory: a grasp memory: adds the ``recall`` agent (learned sub-rating) and, when the
-            plan reaches grasping, records how it went (give the request a learned weight
-            P(B_l) > 0 for recall to be chosen).
-        oracle_postulate: grasp_points plans on the request's true object instead of
-            post_shape's postulate — for measuring the grasp stage apart from recognition
-            only; off by default, never used by the command line or the service.
-        check: run :func:`~eos_svc.world.admission.check_plannable` first (``False`` only
-            when the caller has just run it on this request, hand and parameters, as the
-            service does at admission).
-        check_board: debug mode: every agent reads and writes the board only through the
-            entries it declares (``reads`` / ``writes``), and every value written is checked
-            against its declared type (:mod:`eos_svc.schema.board_entries`); a breach ends the
-            plan with status ``error`` naming the agent and the entry. Off by default; the
-            plan's cycles are the same either way.
-        world: where the hand acts (default: the request's ``world``; see
-            :mod:`eos_svc.drivers.worlds`): ``"kinematic"`` (exact, the object fixed: the
-            paper's experiments) or ``"drake"`` (the object a free body on a
-            table under gravity; the grasp must pass the lift test; the result's ``world``
-            entry says how far the object moved and how fast the simulation ran).
-        driver: a hand driver of the caller's (e.g. a :class:`~eos_svc.drivers.zenoh_driver.ZenohDriver`
-            of a hand served elsewhere) instead of a world built here for the request;
-            ``world`` is then the served world's.
-        agents: plug-in agents added to this plan after the request's own (``request.agents``):
-            factories called with the plan's hand driver, ``Agent`` instances, or names (an
-            ``eos_svc.agents`` entry point, or ``module:attr``); each checked against the
-            plug-in contract (:mod:`eos_svc.agents.plugins.loading`) and placed, in order,
-            just before ``end``.
-        offered: the plug-ins the request's names may pick (name -> plug-in), as a service
-            instance offers them; ``None``: any installed entry point or ``module:attr``.
+        on_cycle, cancel, keep_trace: a callback of every cycle record, a token another thread
+            may set to stop the plan, keep every cycle record in the result.
+        hand, params: the hand model (default: the one ``request.hand`` names, else hand3x3) and
+            the world's constants (default: the hand's own).
+        context: the hand's :class:`~eos_svc.world.hand_context.HandContext`, built once by a
+            caller planning many times with its own hand (``hand`` is then ignored).
+        memory: a grasp memory: adds the ``recall`` agent and records how the grasp went.
+        oracle_postulate: grasp_points plans on the true object (measurement only).
+        check: run :func:`~eos_svc.world.admission.check_plannable` first.
+        check_board: debug mode: every agent reads and writes only the entries it declares,
+            every value written checked against its type (:mod:`eos_svc.schema.board_entries`).
+        world: ``"kinematic"`` or ``"drake"`` (:mod:`eos_svc.drivers.worlds`; default: the
+            request's).
+        driver: a hand driver of the caller's instead of a world built here.
+        agents: plug-in agents added after the request's own, just before ``end``
+            (:mod:`eos_svc.agents.plugins.loading`).
+        offered: the plug-ins the request's names may pick; ``None``: any installed one.
 
     Raises:
-        ValidationError: a plug-in that cannot be resolved or breaks the contract (naming
-            ``agents[i]``); a request the planner cannot plan, refused before any cycle by
-            :func:`~eos_svc.world.admission.check_plannable` (object out of reach, overlapping
-            the hand, wider than the hand's span). Every planning outcome is a status in the result.
+        ValidationError: a plug-in that cannot be resolved (naming ``agents[i]``), or a request
+            admission refuses. Every planning outcome is a status in the result.
     """
     t0 = time.perf_counter()
     request = request if request is not None else PlanRequest()
@@ -287,10 +209,9 @@ def plan(
     wanted = [*requested_plugins(request.agents, offered), *agents]
     extra = plugin_agents(driver, wanted, team, STAGES) if wanted else []
     team[-1:-1] = extra  # plug-ins join just before end (ties go to the built-in agents)
+    entry_check = None
     if check_board:  # the entries the planner writes before the first cycle (board_entries.OUTSIDE_WRITERS)
         check_entry(keys.FRICTION, request.friction)
-    entry_check = None
-    if check_board:
         own = plugin_entries(extra)
         entry_check = functools.partial(check_entry, extra=own) if own else check_entry
     controller = Controller(
@@ -325,11 +246,10 @@ def plan(
     truth["d_over_h"] = obj.diameter / model.hand.hand_height
     if request.obj.shape == "sphere":
         truth["radius"] = request.obj.size["radius"]
-    shape = board.get(keys.SHAPE)
-    result = PlanResult.from_run(
+    return PlanResult.from_run(
         run,
         request=request,
-        shape=shape,
+        shape=board.get(keys.SHAPE),
         curvature=board.get(keys.CURVATURE),
         ground_truth=truth,
         contacts=verdict["contacts"],
@@ -347,7 +267,6 @@ def plan(
         wall_time_s=time.perf_counter() - t0,
         world=report,
     )
-    return result
 
 
 def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:

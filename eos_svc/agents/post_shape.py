@@ -1,46 +1,18 @@
 """post_shape: postulates the object — class, size, pose and a calibrated confidence.
 
-Two sources, in the order the information stage gathers them:
+From **EP1 alone**: the class from the top's principal curvatures (:func:`classify`), the
+vertical half extent from the top and bottom contacts, the confidence
+:data:`EP1_CLASS_PROBABILITY` × P(size within ±10 %) — below 60 %, so it asks EP1 for the
+bottom (``needs: "bottom"``), for more rolling (``"curvature"``), then EP2 (``"surface"``).
+From **every contact**: every class fitted and chosen by model evidence (:mod:`eos_svc.shape`),
+the confidence P(class right and size within tolerance); below 60 %, or not precise to
+:data:`PRECISION` on fewer than :data:`PRECISION_CONTACTS` contacts, it asks EP2 again and
+leaves its ``candidates`` and ``open_faces``. When **no class explains the contacts** after
+EP2's last round (:data:`OUT_OF_CLASS`): their convex hull (:mod:`eos_svc.shape.hull`),
+``approximate``. The postulate's fields: :class:`~eos_svc.schema.board_entries.ShapeEntry`;
+docs/planner.md has the detail.
 
-1. **EP1 alone** (the top's curvature, then the bottom's contact): the class from the
-   principal curvatures k1 ≥ k2 and their σ (1/m) — ``plane`` (both flat), ``cylinder`` (k2
-   flat), ``sphere`` (|k1 − k2| within max(2σ, 15 % of the mean curvature)), else
-   ``ellipsoid`` — and the vertical half extent from the top and bottom contacts (the centre
-   between them, one half extent behind the surface point nearest the hand). Two curvature
-   readings cannot tell a sphere from an upright capsule or ellipsoid, nor a box's face from
-   a large cylinder, nor give depth or orientation: the class probability is
-   :data:`EP1_CLASS_PROBABILITY`, so the confidence (that times P(size within ±10 %) under the
-   estimate's σ — EP1's relative radius error for a sphere, the paper's criterion, else the
-   tactile noise over the half extent) stays below the 60 % the grasp needs. post_shape asks
-   EP1 for the bottom (``needs: "bottom"``), for more rolling while EP1's own size
-   confidence is under 60 % (``needs: "curvature"``: the paper's "EP1 repeats"), then for
-   more of the surface (``needs: "surface"``: EP2).
-2. **Every contact** (EP1's two and EP2's, with EP2's free paths): every class is fitted by
-   least squares and chosen by model evidence (:mod:`eos_svc.shape`); the confidence is
-   P(class right and size within tolerance). Below 60 % post_shape asks EP2 again — and, while
-   the postulate rests on fewer than :data:`PRECISION_CONTACTS` contacts, also while its sizes
-   and centre are not known to ±:data:`PRECISION` with that probability (the precision rule:
-   a few contacts fit five classes loosely) — leaving its ``candidates``
-   (:func:`~eos_svc.shape.probe_information.candidates_of`) for EP2 to choose its next probes.
-   The next fit starts each of those classes from its candidate (``select_class``'s ``warm``):
-   a few new contacts move an optimum little, so the class's cold starts are tried only when
-   that refit does not explain the touches to within the noise.
-3. **No class explains the contacts** (the best fit beyond the noise, :data:`OUT_OF_CLASS`):
-   once EP2 has made all its rounds, the convex hull of the touches (:mod:`eos_svc.shape.hull`),
-   ``approximate``, its confidence capped at 50 %; grasp_points plans on it as it is, and the
-   end agent counts a success only with a good grasp. (Before that, the best primitive is
-   postulated as always, asking EP2 for more.)
-
-The postulate (board entry ``keys.SHAPE``) keeps ``class``, ``confidence``,
-``grasp_radius`` (the vertical half extent, what the grasp closes on), ``diameter``,
-``centre``, ``needs``, ``principal_curvatures`` and ``curvature_radius`` (EP1's, on top), and
-adds ``object`` — the postulated object in the request's JSON form (shape, size fields,
-position, rpy), None for a plane or before the size is known — ``pose_known`` (False when the
-orientation is assumed upright), ``evidence`` (contacts used, fit residual, competing classes
-with their probabilities) and ``bounds`` (the object's world-axis bounds, m).
-
-Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new (a contact, or a probe's
-free path), else 0.
+Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
 """
 
 from __future__ import annotations
@@ -73,12 +45,12 @@ MAX_FREE_SAMPLES = 60
 OUT_OF_CLASS = 1e-3
 #: the approximate postulate's class name
 HULL = "hull"
-#: the precision rule: while fewer contacts than this, a confident postulate is asked to be
-#: precise too — P(sizes and centre within ±PRECISION) at least the confidence threshold —
-#: before the grasp (EP2's active touch is cheap; a few contacts fit five classes loosely)
+#: the precision rule: on fewer contacts than this, a confident postulate must also have its sizes
+#: and centre within ±PRECISION with the confidence threshold's probability (a few contacts fit loosely)
 PRECISION_CONTACTS = 12
 PRECISION = 0.03
-#: probability that EP1's curvature class is right (see the module docstring)
+#: probability that EP1's curvature class is right: two readings cannot tell a sphere from an
+#: upright capsule or ellipsoid, nor a box from a large cylinder
 EP1_CLASS_PROBABILITY = 0.5
 
 
@@ -102,6 +74,16 @@ def classify(curvature: dict) -> tuple[str, float]:
     if abs(k1 - k2) <= max(2.0 * math.hypot(s1, s2), SPHERE_TOLERANCE * abs(mean)):
         return "sphere", 1.0 / mean
     return "ellipsoid", 1.0 / mean
+
+
+def sized(centre: np.ndarray, half: np.ndarray) -> dict[str, Any]:
+    """A postulate's size fields from its centre and half extents along the world axes (m)."""
+    return {
+        "grasp_radius": round(float(half[2]), 6),
+        "diameter": round(2.0 * float(half[2]), 6),
+        "centre": np.round(centre, 6).tolist(),
+        "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
+    }
 
 
 def touches_from(board: Board, world: HandDriver) -> Touches:
@@ -172,7 +154,11 @@ class PostShapeAgent(GraspAgent):
                 return self._from_touches(board, curvature, touches)
         return self._from_ep1(board, curvature, contacts)
 
-    def _write(self, board: Board, shape: dict[str, Any]) -> None:
+    def _write(self, board: Board, curvature: dict, shape: dict[str, Any]) -> None:
+        """Write the postulate, with EP1's curvature on top, and d/h once it is sized."""
+        radius = classify(curvature)[1]
+        shape["principal_curvatures"] = curvature["principal_curvatures"]
+        shape["curvature_radius"] = round(radius, 6) if math.isfinite(radius) else None
         board.set(keys.SHAPE, shape)
         if shape["grasp_radius"] is not None:
             board.set(keys.D_OVER_H, round(2.0 * shape["grasp_radius"] / self.world.hand.hand_height, 6))
@@ -195,7 +181,6 @@ class PostShapeAgent(GraspAgent):
                 return self._from_hull(board, curvature, touches, post.kind, hull)
         threshold = self.world.params.confidence_threshold
         fit = post.best
-        radius = classify(curvature)[1]
         precise = (
             fit is None
             or touches.count >= PRECISION_CONTACTS
@@ -210,8 +195,6 @@ class PostShapeAgent(GraspAgent):
             "diameter": None,
             "centre": None,
             "needs": None if trusted else "surface",
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": post.object(),
             "pose_known": fit is not None,
             "evidence": {
@@ -227,13 +210,8 @@ class PostShapeAgent(GraspAgent):
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
                 # the classes and extents EP2 should tell apart (its next probes)
                 shape["candidates"] = [c.to_dict() for c in candidates_of(post, touches)]
-            g = fit.geometry
-            half = g.half_extents()
-            shape["grasp_radius"] = round(float(half[2]), 6)
-            shape["diameter"] = round(2.0 * float(half[2]), 6)
-            shape["centre"] = np.round(g.centre, 6).tolist()
-            shape["bounds"] = [np.round(g.centre - half, 6).tolist(), np.round(g.centre + half, 6).tolist()]
-        self._write(board, shape)
+            shape.update(sized(fit.geometry.centre, fit.geometry.half_extents()))
+        self._write(board, curvature, shape)
         rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
         ask = "" if trusted else "; asks EP2 for more of the surface"
         if post.confidence >= threshold and not precise:
@@ -250,17 +228,11 @@ class PostShapeAgent(GraspAgent):
     ) -> ActionResult:
         """The approximate postulate (:mod:`eos_svc.shape.hull`), once EP2 has felt all it
         will: grasp_points plans on it as it is."""
-        radius = classify(curvature)[1]
-        half, centre = hull.half_extents, hull.centre
         shape: dict[str, Any] = {
             "class": HULL,
             "confidence": round(hull.confidence, 6),
-            "grasp_radius": round(float(half[2]), 6),
-            "diameter": round(2.0 * float(half[2]), 6),
-            "centre": np.round(centre, 6).tolist(),
+            **sized(hull.centre, hull.half_extents),
             "needs": None,
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "object": hull.object,
             "pose_known": True,
             "approximate": True,
@@ -270,9 +242,8 @@ class PostShapeAgent(GraspAgent):
                 "on_hull": round(hull.on_hull, 6),
                 "source": "convex hull of the EP1 and EP2 contacts: no primitive explains them",
             },
-            "bounds": [np.round(centre - half, 6).tolist(), np.round(centre + half, 6).tolist()],
         }
-        self._write(board, shape)
+        self._write(board, curvature, shape)
         return ActionResult(
             Outcome.PROGRESS,
             f"no class explains the {touches.count} contacts (best: a {best}): the convex hull of the "
@@ -323,8 +294,6 @@ class PostShapeAgent(GraspAgent):
             "diameter": None if half is None else round(2.0 * half, 6),
             "centre": centre,
             "confidence": round(confidence, 6),
-            "principal_curvatures": curvature["principal_curvatures"],
-            "curvature_radius": round(radius, 6) if math.isfinite(radius) else None,
             "needs": needs,
             "object": obj,
             "pose_known": False,
@@ -336,7 +305,7 @@ class PostShapeAgent(GraspAgent):
             },
             "bounds": None,
         }
-        self._write(board, shape)
+        self._write(board, curvature, shape)
         size = "" if half is None else f", half-height {half * 1000:.2f} mm"
         asks = {
             "bottom": "asks EP1 to feel the bottom",

@@ -1,12 +1,9 @@
 """recall: tries the grasp remembered for objects like this one (the learned sub-rating, paper §7).
 
-In the grasping stage, when the grasp memory holds a grasp that worked for the
-postulated shape class and size band, recall's *learned* sub-rating is that
-grasp's smoothed success rate; its default and opportunistic sub-ratings are 0, so
-it is chosen only through the learned weight P(B_l). Its action pre-shapes the
-hand in one move: the wrist where it stood relative to the estimated centre, each
-finger two closing steps short of its remembered contact angle — the finger agents
-then close the last steps. It acts at most once per plan.
+Its learned sub-rating is the smoothed success rate of the remembered grasp of the postulated
+class and size band (default and opportunistic 0). Its one action pre-shapes the hand: the
+wrist where it stood relative to the centre, each finger two closing steps short of its
+remembered angle.
 """
 
 from __future__ import annotations
@@ -20,14 +17,12 @@ from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
 
-RECALLED = keys.RECALLED  #: board entry: the memory key recall applied
-
 
 class RecallAgent(GraspAgent):
     """Pre-shapes the hand to a remembered grasp."""
 
-    reads = frozenset({keys.SHAPE, keys.D_OVER_H, RECALLED})
-    writes = frozenset({RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
+    reads = frozenset({keys.SHAPE, keys.D_OVER_H, keys.RECALLED})
+    writes = frozenset({keys.RECALLED, keys.AT_TARGET, keys.FINGER_STATE})
 
     def __init__(self, world: HandDriver, memory: GraspMemory) -> None:
         super().__init__("recall", (GRASP,), 0.0, world)
@@ -46,7 +41,7 @@ class RecallAgent(GraspAgent):
         return self._cache[1]
 
     def learned_rating(self, board: Board, ctx: CycleContext) -> float:
-        if RECALLED in board:
+        if keys.RECALLED in board:
             return 0.0
         entry = self.remembered(board)
         return 0.0 if entry is None else entry.reliability
@@ -73,7 +68,7 @@ class RecallAgent(GraspAgent):
                 break
         else:
             return ActionResult(Outcome.CANNOT_ACT, f"the grasp remembered for {entry.key} collides here")
-        board.set(RECALLED, entry.key)
+        board.set(keys.RECALLED, entry.key)
         board.set(keys.AT_TARGET, True)
         board.set(keys.FINGER_STATE, dict.fromkeys(hand.finger_names, "closing"))
         return ActionResult(

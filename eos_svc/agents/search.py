@@ -1,21 +1,10 @@
-"""The search stage's behaviour (paper §4): a seeded random search of a bounded workspace.
+"""The search stage's behaviour (paper §4): a seeded search of a bounded workspace.
 
-The paper's search picks a random direction and step each move; a random walk revisits
-places and has a long tail. Here each move goes straight to the next point of a coverage
-lattice over the workspace, visited once each in a seeded space-filling order
-(:mod:`eos_svc.world.coverage`, which also states which objects the search is guaranteed
-to find). The object is *located* when its surface comes within the hand's envelope
-(``WorldParameters.envelope_radius`` of the grasp centre, between the fingers) — a
-proximity sense of the palm, active all along a move (the move stops there), documented in
-``docs/planner.md``. Any of the motion agents (finger1–3, wrist) can make a
-search move: the finger agents lead the hand with their fingertip, the wrist
-moves it; the paper allows all four in the search stage.
-
-On a table the first search move first rolls the hand a quarter turn about its approach axis
-(:func:`roll_for_table`): upright, the hand is as tall as its finger spread (hand3x3: its palm
-reaches 75 mm below the grasp centre), so over a table its grasp centre could not come
-within the envelope of an object shorter than about 50 mm; rolled, its fingers lie side by
-side over the table and the grasp centre sweeps as low as the fingers' thickness allows.
+Each move sweeps the next column of a coverage lattice in a seeded space-filling order
+(:mod:`eos_svc.world.coverage`, which states what the search is sure to find) until the object
+is *located* (within ``WorldParameters.envelope_radius`` of the grasp centre). Any motion agent
+(the fingers, the wrist) can make a search move. On a table the first move rolls the hand a
+quarter turn about its approach (:func:`roll_for_table`) so its grasp centre sweeps low enough.
 """
 
 from __future__ import annotations
@@ -34,16 +23,8 @@ def search_rating(board: Board) -> float:
     return 0.0 if board.get(keys.LOCATED) else 1.0
 
 
-def search_move_limit(world: HandDriver) -> int:
-    """Sweeps after which the search gives up: every column of the coverage lattice twice
-    (:func:`eos_svc.world.coverage.column_counts`)."""
-    ny, nz = column_counts(world.params)
-    return 2 * ny * nz
-
-
 def roll_for_table(world: HandDriver) -> bool:
-    """Roll the hand a quarter turn about its approach axis (the wrist's roll joint to π/2),
-    where it stands, when it is then clear of the object; whether it rolled."""
+    """Roll the hand a quarter turn about its approach (wrist roll π/2) if it stays clear; whether it did."""
     hand = world.hand
     q = world.joint_positions()
     roll = hand.wrist_q_index[3]
@@ -58,15 +39,14 @@ def roll_for_table(world: HandDriver) -> bool:
 
 
 def search_move(world: HandDriver, board: Board, who: str) -> ActionResult:
-    """Make one search move and report whether the object is now located (on a table, the
-    hand rolled first: :func:`roll_for_table`)."""
+    """Make one search move (on a table, :func:`roll_for_table` first); is the object located now?"""
     if world.located():
         board.set(keys.LOCATED, True)
         board.set(keys.GAP, round(world.object_gap_to_grasp_centre(), 6))
         return ActionResult(Outcome.STAGE_COMPLETE, "object already within the hand's envelope")
     moves = int(board.get(keys.SEARCH_MOVES, 0))
-    limit = search_move_limit(world)
-    if moves >= limit:
+    ny, nz = column_counts(world.params)
+    if moves >= 2 * ny * nz:  # every column of the coverage lattice swept twice: give up
         return ActionResult(
             Outcome.FINISHED,
             f"object not located after sweeping every column of the search lattice twice "

@@ -1,17 +1,10 @@
 """wrist: search moves, then brings the hand closer to its grasp position.
 
-Grasping (paper §2.1, §5): each action moves the hand a little closer
-(``WorldParameters.wrist_step``) from the pre-grasp stand-off toward the grasp
-position chosen by grasp_points, along the grasp's approach (the wrist keeps the
-orientation grasp_points gave it), stopping short of any contact. When it must
-stop short, the hand is as close as it can get: the wrist re-predicts, on the
-postulated object, where each fingertip lands when it closes from here and
-makes those the fingers' chosen contacts (the cycle record says so).
-Opportunistic sub-rating: 1 − d/h while the hand is not there yet and no
-fingertip touches, and never below :data:`WRIST_FLOOR` then: for an object as wide as the hand
-is high (d/h ≥ 1: the paper's "too big" ratio, yet within the fingertips' span) the fingers
-cannot land from the pre-grasp stand-off, so the wrist is the only agent that can still bring
-the hand to its grasp — rated 0 it would be passed over and the run would stall.
+Grasping (paper §2.1, §5): each action moves the hand ``WorldParameters.wrist_step`` along the
+grasp's approach, stopping short of contact; stopped short, it re-predicts on the postulated
+object where each fingertip lands from here and makes those the chosen contacts.
+Opportunistic sub-rating: 1 − d/h while the hand is not there and no tip touches, never below
+:data:`WRIST_FLOOR` (for d/h ≥ 1 the wrist alone can still bring the hand to its grasp).
 """
 
 from __future__ import annotations

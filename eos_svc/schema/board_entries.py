@@ -1,16 +1,9 @@
 """The grasp planner's board entries: each one's type, in one place.
 
-The entries stay plain JSON-able values (dicts, lists, numbers) — the form the cycle records
-and the wire carry — and their shapes are declared here as ``TypedDict``s. :data:`ENTRIES`
-maps every entry name (:mod:`eos_svc.schema.keys`) to its type and meaning; which agent reads
-and writes which entry is declared on the agents themselves (``reads`` / ``writes``, see
-:class:`eos_svc.agent.Agent`) and tabulated by :mod:`eos_svc.agents.board_table` (the table in
-``docs/planner.md``).
-
-In the debug mode ``plan(..., check_board=True)`` the controller checks every access against
-the agents' declarations and every value written with :func:`check_entry`: required fields
-present, no undeclared field, and each field of the declared type (``float`` accepts an
-``int``; ``list`` a tuple).
+The entries are plain JSON-able values, their shapes declared as ``TypedDict``s;
+:data:`ENTRIES` maps every entry name (:mod:`eos_svc.schema.keys`) to its type and meaning (the
+table in ``docs/planner.md``, made by :mod:`eos_svc.agents.board_table`). With
+``plan(..., check_board=True)`` every value written is checked by :func:`check_entry`.
 """
 
 import functools
@@ -94,19 +87,12 @@ ShapeEntry = TypedDict(
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
 
-Required: ``class`` (plane, cylinder, sphere, ellipsoid, …), ``grasp_radius`` (vertical
-half-extent, m) and ``diameter`` (m) — ``None`` until sized —, ``centre`` (world, m, or
-``None``), ``confidence`` in [0, 1], the top's ``principal_curvatures`` (1/m) and
-``curvature_radius`` (m, ``None`` when flat), and ``needs`` (what post_shape asks EP1 for next,
-e.g. ``"bottom"``, or ``None``). Optional: ``object`` (the postulated object in the request's
-JSON form, or ``None``), ``pose_known`` (its orientation was sensed), ``evidence`` (what the
-postulate rests on), ``bounds`` (world-axis bounds [lo, hi], m) and ``open_faces`` (the
-fitted faces no touch bounds, each its ``centre``, outward ``normal``, ``half`` size and
-``delta_chi2``: where EP2 probes next, :mod:`eos_svc.shape.open_faces`), ``candidates``
-(while the postulate is not trusted: the likeliest classes, each its ``class``,
-``probability``, fitted ``parameters``, ``start_rotation`` and ``sigma_steps``, from which EP2
-chooses its next probes, :mod:`eos_svc.shape.probe_information`)
-and ``approximate`` (True: the convex hull of the touches, no primitive explaining them).
+``class``, ``grasp_radius`` (vertical half-extent, m) and ``diameter`` (m; ``None`` until
+sized), ``centre`` (world, m), ``confidence`` in [0, 1], the top's ``principal_curvatures``
+(1/m) and ``curvature_radius`` (m, ``None`` when flat), ``needs`` (what post_shape asks for
+next, or ``None``); optional: ``object`` (request form), ``pose_known``, ``evidence``,
+``bounds`` ([lo, hi], m), ``open_faces`` (:mod:`eos_svc.shape.open_faces`), ``candidates``
+(:mod:`eos_svc.shape.probe_information`) and ``approximate`` (the touches' convex hull).
 """
 
 
@@ -131,11 +117,8 @@ class LandingEntry(TypedDict):
 
 
 class TargetEntry(TypedDict):
-    """grasp_points' target (world, m and rad): the wrist's goal and angles, the pre-grasp, the
-    postulated centre, approach and closing directions, the grasp's label, its ε and angle
-    across the centre (deg), each finger's chosen contact, the postulated object (request
-    form), whether its pose was assumed upright, the postulate's source; ``repredicted`` once
-    the wrist re-predicted the contacts from where it had to stop."""
+    """grasp_points' target (world, m, rad; the angle across the centre in deg): the grasp, each
+    finger's chosen contact, the postulated object; ``repredicted`` once the wrist re-predicted."""
 
     wrist: Vector
     wrist_rpy: list[float]
@@ -164,11 +147,9 @@ class FingertipContact(TypedDict):
 
 
 class OutcomeEntry(TypedDict):
-    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`): contacts per finger,
-    whether all touch, the grip is good and about the diameter, the rule that judges the centre
-    (``"diameter"``, or ``"force closure"`` for a mesh), the angle across the centre
-    (deg, ``None`` unless all touch), the grasp quality (``GraspQuality.to_dict``) and the
-    hand configuration judged."""
+    """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`; the angle
+    across the centre in deg, ``None`` unless all touch; ``centre_rule``: ``"diameter"``, or
+    ``"force closure"`` for a mesh)."""
 
     contacts: dict[str, FingertipContact]
     all_touching: bool
@@ -244,20 +225,11 @@ AFTER_RUN: frozenset[str] = frozenset(
     }
 )
 
-#: names the table prints for the aliases above (``Vector`` is any ``list[float]``: printed as such)
-_ALIASES: dict[str, Any] = {"FingerState": FingerState}
-
 
 # --- the runtime check --------------------------------------------------------------------
 def check_entry(key: str, value: Any, extra: Mapping[str, Entry] | None = None) -> None:
-    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES`, or in
-    ``extra``: the entries plug-in agents declare for themselves).
-
-    Raises:
-        ContractError: ``field`` names the entry (``board.shape``) or the part at fault
-            (``board.shape.confidence``), ``reason`` says what is wrong; also for an entry
-            that neither declares.
-    """
+    """Check ``value`` against entry ``key``'s declared type (in :data:`ENTRIES` or ``extra``, the
+    plug-ins' own); a ContractError names the entry or the part at fault (``board.shape.confidence``)."""
     entry = ENTRIES.get(key)
     if entry is None and extra:
         entry = extra.get(key)
@@ -338,9 +310,8 @@ def _check(value: Any, tp: Any, field: str) -> None:
 # --- how a declared type reads ----------------------------------------------------------------
 def type_name(tp: Any) -> str:
     """A declared type as the table and the errors print it (``FingerState`` by name)."""
-    for name, alias in _ALIASES.items():
-        if tp == alias:
-            return name
+    if tp == FingerState:  # an alias printed by name (``Vector`` is any ``list[float]``)
+        return "FingerState"
     if tp is type(None) or tp is None:
         return "None"
     origin = get_origin(tp)

@@ -1,18 +1,12 @@
-"""Names of the information-board entries the grasp agents share.
-
-Keeping them in one place documents what the agents know and lets tests and
-clients read the board without guessing strings. Each entry's type, and which agent
-reads and writes it: :mod:`eos_svc.schema.board_entries`.
-"""
+"""Names of the information-board entries the grasp agents share (their types:
+:mod:`eos_svc.schema.board_entries`)."""
 
 from __future__ import annotations
 
 LOCATED = "located"  #: bool: the object is within the hand's envelope
 GAP = "gap_to_object"  #: float m: object surface to the grasp centre
 SEARCH_MOVES = "search_moves"  #: int: search moves (sweeps) made
-CURVATURE = (
-    "curvature"  #: dict: EP1's curvature estimate on the object's top (principal curvatures, σ, rating)
-)
+CURVATURE = "curvature"  #: dict: EP1's curvature estimate on the object's top (curvatures, σ, rating)
 CURVATURE_BOTTOM = "curvature_bottom"  #: dict: the same on the object's bottom, when explored
 EP1_RUNS = "ep1_runs"  #: int: EP1 runs so far
 EP1_CONTACT = "ep1_contact"  #: dict side -> {finger, point, normal}: sensed EP1 contact (world)
@@ -29,7 +23,6 @@ FINGER_STATE = "finger_state"  #: dict finger -> "open" | "closing" | "touching"
 FINGER_ANGLE = "finger_angle"  #: dict finger -> joint angle (rad)
 OUTCOME = "grasp_outcome"  #: dict: the end agent's verdict
 FRICTION = "friction"  #: float: Coulomb μ of the fingertip contacts (from the request; read by end)
-Q_FINAL = "q_final"  #: list: the hand configuration when end judged the grasp (for pictures)
 HAND_Q = "hand_q"  #: tuple: the hand's configuration after the cycle (rad/m, 1e-7; written by PoseBoard)
 RECALLED = "recalled"  #: str: the grasp-memory key recall applied
 OBJECT_POSE = "object_pose"  #: list: the object's pose after the cycle, Drake world (by PoseBoard)

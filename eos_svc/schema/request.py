@@ -1,11 +1,6 @@
-"""Plan requests: what a caller asks the grasp planner for, validated at the edge.
-
-Pure data and validation (no Pinocchio, no Zenoh), shared by the library call,
-the ``eos plan`` command line and the Zenoh service. Every rejection is a
-:class:`~eos_svc.errors.ValidationError` naming the field (dotted path) and the
-reason.
-
-JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
+"""Plan requests, validated at the edge: pure data shared by the library, ``eos plan`` and the
+service; every rejection a :class:`~eos_svc.errors.ValidationError` naming the field and the
+reason. JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
 
     {"object": {"shape": "sphere", "radius": 0.03, "position": [0.22, 0.0, 0.0]},
      "weights": {"default": 0.5, "opportunistic": 0.5},
@@ -165,14 +160,9 @@ def mesh_size(size: Mapping[str, Any]) -> dict[str, Any]:
 
 @dataclass(frozen=True)
 class ObjectSpec:
-    """The object to grasp: a primitive shape at a pose (metres, radians).
-
-    Attributes:
-        shape: one of :data:`SHAPE_SIZE_FIELDS`, or :data:`MESH` (its fields: :func:`mesh_size`).
-        size: the shape's size fields, e.g. ``{"radius": 0.03}`` or
-            ``{"size": (0.05, 0.05, 0.05)}`` (box: full edge lengths).
-        position: centre in the world frame (m).
-        rpy: orientation as roll, pitch, yaw (rad).
+    """The object to grasp: a ``shape`` of :data:`SHAPE_SIZE_FIELDS` or :data:`MESH`
+    (:func:`mesh_size`), its ``size`` fields (m; e.g. ``{"radius": 0.03}``, a box's full edge
+    lengths ``{"size": (0.05, 0.05, 0.05)}``), its centre's world ``position`` (m) and ``rpy`` (rad).
     """
 
     shape: str = "sphere"
@@ -245,23 +235,14 @@ class ObjectSpec:
         shape = data["shape"]
         if not isinstance(shape, str):
             raise ValidationError(f"{prefix}.shape", f"must be a string, got {type(shape).__name__}")
-        if shape == MESH:
-            _check_keys(data, {"shape", "position", "rpy", *MESH_FIELDS}, prefix)
-            return cls(
-                shape=shape,
-                size={k: data[k] for k in MESH_FIELDS if k in data},
-                position=data.get("position", DEFAULT_OBJECT["position"]),
-                rpy=data.get("rpy", (0.0, 0.0, 0.0)),
-            )
-        size_fields = set(SHAPE_SIZE_FIELDS.get(shape, ()))
-        all_sizes = {k for v in SHAPE_SIZE_FIELDS.values() for k in v}
-        _check_keys(data, {"shape", "position", "rpy"} | all_sizes, prefix)
-        size = {k: data[k] for k in data if k in all_sizes}
-        extra = set(size) - size_fields
-        if shape in SHAPE_SIZE_FIELDS and extra:
-            key = sorted(extra)[0]
+        sizes = set(MESH_FIELDS) if shape == MESH else {k for v in SHAPE_SIZE_FIELDS.values() for k in v}
+        _check_keys(data, {"shape", "position", "rpy", *sizes}, prefix)
+        size = {k: data[k] for k in data if k in sizes}
+        extra = sorted(set(size) - set(SHAPE_SIZE_FIELDS.get(shape, size)))
+        if extra:
             raise ValidationError(
-                f"{prefix}.{key}", f"not a size of a {shape} (takes {', '.join(SHAPE_SIZE_FIELDS[shape])})"
+                f"{prefix}.{extra[0]}",
+                f"not a size of a {shape} (takes {', '.join(SHAPE_SIZE_FIELDS[shape])})",
             )
         return cls(
             shape=shape,
@@ -303,10 +284,8 @@ _HAND_NAME = re.compile(r"[A-Za-z0-9_.-]{1,64}")
 
 @dataclass(frozen=True)
 class Table:
-    """A horizontal support surface under the object: its top at world z = ``height`` (m).
-
-    The planner knows it: no hand motion below it, no probe from under it, no grasp whose hand
-    would touch it; the Drake validation welds a box there."""
+    """A horizontal support surface under the object, its top at world z = ``height`` (m): no hand
+    motion, probe or grasp goes below it."""
 
     height: float
 
@@ -342,22 +321,17 @@ class PlanRequest:
         tactile_noise: standard deviation of the tactile contact location (m).
         max_cycles: cycle limit of the run.
         deadline_s: wall-clock budget of the run (s), or ``None``.
-        friction: Coulomb friction coefficient μ of the fingertip contacts, in
-            [0, :data:`MAX_FRICTION`]; the end agent's force-closure test and ε use it.
-        world: where the hand acts, one of :data:`WORLDS`: ``"kinematic"`` (exact, the object
-            fixed) or ``"drake"`` (the object a free body on a table; success needs the lift
-            test). The JSON form carries it only when it is not ``"kinematic"``.
-        agents: names of plug-in agents to add to the plan (an ``eos_svc.agents`` entry
-            point or ``module:attr``; a service instance takes only those it offers); at most
-            :data:`MAX_PLUGINS`, no name twice. Left out of the JSON form when empty.
-        encoder_noise: standard deviation of every finger joint encoder's reading (rad), in
-            [0, :data:`MAX_ENCODER_NOISE`]; 0: the hand reports its exact kinematics.
-        link_error: standard deviation of every finger link's length calibration error (m),
-            in [0, :data:`MAX_LINK_ERROR`] (see :mod:`eos_svc.world.joint_sensing`).
-        hand: the name of a registered hand to plan with (``eos hands``; a service plans
-            with the hands it registered), or ``None`` for the planner's default hand.
-        table: the support surface the object rests on (``"table": {"height": z}``), or
-            ``None`` (the default, the paper's scene: the object floats, no support).
+        friction: Coulomb μ of the fingertip contacts, in [0, :data:`MAX_FRICTION`].
+        world: one of :data:`WORLDS`: ``"kinematic"`` (exact, the object fixed) or ``"drake"``
+            (the object a free body; success needs the lift test).
+        agents: names of plug-in agents to add (an ``eos_svc.agents`` entry point or
+            ``module:attr``), at most :data:`MAX_PLUGINS`, no name twice.
+        encoder_noise: σ of every finger joint encoder's reading (rad), in [0, :data:`MAX_ENCODER_NOISE`].
+        link_error: σ of every finger link's length error (m), in [0, :data:`MAX_LINK_ERROR`]
+            (:mod:`eos_svc.world.joint_sensing`).
+        hand: the name of a registered hand (``eos hands``), or ``None`` for the default hand.
+        table: the support surface the object rests on, or ``None`` (the paper's scene).
+    The JSON form leaves out ``world`` when kinematic and the others at their defaults.
     """
 
     obj: ObjectSpec = field(default_factory=ObjectSpec)
@@ -386,37 +360,28 @@ class PlanRequest:
         if not isinstance(self.weights, Weights):
             raise ValidationError("weights", f"must be a Weights, got {type(self.weights).__name__}")
         object.__setattr__(self, "seed", _integer(self.seed, "seed", 0, 2**63 - 1))
-        noise = _number(self.tactile_noise, "tactile_noise")
-        if not 0.0 <= noise <= MAX_TACTILE_NOISE:
-            raise ValidationError("tactile_noise", f"must be in [0, {MAX_TACTILE_NOISE}] m, got {noise}")
-        object.__setattr__(self, "tactile_noise", noise)
         object.__setattr__(self, "max_cycles", _integer(self.max_cycles, "max_cycles", 1, MAX_CYCLES_LIMIT))
         if self.deadline_s is not None:
             object.__setattr__(self, "deadline_s", _positive(self.deadline_s, "deadline_s", MAX_DEADLINE_S))
-        mu = _number(self.friction, "friction")
-        if not 0.0 <= mu <= MAX_FRICTION:
-            raise ValidationError("friction", f"must be in [0, {MAX_FRICTION}], got {mu}")
-        object.__setattr__(self, "friction", mu)
+        for name, upper, unit in (
+            ("tactile_noise", MAX_TACTILE_NOISE, " m"),
+            ("friction", MAX_FRICTION, ""),
+            ("encoder_noise", MAX_ENCODER_NOISE, " rad"),
+            ("link_error", MAX_LINK_ERROR, " m"),
+        ):
+            value = _number(getattr(self, name), name)
+            if not 0.0 <= value <= upper:
+                raise ValidationError(name, f"must be in [0, {upper}]{unit}, got {value}")
+            object.__setattr__(self, name, value)
         if self.world not in WORLDS:
             raise ValidationError("world", f"must be one of {', '.join(WORLDS)}, got {self.world!r}")
         if self.agents:
             object.__setattr__(self, "agents", _plugin_names(self.agents))
-        for name, limit, unit in (
-            ("encoder_noise", MAX_ENCODER_NOISE, "rad"),
-            ("link_error", MAX_LINK_ERROR, "m"),
-        ):
-            value = _number(getattr(self, name), name)
-            if not 0.0 <= value <= limit:
-                raise ValidationError(name, f"must be in [0, {limit}] {unit}, got {value}")
-            object.__setattr__(self, name, value)
 
     @classmethod
     def from_dict(cls, data: object) -> PlanRequest:
-        """Validate and build from the JSON form; missing fields take their defaults.
-
-        Raises:
-            ValidationError: naming the first offending field.
-        """
+        """Validate and build from the JSON form (defaults for missing fields; a ValidationError
+        naming the first offending field)."""
         if not isinstance(data, Mapping):
             raise ValidationError("request", f"must be a JSON object, got {type(data).__name__}")
         _check_keys(

@@ -21,15 +21,7 @@ if TYPE_CHECKING:
     from eos_svc.schema.request import PlanRequest
 
 #: core run status -> plan status (a completed run is ``success`` only with a good grasp)
-PLAN_STATUS: dict[RunStatus, str] = {
-    RunStatus.COMPLETED: "completed",
-    RunStatus.FAILED: "failed",
-    RunStatus.STALLED: "stalled",
-    RunStatus.CYCLE_LIMIT: "cycle_limit",
-    RunStatus.DEADLINE: "deadline",
-    RunStatus.CANCELLED: "cancelled",
-    RunStatus.ERROR: "error",
-}
+PLAN_STATUS: dict[RunStatus, str] = {status: status.value for status in RunStatus}
 
 
 @dataclass(frozen=True)
@@ -42,34 +34,20 @@ class PlanResult:
         reason: why, in words.
         cycles: cycles in total; ``cycles_per_stage`` per stage entered.
         stages_completed: stages exited gracefully, in order.
-        shape: post_shape's postulate or None: ``class``, ``confidence`` (P(class right and size
-            within tolerance)), ``object`` (the postulated object in the request's JSON form, None
-            for a plane or before the size is known), ``pose_known``, ``evidence`` (contacts,
-            fit residual, competing classes), ``grasp_radius``, ``diameter``, ``centre``.
+        shape: post_shape's postulate (:class:`~eos_svc.schema.board_entries.ShapeEntry`) or None.
         curvature: EP1's last curvature estimate (principal curvatures, σ, radii).
         ground_truth: the real object (shape, size, pose, diameter, d/h).
         contacts: per finger: touching, distance (m), contact point and normal (world).
-        good_grasp: the end agent's verdict: all fingertips touch, about the diameter (paper
-            Fig. 2), and the contacts are in force closure at the request's friction (False
-            when the end agent never judged the grasp).
-        force_closure: the touching contacts are in force closure (Coulomb, μ = ``friction``),
-            as the end agent found (or, when it never acted, measured on the final contacts).
-        epsilon: Ferrari–Canny ε of the touching contacts (0 without force closure); see
-            :mod:`eos_svc.grasp.quality` (torques about the object's centre / its half diameter).
-        friction: the Coulomb coefficient μ used.
-        quality: the full quality record (cone edges, torque scale, rank, …).
-        q_final: the hand configuration the end agent judged (None when it never acted or
-            the trace was not kept).
+        good_grasp: the end agent's verdict (paper Fig. 2 and force closure; False unjudged).
+        force_closure, epsilon, quality: the contacts' force closure at μ = ``friction``, their
+            Ferrari–Canny ε (:mod:`eos_svc.grasp.quality`) and the full quality record.
+        q_final: the hand configuration judged (None when never judged).
         d_over_h: estimated diameter over hand height (None if never estimated).
-        touches: the contacts the object's postulate rests on (EP1's and EP2's).
-        probes: the guarded probes EP2 ran (touched, missed or blocked) plus EP1's runs.
+        touches: the contacts the postulate rests on; ``probes``: EP2's probes plus EP1's runs.
         seed: the request's seed. ``wall_time_s``: seconds for the whole call.
         trace: every cycle record (when kept).
-        validation: the Drake validation of the final grasp
-            (:meth:`eos_svc.validation.GraspValidation.to_dict`), None unless asked for.
-        world: the Drake world's figures (:meth:`eos_svc.drivers.drake_world.DrakeDriver.report`:
-            how far the object moved (mm), the lift test, simulated and wall time); None in the
-            kinematic world (and then absent from :meth:`to_dict`).
+        validation: the Drake validation of the final grasp, None unless asked for.
+        world: the Drake world's figures (object moved, lift test, times); None when kinematic.
     """
 
     status: str
@@ -123,13 +101,9 @@ class PlanResult:
 
     @classmethod
     def from_run(cls, run: RunResult, *, request: PlanRequest, **fields: Any) -> PlanResult:
-        """Combine the controller's result with what the agents found.
-
-        ``good_grasp``, ``force_closure``, ``epsilon`` and ``quality`` are the end agent's
-        verdict as given (never recomputed here). A completed run is ``success`` only when
-        ``good_grasp``; otherwise ``completed``. ``q_final`` (unless given) comes from the end
-        agent's verdict in the trace.
-        """
+        """Combine the controller's result with what the agents found (the end agent's verdict as
+        given): a completed run is ``success`` only when ``good_grasp``; ``q_final`` unless given
+        from the verdict in the trace."""
         if "q_final" not in fields:
             fields["q_final"] = _q_final(run.trace)
         fields.setdefault("friction", request.friction)
@@ -151,43 +125,13 @@ class PlanResult:
         )
 
     def to_dict(self, include_trace: bool = False, *, jsonable: bool = True) -> dict[str, Any]:
-        """JSON-friendly form; the trace only when asked.
-
-        ``jsonable=False``: the same members as the result holds them, not converted nor
-        copied (do not modify them), for an encoder that writes tuples as arrays and
-        non-finite floats as ``null`` itself (msgspec: the service encodes a result straight
-        from them, the same bytes as from the converted form, without walking it twice).
-        The planner builds every member from plain values (str, int, float, bool, None, dict,
-        list, tuple), so only those two conversions differ.
-        """
+        """JSON-friendly form; the trace only when asked. ``jsonable=False``: the members as held
+        (not copied: do not modify), for an encoder that writes tuples and non-finite floats
+        itself (the service's msgspec)."""
         out = {
-            "status": self.status,
-            "reason": self.reason,
-            "cycles": self.cycles,
-            "cycles_per_stage": self.cycles_per_stage,
-            "stages_completed": list(self.stages_completed),
-            "final_stage": self.final_stage,
-            "shape": self.shape,
-            "curvature": self.curvature,
-            "ground_truth": self.ground_truth,
-            "contacts": self.contacts,
-            "good_grasp": self.good_grasp,
-            "force_closure": self.force_closure,
-            "epsilon": self.epsilon,
-            "friction": self.friction,
-            "quality": self.quality,
-            "q_final": self.q_final,
-            "diameter_angle_deg": self.diameter_angle_deg,
-            "d_over_h": self.d_over_h,
-            "hand_height": self.hand_height,
-            "ep1_runs": self.ep1_runs,
-            "touches": self.touches,
-            "probes": self.probes,
-            "seed": self.seed,
-            "weights": self.weights,
-            "wall_time_s": self.wall_time_s,
-            "request": self.request,
-            "validation": self.validation,
+            f.name: getattr(self, f.name)
+            for f in dataclasses.fields(self)
+            if f.name not in ("trace", "world")
         }
         if self.world is not None:
             out["world"] = self.world

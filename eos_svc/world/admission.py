@@ -1,28 +1,12 @@
 """Admission: refuse, before any planning, the objects the grasp planner cannot plan for.
 
-:func:`check_plannable` is called first by :func:`eos_svc.agents.plan`, by ``eos plan`` and by
-the Zenoh service at admission, so a request the planner would refuse is refused at the edge
-with a :class:`~eos_svc.errors.ValidationError` naming the field and the reason. Three tests,
-each a real geometric query on the hand's model (coal distances, Pinocchio kinematics):
-
-* **reach** (``object.position``): the search moves the wrist inside the axis-aligned box
-  [``search_box_lo``, ``search_box_hi``] (world, m) without turning it, so the grasp centre
-  sweeps that box shifted by ``grasp_centre``. The object is *located* when its surface comes
-  within ``envelope_radius`` of the grasp centre; if the coal distance between the object and
-  the swept box exceeds ``envelope_radius``, no wrist position ever locates it.
-* **overlap** (``object.position``): at the start configuration (``hand.neutral()``) the
-  object must clear every hand collision geometry by ``clearance`` (coal distances).
-* **size** (the size field of the object's thinnest grip): the object must fit between this
-  hand's fingertips along some axis — its width there below the widest opening at which every
-  finger still reaches a contact (across flat faces, the tip before its links; across curved
-  ones, the tips' reach and the planner's d/h < 1 rule), with room behind the contacts before
-  the palm. One rule, :func:`~eos_svc.world.fingertip_fit.fit_refusal`, on the hand's
-  :class:`~eos_svc.world.fingertip_fit.FingertipOpening`; not the hand's *span* (the largest
-  distance between two fingertips, :func:`~eos_svc.world.hand_context.hand_span`), which
-  fingers opened that wide no longer close on.
-
-With a table (``request.table``), a fourth: **on the table** (``object.position[2]``): the
-object may not reach into it (:func:`check_on_table`).
+:func:`check_plannable` runs first in :func:`eos_svc.agents.plan`, ``eos plan`` and the
+service, so a request the planner would refuse is refused at the edge with a
+:class:`~eos_svc.errors.ValidationError` naming the field. Real geometric queries on the hand's
+model: **reach** (the search's swept grasp-centre box comes within ``envelope_radius`` of the
+object), **overlap** (the object clears the start pose by ``clearance``), **size** (it fits
+between the fingertips along some grip: :func:`~eos_svc.world.fingertip_fit.fit_refusal`) and,
+with a table, **on the table** (:func:`check_on_table`).
 """
 
 from __future__ import annotations
@@ -37,7 +21,7 @@ from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import make_object
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.world.coverage import centre_in_grasp_box, findable
+from eos_svc.world.coverage import findable
 from eos_svc.world.fingertip_fit import fit_refusal
 from eos_svc.world.hand_context import HandContext, context_for, default_context, hand_span
 from eos_svc.world.parameters import WorldParameters
@@ -48,22 +32,7 @@ __all__ = [
     "default_check",
     "hand_span",
     "plannable_verdict",
-    "smallest_width",
 ]
-
-
-def swept_box(params: WorldParameters) -> tuple[list[float], list[float]]:
-    """The box the grasp centre sweeps during the search (world, m): ``search_box`` + ``grasp_centre``."""
-    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
-    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
-    return lo, hi
-
-
-def smallest_width(spec: ObjectSpec) -> tuple[float, str]:
-    """The object's smallest width (m) and the size field that sets it (``object.<field>``): the
-    kind's own (:meth:`~eos_svc.objects.base.SurfaceObject.smallest_width`)."""
-    width, size_field = make_object(spec).smallest_width()
-    return width, f"object.{size_field}"
 
 
 def _distance(
@@ -84,20 +53,9 @@ def check_plannable(
     *,
     context: HandContext | None = None,
 ) -> None:
-    """Raise :class:`ValidationError` if the planner cannot plan ``request`` (see the module doc).
-
-    Args:
-        request: a validated plan request.
-        hand: the hand (default: hand3x3); ignored when ``context`` is given.
-        params: world constants (default: the context's, ``WorldParameters.for_hand(hand)``).
-        context: the hand's context (default: :func:`~eos_svc.world.hand_context.context_for` ``(hand)``:
-            give it when planning many requests with another hand).
-
-    Raises:
-        ValidationError: ``object.position`` when the object is out of reach or overlaps the
-            hand at its start configuration; the size field when it fits between the
-            fingertips along no axis.
-    """
+    """Raise :class:`ValidationError` (naming ``object.position``, the size field or the table's)
+    if the planner cannot plan ``request`` with ``context`` (default: ``context_for(hand)``; give
+    it when planning many requests with another hand), ``params`` overriding its own."""
     context = context_for(hand) if context is None else context
     verdict = plannable_verdict(request.obj, context if params is None else context.with_params(params))
     if verdict:
@@ -112,9 +70,8 @@ TABLE_TOLERANCE = 1e-3
 
 
 def check_on_table(spec: ObjectSpec, height: float) -> None:
-    """Refuse an object that reaches into the table at ``height`` (world z, m) by more than
-    :data:`TABLE_TOLERANCE` (its lowest point:
-    :meth:`~eos_svc.objects.base.SurfaceObject.depth_below_centre`)."""
+    """Refuse an object whose lowest point is below the table's top ``height`` (world z, m) by more
+    than :data:`TABLE_TOLERANCE`."""
     obj = make_object(spec)
     lowest = float(obj.centre[2] - obj.depth_below_centre())
     if lowest < height - TABLE_TOLERANCE:
@@ -137,8 +94,7 @@ def default_check() -> Callable[[PlanRequest], None]:
 
 
 def plannable_verdict(spec: ObjectSpec, context: HandContext) -> tuple[str, ...]:
-    """The admission verdict on ``spec``: ``()`` when the planner can plan it, else the refusal's
-    ``(field, reason)`` (see :func:`check_plannable`)."""
+    """``()`` when the planner can plan ``spec``, else the refusal's ``(field, reason)``."""
     try:
         _check_object(spec, context)
     except ValidationError as exc:
@@ -156,17 +112,19 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
 
     # Reach. The centre lies in the object, so the object's gap to the swept box is at most the
     # centre's distance to it and at least that minus the bounding radius: coal only in between.
+    obj = make_object(spec)
     centre = spec.position
-    radius = 0.5 * _diameter(spec)
-    lo, hi = swept_box(params)
+    radius = 0.5 * obj.diameter
+    # the box the grasp centre sweeps during the search (world, m)
+    lo = [a + b for a, b in zip(params.search_box_lo, params.grasp_centre, strict=True)]
+    hi = [a + b for a, b in zip(params.search_box_hi, params.grasp_centre, strict=True)]
     outside = [max(lo[i] - centre[i], 0.0, centre[i] - hi[i]) for i in range(3)]
     centre_gap = math.sqrt(sum(d * d for d in outside))
-    shape: coal.ShapeBase | None = None
-    tf_obj: coal.Transform3s | None = None
+    shape = obj.geometry
+    tf_obj = coal.Transform3s(np.array(obj.placement.rotation), np.array(obj.placement.translation))
     if centre_gap > params.envelope_radius:
         gap, axis = centre_gap - radius, max(range(3), key=outside.__getitem__)
         if gap <= params.envelope_radius:  # undecided by the bounds: the exact distance
-            shape, tf_obj = _coal_object(spec)
             res = _distance(
                 shape,
                 tf_obj,
@@ -192,8 +150,6 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
         gx, gy, gz = g.centre
         if math.sqrt((gx - cx) ** 2 + (gy - cy) ** 2 + (gz - cz) ** 2) - g.radius > reach:
             continue  # the bounding spheres are apart (plain floats: 13 of them cost less than numpy)
-        if shape is None or tf_obj is None:
-            shape, tf_obj = _coal_object(spec)
         d = float(_distance(shape, tf_obj, g.shape, g.transform).min_distance)
         if d < params.clearance:
             raise ValidationError(
@@ -206,8 +162,7 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
     # Findable: the search sweeps a lattice of columns and guarantees to locate only objects that
     # come near a sweep line and lie ahead of the fingers' reach from the rear of the box.
     rear_limit = params.search_box_lo[0] + reach_ahead + params.clearance
-    surely = centre[0] - radius > rear_limit and centre_in_grasp_box(np.asarray(centre), params)
-    if not surely and not findable(make_object(spec), params, reach_ahead):
+    if not findable(obj, params, reach_ahead):
         pos = ", ".join(f"{v:.3f}" for v in centre)
         raise ValidationError(
             "object.position",
@@ -216,16 +171,3 @@ def _check_object(spec: ObjectSpec, context: HandContext) -> None:
             f"{rear_limit:.3f} m "
             "(what the fingers reach from the rear of the search box)",
         )
-
-
-def _coal_object(spec: ObjectSpec) -> tuple[coal.ShapeBase, coal.Transform3s]:
-    """The object's coal shape and placement (as :func:`eos_svc.grasp.postulate.make_object` builds)."""
-    obj = make_object(spec)
-    return obj.geometry, coal.Transform3s(
-        np.array(obj.placement.rotation), np.array(obj.placement.translation)
-    )
-
-
-def _diameter(spec: ObjectSpec) -> float:
-    """Diameter of the smallest sphere about the object's centre that contains it (m)."""
-    return make_object(spec).diameter

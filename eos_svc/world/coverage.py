@@ -1,36 +1,11 @@
 """The search's coverage plan: where the hand looks, in a seeded space-filling order.
 
-The search stage (paper §4) is a seeded random search of a bounded workspace. A random walk
-revisits places and has a long tail (some seeds need hundreds of moves). Here every search
-move is a *sweep*: the hand retreats to the back of the search box (−x), crosses to one
-column ``(y_j, z_k)`` of a lattice and sweeps forward (+x) through the whole box, sensing
-the object all the way (it stops where the object enters the envelope, or short of a
-contact). The columns are visited once each, in a seeded space-filling order:
-
-- **Columns.** A grid over the (y, z) face of the wrist's search box, its corners included,
-  at most ``√2·envelope_radius`` apart along y and z: every point of the grasp-centre box
-  ``B = [search_box_lo, search_box_hi] + grasp_centre`` is then within ``envelope_radius``
-  of a column's sweep line (half a cell's diagonal).
-- **Order.** The columns are visited in a seeded farthest-point (maximin) order: a first
-  column drawn by the run's generator, then always the column farthest from every column
-  swept so far, so the search looks everywhere coarsely before it looks anywhere finely —
-  no long tail — and another seed gives another order. (A scrambled Sobol order was tried
-  first: median 3 sweeps but p99 14 on the default object; maximin: median 5, max 9.) A
-  sweep stopped by a bump (a hand part within the clearance of the object) moves the column
-  nearest the bump to the front of the queue.
-
-**Findable** (what the search guarantees, :func:`findable`): the object's signed distance
-from some sweep line (grasp centre at ``(x, y_j, z_k) + grasp_centre``,
-``x ∈ [search_box_lo[0], search_box_hi[0]]``) is at most ``envelope_radius`` (a sufficient
-closed form: the object reaches within ``envelope_radius − spacing/√2`` of ``B``, i.e. into
-``B`` with the default spacing), and the object lies wholly ahead of the hand's reach from
-the rear of the box (x > ``search_box_lo[0]`` + the fingers' forward reach + ``clearance``,
-0.042 m for hand3x3), so the crossings at the rear cannot bump into it, and its centre lies
-within ``B``'s height range (the upper and lower fingers would otherwise bump into it on every
-sweep). Objects closer to the rear are often found too, but a crossing the fingers cannot make
-may stall the search; the admission check (:mod:`eos_svc.world.admission`) refuses every
-object this rule does not promise, and a search that has swept every column twice without
-locating the object ends the run (``failed``) rather than sweeping on.
+Every search move is a *sweep*: back to the search box's rear (−x), across to one column
+``(y, z)`` of a lattice whose columns are at most ``√2·envelope_radius`` apart, and forward
+through the box. The columns are visited once each in a seeded farthest-point (maximin) order;
+a sweep stopped by a bump moves the column nearest the bump to the front. :func:`findable`
+states what the search is sure to find (docs/planner.md); admission
+(:mod:`eos_svc.world.admission`) refuses the rest.
 """
 
 from __future__ import annotations
@@ -68,89 +43,35 @@ def wrist_columns(params: WorldParameters) -> np.ndarray:
     return np.stack(np.meshgrid(ys, zs, indexing="ij"), axis=-1)
 
 
-def space_filling_order(counts: tuple[int, int], rng: np.random.Generator) -> list[tuple[int, int]]:
+def space_filling_order(
+    counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
+) -> list[tuple[int, int]]:
     """Every column index once, in a seeded farthest-point (maximin) order.
 
     The first column is drawn by ``rng``; each next one is the column farthest from every
     column visited so far (ties broken by a seeded jitter), so the visited columns cover the
     face ever more finely and evenly: after k columns every column is within the k-th
-    column's distance of a visited one, and that distance never grows.
-
-    The whole order at once: :class:`SpaceFillingOrder` (what the search uses) computes it a
-    column at a time, the same columns from the same draws of ``rng``.
+    column's distance of a visited one, and that distance never grows. ``lattice``:
+    :func:`lattice_of` ``(*counts)``, when the caller keeps it.
     """
-    return SpaceFillingOrder(counts, rng).pending()[:]
-
-
-class SpaceFillingOrder:
-    """The columns of :func:`space_filling_order`, each computed when the search asks for it.
-
-    The search seldom sweeps more than a few of the few dozen columns before it locates the
-    object, so the order is extended one farthest column at a time (a pass over the columns)
-    rather than all at once (one pass per column: ≈ 0.1 ms on hand3x3's 6 × 6 lattice, as much
-    as a search move). Same draws of ``rng`` at construction (the jitter, the first column) and
-    the same columns in the same order as the whole order computed at once (tested).
-
-    Scalar Python over the few dozen columns (a vectorised form costs ~40× more in numpy call
-    overhead); the lattice distances are square roots of exact integers, so the order is the
-    same as the vectorised form's (tested against it).
-    """
-
-    __slots__ = ("_distances", "_jitter", "_left", "_nearest", "_points", "_queue")
-
-    def __init__(
-        self, counts: tuple[int, int], rng: np.random.Generator, lattice: Lattice | None = None
-    ) -> None:
-        points, distances = lattice if lattice is not None else lattice_of(*counts)
-        self._points = points
-        self._distances = distances
-        self._jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
-        first = int(rng.integers(len(points)))
-        # each column's distance to the nearest column ordered so far (-1: ordered)
-        self._nearest = list(distances[first])
-        self._nearest[first] = -1.0
-        self._left = len(points) - 1  # columns not yet ordered
-        self._queue: list[tuple[int, int]] = [points[first]]  # ordered, not yet taken
-
-    def __len__(self) -> int:
-        """Columns not yet taken."""
-        return len(self._queue) + self._left
-
-    def _extend(self) -> None:
-        """Order one more column: the unordered column farthest from the ordered ones (the
-        first of equal scores, as argmax), then every column's nearest distance updated."""
-        nearest, jitter = self._nearest, self._jitter
-        k, best = 0, -math.inf
+    points, distances = lattice if lattice is not None else lattice_of(*counts)
+    jitter: list[float] = rng.uniform(0.0, 1e-3, len(points)).tolist()
+    first = int(rng.integers(len(points)))
+    nearest = list(distances[first])  # each column's distance to the nearest ordered one (-1: ordered)
+    nearest[first] = -1.0
+    order = [points[first]]
+    for _ in range(len(points) - 1):
+        k, best = 0, -math.inf  # the unordered column farthest from the ordered ones (argmax)
         for n, d in enumerate(nearest):
             score = d + jitter[n] if d >= 0.0 else -1.0
             if score > best:
                 k, best = n, score
-        self._queue.append(self._points[k])
-        self._left -= 1
+        order.append(points[k])
         nearest[k] = -1.0
-        for n, to_k in enumerate(self._distances[k]):
+        for n, to_k in enumerate(distances[k]):
             if to_k < nearest[n]:  # never for an ordered column (-1)
                 nearest[n] = to_k
-
-    def take(self) -> tuple[int, int]:
-        """The next column (``IndexError`` when every column was taken)."""
-        if not self._queue:
-            if not self._left:
-                raise IndexError("every column was taken")
-            self._extend()
-        return self._queue.pop(0)
-
-    def pending(self) -> list[tuple[int, int]]:
-        """Every column not yet taken, in order (the whole rest ordered now; the list itself:
-        reorder it with :meth:`move_to_front`)."""
-        while self._left:
-            self._extend()
-        return self._queue
-
-    def move_to_front(self, index: int) -> None:
-        """Take the ``index``-th pending column next (the rest keep their order)."""
-        queue = self.pending()
-        queue.insert(0, queue.pop(index))
+    return order
 
 
 #: a lattice's column indices and their distances (see :func:`lattice_of`)
@@ -179,22 +100,12 @@ def findable(
     samples_per_metre: int = 1000,
     exhaustive: bool = False,
 ) -> bool:
-    """Whether the search is guaranteed to locate ``obj`` (the rule of the module docstring):
-
-    1. some sweep line passes within ``envelope_radius`` of the object (signed distance,
-       sampled every ``1/samples_per_metre`` m along x), and
-    2. the object lies wholly ahead of what the hand reaches from the rear of the box — every
-       point at x > ``search_box_lo[0] + forward_reach + clearance`` — so the crossings at the
-       rear never bump into it, and
-    3. its centre lies within the grasp-centre box's height range: the upper and lower fingers
-       sit above and below the grasp centre, so an object centred above or below that range is
-       bumped by them on every sweep before the grasp centre comes near it (measured: such
-       objects ran the search into the cycle limit).
-
-    Condition 1 holds at once when the object's centre lies in the grasp-centre box
-    (:func:`centre_in_grasp_box`); ``exhaustive=True`` samples every sweep line regardless
-    (the plain test the shortcut is checked against).
-    """
+    """Whether the search is guaranteed to locate ``obj``: (1) some sweep line passes within
+    ``envelope_radius`` of it (sampled every ``1/samples_per_metre`` m), (2) it lies wholly
+    ahead of the fingers' reach from the rear of the box (x > ``search_box_lo[0] +
+    forward_reach + clearance``) and (3) its centre lies within the grasp-centre box's height
+    range (else the fingers bump it on every sweep). (1) holds at once when the centre lies in
+    the grasp-centre box (:func:`centre_in_grasp_box`) unless ``exhaustive``."""
     gc = np.asarray(params.grasp_centre, dtype=float)
     lo, hi = params.search_box_lo[0], params.search_box_hi[0]
     c = np.asarray(obj.placement.translation, dtype=float)
@@ -217,10 +128,8 @@ def findable(
 
 
 def centre_in_grasp_box(centre: np.ndarray, params: WorldParameters) -> bool:
-    """Whether ``centre`` lies in the grasp-centre box ``B`` (m). Then some sweep line passes
-    within half a lattice cell's diagonal (≤ ``envelope_radius``) of it, and the object's
-    signed distance from that point is at most the distance to its centre: condition 1 of
-    :func:`findable` holds without sampling."""
+    """Whether ``centre`` lies in the grasp-centre box (m): then some sweep line passes within
+    ``envelope_radius`` of it (condition 1 of :func:`findable`)."""
     gc = params.grasp_centre
     lo, hi = params.search_box_lo, params.search_box_hi
     return all(lo[i] + gc[i] <= float(centre[i]) <= hi[i] + gc[i] for i in range(3))

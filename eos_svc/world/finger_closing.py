@@ -3,24 +3,16 @@ on the closing gap), and tell a fingertip's touch from a link's."""
 
 from __future__ import annotations
 
-import math
 from typing import TYPE_CHECKING
-
-from eos_svc.kinematics.gap_bounds import BOUND_MARGIN
 
 if TYPE_CHECKING:
     from eos_svc.world.world import GraspWorld
 
 
 def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[str, float]:
-    """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch.
-
-    Returns:
-        (event, new angle): event is ``"moved"``, ``"touched"`` (the tip reached the
-        object; the step was cut at the contact by regula falsi), ``"link"`` (another part
-        of the finger, or the table, touched first: not a precision grip) or ``"limit"`` (the joint
-        limit was reached without touching).
-    """
+    """Close ``finger`` by ``dtheta`` rad per joint, stopping at first touch; (event, new angle):
+    ``"moved"``, ``"touched"`` (the step cut at the contact by regula falsi), ``"link"`` (another
+    part of the finger, or the table, touched first) or ``"limit"`` (no touch to the limit)."""
     tol = world.params.contact_tolerance
     idx = world.context.finger_q[finger]
     q0 = world.state.q
@@ -30,9 +22,9 @@ def close_finger_step(world: GraspWorld, finger: str, dtheta: float) -> tuple[st
     if world.table_gap() < 0.5 * tol:  # the finger would touch the table: stay, as at a link's touch
         world.set_q(q0)
         return "link", world.finger_angle(finger)
-    if closing_clear(world, finger):
-        return ("limit" if at_limit else "moved"), world.finger_angle(finger)
     f1 = closing_gap(world, finger)
+    if f1 > 0.0:  # nothing touches at the end of the step
+        return ("limit" if at_limit else "moved"), world.finger_angle(finger)
     if f0 is None:  # the closing gap at the start of the step (the bracket's other end)
         world.set_q(q0)
         f0 = closing_gap(world, finger)
@@ -81,23 +73,3 @@ def closing_gap(world: GraspWorld, finger: str) -> float:
         tip = world.tip_distance(finger) - 0.5 * world.params.contact_tolerance
         value = memo[key] = world.min_gap(world.context.links[finger], tip)
     return value
-
-
-def closing_clear(world: GraspWorld, finger: str) -> bool:
-    """``_closing_gap(finger) > 0``, proved without collision queries when the tip's and
-    the links' lower bounds allow (the tip's: its centre's distance to the object's
-    bounding ball, less its radius), else from the exact closing gap."""
-    value = world.memo.get(("closing", finger))
-    if value is None:
-        tip = world.context.tip_bound.get(finger)
-        if tip is not None:
-            tx, ty, tz = world.state.frame_views(tip[0])[0].tolist()
-            ox, oy, oz = world.obj_centre
-            dx, dy, dz = tx - ox, ty - oy, tz - oz
-            lower = math.sqrt(dx * dx + dy * dy + dz * dz) - tip[1] - world.obj_radius - BOUND_MARGIN
-            if lower > 0.5 * world.params.contact_tolerance and all(
-                bound > 0.0 for bound, _ in world.lower_bounds(world.context.links[finger])
-            ):
-                return True
-        value = closing_gap(world, finger)
-    return bool(value > 0.0)

@@ -1,13 +1,6 @@
-"""What a plan derives from its hand alone, built once per hand and passed explicitly.
-
-A :class:`HandContext` holds the hand model and everything the world, the agents and the
-admission check derive from it and never change: the fingers' closing sweeps, the world's
-parameters, the gap-bound table of its geometries, which finger probes where (and the probe
-poses), the side fingers of EP2, the sphere tips, the hand's span, its collision geometries at
-the start configuration and its forward reach. It is immutable: build it once
-(:meth:`HandContext.build`, ≈ 25 ms for hand3x3, most of it the span) and share it between
-plans and threads. The process's default hand has one kept context (:func:`default_context`):
-loading hand3x3 and building its context costs about a third of a default plan.
+"""What a plan derives from its hand alone: :class:`HandContext`, built once per hand, immutable,
+passed explicitly and shared between plans and threads (docs/planner.md). The process's default
+hand keeps one (:func:`default_context`): building it costs about a third of a default plan.
 """
 
 from __future__ import annotations
@@ -55,22 +48,18 @@ class HandContext:
         hand: the hand model.
         sweeps: each finger's closing sweep (palm frame).
         params: the world's constants for this hand (:meth:`WorldParameters.for_hand`).
-        bounds: per collision geometry, how to bound its gap to a ball from below
-            (:func:`~eos_svc.kinematics.gap_bounds.shape_bound`).
+        bounds: per collision geometry, how to bound its gap to a ball (:mod:`eos_svc.kinematics.gap_bounds`).
         links: per finger, its link geometries (what stops a closing finger as "link").
         probe: which finger explores the object's top and bottom, at which angle.
         probe_poses: the probe pose of every (finger, angle) EP2 probes with.
         angle_q: per finger, the q index of its first joint (its angle).
         finger_q: per finger, its joints' q indices (read-only).
-        tip_bound: per finger with a sphere tip, its tip frame id and radius (m).
         side_fingers: the upper finger leading a probe along +y (key ``+1``) and along −y (``-1``).
         span: the largest distance between two fingertips' surfaces over the joint ranges (m).
         neutral_geometries: the collision geometries at the start configuration.
         forward_reach: how far ahead of the wrist the fingers reach (m).
-        lattice: the search's column lattice and its distances (from ``params``; ≈ 0.2 ms).
-        opening: the widest openings between the fingertips at which every finger still
-            reaches a contact, and the room behind the contacts (what admission's size rule
-            asks: :func:`~eos_svc.world.fingertip_fit.fit_refusal`).
+        lattice: the search's column lattice and its distances (from ``params``).
+        opening: the fingertips' widest openings that still reach a contact (admission's size rule).
     """
 
     hand: HandModel
@@ -82,7 +71,6 @@ class HandContext:
     probe_poses: dict[tuple[str, float], ProbePose]
     angle_q: dict[str, int]
     finger_q: dict[str, np.ndarray]
-    tip_bound: dict[str, tuple[int, float]]
     side_fingers: dict[int, str]
     span: float
     neutral_geometries: tuple[PlacedGeometry, ...]
@@ -110,7 +98,6 @@ class HandContext:
             probe_poses={(f, a): ProbePose.build(hand, f, a) for f, a in angles},
             angle_q={f: hand.finger_joint_limits(f)[0][0] for f in hand.finger_names},
             finger_q={f: read_only(hand.finger_q_index(f)) for f in hand.finger_names},
-            tip_bound=sphere_tips(hand),
             side_fingers=sides,
             span=hand_span(hand),
             neutral_geometries=neutral_geometries(hand),
@@ -134,14 +121,12 @@ class HandContext:
 
 @functools.cache
 def default_context() -> HandContext:
-    """The context of the default hand (hand3x3, from its shipped description), built once per
-    process."""
+    """The context of the default hand (hand3x3), built once per process."""
     return HandContext.build(load_hand_named(DEFAULT_HAND))
 
 
 def context_for(hand: HandModel | None = None, params: WorldParameters | None = None) -> HandContext:
-    """The default context for ``None`` or the default hand, else a new one for ``hand``; with
-    ``params`` when given."""
+    """The default context for ``None`` or the default hand, else a new one; with ``params``."""
     default = default_context()
     context = default if hand is None or hand is default.hand else HandContext.build(hand, params)
     return context if params is None else context.with_params(params)
@@ -155,26 +140,9 @@ def side_fingers(hand: HandModel) -> dict[int, str]:
     return {+1: max(upper, key=lambda f: y[f]), -1: min(upper, key=lambda f: y[f])}
 
 
-def sphere_tips(hand: HandModel) -> dict[str, tuple[int, float]]:
-    """Per finger whose tip is a sphere (no tip geometry, or a coal sphere): its tip frame id and
-    radius (m)."""
-    geometries = hand.collision_model.geometryObjects
-    tips: dict[str, tuple[int, float]] = {}
-    for f in hand.finger_names:
-        gid = hand.tip_geometry_id(f)
-        if gid is None or isinstance(geometries[gid].geometry, coal.Sphere):
-            tips[f] = (hand.tip_frame_id(f), float(hand.tip_radius(f)))
-    return tips
-
-
 def hand_span(hand: HandModel) -> float:
-    """Largest distance between the surfaces of two fingertips, over each finger's joint range (m).
-
-    Every finger's joints are sampled on a grid of :data:`SPAN_SAMPLES` values per joint (wrist
-    at the origin); the span is the largest centre distance of two different fingers' tips
-    minus both tip radii. An object wider than this in every direction cannot be touched on
-    opposite sides by two fingertips.
-    """
+    """Largest distance between the surfaces of two fingertips over the joint ranges (m), each
+    joint sampled at :data:`SPAN_SAMPLES` values."""
     state = hand.state(hand.neutral())
     tips: dict[str, np.ndarray] = {}
     for finger in hand.finger_names:

@@ -22,29 +22,24 @@ class WorldParameters:
 
     Attributes:
         search_box_lo, search_box_hi: bounds of the wrist's search workspace (m).
-        envelope_radius: the object is *located* when its surface comes within this
-            distance of the hand's grasp centre (m).
+        envelope_radius: the object is *located* within this distance of the grasp centre (m).
         grasp_centre: the grasp centre in the palm frame (m): between the fingers.
         clearance: smallest hand–object distance a search or approach move may leave (m).
         wrist_step: length of one wrist approach step in the grasp stage (m).
-        approach_distance: pre-grasp stand-off: how far before its grasp position the
-            hand is placed by grasp_points (m).
+        approach_distance: how far before its grasp position grasp_points places the hand (m).
         finger_step: joint increment of one finger closing step (rad, every joint).
         contact_tolerance: a fingertip within this distance touches (m).
         ep1_steps: rolling steps per direction in one EP1 run.
-        ep1_omega: rolling rate (rad/s); with ``ep1_dt`` the sweep of one direction is
-            ``ep1_omega · ep1_dt · ep1_steps`` rad (0.32 rad by default: large enough that the
-            contact's travel over the fingertip dominates the tactile noise).
+        ep1_omega: rolling rate (rad/s); a direction sweeps ``ep1_omega · ep1_dt · ep1_steps``
+            rad (0.32 by default: the contact's travel dominates the tactile noise).
         ep1_dt: time step of the rolling motion (s).
         ep1_directions: roll directions of one EP1 run (degrees in the tangent plane).
         confidence_threshold: post_shape confidence needed to leave the information stage.
-        landing_tolerance: a finger closes only when its tip will land within this distance
-            of the contact grasp_points chose for it, on the postulated object (m).
-        hand_bound: radius of a ball about the grasp centre that contains the whole hand at
-            any finger angle (m); objects farther away need no collision query.
-        contact_patch_radius: radius of the fingertips' contact patch for the grasp quality
-            (m): 0 for hard point contacts (sphere tips); > 0 for soft pads, which also resist
-            a torque about the contact normal (:mod:`eos_svc.grasp.quality`).
+        landing_tolerance: a finger closes only when its tip lands within this distance of its
+            chosen contact (m).
+        hand_bound: radius of a ball about the grasp centre containing the whole hand (m).
+        contact_patch_radius: the fingertips' contact patch radius (m): 0 for point contacts,
+            > 0 for soft pads that resist a torque about the normal (:mod:`eos_svc.grasp.quality`).
     """
 
     search_box_lo: tuple[float, float, float] = (-0.10, -0.15, -0.15)
@@ -79,15 +74,10 @@ class WorldParameters:
 
 
 def derive_hand_fields(hand: HandModel, sweeps: dict[str, FingerSweep] | None = None) -> dict[str, object]:
-    """The hand-dependent :class:`WorldParameters` fields, from the hand's model.
-
-    - ``grasp_centre``: on the hand axis (the palm frame's x axis), at the mean x of the
-      points where each finger's closing path comes nearest that axis;
-    - ``search_box_lo``/``hi``: hand3x3's wrist box shifted so the grasp centre sweeps the
-      same region of the world (an object findable by hand3x3 is findable by this hand);
-    - ``hand_bound``: the largest distance from the grasp centre to any point of any
-      collision geometry over every finger's closing path, plus 1 cm.
-    """
+    """The hand-dependent :class:`WorldParameters` fields: ``grasp_centre`` on the palm's x axis
+    where the fingers' closing paths come nearest it (mean x), hand3x3's search box shifted so
+    the grasp centre sweeps the same region, and ``hand_bound`` (the hand's reach from the grasp
+    centre over the closing paths, plus 1 cm)."""
     sweeps = sweeps if sweeps is not None else build_sweeps(hand)
     xs = []
     for sweep in sweeps.values():

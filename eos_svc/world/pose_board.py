@@ -1,11 +1,6 @@
-"""The planner's information board: the core :class:`~eos_svc.board.Board` plus the hand's pose.
-
-At the end of every cycle it writes the hand's configuration (``keys.HAND_Q``: every joint of
-the hand model in order — wrist x, y, z in m, roll, pitch, yaw in rad, then the finger joints
-in rad — rounded to 1e-7) when the cycle moved the hand, so the cycle record itself says where
-the hand went: a recording, a replay or a remote watcher of the service's cycle stream can draw
-the hand cycle by cycle (:mod:`eos_svc.view`). No agent reads the entry: the cycles' choices are
-the same with it.
+"""The planner's information board: the core :class:`~eos_svc.board.Board` plus the hand's pose,
+written after every cycle that moved it (``keys.HAND_Q``: every joint in m and rad, rounded to
+1e-7), so a recording or a watcher can draw the hand cycle by cycle. No agent reads it.
 """
 
 from __future__ import annotations
@@ -27,14 +22,9 @@ def hand_q(world: HandDriver) -> tuple[float, ...]:
 
 
 class PoseBoard(Board):
-    """A board that records the hand's configuration at the end of every cycle that moved it,
-    and, in a world whose object moves (``object_pose``: the Drake world's, for viewers; no
-    agent reads it), the object's pose (``keys.OBJECT_POSE``) when it moved.
-
-    Args:
-        world: the driver of the hand recorded.
-        entries: initial entries (set up by the caller, not recorded as changes).
-        object_pose: the world's object pose now (x, y, z, qw, qx, qy, qz), or None.
+    """A board that records the hand's configuration after every cycle that moved it, and the
+    object's pose (``keys.OBJECT_POSE``, read by ``object_pose()``: x, y, z, qw, qx, qy, qz) in a
+    world whose object moves (the Drake world's); ``entries``: set up, not recorded as changes.
     """
 
     __slots__ = ("_object_pose", "_world")

@@ -25,27 +25,14 @@ def guarded_probe(
     """Move ``finger``'s tip in a straight line from ``start`` along ``direction`` (world,
     m) for at most ``travel`` m, stopping at first touch (EP2's guarded move).
 
-    The hand is placed with its wrist rotation at zero (turned by ``yaw`` rad about the vertical
-    when given: a hand whose fingers cannot curl back reaches a face turned away from it from
-    the side), ``finger`` at joint angle
-    ``angle`` and every other finger opened, so that the tip's centre is at ``start``
-    (backed off along ``−direction`` by up to 3 × 2 cm when the hand would not be clear
-    there). With a table, a probe whose hand would start within ``clearance`` of it (a probe
-    from below) is blocked, and a downward travel is cut where the hand would reach it.
-    Conservative advancement: each sub-step is at most the tip's gap beyond half the contact
-    tolerance and the other geometries' gap beyond half the contact tolerance
-    (a link may pass a face closer than ``clearance``: a straight finger's links ride 2 mm
-    above the face its tip touches), so only the tip can touch, and it never pushes the
-    object. The start's clearance is taken as the other geometries' exact minimum and the
-    tip's exact gap (the first sub-step's bound of the others, exact); after that the others'
-    exact gaps are queried only when their lower bound (the last exact value less the
-    distance moved: :func:`_probe_floor_after`) does not already fix the sub-step (the same
-    steps as querying them every sub-step).
-
-    Returns:
-        the outcome: touched (tip centre, sensed normal), missed or blocked (another part
-        of the hand would touch first, or the wrist's limits), the last two with the
-        tip-centre samples of the free path.
+    The hand is placed with its wrist turned by ``yaw`` rad about the vertical, ``finger`` at
+    ``angle`` rad and the other fingers open, the tip's centre at ``start`` (backed off along
+    ``−direction`` by up to 6 cm when the hand would not be clear there); with a table, a start
+    at or under it is blocked and a downward travel stops above it. Conservative advancement:
+    each sub-step is at most the tip's and the other geometries' gaps beyond half the contact
+    tolerance, so only the tip can touch and it never pushes the object; the others' exact gaps
+    are queried only when their lower bound (:func:`_probe_floor_after`) does not fix the step.
+    The outcome: touched, missed, or blocked (another part of the hand first, the wrist's limits).
     """
     p = world.params
     hand = world.hand
@@ -69,11 +56,8 @@ def guarded_probe(
             return ProbeOutcome("blocked", finger, why="outside the wrist's workspace")
         q[xyz] = wrist
         world.set_q(q)
-        # The hand's clearance as the other geometries' exact minimum and the tip's exact
-        # gap: their minimum is exact_clearance's exact value (the same gaps), and where
-        # exact_clearance takes its plain bound (gap − hand_bound > clearance + 5 mm) the
-        # exact minimum is above the threshold too — the same decision; the first sub-step
-        # below then has ``other`` without a query.
+        # the hand's exact clearance: the other geometries' minimum (the first sub-step's
+        # ``other``) and the tip's gap
         others_gap = world.min_gap(others, math.inf)
         clearance = others_gap if tip_gid is None else min(world.scene.gap(state, tip_gid), others_gap)
         if clearance >= p.clearance:
@@ -90,7 +74,6 @@ def guarded_probe(
     tol = p.contact_tolerance
     half_tol = 0.5 * tol
     # the wrist's start and the direction as floats: each sub-step's wrist0 + d · travelled
-    # in floats (the same products and sums numpy's would be), written item by item
     w0, w1, w2 = q[xyz].tolist()
     d0, d1, d2 = d.tolist()
     i0, i1, i2 = pose.wrist_xyz
@@ -114,10 +97,7 @@ def guarded_probe(
         room = travel - travelled
         tip_room = tip_gap - half_tol
         need = room if room <= tip_room else tip_room  # = min(room, tip_room)
-        if floor >= need and floor >= 1e-5:
-            # the other geometries can neither block nor limit this step (their gap, less
-            # half the tolerance, is ≥ floor ≥ need): the step min(room, tip_room, other)
-            # is need, without their exact queries
+        if floor >= need and floor >= 1e-5:  # the others can neither block nor limit this step
             step = need
         else:
             other = floor if exact else world.min_gap(others, math.inf) - half_tol
@@ -165,10 +145,8 @@ _PROBE_FLOOR_SLACK = (1e-6, 1e-7)
 
 
 def _probe_floor_after(floor: float, step: float) -> float:
-    """A lower bound of every hand geometry's gap to the object (m, less a constant) after a
-    pure wrist translation by ``step`` m from a pose where it was ``floor``: a translation
-    changes each distance by at most its length (less the slack of the distance queries'
-    accuracy, :data:`_PROBE_FLOOR_SLACK`). :meth:`GraspWorld.guarded_probe` skips the exact
-    queries of the other geometries while this bound alone fixes its step."""
+    """A lower bound of every hand geometry's gap to the object (m) after a wrist translation by
+    ``step`` m from a pose where it was ``floor``: a translation changes each distance by at most
+    its length (plus the queries' slack, :data:`_PROBE_FLOOR_SLACK`)."""
     per_metre, constant = _PROBE_FLOOR_SLACK
     return floor - step * (1.0 + per_metre) - constant

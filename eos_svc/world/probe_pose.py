@@ -14,17 +14,10 @@ from eos_svc.kinematics import HandModel
 
 @dataclass(frozen=True)
 class ProbePose:
-    """What a probe of ``finger`` at joint angle ``angle`` sets and checks.
-
-    Attributes:
-        indices: q indices of the wrist's roll, pitch and yaw joints, then every finger's joints.
-        values: their values (rad): wrist roll and pitch 0 and its yaw the probe's (0 unless a
-            probe turns the hand about the vertical), the probing finger's joints at the angle,
-            every other finger open (its lower limits).
-        wrist_xyz: q indices of the wrist's x, y, z joints (a list of ints).
-        wrist_lo, wrist_hi: their limits (m), as floats.
-        others: collision geometry ids other than the probing finger's tip.
-    """
+    """What a probe of ``finger`` at joint angle ``angle`` sets and checks: the ``values`` (rad)
+    of the wrist's roll, pitch, yaw and every finger joint at ``indices`` (the probing finger at
+    the angle, the others open), the wrist's x, y, z indices and limits (m), and the collision
+    geometries ``others`` than the probing tip."""
 
     indices: np.ndarray
     values: np.ndarray
@@ -34,8 +27,7 @@ class ProbePose:
     others: list[int]
 
     def apply(self, q: np.ndarray) -> None:
-        """Set the probe's configuration in ``q`` (in place; the wrist's x, y, z untouched):
-        the same values as the joint-by-joint assignments, in one indexed write."""
+        """Set the probe's configuration in ``q`` (in place; the wrist's x, y, z untouched)."""
         q[self.indices] = self.values
 
     @classmethod

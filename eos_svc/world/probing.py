@@ -16,16 +16,9 @@ from eos_svc.kinematics import HandModel
 
 @dataclass(frozen=True)
 class ProbeChoice:
-    """Which finger EP1 rolls on the object's top and on its bottom, and at which angle.
-
-    Attributes:
-        top: the non-opposing finger whose closing path runs nearest the palm's x–z plane
-            (the first listed on a tie: finger1 for hand3x3, the middle finger for the Allegro).
-        bottom: the opposing finger.
-        angles: per probing finger, the joint angle it is set to while exploring: the angle of
-            its closing path's most forward point (the fingertip moves along ±z there; 0 for
-            hand3x3's straight fingers).
-    """
+    """Which finger explores the object's top (the non-opposing finger whose closing path runs
+    nearest the palm's x–z plane, the first on a tie) and its bottom (the opposing finger), and
+    each one's joint ``angles`` (rad) while exploring: its closing path's most forward point."""
 
     top: str
     bottom: str
@@ -53,17 +46,9 @@ class ProbeChoice:
 
 @dataclass(frozen=True)
 class ProbeOutcome:
-    """What one guarded probe found (:meth:`GraspWorld.guarded_probe`).
-
-    Attributes:
-        event: "touched", "missed" or "blocked".
-        finger: the probing finger.
-        centre: touched: the tip's centre (world, m).
-        normal: touched: the sensed outward object normal (unit, world; tactile noise).
-        free: missed or blocked: tip-centre samples of the free path (N, 3), m.
-        travelled: length moved (m).
-        why: blocked: the reason.
-    """
+    """What one guarded probe of ``finger`` found: ``event`` "touched" (the tip's ``centre`` and
+    the sensed outward ``normal``, world, m), "missed" or "blocked" (``why``), those two with the
+    ``free`` tip-centre path (N, 3); the length ``travelled`` (m)."""
 
     event: str
     finger: str

@@ -1,23 +1,11 @@
 """The simulated hand and its world, as the grasp agents see and move it.
 
-:class:`GraspWorld` holds the hand's context (:class:`~eos_svc.world.hand_context.HandContext`:
-the hand and what is derived from it), the scene (coal), the hand's state (Pinocchio), the
-tactile sensor and the run's random generator. It answers the agents' questions (where the
-wrist is, how far the object is, whether the hand is clear) and offers the few guarded motions
-they make: the search's sweeps and the wrist's steps (:mod:`eos_svc.world.wrist_motion`), EP2's
-guarded probes (:mod:`eos_svc.world.probe_motion`) and a finger closing step that stops at first
-touch (:mod:`eos_svc.world.finger_closing`). Agents keep what they *know* on the board; the world
-is what they act on.
-
-Conventions (hand3x3 and every hand the planner takes): world z up; the palm frame's x axis is
-the approach direction and its z axis the closing direction (the opposing finger below, the
-others above). The wrist keeps its rotation at zero in the search and while EP1 explores (the
-palm frame is then the world frame shifted by the wrist's translation, the hand approaching
-along +x); grasp_points turns it to the chosen grasp's orientation. SI units.
-
-Hand–object gaps are exact coal distances; the cheap lower bounds of
-:mod:`eos_svc.kinematics.gap_bounds` (each at most the exact gap, tested against coal) spare the
-exact queries that cannot change a minimum or a decision.
+:class:`GraspWorld` holds the hand's context, the scene (coal), the hand's state (Pinocchio),
+the tactile sensor and the run's generator; it answers the agents' questions and runs their
+guarded motions (:mod:`~eos_svc.world.wrist_motion`, :mod:`~eos_svc.world.probe_motion`,
+:mod:`~eos_svc.world.finger_closing`). Conventions: world z up; the palm's x axis is the
+approach, its z axis the closing direction. SI units. Gaps are exact coal distances, queried
+only where the lower bounds of :mod:`eos_svc.kinematics.gap_bounds` cannot decide.
 """
 
 from __future__ import annotations
@@ -36,7 +24,6 @@ from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds
 from eos_svc.objects import SurfaceObject
 from eos_svc.world import finger_closing, probe_motion, wrist_motion
-from eos_svc.world.coverage import SpaceFillingOrder
 from eos_svc.world.hand_context import HandContext
 from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
@@ -46,10 +33,9 @@ from eos_svc.world.table import hand_table_gap, table_shape
 
 @dataclass
 class GraspWorld:
-    """The hand, the object and the run's randomness; guarded motions for the agents.
-
-    ``memo`` keeps values derived from the current hand pose (gaps, clearances); every move
-    clears it (:meth:`set_q`, :meth:`direct_motion`)."""
+    """The hand, the object and the run's randomness; guarded motions for the agents. ``hand``,
+    ``params``, ``sweeps`` and ``probe`` are the context's, ``obj`` the scene's object; ``memo``
+    keeps what is derived from the current hand pose until the next move."""
 
     context: HandContext
     scene: Scene
@@ -62,6 +48,11 @@ class GraspWorld:
     table_height: float | None = None
 
     def __post_init__(self) -> None:
+        self.hand: HandModel = self.context.hand
+        self.params: WorldParameters = self.context.params
+        self.sweeps: dict[str, FingerSweep] = self.context.sweeps
+        self.probe: ProbeChoice = self.context.probe
+        self.obj: SurfaceObject = self.scene.object
         # where the hand reports its fingertips (EP1's and EP2's contacts come from it)
         self.encoders: JointSensing = self.sensing if self.sensing is not None else JointSensing(self.hand)
         self.wrist_xyz_q = self.hand.wrist_q_index[:3]  # the wrist's x, y, z joints' q indices
@@ -73,36 +64,10 @@ class GraspWorld:
         # object is fixed for a world's lifetime (a plan never moves it)
         self.obj_centre = tuple(float(x) for x in self.scene.object.placement.translation)
         self.obj_radius = 0.5 * float(self.scene.object.diameter)
-        # the search's lattice order, drawn from rng at the first search move (see search_step)
-        self.search_order: SpaceFillingOrder | None = None
+        # the search's columns left, in order, drawn from rng at the first search move (search_step)
+        self.search_order: list[tuple[int, int]] = []
         self.search_columns = np.empty((0, 0, 2))
         self.table = None if self.table_height is None else table_shape(self.table_height)
-
-    # --- what the world is made of ---------------------------------------------------
-    @property
-    def hand(self) -> HandModel:
-        """The hand model."""
-        return self.context.hand
-
-    @property
-    def params(self) -> WorldParameters:
-        """The world's constants."""
-        return self.context.params
-
-    @property
-    def sweeps(self) -> dict[str, FingerSweep]:
-        """Each finger's closing sweep (palm frame)."""
-        return self.context.sweeps
-
-    @property
-    def probe(self) -> ProbeChoice:
-        """Which finger explores the object's top and bottom, and at which angle."""
-        return self.context.probe
-
-    @property
-    def obj(self) -> SurfaceObject:
-        """The object."""
-        return self.scene.object
 
     # --- reading the world -------------------------------------------------------------
     def wrist_position(self) -> np.ndarray:
@@ -160,11 +125,8 @@ class GraspWorld:
 
     # --- clearance -----------------------------------------------------------------------
     def hand_clearance(self) -> float:
-        """Smallest distance between any hand geometry and the object, m.
-
-        When the object is farther from the grasp centre than ``hand_bound`` no hand geometry
-        can be near it; the lower bound (gap − hand_bound) is returned without a collision query.
-        """
+        """Smallest distance between any hand geometry and the object, m; beyond ``hand_bound``
+        of the grasp centre its lower bound (gap − hand_bound), without a collision query."""
         value = self.memo.get("clearance")
         if value is None:
             gap = self.object_gap_to_grasp_centre()
@@ -176,17 +138,14 @@ class GraspWorld:
         return value
 
     def probe_finger(self, face: str) -> str:
-        """The finger that explores ``face`` ("top", "bottom", "front" or "side"; a side probe
-        along ±y is led by ``context.side_fingers``): :attr:`probe`'s choice, except on a table,
-        where every probe is the opposing finger's — the hand's lowest part, it keeps the rest
-        of the hand above the probed place."""
+        """The finger that explores ``face`` ("top", "bottom", "front" or "side"): :attr:`probe`'s
+        choice, except on a table, where every probe is the opposing finger's (the hand's lowest)."""
         if self.table is not None or face == "bottom":
             return self.probe.bottom
         return self.probe.top
 
     def table_gap(self) -> float:
-        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf``
-        without one (memoised per hand pose)."""
+        """The hand's least distance to the table (m; :mod:`eos_svc.world.table`), ``inf`` without one."""
         if self.table is None:
             return math.inf
         value = self.memo.get("table_gap")
@@ -195,19 +154,8 @@ class GraspWorld:
         return value
 
     def hand_clear(self, threshold: float) -> bool:
-        """``hand_clearance() >= threshold``, without the exact collision queries when the
-        geometries' lower bounds already reach ``threshold``."""
-        value = self.memo.get("clearance")
-        if value is None:
-            gap = self.object_gap_to_grasp_centre()
-            if gap <= self.params.hand_bound + self.params.clearance:  # the exact case
-                bounds = self.lower_bounds(range(len(self.context.bounds)))
-                if min(bounds)[0] >= threshold:  # every exact gap ≥ its bound ≥ threshold
-                    return True
-                value = self.memo["clearance"] = self.min_of(bounds, math.inf)
-            else:
-                value = self.hand_clearance()
-        return bool(value >= threshold)
+        """Whether :meth:`hand_clearance` is at least ``threshold`` (m)."""
+        return self.hand_clearance() >= threshold
 
     def exact_clearance(self) -> float:
         """:meth:`hand_clearance`, exact whenever the object is within 5 mm of the hand's
@@ -221,15 +169,9 @@ class GraspWorld:
         return value
 
     def min_gap(self, geometry_ids: Iterable[int], best: float) -> float:
-        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the exact
-        query of a geometry whose lower bound already reaches the minimum (its gap is ≥ its
-        bound ≥ the minimum, so the result is the min over every geometry)."""
-        return self.min_of(self.lower_bounds(geometry_ids), best)
-
-    def min_of(self, bounds: list[tuple[float, int]], best: float) -> float:
-        """:meth:`min_gap` from the geometries' ``(lower bound, id)`` (sorted in place)."""
-        bounds.sort()
-        for lower, gid in bounds:
+        """min(best, exact gap of every geometry in ``geometry_ids``) (m), skipping the query of a
+        geometry whose lower bound already reaches the minimum."""
+        for lower, gid in sorted(self.lower_bounds(geometry_ids)):
             if lower >= best:
                 break
             best = min(best, self.scene.gap(self.state, gid))
@@ -252,16 +194,14 @@ class GraspWorld:
         self.sync()
 
     def sync(self) -> None:
-        """Forget memoised values after ``state`` was moved directly (prefer
-        :meth:`direct_motion`, which cannot forget to)."""
+        """Forget memoised values after ``state`` was moved directly (prefer :meth:`direct_motion`)."""
         self.version += 1
         self.memo.clear()
 
     @contextlib.contextmanager
     def direct_motion(self) -> Iterator[HandState]:
-        """``with world.direct_motion() as state:`` — move ``state`` directly inside (e.g. EP1's
-        rolling QP integrates it); on leaving, normally or by an exception, the world forgets
-        what it had memoised about the old pose."""
+        """``with world.direct_motion() as state:`` — move ``state`` directly inside (EP1's rolling
+        QP); on leaving, even by an exception, the world forgets what it memoised."""
         try:
             yield self.state
         finally:

@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from eos_svc.world.coverage import SpaceFillingOrder, column_counts, wrist_columns
+from eos_svc.world.coverage import column_counts, space_filling_order, wrist_columns
 from eos_svc.world.table import clamp_above
 
 if TYPE_CHECKING:
@@ -15,23 +15,14 @@ if TYPE_CHECKING:
 
 
 def search_step(world: GraspWorld) -> tuple[str, float, bool]:
-    """One search move: a sweep of the next column of the coverage plan in this run's seeded
-    space-filling order (:mod:`eos_svc.world.coverage`): back to the box's rear (−x), across to
-    the column (y, z) — no lower than the table allows, when there is one — forward through
-    the box (+x), each leg a guarded straight move
-    (:func:`guarded_wrist_move`) that stops where the object enters the envelope or short of a
-    contact.
-
-    Returns:
-        (label of the column "(j, k)", length moved in m, blocked flag).
-    """
+    """One search move: a sweep of the next column of the coverage plan
+    (:mod:`eos_svc.world.coverage`), each leg a :func:`guarded_wrist_move` that stops where the
+    object enters the envelope or short of a contact; (column label "(j, k)", m moved, blocked)."""
     p = world.params
-    if world.search_order is None:
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
+    if not world.search_order:  # the first move, or every column swept: (again) in a new order
+        world.search_order = space_filling_order(column_counts(p), world.rng, world.context.lattice)
         world.search_columns = wrist_columns(p)
-    if not world.search_order:  # every column swept: sweep them again
-        world.search_order = SpaceFillingOrder(column_counts(p), world.rng, world.context.lattice)
-    j, k = world.search_order.take()
+    j, k = world.search_order.pop(0)
     y, z = (float(v) for v in world.search_columns[j, k])
     if world.table is not None:  # a column under the table's reach is swept as low as it allows
         z = max(z, world.wrist_xyz()[2] - (world.table_gap() - p.clearance) + 1e-6)
@@ -51,32 +42,24 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
 def _bumped(world: GraspWorld) -> None:
     """After a bump: sweep next the column that puts the grasp centre's line nearest the point of
     the object the hand bumped into (the object is there)."""
-    if not world.search_order:
+    order = world.search_order
+    if not order:
         return
-    order = world.search_order.pending()
     witness = np.asarray(world.scene.min_distance(world.state).point_object)
     cols = world.search_columns
     want = witness[1:] - np.asarray(world.params.grasp_centre)[1:]
     n = min(range(len(order)), key=lambda i: float(np.sum((cols[order[i]] - want) ** 2)))
-    world.search_order.move_to_front(n)
+    order.insert(0, order.pop(n))
 
 
 def guarded_wrist_move(
     world: GraspWorld, target: np.ndarray, stop_when_located: bool = False
 ) -> tuple[float, bool]:
-    """Translate the wrist in a straight line toward ``target`` (world, m), guarded.
-
-    Conservative advancement: each sub-step is at most the hand's clearance beyond
-    ``params.clearance`` (a translation changes every hand–object distance by at most its
-    length, so no sub-step can bring the hand closer than that) and, with
-    ``stop_when_located``, at most the grasp centre's gap beyond the envelope (floored at
-    0.5 mm). Stops when the object is located, when the hand is within 0.1 mm of the clearance
-    (blocked) or at the target. With a table the target is first shortened so that no hand
-    geometry comes within ``params.clearance`` of it (then blocked at the shortened target).
-
-    Returns:
-        (length moved in m, blocked flag).
-    """
+    """Translate the wrist in a straight line toward ``target`` (world, m), guarded: conservative
+    advancement, each sub-step at most the hand's clearance beyond ``params.clearance`` (and with
+    ``stop_when_located`` the grasp centre's gap beyond the envelope, at least 0.5 mm); stops
+    located, blocked (within 0.1 mm of the clearance, or the table) or at the target.
+    Returns (length moved in m, blocked flag)."""
     p = world.params
     xyz = world.wrist_xyz_q
     start = world.wrist_position().copy()
@@ -116,14 +99,8 @@ def guarded_wrist_move(
 
 
 def step_wrist_toward(world: GraspWorld, target: np.ndarray, step: float) -> tuple[float, bool]:
-    """Move the wrist up to ``step`` m toward ``target`` (world), guarded.
-
-    Stops short (by bisection) where any hand geometry would come within half the contact
-    tolerance of the object, so the hand never pushes the object, and short of the table.
-
-    Returns:
-        (distance left to the target in m, stopped-by-contact flag).
-    """
+    """Move the wrist up to ``step`` m toward ``target`` (world), stopping short (by bisection)
+    of half the contact tolerance from the object, and of the table; (m left, stopped flag)."""
     xyz = world.wrist_xyz_q
     threshold = 0.5 * world.params.contact_tolerance
     start = world.wrist_position().copy()

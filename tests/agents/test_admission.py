@@ -9,12 +9,14 @@ import sys
 import numpy as np
 import pytest
 
-from eos_svc.agents.planner import default_hand, finger_sweeps, parameters_for, plan
+from eos_svc.agents.planner import default_hand, plan
 from eos_svc.errors import ValidationError
+from eos_svc.grasp.postulate import make_object
 from eos_svc.schema.request import ObjectSpec, PlanRequest
-from eos_svc.world.admission import check_plannable, hand_span, smallest_width
+from eos_svc.world.admission import check_plannable, hand_span
+from eos_svc.world.hand_context import context_for
 
-PARAMS = parameters_for(default_hand())
+PARAMS = context_for().params
 #: the box the grasp centre sweeps (world, m) and the envelope radius
 LO = np.add(PARAMS.search_box_lo, PARAMS.grasp_centre)
 HI = np.add(PARAMS.search_box_hi, PARAMS.grasp_centre)
@@ -82,7 +84,7 @@ def test_span_covers_the_fingers_opening():
     hand = default_hand()
     span = hand_span(hand)
     # closed form from the closing sweeps: the two farthest tips when all joints open together
-    sweeps = finger_sweeps(hand)
+    sweeps = context_for(hand).sweeps
     opened = max(
         float(np.linalg.norm(sweeps[a].points[0] - sweeps[b].points[0])) - 2 * hand.tip_radius(a)
         for a in sweeps
@@ -103,7 +105,8 @@ def test_span_covers_the_fingers_opening():
     ],
 )
 def test_too_large_in_every_direction_names_the_size_field(spec, width, field):
-    assert smallest_width(spec) == (pytest.approx(width), field)
+    smallest, size_field = make_object(spec).smallest_width()
+    assert (smallest, f"object.{size_field}") == (pytest.approx(width), field)
     err = refusal(spec)
     assert err is not None and err.field == field
 
@@ -160,8 +163,8 @@ def test_the_findable_shortcut_agrees_with_sampling_every_sweep_line():
     from eos_svc.world.coverage import findable
 
     hand = default_hand()
-    params = parameters_for(hand)
-    reach = forward_reach(hand, finger_sweeps(hand))
+    params = context_for(hand).params
+    reach = forward_reach(hand, context_for(hand).sweeps)
     rng = np.random.default_rng(5)
     shapes = [
         ("sphere", {"radius": 0.02}),

@@ -9,17 +9,17 @@ import numpy as np
 import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest, keys
-from eos_svc.agents.planner import build_world, default_hand, make_object, parameters_for
+from eos_svc.agents.planner import build_world, default_hand, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.world.coverage import (
-    SpaceFillingOrder,
     column_counts,
     coverage_spacing,
     findable,
     space_filling_order,
     wrist_columns,
 )
+from eos_svc.world.hand_context import context_for
 
 
 def search_length(spec: ObjectSpec, seed: int, limit: int = 200) -> int:
@@ -35,7 +35,7 @@ def search_length(spec: ObjectSpec, seed: int, limit: int = 200) -> int:
 
 
 def test_columns_cover_the_box():
-    params = parameters_for(default_hand())
+    params = context_for().params
     cols = wrist_columns(params).reshape(-1, 2)
     rng = np.random.default_rng(0)
     pts = rng.uniform(params.search_box_lo[1:], params.search_box_hi[1:], size=(2000, 2))
@@ -45,8 +45,7 @@ def test_columns_cover_the_box():
 
 
 def vectorised_space_filling_order(counts, rng):
-    """The maximin order written with numpy arrays (the plain form space_filling_order's scalar
-    loop must agree with)."""
+    """The maximin order written with numpy arrays (space_filling_order's scalar loop must agree)."""
     ny, nz = counts
     points = np.array([(i, j) for i in range(ny) for j in range(nz)], dtype=float)
     jitter = rng.uniform(0.0, 1e-3, len(points))
@@ -72,36 +71,6 @@ def test_scalar_order_equals_the_vectorised_one(counts):
         assert all(type(i) is int and type(j) is int for i, j in fast)
 
 
-@pytest.mark.parametrize("counts", [(6, 6), (1, 1), (3, 7)])
-def test_order_a_column_at_a_time_is_the_whole_order_and_draws_the_same(counts):
-    for seed in range(10):
-        whole_rng, lazy_rng = np.random.default_rng(seed), np.random.default_rng(seed)
-        whole = space_filling_order(counts, whole_rng)
-        lazy = SpaceFillingOrder(counts, lazy_rng)
-        assert whole_rng.random() == lazy_rng.random()  # the same draws, at construction
-        taken = []
-        while lazy:
-            assert len(lazy) == len(whole) - len(taken)
-            taken.append(lazy.take())
-        assert taken == whole
-        with pytest.raises(IndexError):
-            lazy.take()
-
-
-def test_pending_and_move_to_front_act_as_on_the_whole_list():
-    counts = (6, 6)
-    for seed, taken_first, index in ((0, 0, 5), (1, 3, 0), (2, 4, 30), (3, 35, 0)):
-        whole = space_filling_order(counts, np.random.default_rng(seed))
-        lazy = SpaceFillingOrder(counts, np.random.default_rng(seed))
-        for _ in range(taken_first):
-            lazy.take()
-        rest = whole[taken_first:]
-        assert lazy.pending() == rest
-        rest.insert(0, rest.pop(index))  # what the search did with the whole list after a bump
-        lazy.move_to_front(index)
-        assert [lazy.take() for _ in range(len(lazy))] == rest
-
-
 def test_order_visits_every_column_once_and_follows_the_seed():
     counts = (6, 6)
     a = space_filling_order(counts, np.random.default_rng(3))
@@ -124,7 +93,7 @@ def test_order_visits_every_column_once_and_follows_the_seed():
 )
 def test_findable_objects_are_found_within_one_pass(position):
     spec = ObjectSpec("sphere", {"radius": 0.025}, position)
-    params = parameters_for(default_hand())
+    params = context_for().params
     assert findable(make_object(spec), params)
     ny, nz = column_counts(params)
     lengths = [search_length(spec, seed) for seed in range(1, 11)]
@@ -132,7 +101,7 @@ def test_findable_objects_are_found_within_one_pass(position):
 
 
 def test_object_within_the_fingers_reach_from_the_rear_is_not_findable():
-    params = parameters_for(default_hand())
+    params = context_for().params
     rear = ObjectSpec("sphere", {"radius": 0.03}, (0.05, -0.1, 0.1))  # the fingers reach it at the rear
     assert not findable(make_object(rear), params)
     ahead = ObjectSpec("sphere", {"radius": 0.03}, (0.09, -0.1, 0.1))
@@ -142,15 +111,15 @@ def test_object_within_the_fingers_reach_from_the_rear_is_not_findable():
 
 
 def test_object_beyond_every_sweep_is_not_findable():
-    params = parameters_for(default_hand())
+    params = context_for().params
     far = ObjectSpec("sphere", {"radius": 0.02}, (0.30, 0.0, 0.25))  # 8 cm above the box's top
     assert not findable(make_object(far), params)
 
 
 def test_forward_reach_of_hand3x3_is_the_default_of_the_rule():
-    from eos_svc.agents.planner import finger_sweeps
     from eos_svc.grasp.sweeps import forward_reach
     from eos_svc.world.coverage import HAND3X3_FORWARD_REACH
+    from eos_svc.world.hand_context import context_for
 
     hand = default_hand()
-    assert forward_reach(hand, finger_sweeps(hand)) == pytest.approx(HAND3X3_FORWARD_REACH, abs=1e-3)
+    assert forward_reach(hand, context_for(hand).sweeps) == pytest.approx(HAND3X3_FORWARD_REACH, abs=1e-3)

@@ -104,13 +104,14 @@ def test_a_box_mesh_on_a_table_is_planned_as_the_box():
 
 
 def table_synthesis(spec: ObjectSpec, table: float | None):
-    from eos_svc.agents.planner import build_world, parameters_for
+    from eos_svc.agents.planner import build_world
     from eos_svc.grasp.postulate import make_object
     from eos_svc.grasp.synthesis import GraspSynthesis
+    from eos_svc.world.hand_context import context_for
 
     hand = default_hand()
     world = build_world(PlanRequest(), hand)
-    params = parameters_for(hand)
+    params = context_for(hand).params
     return GraspSynthesis(hand, world.sweeps, params, make_object(spec), 0.5, table_height=table)
 
 
