@@ -2,7 +2,7 @@
 
 EP1 feels the curvature at one contact; EP2 (Charlebois, Gupta and Payandeh, ICRA 1996) gathers
 more of the surface. Each action is a round of guarded probes
-(:meth:`~eos_svc.world.world.GraspWorld.guarded_probe`): a fingertip moves straight toward the
+(:func:`~eos_svc.world.probe_motion.guarded_probe`): a fingertip moves straight toward the
 object and stops at first touch (a point and a noisy normal); a probe that touches nothing tells
 where the object is not. An **active round** (:mod:`eos_svc.agents.probe_choice`) probes the
 lines where post_shape's candidates disagree most; a **round over the whole surface** (no line

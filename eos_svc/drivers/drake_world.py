@@ -278,7 +278,7 @@ class DrakeDriver(KinematicDriver):
     def search_step(self) -> tuple[str, float, bool]:
         """One search sweep, planned on the model and executed in Drake."""
         q0 = self._world.state.q
-        out = self._world.search_step()
+        out = super().search_step()
         self._execute(q0, self._world.state.q, self._settings.free_speed)
         return out
 

@@ -23,6 +23,7 @@ from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.protocol import FingerStep, JointState, TactileReading, Touch, WristMove
 from eos_svc.kinematics.ep1 import EP1Result, place_hand_for_ep1, run_ep1
 from eos_svc.kinematics.hand import HandState
+from eos_svc.world import finger_closing, probe_motion, wrist_motion
 
 if TYPE_CHECKING:
     from eos_svc.grasp.sweeps import FingerSweep
@@ -184,12 +185,12 @@ class KinematicDriver:
 
     def search_step(self) -> tuple[str, float, bool]:
         """One search sweep (:func:`eos_svc.world.wrist_motion.search_step`)."""
-        return self._world.search_step()
+        return wrist_motion.search_step(self._world)
 
     def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> WristMove:
         """A guarded straight wrist move (:func:`eos_svc.world.wrist_motion.guarded_wrist_move`)."""
         world = self._world
-        moved, blocked = world.guarded_wrist_move(target, stop_when_located)
+        moved, blocked = wrist_motion.guarded_wrist_move(world, target, stop_when_located)
         left = float(np.linalg.norm(np.asarray(target, dtype=float) - world.wrist_position()))
         return WristMove(moved, blocked, left, self._witness() if blocked else None)
 
@@ -197,7 +198,7 @@ class KinematicDriver:
         """A guarded wrist step (:func:`eos_svc.world.wrist_motion.step_wrist_toward`)."""
         world = self._world
         start = world.wrist_position().copy()
-        left, blocked = world.step_wrist_toward(target, step)
+        left, blocked = wrist_motion.step_wrist_toward(world, target, step)
         moved = float(np.linalg.norm(world.wrist_position() - start))
         return WristMove(moved, blocked, left, self._witness() if blocked else None)
 
@@ -208,7 +209,7 @@ class KinematicDriver:
     def close_finger_step(self, finger: str, dtheta: float) -> FingerStep:
         """A guarded closing step (:func:`eos_svc.world.finger_closing.close_finger_step`)."""
         world = self._world
-        event, angle = world.close_finger_step(finger, dtheta)
+        event, angle = finger_closing.close_finger_step(world, finger, dtheta)
         touch = None
         if event == "touched":
             c = world.scene.contact(world.state, finger)
@@ -225,7 +226,7 @@ class KinematicDriver:
         yaw: float = 0.0,
     ) -> ProbeOutcome:
         """EP2's guarded probe (:func:`eos_svc.world.probe_motion.guarded_probe`)."""
-        return self._world.guarded_probe(finger, start, direction, travel, angle, yaw)
+        return probe_motion.guarded_probe(self._world, finger, start, direction, travel, angle, yaw)
 
     def place_tip_on(self, finger: str, q: np.ndarray, point: np.ndarray) -> None:
         """EP1's start (:func:`eos_svc.kinematics.ep1.place_hand_for_ep1`)."""

@@ -1,9 +1,8 @@
 """EP1 accuracy: estimated curvatures against the analytic ground truth.
 
-Noise-free: spheres of radius 1, 2, 4, 8 cm, a plane (a box face), a cylinder (r = 2 cm,
-curvatures 1/r and 0) and an ellipsoid touched off its axes — one EP1 each. With the default
-tactile noise (σ = 0.2 mm): each sphere, several seeds, EP1 repeated in place until its
-rating (1 − σ_R/R) reaches the target; the median radius error over the seeds.
+Noise-free, one EP1 on each of spheres of radius 1–8 cm, a plane, a cylinder and an ellipsoid;
+with tactile noise, EP1 repeated on each sphere until its rating reaches the target, the median
+radius error over seeds (``docs/ep1.md``).
 
 Run: ``python -m eos_svc.experiments.accuracy`` (or ``eos experiment accuracy``).
 """
@@ -72,12 +71,6 @@ class NoisyRow:
     ok: bool
 
 
-def _truth(scene: Any, point: np.ndarray, frame: np.ndarray) -> tuple[float, float]:
-    K = ground_truth_form(scene.object, point, frame)
-    w = np.linalg.eigvalsh(K)
-    return float(w[1]), float(w[0])
-
-
 def run_noise_free(**ep1_kwargs: Any) -> list[AccuracyRow]:
     """One noise-free EP1 per case."""
     rows = []
@@ -86,7 +79,8 @@ def run_noise_free(**ep1_kwargs: Any) -> list[AccuracyRow]:
         st = sc.hand.state(place_hand_for_ep1(sc, "finger1"))
         res = run_ep1(sc, st, "finger1", TactileSensor(0.0), **ep1_kwargs)
         e = res.estimate
-        kt = _truth(sc, res.contact_point, res.frame)
+        w = np.linalg.eigvalsh(ground_truth_form(sc.object, res.contact_point, res.frame))
+        kt = (float(w[1]), float(w[0]))  # the true principal curvatures, largest first
         ke = e.principal_curvatures
         scale = max(abs(kt[0]), abs(kt[1]))
         if scale > 0:
@@ -96,12 +90,8 @@ def run_noise_free(**ep1_kwargs: Any) -> list[AccuracyRow]:
         else:
             cerr = max(abs(ke[0]), abs(ke[1]))
             rerr = None
-        if shape == "sphere":
-            ok = rerr is not None and rerr <= 0.005
-        elif shape == "plane":
-            ok = e.is_flat
-        else:
-            ok = cerr <= 0.02
+        # the goals: a sphere's radius within 0.5 %, a plane flat, the other curvatures within 2 %
+        ok = {"sphere": rerr is not None and rerr <= 0.005, "plane": e.is_flat}.get(shape, cerr <= 0.02)
         rows.append(
             AccuracyRow(name, ke, kt, rerr, cerr, e.is_flat, res.steps, res.max_slip_speed, res.max_gap, ok)
         )
@@ -122,14 +112,9 @@ def run_noisy(
         for seed in range(seeds):
             sc = ep1_scene("sphere", R)
             st = sc.hand.state(place_hand_for_ep1(sc, "finger1"))
+            sensor = TactileSensor(noise_std, rng=seed)
             res, n, total = repeat_ep1(
-                sc,
-                st,
-                "finger1",
-                TactileSensor(noise_std, rng=seed),
-                target_rating=target_rating,
-                max_runs=max_runs,
-                **ep1_kwargs,
+                sc, st, "finger1", sensor, target_rating=target_rating, max_runs=max_runs, **ep1_kwargs
             )
             e = res.estimate
             errs.append(abs(1.0 / (R * e.mean_curvature) - 1.0) if e.mean_curvature else math.inf)
@@ -137,18 +122,8 @@ def run_noisy(
             steps.append(total)
             ratings.append(e.rating)
         med = float(np.median(errs))
-        rows.append(
-            NoisyRow(
-                R,
-                seeds,
-                med,
-                float(np.max(errs)),
-                float(np.median(runs)),
-                float(np.median(steps)),
-                float(np.median(ratings)),
-                med <= 0.05,
-            )
-        )
+        n_runs, n_steps, rating = (float(np.median(values)) for values in (runs, steps, ratings))
+        rows.append(NoisyRow(R, seeds, med, float(np.max(errs)), n_runs, n_steps, rating, med <= 0.05))
     return rows
 
 
@@ -163,11 +138,8 @@ def format_tables(clean: Sequence[AccuracyRow], noisy: Sequence[NoisyRow], noise
     ]
     for r in clean:
         rerr = "-" if r.radius_error is None else f"{100 * r.radius_error:.3f} %"
-        cerr = (
-            f"{100 * r.curvature_error:.3f} %"
-            if max(map(abs, r.k_true)) > 0
-            else f"{r.curvature_error:.3g} 1/m"
-        )
+        curved = max(map(abs, r.k_true)) > 0
+        cerr = f"{100 * r.curvature_error:.3f} %" if curved else f"{r.curvature_error:.3g} 1/m"
         out.append(
             f"| {r.case} | {r.k_est[0]:8.3f} | {r.k_est[1]:8.3f} | {r.k_true[0]:8.3f} | "
             f"{r.k_true[1]:8.3f} | {rerr} | {cerr} | {'yes' if r.flat else 'no'} | "
@@ -214,7 +186,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seeds", type=int_at_least(1), default=8, help="seeds per sphere in the noisy part")
     p.add_argument("--noise", type=non_negative_float, default=2e-4, help="tactile noise sigma, m")
     p.add_argument(
-        "--target-rating", type=fraction, default=0.95, help="repeat EP1 until its rating reaches this"
+        "--target-rating", type=fraction, default=0.95, help="EP1 repeated until its rating reaches it"
     )
     p.add_argument("--no-noise", action="store_true", help="only the noise-free table")
     p.add_argument("--json", action="store_true", help="print JSON")

@@ -7,30 +7,34 @@ import csv
 import json
 import sys
 import time
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from eos_svc.agents import PlanRequest, PlanResult, plan
+
+T = TypeVar("T")
+
+
+def with_progress(items: Sequence[T], label: str, quiet: bool = False) -> Iterator[T]:
+    """Yield every item, printing after each how many are done and the time left to stderr
+    (one line, updated; nothing when ``quiet``)."""
+    t0, n = time.perf_counter(), len(items)
+    for i, item in enumerate(items, 1):
+        yield item
+        if not quiet:
+            elapsed = time.perf_counter() - t0
+            eta = elapsed / i * (n - i)
+            print(f"\r{label}: {i}/{n}, {elapsed:.1f} s, ~{eta:.0f} s left   ", end="", file=sys.stderr)
+    if not quiet:
+        print(file=sys.stderr)
 
 
 def run_plans(
     requests: Sequence[PlanRequest], label: str, quiet: bool = False, **options: Any
 ) -> list[PlanResult]:
-    """Plan every request in order (``options`` go to :func:`plan`), printing progress to
-    stderr (one line, updated)."""
-    results = []
-    t0 = time.perf_counter()
-    n = len(requests)
-    for i, request in enumerate(requests, 1):
-        results.append(plan(request, keep_trace=True, **options))
-        if not quiet:
-            elapsed = time.perf_counter() - t0
-            eta = elapsed / i * (n - i)
-            print(f"\r{label}: {i}/{n} plans, {elapsed:.1f} s, ~{eta:.0f} s left   ", end="", file=sys.stderr)
-    if not quiet:
-        print(file=sys.stderr)
-    return results
+    """Plan every request in order (``options`` go to :func:`plan`), with progress."""
+    return [plan(request, keep_trace=True, **options) for request in with_progress(requests, label, quiet)]
 
 
 def write_json(path: Path, data: Any) -> Path:

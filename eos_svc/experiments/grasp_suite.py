@@ -1,18 +1,10 @@
-"""The objects of ``eos experiment grasps``: a fixed suite and a seeded held-back suite.
+"""The objects of ``eos experiment grasps``: a fixed suite, a seeded held-back suite, random draws.
 
-Every object is an :class:`~eos_svc.agents.ObjectSpec` with a label. The fixed suite covers
-every class and the poses that matter for a three-finger hand approaching along +x:
-
-- spheres of diameter d = 0.2 … 0.95 × the hand height h;
-- ellipsoids, longest axis along each world axis;
-- cylinders and capsules upright (axis z), lying across the approach (axis y), lying along it
-  (axis x) and at an angle (axis in the x-y plane at 45°, tilted 30° up);
-- boxes of three aspect ratios (cube, plate, bar) at yaw 0°, 30° and 60°.
-
-The held-back suite draws other sizes, orientations and positions from a seeded generator
-(seed :data:`HELD_BACK_SEED`), so a goal can be checked on objects nobody tuned on. A random
-draw (:func:`random_draw`) goes further: any class, any size in a range of the hand's span, any
-orientation, anywhere near the default position.
+The fixed suite covers every class and the poses that matter for a hand approaching along +x
+(spheres of d/h 0.2–0.95; ellipsoids long along each axis; cylinders and capsules upright,
+across, along the approach and at an angle; cubes, plates and bars at three yaws). The
+held-back suite and the random draws come from seeded generators, so a goal can be checked on
+objects nobody tuned on (``docs/validation.md``).
 """
 
 import math
@@ -44,10 +36,11 @@ BOX_YAWS_DEG = (0.0, 30.0, 60.0)
 
 
 class SuiteObject(NamedTuple):
-    """One object of a suite: a readable label and the object."""
+    """One object of a suite: a readable label, the object and, drawn at random, its plan seed."""
 
     label: str
     spec: ObjectSpec
+    seed: int | None = None
 
 
 def default_position() -> tuple[float, float, float]:
@@ -78,12 +71,8 @@ def fixed_suite() -> list[SuiteObject]:
             out.append(SuiteObject(f"{shape} {pose}", ObjectSpec(shape, size, p, rpy)))
     for name, edges in BOXES.items():
         for yaw in BOX_YAWS_DEG:
-            out.append(
-                SuiteObject(
-                    f"box {name} yaw {yaw:.0f}",
-                    ObjectSpec("box", {"size": edges}, p, (0, 0, math.radians(yaw))),
-                )
-            )
+            spec = ObjectSpec("box", {"size": edges}, p, (0, 0, math.radians(yaw)))
+            out.append(SuiteObject(f"box {name} yaw {yaw:.0f}", spec))
     return out
 
 
@@ -116,17 +105,13 @@ def held_back_suite(per_class: int = 3, seed: int = HELD_BACK_SEED) -> list[Suit
 
     for i in range(per_class):
         r = mm(0.25, 0.9) * h / 2
-        out.append(
-            SuiteObject(
-                f"hb sphere {i} r{r * 1000:.0f}", ObjectSpec("sphere", {"radius": round(r, 4)}, position())
-            )
-        )
+        spec = ObjectSpec("sphere", {"radius": round(r, 4)}, position())
+        out.append(SuiteObject(f"hb sphere {i} r{r * 1000:.0f}", spec))
     for i in range(per_class):
         radii = tuple(mm(0.018, 0.042) for _ in range(3))
         rpy = (0.0, 0.0, mm(-math.pi / 2, math.pi / 2))
-        out.append(
-            SuiteObject(f"hb ellipsoid {i}", ObjectSpec("ellipsoid", {"radii": radii}, position(), rpy))
-        )
+        spec = ObjectSpec("ellipsoid", {"radii": radii}, position(), rpy)
+        out.append(SuiteObject(f"hb ellipsoid {i}", spec))
     for shape in ("cylinder", "capsule"):
         for i in range(per_class):
             size = {"radius": mm(0.014, 0.028), "length": mm(0.03, 0.08)}
@@ -145,47 +130,28 @@ DRAW_POSITION_SPREAD = (0.10, 0.12, 0.12)
 DRAW_CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
 
 
-class DrawnObject(NamedTuple):
-    """One object of a random draw and the plan seed drawn with it."""
-
-    label: str
-    spec: ObjectSpec
-    seed: int
-
-
 def random_draw(
     count: int, draw_seed: int, sizes: tuple[float, float] = (0.15, 0.50), span: float | None = None
-) -> list[DrawnObject]:
-    """``count`` objects drawn from a seeded generator: the class uniform over
-    :data:`DRAW_CLASSES`; every size field uniform in ``sizes`` × the hand's span (m; a radius,
-    half a length or half an edge over half of it, so that a full width is in the range); a
-    uniformly random orientation (a random rotation, as roll, pitch, yaw); the position uniform in
-    the default position ± :data:`DRAW_POSITION_SPREAD`; one plan seed each. Nothing is filtered
-    here: the caller asks admission which it accepts.
-
-    Args:
-        count: objects to draw (≥ 1).
-        draw_seed: the generator's seed.
-        sizes: (low, high) fractions of the span (0 < low ≤ high).
-        span: the hand's span (m); default: hand3x3's, as admission measures it.
-    """
+) -> list[SuiteObject]:
+    """``count`` objects from a seeded generator (``draw_seed``), none filtered (admission
+    decides): the class uniform over :data:`DRAW_CLASSES`; every full width (a radius or half a
+    length: half of one) uniform in ``sizes`` (low, high) × ``span`` (m; default hand3x3's span,
+    as admission measures it); a uniformly random orientation; the position uniform in the
+    default position ± :data:`DRAW_POSITION_SPREAD`; one plan seed each."""
     from scipy.spatial.transform import Rotation
 
-    if span is None:
-        from eos_svc.world.admission import hand_span
+    from eos_svc.world.admission import hand_span
 
-        span = hand_span(default_hand())
-    lo, hi = sizes
+    scale = hand_span(default_hand()) if span is None else span
     rng = np.random.default_rng(draw_seed)
-    base = np.asarray(default_position())
-    spread = np.asarray(DRAW_POSITION_SPREAD)
+    base, spread = np.asarray(default_position()), np.asarray(DRAW_POSITION_SPREAD)
     out = []
+
+    def width() -> float:
+        return round(float(rng.uniform(*sizes)) * scale, 4)
+
     for i in range(count):
         shape = DRAW_CLASSES[int(rng.integers(len(DRAW_CLASSES)))]
-
-        def width() -> float:
-            return round(float(rng.uniform(lo, hi)) * span, 4)
-
         if shape == "sphere":
             size: dict = {"radius": round(width() / 2, 4)}
         elif shape == "ellipsoid":
@@ -203,5 +169,5 @@ def random_draw(
             tuple(round(float(v), 4) for v in position),  # type: ignore[arg-type]
             tuple(round(float(v), 4) for v in rpy),  # type: ignore[arg-type]
         )
-        out.append(DrawnObject(f"draw {draw_seed}:{i} {shape}", spec, seed))
+        out.append(SuiteObject(f"draw {draw_seed}:{i} {shape}", spec, seed))
     return out

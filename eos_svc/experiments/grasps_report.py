@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from eos_svc.experiments.common import pyplot, save_figure
+from eos_svc.experiments import common
 from eos_svc.world.parameters import WorldParameters
 
 #: the goal: share of good grasps Drake finds held
@@ -122,15 +122,13 @@ def recognition_totals(done: list[dict[str, Any]]) -> dict[str, Any]:
 
 def plot(rows: list[dict], totals: dict, path: Path, name: str) -> Path:
     """Good-grasp rate and Drake hold rate per object (horizontal bars)."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.5, 0.6 + 0.24 * len(rows)), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(7.5, 0.6 + 0.24 * len(rows)), dpi=120)
     y = np.arange(len(rows))
     ax.barh(y - 0.2, [r["good_grasp_rate"] or 0.0 for r in rows], height=0.4, label="good grasp (end agent)")
     ax.barh(y + 0.2, [r["held_rate"] or 0.0 for r in rows], height=0.4, label="held (Drake)")
     ax.set_yticks(y, [r["object"] for r in rows], fontsize=7)
     ax.invert_yaxis()
-    ax.set_xlim(0, 1.05)
-    ax.set_xlabel("rate over seeds")
+    ax.set(xlim=(0, 1.05), xlabel="rate over seeds")
     median = totals["median_plan_time_s"]
     held = totals["held_given_good"]
     ax.set_title(
@@ -139,7 +137,7 @@ def plot(rows: list[dict], totals: dict, path: Path, name: str) -> Path:
         fontsize=9,
     )
     ax.legend(fontsize=7, loc="lower right")
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def _pct(value: float | None) -> str:

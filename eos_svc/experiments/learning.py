@@ -1,10 +1,8 @@
 """The learned sub-rating (paper §7): a stream of objects with repeats, with and without learning.
 
-Without learning: weights (0.5, 0.5, 0), no memory. With learning: weights
-(0.25, 0.25, 0.5) and a grasp memory (SQLite file in the output folder, fresh for the
-run) that the ``recall`` agent reads through its learned sub-rating. The same seeded
-stream is planned both ways; the grasp-stage cycles of first sightings ("new") and of
-repeats are compared.
+The same seeded stream planned with weights (0.5, 0.5, 0) and no memory, then with weights
+(0.25, 0.25, 0.5) and a fresh grasp memory (SQLite, in the output folder) that ``recall``
+reads; the grasp-stage cycles of first sightings and of repeats compared (``docs/planner.md``).
 
     eos experiment learning --out results/learning
 """
@@ -22,14 +20,7 @@ import numpy as np
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.cli.common import int_at_least
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 from eos_svc.ratings import Weights
 
 ACROSS = (math.pi / 2, 0.0, 0.0)
@@ -61,8 +52,9 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     memory = GraspMemory(db)
     names = stream(repeats, seed)
     requests = [PlanRequest(obj=OBJECTS[name], seed=seed * 1000 + i) for i, name in enumerate(names)]
-    base = run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
-    learned = run_plans([replace(r, weights=WITH) for r in requests], "with learning", quiet, memory=memory)
+    base = common.run_plans([replace(r, weights=WITHOUT) for r in requests], "without learning", quiet)
+    with_memory = [replace(r, weights=WITH) for r in requests]
+    learned = common.run_plans(with_memory, "with learning", quiet, memory=memory)
     rows: list[dict[str, Any]] = [
         {
             "index": i,
@@ -78,9 +70,9 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     ]
     memory.close()
 
-    def mean(key: str, repeat: bool) -> float:
+    def mean(key: str, repeat: bool) -> float | None:  # None: no such plan (no repeats)
         values = [r[key] for r in rows if r["repeat"] == repeat]
-        return float(np.mean(values)) if values else float("nan")
+        return float(np.mean(values)) if values else None
 
     summary: dict[str, Any] = {
         "new": {"without": mean("grasp_cycles_without", False), "with": mean("grasp_cycles_with", False)},
@@ -88,31 +80,29 @@ def run(repeats: int = 3, seed: int = 1, out: Path = Path("results/learning"), q
     }
     rep = summary["repeated"]
     summary["repeated_reduction"] = 1.0 - rep["with"] / rep["without"] if rep["without"] else None
-    summary["new_worse"] = len(
-        [r for r in rows if not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"]]
+    summary["new_worse"] = sum(
+        not r["repeat"] and r["grasp_cycles_with"] > r["grasp_cycles_without"] for r in rows
     )
     data = {"repeats": repeats, "seed": seed, "rows": rows, "summary": summary, "memory": str(db)}
-    write_json(out / "learning.json", data)
-    write_csv(out / "learning.csv", rows)
+    common.write_json(out / "learning.json", data)
+    common.write_csv(out / "learning.csv", rows)
     plot(rows, out / "learning.png")
     return data
 
 
 def plot(rows: list[dict], path: Path) -> Path:
     """Grasp cycles per plan along the stream, with and without learning."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 3.8), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(7.0, 3.8), dpi=120)
     x = [r["index"] for r in rows]
     ax.plot(x, [r["grasp_cycles_without"] for r in rows], "o-", label="without learning", alpha=0.8)
     ax.plot(x, [r["grasp_cycles_with"] for r in rows], "s-", label="with learning", alpha=0.8)
     for r in rows:
         if r["repeat"]:
             ax.axvspan(r["index"] - 0.4, r["index"] + 0.4, color="0.9", zorder=0)
-    ax.set_xlabel("plan in the stream (shaded: an object seen before)")
-    ax.set_ylabel("grasp-stage cycles")
+    ax.set(xlabel="plan in the stream (shaded: an object seen before)", ylabel="grasp-stage cycles")
     ax.set_title("Learned sub-rating: grasp cycles on new and repeated objects")
     ax.legend(fontsize=8)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -124,17 +114,19 @@ def report(data: dict) -> str:
             f"  {r['index']:>2}  {r['object']:<14} {'yes' if r['repeat'] else 'no':<5} "
             f"{r['grasp_cycles_without']:>7}  {r['grasp_cycles_with']:>4}  {r['recalled']}"
         )
+    rep, fewer = s["repeated"], s["repeated_reduction"]
+    repeated = "none" if rep["without"] is None else f"{rep['without']:.1f} without, {rep['with']:.1f} with"
     lines.append(
         f"mean grasp cycles — new: {s['new']['without']:.1f} without, {s['new']['with']:.1f} with; "
-        f"repeated: {s['repeated']['without']:.1f} without, {s['repeated']['with']:.1f} with "
-        f"({s['repeated_reduction']:.0%} fewer); new objects worse with learning: {s['new_worse']}"
+        f"repeated: {repeated} ({'-' if fewer is None else f'{fewer:.0%}'} fewer); "
+        f"new objects worse with learning: {s['new_worse']}"
     )
     return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment learning [options]``."""
-    parser = experiment_parser("learning", __doc__, "results/learning")
+    parser = common.experiment_parser("learning", __doc__, "results/learning")
     parser.add_argument("--repeats", type=int_at_least(1), default=3, help="times each object appears (3)")
     parser.add_argument("--seed", type=int, default=1, help="seed of the stream order and the plans (1)")
     args = parser.parse_args(argv)

@@ -1,8 +1,8 @@
 """Paper §4.2 / Figure 3: grasp-stage cycles against the object-diameter to hand-height ratio.
 
 Spheres of diameter d = ratio × h at the default position, many seeds per ratio, weights
-(0.5, 0.5). As in the paper, a run counts when all three fingertips touched; the
-good-grasp rate (contacts about the diameter) is reported beside it.
+(0.5, 0.5); as in the paper a run counts when all three fingertips touched, the good-grasp
+rate beside it. The figures: ``docs/planner.md``.
 
     eos experiment ratio --seeds 10 --out results/ratio
 """
@@ -17,14 +17,7 @@ import numpy as np
 
 from eos_svc.agents.planner import ratio_sphere_request
 from eos_svc.cli.common import int_at_least
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 
 DEFAULT_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
 
@@ -38,9 +31,8 @@ def run(
     """Run the sweep; write ratio.json, ratio.csv, ratio_runs.csv and ratio.png into ``out``."""
     rows, runs = [], []
     for ratio in ratios:
-        results = run_plans(
-            [ratio_sphere_request(ratio, seed) for seed in range(1, seeds + 1)], f"d/h = {ratio:.2f}", quiet
-        )
+        requests = [ratio_sphere_request(ratio, seed) for seed in range(1, seeds + 1)]
+        results = common.run_plans(requests, f"d/h = {ratio:.2f}", quiet)
         # the paper's Fig. 3 counts every run whose three fingertips touch (good grasp or not)
         grasped = [r for r in results if r.precision_grip]
         cycles = [r.cycles_per_stage.get("grasping", 0) for r in grasped]
@@ -73,17 +65,16 @@ def run(
     slope = float(np.polyfit(xs, ys, 1)[0]) if len(valid) >= 2 else None
     falling = all(b <= a for (_, a), (_, b) in pairwise(valid)) if valid else False
     data = {"seeds": seeds, "rows": rows, "slope_cycles_per_ratio": slope, "monotonically_falling": falling}
-    write_json(out / "ratio.json", data)
-    write_csv(out / "ratio.csv", rows)
-    write_csv(out / "ratio_runs.csv", runs)
+    common.write_json(out / "ratio.json", data)
+    common.write_csv(out / "ratio.csv", rows)
+    common.write_csv(out / "ratio_runs.csv", runs)
     plot(rows, runs, out / "ratio.png")
     return data
 
 
 def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
     """Grasp cycles against d/h (paper Fig. 3): every run, means with ±1 σ."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(6.4, 4.0), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(6.4, 4.0), dpi=120)
     ok = [r for r in runs if r["precision_grip"]]
     ax.scatter(
         [r["ratio"] for r in ok], [r["grasp_cycles"] for r in ok], s=10, alpha=0.35, label="runs (grasped)"
@@ -97,8 +88,7 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
         capsize=3,
         label="mean ± std",
     )
-    ax.set_xlabel("object diameter / hand height  d/h")
-    ax.set_ylabel("grasp-stage cycles")
+    ax.set(xlabel="object diameter / hand height  d/h", ylabel="grasp-stage cycles")
     ax.set_title("Grasp cycles fall as d/h rises (paper Fig. 3)")
     ax2 = ax.twinx()
     ax2.plot(
@@ -108,12 +98,11 @@ def plot(rows: list[dict], runs: list[dict], path: Path) -> Path:
         color="tab:green",
         label="good-grasp rate",
     )
-    ax2.set_ylim(-0.05, 1.05)
-    ax2.set_ylabel("good-grasp rate (about the diameter, force closure)")
+    ax2.set(ylim=(-0.05, 1.05), ylabel="good-grasp rate (about the diameter, force closure)")
     handles = ax.get_legend_handles_labels()
     handles2 = ax2.get_legend_handles_labels()
     ax.legend(handles[0] + handles2[0], handles[1] + handles2[1], fontsize=8, loc="center left")
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -133,7 +122,7 @@ def report(data: dict) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment ratio [options]``."""
-    parser = experiment_parser("ratio", __doc__, "results/ratio")
+    parser = common.experiment_parser("ratio", __doc__, "results/ratio")
     parser.add_argument("--seeds", type=int_at_least(1), default=10, help="seeds per ratio (10)")
     parser.add_argument("--ratios", type=float, nargs="+", default=list(DEFAULT_RATIOS), help="d/h values")
     args = parser.parse_args(argv)

@@ -1,19 +1,9 @@
 """Knowing the object by touch: how often the postulate is right, how close, how sure.
 
-Plans objects of every class — several sizes, poses and seeds, at tactile noise 0, the
-default (0.2 mm) and twice the default — with the real planner (search, EP1, EP2, fit,
-grasp), and compares post_shape's postulate with the truth:
-
-- **class**: the confusion matrix (truth × postulate) per noise level;
-- **shape-and-pose error**: RMS distance from points of the true surface to the postulated
-  surface, over the true half extent (half the bounding diameter);
-- **calibration**: "right" = class right and shape-and-pose error ≤ 10 % (the confidence's
-  tolerance); accuracy per confidence bin, and the wrong postulates with confidence ≥ 0.9;
-- **search length**: moves to locate the default object over 100 seeds (median, p90, p99,
-  max; none may end in the cycle limit).
-
-The objects are drawn by a seeded generator (sizes within each class's range, positions
-around the default, yaw and tilt), so they are not the ones the planner was tuned on.
+Seeded objects of every class (sizes, positions, poses nobody tuned on) planned end to end at
+tactile noise 0, 0.2 and 0.4 mm; post_shape's postulate against the truth: the class confusion
+per noise, the shape-and-pose error, the confidence's calibration ("right" = class right and
+error ≤ 10 %) and the search length over 100 seeds. The figures: ``docs/planner.md``.
 
     eos experiment recognition --seeds 3 --out results/recognition
     eos experiment recognition --quick
@@ -35,14 +25,7 @@ from eos_svc.agents.search import search_move
 from eos_svc.board import Board
 from eos_svc.cli.common import int_at_least
 from eos_svc.drivers.kinematic import KinematicDriver
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 
 CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
 POSTULATES = (*CLASSES, "plane", "none")
@@ -103,18 +86,16 @@ def pose_and_size_error(truth: ObjectSpec, postulate: dict | None) -> tuple[floa
 
 def search_lengths(seeds: int = 100, limit: int = 2000) -> list[int]:
     """Search moves to locate the default object for seeds 1…``seeds`` (``limit + 1`` if not)."""
-    out = []
-    for seed in range(1, seeds + 1):
-        world = KinematicDriver(build_world(PlanRequest(seed=seed)))
-        board = Board()
-        n = limit + 1
+
+    def moves(seed: int) -> int:
+        world, board = KinematicDriver(build_world(PlanRequest(seed=seed))), Board()
         for k in range(1, limit + 1):
             search_move(world, board, "wrist")
             if board.get(keys.LOCATED):
-                n = k
-                break
-        out.append(n)
-    return out
+                return k
+        return limit + 1
+
+    return [moves(seed) for seed in range(1, seeds + 1)]
 
 
 def run(
@@ -127,15 +108,13 @@ def run(
 ) -> dict[str, Any]:
     """Run the experiment; write recognition.csv, recognition.json and three PNGs into ``out``."""
     rng = np.random.default_rng(20261201)
-    specs = [(k, s, random_object(k, s, rng)) for k in CLASSES for s in range(sizes)]
+    specs = [random_object(k, s, rng) for k in CLASSES for s in range(sizes)]
     rows: list[dict[str, Any]] = []
     for noise in noises:
         requests = [
-            PlanRequest(obj=spec, seed=seed, tactile_noise=noise)
-            for _, _, spec in specs
-            for seed in range(1, seeds + 1)
+            PlanRequest(obj=o, seed=seed, tactile_noise=noise) for o in specs for seed in range(1, seeds + 1)
         ]
-        results = run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
+        results = common.run_plans(requests, f"noise {noise * 1000:.1f} mm", quiet)
         for request, result in zip(requests, results, strict=True):
             shape = result.shape or {}
             guess = shape.get("class", "none")
@@ -165,17 +144,15 @@ def run(
             )
     lengths = search_lengths(search_seeds)
     data = summarize(rows, noises, lengths)
-    write_csv(out / "recognition.csv", [{**r, "object": str(r["object"])} for r in rows])
-    write_json(out / "recognition.json", {**data, "rows": [clean(r) for r in rows]})
+    common.write_csv(out / "recognition.csv", [{**r, "object": str(r["object"])} for r in rows])
+    strict = [
+        {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in r.items()} for r in rows
+    ]
+    common.write_json(out / "recognition.json", {**data, "rows": strict})  # NaN as None: strict JSON
     plot_confusion(data, out / "recognition_confusion.png")
     plot_calibration(data, out / "recognition_calibration.png")
     plot_search(lengths, out / "recognition_search.png")
     return data
-
-
-def clean(row: dict[str, Any]) -> dict[str, Any]:
-    """A row with NaN as None (strict JSON)."""
-    return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in row.items()}
 
 
 def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list[int]) -> dict[str, Any]:
@@ -238,57 +215,47 @@ def summarize(rows: list[dict[str, Any]], noises: Sequence[float], lengths: list
 
 def plot_confusion(data: dict[str, Any], path: Path) -> Path:
     """One confusion matrix per noise level."""
-    plt = pyplot()
     noises = list(data["per_noise"])
-    fig, axes = plt.subplots(1, len(noises), figsize=(4.2 * len(noises), 3.6), dpi=110, squeeze=False)
+    fig, axes = common.pyplot().subplots(
+        1, len(noises), figsize=(4.2 * len(noises), 3.6), dpi=110, squeeze=False
+    )
     for ax, noise in zip(axes[0], noises, strict=True):
         conf = data["per_noise"][noise]["confusion"]
         m = np.array([[conf[t][p] for p in POSTULATES] for t in CLASSES])
         ax.imshow(m, cmap="Blues")
-        for i in range(m.shape[0]):
-            for j in range(m.shape[1]):
-                if m[i, j]:
-                    ax.text(j, i, str(m[i, j]), ha="center", va="center", fontsize=8)
+        for i, j in zip(*np.nonzero(m), strict=True):
+            ax.text(j, i, str(m[i, j]), ha="center", va="center", fontsize=8)
         ax.set_xticks(range(len(POSTULATES)), POSTULATES, rotation=45, fontsize=7)
         ax.set_yticks(range(len(CLASSES)), CLASSES, fontsize=7)
         ax.set_title(f"noise {float(noise) * 1000:.1f} mm", fontsize=9)
         ax.set_xlabel("postulated", fontsize=8)
     axes[0][0].set_ylabel("truth", fontsize=8)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def plot_calibration(data: dict[str, Any], path: Path) -> Path:
     """Accuracy against confidence (bins), with the diagonal."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(4.5, 4.0), dpi=110)
+    fig, ax = common.pyplot().subplots(figsize=(4.5, 4.0), dpi=110)
     bins = [b for b in data["calibration"] if b["n"]]
     ax.plot([0, 1], [0, 1], ":", color="grey")
     ax.plot([b["mean_confidence"] for b in bins], [b["accuracy"] for b in bins], "o-")
     for b in bins:
-        ax.annotate(
-            str(b["n"]),
-            (b["mean_confidence"], b["accuracy"]),
-            fontsize=7,
-            xytext=(3, -10),
-            textcoords="offset points",
-        )
-    ax.set_xlabel("confidence")
-    ax.set_ylabel("fraction right (class and ≤ 10 % error)")
-    ax.set_xlim(0, 1.02)
-    ax.set_ylim(0, 1.02)
+        xy = (b["mean_confidence"], b["accuracy"])
+        ax.annotate(str(b["n"]), xy, fontsize=7, xytext=(3, -10), textcoords="offset points")
+    ax.set(
+        xlabel="confidence", ylabel="fraction right (class and ≤ 10 % error)", xlim=(0, 1.02), ylim=(0, 1.02)
+    )
     ax.set_title("Calibration of post_shape's confidence", fontsize=9)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def plot_search(lengths: list[int], path: Path) -> Path:
     """Histogram of search moves over seeds."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(4.5, 3.2), dpi=110)
+    fig, ax = common.pyplot().subplots(figsize=(4.5, 3.2), dpi=110)
     ax.hist(lengths, bins=range(1, max(lengths) + 2), color="tab:blue")
-    ax.set_xlabel("search moves to locate the default object")
-    ax.set_ylabel("seeds")
+    ax.set(xlabel="search moves to locate the default object", ylabel="seeds")
     ax.set_title(f"{len(lengths)} seeds: median {np.median(lengths):.0f}, max {max(lengths)}", fontsize=9)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict[str, Any]) -> str:
@@ -319,23 +286,17 @@ def report(data: dict[str, Any]) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment recognition [options]``."""
-    parser = experiment_parser("recognition", __doc__, "results/recognition")
+    parser = common.experiment_parser("recognition", __doc__, "results/recognition")
     parser.add_argument("--seeds", type=int_at_least(1), default=3, help="seeds per object and noise (3)")
     parser.add_argument("--sizes", type=int, default=3, choices=(1, 2, 3), help="sizes per class (3)")
-    parser.add_argument(
-        "--search-seeds", type=int_at_least(1), default=100, help="seeds of the search run (100)"
-    )
-    parser.add_argument(
-        "--quick", action="store_true", help="one size, one seed, default noise, 10 search seeds"
-    )
+    parser.add_argument("--search-seeds", type=int_at_least(1), default=100, help="search run seeds (100)")
+    parser.add_argument("--quick", action="store_true", help="1 size, 1 seed, default noise, 10 search seeds")
     args = parser.parse_args(argv)
     if args.quick:
         data = run(seeds=1, sizes=1, noises=(2e-4,), search_seeds=10, out=args.out)
     else:
         data = run(args.seeds, args.sizes, NOISES, args.search_seeds, args.out)
     print(report(data))
-    print(
-        f"wrote {args.out}/recognition.csv, recognition.json, recognition_confusion.png, "
-        "recognition_calibration.png, recognition_search.png"
-    )
+    pngs = "recognition_confusion.png, recognition_calibration.png, recognition_search.png"
+    print(f"wrote {args.out}/recognition.csv, recognition.json, {pngs}")
     return 0

@@ -1,12 +1,9 @@
 """Every shape end to end: precision-grip and success (good grasp) rates per object class.
 
-Spheres, ellipsoids, cylinders and capsules (lying across the approach, upright, along the
-approach, at an angle) and boxes (several aspect ratios and yaws) at the default position,
-several seeds each, weights (0.5, 0.5). ``success`` is a good grasp (the end agent's
-verdict); ``grip`` a precision grip (all fingertips touch). With ``--oracle`` every object is
-planned a second time with grasp_points planning on the true object instead of post_shape's
-postulate (``plan(..., oracle_postulate=True)``): the grasp stage measured apart from
-recognition (its column is *not* the planner's result).
+Every class in several sizes and poses at the default position, several seeds each, weights
+(0.5, 0.5). With ``--oracle`` every object is planned again with grasp_points on the true
+object instead of post_shape's postulate (``plan(..., oracle_postulate=True)``): the grasp
+stage apart from recognition, *not* the planner's result. The figures: ``docs/planner.md``.
 
     eos experiment shapes --seeds 5 --out results/shapes
     eos experiment shapes --seeds 5 --oracle
@@ -23,14 +20,7 @@ import numpy as np
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.cli.common import int_at_least
-from eos_svc.experiments.common import (
-    experiment_parser,
-    pyplot,
-    run_plans,
-    save_figure,
-    write_csv,
-    write_json,
-)
+from eos_svc.experiments import common
 
 ACROSS = (math.pi / 2, 0.0, 0.0)  # cylinder/capsule axis along y: across the approach (x)
 
@@ -63,7 +53,7 @@ def run(
     for label, shape, size, rpy in OBJECTS:
         spec = ObjectSpec(shape, size, position, rpy)
         requests = [PlanRequest(obj=spec, seed=s) for s in range(1, seeds + 1)]
-        results = run_plans(requests, label, quiet)
+        results = common.run_plans(requests, label, quiet)
         classes = [r.shape["class"] if r.shape else "none" for r in results]
         rows.append(
             {
@@ -79,20 +69,19 @@ def run(
             }
         )
         if oracle:
-            truth = run_plans(requests, f"{label} (oracle postulate)", quiet, oracle_postulate=True)
+            truth = common.run_plans(requests, f"{label} (oracle postulate)", quiet, oracle_postulate=True)
             rows[-1]["oracle_success_rate"] = float(np.mean([r.status == "success" for r in truth]))
             rows[-1]["oracle_statuses"] = ",".join(sorted({r.status for r in truth}))
     data = {"seeds": seeds, "rows": rows}
-    write_json(out / "shapes.json", data)
-    write_csv(out / "shapes.csv", rows)
+    common.write_json(out / "shapes.json", data)
+    common.write_csv(out / "shapes.csv", rows)
     plot(rows, out / "shapes.png")
     return data
 
 
 def plot(rows: list[dict], path: Path) -> Path:
     """Precision-grip and success (good grasp) rates per object (horizontal bars)."""
-    plt = pyplot()
-    fig, ax = plt.subplots(figsize=(7.0, 6.0), dpi=120)
+    fig, ax = common.pyplot().subplots(figsize=(7.0, 6.0), dpi=120)
     y = np.arange(len(rows))
     bars = [("grip_rate", "precision grip (all tips touch)"), ("success_rate", "success (good grasp)")]
     if all("oracle_success_rate" in r for r in rows):
@@ -103,11 +92,9 @@ def plot(rows: list[dict], path: Path) -> Path:
         ax.barh(y + offset, [r[key] for r in rows], height=height, label=label)
     ax.set_yticks(y, [r["object"] for r in rows], fontsize=8)
     ax.invert_yaxis()
-    ax.set_xlim(0, 1.05)
-    ax.set_xlabel("rate over seeds")
-    ax.set_title("Every shape end to end")
+    ax.set(xlim=(0, 1.05), xlabel="rate over seeds", title="Every shape end to end")
     ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.12), ncol=1)
-    return save_figure(fig, path)
+    return common.save_figure(fig, path)
 
 
 def report(data: dict) -> str:
@@ -128,12 +115,10 @@ def report(data: dict) -> str:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point: ``eos experiment shapes [options]``."""
-    parser = experiment_parser("shapes", __doc__, "results/shapes")
+    parser = common.experiment_parser("shapes", __doc__, "results/shapes")
     parser.add_argument("--seeds", type=int_at_least(1), default=5, help="seeds per object (5)")
     parser.add_argument(
-        "--oracle",
-        action="store_true",
-        help="also plan every object with grasp_points on the true object (the grasp stage alone)",
+        "--oracle", action="store_true", help="also plan on the true object (grasp stage alone)"
     )
     args = parser.parse_args(argv)
     data = run(args.seeds, args.out, oracle=args.oracle)

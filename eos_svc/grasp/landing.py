@@ -98,26 +98,6 @@ class SweepLandings:
             self._by_sample[k] = Landing(k, angle, point, normal)
         return self._by_sample[k]
 
-    def miss_lower_bound(self, start: int, tip_radius: float, point: np.ndarray) -> float:
-        """A lower bound (m) of the distance from the landing from ``start`` to ``point`` (world),
-        without the object's closest point: −inf when there is no landing.
-
-        The landing's contact is the surface point closest to the touching tip centre, ``|sd(tip)|``
-        from it; the signed distance is 1-Lipschitz and known at the bracketing samples (their
-        gap + ``tip_radius``), so ``|sd(tip)| ≤ |gap(k−1) + r| + s·seg`` and ``≤ |gap(k) + r| +
-        (1 − s)·seg`` (``seg`` the samples' spacing, ``s`` the tip's fraction of it), and the contact is at
-        least ``|tip − point|`` less that from ``point`` (less 1e-9 m for round-off)."""
-        k = self.first_touch(start)
-        if k is None:
-            return -math.inf
-        s, tip = self._between(k)
-        step = self.pts[k] - self.pts[k - 1]
-        seg = math.sqrt(float(step @ step))
-        a, b = float(self.gaps[k - 1]) + tip_radius, float(self.gaps[k]) + tip_radius
-        reach = min(abs(a) + s * seg, abs(b) + (1.0 - s) * seg)
-        off = tip - point
-        return math.sqrt(float(off @ off)) - reach - 1e-9
-
 
 def landing(
     obj: SurfaceObject,

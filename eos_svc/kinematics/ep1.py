@@ -129,38 +129,19 @@ def place_hand_for_ep1(
     return q_new
 
 
-def _log3(R: np.ndarray) -> np.ndarray:
-    """Rotation vectors of a stack of rotation matrices (n, 3, 3) → (n, 3), as ``pin.log3``."""
-    v = np.stack([R[:, 2, 1] - R[:, 1, 2], R[:, 0, 2] - R[:, 2, 0], R[:, 1, 0] - R[:, 0, 1]], axis=1)
-    s2 = _row_norms(v)  # 2 sin θ
-    c = 0.5 * (R[:, 0, 0] + R[:, 1, 1] + R[:, 2, 2] - 1.0)  # cos θ
-    theta = np.arctan2(0.5 * s2, c)
-    # θ / (2 sin θ) → ½ as θ → 0
-    scale = np.where(s2 > 1e-12, theta / np.maximum(s2, 1e-300), 0.5 + theta * theta / 12.0)
-    out: np.ndarray = v * scale[:, None]
-    return out
-
-
 def _log_chart(
     points: np.ndarray, b: np.ndarray, ex: np.ndarray, ey: np.ndarray, r: float, directions: np.ndarray | None
 ) -> np.ndarray:
     """Geodesic (log-map) coordinates on the tip sphere of radius ``r`` around the unit ``b``, in
     the tangent basis ex, ey at b, m (``directions``: the points normalised, when known)."""
-    d = points / _row_norms(points)[:, None] if directions is None else directions
+    d = points / np.linalg.norm(points, axis=1)[:, None] if directions is None else directions
     cosang = d @ b
     v = d - np.outer(cosang, b)
-    sin_ang = _row_norms(v)
+    sin_ang = np.linalg.norm(v, axis=1)
     ang = np.arctan2(sin_ang, cosang)
     scale = np.where(sin_ang > 1e-15, r * ang / np.maximum(sin_ang, 1e-300), r)
     v = v * scale[:, None]
     return np.array((v @ ex, v @ ey)).T
-
-
-def _row_norms(x: np.ndarray) -> np.ndarray:
-    """The rows' Euclidean lengths: ``np.linalg.norm(x, axis=1)``'s arithmetic without its checks
-    (microseconds on the few points of a leg)."""
-    out: np.ndarray = np.sqrt(np.add.reduce(x * x, axis=1))
-    return out
 
 
 def _chart_at_mean(
@@ -168,13 +149,11 @@ def _chart_at_mean(
 ) -> np.ndarray:
     """The tactile points ``P`` (tip frame, m) in the log chart at their mean direction b, with the
     frame's x (``ex_tip``, tip frame) projected on the tangent plane at b as the chart's first axis."""
-    b = np.add.reduce(P, axis=0) / len(P)  # P.mean(axis=0)
-    b /= math.sqrt(b.dot(b))  # np.linalg.norm(b), the same arithmetic
+    b = P.mean(axis=0)
+    b /= np.linalg.norm(b)
     ex = ex_tip - (ex_tip @ b) * b
-    ex /= math.sqrt(ex.dot(ex))
-    (b0, b1, b2), (e0, e1, e2) = b.tolist(), ex.tolist()
-    ey = np.array((b1 * e2 - b2 * e1, b2 * e0 - b0 * e2, b0 * e1 - b1 * e0))  # b × ex
-    return _log_chart(P, b, ex, ey, r, directions)
+    ex /= np.linalg.norm(ex)
+    return _log_chart(P, b, ex, np.cross(b, ex), r, directions)
 
 
 def _fit_slope(theta: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -277,7 +256,7 @@ def run_ep1(
             R_all = np.array(rotations).reshape(-1, 3, 3)
             sets = np.array(set_of, dtype=int)
             # realized net roll angle of the tip about a (not the commanded ω·t)
-            th_all = _log3(np.matmul(R0.T, R_all)) @ (R0.T @ axis)
+            th_all = np.array([pin.log3(R0.T @ R) for R in R_all]) @ (R0.T @ axis)
             for k in (0, 1):
                 P = P_all[sets == k]
                 if len(P) < 5:

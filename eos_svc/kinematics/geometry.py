@@ -52,12 +52,7 @@ def unit_vector(name: str, v: object) -> np.ndarray:
     """``v`` normalised (a new array); :class:`~eos_svc.errors.ValidationError` naming ``name``
     unless it is a finite non-zero 3-vector."""
     a = np.asarray(v, dtype=float).reshape(-1)
-    if a.shape == (3,):
-        x, y, z = a.tolist()
-        na = math.sqrt(x * x + y * y + z * z)
-        if math.isfinite(na) and na >= 1e-12:
-            return np.array((x / na, y / na, z / na))
-        if np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:  # huge entries: x * x overflowed
-            out: np.ndarray = a / np.linalg.norm(a)
-            return out
+    if a.shape == (3,) and np.all(np.isfinite(a)) and np.linalg.norm(a) >= 1e-12:
+        out: np.ndarray = a / np.linalg.norm(a)
+        return out
     raise ValidationError(name, f"must be a finite non-zero 3-vector, got {v!r}")

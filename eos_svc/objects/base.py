@@ -211,10 +211,6 @@ class SurfaceObject(ABC):
         return [self.drake_shape()]
 
     @abstractmethod
-    def smallest_width(self) -> tuple[float, str]:
-        """(the object's smallest width (m), the size field that sets it)."""
-
-    @abstractmethod
     def closing_axes(self) -> list[tuple[str, Array]]:
         """The closing axes (unsigned, world) through the centre of mass for the kind, each
         with a word on it (see :mod:`eos_svc.grasp.frames`)."""

@@ -93,9 +93,6 @@ class Box(SurfaceObject):
 
         return DrakeBox(*self.size)
 
-    def smallest_width(self) -> tuple[float, str]:
-        return float(self.size.min()), "size"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across each pair of opposite faces."""
         A = self.rotation

@@ -68,9 +68,6 @@ class Capsule(AxialObject):
 
         return DrakeCapsule(self.radius, self.length)
 
-    def smallest_width(self) -> tuple[float, str]:
-        return 2.0 * self.radius, "radius"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across the axis (its normals, the vertical's and the hand's y's parts across it); never
         along it: a capsule is always longer than wide."""

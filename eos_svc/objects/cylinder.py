@@ -90,11 +90,6 @@ class Cylinder(AxialObject):
 
         return DrakeCylinder(self.radius, self.length)
 
-    def smallest_width(self) -> tuple[float, str]:
-        if self.length < 2.0 * self.radius:
-            return self.length, "length"
-        return 2.0 * self.radius, "radius"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across the axis (its normals, the vertical's and the hand's y's parts across it), and
         along it when the object is no longer than wide (on the end faces)."""

@@ -140,9 +140,6 @@ class Ellipsoid(SurfaceObject):
 
         return DrakeEllipsoid(*self.radii)
 
-    def smallest_width(self) -> tuple[float, str]:
-        return 2.0 * float(self.radii.min()), "radii"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across its two shorter axes."""
         A, order = self.rotation, np.argsort(self.radii)

@@ -264,12 +264,6 @@ class Mesh(SurfaceObject):
         _, V = np.linalg.eigh(self.unit_inertia())
         return V
 
-    def smallest_width(self) -> tuple[float, str]:
-        """The convex hull's width across its faces, the least (m): the field is ``scale``."""
-        V = np.asarray(self.hull.vertices)
-        widths = (V @ self._hull_normals.T).max(axis=0) - (V @ self._hull_normals.T).min(axis=0)
-        return float(widths.min()), "scale"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """Across each principal axis of inertia, the thinnest first (a box's rule on the mesh)."""
         A = self.rotation @ self.principal_axes()

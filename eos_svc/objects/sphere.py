@@ -66,9 +66,6 @@ class Sphere(SurfaceObject):
 
         return DrakeSphere(self.radius)
 
-    def smallest_width(self) -> tuple[float, str]:
-        return 2.0 * self.radius, "radius"
-
     def closing_axes(self) -> list[tuple[str, Array]]:
         """About a vertical and a horizontal diameter."""
         return [

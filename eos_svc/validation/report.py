@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import asdict, dataclass
 from typing import Any
 
 #: the six load directions, in the order they are simulated (world axes)
@@ -15,13 +15,11 @@ class DirectionOutcome:
 
     Attributes:
         direction: ``"+x"`` … ``"-z"`` (world axes).
-        displacement_m: largest distance (m) of the object's centre from where the squeeze
-            left it, sampled during the load.
+        displacement_m: largest distance (m) of the object's centre from where the squeeze left it.
         final_displacement_m: that distance at the end of the load (or when it stopped early).
         touching: hand parts (``palm`` or a finger name) in contact with the object at the end.
         held: ``displacement_m`` < the hold tolerance and at least ``min_parts`` parts touch.
-        stopped_early: the object was so far away (``stop_distance``) that the rest of the
-            load was not simulated.
+        stopped_early: the object got ``stop_distance`` away; the rest of the load was skipped.
     """
 
     direction: str
@@ -32,15 +30,8 @@ class DirectionOutcome:
     stopped_early: bool = False
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly form."""
-        return {
-            "direction": self.direction,
-            "displacement_m": self.displacement_m,
-            "final_displacement_m": self.final_displacement_m,
-            "touching": list(self.touching),
-            "held": self.held,
-            "stopped_early": self.stopped_early,
-        }
+        """JSON-friendly form (every field)."""
+        return asdict(self) | {"touching": list(self.touching)}
 
 
 @dataclass(frozen=True)
@@ -49,8 +40,9 @@ class GraspValidation:
 
     Attributes:
         held: held in every direction simulated.
-        outcomes: one :class:`DirectionOutcome` per direction, in simulation order.
+        reason: the first failing direction and why, or "held in every direction".
         seconds: load duration per direction (s).
+        outcomes: one :class:`DirectionOutcome` per direction, in simulation order.
         settle_seconds: squeeze time before any load (s).
         settle_displacement_m: how far the squeeze alone moved the object's centre (m).
         settle_touching: hand parts touching the object after the squeeze.
@@ -63,12 +55,12 @@ class GraspValidation:
         min_parts: fewest hand parts that must still touch the object.
         time_step: the discrete plant's step (s).
         wall_time_s: seconds the validation took.
-        reason: the first failing direction and why, or "held in every direction".
     """
 
     held: bool
-    outcomes: tuple[DirectionOutcome, ...]
+    reason: str
     seconds: float
+    outcomes: tuple[DirectionOutcome, ...]
     settle_seconds: float
     settle_displacement_m: float
     settle_touching: tuple[str, ...]
@@ -82,7 +74,6 @@ class GraspValidation:
     min_parts: int
     time_step: float
     wall_time_s: float
-    reason: str = field(default="")
 
     @property
     def directions(self) -> tuple[str, ...]:
@@ -95,26 +86,11 @@ class GraspValidation:
         return {o.direction: o.displacement_m for o in self.outcomes}
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-friendly form: ``held``, ``displacement_m`` per direction, ``directions``,
-        ``seconds`` and the rest of the fields (per-direction details under ``outcomes``)."""
-        return {
-            "held": self.held,
-            "reason": self.reason,
-            "displacement_m": self.displacement_m,
-            "directions": list(self.directions),
-            "seconds": self.seconds,
+        """JSON-friendly form: ``held``, ``reason``, ``displacement_m`` per direction,
+        ``directions``, then every other field (per-direction details under ``outcomes``)."""
+        head = {"held": self.held, "reason": self.reason, "displacement_m": self.displacement_m}
+        lists = {
             "outcomes": [o.to_dict() for o in self.outcomes],
-            "settle_seconds": self.settle_seconds,
-            "settle_displacement_m": self.settle_displacement_m,
             "settle_touching": list(self.settle_touching),
-            "mass_kg": self.mass_kg,
-            "friction": self.friction,
-            "squeeze_rad": self.squeeze_rad,
-            "kp": self.kp,
-            "kd": self.kd,
-            "effort_limit": self.effort_limit,
-            "hold_tolerance_m": self.hold_tolerance_m,
-            "min_parts": self.min_parts,
-            "time_step": self.time_step,
-            "wall_time_s": self.wall_time_s,
         }
+        return head | {"directions": list(self.directions)} | asdict(self) | lists

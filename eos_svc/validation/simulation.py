@@ -1,25 +1,11 @@
 """The grasp in Drake: a hand welded at its planned wrist pose, fingers squeezing, a free object.
 
-Built with Drake's ``MultibodyPlant`` (discrete, SAP solver, point contact) from the same URDF
-the planner loads with Pinocchio (for a described hand, the URDF text its description makes:
-:class:`~eos_svc.hands.DescribedHand`), parsed by Drake's own ``Parser``. Drake-only adjustments are
-made here in code, never in the URDF:
-
-- the six wrist joints are removed and the palm is welded to the world at the pose Drake's
-  own forward kinematics gives for the planned wrist coordinates (the links between world and
-  palm, which carry no geometry, are welded too);
-- a joint actuator with an implicit PD controller (gains ``kp``, ``kd``, the URDF's effort
-  limit) is added to every finger joint, and to every joint a pre-shape holds (the URDF
-  declares no transmissions);
-- collisions between hand bodies are filtered out (the planner checks only hand–object
-  distances, and the finger links are not meant to touch one another);
-- every hand and object collision geometry gets the request's Coulomb μ and one point-contact
-  stiffness;
-- gravity is off: the object's weight is applied as an external force along one direction
-  at a time.
-
-The scene's builders (:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`,
-:func:`hand_parser`) serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
+Drake's ``MultibodyPlant`` (discrete, SAP, point contact) parses the URDF the planner loads
+with Pinocchio; the Drake-only adjustments (welded wrist, PD finger actuators, hand-hand
+collisions filtered, the request's μ, gravity off and the weight applied along one direction at
+a time) are made here in code, never in the URDF: ``docs/validation.md``. The scene's builders
+(:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`, :func:`hand_parser`)
+serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
 
 Reference: Drake, https://drake.mit.edu (MultibodyPlant, SAP: Castro et al., "An Unconstrained
 Convex Formulation of Compliant Contact", IEEE T-RO 2023).
@@ -41,7 +27,6 @@ from pydrake.geometry import (
     ProximityProperties,
     RoleAssign,
     SceneGraph,
-    Shape,
 )
 from pydrake.math import RigidTransform, RollPitchYaw
 from pydrake.multibody.math import SpatialForce
@@ -53,7 +38,7 @@ from pydrake.multibody.plant import (
     MultibodyPlant,
     MultibodyPlantConfig,
 )
-from pydrake.multibody.tree import PdControllerGains, RigidBody, RotationalInertia, SpatialInertia
+from pydrake.multibody.tree import PdControllerGains, RigidBody, SpatialInertia, UnitInertia
 from pydrake.systems.analysis import Simulator
 from pydrake.systems.framework import DiagramBuilder
 
@@ -62,7 +47,6 @@ from eos_svc.errors import EosError, ValidationError
 from eos_svc.kinematics.hand import HandDescription
 from eos_svc.schema.request import ObjectSpec
 
-#: name of the object's body and model instance in the plant
 #: the physical model's defaults: object mass (kg), squeeze added to the planned finger angles
 #: (rad), finger PD gains (N·m/rad, N·m·s/rad), point-contact stiffness (N/m), plant step (s)
 DEFAULT_MASS = 0.1
@@ -72,6 +56,7 @@ DEFAULT_KD = 0.05
 DEFAULT_CONTACT_STIFFNESS = 2e4
 DEFAULT_TIME_STEP = 1e-3
 
+#: name of the object's body and model instance in the plant
 OBJECT_NAME = "object"
 #: the table's geometry name, side (m) and thickness (m): a slab whose top is the table's height
 TABLE_NAME = "table"
@@ -102,26 +87,17 @@ def contact_material(friction: float, stiffness: float) -> ProximityProperties:
     return material
 
 
-def object_shapes(spec: ObjectSpec) -> tuple[list[Shape], SpatialInertia]:
-    """Drake's collision shapes for ``spec`` (one for a primitive, the convex pieces of a mesh)
-    and the unit-mass solid inertia about its centre (scaled later), both from the object's
-    kind (:mod:`eos_svc.objects`)."""
-    obj = objects.make(spec.shape, spec.size, spec.position)
-    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
-    inertia = RotationalInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
-    unit = SpatialInertia.MakeFromCentralInertia(1.0, vec((0.0, 0.0, 0.0)), inertia)
-    return obj.drake_collision_shapes(), unit
-
-
 def add_object(
     plant: MultibodyPlant, spec: ObjectSpec, mass: float, material: ProximityProperties
 ) -> RigidBody:
-    """The object as a free body (:data:`OBJECT_NAME`, its own model instance) of ``mass`` kg, its
-    collision shapes (:func:`object_shapes`) with ``material``."""
-    shapes, unit_inertia = object_shapes(spec)
-    inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit_inertia.get_unit_inertia())
+    """The object as a free body (:data:`OBJECT_NAME`, its own model instance) of ``mass`` kg,
+    the solid's inertia, its kind's collision shapes (:mod:`eos_svc.objects`) with ``material``."""
+    obj = objects.make(spec.shape, spec.size, spec.position)
+    _, _, J = obj.mass_properties(mass=1.0)  # the object's own axes: placed at the origin, upright
+    unit = UnitInertia(J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2])
+    inertia = SpatialInertia(mass, vec((0.0, 0.0, 0.0)), unit)
     body = plant.AddRigidBody(OBJECT_NAME, plant.AddModelInstance(OBJECT_NAME), inertia)
-    for i, shape in enumerate(shapes):
+    for i, shape in enumerate(obj.drake_collision_shapes()):
         plant.RegisterCollisionGeometry(body, RigidTransform(), shape, f"{OBJECT_NAME}_{i}", material)
     return body
 
@@ -201,11 +177,8 @@ class GraspSimulation:
         package_dirs: directories of the packages the URDF's ``package://`` URIs name.
         obj: the object (shape, size, pose).
         friction: Coulomb μ of every contact.
-        mass: object mass (kg).
-        squeeze: added to the planned finger angles as the PD target (rad; closing is +).
-        kp, kd: finger PD gains (N·m/rad, N·m·s/rad).
-        contact_stiffness: point-contact stiffness of every geometry (N/m).
-        time_step: the discrete plant's step (s).
+        mass, squeeze, kp, kd, contact_stiffness, time_step: as
+            :func:`~eos_svc.validation.validate_grasp`'s (kg, rad, N·m/rad, N·m·s/rad, N/m, s).
         table_height: the table's top (world z, m): a box welded to the world under it, in
             contact with the hand and the object like them (None: no table).
     """
@@ -231,9 +204,7 @@ class GraspSimulation:
         wrist = description.wrist_joints
         finger_joints = [j for f in description.fingers for j in f.joints]
         names = list(joint_names) if joint_names is not None else [*wrist, *finger_joints]
-        if len(q_final) != len(names):
-            raise ValidationError("q_final", f"must have {len(names)} values")
-        value = dict(zip(names, (float(v) for v in q_final), strict=True))
+        value = dict(zip(names, (float(v) for v in q_final), strict=True))  # validate_grasp checked the count
         held_joints = [j for j in names if j not in wrist]  # finger joints and the pre-shape
         efforts = urdf_effort_limits(urdf)
         self.effort_limit = min(efforts.get(j, np.inf) for j in finger_joints)
@@ -283,10 +254,7 @@ class GraspSimulation:
 
         self.plant = plant
         self.body = body
-        self.hand = hand
-        self.mass = mass
-        self.diagram = builder.Build()
-        self.simulator = Simulator(self.diagram)
+        self.simulator = Simulator(builder.Build())
         self.context = self.simulator.get_mutable_context()
         self._plant_context = plant.GetMyMutableContextFromRoot(self.context)
         pc = self._plant_context
@@ -315,7 +283,7 @@ class GraspSimulation:
 
     def position(self) -> np.ndarray:
         """The object's centre in the world (m)."""
-        return np.array(self.plant.EvalBodyPoseInWorld(self._plant_context, self.body).translation())
+        return self.body_position(OBJECT_NAME)
 
     def body_position(self, name: str) -> np.ndarray:
         """The origin of the plant's body ``name`` in the world now (m)."""
@@ -325,15 +293,12 @@ class GraspSimulation:
     def touching(self) -> tuple[str, ...]:
         """The hand parts (palm, finger names) in contact with the object now, sorted."""
         results = self.plant.get_contact_results_output_port().Eval(self._plant_context)
-        me = self.body.index()
-        parts = set()
-        for i in range(results.num_point_pair_contacts()):
-            info = results.point_pair_contact_info(i)
+        me, parts = self.body.index(), set()
+        for info in (results.point_pair_contact_info(i) for i in range(results.num_point_pair_contacts())):
             a, b = info.bodyA_index(), info.bodyB_index()
-            if me in (a, b):
-                other = int(b if a == me else a)
-                if other in self._part:
-                    parts.add(self._part[other])
+            other = int(b if a == me else a) if me in (a, b) else None
+            if other in self._part:
+                parts.add(self._part[other])
         return tuple(sorted(parts))
 
     def settle(self, seconds: float) -> np.ndarray:

@@ -30,10 +30,11 @@ def guarded_probe(
     ``−direction`` by up to 6 cm when the hand would not be clear there); with a table, a start
     at or under it is blocked and a downward travel stops above it. Conservative advancement:
     each sub-step is at most the tip's and the other geometries' gaps beyond half the contact
-    tolerance, so only the tip can touch and it never pushes the object; the others' exact gaps
-    are queried only when their lower bound (:func:`_probe_floor_after`) does not fix the step.
+    tolerance, so only the tip can touch and it never pushes the object.
     The outcome: touched, missed, or blocked (another part of the hand first, the wrist's limits).
+    Counted in ``world.probes``.
     """
+    world.probes += 1
     p = world.params
     hand = world.hand
     d = np.asarray(direction, dtype=float)
@@ -80,12 +81,9 @@ def guarded_probe(
     travelled = 0.0
     tip = state.tip_centre_view(finger)  # live view of the tip centre (world)
     free = [tip.copy()]
-    contact_of = world.scene.contact
-    # ``other`` at the start pose (exact), then a lower bound of it (_probe_floor_after)
-    floor = others_gap - half_tol
-    exact = True  # floor is the exact ``other`` of the current pose
+    other = others_gap - half_tol  # the other geometries' gap at the start pose
     for _ in range(300):
-        contact = contact_of(state, finger)  # = tip_distance's query (the pose is new)
+        contact = world.scene.contact(state, finger)
         tip_gap = float(contact.distance)
         if tip_gap <= tol:
             reading = world.sensor.read(state, contact)
@@ -94,31 +92,21 @@ def guarded_probe(
             return ProbeOutcome(
                 "touched", finger, centre=M.translation.copy(), normal=normal, travelled=travelled
             )
-        room = travel - travelled
-        tip_room = tip_gap - half_tol
-        need = room if room <= tip_room else tip_room  # = min(room, tip_room)
-        if floor >= need and floor >= 1e-5:  # the others can neither block nor limit this step
-            step = need
-        else:
-            other = floor if exact else world.min_gap(others, math.inf) - half_tol
-            if other < 1e-5:
-                return ProbeOutcome(
-                    "blocked",
-                    finger,
-                    free=densify(_reported(world, finger, np.array(free))),
-                    travelled=travelled,
-                    why="another part of the hand would touch first",
-                )
-            step = min(room, tip_room, other)
-            floor = other
-        travelled += step
+        if other < 1e-5:
+            return ProbeOutcome(
+                "blocked",
+                finger,
+                free=densify(_reported(world, finger, np.array(free))),
+                travelled=travelled,
+                why="another part of the hand would touch first",
+            )
+        travelled += min(travel - travelled, tip_gap - half_tol, other)
         q[i0], q[i1], q[i2] = w0 + d0 * travelled, w1 + d1 * travelled, w2 + d2 * travelled
         world.set_q(q)
         free.append(tip.copy())
         if travelled >= travel - 1e-12:
             break
-        floor = _probe_floor_after(floor, step)
-        exact = False
+        other = world.min_gap(others, math.inf) - half_tol
     return ProbeOutcome(
         "missed", finger, free=densify(_reported(world, finger, np.array(free))), travelled=travelled
     )
@@ -136,17 +124,3 @@ def _reported(world: GraspWorld, finger: str, path: np.ndarray) -> np.ndarray:
         - state.data.oMf[world.hand.tip_frame_id(finger)].translation
     )
     return path + offset
-
-
-#: what a guarded probe's bound of the other geometries' gaps gives up per metre moved and in all
-#: (m): coal's distances are exact to ~1e-15 m for primitives and to its GJK tolerance (1e-8 m,
-#: relative) for curved shapes; the wrist's translation is exact to ~1e-16 m
-_PROBE_FLOOR_SLACK = (1e-6, 1e-7)
-
-
-def _probe_floor_after(floor: float, step: float) -> float:
-    """A lower bound of every hand geometry's gap to the object (m) after a wrist translation by
-    ``step`` m from a pose where it was ``floor``: a translation changes each distance by at most
-    its length (plus the queries' slack, :data:`_PROBE_FLOOR_SLACK`)."""
-    per_metre, constant = _PROBE_FLOOR_SLACK
-    return floor - step * (1.0 + per_metre) - constant

@@ -1,6 +1,6 @@
 """Exploring the object with a fingertip: which finger probes which side
 (:class:`ProbeChoice`, used by EP1 and EP2) and what one guarded probe found
-(:class:`ProbeOutcome`, :meth:`eos_svc.world.world.GraspWorld.guarded_probe`)."""
+(:class:`ProbeOutcome`, :func:`eos_svc.world.probe_motion.guarded_probe`)."""
 
 from __future__ import annotations
 

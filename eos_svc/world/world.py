@@ -23,11 +23,10 @@ from eos_svc.kinematics import HandModel, HandState, Scene, TactileSensor
 from eos_svc.kinematics.curvature import CurvatureEstimator
 from eos_svc.kinematics.gap_bounds import ball_gap_lower_bounds
 from eos_svc.objects import SurfaceObject
-from eos_svc.world import finger_closing, probe_motion, wrist_motion
 from eos_svc.world.hand_context import HandContext
 from eos_svc.world.joint_sensing import JointSensing
 from eos_svc.world.parameters import WorldParameters
-from eos_svc.world.probing import ProbeChoice, ProbeOutcome
+from eos_svc.world.probing import ProbeChoice
 from eos_svc.world.table import hand_table_gap, table_shape
 
 
@@ -206,33 +205,3 @@ class GraspWorld:
             yield self.state
         finally:
             self.sync()
-
-    def search_step(self) -> tuple[str, float, bool]:
-        """One search move (:func:`eos_svc.world.wrist_motion.search_step`)."""
-        return wrist_motion.search_step(self)
-
-    def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> tuple[float, bool]:
-        """A guarded straight wrist move (:func:`eos_svc.world.wrist_motion.guarded_wrist_move`)."""
-        return wrist_motion.guarded_wrist_move(self, target, stop_when_located)
-
-    def step_wrist_toward(self, target: np.ndarray, step: float) -> tuple[float, bool]:
-        """A guarded wrist step (:func:`eos_svc.world.wrist_motion.step_wrist_toward`)."""
-        return wrist_motion.step_wrist_toward(self, target, step)
-
-    def guarded_probe(
-        self,
-        finger: str,
-        start: np.ndarray,
-        direction: np.ndarray,
-        travel: float,
-        angle: float,
-        yaw: float = 0.0,
-    ) -> ProbeOutcome:
-        """A fingertip's guarded straight move (:func:`eos_svc.world.probe_motion.guarded_probe`),
-        counted in :attr:`probes`."""
-        self.probes += 1
-        return probe_motion.guarded_probe(self, finger, start, direction, travel, angle, yaw)
-
-    def close_finger_step(self, finger: str, dtheta: float) -> tuple[str, float]:
-        """A finger's closing step (:func:`eos_svc.world.finger_closing.close_finger_step`)."""
-        return finger_closing.close_finger_step(self, finger, dtheta)

@@ -9,6 +9,7 @@ import pytest
 from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import build_world
 from eos_svc.agents.probe_plan import HOOK_ANGLE, HOOK_ANGLES, REACH_FRACTIONS, targeted_probes
+from eos_svc.world.probe_motion import guarded_probe
 
 
 @pytest.mark.parametrize("finger", ["finger1", "finger3"])
@@ -18,13 +19,14 @@ def test_a_hooked_finger_touches_a_face_turned_away(finger):
     back = 0.3 + 0.1
     for dz in (0.02, 0.0, -0.02):
         start = np.array([back + 0.04, 0.04, -0.12 + dz])
-        out = world.guarded_probe(finger, start, np.array([-1.0, 0.0, 0.0]), 0.08, HOOK_ANGLE)
+        out = guarded_probe(world, finger, start, np.array([-1.0, 0.0, 0.0]), 0.08, HOOK_ANGLE)
         assert out.event == "touched"
         # the tip, not a link, met the back face: its centre one tip radius behind it
         assert out.centre[0] - back == pytest.approx(world.hand.tip_radius(finger), abs=2e-4)
         assert out.normal[0] > 0.99
     # a straight finger cannot: its links lead
-    out = world.guarded_probe(finger, np.array([back + 0.04, 0.04, -0.12]), np.array([-1.0, 0, 0]), 0.08, 0.0)
+    west = np.array([-1.0, 0.0, 0.0])
+    out = guarded_probe(world, finger, np.array([back + 0.04, 0.04, -0.12]), west, 0.08, 0.0)
     assert out.event == "blocked"
 
 
@@ -52,7 +54,7 @@ def test_probes_of_open_faces_start_beyond_and_move_inward():
     assert {p.angle for p in alternatives} == set(HOOK_ANGLES)
     # 5 points per reach; reaches 0.1 m, then 0.05 m (the least) twice
     assert len({tuple(np.round(p.start, 6)) for p in alternatives}) == 2 * 5 < len(REACH_FRACTIONS) * 5
-    out = world.guarded_probe(back.finger, back.start, back.direction, back.travel, back.angle)
+    out = guarded_probe(world, back.finger, back.start, back.direction, back.travel, back.angle)
     assert out.event == "touched" and out.centre[0] == pytest.approx(0.35 + 0.01, abs=2e-4)
     # after the hooks, the face turned away from the side: the wrist turned a quarter turn either
     # way, the start shifted toward the hand; a side face gets none
@@ -80,10 +82,10 @@ def test_a_parallel_jaw_feels_a_face_turned_away_only_from_the_side():
     angle = world.probe.angles[finger]
     start = np.array([back + 0.05, 0.02 - 0.012, -0.015])
     west = np.array([-1.0, 0.0, 0.0])
-    assert world.guarded_probe(finger, start, west, 0.08, angle).event == "blocked"
+    assert guarded_probe(world, finger, start, west, 0.08, angle).event == "blocked"
     for yaw in (np.pi / 2, -np.pi / 2):
         side_start = start if yaw > 0 else start + np.array([0.0, 0.024, 0.0])
-        out = world.guarded_probe(finger, side_start, west, 0.08, angle, yaw)
+        out = guarded_probe(world, finger, side_start, west, 0.08, angle, yaw)
         assert out.event == "touched", out.why
         assert out.centre[0] - back == pytest.approx(world.hand.tip_radius(finger), abs=2e-4)
         assert out.normal[0] > 0.99

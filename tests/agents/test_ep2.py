@@ -11,6 +11,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, plan
 from eos_svc.agents.planner import build_world, default_hand
 from eos_svc.hands import load_hand_named
 from eos_svc.world.hand_context import side_fingers
+from eos_svc.world.probe_motion import guarded_probe
 
 
 def world_with(spec: ObjectSpec, noise: float = 2e-4, seed: int = 1):
@@ -20,7 +21,7 @@ def world_with(spec: ObjectSpec, noise: float = 2e-4, seed: int = 1):
 def test_guarded_probe_stops_at_first_touch_with_the_sensed_normal():
     world = world_with(ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.0, 0.0)), noise=2e-4)
     r = world.hand.tip_radius("finger1")
-    out = world.guarded_probe("finger1", np.array([0.15, 0.0, 0.01]), np.array([1.0, 0.0, 0.0]), 0.1, 0.0)
+    out = guarded_probe(world, "finger1", np.array([0.15, 0.0, 0.01]), np.array([1.0, 0.0, 0.0]), 0.1, 0.0)
     assert out.event == "touched"
     assert 0.0 <= world.tip_distance("finger1") <= world.params.contact_tolerance  # touched, not pushed
     assert world.hand_clearance() >= 0.0
@@ -33,7 +34,7 @@ def test_guarded_probe_stops_at_first_touch_with_the_sensed_normal():
 
 def test_a_probe_that_misses_records_its_free_path():
     world = world_with(ObjectSpec("sphere", {"radius": 0.02}, (0.21, 0.0, 0.0)))
-    out = world.guarded_probe("finger1", np.array([0.15, 0.0, 0.06]), np.array([1.0, 0.0, 0.0]), 0.1, 0.0)
+    out = guarded_probe(world, "finger1", np.array([0.15, 0.0, 0.06]), np.array([1.0, 0.0, 0.0]), 0.1, 0.0)
     assert out.event == "missed"
     r = world.hand.tip_radius("finger1")
     assert len(out.free) > 5
@@ -43,7 +44,7 @@ def test_a_probe_that_misses_records_its_free_path():
 def test_a_probe_another_part_would_touch_first_is_abandoned():
     # a straight finger lowered beyond a sphere's apex: its links, behind the tip, land first
     world = world_with(ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.0, 0.0)))
-    out = world.guarded_probe("finger1", np.array([0.235, 0.0, 0.06]), np.array([0.0, 0.0, -1.0]), 0.1, 0.0)
+    out = guarded_probe(world, "finger1", np.array([0.235, 0.0, 0.06]), np.array([0.0, 0.0, -1.0]), 0.1, 0.0)
     assert out.event == "blocked"
     assert world.hand_clearance() > 0.0  # the link stopped short of the object
     assert world.tip_distance("finger1") > world.params.contact_tolerance  # the tip touches nothing

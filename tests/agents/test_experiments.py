@@ -54,3 +54,15 @@ def test_recognition_experiment_writes_its_files(tmp_path):
     assert data["search"]["seeds"] == 4 and data["search"]["hit_limit"] == 0
     for name in ("recognition_confusion.png", "recognition_calibration.png", "recognition_search.png"):
         assert (tmp_path / name).stat().st_size > 1000
+
+
+def test_learning_stream_without_repeats_reports_none(tmp_path):
+    from eos_svc.experiments import learning
+
+    data = learning.run(repeats=1, seed=1, out=tmp_path, quiet=True)  # every object once: no repeat
+    assert not any(row["repeat"] for row in data["rows"]) and len(data["rows"]) == len(learning.OBJECTS)
+    assert data["summary"]["repeated"] == {"without": None, "with": None}
+    assert data["summary"]["repeated_reduction"] is None
+    saved = json.loads((tmp_path / "learning.json").read_text())  # strict JSON: no NaN
+    assert saved["summary"]["new"] == data["summary"]["new"]
+    assert "repeated: none (- fewer)" in learning.report(data)

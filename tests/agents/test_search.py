@@ -12,6 +12,7 @@ from eos_svc.agents import ObjectSpec, PlanRequest, keys
 from eos_svc.agents.planner import build_world, default_hand, make_object
 from eos_svc.agents.search import search_move
 from eos_svc.board import Board
+from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.world.coverage import (
     column_counts,
     coverage_spacing,
@@ -24,9 +25,10 @@ from eos_svc.world.hand_context import context_for
 
 def search_length(spec: ObjectSpec, seed: int, limit: int = 200) -> int:
     world = build_world(PlanRequest(obj=spec, seed=seed))
+    driver = KinematicDriver(world)
     board = Board()
     for n in range(1, limit + 1):
-        search_move(world, board, "wrist")
+        search_move(driver, board, "wrist")
         if board.get(keys.LOCATED):
             assert world.object_gap_to_grasp_centre() <= world.params.envelope_radius
             assert world.hand_clearance() >= world.params.clearance - 1e-9  # never touched it

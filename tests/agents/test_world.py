@@ -7,6 +7,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec, PlanRequest
 from eos_svc.agents.planner import build_world
+from eos_svc.world import finger_closing, wrist_motion
 
 
 def world_with_sphere(position=(0.12, 0.0, 0.0), radius=0.03, seed=1):
@@ -19,7 +20,7 @@ def test_closing_stops_at_first_touch(finger):
     tol = world.params.contact_tolerance
     events = []
     for _ in range(100):
-        event, _angle = world.close_finger_step(finger, 0.05)
+        event, _angle = finger_closing.close_finger_step(world, finger, 0.05)
         events.append(event)
         assert world.tip_distance(finger) >= 0.0  # never penetrates
         if event != "moved":
@@ -32,7 +33,7 @@ def test_closing_on_nothing_reaches_the_limit():
     world = world_with_sphere(position=(0.35, 0.1, 0.1), radius=0.01)
     event = "moved"
     for _ in range(200):
-        event, angle = world.close_finger_step("finger1", 0.1)
+        event, angle = finger_closing.close_finger_step(world, "finger1", 0.1)
         if event != "moved":
             break
     assert event == "limit"
@@ -44,7 +45,7 @@ def test_wrist_step_stops_short_of_contact():
     target = world.wrist_position() + np.array([0.3, 0.0, 0.0])  # straight through the object
     blocked = False
     for _ in range(200):
-        left, blocked = world.step_wrist_toward(target, 0.01)
+        left, blocked = wrist_motion.step_wrist_toward(world, target, 0.01)
         assert world.hand_clearance() >= 0.0
         if blocked or left == 0.0:
             break
@@ -58,7 +59,7 @@ def test_search_steps_stay_in_the_box_and_follow_the_seed():
         world = world_with_sphere(position=(0.35, 0.1, 0.1), radius=0.02, seed=7)
         path = []
         for _ in range(50):
-            world.search_step()
+            wrist_motion.search_step(world)
             p = world.wrist_position()
             assert np.all(p >= np.array(world.params.search_box_lo) - 1e-12)
             assert np.all(p <= np.array(world.params.search_box_hi) + 1e-12)
