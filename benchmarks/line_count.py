@@ -34,6 +34,8 @@ NEW_FEATURES: dict[str, str] = {
     "shape/open_faces.py": "active touch: the faces a fit leaves open",
     "agents/probe_choice.py": "active touch: the probes where candidate postulates disagree",
     "shape/probe_information.py": "active touch: a probe's expected information",
+    "agents/relocate.py": "re-locating an object the exploration moved (the Drake world)",
+    "shape/pose_refit.py": "re-location: the object's pose refitted to fresh touches",
     "experiments/pybullet_objects.py": "pybullet test objects (meshes)",
     "experiments/plugins.py": "eos experiment plugins",
     "cli/batch.py": "eos batch",

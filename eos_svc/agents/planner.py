@@ -30,6 +30,7 @@ from eos_svc.agents.memory import GraspMemory
 from eos_svc.agents.plugins.loading import PluginSpec, plugin_agents, plugin_entries, requested_plugins
 from eos_svc.agents.post_shape import PostShapeAgent
 from eos_svc.agents.recall import RecallAgent
+from eos_svc.agents.relocate import RelocateAgent
 from eos_svc.agents.wrist import WristAgent
 from eos_svc.board import Board
 from eos_svc.controller import CancelToken, Controller
@@ -68,6 +69,8 @@ DEFAULT_RATINGS: dict[str, float] = {
     "grasp_points": 0.6,
     "end": 0.2,
 }
+#: relocate's default sub-rating (it joins only a world whose object can move: ahead of grasp_points)
+RELOCATE_RATING = 0.65
 
 
 #: default sub-ratings of the finger agents by their position in the hand's finger list;
@@ -140,12 +143,17 @@ def build_agents(
     fingers = world.hand.finger_names
     r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
+    # where a touch may push the object, a check of where it is before the grasp (agents.relocate)
+    relocate: list[Agent] = (
+        [] if world.object_fixed else [RelocateAgent(r.get("relocate", RELOCATE_RATING), world)]
+    )
     return [
         *(FingerAgent(finger, r[finger], world) for finger in fingers),
         WristAgent(r["wrist"], world),
         EP1Agent(r["ep1"], world, solver=solver),
         EP2Agent(r["ep2"], world),
         PostShapeAgent(r["post_shape"], world),
+        *relocate,
         GraspPointsAgent(r["grasp_points"], world, oracle=oracle),
         *recall,
         EndAgent(r["end"], world),
@@ -237,10 +245,7 @@ def plan(
         remember(memory, driver, board, run.cycles_per_stage.get("grasping", 0), good)
     report = getattr(driver, "report", lambda: None)()
     if report is not None and report.get("moved_past_relocation_limit"):  # the planner says so
-        run = dataclasses.replace(run, reason=(
-            f"{run.reason} (the object moved {report['object_moved_mm']:.1f} mm while the hand explored "
-            "it, more than the 2 mm the plan tolerates: the grasp aimed where it had been)"
-        ))  # fmt: skip
+        run = dataclasses.replace(run, reason=f"{run.reason} ({moved_words(report, board.get(keys.SHAPE))})")
     obj = model.obj
     truth: dict = {"shape": request.obj.shape, **request.obj.to_dict(), "diameter": obj.diameter}
     truth["d_over_h"] = obj.diameter / model.hand.hand_height
@@ -267,6 +272,20 @@ def plan(
         wall_time_s=time.perf_counter() - t0,
         world=report,
     )
+
+
+def moved_words(report: dict, shape: dict | None) -> str:
+    """What the plan did about an object the exploration moved more than 2 mm (the relocate
+    agent's ``located`` verdict on the postulate)."""
+    moved = f"the object moved {report['object_moved_mm']:.1f} mm while the hand explored it"
+    located = (shape or {}).get("located")
+    if located is None:
+        return f"{moved}, more than the 2 mm the plan tolerates: the grasp aimed where it had been"
+    relocations = int((shape or {}).get("relocations", 0))
+    if located.get("verified", True):
+        how = f"re-located by touch {relocations} time(s), then" if relocations else "its pose"
+        return f"{moved}; {how} checked within 2 mm by touch before the grasp"
+    return f"{moved}; re-located before the grasp, but the last check still found it more than 2 mm off"
 
 
 def remember(memory: GraspMemory, world: HandDriver, board: Board, grasp_cycles: int, success: bool) -> None:

@@ -173,7 +173,7 @@ def format_world(world: dict) -> str:
     held = "held" if lift.get("held") else f"not held ({lift.get('why', 'no lift test')})"
     moved = ""
     if world.get("moved_past_relocation_limit"):
-        moved = " (past 2 mm: not re-located, the plan assumed it still)"
+        moved = " (past 2 mm: the plan's reason says whether it was re-located)"
     return (
         f"drake world: object moved {world['object_moved_mm']:.1f} mm{moved}; lift test: {held}; "
         f"{world['simulated_s']:.1f} s simulated, real-time factor {world['real_time_factor']}"

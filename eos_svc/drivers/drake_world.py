@@ -36,6 +36,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import pinocchio as pin
+from pydrake.math import RigidTransform
 
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
@@ -102,7 +103,10 @@ class DrakeDriver(KinematicDriver):
 
     __slots__ = (
         "_explored",
+        "_last_pose",
         "_lift",
+        "_motion",
+        "_moved_by",
         "_moved_max",
         "_plant",
         "_settings",
@@ -110,6 +114,7 @@ class DrakeDriver(KinematicDriver):
         "_start",
         "_stop",
         "_transfers",
+        "_transfers_into",
     )
 
     def __init__(
@@ -132,8 +137,12 @@ class DrakeDriver(KinematicDriver):
         self._start = np.array(self._plant.object_pose().translation())  # where it rests
         self._moved_max = 0.0
         self._transfers = 0  # free-space transfers made without simulation
+        self._transfers_into = 0  # transfers that placed the hand pressing on the object
         self._explored: float | None = None  # how far the object had moved when the grip was judged
         self._lift: dict[str, Any] | None = None
+        self._motion = "settle"  # the motion running now: what moves the object is charged to it
+        self._moved_by: dict[str, float] = {}  # per motion kind, how far it moved the object, m
+        self._last_pose = self._start.copy()
         weight = self._plant.settings.mass * GRAVITY
         self._stop = min(self._settings.stop_force, STOP_FRACTION * friction * weight)
         self._sync()
@@ -142,6 +151,11 @@ class DrakeDriver(KinematicDriver):
     def support_height(self) -> float | None:
         """The Drake table's top (m): the object rests on it (the hand passes through it)."""
         return self._plant.table_top
+
+    @property
+    def object_fixed(self) -> bool:
+        """False: the object is a free body a touch may push."""
+        return False
 
     # --- time ---------------------------------------------------------------------------------
     def clock(self) -> float:
@@ -177,6 +191,10 @@ class DrakeDriver(KinematicDriver):
             model = world.hand
             world.set_q(np.clip(self._plant.hand_q(), model.lower, model.upper))
         self._moved_max = max(self._moved_max, float(np.linalg.norm(pose.translation() - self._start)))
+        now = np.array(pose.translation())
+        step = float(np.linalg.norm(now - self._last_pose))
+        self._moved_by[self._motion] = self._moved_by.get(self._motion, 0.0) + step
+        self._last_pose = now
 
     def object_pose(self) -> list[float]:
         """The object's pose for viewers: x, y, z (m), quaternion w, x, y, z (rounded to 1e-7)."""
@@ -184,6 +202,17 @@ class DrakeDriver(KinematicDriver):
         q = pose.rotation().ToQuaternion()
         values = [*pose.translation(), q.w(), q.x(), q.y(), q.z()]
         return [round(float(v), 7) for v in values]
+
+    def displace_object(self, shift: np.ndarray, settle_s: float = 0.3) -> None:
+        """Move the object by ``shift`` (world, m; an outside push the hand did not make, as a
+        person bumping the table), then let it settle for ``settle_s`` s."""
+        plant = self._plant
+        pose = plant.object_pose()
+        moved = RigidTransform(pose.rotation(), pose.translation() + np.asarray(shift, dtype=float))
+        plant.plant.SetFreeBodyPose(plant.context, plant.body, moved)
+        self._motion = "outside push"
+        self._timed(lambda: plant.advance(settle_s))
+        self._sync(hand=False)
 
     def object_moved(self) -> float:
         """How far the object's centre is from where it rested at the start, m."""
@@ -239,7 +268,10 @@ class DrakeDriver(KinematicDriver):
         )
         if jump > 1e-3:
             self._transfers += 1
+        before = self._pushing()
         self._plant.set_hand_q(q)
+        if before < self._settings.touch_force < self._stop < self._pushing():  # placed into the object
+            self._transfers_into += 1
 
     def _pushing(self) -> float:
         """The largest normal force of any hand body on the object, N."""
@@ -252,6 +284,7 @@ class DrakeDriver(KinematicDriver):
         ends near that force (a light touch moves no resting object); the touch as Drake
         reports it."""
         plant, s = self._plant, self._settings
+        self._motion = self._motion.removesuffix(" press") + " press"
         body = plant.tip_bodies[finger]
         q0 = plant.hand_q()
         found = plant.tip_force(body)
@@ -277,6 +310,7 @@ class DrakeDriver(KinematicDriver):
     # --- acting ---------------------------------------------------------------------------------
     def search_step(self) -> tuple[str, float, bool]:
         """One search sweep, planned on the model and executed in Drake."""
+        self._motion = "search"
         q0 = self._world.state.q
         out = super().search_step()
         self._execute(q0, self._world.state.q, self._settings.free_speed)
@@ -284,6 +318,7 @@ class DrakeDriver(KinematicDriver):
 
     def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> WristMove:
         """A guarded straight wrist move, planned on the model and executed in Drake."""
+        self._motion = "wrist"
         q0 = self._world.state.q
         move = super().guarded_wrist_move(target, stop_when_located)
         self._execute(q0, self._world.state.q, self._settings.free_speed)
@@ -291,6 +326,7 @@ class DrakeDriver(KinematicDriver):
 
     def step_wrist_toward(self, target: np.ndarray, step: float) -> WristMove:
         """A guarded wrist step, planned on the model and executed in Drake."""
+        self._motion = "wrist step"
         q0 = self._world.state.q
         move = super().step_wrist_toward(target, step)
         self._execute(q0, self._world.state.q, self._settings.approach_speed)
@@ -298,6 +334,7 @@ class DrakeDriver(KinematicDriver):
 
     def close_finger_step(self, finger: str, dtheta: float) -> FingerStep:
         """A closing step executed in Drake; a touch presses on to the touch force."""
+        self._motion = "closing"
         world = self._world
         q0 = world.state.q
         step = super().close_finger_step(finger, dtheta)
@@ -319,6 +356,7 @@ class DrakeDriver(KinematicDriver):
         yaw: float = 0.0,
     ) -> ProbeOutcome:
         """EP2's probe: placed (a transfer), advanced in Drake; a touch presses on."""
+        self._motion = "probe"
         world = self._world
         outcome = super().guarded_probe(finger, start, direction, travel, angle, yaw)
         q_end = world.state.q
@@ -350,6 +388,7 @@ class DrakeDriver(KinematicDriver):
             finger, omega=omega, dt=dt, steps_per_direction=steps_per_direction, directions=directions,
             solver=solver, estimator=estimator, path_every=every,
         )  # fmt: skip
+        self._motion = "roll"
         plant = self._plant
         path = [np.asarray(q) for q in result.path] or [result.q_final]
         self._transfer(path[0])
@@ -381,6 +420,7 @@ class DrakeDriver(KinematicDriver):
         closed, settled), its contacts and quality where the object now is, then the rest of
         the lift test: good only if held."""
         moved = self._explored = self.object_moved()  # before the grip and the lift move it
+        self._motion = "squeeze"
         world = self._world
         # a described hand's own squeeze (its [drake] table: per joint unit, m for a prismatic finger)
         squeeze = float(dict(getattr(world.hand, "drake", {})).get("squeeze", SQUEEZE))
@@ -409,8 +449,11 @@ class DrakeDriver(KinematicDriver):
             # (it does not re-locate the object yet)
             "moved_past_relocation_limit": bool(moved > RELOCATE_AFTER),
             "object_moved_max_mm": round(1000.0 * self._moved_max, 3),
+            # the path length the object's centre moved during each kind of motion, mm
+            "moved_by_mm": {k: round(1000.0 * v, 3) for k, v in sorted(self._moved_by.items())},
             "lift": self._lift,
             "transfers_unsimulated": self._transfers,
+            "transfers_into_object": self._transfers_into,
             "simulated_s": round(sim, 4),
             "simulation_wall_s": round(self._sim_wall, 4),
             "real_time_factor": round(sim / self._sim_wall, 3) if self._sim_wall > 0 else None,

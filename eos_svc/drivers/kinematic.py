@@ -92,6 +92,11 @@ class KinematicDriver:
         return self._world.table_height
 
     @property
+    def object_fixed(self) -> bool:
+        """True: the kinematic world's object never moves."""
+        return True
+
+    @property
     def kinematic_sigma(self) -> float:
         """The joint encoders' fingertip position uncertainty, m."""
         return float(self._world.encoders.position_sigma)

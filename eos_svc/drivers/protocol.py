@@ -161,6 +161,12 @@ class HandDriver(Protocol):
         ...
 
     @property
+    def object_fixed(self) -> bool:
+        """Whether the object is held fixed (the kinematic world's): no touch can move it, so
+        the planner never checks where it is before the grasp (:mod:`eos_svc.agents.relocate`)."""
+        ...
+
+    @property
     def kinematic_sigma(self) -> float:
         """The joint sensing's fingertip position uncertainty (m; 0 for exact kinematics)."""
         ...

@@ -127,6 +127,11 @@ class ZenohDriver:
         return None if value is None else float(value)
 
     @property
+    def object_fixed(self) -> bool:
+        """Whether the served world holds its object fixed."""
+        return bool(self._call("object_fixed"))
+
+    @property
     def kinematic_sigma(self) -> float:
         """The served hand's fingertip position uncertainty, m."""
         return float(self._call("kinematic_sigma"))

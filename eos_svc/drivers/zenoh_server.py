@@ -31,13 +31,14 @@ from eos_svc.service.session import make_config
 
 #: the protocol's methods a client may call, with the arguments that cross as arrays
 #: the protocol's properties served as calls without arguments
-PROPERTIES = frozenset({"table_height", "support_height", "kinematic_sigma", "probes"})
+PROPERTIES = frozenset({"table_height", "support_height", "object_fixed", "kinematic_sigma", "probes"})
 #: the protocol's methods served, each with its array-valued arguments
 METHODS: dict[str, tuple[str, ...]] = {
     "clock": (),
     "probe_finger": (),
-    "table_height": (),  # the next four are the driver's properties, read rather than called
+    "table_height": (),  # the next five are the driver's properties, read rather than called
     "support_height": (),
+    "object_fixed": (),
     "kinematic_sigma": (),
     "probes": (),
     "object_gap_to_grasp_centre": (),

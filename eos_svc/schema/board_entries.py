@@ -83,6 +83,8 @@ ShapeEntry = TypedDict(
         "open_faces": NotRequired[list[dict[str, Any]]],
         "candidates": NotRequired[list[dict[str, Any]]],
         "approximate": NotRequired[bool],
+        "located": NotRequired[dict[str, Any]],
+        "relocations": NotRequired[int],
     },
 )
 ShapeEntry.__doc__ = """post_shape's postulate.
@@ -92,7 +94,8 @@ sized), ``centre`` (world, m), ``confidence`` in [0, 1], the top's ``principal_c
 (1/m) and ``curvature_radius`` (m, ``None`` when flat), ``needs`` (what post_shape asks for
 next, or ``None``); optional: ``object`` (request form), ``pose_known``, ``evidence``,
 ``bounds`` ([lo, hi], m), ``open_faces`` (:mod:`eos_svc.shape.open_faces`), ``candidates``
-(:mod:`eos_svc.shape.probe_information`) and ``approximate`` (the touches' convex hull).
+(:mod:`eos_svc.shape.probe_information`), ``approximate`` (the touches' convex hull); where
+the object can move, ``located`` and ``relocations`` (:mod:`eos_svc.agents.relocate`).
 """
 
 

@@ -166,13 +166,14 @@ def _shape(**fields) -> dict:
 def test_entry_check_accepts_the_declared_forms():
     check_entry(keys_module.SHAPE, _shape())
     # the postulate's optional object fields: object, pose_known, evidence, bounds, open_faces,
-    # candidates, approximate
+    # candidates, approximate, and relocate's located, relocations
     obj = {"shape": "sphere", "radius": 0.03, "position": [0.2, 0.0, 0.0], "rpy": [0.0, 0.0, 0.0]}
     check_entry(keys_module.SHAPE, _shape(object=obj, pose_known=True, evidence={"contacts": 5}, bounds=None))
     face = {"centre": [0.3, 0.0, 0.0], "normal": [1.0, 0.0, 0.0], "half": 0.05, "delta_chi2": 0.0}
     check_entry(keys_module.SHAPE, _shape(open_faces=[face]))
     candidate = {"class": "sphere", "probability": 1.0, "parameters": [0.2, 0.0, 0.0, -3.5]}
     check_entry(keys_module.SHAPE, _shape(candidates=[candidate]))
+    check_entry(keys_module.SHAPE, _shape(located={"moved": False, "checks": 1}, relocations=1))
     assert ShapeEntry.__optional_keys__ == {
         "object",
         "pose_known",
@@ -181,6 +182,8 @@ def test_entry_check_accepts_the_declared_forms():
         "open_faces",
         "candidates",
         "approximate",
+        "located",
+        "relocations",
     }
     check_entry(keys_module.FINGER_STATE, {"finger1": "open", "finger2": "touching"})
     check_entry(keys_module.GAP, 1)  # an int is a float

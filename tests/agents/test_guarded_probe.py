@@ -67,7 +67,12 @@ def test_a_probe_down_onto_a_sphere_touches_its_top():
     )
     finger = world.probe.finger("top")
     out = guarded_probe(
-        world, finger, centre + [0, 0, 0.08], np.array([0.0, 0.0, -1.0]), 0.1, world.probe.angles[finger]
+        world,
+        finger,
+        centre + np.array([0.0, 0.0, 0.08]),
+        np.array([0.0, 0.0, -1.0]),
+        0.1,
+        world.probe.angles[finger],
     )
     assert out.event == "touched"
     tip_radius = np.linalg.norm(out.centre - centre) - radius - world.tip_distance(finger)
