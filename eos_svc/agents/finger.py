@@ -89,9 +89,15 @@ class FingerAgent(GraspAgent):
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —
         or the finger has closed past it without touching (the object is not quite where it
-        was postulated): then it keeps closing until it touches or reaches its limit."""
+        was postulated): then it keeps closing until it touches or reaches its limit — or
+        another fingertip already touches (the wrist holds the hand where it is) and closing
+        lands on the postulated object at all: the hand stopped short of its grasp position when
+        a finger in reach there touched, and landing near the chosen contact beats stalling."""
         miss = self.landing_miss(board)
         if miss is not None and miss <= self.world.params.landing_tolerance:
+            return True
+        states = board.get(keys.FINGER_STATE, {})
+        if miss is not None and any(s == "touching" for f, s in states.items() if f != self.finger):
             return True
         if self.finger_state(board) != "closing":
             return False

@@ -17,10 +17,12 @@ import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
+from eos_svc.agents.post_shape import touches_from
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
+from eos_svc.grasp.support import TouchSupport
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
 from eos_svc.schema import keys
 from eos_svc.schema.request import MESH, ObjectSpec
@@ -48,7 +50,9 @@ class GraspPointsAgent(GraspAgent):
     instead of the postulate (measurement only); ``name``: a subclass's own (another sampler,
     :meth:`choose_candidates`)."""
 
-    reads = frozenset({keys.SHAPE, keys.TARGET, keys.FRICTION})
+    reads = frozenset(
+        {keys.SHAPE, keys.TARGET, keys.FRICTION, keys.EP1_CONTACT, keys.EP2_TOUCHES, keys.EP2_FREE}
+    )
     writes = frozenset({keys.TARGET, keys.FINGER_STATE, keys.AT_TARGET, keys.WRIST_LEFT})
 
     def __init__(
@@ -96,7 +100,7 @@ class GraspPointsAgent(GraspAgent):
             )
         hand = self.world.hand
         spec = postulate.spec
-        synthesis = self.synthesis(board, postulate)
+        synthesis = self.synthesis(board, postulate, shape)
         note = postulate.words()
         note = f" ({note})" if note else ""
         candidates = self.choose_candidates(synthesis, spec)
@@ -125,9 +129,15 @@ class GraspPointsAgent(GraspAgent):
             f"{stand_off * 1000:.0f} mm before the grasp, open",
         )
 
-    def synthesis(self, board: Board, postulate: Postulate) -> GraspSynthesis:
-        """Grasp synthesis of this world's hand on the postulated object, at the board's μ."""
+    def synthesis(self, board: Board, postulate: Postulate, shape: dict | None = None) -> GraspSynthesis:
+        """Grasp synthesis of this world's hand on the postulated object, at the board's μ; on
+        an approximate postulate (post_shape's ``shape`` says so) its candidates are ranked by
+        the touches' support first (:mod:`eos_svc.grasp.support`)."""
         world = self.world
+        support = None
+        if shape is not None and shape.get("approximate") and postulate.source == "post_shape":
+            touches = touches_from(board, world)
+            support = TouchSupport(touches.surface_points, touches.normals)
         return GraspSynthesis(
             world.hand,
             world.sweeps,
@@ -136,6 +146,7 @@ class GraspPointsAgent(GraspAgent):
             float(board.get(keys.FRICTION, 0.5)),
             vertical_only=postulate.vertical_only,
             table_height=world.table_height,
+            support=support,
         )
 
     def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:

@@ -66,7 +66,7 @@ def plan_and_validate(
     drake: dict[str, Any] = {"world": "drake", "deadline_s": DRAKE_DEADLINE_S} if world == "drake" else {}
     try:
         request = PlanRequest(
-            obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **drake, **(options or {})
+            obj=obj.spec, seed=seed, table=getattr(obj, "table", None), **{**drake, **(options or {})}
         )
         result = plan(request, keep_trace=False, context=context)
     except ValidationError as exc:  # the planner refuses the request: not a run
@@ -197,6 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
     add("--noise", dest="tactile_noise", type=float, metavar="M", help="tactile noise (std, m; 0.0002)")
     add("--encoder-noise", type=float, metavar="RAD", help="the hand's joint-encoder noise (std, rad; 0)")
     add("--link-error", type=float, metavar="M", help="the hand's link-length error (std, m; 0)")
+    add("--deadline", dest="deadline_s", type=positive_float, metavar="S", help="each plan's budget, s (10)")
     add("--world", choices=WORLDS, default="kinematic", help="where the plans run (kinematic)")
     add("--seconds", type=positive_float, default=1.5, help="Drake load time per direction, s (1.5)")
     return parser
@@ -234,12 +235,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f"argument --seconds: must be ≤ {MAX_SECONDS:g}, got {args.seconds:g}")
     if args.sizes[0] > args.sizes[1]:
         parser.error(f"argument --sizes: LO must be ≤ HI, got {args.sizes[0]:g} {args.sizes[1]:g}")
-    options = {key: getattr(args, key) for key in SENSING_FLAGS if getattr(args, key) is not None}
+    flags = {**SENSING_FLAGS, "deadline_s": "--deadline"}  # the request's fields the options set
+    options = {key: getattr(args, key) for key in flags if getattr(args, key) is not None}
     try:  # the request checks every option, naming the field
         PlanRequest(**options)
         objects, name = chosen_objects(args)
     except ValidationError as exc:
-        parser.error(f"argument {SENSING_FLAGS.get(exc.field, '--' + exc.field)}: {exc.reason}")
+        parser.error(f"argument {flags.get(exc.field, '--' + exc.field)}: {exc.reason}")
     hand = chosen_hand(args)
     name += "" if hand is None else f"_{hand.name}"
     name += "_drake" if args.world == "drake" else ""

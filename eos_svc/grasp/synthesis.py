@@ -20,6 +20,7 @@ from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
 from eos_svc.grasp.landing import hand_landings
 from eos_svc.grasp.quality import grasp_quality
+from eos_svc.grasp.support import TouchSupport
 from eos_svc.grasp.sweeps import FingerSweep
 from eos_svc.kinematics import HandModel
 from eos_svc.objects import Sphere, SurfaceObject
@@ -39,6 +40,8 @@ GOOD_ENOUGH_ANGLE_DEG = 172.0
 EPSILON_TIE = 0.05
 #: collision-free candidates about the centre scored by ε, the least-rotated first
 SCORED = 4
+#: ... on an approximate postulate, ranked by the touches' support first (:mod:`~eos_svc.grasp.support`)
+SUPPORT_SCORED = 12
 #: how far past a wrist joint's limit (rad) an angle still counts as at it: URDF limits are
 #: written rounded (1.570796 for π/2), and a grasp from above needs a yaw of exactly π/2
 LIMIT_SLACK = 1e-6
@@ -50,7 +53,9 @@ class GraspSynthesis:
     """Candidate grasps of one hand (its closing sweeps, palm frame; world constants) on one
     postulated object, checked and scored by ε at ``friction`` μ. ``vertical_only``: the size is
     known along the vertical only; ``table_height`` (world z, m): a hand touching the table is
-    rejected. :attr:`rejections` counts the rejected candidates per reason (in words).
+    rejected. ``support``: the touches of an approximate postulate, which then rank the candidates
+    first (:mod:`~eos_svc.grasp.support`). :attr:`rejections` counts the rejected candidates per
+    reason (in words).
     """
 
     def __init__(
@@ -62,6 +67,7 @@ class GraspSynthesis:
         friction: float,
         vertical_only: bool = False,
         table_height: float | None = None,
+        support: TouchSupport | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
         self.friction = friction
@@ -71,6 +77,7 @@ class GraspSynthesis:
         self.tip_radii = {f: hand.tip_radius(f) for f in hand.finger_names}
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
+        self.support = support
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -79,8 +86,9 @@ class GraspSynthesis:
         """The best candidates, best first: orientations simulated from the least wrist rotation
         up; the ``SCORED`` least-rotated collision-free ones about the centre (one for a sphere)
         scored by ε, those within ``EPSILON_TIE`` of the best counted equal (least rotation
-        first). None about the centre: the collision-free one closest to it, alone."""
-        wanted = 1 if isinstance(self.obj, Sphere) else SCORED
+        first); with ``support``, the ``SUPPORT_SCORED`` least-rotated, ranked by the touches'
+        support first. None about the centre: the collision-free one closest to it, alone."""
+        wanted = 1 if isinstance(self.obj, Sphere) else (SCORED if self.support is None else SUPPORT_SCORED)
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
         groups: dict[float, list[tuple[str, np.ndarray]]] = {}  # by wrist rotation, least first
@@ -103,9 +111,14 @@ class GraspSynthesis:
             if len(rest) > 0:
                 self._reject("contacts not about the centre")
             return next(([self._scored(c)] for c in rest if self._collision_free(c)), [])
-        top = max(c.epsilon for c in kept)
-        kept.sort(key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))
-        return kept
+        if self.support is None:
+            return _by_epsilon(kept)
+        # the candidates with the most supported contacts first, each level by the ε rule
+        counts = [self.support.rank(c, self.opposing) for c in kept]
+        levels = sorted(set(counts), reverse=True)
+        return [
+            c for n in levels for c in _by_epsilon([k for k, m in zip(kept, counts, strict=True) if m == n])
+        ]
 
     def score_frames(self, frames: Iterable[tuple[str, np.ndarray]]) -> list[GraspCandidate]:
         """Another sampler's ``(label, palm rotation)`` pairs, checked as :meth:`candidates` checks
@@ -232,3 +245,10 @@ class GraspSynthesis:
             self.params.contact_patch_radius,
         )
         return dataclasses.replace(c, epsilon=q.epsilon)
+
+
+def _by_epsilon(kept: list[GraspCandidate]) -> list[GraspCandidate]:
+    """``kept`` best first: the best ε, and those within ``EPSILON_TIE`` (relative) of it as
+    equal, the least wrist rotation first."""
+    top = max(c.epsilon for c in kept)
+    return sorted(kept, key=lambda c: (c.epsilon < (1.0 - EPSILON_TIE) * top, c.turn, -c.epsilon))

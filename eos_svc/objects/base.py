@@ -136,6 +136,9 @@ class SurfaceObject(ABC):
     orientation: ClassVar[str] = "rotation"
     #: the shape fit fits this kind to touches (a primitive with half sizes); False: a mesh
     fittable: ClassVar[bool] = True
+    #: a good grasp must also lie about the diameter (the paper's Fig. 2 angle test,
+    #: :mod:`eos_svc.drivers.grip_verdict`); False: force closure about the centre of mass decides
+    grasp_about_diameter: ClassVar[bool] = True
 
     _geom: coal.ShapeBase
 

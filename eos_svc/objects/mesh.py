@@ -110,6 +110,9 @@ class Mesh(SurfaceObject):
     half_size_count = 0
     orientation = "rotation"
     fittable = False
+    #: a mesh's grip is judged by force closure at the contacts made, torques about its centre of
+    #: mass; the 150° test of a sphere's diameter rejects grips Drake's lift test holds (docs/objects.md)
+    grasp_about_diameter = False
 
     def __init__(
         self,

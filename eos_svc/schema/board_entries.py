@@ -151,12 +151,14 @@ class FingertipContact(TypedDict):
 
 class OutcomeEntry(TypedDict):
     """The end agent's verdict (:func:`eos_svc.drivers.grip_verdict.grasp_geometry`; the angle
-    across the centre in deg, ``None`` unless all touch)."""
+    across the centre in deg, ``None`` unless all touch; ``centre_rule``: ``"diameter"``, or
+    ``"force closure"`` for a mesh)."""
 
     contacts: dict[str, FingertipContact]
     all_touching: bool
     good: bool
     about_diameter: bool
+    centre_rule: str
     diameter_angle_deg: float | None
     quality: dict[str, Any]
     q_final: list[float]
