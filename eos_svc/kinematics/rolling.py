@@ -15,7 +15,7 @@ import qpsolvers
 
 from .geometry import unit_vector
 from .hand import HandState, KinematicsError
-from .rolling_problem import JointBox, StepQP, step_qp, velocity_bounds
+from .rolling_problem import JointBox, StepQP, step_qp, steps_at_speed_limits, velocity_bounds
 from .rolling_solvers import RollingQPError, solve_rolling_qp
 from .scene import Contact, Scene
 from .tactile import TactileReading, TactileSensor
@@ -124,6 +124,8 @@ class RollingQP:
         self._qdot = np.zeros(hand.nv)
         self._zero = np.zeros(hand.nv)
         self._qp: StepQP | None = None  # the QP of the last step (or of build)
+        #: steps for which the velocity bounds are surely ∓q̇max (steps_at_speed_limits)
+        self._steps_at_speed_limits = 0
         self._state = state
         self.retarget(axis, omega, state=state, project_axis=project_axis)
 
@@ -142,6 +144,7 @@ class RollingQP:
                 self._state.update(self._state.q)
             self._use(state)
         self._qdot[:] = 0.0
+        self._steps_at_speed_limits = 0
         self._kinematics()
         self._probe.place_object(self.scene.object.placement)
         n = self._probe.measure(self._centre).normal
@@ -192,8 +195,16 @@ class RollingQP:
         return None if self._qp is None else self._qp.problem()
 
     def _bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """The velocity bounds at q (:func:`~.rolling_problem.velocity_bounds`)."""
-        return velocity_bounds(self._q[self.active], self.box, self.dt)
+        """The velocity bounds at q: ``∓q̇max`` while every position limit is out of a step's
+        reach (:func:`~.rolling_problem.steps_at_speed_limits`, evaluated again when that many
+        steps are taken), else :func:`~.rolling_problem.velocity_bounds`."""
+        box = self.box
+        if self._steps_at_speed_limits > 0:
+            self._steps_at_speed_limits -= 1
+            return box.velocity_floor, box.velocity
+        q = self._q[self.active]
+        self._steps_at_speed_limits = max(steps_at_speed_limits(q, box, self.dt) - 1, 0)  # after this one
+        return velocity_bounds(q, box, self.dt)
 
     def _build(self) -> tuple[StepQP, Contact]:
         """The kinematics at q (with the last q̇), the contact, and the QP of the step."""

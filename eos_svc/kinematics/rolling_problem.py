@@ -24,8 +24,13 @@ __all__ = [
     "StepQP",
     "contact_rows",
     "step_qp",
+    "steps_at_speed_limits",
     "velocity_bounds",
 ]
+
+#: the most a solver's q̇ may exceed a velocity bound, as a fraction of the limit (plus 1e-6):
+#: what :func:`steps_at_speed_limits` allows for each step
+SPEED_MARGIN = 0.01
 
 
 @dataclass(frozen=True)
@@ -91,6 +96,18 @@ def velocity_bounds(q: np.ndarray, box: JointBox, dt: float) -> tuple[np.ndarray
     return np.maximum(box.velocity_floor, reach[0]), np.minimum(box.velocity, reach[1])
 
 
+def steps_at_speed_limits(q: np.ndarray, box: JointBox, dt: float) -> int:
+    """How many steps from ``q``, this one included, :func:`velocity_bounds` surely stays the
+    velocity limits ``∓q̇max`` (no position limit within a step's reach): 0 when a position limit
+    binds now. Each step moves a joint by at most ``q̇ dt`` with ``|q̇| ≤ q̇max`` (plus
+    :data:`SPEED_MARGIN` for a solver's tolerance), so its slack ``(q − q_min)/dt − q̇max`` (and
+    ``(q_max − q)/dt − q̇max``) falls by at most that much per step."""
+    slack = np.minimum((q - box.lower) / dt, (box.upper - q) / dt) - box.velocity
+    per_step = box.velocity * (1.0 + SPEED_MARGIN) + 1e-6
+    steps = float((slack / per_step).min())
+    return int(steps) + 1 if steps >= 0.0 else 0
+
+
 def step_qp(
     jacobian: np.ndarray,
     drift: np.ndarray | None,
@@ -109,8 +126,11 @@ def step_qp(
     M = contact_rows(contact.normal, radius)
     wx, wy, wz = omega_axis
     gap_target = -gap_gain * contact.distance / dt
-    b = np.array((0.0, 0.0, gap_target, wx, wy, wz))
-    if drift is not None:  # b − ½ dt M J̇ q̇_prev
-        b = b - 0.5 * dt * (M @ drift)
+    if drift is None:
+        b = np.array((0.0, 0.0, gap_target, wx, wy, wz))
+    else:  # b − ½ dt M J̇ q̇_prev, on floats (the same roundings as on arrays)
+        h = 0.5 * dt
+        m0, m1, m2, m3, m4, m5 = M.dot(drift).tolist()
+        b = np.array((0.0 - h * m0, 0.0 - h * m1, gap_target - h * m2, wx - h * m3, wy - h * m4, wz - h * m5))
     lb, ub = bounds
     return StepQP(weights, M.dot(jacobian), b, lb, ub)
