@@ -36,6 +36,8 @@ NEW_FEATURES: dict[str, str] = {
     "shape/probe_information.py": "active touch: a probe's expected information",
     "agents/relocate.py": "re-locating an object the exploration moved (the Drake world)",
     "shape/pose_refit.py": "re-location: the object's pose refitted to fresh touches",
+    "agents/regrip.py": "mesh objects: letting go of a grip the fingertips feel open, re-gripping",
+    "grasp/support.py": "mesh objects: grasp candidates ranked by the touches that support them",
     "experiments/pybullet_objects.py": "pybullet test objects (meshes)",
     "experiments/plugins.py": "eos experiment plugins",
     "cli/batch.py": "eos batch",
