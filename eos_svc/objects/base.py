@@ -59,10 +59,7 @@ def positive3(field: str, value: object) -> Array:
         raise ObjectSizeError(field, f"must be a 3-vector, got {value!r}") from exc
     if arr.shape != (3,):
         raise ObjectSizeError(field, f"must be a 3-vector, got shape {arr.shape}")
-    for i, v in enumerate(arr):
-        if not (math.isfinite(v) and v > 0.0):
-            raise ObjectSizeError(f"{field}[{i}]", f"must be finite and > 0 m, got {v!r}")
-    return arr
+    return np.array([positive(f"{field}[{i}]", v) for i, v in enumerate(arr.tolist())])
 
 
 def vector3(field: str, value: object) -> Array:
