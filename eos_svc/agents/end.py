@@ -48,12 +48,15 @@ class EndAgent(GraspAgent):
         states = board.get(keys.FINGER_STATE, {})
         if verdict["all_touching"]:
             q = verdict["quality"]
+            mesh_rule = verdict.get("centre_rule", "diameter") == "force closure"
             if verdict["good"]:
                 judgement = "good"
-            elif verdict["about_diameter"] or verdict["centre_rule"] == "force closure":
+            elif not (verdict["about_diameter"] or mesh_rule):
+                judgement = "not good (not about the diameter)"
+            elif not q["force_closure"]:
                 judgement = "not good (no force closure)"
             else:
-                judgement = "not good (not about the diameter)"
+                judgement = "not good (not held in the lift test)"
             angle = verdict["diameter_angle_deg"]
             closure = "force closure" if q["force_closure"] else "no force closure"
             return ActionResult(

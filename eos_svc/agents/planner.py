@@ -285,6 +285,8 @@ def moved_words(report: dict, shape: dict | None) -> str:
     if located.get("verified", True):
         how = f"re-located by touch {relocations} time(s), then" if relocations else "its pose"
         return f"{moved}; {how} checked within 2 mm by touch before the grasp"
+    if not relocations:
+        return f"{moved}; a check found it off by more than 2 mm, with too few fresh touches to re-locate it"
     return f"{moved}; re-located before the grasp, but the last check still found it more than 2 mm off"
 
 

@@ -108,6 +108,7 @@ class Regrip:
         if hull is None:
             return None
         postulate = Postulate(ObjectSpec.from_dict(hull.object), True, False)
+        grip = world.joint_positions()  # back to it when no other grasp can be placed
         self._open_fingers()
         synthesis = self.placer.synthesis(board, postulate, shape)
         fresh = [c for c in synthesis.candidates() if not self._was_tried(c)]
@@ -116,6 +117,7 @@ class Regrip:
             if placed is not None:
                 break
         else:
+            world.move_joints(grip)  # the grip as it was, for the end agent to judge
             return None
         pre, stand_off = placed
         board.set(keys.TARGET, GraspPointsAgent._target(cand, pre, postulate.spec, postulate))

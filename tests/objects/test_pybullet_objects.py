@@ -67,3 +67,19 @@ def test_a_grip_felt_not_to_close_is_let_go_and_planned_again():
     assert details[0].startswith("regrip 1: the fingertips felt 1 of 3 contacts, not in force closure")
     assert len(details) >= 2 and details[-1].startswith("precision grip")
     assert result.good_grasp and result.status == "success"  # a later grip closes
+
+
+def test_a_regrip_with_no_untried_grasp_keeps_the_grip_it_let_go(monkeypatch):
+    """When every remade grasp was tried already, the hand goes back to the grip it opened and
+    the end agent judges that grip (not an open hand)."""
+    from eos_svc.agents.regrip import Regrip
+
+    (obj,), _ = random_objects(range(502, 503))
+    request = PlanRequest(obj=obj.spec, seed=1, table=obj.table, deadline_s=None)
+    monkeypatch.setattr(Regrip, "_was_tried", lambda self, cand: True)
+    result = plan(request)
+    end = [c.detail for c in result.trace if c.chosen == "end"]
+    assert len(end) == 1  # no regrip was placed: the grip judged at once
+    touching = [c["touching"] for c in result.contacts.values()]
+    assert any(touching)  # the grip it had (one tip felt the object), not the opened hand
+    assert not result.good_grasp and result.status != "success"
