@@ -25,7 +25,7 @@ import pinocchio as pin
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.probe_choice import next_probes, seed_probes
-from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, targeted_probes
+from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, targeted_probes, top_probe
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
@@ -98,9 +98,8 @@ class EP2Agent(GraspAgent):
     def plan_round(self, centre: np.ndarray, half: np.ndarray) -> list[Probe]:
         """The probes of a round over the whole surface around the estimate (docs/planner.md)."""
         world = self.world
-        probe = world.probe
-        top, bottom = world.probe_finger("top"), world.probe_finger("bottom")
-        straight = probe.angles
+        bottom = world.probe_finger("bottom")
+        straight = world.probe.angles
         rng = world.rng
         f = (lambda base: base) if self.rounds == 0 else (lambda base: base * float(rng.uniform(0.6, 1.2)))
         cx, cy, cz = centre.tolist()
@@ -124,8 +123,7 @@ class EP2Agent(GraspAgent):
         # top: along −z (straight finger, its links trailing toward −x: in front of the apex);
         # bottom: along +z with the opposing finger
         for dx, dy in ((-f(0.25) * hx, f(0.6) * hy), (-f(0.25) * hx, -f(0.6) * hy)):
-            start = np.array([cx + dx, cy + dy, cz + hz + STANDOFF])
-            probes.append(Probe("top", top, start, -ez, 2.0 * hz + STANDOFF, straight[top]))
+            probes.append(top_probe(world, centre, half, dx, dy, STANDOFF))
         for dx in () if world.support_height is not None else (-f(0.4) * hx,):  # none under a support
             start = np.array([cx + dx, cy, cz - hz - STANDOFF])
             probes.append(Probe("bottom", bottom, start, ez, 2.0 * hz + STANDOFF, straight[bottom]))

@@ -98,7 +98,6 @@ class GraspPointsAgent(GraspAgent):
                 f"cannot choose grasp points on a {shape['class']} of unknown size from EP1 alone",
                 succeeded=False,
             )
-        hand = self.world.hand
         spec = postulate.spec
         synthesis = self.synthesis(board, postulate, shape)
         note = postulate.words()
@@ -106,17 +105,10 @@ class GraspPointsAgent(GraspAgent):
         candidates = self.choose_candidates(synthesis, spec)
         if not candidates:
             return self._no_grasp(spec, synthesis, note)
-        for cand in candidates:
-            placed = self._place(cand, synthesis)
-            if placed is not None:
-                break
-        else:
+        placed = self.place_first(board, candidates, synthesis, postulate)
+        if placed is None:
             return ActionResult(Outcome.FINISHED, f"no collision-free pre-grasp found{note}", succeeded=False)
-        pre, stand_off = placed
-        board.set(keys.TARGET, self._target(cand, pre, spec, postulate))
-        board.set(keys.FINGER_STATE, dict.fromkeys(hand.finger_names, "open"))
-        board.set(keys.AT_TARGET, False)
-        board.set(keys.WRIST_LEFT, round(stand_off, 6))
+        cand, stand_off = placed
         roll, pitch, yaw = np.degrees(cand.wrist_rpy) + 0.0  # + 0.0: never "-0°"
         if not cand.about_centre:
             angle = f"{cand.angle_deg:.1f}°"
@@ -172,6 +164,23 @@ class GraspPointsAgent(GraspAgent):
             f"no grasp of the postulated {spec.shape} {size_words(spec)} is reachable{note}: {reasons}",
             succeeded=False,
         )
+
+    def place_first(
+        self, board: Board, candidates: list[GraspCandidate], synthesis: GraspSynthesis, postulate: Postulate
+    ) -> tuple[GraspCandidate, float] | None:
+        """Place the hand, open, at the pre-grasp of the first of ``candidates`` that is clear of
+        the object there and write its target (fingers open, not yet at it, the stand-off left);
+        (that candidate, its stand-off in m), or None when none is clear."""
+        for cand in candidates:
+            placed = self._place(cand, synthesis)
+            if placed is not None:
+                pre, stand_off = placed
+                board.set(keys.TARGET, self._target(cand, pre, postulate.spec, postulate))
+                board.set(keys.FINGER_STATE, dict.fromkeys(self.world.hand.finger_names, "open"))
+                board.set(keys.AT_TARGET, False)
+                board.set(keys.WRIST_LEFT, round(stand_off, 6))
+                return cand, stand_off
+        return None
 
     def _place(self, cand: GraspCandidate, synthesis: GraspSynthesis) -> tuple[np.ndarray, float] | None:
         """Move the hand to ``cand``'s pre-grasp, fingers open, if it is clear of the object there;

@@ -107,6 +107,18 @@ def side_probe(
     return Probe("side", finger, start, direction, travel, world.probe.angles.get(finger, 0.0), group)
 
 
+def top_probe(
+    world: HandDriver, centre: np.ndarray, half: np.ndarray, dx: float, dy: float, standoff: float
+) -> Probe:
+    """A probe of the top along −z, ``(dx, dy)`` off the middle of the estimate (``centre``,
+    ``half`` extents along the world axes, m), from ``standoff`` above it, the finger straight."""
+    top = world.probe_finger("top")
+    cx, cy, cz = centre.tolist()
+    hz = float(half[2])
+    start = np.array([cx + dx, cy + dy, cz + hz + standoff])
+    return Probe("top", top, start, np.array([0.0, 0.0, -1.0]), 2.0 * hz + standoff, world.probe.angles[top])
+
+
 def targeted_probes(
     world: HandDriver, faces: list[dict], standoff: float, label: str = "open", off_centre: bool = True
 ) -> list[Probe]:

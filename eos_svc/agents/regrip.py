@@ -112,18 +112,11 @@ class Regrip:
         self._open_fingers()
         synthesis = self.placer.synthesis(board, postulate, shape)
         fresh = [c for c in synthesis.candidates() if not self._was_tried(c)]
-        for cand in fresh:
-            placed = self.placer._place(cand, synthesis)
-            if placed is not None:
-                break
-        else:
+        placed = self.placer.place_first(board, fresh, synthesis, postulate)
+        if placed is None:
             world.move_joints(grip)  # the grip as it was, for the end agent to judge
             return None
-        pre, stand_off = placed
-        board.set(keys.TARGET, GraspPointsAgent._target(cand, pre, postulate.spec, postulate))
-        board.set(keys.FINGER_STATE, dict.fromkeys(world.hand.finger_names, "open"))
-        board.set(keys.AT_TARGET, False)
-        board.set(keys.WRIST_LEFT, round(stand_off, 6))
+        cand, _ = placed
         return (
             f"regrip {self.attempts}: the fingertips felt {len(felt)} of {len(world.hand.finger_names)} "
             "contacts, not in force closure; "

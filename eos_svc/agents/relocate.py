@@ -28,7 +28,7 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.ep2 import STANDOFF
-from eos_svc.agents.probe_plan import Probe, front_probe, side_probe
+from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, top_probe
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.grasp.postulate import make_object, read_postulate
@@ -92,19 +92,16 @@ class RelocateAgent(GraspAgent):
             "a check probe missed it" if lost else f"a check touch {1000 * worst:.1f} mm off the prediction"
         )
         if self.rounds >= MAX_ROUNDS:
-            shape["located"] = {"moved": True, "checks": self.rounds, "verified": False}
-            board.set(keys.SHAPE, shape)
-            return ActionResult(
-                Outcome.PROGRESS,
+            return self._unverified(
+                board,
+                shape,
                 f"{what} after {self.rounds} checks: the object keeps moving; planning on the last pose",
             )
         more = self._probe(self.relocation_probes(spec))
         touches = [t for t in checks if t is not None] + [t for t in more if t is not None]
         if len(touches) < 3:
-            shape["located"] = {"moved": True, "checks": self.rounds, "verified": False}
-            board.set(keys.SHAPE, shape)
-            return ActionResult(
-                Outcome.PROGRESS, f"{what}; only {len(touches)} fresh touches: cannot re-locate it"
+            return self._unverified(
+                board, shape, f"{what}; only {len(touches)} fresh touches: cannot re-locate it"
             )
         centres, normals, radii = (np.array([t[i] for t in touches]) for i in range(3))
         fit = refit_pose(spec, centres, normals, radii, self.world.support_height, self.world.tactile_noise)
@@ -116,6 +113,12 @@ class RelocateAgent(GraspAgent):
             f"{np.degrees(fit.turn):.0f}°, touches within {1000 * fit.rms:.1f} mm rms",
         )
 
+    def _unverified(self, board: Board, shape: dict, words: str) -> ActionResult:
+        """The postulate marked moved and not verified (the plan goes on with its last pose)."""
+        shape["located"] = {"moved": True, "checks": self.rounds, "verified": False}
+        board.set(keys.SHAPE, shape)
+        return ActionResult(Outcome.PROGRESS, words)
+
     # --- the probes ---------------------------------------------------------------------------
     def _estimate(self, spec: ObjectSpec) -> tuple[np.ndarray, np.ndarray]:
         obj = make_object(spec)
@@ -125,11 +128,10 @@ class RelocateAgent(GraspAgent):
         """The check probes: the front's middle along +x and the top's along −z."""
         world = self.world
         centre, half = self._estimate(spec)
-        top = world.probe_finger("top")
-        start = centre + np.array([0.0, 0.0, half[2] + STANDOFF])
-        travel = 2.0 * half[2] + STANDOFF
-        down = Probe("top", top, start, np.array([0.0, 0.0, -1.0]), travel, world.probe.angles[top])
-        return [front_probe(world, centre, half, 0.0, 0.0, STANDOFF), down]
+        return [
+            front_probe(world, centre, half, 0.0, 0.0, STANDOFF),
+            top_probe(world, centre, half, 0.0, 0.0, STANDOFF),
+        ]
 
     def relocation_probes(self, spec: ObjectSpec) -> list[Probe]:
         """The probes added to re-locate: both sides along ±y, the front off its middle."""

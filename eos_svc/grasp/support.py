@@ -49,6 +49,5 @@ class TouchSupport:
         predicted contacts are): the larger, the better. The opposing finger's contact comes
         first: it lands alone across the others, on the side a table hides and the hull of the
         touches guesses (the failed grips' unsupported contact was the opposing finger's)."""
-        hits = candidate.landings
-        count = sum(self.supported(hit.point, hit.normal) for hit in hits.values())
-        return self.supported(hits[opposing].point, hits[opposing].normal), count
+        support = {f: self.supported(hit.point, hit.normal) for f, hit in candidate.landings.items()}
+        return support[opposing], sum(support.values())
