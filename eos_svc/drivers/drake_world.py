@@ -44,6 +44,7 @@ from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.drivers.lift_test import GRAVITY, SQUEEZE, lift_test, squeeze_grip
 from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
+from eos_svc.world import wrist_motion
 
 if TYPE_CHECKING:
     from eos_svc.kinematics.curvature import CurvatureEstimator
@@ -308,12 +309,12 @@ class DrakeDriver(KinematicDriver):
 
     # --- acting ---------------------------------------------------------------------------------
     def search_step(self) -> tuple[str, float, bool]:
-        """One search sweep, planned on the model and executed in Drake."""
+        """One search sweep, planned on the model and executed in Drake leg by leg (a sweep's
+        legs turn corners around the object: one straight motion from its start to its end
+        would cut through it)."""
         self._motion = "search"
-        q0 = self._world.state.q
-        out = super().search_step()
-        self._execute(q0, self._world.state.q, self._settings.free_speed)
-        return out
+        speed = self._settings.free_speed
+        return wrist_motion.search_step(self._world, lambda a, b: self._execute(a, b, speed))
 
     def guarded_wrist_move(self, target: np.ndarray, stop_when_located: bool = False) -> WristMove:
         """A guarded straight wrist move, planned on the model and executed in Drake."""

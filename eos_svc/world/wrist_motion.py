@@ -3,6 +3,7 @@ move, and the grasp stage's step toward a target that stops short of touching (w
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -14,10 +15,15 @@ if TYPE_CHECKING:
     from eos_svc.world.world import GraspWorld
 
 
-def search_step(world: GraspWorld) -> tuple[str, float, bool]:
+def search_step(
+    world: GraspWorld, execute: Callable[[np.ndarray, np.ndarray], bool] | None = None
+) -> tuple[str, float, bool]:
     """One search move: a sweep of the next column of the coverage plan
     (:mod:`eos_svc.world.coverage`), each leg a :func:`guarded_wrist_move` that stops where the
-    object enters the envelope or short of a contact; (column label "(j, k)", m moved, blocked)."""
+    object enters the envelope or short of a contact; (column label "(j, k)", m moved, blocked).
+    ``execute(q_from, q_to)``: a driver's execution of each planned leg (a simulated hand's,
+    leg by leg, so that no leg cuts a corner through the object); True when it stopped on a
+    contact, which blocks the sweep as the model's contact does."""
     p = world.params
     if not world.search_order:  # the first move, or every column swept: (again) in a new order
         world.search_order = space_filling_order(column_counts(p), world.rng, world.context.lattice)
@@ -29,7 +35,10 @@ def search_step(world: GraspWorld) -> tuple[str, float, bool]:
     x_lo, x_hi = p.search_box_lo[0], p.search_box_hi[0]
     moved = 0.0
     for leg in ((x_lo, *world.wrist_xyz()[1:]), (x_lo, y, z), (x_hi, y, z)):
+        q_from = world.state.q.copy()
         length, blocked = guarded_wrist_move(world, np.array(leg), stop_when_located=True)
+        if execute is not None:
+            blocked = execute(q_from, world.state.q.copy()) or blocked
         moved += length
         if world.located():
             return f"({j}, {k})", moved, False
