@@ -131,13 +131,21 @@ DRAW_CLASSES = ("sphere", "ellipsoid", "cylinder", "capsule", "box")
 
 
 def random_draw(
-    count: int, draw_seed: int, sizes: tuple[float, float] = (0.15, 0.50), span: float | None = None
+    count: int,
+    draw_seed: int,
+    sizes: tuple[float, float] = (0.15, 0.50),
+    span: float | None = None,
+    resting: bool = False,
 ) -> list[SuiteObject]:
     """``count`` objects from a seeded generator (``draw_seed``), none filtered (admission
     decides): the class uniform over :data:`DRAW_CLASSES`; every full width (a radius or half a
     length: half of one) uniform in ``sizes`` (low, high) × ``span`` (m; default hand3x3's span,
-    as admission measures it); a uniformly random orientation; the position uniform in the
-    default position ± :data:`DRAW_POSITION_SPREAD`; one plan seed each."""
+    as admission measures it); a uniformly random orientation (with ``resting``, turned to the
+    nearest pose it can rest in on a table: :mod:`eos_svc.experiments.resting_pose`; the same
+    objects otherwise); the position uniform in the default position ±
+    :data:`DRAW_POSITION_SPREAD`; one plan seed each."""
+    from eos_svc.experiments.resting_pose import resting_rpy
+
     from scipy.spatial.transform import Rotation
 
     from eos_svc.world.admission import hand_span
@@ -161,6 +169,7 @@ def random_draw(
         else:
             size = {"size": tuple(width() for _ in range(3))}
         rpy = Rotation.random(random_state=rng).as_euler("xyz")
+        rpy = resting_rpy(shape, size, rpy) if resting else rpy
         position = base + rng.uniform(-spread, spread)
         seed = int(rng.integers(1, 2**31 - 1))
         spec = ObjectSpec(

@@ -189,6 +189,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar=("LO", "HI"),
         help="the random draw's widths as fractions of the hand's span (0.15 0.5)",
     )
+    add(
+        "--poses",
+        choices=("any", "resting"),
+        help="the random draw's orientations: any, or turned to rest on a table "
+        "(default: resting in the Drake world, whose object rests on a table; any otherwise)",
+    )
     add("--objects", choices=("pybullet-random", "pybullet-named"), help="pybullet's meshes instead")
     add("--ids", default="0-9", help="the pybullet random objects' ids, A-B (0-9)")
     add("--table", action="store_true", help="the pybullet objects rest on a table")
@@ -216,8 +222,10 @@ def chosen_objects(args: argparse.Namespace) -> tuple[Sequence[SuiteObject | Wor
     elif args.random is not None:
         lo, hi = args.sizes
         drawn = f"{args.random} objects, draw seed {args.draw_seed}"
+        resting = (args.poses or ("resting" if args.world == "drake" else "any")) == "resting"
+        drawn += ", resting poses" if resting else ""
         print(f"random draw: {drawn}, widths {lo:g}-{hi:g} of the span", file=sys.stderr)
-        return random_draw(args.random, args.draw_seed, (lo, hi)), "grasps_random"
+        return random_draw(args.random, args.draw_seed, (lo, hi), resting=resting), "grasps_random"
     elif args.held_back:
         return held_back_suite(1 if args.quick else 3), "grasps_held_back"
     else:
