@@ -144,10 +144,9 @@ def random_draw(
     nearest pose it can rest in on a table: :mod:`eos_svc.experiments.resting_pose`; the same
     objects otherwise); the position uniform in the default position ±
     :data:`DRAW_POSITION_SPREAD`; one plan seed each."""
-    from eos_svc.experiments.resting_pose import resting_rpy
-
     from scipy.spatial.transform import Rotation
 
+    from eos_svc.experiments.resting_pose import resting_rpy
     from eos_svc.world.admission import hand_span
 
     scale = hand_span(default_hand()) if span is None else span

@@ -28,7 +28,8 @@ def _angle(a: np.ndarray, b: np.ndarray) -> float:
 def test_every_drawn_object_is_turned_to_a_stable_rest_by_the_smallest_rotation() -> None:
     anywhere, resting = random_draw(DRAW, 3), random_draw(DRAW, 3, resting=True)
     for drawn, rest in zip(anywhere, resting, strict=True):
-        assert (drawn.spec.size, drawn.spec.position, drawn.seed) == (rest.spec.size, rest.spec.position, rest.seed)
+        same = (drawn.spec.size, drawn.spec.position, drawn.seed)
+        assert same == (rest.spec.size, rest.spec.position, rest.seed)
         before = np.asarray(pin.rpy.rpyToMatrix(*drawn.spec.rpy))
         after = np.asarray(pin.rpy.rpyToMatrix(*rest.spec.rpy))
         vertical = np.abs(after[2, :])  # each local axis's |cos| with the vertical
@@ -53,7 +54,8 @@ def test_every_drawn_object_is_turned_to_a_stable_rest_by_the_smallest_rotation(
 
 def test_a_pose_already_at_rest_is_kept_and_an_unknown_shape_is_refused() -> None:
     upright = np.asarray(pin.rpy.rpyToMatrix(0.0, 0.0, 0.7))
-    np.testing.assert_allclose(resting_rotation("box", {"size": (0.05, 0.06, 0.07)}, upright), upright, atol=1e-12)
+    box = {"size": (0.05, 0.06, 0.07)}
+    np.testing.assert_allclose(resting_rotation("box", box, upright), upright, atol=1e-12)
     lying = resting_rpy("capsule", {"radius": 0.02, "length": 0.05}, (math.pi / 2, 0.0, 0.3))
     np.testing.assert_allclose(lying, (math.pi / 2, 0.0, 0.3), atol=1e-12)
     with pytest.raises(ValueError, match="shape"):
