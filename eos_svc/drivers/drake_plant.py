@@ -50,6 +50,10 @@ from eos_svc.validation.simulation import (
 
 #: the object starts this far above the table, m
 DROP = 1e-4
+#: below this spin about horizontal axes (rad/s) the object is not rolling: no rolling torque
+STILL_SPIN = 1e-6
+#: the table's normal out of the object
+DOWN = np.array([0.0, 0.0, -1.0])
 
 
 @dataclass(frozen=True)
@@ -188,7 +192,9 @@ class DrakeHandPlant:
         self._n = len(names)
         self._table_geometry = table
         self._wrench = (np.zeros(3), np.zeros(3))
+        self._bodies: dict[Any, int] = {}  # geometry id -> body index, filled as contacts name them
         plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
+        self._applied = False  # whether a non-zero wrench is fixed on the port
         self.set_object_wrench(np.zeros(3), np.zeros(3))
 
     # --- the hand --------------------------------------------------------------------------
@@ -263,11 +269,13 @@ class DrakeHandPlant:
         c = self.settings.rolling_resistance
         if c <= 0.0:
             return np.zeros(3)
+        spin = np.array(self.plant.EvalBodySpatialVelocityInWorld(self.context, self.body).rotational())
+        spin[2] = 0.0
+        if float(np.linalg.norm(spin)) < STILL_SPIN:  # not rolling: no torque worth applying
+            return np.zeros(3)
         normal = self.table_force()
         if normal <= 0.0:
             return np.zeros(3)
-        spin = np.array(self.plant.EvalBodySpatialVelocityInWorld(self.context, self.body).rotational())
-        spin[2] = 0.0
         height = max(0.0, float(self.object_pose().translation()[2]) - self.table_top)
         return -c * normal * height * spin / max(float(np.linalg.norm(spin)), 0.05)
 
@@ -287,10 +295,18 @@ class DrakeHandPlant:
         from pydrake.multibody.plant import ExternallyAppliedSpatialForce
 
         force, torque = self._wrench
+        torque = torque + self.rolling_torque()
+        if not force.any() and not torque.any():  # nothing applied: fix the port only if it changes
+            if not self._applied:
+                return
+            self.plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
+            self._applied = False
+            return
+        self._applied = True
         f = ExternallyAppliedSpatialForce()
         f.body_index = self.body.index()
         f.p_BoBq_B = vec((0.0, 0.0, 0.0))
-        f.F_Bq_W = SpatialForce(vec(torque + self.rolling_torque()), vec(force))
+        f.F_Bq_W = SpatialForce(vec(torque), vec(force))
         self.plant.get_applied_spatial_force_input_port().FixValue(self.context, [f])
 
     def object_contacts(self) -> list[tuple[int, np.ndarray, np.ndarray, float]]:
@@ -324,6 +340,9 @@ class DrakeHandPlant:
             other = b if a == me else a
             if a != me:
                 f_on_obj = -f_on_obj
+            if self._table_geometry in (surface.id_M(), surface.id_N()):  # the table's: normal −z
+                out.append((other, np.asarray(surface.centroid()), DOWN, float(max(0.0, f_on_obj[2]))))
+                continue
             # the patch's area-weighted normal (Drake's face normals point out of N into M)
             faces = range(surface.num_faces())
             mean = sum((surface.area(f) * np.asarray(surface.face_normal(f)) for f in faces), np.zeros(3))
@@ -335,7 +354,11 @@ class DrakeHandPlant:
 
     def _body_of_geometry(self, geometry: Any) -> int:
         """The index of the body a geometry belongs to."""
-        return int(self.plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry)).index())
+        body = self._bodies.get(geometry)
+        if body is None:
+            body = int(self.plant.GetBodyFromFrameId(self._inspector.GetFrameId(geometry)).index())
+            self._bodies[geometry] = body
+        return body
 
     def tip_force(self, finger_body: Any) -> tuple[np.ndarray, np.ndarray, float] | None:
         """The contact of a fingertip body with the object: (point, normal, force) or None."""
