@@ -195,6 +195,8 @@ class DrakeHandPlant:
         self._bodies: dict[Any, int] = {}  # geometry id -> body index, filled as contacts name them
         plant.get_applied_spatial_force_input_port().FixValue(self.context, [])
         self._applied = False  # whether a non-zero wrench is fixed on the port
+        # every second simulated, those of branches :meth:`restore` went back from included, s
+        self.simulated_s = 0.0
         self.set_object_wrench(np.zeros(3), np.zeros(3))
 
     # --- the hand --------------------------------------------------------------------------
@@ -224,11 +226,13 @@ class DrakeHandPlant:
 
     def advance_to(self, t: float) -> None:
         """Simulate up to time ``t``, s (in steps of at most ``rolling_update`` s, the rolling
-        resistance's torque updated before each)."""
+        resistance's torque updated before each; added to :attr:`simulated_s`)."""
         step = self.settings.rolling_update
+        start = self.root.get_time()
         while self.root.get_time() < t - 1e-12:
             self._apply_wrench()
             self.simulator.AdvanceTo(min(t, self.root.get_time() + step))
+        self.simulated_s += max(0.0, self.root.get_time() - start)
 
     def save(self) -> Any:
         """A copy of the simulation's state (time, positions, velocities)."""

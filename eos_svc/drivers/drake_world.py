@@ -23,7 +23,8 @@ before it executes it:
   also held.
 
 :meth:`DrakeDriver.report` says how far the exploration moved the object and how long the
-simulation ran (simulated and wall time).
+simulation ran: the seconds simulated (the lift test's nine loads, each simulated from the same
+lifted state, counted: 2.7 s a grip), the plan's clock and the wall time spent simulating.
 """
 
 from __future__ import annotations
@@ -38,6 +39,7 @@ import numpy as np
 import pinocchio as pin
 from pydrake.math import RigidTransform
 
+from eos_svc.drivers import balanced_squeeze as balanced
 from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
@@ -416,15 +418,20 @@ class DrakeDriver(KinematicDriver):
 
     # --- the referee ------------------------------------------------------------------------------
     def judge_grip(self, friction: float) -> dict[str, Any]:
-        """The grip squeezed (the lift test's first step: every finger joint 0.1 rad further
-        closed, settled), its contacts and quality where the object now is, then the rest of
-        the lift test: good only if held."""
+        """The grip squeezed (a balanced squeeze, :mod:`eos_svc.drivers.balanced_squeeze`; where
+        a fingertip does not touch, every finger joint 0.1 rad further closed), its contacts and
+        quality where the object now is, then the rest of the lift test: good only if held."""
         moved = self._explored = self.object_moved()  # before the grip and the lift move it
         self._motion = "squeeze"
         world = self._world
-        # a described hand's own squeeze (its [drake] table: per joint unit, m for a prismatic finger)
-        squeeze = float(dict(getattr(world.hand, "drake", {})).get("squeeze", SQUEEZE))
-        target = self._timed(lambda: squeeze_grip(self._plant, world.hand, squeeze))
+        drake = dict(getattr(world.hand, "drake", {}))  # a described hand's [drake] table
+        kp = float(drake.get("kp", self._plant.settings.finger_kp))
+        # the balanced squeeze; where a fingertip does not touch, the uniform one (the
+        # description's own: per joint unit, m for a prismatic finger)
+        squeeze = float(drake.get("squeeze", SQUEEZE))
+        target = self._timed(lambda: balanced.squeeze(self._plant, world.hand, kp))
+        if target is None:
+            target = self._timed(lambda: squeeze_grip(self._plant, world.hand, squeeze))
         self._sync()
         verdict = grasp_geometry(world, friction)
         verdict["object_moved_mm"] = round(1000.0 * moved, 3)
@@ -440,7 +447,7 @@ class DrakeDriver(KinematicDriver):
 
     def report(self) -> dict[str, Any]:
         """The Drake world's figures for the plan result."""
-        sim = self._plant.time()
+        sim = self._plant.simulated_s  # the lift test's loads, each from the lifted state, included
         moved = self.object_moved() if self._explored is None else self._explored
         return {
             "name": "drake",
@@ -455,6 +462,7 @@ class DrakeDriver(KinematicDriver):
             "transfers_unsimulated": self._transfers,
             "transfers_into_object": self._transfers_into,
             "simulated_s": round(sim, 4),
+            "clock_s": round(self._plant.time(), 4),
             "simulation_wall_s": round(self._sim_wall, 4),
             "real_time_factor": round(sim / self._sim_wall, 3) if self._sim_wall > 0 else None,
         }
