@@ -4,12 +4,12 @@ faster is it?
     .venv/bin/python benchmarks/bench_drake_step.py [--steps 0.001 0.002] [--quick]
 
 For every object of the fixed suite (``--quick``: one per class), the kinematic world's plan
-(seed 1) gives a grip; the Drake world with each plant step places the hand there, squeezes and
-runs the lift test (:mod:`eos_svc.drivers.lift_test`). Prints, per object and step, the verdict
-and the object's largest displacement under the loads, then per step the verdicts that differ
-from the first step's and the CPU seconds per simulated second (process time: less sensitive
-than wall time to the other processes on the machine), median over the objects, and their ratio
-against the first step measured in the same run.
+(seed 1) gives a grip; the Drake world with each plant step places the hand there and judges
+the grip as a plan's end does (:meth:`DrakeDriver.judge_grip`: the squeeze, the lift test).
+Prints, per object and step, the verdict and the object's largest displacement under the
+loads; then, per step, the verdicts that differ from the first step's and the CPU seconds per
+simulated second (process time: less sensitive than wall time to the other processes on the
+machine), median over the objects, with their ratio against the first step in the same run.
 """
 
 from __future__ import annotations
@@ -23,23 +23,20 @@ import numpy as np
 from eos_svc.agents import PlanRequest, build_world, plan
 from eos_svc.drivers.drake_plant import PlantSettings
 from eos_svc.drivers.drake_world import DrakeDriver
-from eos_svc.drivers.lift_test import lift_test, squeeze_grip
 from eos_svc.experiments.grasp_suite import fixed_suite, quick_suite
 
 
 def lift_with_step(request: PlanRequest, q_grip: np.ndarray, step: float) -> tuple[bool, float, float]:
     """The lift test of the grip ``q_grip`` in a Drake world stepping ``step`` s: (held, the
     largest load displacement in m, CPU seconds per simulated second)."""
-    driver = DrakeDriver(
-        build_world(request), request.obj, request.friction, None, PlantSettings(time_step=step)
-    )
-    plant, world = driver._plant, driver._world
+    settings = PlantSettings(time_step=step)
+    driver = DrakeDriver(build_world(request), request.obj, request.friction, None, settings)
+    plant = driver._plant
     plant.set_hand_q(q_grip)
     simulated, cpu = plant.simulated_s, time.process_time()
-    target = squeeze_grip(plant, world.hand)
-    lift = lift_test(plant, world.hand, world.wrist_xyz_q, 0.5 * float(world.obj.diameter), target)
+    lift = driver.judge_grip(request.friction)["lift"]  # the driver's squeeze, then the lift test
     cpu = time.process_time() - cpu
-    worst = max(lift["load_displacement_m"].values())
+    worst = max(lift.get("load_displacement_m", {"none": np.inf}).values())
     return bool(lift["held"]), float(worst), cpu / (plant.simulated_s - simulated)
 
 
