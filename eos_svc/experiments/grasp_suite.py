@@ -1,10 +1,5 @@
-"""The objects of ``eos experiment grasps``: a fixed suite, a seeded held-back suite, random draws.
-
-The fixed suite covers every class and the poses that matter for a hand approaching along +x
-(spheres of d/h 0.2–0.95; ellipsoids long along each axis; cylinders and capsules upright,
-across, along the approach and at an angle; cubes, plates and bars at three yaws). The
-held-back suite and the random draws come from seeded generators, so a goal can be checked on
-objects nobody tuned on (``docs/validation.md``).
+"""The objects of ``eos experiment grasps``: a fixed suite of every class and the poses that
+matter, a seeded held-back suite and random draws (``docs/validation.md``).
 """
 
 import math

@@ -1,8 +1,5 @@
-"""Whether anyone watches the goals: a flag the service reads before publishing a goal's messages.
-
-Zenoh drops a put nobody subscribes to unsent; the service skips building such a message at all
-(a plan nobody watches costs no encoding and no put). :class:`GoalWatchers` answers whether any
-subscriber matches ``P/goal/*/*`` from a publisher declared on that key and never used to put.
+"""Whether anyone watches the goals (a subscriber matching ``P/goal/*/*``, read from a publisher
+never used to put): the service builds no message nobody would receive.
 """
 
 from __future__ import annotations

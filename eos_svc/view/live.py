@@ -1,12 +1,6 @@
-"""A live 3-D view of plans: a Drake MeshCat page on localhost that follows the cycles.
-
-    view = LiveView()                      # view.url is the page
-    view.start(request)                    # the object, the hand at its start
-    result = plan(request, on_cycle=view.cycle)
-    view.finish(result.to_dict())          # final grasp, contacts, and the whole plan animated
-
-``eos plan --view`` feeds it from the planner, ``eos client watch --view`` from the service's
-messages (:class:`StreamView`, which queues them: every MeshCat call happens in the view's thread).
+"""A live 3-D view of plans: a Drake MeshCat page on localhost that follows the cycles
+(``eos plan --view``; ``eos client watch --view`` through :class:`StreamView`, which queues the
+service's messages so that every MeshCat call happens in the view's thread; ``docs/view.md``).
 """
 
 from __future__ import annotations
