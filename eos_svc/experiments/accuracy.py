@@ -1,6 +1,7 @@
-"""EP1 accuracy: estimated curvatures against the analytic ground truth, noise-free on spheres,
-a plane, a cylinder and an ellipsoid, and with tactile noise over seeds (``docs/ep1.md``;
-``eos experiment accuracy``).
+"""EP1 accuracy: estimated curvatures against the analytic ground truth.
+
+Noise-free on spheres, a plane, a cylinder and an ellipsoid; with tactile noise over seeds
+(``docs/ep1.md``; ``eos experiment accuracy``).
 """
 
 from __future__ import annotations

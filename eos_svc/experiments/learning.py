@@ -1,5 +1,6 @@
-"""The learned sub-rating (paper §7): a seeded stream of objects with repeats, planned without
-learning, then with weights (0.25, 0.25, 0.5) and a fresh grasp memory (``docs/planner.md``).
+"""The learned sub-rating (paper §7): a stream of objects with repeats, with and without learning.
+
+Without: weights (0.5, 0.5, 0); with: (0.25, 0.25, 0.5) and a fresh grasp memory (``docs/planner.md``).
 
     eos experiment learning --out results/learning
 """
