@@ -1,7 +1,5 @@
 """Contact queries between the hand's collision geometry and one object (coal): signed distances
-(negative = penetration), witness points and the normal, world coordinates (m). A penetrating
-sphere fingertip's contact comes from the object's analytic closest point (coal's depth is
-approximate for curved shapes).
+(negative = penetration), witness points and the normal, world coordinates (m).
 """
 
 from __future__ import annotations

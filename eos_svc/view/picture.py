@@ -1,7 +1,6 @@
 """Pictures of a final grasp (``draw_result(plan(), "grasp.png")``): a 3-D view and three
-orthographic views in mm of the hand's collision geometry, the object and the contacts (a red dot
-and an arrow into the object). Every primitive is drawn as the convex hull of points on its
-surface, in the orthographic views as the outline of their projection, back to front.
+orthographic views (mm) of the hand's collision geometry, the object and the contacts, each
+primitive drawn as the convex hull of points on its surface.
 """
 
 from __future__ import annotations
