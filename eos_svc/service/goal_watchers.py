@@ -26,16 +26,6 @@ class GoalWatchers:
     - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
 
-    __slots__ = (
-        "_listener",
-        "_matching_notices",
-        "_on_notice",
-        "_publisher",
-        "_reading",
-        "any",
-        "zenoh_says_matching",
-    )
-
     def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
         self._publisher = session.declare_publisher(proto.goal_keys(prefix))
         self.any = False
