@@ -8,7 +8,7 @@ from typing import NamedTuple
 import numpy as np
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.schema.request import DEFAULT_OBJECT, ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 
 #: sphere diameters of the fixed suite, as d/h
 SPHERE_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
@@ -38,15 +38,9 @@ class SuiteObject(NamedTuple):
     seed: int | None = None
 
 
-def default_position() -> tuple[float, float, float]:
-    """Where the default request puts its object (m)."""
-    x, y, z = DEFAULT_OBJECT["position"]
-    return (float(x), float(y), float(z))
-
-
 def fixed_suite() -> list[SuiteObject]:
     """The fixed suite (29 objects), all at the default object position."""
-    p = default_position()
+    p = ObjectSpec().position  # the default request's
     h = default_hand().hand_height
     out = [
         SuiteObject(f"sphere d/h {r:.2f}", ObjectSpec("sphere", {"radius": 0.5 * r * h}, p))
@@ -88,7 +82,7 @@ def held_back_suite(per_class: int = 3, seed: int = HELD_BACK_SEED) -> list[Suit
     seeded generator (uniform ranges; positions within ±1 cm of the default)."""
     rng = np.random.default_rng(seed)
     h = default_hand().hand_height
-    base = np.asarray(default_position())
+    base = np.asarray(ObjectSpec().position)
     out = []
 
     def position() -> tuple[float, float, float]:
@@ -139,7 +133,7 @@ def random_draw(
 
     scale = hand_span(default_hand()) if span is None else span
     rng = np.random.default_rng(draw_seed)
-    base, spread = np.asarray(default_position()), np.asarray(DRAW_POSITION_SPREAD)
+    base, spread = np.asarray(ObjectSpec().position), np.asarray(DRAW_POSITION_SPREAD)
     out = []
 
     def width() -> float:
