@@ -265,15 +265,13 @@ def run_ep1(
         raise
     assert rq is not None
     state.update(rq.q)
-    max_slip = max(slips)
-    max_gap = max(gaps)
     return EP1Result(
         estimate=est.estimate(),
         q_final=state.q,
         steps=steps,
         samples=tuple(samples),
-        max_slip_speed=max_slip,
-        max_gap=max_gap,
+        max_slip_speed=max(slips),
+        max_gap=max(gaps),
         frame=F,
         contact_point=np.array(ct0.point_object, dtype=float),
         normal=np.array(ct0.normal, dtype=float),
