@@ -2,12 +2,16 @@
 
 Each cycle it rates the agents allowed in the stage, chooses the highest total
 P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties: the agent listed first), runs its action on the board and
-records the cycle. Its rules (``docs/planner.md``): 1. opportunistic sub-ratings reset every cycle
-(then the previous action's and each agent's own test, the larger); 2. an agent that acted in the
-stage is eligible again only while its opportunistic and learned part is positive
-(:class:`RepeatPolicy`); 3. ``CANNOT_ACT`` or nobody eligible stalls, ``STAGE_COMPLETE`` moves on,
-``FINISHED`` ends, an exception ends with ``error``; 4. with ``check_access`` each agent sees only
-its declared entries; 5. an :class:`~eos_svc.errors.AgentUnavailableError` skips it that cycle.
+records the cycle. Its rules, explained in ``docs/planner.md``:
+
+1. Opportunistic sub-ratings reset every cycle; the previous action's and each agent's own test
+   apply (the larger counts).
+2. An agent that acted in the stage is eligible again only while its opportunistic and learned
+   part is positive (:class:`RepeatPolicy`).
+3. ``CANNOT_ACT`` or nobody eligible stalls; ``STAGE_COMPLETE`` moves on; ``FINISHED`` ends; an
+   exception ends the run with ``error``.
+4. With ``check_access`` each agent sees only its declared entries.
+5. An :class:`~eos_svc.errors.AgentUnavailableError` skips the agent for that cycle.
 """
 
 from __future__ import annotations
