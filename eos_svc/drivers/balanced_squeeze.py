@@ -11,10 +11,11 @@ A grip controller squeezes with *internal* forces (forces in the null space of t
 matrix's force rows, Murray, Li & Sastry, "A Mathematical Introduction to Robotic
 Manipulation", 1994, §5.3): here the fingertip normal forces ``F_f ≥ 0`` minimising
 ``‖Σ F_f n_f‖`` (non-negative least squares, each finger at least :data:`MIN_SHARE` of the
-total), each made by the joint torques ``τ = J_fᵀ (−F_f n_f)`` (``J_f``: the tip centre's
-Jacobian, a force along a spherical tip's normal passes through its centre), scaled so the most
-loaded joint uses ``effort`` of its URDF effort limit, and commanded as PD targets
-``q + τ / kp``. The contact normals are the ones Drake reports.
+total; of balanced shares the most even: two fingers on one side push equally), each made
+by the joint torques ``τ = J_fᵀ (−F_f n_f)`` (``J_f``: the tip centre's Jacobian; a force
+along a spherical tip's normal passes through its centre), scaled so the most loaded joint
+uses ``effort`` of its URDF effort limit, and commanded as PD targets ``q + τ / kp``. The
+contact normals are the ones Drake reports.
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ if TYPE_CHECKING:
 
 #: the smallest share of the squeeze's total normal force one finger takes
 MIN_SHARE = 0.15
+#: the weight of the shares' evenness against their balance
+EVEN = 0.05
 #: the fraction of a joint's URDF effort limit the most loaded finger joint squeezes with (at 0.5,
 #: the upright capsule's grip turned under the lift test's torque; at 0.9 it held)
 EFFORT = 0.9
@@ -43,15 +46,19 @@ LIGHT = 0.02
 
 def balanced_forces(normals: np.ndarray, min_share: float = MIN_SHARE) -> np.ndarray:
     """Normal force shares ``F`` (summing to 1, each ≥ ``min_share``) minimising ``‖Σ F_f n_f‖``
-    for unit normals ``normals`` (k × 3)."""
+    for unit normals ``normals`` (k × 3), and among those (weight :data:`EVEN`) the spread of the
+    shares."""
     n = np.asarray(normals, dtype=float)
     k = len(n)
     if k * min_share > 1.0:
         raise ValueError(f"min_share: {min_share} times {k} fingers exceeds the whole force")
     weight = 10.0  # the sum's row: shares add to 1 (nearly exactly)
     base = np.full(k, min_share)
-    matrix = np.vstack([n.T, weight * np.ones((1, k))])
-    rhs = np.concatenate([-(n.T @ base), [weight * (1.0 - k * min_share)]])
+    # among balanced shares the most even (fingers on one side share their push equally: a
+    # grip that resists a twist about the line through the contacts with both)
+    even = EVEN * (np.eye(k) - np.full((k, k), 1.0 / k))
+    matrix = np.vstack([n.T, weight * np.ones((1, k)), even])
+    rhs = np.concatenate([-(n.T @ base), [weight * (1.0 - k * min_share)], -(even @ base)])
     extra, _ = nnls(matrix, rhs)
     shares: np.ndarray = base + extra
     return shares / shares.sum()
