@@ -11,6 +11,7 @@ model (:class:`~eos_svc.shape.touches.Touches`), so the covariance is ``(JᵀJ)�
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 
@@ -152,13 +153,15 @@ class Problem:
     def evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(whitened residuals (m,), Jacobian (m, k)) at ``theta``."""
         key = theta.tobytes()
-        if key not in self.known:
+        known = self.known.get(key)
+        if known is None:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-            thetas = np.repeat(theta[None], len(theta) + 1, axis=0)  # θ, then θ + h_i e_i
-            thetas[1:][np.diag_indices(len(theta))] += h
+            thetas = np.empty((len(theta) + 1, len(theta)))  # θ, then θ + h_i e_i
+            thetas[:] = theta
+            thetas[1:] += np.diag(h)
             R = whitened_residuals(thetas, self.kind, self.r0, self.touches)
-            self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
-        return self.known[key]
+            known = self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
+        return known
 
     def residuals(self, theta: np.ndarray, *_: object) -> np.ndarray:
         """The residuals at ``theta`` (a copy: MINPACK works in the arrays it is given)."""
@@ -225,17 +228,20 @@ def _minimise(
     ``least_squares(method="lm", x_scale="jac")`` runs) when ``levenberg_marquardt`` (at least
     as many residuals as parameters), else ``least_squares(method="trf")``."""
     if levenberg_marquardt:
-        theta, _, info, _, _ = leastsq(
-            problem.residuals,
-            theta0,
-            Dfun=problem.jacobian,
-            full_output=True,
-            ftol=1e-8,
-            xtol=1e-8,
-            gtol=1e-8,
-            maxfev=max_nfev,
-        )
-        return theta, info["fvec"]
+        # without full_output: leastsq then skips a covariance (its cost doubles a short fit's)
+        # and warns when it stops at max_nfev, as a quick fit is meant to
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            theta, _ = leastsq(
+                problem.residuals,
+                theta0,
+                Dfun=problem.jacobian,
+                ftol=1e-8,
+                xtol=1e-8,
+                gtol=1e-8,
+                maxfev=max_nfev,
+            )
+        return theta, problem.evaluate(theta)[0]
     res = least_squares(
         problem.residuals,
         theta0,
