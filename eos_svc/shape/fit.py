@@ -149,6 +149,8 @@ class Problem:
     def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
         self.kind, self.r0, self.touches = kind, r0, touches
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+        k = N_PARAMS[kind]
+        self.steps = np.eye(k + 1, k, -1)  # θ, then θ + h_i e_i: rows 0, e_1, …, e_k times h
 
     def evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(whitened residuals (m,), Jacobian (m, k)) at ``theta``."""
@@ -156,10 +158,7 @@ class Problem:
         known = self.known.get(key)
         if known is None:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-            thetas = np.empty((len(theta) + 1, len(theta)))  # θ, then θ + h_i e_i
-            thetas[:] = theta
-            thetas[1:] += np.diag(h)
-            R = whitened_residuals(thetas, self.kind, self.r0, self.touches)
+            R = whitened_residuals(theta + self.steps * h, self.kind, self.r0, self.touches)
             known = self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
         return known
 
