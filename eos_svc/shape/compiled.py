@@ -18,8 +18,8 @@ TINY = 1e-15
 
 @njit(cache=True)
 def _rotation(code: int, theta: np.ndarray, r0: np.ndarray, R: np.ndarray) -> None:  # pragma: no cover
-    """``R`` (3, 3) ← the world ← local rotation of parameters ``theta`` about ``r0`` (3, 3),
-    written out in scalars (a 3×3 product through BLAS costs more than its arithmetic)."""
+    """``R`` (3, 3) ← the world ← local rotation of parameters ``theta`` about ``r0`` (3, 3)
+    (a sphere's: left as it is), in scalars (a 3×3 product through BLAS costs more)."""
     if code == 1 or code == 2:  # R0·exp([ω]×), exp([ω]×) = I + sin θ [k]× + (1 − cos θ) [k]×² (Rodrigues)
         w0, w1, w2 = theta[3], theta[4], theta[5]
         angle = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
@@ -49,10 +49,6 @@ def _rotation(code: int, theta: np.ndarray, r0: np.ndarray, R: np.ndarray) -> No
         R[0, 0], R[1, 0], R[2, 0] = x0, x1, x2
         R[0, 1], R[1, 1], R[2, 1] = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
         R[0, 2], R[1, 2], R[2, 2] = z0, z1, z2
-    else:
-        for i in range(3):
-            for j in range(3):
-                R[i, j] = 1.0 if i == j else 0.0
 
 
 @njit(cache=True)
@@ -175,7 +171,7 @@ def residuals(
     K, N = thetas.shape[0], points.shape[0]
     out = np.empty((K, 4 * count + N - count))
     half = np.empty(3)
-    R = np.empty((3, 3))
+    R = np.eye(3)
     for row in range(K):
         theta = thetas[row]
         for j in range(thetas.shape[1] - first):

@@ -36,6 +36,8 @@ SIZE_INDEX = {k: tuple(range(N_PARAMS[k] - c.half_size_count, N_PARAMS[k])) for 
 GOOD_FIT = 3.0
 #: relative step of the forward-difference Jacobian
 JACOBIAN_STEP = 1e-8
+#: the least-squares solvers' tolerances: relative change of the cost and of θ, the gradient's cosine
+TOLERANCES = {"ftol": 1e-8, "xtol": 1e-8, "gtol": 1e-8}
 #: ridge added to JᵀJ before inverting it (whitened units)
 RIDGE = 1e-6
 #: range of the log half sizes a fit may take (ln m): 0.1 mm to 1 m
@@ -226,32 +228,15 @@ def _minimise(
     ``max_nfev`` evaluations: MINPACK's Levenberg–Marquardt (``leastsq``, what
     ``least_squares(method="lm", x_scale="jac")`` runs) when ``levenberg_marquardt`` (at least
     as many residuals as parameters), else ``least_squares(method="trf")``."""
+    f, jac = problem.residuals, problem.jacobian
     if levenberg_marquardt:
-        # without full_output: leastsq then skips a covariance (its cost doubles a short fit's)
-        # and warns when it stops at max_nfev, as a quick fit is meant to
+        # without full_output leastsq skips a covariance (as long as a short fit) but warns when
+        # it stops at max_nfev, as a quick fit is meant to
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            theta, _ = leastsq(
-                problem.residuals,
-                theta0,
-                Dfun=problem.jacobian,
-                ftol=1e-8,
-                xtol=1e-8,
-                gtol=1e-8,
-                maxfev=max_nfev,
-            )
+            theta, _ = leastsq(f, theta0, Dfun=jac, maxfev=max_nfev, **TOLERANCES)
         return theta, problem.evaluate(theta)[0]
-    res = least_squares(
-        problem.residuals,
-        theta0,
-        jac=problem.jacobian,
-        method="trf",
-        x_scale="jac",
-        max_nfev=max_nfev,
-        ftol=1e-8,
-        xtol=1e-8,
-        gtol=1e-8,
-    )
+    res = least_squares(f, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev, **TOLERANCES)
     return res.x, res.fun
 
 
