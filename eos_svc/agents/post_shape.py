@@ -165,11 +165,10 @@ class PostShapeAgent(GraspAgent):
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
         # the previous postulate's candidate fits, on fewer of these touches, start their classes'
-        warm = {
-            c.kind: (c.theta, c.r0)
-            for c in (Candidate.from_dict(d) for d in (board.get(keys.SHAPE) or {}).get("candidates", []))
-        }
-        post = select_class(touches, warm=warm)
+        # fits; its classes' χ² tell which are settled
+        previous = board.get(keys.SHAPE) or {}
+        warm = {c.kind: (c.theta, c.r0) for c in map(Candidate.from_dict, previous.get("candidates", []))}
+        post = select_class(touches, warm=warm, earlier=previous.get("evidence", {}).get("chi2"))
         ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
         if (
             ep2_done

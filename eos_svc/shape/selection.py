@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -40,6 +41,10 @@ QUICK_NFEV = 6
 SIBLING_GAP = 10.0
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
+#: a class whose χ² on fewer of the same touches exceeds the best χ² now by more than this is
+#: settled (its posterior below e^−30 of the best's, and more touches only add to its χ²): it
+#: gets only a screening fit
+SETTLED = 60.0
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,7 @@ class Postulate:
         out: dict[str, Any] = {
             "contacts": self.contacts,
             "classes": {k: round(v, 6) for k, v in sorted(self.probabilities.items(), key=lambda kv: -kv[1])},
+            "chi2": {k: round(f.chi2, 3) for k, f in self.fits.items()},
         }
         fit = self.best
         if fit is not None:
@@ -155,11 +161,13 @@ def select_class(
     touches: Touches,
     classes: tuple[str, ...] = CLASSES,
     warm: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    earlier: dict[str, float] | None = None,
 ) -> Postulate:
     """Fit every class to ``touches`` and choose by posterior (BIC, equal priors); ValueError
     below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
     same touches, refitted first: one that then :func:`explains` the touches is kept without the
-    class's cold starts."""
+    class's cold starts. ``earlier``: per class, its χ² on fewer of the same touches: a class
+    :data:`SETTLED` by it is only screened."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     mean = touches.normals.mean(axis=0)
@@ -175,17 +183,21 @@ def select_class(
             refit = fit_class(kind, touches, class_starts=shared, only=shared.add(kind, theta0, r0))
             if explains(refit.chi2, touches, kind):
                 fits[kind] = refit
+    # a fit from the nearest start alone, QUICK_NFEV evaluations: a screening
+    screen = partial(
+        fit_class, touches=touches, max_nfev=QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared
+    )
+    settled = min((f.chi2 for f in fits.values()), default=math.inf) + SETTLED
+    for kind in classes:
+        if kind not in fits and (earlier or {}).get(kind, -math.inf) > settled:
+            fits[kind] = screen(kind)
     if classes[0] not in fits:
         fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
-        # the first class does not explain the touches: the others, each fitted briefly from its
-        # nearest start (a screening), are fitted from the likeliest, so that once one explains
-        # the touches the rest are shown hopeless against it in a few iterations
-        screened = {
-            k: fit_class(k, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
-            for k in classes[1:]
-            if k not in fits
-        }
+        # the first class does not explain the touches: the others, each screened, are fitted
+        # from the likeliest, so that once one explains the touches the rest are shown
+        # hopeless against it in a few iterations
+        screened = {k: screen(k) for k in classes[1:] if k not in fits}
     rest = tuple(k for k in classes[1:] if k not in fits)
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
