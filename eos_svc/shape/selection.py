@@ -167,7 +167,7 @@ def select_class(
     below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
     same touches, refitted first: one that then :func:`explains` the touches is kept without the
     class's cold starts. ``earlier``: per class, its χ² on fewer of the same touches: a class
-    :data:`SETTLED` by it is only screened."""
+    :data:`SETTLED` by it is only screened (nor refitted as a sibling)."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     mean = touches.normals.mean(axis=0)
@@ -187,10 +187,9 @@ def select_class(
     screen = partial(
         fit_class, touches=touches, max_nfev=QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared
     )
-    settled = min((f.chi2 for f in fits.values()), default=math.inf) + SETTLED
-    for kind in classes:
-        if kind not in fits and (earlier or {}).get(kind, -math.inf) > settled:
-            fits[kind] = screen(kind)
+    behind = min((f.chi2 for f in fits.values()), default=math.inf) + SETTLED
+    settled = [k for k in classes if k not in fits and (earlier or {}).get(k, -math.inf) > behind]
+    fits.update((k, screen(k)) for k in settled)
     if classes[0] not in fits:
         fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
@@ -223,8 +222,8 @@ def select_class(
         fits[kind] = fit_class(kind, touches, hopeless=hopeless, class_starts=shared)
     best_kind = min(fits, key=lambda k: fits[k].chi2)
     for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
-        if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
-            continue  # near the best already: a refit would barely move the posterior
+        if kind in settled or fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
+            continue  # settled, or near the best already: a refit would barely move the posterior
         start = shared.add(kind, *sibling_start(fits[best_kind], kind))
         refit = fit_class(kind, touches, class_starts=shared, only=start)
         if refit.chi2 < fits[kind].chi2:

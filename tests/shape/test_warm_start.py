@@ -48,8 +48,8 @@ def test_a_warm_start_that_does_not_explain_the_touches_is_dropped():
 
 def test_a_class_settled_on_fewer_touches_is_only_screened(monkeypatch):
     """A class whose χ² on fewer of the touches already exceeded the best by SETTLED gets one
-    screening fit (its nearest start, QUICK_NFEV evaluations; a sibling's refit aside); the
-    posterior is the full selection's to 1e-6."""
+    screening fit (its nearest start, QUICK_NFEV evaluations), not a sibling's refit either;
+    the posterior is the full selection's to 1e-6."""
     obj = objects()["box"]
     fewer = touches_on(obj, np.random.default_rng(3), n=12)
     touches = touches_on(obj, np.random.default_rng(3), n=18)
@@ -61,8 +61,7 @@ def test_a_class_settled_on_fewer_touches_is_only_screened(monkeypatch):
     calls: list[tuple[str, int | None]] = []
 
     def recording(kind, touches, *args, **kw):
-        if kw.get("only") is None:  # not a refit from one given start (a sibling's fit)
-            calls.append((kind, kw.get("max_starts")))
+        calls.append((kind, kw.get("max_starts")))
         return fit_class(kind, touches, *args, **kw)
 
     monkeypatch.setattr(selection, "fit_class", recording)
