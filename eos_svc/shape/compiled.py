@@ -41,9 +41,9 @@ def _rotation(code: int, theta: np.ndarray, r0: np.ndarray, R: np.ndarray) -> No
         z2 = r0[2, 0] * a + r0[2, 1] * b + r0[2, 2]
         n = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
         z0, z1, z2 = z0 / n, z1 / n, z2 / n
-        x0, x1, x2 = (
-            (1.0 - z0 * z0, -z0 * z1, -z0 * z2) if abs(z0) < 0.9 else (-z1 * z0, 1.0 - z1 * z1, -z1 * z2)
-        )
+        rx = 1.0 if abs(z0) < 0.9 else 0.0  # x from world x, or y when z is near x
+        d = rx * z0 + (1.0 - rx) * z1
+        x0, x1, x2 = rx - d * z0, (1.0 - rx) - d * z1, -d * z2
         n = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
         x0, x1, x2 = x0 / n, x1 / n, x2 / n
         R[0, 0], R[1, 0], R[2, 0] = x0, x1, x2

@@ -41,9 +41,8 @@ QUICK_NFEV = 6
 SIBLING_GAP = 10.0
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
-#: a class whose χ² on fewer of the same touches exceeds the best χ² now by more than this is
-#: settled (its posterior below e^−30 of the best's, and more touches only add to its χ²): it
-#: gets only a screening fit
+#: a class whose χ² on fewer of the same touches exceeds the best now by this is settled (more
+#: touches only add to its χ²; its posterior is below e^−30 of the best's): it is only screened
 SETTLED = 60.0
 
 
