@@ -1,11 +1,8 @@
 """eos_svc — an Enhanced Opportunistic System (EOS) grasp planner.
 
-The package root is the paper's Figure 1, domain-free: the information
-:class:`Board`, the :class:`Agent` contract, the :class:`Weights` of the
-sub-ratings, and the :class:`Controller` with its cycle records. It imports
-neither Pinocchio, coal nor Zenoh, so another planner can embed it with its
-own agents. The grasping domain lives in :mod:`eos_svc.kinematics` and
-:mod:`eos_svc.agents`; the network service in :mod:`eos_svc.service`.
+The package root is the paper's Figure 1, domain-free (no Pinocchio, coal, Drake or Zenoh): the
+:class:`Board`, the :class:`Agent` contract, the :class:`Weights` and the :class:`Controller`
+with its cycle records. The grasping domain: :mod:`eos_svc.agents`; the service: :mod:`eos_svc.service`.
 """
 
 from eos_svc.agent import ActionResult, Agent, CycleContext, Outcome

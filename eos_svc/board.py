@@ -1,9 +1,6 @@
-"""The information board (paper Fig. 1, "IF"): named entries agents read and write.
-
-Every write is attributed to the agent acting in the current cycle, and the board
-keeps, per cycle, the list of entries that changed (old and new value). The
-controller hands that list to the cycle record and, as *events*, to the next
-cycle's precondition tests.
+"""The information board (paper Fig. 1, "IF"): named entries agents read and write, each write
+attributed to the acting agent; the entries each cycle changed go to its record and, as
+*events*, to the next cycle's precondition tests.
 """
 
 from __future__ import annotations

@@ -1,19 +1,17 @@
 """The EOS controller (paper §2.1, §3, §5): rate, choose, act, record — every cycle.
 
-Each cycle it rates every agent allowed in the current stage, chooses the highest total
-P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties go to the agent listed first), runs its action against the
-board and records the cycle. The rules the paper leaves open (docs/planner.md, docs/extending.md):
+Each cycle it rates the agents allowed in the stage, chooses the highest total
+P(A_j) = Σ_i P(A_j|B_i)·P(B_i) (ties: the agent listed first), runs its action on the board and
+records the cycle. Its rules, explained in ``docs/planner.md``:
 
-1. Opportunistic sub-ratings are reset every cycle; the ratings the previous action of the stage
-   set apply, and every agent's precondition test may raise its own (the larger counts).
-2. Repeat rule (:class:`RepeatPolicy`): an agent that has acted in the stage is eligible again
-   only while its opportunistic and learned part is positive.
-3. Ends: ``CANNOT_ACT`` or no eligible agent stalls the run; ``STAGE_COMPLETE`` moves on;
-   ``FINISHED`` ends it (its stage completed). An exception in an agent ends it with ``error``.
-4. Board contract (``check_access``): each agent sees a board client limited to its declared
-   ``reads`` and ``writes``; ``entry_check`` validates every value written.
-5. An agent raising :class:`~eos_svc.errors.AgentUnavailableError` rates 0 (or its action does
-   not run) for that cycle, its record row saying why.
+1. Opportunistic sub-ratings reset every cycle; the previous action's and each agent's own test
+   apply (the larger counts).
+2. An agent that acted in the stage is eligible again only while its opportunistic and learned
+   part is positive (:class:`RepeatPolicy`).
+3. ``CANNOT_ACT`` or nobody eligible stalls; ``STAGE_COMPLETE`` moves on; ``FINISHED`` ends; an
+   exception ends the run with ``error``.
+4. With ``check_access`` each agent sees only its declared entries.
+5. An :class:`~eos_svc.errors.AgentUnavailableError` skips the agent for that cycle.
 """
 
 from __future__ import annotations

@@ -1,10 +1,8 @@
 """A small non-grasping problem solved by the EOS core: find a root of f(x).
 
-How another planner embeds the controller: stage ``bracket`` (``scan`` samples the interval,
-``widen`` doubles it while no sign change is known), stage ``refine`` (``bisect``, ``secant``
-rated by how much its last step shrank |f|, ``done`` once the bracket is narrow enough). Each
-agent declares its ``reads`` / ``writes``; ``solve_root(..., check_access=True)`` holds them to
-it. Domain-free: the standard library and the EOS core only.
+How another planner embeds the controller: stage ``bracket`` (``scan``, ``widen``), stage
+``refine`` (``bisect``, ``secant``, ``done``), each agent declaring its ``reads`` / ``writes``
+(``solve_root(..., check_access=True)`` holds them to it). The standard library and the core only.
 """
 
 from __future__ import annotations

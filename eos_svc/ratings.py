@@ -55,18 +55,14 @@ class Weights:
         return {"default": self.default, "opportunistic": self.opportunistic, "learned": self.learned}
 
     @classmethod
-    def from_dict(cls, data: object, field: str = "weights") -> Weights:
+    def from_dict(cls, data: object) -> Weights:
         """Build from a mapping with keys default/opportunistic/learned (missing learned = 0)."""
         if not isinstance(data, dict):
-            raise ValidationError(field, f"must be an object, got {type(data).__name__}")
+            raise ValidationError("weights", f"must be an object, got {type(data).__name__}")
         unknown = set(data) - {"default", "opportunistic", "learned"}
         if unknown:
-            raise ValidationError(f"{field}.{sorted(unknown)[0]}", "unknown weight")
+            raise ValidationError(f"weights.{sorted(unknown)[0]}", "unknown weight")
         for key in ("default", "opportunistic"):
             if key not in data:
-                raise ValidationError(f"{field}.{key}", "is required")
-        values = {k: check_probability(v, f"{field}.{k}") for k, v in data.items()}
-        try:
-            return cls(**values)
-        except ValidationError as exc:
-            raise ValidationError(field if exc.field == "weights" else exc.field, exc.reason) from None
+                raise ValidationError(f"weights.{key}", "is required")
+        return cls(**data)  # each weight checked, and their sum, by __post_init__

@@ -1,10 +1,6 @@
-"""The record file of a plan, written by ``eos plan --record`` and read by ``eos replay``.
-
-JSON lines (domain-free: JSON and the core's records only): a header
-``{"eos_record": "header", "schema": 1, "request": {...}, "hand": "hand3x3"}``, one
-:meth:`CycleRecord.to_dict` per cycle, and last ``{"eos_record": "result", "result": {...}}``
-(absent when the run was interrupted). :func:`compare_run` compares two runs cycle by cycle,
-ignoring wall-clock fields and those added since a record was written (:data:`ADDED_FIELDS`).
+"""The record file of a plan (JSON lines: a header, one :meth:`CycleRecord.to_dict` per cycle, the
+result; ``docs/planner.md``), written by ``eos plan --record`` and read by ``eos replay``;
+:func:`compare_run` compares two runs, ignoring wall-clock fields and :data:`ADDED_FIELDS`.
 """
 
 from __future__ import annotations

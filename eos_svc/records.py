@@ -1,8 +1,5 @@
-"""Cycle records and run results.
-
-A cycle is the choice and the execution of one action (paper §2.1). Every cycle
-leaves a :class:`CycleRecord`; a run ends with a :class:`RunResult` whose status
-says how it ended. Both convert to JSON-friendly dicts with :func:`to_jsonable`.
+"""Cycle records and run results (paper §2.1): a :class:`CycleRecord` per cycle, a
+:class:`RunResult` whose status says how the run ended; JSON-friendly through :func:`to_jsonable`.
 """
 
 from __future__ import annotations

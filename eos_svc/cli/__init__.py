@@ -1,9 +1,5 @@
-"""The ``eos`` command line.
-
-Each sub-command lives in its own module under :mod:`eos_svc.cli` and exposes
-``add_arguments(parser)`` and ``run(args) -> int``. Modules are imported only
-when their command runs, so ``eos --help`` stays fast and a broken optional
-dependency of one command cannot break the others.
+"""The ``eos`` command line: one module per sub-command (``add_arguments(parser)``, ``run(args) -> int``),
+imported only when its command runs (a fast ``--help``; one broken optional dependency breaks one command).
 """
 
 from __future__ import annotations

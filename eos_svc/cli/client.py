@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
             try:
                 had_it = client.cancel(args.goal_id, timeout=args.timeout or 2.0, cancel_token=args.token)
             except proto.RequestError as err:
-                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}")
+                print(f"eos client: refused: {err}")
                 return 1
             print(f"goal {args.goal_id}: {'cancelled' if had_it else 'not found on any instance'}")
             return 0 if had_it else 1
@@ -189,12 +189,12 @@ def run(args: argparse.Namespace) -> int:
                     timeout=args.timeout,
                     cancel_token=cancel_token,
                 )
-            except proto.RequestError as err:
-                print(f"eos client: refused: {err.code}: {err.field}: {err.reason}", flush=True)
-                code = 1
-                continue
-            except ServiceUnavailableError as exc:
-                print(f"eos client: no service: {exc}", flush=True)
+            except (
+                proto.RequestError,
+                ServiceUnavailableError,
+            ) as exc:  # RequestError: "code: field: reason"
+                why = "refused" if isinstance(exc, proto.RequestError) else "no service"
+                print(f"eos client: {why}: {exc}", flush=True)
                 code = 1
                 continue
             print_outcome(outcome, args.json)

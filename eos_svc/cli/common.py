@@ -29,7 +29,9 @@ def float_in(low: float, high: float = math.inf, *, above: bool = False) -> Call
     def parse(text: str) -> float:
         value = finite_float(text)
         if value < low or (above and value == low) or value > high:
-            bound = f"in [{low:g}, {high:g}]" if high < math.inf else f"{'>' if above else '≥'} {low:g}"
+            bound = f"{'>' if above else '≥'} {low:g}"
+            if high < math.inf:
+                bound = f"in {'(' if above else '['}{low:g}, {high:g}]"
             raise argparse.ArgumentTypeError(f"must be {bound}, got {text!r}")
         return value
 

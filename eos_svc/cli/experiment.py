@@ -1,7 +1,5 @@
-"""``eos experiment NAME [options]``: the paper's experiments and ours, on the real planner.
-
-Each experiment module has its own options (``eos experiment NAME --help``), writes
-JSON/CSV and PNG plots to ``--out`` and prints a summary.
+"""``eos experiment NAME [options]``: the paper's experiments and ours, on the real planner; each
+has its own options (``--help``), writes JSON/CSV and PNG plots to ``--out`` and prints a summary.
 """
 
 from __future__ import annotations

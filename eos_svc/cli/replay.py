@@ -1,8 +1,6 @@
-"""``eos replay FILE``: print a recorded plan (:mod:`eos_svc.recording`), re-run it and compare.
-
-The re-run (same request, seed and hand) is compared cycle by cycle, then the result, ignoring
-wall-clock fields; the first divergence is reported with its cycle, field path and both values.
-Exit status: 0 identical (or not verified), 1 a divergence, 2 a bad file.
+"""``eos replay FILE``: print a recorded plan (:mod:`eos_svc.recording`), re-run it (same request,
+seed and hand) and compare cycle by cycle, then the result, wall-clock fields ignored. Exit status:
+0 identical (or not verified), 1 a divergence (the first reported with its cycle, path, values), 2 a bad file.
 """
 
 from __future__ import annotations

@@ -1,7 +1,5 @@
-"""``eos validate FILE``: simulate a planned grasp in Drake and say whether it holds.
-
-FILE is what ``eos plan --json`` prints or an ``eos plan --record`` file (its result line, with the
-hand its header names unless ``--hand`` is given). Exit status: 0 held, 1 dropped, 2 bad input.
+"""``eos validate FILE``: simulate a planned grasp in Drake and say whether it holds (FILE: what
+``eos plan --json`` prints, or a record file). Exit status: 0 held, 1 dropped, 2 bad input.
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
 """Paper §4.1: default vs opportunistic sub-ratings, by running the planner with those weights.
 
-Weights (default, opportunistic) (1, 0), (0, 1) and (0.5, 0.5): which agents ran and which
-stages completed on seed 1, the statuses over many seeds, and a sweep of the default weight
-from 0 to 1 (completion rate, mean cycles). The figures: ``docs/planner.md``.
-
-    eos experiment ablation --seeds 20 --out results/ablation
+Weights (1, 0), (0, 1) and (0.5, 0.5) on seed 1 and over many seeds, and a sweep of the default
+weight from 0 to 1 (figures: ``docs/planner.md``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
 """EP1 accuracy: estimated curvatures against the analytic ground truth.
 
-Noise-free, one EP1 on each of spheres of radius 1–8 cm, a plane, a cylinder and an ellipsoid;
-with tactile noise, EP1 repeated on each sphere until its rating reaches the target, the median
-radius error over seeds (``docs/ep1.md``).
-
-Run: ``python -m eos_svc.experiments.accuracy`` (or ``eos experiment accuracy``).
+Noise-free on spheres, a plane, a cylinder and an ellipsoid; with tactile noise over seeds
+(``docs/ep1.md``; ``eos experiment accuracy``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,5 @@
-"""The objects of ``eos experiment grasps``: a fixed suite, a seeded held-back suite, random draws.
-
-The fixed suite covers every class and the poses that matter for a hand approaching along +x
-(spheres of d/h 0.2–0.95; ellipsoids long along each axis; cylinders and capsules upright,
-across, along the approach and at an angle; cubes, plates and bars at three yaws). The
-held-back suite and the random draws come from seeded generators, so a goal can be checked on
-objects nobody tuned on (``docs/validation.md``).
+"""The objects of ``eos experiment grasps``: a fixed suite of every class and the poses that
+matter, a seeded held-back suite and random draws (``docs/validation.md``).
 """
 
 import math
@@ -13,7 +8,7 @@ from typing import NamedTuple
 import numpy as np
 
 from eos_svc.agents.planner import default_hand
-from eos_svc.schema.request import DEFAULT_OBJECT, ObjectSpec
+from eos_svc.schema.request import ObjectSpec
 
 #: sphere diameters of the fixed suite, as d/h
 SPHERE_RATIOS = (0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9, 0.95)
@@ -43,15 +38,9 @@ class SuiteObject(NamedTuple):
     seed: int | None = None
 
 
-def default_position() -> tuple[float, float, float]:
-    """Where the default request puts its object (m)."""
-    x, y, z = DEFAULT_OBJECT["position"]
-    return (float(x), float(y), float(z))
-
-
 def fixed_suite() -> list[SuiteObject]:
     """The fixed suite (29 objects), all at the default object position."""
-    p = default_position()
+    p = ObjectSpec().position  # the default request's
     h = default_hand().hand_height
     out = [
         SuiteObject(f"sphere d/h {r:.2f}", ObjectSpec("sphere", {"radius": 0.5 * r * h}, p))
@@ -93,7 +82,7 @@ def held_back_suite(per_class: int = 3, seed: int = HELD_BACK_SEED) -> list[Suit
     seeded generator (uniform ranges; positions within ±1 cm of the default)."""
     rng = np.random.default_rng(seed)
     h = default_hand().hand_height
-    base = np.asarray(default_position())
+    base = np.asarray(ObjectSpec().position)
     out = []
 
     def position() -> tuple[float, float, float]:
@@ -144,7 +133,7 @@ def random_draw(
 
     scale = hand_span(default_hand()) if span is None else span
     rng = np.random.default_rng(draw_seed)
-    base, spread = np.asarray(default_position()), np.asarray(DRAW_POSITION_SPREAD)
+    base, spread = np.asarray(ObjectSpec().position), np.asarray(DRAW_POSITION_SPREAD)
     out = []
 
     def width() -> float:

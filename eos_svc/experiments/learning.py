@@ -1,8 +1,6 @@
 """The learned sub-rating (paper §7): a stream of objects with repeats, with and without learning.
 
-The same seeded stream planned with weights (0.5, 0.5, 0) and no memory, then with weights
-(0.25, 0.25, 0.5) and a fresh grasp memory (SQLite, in the output folder) that ``recall``
-reads; the grasp-stage cycles of first sightings and of repeats compared (``docs/planner.md``).
+Without: weights (0.5, 0.5, 0); with: (0.25, 0.25, 0.5) and a fresh grasp memory (``docs/planner.md``).
 
     eos experiment learning --out results/learning
 """

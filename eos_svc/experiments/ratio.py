@@ -1,10 +1,7 @@
 """Paper §4.2 / Figure 3: grasp-stage cycles against the object-diameter to hand-height ratio.
 
-Spheres of diameter d = ratio × h at the default position, many seeds per ratio, weights
-(0.5, 0.5); as in the paper a run counts when all three fingertips touched, the good-grasp
-rate beside it. The figures: ``docs/planner.md``.
-
-    eos experiment ratio --seeds 10 --out results/ratio
+Spheres of d = ratio × h, many seeds each; a run counts when all three fingertips touch (as in the
+paper), the good-grasp rate beside it (figures: ``docs/planner.md``).
 """
 
 from __future__ import annotations

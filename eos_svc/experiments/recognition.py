@@ -1,12 +1,8 @@
 """Knowing the object by touch: how often the postulate is right, how close, how sure.
 
-Seeded objects of every class (sizes, positions, poses nobody tuned on) planned end to end at
-tactile noise 0, 0.2 and 0.4 mm; post_shape's postulate against the truth: the class confusion
-per noise, the shape-and-pose error, the confidence's calibration ("right" = class right and
-error ≤ 10 %) and the search length over 100 seeds. The figures: ``docs/planner.md``.
-
-    eos experiment recognition --seeds 3 --out results/recognition
-    eos experiment recognition --quick
+Seeded objects of every class planned at tactile noise 0, 0.2 and 0.4 mm: the class confusion, the
+shape-and-pose error, the confidence's calibration ("right": class right, error ≤ 10 %) and the
+search length over 100 seeds (figures: ``docs/planner.md``; ``--quick``: a short run).
 """
 
 from __future__ import annotations

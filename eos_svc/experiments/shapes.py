@@ -1,12 +1,9 @@
 """Every shape end to end: precision-grip and success (good grasp) rates per object class.
 
-Every class in several sizes and poses at the default position, several seeds each, weights
-(0.5, 0.5). With ``--oracle`` every object is planned again with grasp_points on the true
-object instead of post_shape's postulate (``plan(..., oracle_postulate=True)``): the grasp
-stage apart from recognition, *not* the planner's result. The figures: ``docs/planner.md``.
+Every class in several sizes and poses, several seeds each; ``--oracle`` plans each again on the
+true object instead of post_shape's postulate (the grasp stage alone). Figures: ``docs/planner.md``.
 
     eos experiment shapes --seeds 5 --out results/shapes
-    eos experiment shapes --seeds 5 --oracle
 """
 
 from __future__ import annotations

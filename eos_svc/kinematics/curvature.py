@@ -1,10 +1,6 @@
-"""Curvature estimation from rolling contact (EP1): Montana's first equation with v = 0.
-
-In the contact frame (``z`` the fingertip's outward normal), rolling without sliding gives
-``K_o u = [−ω_y, ω_x]ᵀ − K_f u`` (``ω``: tangential angular velocity, ``u``: the contact's
-velocity over the fingertip, ``K``: curvature forms, 1/m, positive convex), linear in (ω, u) so
-increments serve as rates; rolls along two directions determine ``K_o`` by least squares. The
-convention and its proofs: ``docs/ep1.md``.
+"""Curvature estimation from rolling contact (EP1): Montana's first equation with v = 0,
+``K_o u = [−ω_y, ω_x]ᵀ − K_f u`` in the contact frame, solved for ``K_o`` (1/m) by least squares
+over rolls along two directions (the convention and its proofs: ``docs/ep1.md``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,7 @@
-"""EP1, the exploratory procedure: roll one fingertip on the object and estimate its curvature.
-
-From a configuration where the fingertip touches the object (:func:`place_hand_for_ep1`),
-:func:`run_ep1` rolls it about tangent axes (+θ/2, −θ, +θ/2 each: back at the start) with one
-:class:`~.rolling.RollingQP`, maps the tactile readings to geodesic coordinates on the fingertip,
-fits the contact's displacement per radian, and solves Montana's equation for the object's
-curvature form (:class:`~.curvature.CurvatureEstimator`). The procedure: ``docs/ep1.md``.
+"""EP1, the exploratory procedure: roll one fingertip on the object and estimate its curvature
+(:func:`run_ep1`: rolls about tangent axes with one :class:`~.rolling.RollingQP`, the tactile
+readings fitted per radian, Montana's equation solved by :class:`~.curvature.CurvatureEstimator`;
+the procedure: ``docs/ep1.md``).
 """
 
 from __future__ import annotations
@@ -268,15 +265,13 @@ def run_ep1(
         raise
     assert rq is not None
     state.update(rq.q)
-    max_slip = max(slips)
-    max_gap = max(gaps)
     return EP1Result(
         estimate=est.estimate(),
         q_final=state.q,
         steps=steps,
         samples=tuple(samples),
-        max_slip_speed=max_slip,
-        max_gap=max_gap,
+        max_slip_speed=max(slips),
+        max_gap=max(gaps),
         frame=F,
         contact_point=np.array(ct0.point_object, dtype=float),
         normal=np.array(ct0.normal, dtype=float),

@@ -1,9 +1,6 @@
-"""The solver of the rolling QP (:func:`~eos_svc.kinematics.rolling_problem.step_qp`).
-
-:func:`solve_rolling_qp` asks a qpsolvers backend by name (OSQP by default, at tight tolerances).
-The problem has only equalities, box bounds and a diagonal ``W``, so the minimum-``W``-norm
-solution of the equalities (:func:`equality_optimum`) is the QP's optimum whenever it lies within
-the bounds: then no backend is called. A failed or infeasible QP raises :class:`RollingQPError`.
+"""The solver of the rolling QP (:func:`~eos_svc.kinematics.rolling_problem.step_qp`): the
+equalities' minimum-``W``-norm solution (:func:`equality_optimum`) when it lies within the bounds,
+else a qpsolvers backend by name (OSQP by default); a failed QP raises :class:`RollingQPError`.
 """
 
 from __future__ import annotations

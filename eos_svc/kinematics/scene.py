@@ -1,7 +1,5 @@
 """Contact queries between the hand's collision geometry and one object (coal): signed distances
-(negative = penetration), witness points and the normal, world coordinates (m). A penetrating
-sphere fingertip's contact comes from the object's analytic closest point (coal's depth is
-approximate for curved shapes).
+(negative = penetration), witness points and the normal, world coordinates (m).
 """
 
 from __future__ import annotations
@@ -95,10 +93,7 @@ class Scene:
             return Contact(finger, d, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy())
         gid = self.hand.tip_geometry_id(finger)
         assert gid is not None
-        coal.distance(self.object.geometry, self._tf_obj, shape, state.geometry_data.oMg[gid], self._req, res)
-        return Contact(
-            finger, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-        )
+        return self._geometry_distance(state, gid, finger)
 
     def _analytic_sphere_contact(self, finger: str, c: np.ndarray, r: float) -> Contact:
         """Exact contact of a sphere (centre c, radius r) from the object's analytic closest
@@ -121,8 +116,7 @@ class Scene:
     def distance(self, state: HandState, geometry_name: str) -> Contact:
         """Closest points between any hand collision geometry (by name) and the object;
         ``Contact.finger`` holds the geometry name."""
-        gid = self.hand.geometry_id(geometry_name)
-        return self._geometry_distance(state, gid)
+        return self._geometry_distance(state, self.hand.geometry_id(geometry_name))
 
     def gap(self, state: HandState, gid: int) -> float:
         """Signed distance (m) between hand collision geometry ``gid`` and the object, without
@@ -142,21 +136,16 @@ class Scene:
         coal.distance(self._obj_geom, self._tf_obj, self._point, self._tf_point, self._req, res)
         return float(res.min_distance)
 
-    def _geometry_distance(self, state: HandState, gid: int) -> Contact:
+    def _geometry_distance(self, state: HandState, gid: int, name: str | None = None) -> Contact:
+        """Closest points of hand geometry ``gid`` and the object (``Contact.finger``: ``name``,
+        default the geometry's name)."""
         go = self.hand.collision_model.geometryObjects[gid]
         res = self._res
         res.clear()
-        coal.distance(
-            self.object.geometry,
-            self._tf_obj,
-            go.geometry,
-            state.geometry_data.oMg[gid],
-            self._req,
-            res,
-        )
-        return Contact(
-            go.name, res.min_distance, res.getNearestPoint2(), res.getNearestPoint1(), res.normal.copy()
-        )
+        oMg = state.geometry_data.oMg[gid]
+        coal.distance(self.object.geometry, self._tf_obj, go.geometry, oMg, self._req, res)
+        nearest_hand, nearest_object = res.getNearestPoint2(), res.getNearestPoint1()
+        return Contact(name or go.name, res.min_distance, nearest_hand, nearest_object, res.normal.copy())
 
     def min_distance(self, state: HandState) -> Contact:
         """The closest of all hand collision geometries to the object."""

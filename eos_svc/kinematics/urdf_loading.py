@@ -1,7 +1,5 @@
-"""Loading a hand from a URDF and its description (Pinocchio model + coal collision geometry).
-
-Pinocchio prints URDF warnings on the C-level stderr: they are captured and kept on the model
-(:attr:`HandModel.load_warnings`) rather than printed.
+"""Loading a hand from a URDF and its description (Pinocchio model + coal collision geometry),
+Pinocchio's C-level URDF warnings kept on the model (:attr:`HandModel.load_warnings`), not printed.
 """
 
 from __future__ import annotations

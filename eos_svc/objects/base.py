@@ -1,10 +1,6 @@
-"""The abstract object kind: a rigid convex primitive at a pose, and what every kind provides.
-
-Local frames follow coal's (centred; cylinders and capsules along local z); SI units. Every kind
-gives its JSON form and half sizes, its signed distance and gradient (:meth:`local_distance`,
-the one implementation), its curvature (EP1's ground truth; :class:`CurvatureUndefinedError`
-on edges and rims), extents, coal and Drake shapes, mass properties and grasp rules
-(``docs/objects.md``).
+"""The abstract object kind: a rigid convex primitive at a pose, and what every kind provides
+(``docs/objects.md``). Local frames follow coal's (centred; cylinders and capsules along local z);
+SI units; :meth:`SurfaceObject.local_distance` is the one distance implementation.
 """
 
 from __future__ import annotations

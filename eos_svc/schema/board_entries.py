@@ -1,9 +1,6 @@
-"""The grasp planner's board entries: each one's type, in one place.
-
-The entries are plain JSON-able values, their shapes declared as ``TypedDict``s;
-:data:`ENTRIES` maps every entry name (:mod:`eos_svc.schema.keys`) to its type and meaning (the
-table in ``docs/planner.md``, made by :mod:`eos_svc.agents.board_table`). With
-``plan(..., check_board=True)`` every value written is checked by :func:`check_entry`.
+"""The grasp planner's board entries: each one's type (JSON-able values, shapes as ``TypedDict``s)
+and meaning in :data:`ENTRIES` (the table in ``docs/planner.md``); ``plan(..., check_board=True)``
+checks every value written with :func:`check_entry`.
 """
 
 import functools

@@ -1,11 +1,6 @@
 """Plan requests, validated at the edge: pure data shared by the library, ``eos plan`` and the
 service; every rejection a :class:`~eos_svc.errors.ValidationError` naming the field and the
-reason. JSON form (the service's wire format adds ``schema`` and ``goal_id``)::
-
-    {"object": {"shape": "sphere", "radius": 0.03, "position": [0.22, 0.0, 0.0]},
-     "weights": {"default": 0.5, "opportunistic": 0.5},
-     "seed": 1, "tactile_noise": 0.0002, "max_cycles": 2000, "deadline_s": 10.0,
-     "friction": 0.5}
+reason. The JSON form: ``docs/service.md`` (the wire adds ``schema`` and ``goal_id``).
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""The plan result: how the plan ended and what it found.
-
-Status (one authority: the end agent's verdict, carried in, never recomputed here):
-``success`` only when the end agent judged the grasp good; a run whose stages all completed
-with a grip that is not good ends ``completed`` (the paper's graceful exit, §6) with the end
-agent's reason; otherwise the run's own status (failed, stalled, cycle_limit, deadline,
-cancelled, error).
+"""The plan result: how the plan ended and what it found. ``success`` only when the end agent
+judged the grasp good; all stages completed with a grip that is not good is ``completed`` (the
+paper's graceful exit, §6); otherwise the run's own status.
 """
 
 from __future__ import annotations

@@ -1,8 +1,4 @@
-"""The EOS planning service on Zenoh: wire protocol, server and Python client.
-
-See ``docs/service.md``. Key expressions live under ``eos/@v1[/<namespace>]``;
-messages are JSON with ``"schema": 1``.
-"""
+"""The EOS planning service on Zenoh: wire protocol, server and Python client (``docs/service.md``)."""
 
 from eos_svc.service.client import EosClient
 from eos_svc.service.instances import ServiceUnavailableError

@@ -1,15 +1,6 @@
-"""Python client of the EOS planning service.
-
-::
-
-    with EosClient.open(make_config(connect=["tcp/127.0.0.1:7447"])) as client:
-        client.wait_for_instances(1)
-        outcome = client.plan(PlanRequest(), on_cycle=lambda msg: print(msg["seq"]))
-
-Each plan goes to one live instance (:mod:`~eos_svc.service.instances`: the fewest of this
-client's plans in flight, ties in turn), its cycles are watched (:mod:`~eos_svc.service.plan_attempt`)
-and it is retried on another instance when the one asked is lost or busy. ``on_cycle`` runs in
-the thread that called :meth:`EosClient.plan`.
+"""Python client of the EOS planning service (``docs/service.md``): each plan goes to one live
+instance (:mod:`~eos_svc.service.instances`), is watched (:mod:`~eos_svc.service.plan_attempt`)
+and is retried on another instance when the one asked is lost or busy.
 """
 
 from __future__ import annotations

@@ -1,9 +1,5 @@
-"""Stand-in planners for developing and load-testing the transport.
-
-:func:`root_plan` has the grasp planner's signature but solves the core's
-root-finding demo (:mod:`eos_svc.demo`) — a few cycles, no Pinocchio.
-:func:`slowed` wraps any planner so that every cycle takes at least a given
-time (to test cancellation and concurrency with long plans).
+"""Stand-in planners for the transport's tests: :func:`root_plan` (the core's root-finding demo,
+no Pinocchio) and :func:`slowed` (every cycle at least a given time).
 """
 
 from __future__ import annotations

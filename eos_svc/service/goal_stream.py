@@ -1,9 +1,6 @@
-"""What one goal publishes while it runs: its ``running`` status, every cycle, its ``done`` status.
-
-Every message starts with ``{"schema", "goal_id", "instance"}`` and is built and put only while
-someone watches (:class:`~eos_svc.service.goal_watchers.GoalWatchers`); cycles are numbered all the
-same. Puts use ``CongestionControl.DROP``: a subscriber that does not drain loses messages alone
-(gaps in ``seq``), no plan waits for it; the requester gets the ``done`` status as its reply.
+"""What one goal publishes while it runs: its ``running`` status, every cycle, its ``done`` status,
+built and put only while someone watches (cycles numbered all the same), with
+``CongestionControl.DROP``: a slow subscriber loses messages alone (``docs/service.md``).
 """
 
 from __future__ import annotations

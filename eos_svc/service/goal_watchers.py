@@ -1,8 +1,5 @@
-"""Whether anyone watches the goals: a flag the service reads before publishing a goal's messages.
-
-Zenoh drops a put nobody subscribes to unsent; the service skips building such a message at all
-(a plan nobody watches costs no encoding and no put). :class:`GoalWatchers` answers whether any
-subscriber matches ``P/goal/*/*`` from a publisher declared on that key and never used to put.
+"""Whether anyone watches the goals (a subscriber matching ``P/goal/*/*``, read from a publisher
+never used to put): the service builds no message nobody would receive.
 """
 
 from __future__ import annotations
@@ -28,16 +25,6 @@ class GoalWatchers:
       notice Zenoh delivered late or out of order.
     - :meth:`watched`: the choice at a plan's start, from the request's ``watch`` hint.
     """
-
-    __slots__ = (
-        "_listener",
-        "_matching_notices",
-        "_on_notice",
-        "_publisher",
-        "_reading",
-        "any",
-        "zenoh_says_matching",
-    )
 
     def __init__(self, session: zenoh.Session, prefix: str, on_notice: Callable[[], None]) -> None:
         self._publisher = session.declare_publisher(proto.goal_keys(prefix))

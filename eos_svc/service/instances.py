@@ -32,7 +32,6 @@ class LiveInstances:
         self._lock = threading.Lock()
         self._changed = threading.Condition(self._lock)
         self._live: set[str] = set()
-        self._inflight: dict[str, int] = {}
         self._waiters: dict[int, tuple[str, queue.SimpleQueue[Any]]] = {}
         self._waiter_ids = itertools.count()
         self._turn = itertools.count()
@@ -98,7 +97,8 @@ class LiveInstances:
                 return None
             turn = next(self._turn) % len(candidates)
             rotated = candidates[turn:] + candidates[:turn]
-            return min(rotated, key=lambda i: self._inflight.get(i, 0))
+            inflight = [iid for iid, _ in self._waiters.values()]  # one waiter per plan in flight
+            return min(rotated, key=inflight.count)
 
     def track(self, iid: str, events: queue.SimpleQueue[Any]) -> int:
         """Count a plan in flight on ``iid`` and tell ``events`` if its token goes; returns a
@@ -106,11 +106,9 @@ class LiveInstances:
         wid = next(self._waiter_ids)
         with self._lock:
             self._waiters[wid] = (iid, events)
-            self._inflight[iid] = self._inflight.get(iid, 0) + 1
         return wid
 
     def untrack(self, wid: int) -> None:
         """The plan tracked under ``wid`` is no longer in flight."""
         with self._lock:
-            iid, _ = self._waiters.pop(wid)
-            self._inflight[iid] -= 1
+            self._waiters.pop(wid)

@@ -1,8 +1,5 @@
-"""The other live instances of the service, and who answers a plan query that names no single one.
-
-A queryable sees the key a query was sent to: a plan query on ``P/plan/*`` reaches every instance
-it matches. Of those, only the first by id answers (one error naming the keys to use); the others
-stay silent. Each instance follows the others' liveliness tokens to know which they are.
+"""The other live instances of the service (their liveliness tokens): a plan query on ``P/plan/*``
+reaches every instance it matches; only the first by id answers, naming the keys to use.
 """
 
 from __future__ import annotations

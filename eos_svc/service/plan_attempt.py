@@ -1,8 +1,5 @@
-"""One attempt of a plan: its query to one instance, its goal's messages, its outcome.
-
-The query's replies, its end and a ``lost`` notice (:class:`~.instances.LiveInstances`) come into
-one event queue, which the thread that called :meth:`EosClient.plan` drains (running ``on_cycle``);
-the goal's messages come from a subscriber declared before the query (so no cycle is missed).
+"""One attempt of a plan: its query to one instance, its goal's messages (subscribed before the
+query), its outcome; replies, end and ``lost`` notices come into one queue the caller drains.
 """
 
 from __future__ import annotations

@@ -1,11 +1,6 @@
-"""Wire protocol of the EOS planning service: key expressions, error codes, the request and cancel messages.
-
-Every message is UTF-8 JSON with ``"schema": 1``, read strictly (:mod:`eos_svc.service.wire_json`);
-an error reply's field and reason are clipped so it stays under 4 KiB. Keys live under the prefix
-``P`` = ``eos/@v1[/<namespace>]`` (``@v1`` is verbatim: no wildcard crosses it): ``P/instance/<iid>``
-(liveliness token), ``P/plan/<iid>`` (plan queryable), ``P/cancel/<goal_id>``, and the publications
-``P/goal/<goal_id>/cycle`` and ``P/goal/<goal_id>/status`` (the messages: ``docs/service.md``).
-Pure (no Zenoh import), so the decoder can be fuzzed alone.
+"""Wire protocol of the EOS planning service (keys and messages: ``docs/service.md``): key
+expressions under ``eos/@v1[/<namespace>]``, error codes, the request and cancel messages, read
+strictly (:mod:`eos_svc.service.wire_json`). Pure (no Zenoh import): the decoder can be fuzzed alone.
 """
 
 from __future__ import annotations

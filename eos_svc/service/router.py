@@ -1,10 +1,5 @@
-"""A Zenoh router in a Python process, for setups without the ``zenohd`` binary.
-
-    python -m eos_svc.service.router --config config/router-acl.json5
-    python -m eos_svc.service.router --listen tcp/127.0.0.1:7447
-
-The configuration file may set anything ``zenohd`` takes (endpoints, TLS,
-user/password authentication, access control); ``mode`` is forced to router.
+"""A Zenoh router in a Python process, for setups without the ``zenohd`` binary
+(``python -m eos_svc.service.router --config FILE | --listen ENDPOINT``; ``mode`` forced to router).
 """
 
 from __future__ import annotations

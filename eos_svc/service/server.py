@@ -1,15 +1,6 @@
-"""The EOS planning service on Zenoh: :class:`PlanService`, one service instance.
-
-Under its prefix ``P`` (:mod:`eos_svc.service.protocol`) it declares a liveliness token
-``P/instance/<iid>``, a queryable ``P/plan/<iid>`` (a plan request in, exactly one reply out; a
-wildcard query reaching several instances is answered by the first of them by id, with an error
-naming the keys to use) and a queryable ``P/cancel/*``; it publishes every goal's messages
-(:mod:`~eos_svc.service.goal_stream`) while someone watches (:mod:`~eos_svc.service.goal_watchers`).
-
-Threads: the queryables' callbacks run in Zenoh's thread and never block nor call Zenoh: the plan
-callback decodes and admits the request (at most ``workers + queue_size`` goals held, past that
-``busy``) and queues it for the worker threads, or hands the refusal to a dispatcher thread,
-which sends the error reply (and serves cancels). Every query ends in exactly one reply.
+"""The EOS planning service on Zenoh: :class:`PlanService`, one service instance (its keys and
+threads: ``docs/service.md``). Zenoh's callbacks never block nor call Zenoh: they admit a plan
+for the workers or hand a refusal or cancel to the dispatcher thread; every query gets one reply.
 """
 
 from __future__ import annotations

@@ -1,10 +1,6 @@
-"""Strict JSON of the service's wire (UTF-8, RFC 8259); pure (no Zenoh import).
-
-What anyone may send the service is read by :func:`loads_strict`: UTF-8 only (a leading BOM
-ignored), no NaN/Infinity, no duplicate keys, no integer beyond ±2**64 (refused naming its field,
-never converted). What the service writes a client reads with :func:`loads_message` (msgspec).
-Written by :func:`dumps` (strict: the service's own messages) or :func:`encode_result` (msgspec:
-a plan result or cycle record, non-finite floats as ``null``).
+"""Strict JSON of the service's wire (UTF-8, RFC 8259; pure, no Zenoh import): what anyone may
+send is read by :func:`loads_strict` (no NaN, duplicate keys or integers beyond ±2**64), what the
+service sends by :func:`loads_message`; written by :func:`dumps` or :func:`encode_result` (msgspec).
 """
 
 from __future__ import annotations

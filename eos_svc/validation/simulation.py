@@ -1,14 +1,9 @@
 """The grasp in Drake: a hand welded at its planned wrist pose, fingers squeezing, a free object.
 
-Drake's ``MultibodyPlant`` (discrete, SAP, point contact) parses the URDF the planner loads
-with Pinocchio; the Drake-only adjustments (welded wrist, PD finger actuators, hand-hand
-collisions filtered, the request's μ, gravity off and the weight applied along one direction at
-a time) are made here in code, never in the URDF: ``docs/validation.md``. The scene's builders
-(:func:`contact_material`, :func:`add_object`, :func:`set_hand_contact`, :func:`hand_parser`)
-serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`).
-
-Reference: Drake, https://drake.mit.edu (MultibodyPlant, SAP: Castro et al., "An Unconstrained
-Convex Formulation of Compliant Contact", IEEE T-RO 2023).
+Drake's ``MultibodyPlant`` (discrete, SAP, point contact) parses the planner's URDF; the
+Drake-only adjustments are made here in code, never in the URDF (``docs/validation.md``). The
+scene's builders serve the Drake world too (:mod:`eos_svc.drivers.drake_plant`). Reference:
+Drake, https://drake.mit.edu (SAP: Castro et al., IEEE T-RO 2023).
 """
 
 from __future__ import annotations

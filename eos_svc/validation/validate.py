@@ -1,9 +1,6 @@
-"""``validate_grasp``: does the planned grasp hold the object in a physics engine?
-
-What it reads from a plan result (a :class:`~eos_svc.agents.PlanResult` or its JSON form, as
-``eos plan --json`` prints it: ``q_final``, ``ground_truth``, ``friction``) is checked at the
-edge, every problem a :class:`~eos_svc.errors.ValidationError` naming the field. The recipe, its
-numbers and what is not modelled: ``docs/validation.md``.
+"""``validate_grasp``: does the planned grasp hold the object in a physics engine? What it reads
+from a plan result is checked at the edge, each problem a :class:`~eos_svc.errors.ValidationError`
+naming the field (the recipe and its numbers: ``docs/validation.md``).
 """
 
 from __future__ import annotations

@@ -1,12 +1,6 @@
-"""A live 3-D view of plans: a Drake MeshCat page on localhost that follows the cycles.
-
-    view = LiveView()                      # view.url is the page
-    view.start(request)                    # the object, the hand at its start
-    result = plan(request, on_cycle=view.cycle)
-    view.finish(result.to_dict())          # final grasp, contacts, and the whole plan animated
-
-``eos plan --view`` feeds it from the planner, ``eos client watch --view`` from the service's
-messages (:class:`StreamView`, which queues them: every MeshCat call happens in the view's thread).
+"""A live 3-D view of plans: a Drake MeshCat page on localhost that follows the cycles
+(``eos plan --view``; ``eos client watch --view`` through :class:`StreamView`, which queues the
+service's messages so that every MeshCat call happens in the view's thread; ``docs/view.md``).
 """
 
 from __future__ import annotations
@@ -81,32 +75,25 @@ class LiveView:
         self.drawing = HandDrawing(self.hand)
         self.drawing.add_to(self.meshcat)
         self._q0: tuple[float, ...] = tuple(float(x) for x in self.hand.neutral())
-        self._q_new: Any = None  # the last hand_q written (JSON form), converted when drawn
-        self._records: list[dict[str, Any]] = []  # the cycles' entries a view reads, for finish()
-        self.drawing.pose_in(self.meshcat, self._q0)
         set_camera(self.meshcat, ObjectSpec().position)  # where the default object lies
-        self.request: PlanRequest | None = None
         self._label: str | None = None
-        self._postulate: dict[str, Any] | None = None
         self._last_push = 0.0
-        self.cycles_seen = 0
-        self.updates_sent = 0
         self.finished = False
+        self.start()  # the hand at its start, nothing else drawn
 
     # --- what a plan does to the view ----------------------------------------------------------
     def start(self, request: PlanRequest | Mapping[str, Any] | None = None) -> None:
         """Show a new plan: the hand at its start, no contacts or postulate, its object when the
         request is given (ValidationError when it is not valid: the view stays reset)."""
         mc = self.meshcat
-        mc.Delete(CONTACTS)
-        mc.Delete(POSTULATE)
-        mc.Delete(OBJECT)
+        for path in (CONTACTS, POSTULATE, OBJECT):
+            mc.Delete(path)
         if self.finished:
             mc.SetAnimation(MeshcatAnimation(FPS))  # forget the previous plan's animation
-        self.request = None
-        self._q_new = None
-        self._records = []
-        self._postulate = None
+        self.request: PlanRequest | None = None
+        self._q_new: Any = None  # the last hand_q written (JSON form), converted when drawn
+        self._records: list[dict[str, Any]] = []  # the cycles' entries a view reads, for finish()
+        self._postulate: dict[str, Any] | None = None
         self.cycles_seen = 0
         self.updates_sent = 0
         self.finished = False

@@ -1,7 +1,6 @@
 """Pictures of a final grasp (``draw_result(plan(), "grasp.png")``): a 3-D view and three
-orthographic views in mm of the hand's collision geometry, the object and the contacts (a red dot
-and an arrow into the object). Every primitive is drawn as the convex hull of points on its
-surface, in the orthographic views as the outline of their projection, back to front.
+orthographic views (mm) of the hand's collision geometry, the object and the contacts, each
+primitive drawn as the convex hull of points on its surface.
 """
 
 from __future__ import annotations
@@ -102,14 +101,7 @@ def scene_solids(q: Any, request: PlanRequest, hand: HandModel | None = None) ->
     placed = obj.placement
     own = obj.triangles()
     surface = shape_mesh(obj.geometry) if own is None else list(own)
-    solids = [
-        (
-            "object",
-            [p @ placed.rotation.T + placed.translation for p in surface],
-            OBJECT_COLOUR,
-            0.35,
-        )
-    ]
+    solids = [("object", [p @ placed.rotation.T + placed.translation for p in surface], OBJECT_COLOUR, 0.35)]
     state = hand.state(np.asarray(q, dtype=float))
     geometries = hand.collision_model.geometryObjects
     for gid, (g, colour) in enumerate(zip(geometries, hand_colours(hand), strict=True)):
@@ -141,11 +133,8 @@ def _draw_3d(
     for _finger, p, n in touches:
         ax.scatter(*(p * MM), color=CONTACT_COLOUR, s=30, depthshade=False)
         ax.quiver(*(p * MM), *(-n * arrow), color=CONTACT_COLOUR, linewidth=2)
-    ax.set_xlabel("x (mm)")
-    ax.set_ylabel("y (mm)")
-    ax.set_zlabel("z (mm)")
+    ax.set(xlabel="x (mm)", ylabel="y (mm)", zlabel="z (mm)", title="3-D view")
     ax.view_init(elev=22, azim=-130)
-    ax.set_title("3-D view")
 
 
 def _draw_view(
@@ -175,13 +164,11 @@ def _draw_view(
         ax.plot(pm[h], pm[v], "o", color=CONTACT_COLOUR, markersize=5, zorder=4)
         offset = LABEL_OFFSETS[k % len(LABEL_OFFSETS)]
         ax.annotate(finger, (pm[h], pm[v]), textcoords="offset points", xytext=offset, fontsize=8, zorder=4)
-    ax.set_xlim(centre[h] - half, centre[h] + half)
-    ax.set_ylim(centre[v] - half, centre[v] + half)
-    ax.set_aspect("equal")
+    ax.set(
+        xlim=(centre[h] - half, centre[h] + half), ylim=(centre[v] - half, centre[v] + half), aspect="equal"
+    )
+    ax.set(xlabel=f"{'xyz'[h]} (mm)", ylabel=f"{'xyz'[v]} (mm)", title=label)
     ax.grid(True, linewidth=0.3, alpha=0.5)
-    ax.set_xlabel(f"{'xyz'[h]} (mm)")
-    ax.set_ylabel(f"{'xyz'[v]} (mm)")
-    ax.set_title(label)
 
 
 def draw_grasp(

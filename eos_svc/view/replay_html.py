@@ -1,12 +1,5 @@
-"""A plan as one self-contained HTML file: Drake MeshCat's static page with the plan animated.
-
-    from eos_svc.agents import plan
-    from eos_svc.view import write_result_html
-    write_result_html(plan(), "plan.html")           # or: eos plan --html plan.html
-
-The page (``Meshcat.StaticHtml()``: three.js, the viewer and the scene, no network) plays the
-whole plan once; a panel shows the cycle under the time cursor with a play button and a time
-slider. ``#t=SECONDS`` or ``#cycle=N`` (the end of cycle N) in the URL opens it paused there.
+"""A plan as one self-contained HTML file: Drake MeshCat's static page with the plan animated
+and a panel of the cycle under the time cursor (``eos plan --html``; the page: ``docs/view.md``).
 """
 
 from __future__ import annotations

@@ -31,6 +31,7 @@ from pydrake.math import RigidTransform, RollPitchYaw, RotationMatrix
 from eos_svc import objects
 from eos_svc.kinematics import HandModel
 from eos_svc.schema.request import DEFAULT_FRICTION, ObjectSpec
+from eos_svc.validation.simulation import vec
 
 #: root of everything this package draws in a MeshCat scene
 ROOT = "/eos"
@@ -91,11 +92,6 @@ def play_once(meshcat: Meshcat, anim: MeshcatAnimation, autoplay: bool) -> None:
     anim.set_loop_mode(MeshcatAnimation.LoopMode.kLoopOnce)
     anim.set_clamp_when_finished(True)
     meshcat.SetAnimation(anim)
-
-
-def vec(values: Any) -> Any:
-    """A float array for pydrake (typed Any: pydrake's stubs type arrays so no ndarray matches)."""
-    return np.asarray(values, dtype=float)
 
 
 def object_shape(spec: ObjectSpec) -> tuple[Shape, RigidTransform]:

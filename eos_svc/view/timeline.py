@@ -1,10 +1,8 @@
 """A plan's cycles as an animation timeline: where the hand is at which frame, what each cycle did.
 
-Built from cycle records in their JSON form, which carry the hand's configuration after every
-cycle that moved it (``hand_q``) and the sampled path of every EP1 roll (``hand_path``). Each
-cycle gets at least :data:`CYCLE_FRAMES` frames; a move that turns joints is split into
-keyframes of at most :data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel
-(interpolated in joint space), an EP1 roll adds one keyframe per sample.
+Built from cycle records' JSON form (``hand_q`` after each move, ``hand_path`` of each EP1 roll);
+each cycle gets at least :data:`CYCLE_FRAMES` frames, a move is split into keyframes of at most
+:data:`MAX_STEP_RAD` per joint and :data:`MAX_STEP_M` of wrist travel.
 """
 
 from __future__ import annotations

@@ -55,9 +55,9 @@ def test_random_draw_is_seeded_and_within_its_ranges():
     from eos_svc.experiments.grasp_suite import (
         DRAW_CLASSES,
         DRAW_POSITION_SPREAD,
-        default_position,
         random_draw,
     )
+    from eos_svc.schema.request import ObjectSpec
 
     span = 0.2
     draw = random_draw(60, draw_seed=5, sizes=(0.2, 0.4), span=span)
@@ -65,7 +65,7 @@ def test_random_draw_is_seeded_and_within_its_ranges():
     assert draw != random_draw(60, draw_seed=6, sizes=(0.2, 0.4), span=span)
     assert {o.spec.shape for o in draw} == set(DRAW_CLASSES)
     assert len({o.label for o in draw}) == len(draw)
-    base = default_position()
+    base = ObjectSpec().position  # the default request's
     for o in draw:
         size = o.spec.size
         widths = (
