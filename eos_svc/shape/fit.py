@@ -230,7 +230,7 @@ def _minimise(
     as many residuals as parameters), else ``least_squares(method="trf")``."""
     f, jac = problem.residuals, problem.jacobian
     if levenberg_marquardt:
-        # without full_output leastsq skips a covariance (as long as a short fit) but warns when
+        # without full_output leastsq skips a covariance (it costs a short fit's time) but warns when
         # it stops at max_nfev, as a quick fit is meant to
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
