@@ -198,27 +198,13 @@ def residuals(
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) :func:`residuals`: one call per kind."""
-    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX
+    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX, kernel_residuals
     from eos_svc.shape.kernels import KIND_CODES
     from eos_svc.shape.touches import Touches
 
     radii, free = np.full(3, 0.01), np.array([[0.0, 0.0, 0.2]])
     touches = Touches(np.eye(3) * 0.05, np.eye(3), radii, free, radii[:1])
-    for kind, code in KIND_CODES.items():
+    for kind in KIND_CODES:
         theta = np.zeros((1, N_PARAMS[kind]))
         theta[:, SIZE_INDEX[kind][0] :] = math.log(0.04)
-        residuals(
-            code,
-            SIZE_INDEX[kind][0],
-            theta,
-            np.eye(3)[None],
-            (-9.0, 0.0),
-            touches.points,
-            touches.count,
-            touches.radii,
-            touches.normals,
-            touches.free_radii,
-            touches.gap_offset,
-            touches.sigma_distance,
-            touches.sigma_normal,
-        )
+        kernel_residuals(residuals, theta, kind, np.eye(3), touches)

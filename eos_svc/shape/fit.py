@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 
@@ -99,27 +100,24 @@ def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: T
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
     ``min(sd(f) − r, 0)/σ_d``: by the compiled loop once loaded (:mod:`eos_svc.shape.kernels`),
     else by :func:`numpy_residuals`."""
-    compiled = kernels.compiled_residuals()
-    if compiled is None or kind not in kernels.KIND_CODES:
+    kernel = kernels.compiled_residuals()
+    if kernel is None or kind not in kernels.KIND_CODES:
         return numpy_residuals(thetas, kind, r0, touches)
-    thetas = np.ascontiguousarray(thetas, dtype=float)
+    return kernel_residuals(kernel, thetas, kind, r0, touches)
+
+
+def kernel_residuals(
+    kernel: Callable[..., np.ndarray], thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches
+) -> np.ndarray:
+    """:func:`whitened_residuals` by the compiled loop ``kernel``
+    (:func:`eos_svc.shape.compiled.residuals`)."""
     r0s = np.empty((len(thetas), 3, 3))
     r0s[:] = r0
-    out: np.ndarray = compiled(
-        kernels.KIND_CODES[kind],
-        SIZE_INDEX[kind][0],
-        thetas,
-        r0s,
-        LOG_SIZE_RANGE,
-        touches.points,
-        touches.count,
-        touches.radii,
-        touches.normals,
-        touches.free_radii,
-        touches.gap_offset,
-        touches.sigma_distance,
-        touches.sigma_normal,
-    )
+    t, thetas = touches, np.ascontiguousarray(thetas, dtype=float)
+    out: np.ndarray = kernel(
+        kernels.KIND_CODES[kind], SIZE_INDEX[kind][0], thetas, r0s, LOG_SIZE_RANGE,
+        t.points, t.count, t.radii, t.normals, t.free_radii, t.gap_offset, t.sigma_distance, t.sigma_normal,
+    )  # fmt: skip
     return out
 
 
