@@ -69,9 +69,16 @@ def vector3(field: str, value: object) -> Array:
     return arr
 
 
+def xyz_sum(v: Array) -> Array:
+    """Sum over the last axis, of length 3: x + y + z (what ``v.sum(axis=-1)`` gives, without its
+    reduction's cost over such a short axis, ~6x the additions' on a sweep's points)."""
+    out: Array = v[..., 0] + v[..., 1] + v[..., 2]
+    return out
+
+
 def norm(v: Array) -> Array:
-    """Euclidean norm over the last axis."""
-    out: Array = np.sqrt((v * v).sum(axis=-1))
+    """Euclidean norm over the last axis, of length 3."""
+    out: Array = np.sqrt(xyz_sum(v * v))
     return out
 
 
