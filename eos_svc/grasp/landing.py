@@ -114,6 +114,28 @@ def landing(
     return SweepLandings(obj, sweep, pts, gaps).landing(start)
 
 
+def sweep_landings(
+    obj: SurfaceObject,
+    sweeps: Mapping[str, FingerSweep],
+    tip_radii: Mapping[str, float],
+    rotation: np.ndarray,
+    origin: np.ndarray,
+) -> dict[str, SweepLandings]:
+    """The :class:`SweepLandings` of every finger of ``tip_radii``, the palm at (``rotation``,
+    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
+    names = list(tip_radii)
+    sizes = [len(sweeps[f].points) for f in names]
+    radii = np.repeat([tip_radii[f] for f in names], sizes)
+    rotated = np.concatenate([sweeps[f].points for f in names]) @ rotation.T
+    stacked, gaps = rotated_sweep_gaps(obj, rotated, radii, origin)
+    ends = np.cumsum(sizes)
+    out: dict[str, SweepLandings] = {}
+    for f, end, size in zip(names, ends.tolist(), sizes, strict=True):
+        part = slice(end - size, end)
+        out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part])
+    return out
+
+
 def hand_landings(
     obj: SurfaceObject,
     sweeps: Mapping[str, FingerSweep],
@@ -122,15 +144,6 @@ def hand_landings(
     origin: np.ndarray,
 ) -> dict[str, Landing | None]:
     """The :func:`landing` from open of every finger of ``tip_radii``, the palm at (``rotation``,
-    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
-    names = list(tip_radii)
-    sizes = [len(sweeps[f].points) for f in names]
-    radii = np.repeat([tip_radii[f] for f in names], sizes)
-    rotated = np.concatenate([sweeps[f].points for f in names]) @ rotation.T
-    stacked, gaps = rotated_sweep_gaps(obj, rotated, radii, origin)
-    ends = np.cumsum(sizes)
-    out: dict[str, Landing | None] = {}
-    for f, end, size in zip(names, ends.tolist(), sizes, strict=True):
-        part = slice(end - size, end)
-        out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part]).landing(0)
-    return out
+    ``origin``) (:func:`sweep_landings`)."""
+    found = sweep_landings(obj, sweeps, tip_radii, rotation, origin)
+    return {f: landings.landing(0) for f, landings in found.items()}
