@@ -103,12 +103,11 @@ class Ellipsoid(SurfaceObject):
         v = P - S
         dist = norm(v)
         sign = np.where(xyz_sum((P / half) ** 2) < 1.0, -1.0, 1.0)
-        normal = S / half**2
-        g = np.where(
-            (dist > 1e-12)[..., None],
-            sign[..., None] * v / np.maximum(dist, 1e-12)[..., None],
-            unit(normal, norm(normal), _UP),
-        )
+        g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+        on = dist <= 1e-12  # on the surface: the normal there (made only where needed)
+        if on.any():
+            normal = S / half**2
+            g = np.where(on[..., None], unit(normal, norm(normal), _UP), g)
         return sign * dist, g
 
     @property
