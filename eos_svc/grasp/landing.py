@@ -99,21 +99,6 @@ class SweepLandings:
         return self._by_sample[k]
 
 
-def landing(
-    obj: SurfaceObject,
-    sweep: FingerSweep,
-    tip_radius: float,
-    rotation: np.ndarray,
-    origin: np.ndarray,
-    start: int = 0,
-) -> Landing | None:
-    """Where ``sweep``'s fingertip (radius ``tip_radius``) first touches ``obj`` when the finger
-    closes from sample ``start``, the palm at (``rotation``, ``origin``) in the world; None when
-    it never does, or already touches there (see :class:`SweepLandings`)."""
-    pts, gaps = rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
-    return SweepLandings(obj, sweep, pts, gaps).landing(start)
-
-
 def sweep_landings(
     obj: SurfaceObject,
     sweeps: Mapping[str, FingerSweep],
@@ -121,8 +106,9 @@ def sweep_landings(
     rotation: np.ndarray,
     origin: np.ndarray,
 ) -> dict[str, SweepLandings]:
-    """The :class:`SweepLandings` of every finger of ``tip_radii``, the palm at (``rotation``,
-    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
+    """The :class:`SweepLandings` of every finger of ``tip_radii`` (its tip's radius, m), the palm
+    at (``rotation``, ``origin``) in the world, in one signed-distance query (a distance costs
+    mostly per query)."""
     names = list(tip_radii)
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)
@@ -143,7 +129,7 @@ def hand_landings(
     rotation: np.ndarray,
     origin: np.ndarray,
 ) -> dict[str, Landing | None]:
-    """The :func:`landing` from open of every finger of ``tip_radii``, the palm at (``rotation``,
-    ``origin``) (:func:`sweep_landings`)."""
+    """Where every finger of ``tip_radii`` lands closing from open, the palm at (``rotation``,
+    ``origin``) (:func:`sweep_landings`; None: nowhere)."""
     found = sweep_landings(obj, sweeps, tip_radii, rotation, origin)
     return {f: landings.landing(0) for f, landings in found.items()}
