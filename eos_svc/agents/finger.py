@@ -9,10 +9,9 @@ past its contact keeps closing); otherwise 0, and ``CANNOT_ACT`` if chosen (pape
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_left
 from operator import itemgetter
-
-import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
@@ -96,8 +95,7 @@ class FingerAgent(GraspAgent):
         hit = landings.landing(bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12))
         if hit is None:
             return None
-        chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-        return float(np.linalg.norm(hit.point - chosen))
+        return math.dist(hit.point.tolist(), target["contacts"][self.finger]["point"])
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —
