@@ -38,23 +38,13 @@ class Landing:
         }
 
 
-def rotated_sweep_gaps(
-    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float | np.ndarray, origin: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The sweep's fingertip centres in the world (N, 3) and each one's gap to ``obj`` (m), from
-    the sweep's points turned by the palm's rotation R (``sweep.points @ R.T``), the palm's
-    ``origin`` (world, m) and the tip's radius (m; one, or one per point)."""
-    pts = rotated + origin
-    return pts, obj.signed_distances(pts)[0] - tip_radius
-
-
 class SweepLandings:
     """The landings of one sweep on an object, the palm at one pose, from any start sample.
 
     A finger closing from ``start`` lands at the first touching sample at or after
     ``max(0, start − 1)`` unless it touches there already; each landing is found once per
     touching sample. ``pts``, ``gaps``: the sweep's tip centres at this pose (world, m) and their
-    gaps (m), from :func:`rotated_sweep_gaps`.
+    gaps (m): the object's signed distance at each, less the tip's radius.
     """
 
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
@@ -112,8 +102,8 @@ def sweep_landings(
     names = list(tip_radii)
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)
-    rotated = np.concatenate([sweeps[f].points for f in names]) @ rotation.T
-    stacked, gaps = rotated_sweep_gaps(obj, rotated, radii, origin)
+    stacked = np.concatenate([sweeps[f].points for f in names]) @ rotation.T + origin
+    gaps = obj.signed_distances(stacked)[0] - radii
     ends = np.cumsum(sizes)
     out: dict[str, SweepLandings] = {}
     for f, end, size in zip(names, ends.tolist(), sizes, strict=True):

@@ -9,7 +9,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec
 from eos_svc.grasp.frames import rotation_from_rpy
-from eos_svc.grasp.landing import SweepLandings, hand_landings, rotated_sweep_gaps, sweep_landings
+from eos_svc.grasp.landing import SweepLandings, hand_landings, sweep_landings
 from tests.grasp.scenes import HERE, synthesis
 
 
@@ -71,8 +71,8 @@ def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
     finger = s.opposing
     sweep, r = s.sweeps[finger], s.hand.tip_radius(finger)
     wrist = np.asarray(HERE) - np.array([0.125, 0.0, 0.0])
-    pts, gaps = rotated_sweep_gaps(s.obj, sweep.points, r, wrist)
-    landings = SweepLandings(s.obj, sweep, pts, gaps)
+    landings = sweep_landings(s.obj, s.sweeps, {finger: r}, np.eye(3), wrist)[finger]
+    pts, gaps = landings.pts, landings.gaps
     first = landings.landing(0)
     assert first is not None and gaps[first.index] <= 0.0 < gaps[first.index - 1]
     for start in range(first.index + 1):
