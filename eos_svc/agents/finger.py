@@ -37,26 +37,26 @@ class TargetLandings:
         self.world = world
         # the wrist's joint values, as a tuple, from the configuration list
         self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
-        # (target entry, its postulated object); (wrist pose, target, the landings there)
-        self._object: tuple[object, SurfaceObject | None] = (None, None)
-        self._landings: tuple[object, object, dict[str, SweepLandings]] = (None, None, {})
+        # (wrist pose, target entry, its postulated object, the landings there)
+        self._memo: tuple[object, object, SurfaceObject | None, dict] = (None, None, None, {})
 
     def at_wrist(self, target: dict) -> dict[str, SweepLandings]:
         """Per finger of ``target``'s contacts, its sweep's landings from where the wrist is now
         (none when the target has no object)."""
         world = self.world
         pose = self._wrist_pose(world.q_list())
-        memo_pose, memo_target, landings = self._landings
-        if memo_pose != pose or memo_target is not target:
-            if self._object[0] is not target:
-                spec = target.get("object")
-                self._object = (target, None if spec is None else make_object(ObjectSpec.from_dict(spec)))
-            obj, landings = self._object[1], {}
-            if obj is not None:
-                radii = {f: world.hand.tip_radius(f) for f in target.get("contacts", {})}
-                translation, rotation = world.palm_views()
-                landings = sweep_landings(obj, world.sweeps, radii, rotation, translation)
-            self._landings = (pose, target, landings)
+        memo_pose, memo_target, obj, landings = self._memo
+        if memo_target is not target:
+            spec = target.get("object")
+            obj = None if spec is None else make_object(ObjectSpec.from_dict(spec))
+        elif memo_pose == pose:
+            return landings
+        landings = {}
+        if obj is not None:
+            radii = {f: world.hand.tip_radius(f) for f in target.get("contacts", {})}
+            translation, rotation = world.palm_views()
+            landings = sweep_landings(obj, world.sweeps, radii, rotation, translation)
+        self._memo = (pose, target, obj, landings)
         return landings
 
 

@@ -110,16 +110,3 @@ def sweep_landings(
         part = slice(end - size, end)
         out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part])
     return out
-
-
-def hand_landings(
-    obj: SurfaceObject,
-    sweeps: Mapping[str, FingerSweep],
-    tip_radii: Mapping[str, float],
-    rotation: np.ndarray,
-    origin: np.ndarray,
-) -> dict[str, Landing | None]:
-    """Where every finger of ``tip_radii`` lands closing from open, the palm at (``rotation``,
-    ``origin``) (:func:`sweep_landings`; None: nowhere)."""
-    found = sweep_landings(obj, sweeps, tip_radii, rotation, origin)
-    return {f: landings.landing(0) for f, landings in found.items()}

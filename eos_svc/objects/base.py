@@ -70,8 +70,8 @@ def vector3(field: str, value: object) -> Array:
 
 
 def xyz_sum(v: Array) -> Array:
-    """Sum over the last axis, of length 3: x + y + z (what ``v.sum(axis=-1)`` gives, without its
-    reduction's cost over such a short axis, ~6x the additions' on a sweep's points)."""
+    """x + y + z over the last axis, as ``v.sum(axis=-1)`` (whose reduction over so short an
+    axis costs ~6x the two additions on a sweep's points)."""
     out: Array = v[..., 0] + v[..., 1] + v[..., 2]
     return out
 
