@@ -21,6 +21,7 @@ from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
+from eos_svc.shape.span import within_span
 from eos_svc.shape.starts import ClassStarts, frame_with_z
 from eos_svc.shape.touches import Touches
 
@@ -164,9 +165,10 @@ def select_class(
 ) -> Postulate:
     """Fit every class to ``touches`` and choose by posterior (BIC, equal priors); ValueError
     below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
-    same touches, refitted first: one that then :func:`explains` the touches is kept without the
-    class's cold starts. ``earlier``: per class, its χ² on fewer of the same touches: a class
-    :data:`SETTLED` by it is only screened (nor refitted as a sibling)."""
+    same touches, refitted first (unless it reaches far past them: :mod:`eos_svc.shape.span`):
+    one that then :func:`explains` the touches is kept without the class's cold starts.
+    ``earlier``: per class, its χ² on fewer of the same touches: a class :data:`SETTLED` by it
+    is only screened (nor refitted as a sibling)."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     mean = touches.normals.mean(axis=0)
@@ -178,7 +180,8 @@ def select_class(
     screened: dict[str, ClassFit] = {}
     shared = ClassStarts(touches)  # every class's starts, their common pieces computed once
     for kind, (theta0, r0) in (warm or {}).items():
-        if kind in classes:
+        # a fit grown far past the touches is no start: refitted, it grows on (shape.span)
+        if kind in classes and within_span(ClassFit(kind, 0.0, 0, np.eye(0), theta0, r0).geometry, touches):
             refit = fit_class(kind, touches, class_starts=shared, only=shared.add(kind, theta0, r0))
             if explains(refit.chi2, touches, kind):
                 fits[kind] = refit
