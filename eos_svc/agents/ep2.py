@@ -17,7 +17,7 @@ Opportunistic sub-rating: right after post_shape asked for the surface (``needs:
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable
+from collections.abc import Callable, Iterable, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -225,7 +225,7 @@ class EP2Agent(GraspAgent):
                     axes.extend([h / n, -h / n])
         return axes or [np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0]), np.array([0.0, -1.0, 0.0])]
 
-    def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> list[list[Probe]]:
+    def active_plan(self, board: Board, estimate: tuple[np.ndarray, np.ndarray]) -> Sequence[Iterable[Probe]]:
         """This round's active-touch lines, each its alternative probes
         (:mod:`eos_svc.agents.probe_choice`): the seed probes first (off a table), then the most
         informative lines while candidates and active rounds remain; none otherwise."""
@@ -238,7 +238,11 @@ class EP2Agent(GraspAgent):
         return next_probes(world, candidates, estimate, RANKED_LINES, STANDOFF)
 
     def run_lines(
-        self, lines: list[list[Probe]], touches: list[dict], free: list[list[float]], counts: dict[str, int]
+        self,
+        lines: Sequence[Iterable[Probe]],
+        touches: list[dict],
+        free: list[list[float]],
+        counts: dict[str, int],
     ) -> tuple[int, int]:
         """Run the ``lines`` in order until ROUND_PROBES of them are answered (a touch, or a
         whole travel free): a line the hand cannot probe (every alternative blocked) gives way

@@ -8,7 +8,8 @@ From **every contact**: every class fitted and chosen by model evidence (:mod:`e
 the confidence P(class right and size within tolerance); below 60 %, or not precise to
 :data:`PRECISION` on fewer than :data:`PRECISION_CONTACTS` contacts, it asks EP2 again and
 leaves its ``candidates`` and ``open_faces``. When **no class explains the contacts** after
-EP2's last round (:data:`OUT_OF_CLASS`): their convex hull (:mod:`eos_svc.shape.hull`),
+EP2's last round (:data:`OUT_OF_CLASS`, or the best reaches far past them:
+:mod:`eos_svc.shape.span`): their convex hull (:mod:`eos_svc.shape.hull`),
 ``approximate``. The postulate's fields: :class:`~eos_svc.schema.board_entries.ShapeEntry`;
 docs/planner.md has the detail.
 
@@ -33,6 +34,7 @@ from eos_svc.shape.hull import HullPostulate, hull_postulate
 from eos_svc.shape.open_faces import open_faces
 from eos_svc.shape.probe_information import Candidate, candidates_of
 from eos_svc.shape.selection import MIN_CONTACTS, fit_probability, tolerance_probability
+from eos_svc.shape.span import within_span
 
 #: relative anisotropy below which the two curvatures count as equal (sphere)
 SPHERE_TOLERANCE = 0.15
@@ -165,16 +167,18 @@ class PostShapeAgent(GraspAgent):
 
     def _from_touches(self, board: Board, curvature: dict, touches: Touches) -> ActionResult:
         # the previous postulate's candidate fits, on fewer of these touches, start their classes'
-        warm = {
-            c.kind: (c.theta, c.r0)
-            for c in (Candidate.from_dict(d) for d in (board.get(keys.SHAPE) or {}).get("candidates", []))
-        }
-        post = select_class(touches, warm=warm)
+        # fits; its classes' χ² tell which are settled
+        previous = board.get(keys.SHAPE) or {}
+        warm = {c.kind: (c.theta, c.r0) for c in map(Candidate.from_dict, previous.get("candidates", []))}
+        post = select_class(touches, warm=warm, earlier=previous.get("evidence", {}).get("chi2"))
         ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
         if (
             ep2_done
             and post.best is not None
-            and fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
+            and (
+                fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
+                or not within_span(post.best.geometry, touches)
+            )
         ):
             hull = hull_postulate(touches, self.world.table_height)
             if hull is not None:

@@ -21,7 +21,8 @@ five contacts. SI units: metres.
 from __future__ import annotations
 
 import math
-from itertools import product
+from collections.abc import Iterator
+from itertools import chain, product
 
 import numpy as np
 
@@ -66,15 +67,16 @@ def next_probes(
     estimate: tuple[np.ndarray, np.ndarray],
     most: int,
     standoff: float,
-) -> list[list[Probe]]:
+) -> list[Iterator[Probe]]:
     """The ``most`` most informative lines onto the ``estimate`` (centre, half extents along
     the world axes, m) under post_shape's ``candidates`` (their JSON form), each line's probes
-    the alternatives (one group) in order: the greedy choice (each given the ones before), then
+    the alternatives (one group) in order, made as asked for: the greedy choice, then
     the other lines by their own spread (tried when the hand cannot probe the chosen ones);
     none when no line's predicted distance spreads over MIN_SPREAD."""
     faces = probe_faces(*estimate, table=world.support_height is not None)
-    # each line scored by its face's first probe; the alternatives made for the lines returned
-    firsts = [next(face_probes(world, face, k, standoff, "active", False)) for k, face in enumerate(faces)]
+    # each line scored by its face's first probe; the alternatives made as a line is probed
+    lines = [face_probes(world, face, k, standoff, "active", False) for k, face in enumerate(faces)]
+    firsts = [next(line) for line in lines]
     R = disagreement(
         [Candidate.from_dict(c) for c in candidates],
         np.array([p.start for p in firsts]),
@@ -87,7 +89,7 @@ def next_probes(
     # then, for when those lines cannot be probed, the others by their own spread
     variance = np.sum(R * R, axis=0)
     rest = [int(j) for j in np.argsort(-variance) if variance[j] > MIN_SPREAD**2 and j not in picks]
-    return [list(face_probes(world, faces[j], j, standoff, "active", False)) for j in (picks + rest)[:most]]
+    return [chain([firsts[j]], lines[j]) for j in (picks + rest)[:most]]
 
 
 def seed_probes(world: HandDriver, centre: np.ndarray, half: np.ndarray, standoff: float) -> list[Probe]:

@@ -17,29 +17,38 @@ TINY = 1e-15
 
 
 @njit(cache=True)
-def _rotation(code: int, theta: np.ndarray, r0: np.ndarray) -> np.ndarray:  # pragma: no cover
-    """world ← local rotation of parameters ``theta`` about ``r0`` (3, 3)."""
-    R = np.eye(3)
-    if code == 1 or code == 2:  # R0·exp([ω]×) (Rodrigues)
+def _rotation(code: int, theta: np.ndarray, r0: np.ndarray, R: np.ndarray) -> None:  # pragma: no cover
+    """``R`` (3, 3) ← the world ← local rotation of parameters ``theta`` about ``r0`` (3, 3)
+    (a sphere's: left as it is), in scalars (a 3×3 product through BLAS costs more)."""
+    if code == 1 or code == 2:  # R0·exp([ω]×), exp([ω]×) = I + sin θ [k]× + (1 − cos θ) [k]×² (Rodrigues)
         w0, w1, w2 = theta[3], theta[4], theta[5]
         angle = math.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         s = max(angle, 1e-12)
         k0, k1, k2 = w0 / s, w1 / s, w2 / s
-        K = np.array([[0.0, -k2, k1], [k2, 0.0, -k0], [-k1, k0, 0.0]])
-        E = np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * (K @ K)
-        R = r0 @ E
+        a, b = math.sin(angle), 1.0 - math.cos(angle)
+        E = (
+            (1.0 - b * (k1 * k1 + k2 * k2), -a * k2 + b * k0 * k1, a * k1 + b * k0 * k2),
+            (a * k2 + b * k0 * k1, 1.0 - b * (k0 * k0 + k2 * k2), -a * k0 + b * k1 * k2),
+            (-a * k1 + b * k0 * k2, a * k0 + b * k1 * k2, 1.0 - b * (k0 * k0 + k1 * k1)),
+        )
+        for i in range(3):
+            for j in range(3):
+                R[i, j] = r0[i, 0] * E[0][j] + r0[i, 1] * E[1][j] + r0[i, 2] * E[2][j]
     elif code == 3 or code == 4:  # axis R0·(α, β, 1), normalised; x from world x (or y)
-        z = r0 @ np.array([theta[3], theta[4], 1.0])
-        z = z / math.sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2])
-        ref = np.array([1.0, 0.0, 0.0]) if abs(z[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-        x = ref - (ref[0] * z[0] + ref[1] * z[1] + ref[2] * z[2]) * z
-        x = x / math.sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2])
-        R[0, 0], R[1, 0], R[2, 0] = x[0], x[1], x[2]
-        R[0, 1] = z[1] * x[2] - z[2] * x[1]
-        R[1, 1] = z[2] * x[0] - z[0] * x[2]
-        R[2, 1] = z[0] * x[1] - z[1] * x[0]
-        R[0, 2], R[1, 2], R[2, 2] = z[0], z[1], z[2]
-    return R
+        a, b = theta[3], theta[4]
+        z0 = r0[0, 0] * a + r0[0, 1] * b + r0[0, 2]
+        z1 = r0[1, 0] * a + r0[1, 1] * b + r0[1, 2]
+        z2 = r0[2, 0] * a + r0[2, 1] * b + r0[2, 2]
+        n = math.sqrt(z0 * z0 + z1 * z1 + z2 * z2)
+        z0, z1, z2 = z0 / n, z1 / n, z2 / n
+        rx = 1.0 if abs(z0) < 0.9 else 0.0  # x from world x, or y when z is near x
+        d = rx * z0 + (1.0 - rx) * z1
+        x0, x1, x2 = rx - d * z0, (1.0 - rx) - d * z1, -d * z2
+        n = math.sqrt(x0 * x0 + x1 * x1 + x2 * x2)
+        x0, x1, x2 = x0 / n, x1 / n, x2 / n
+        R[0, 0], R[1, 0], R[2, 0] = x0, x1, x2
+        R[0, 1], R[1, 1], R[2, 1] = z1 * x2 - z2 * x1, z2 * x0 - z0 * x2, z0 * x1 - z1 * x0
+        R[0, 2], R[1, 2], R[2, 2] = z0, z1, z2
 
 
 @njit(cache=True)
@@ -162,11 +171,12 @@ def residuals(
     K, N = thetas.shape[0], points.shape[0]
     out = np.empty((K, 4 * count + N - count))
     half = np.empty(3)
+    R = np.eye(3)
     for row in range(K):
         theta = thetas[row]
         for j in range(thetas.shape[1] - first):
             half[j] = math.exp(min(max(theta[first + j], log_size_range[0]), log_size_range[1]))
-        R = _rotation(code, theta, r0s[row])
+        _rotation(code, theta, r0s[row], R)
         for n in range(N):
             x, y, z = points[n, 0] - theta[0], points[n, 1] - theta[1], points[n, 2] - theta[2]
             d, g0, g1, g2 = _distance(
@@ -188,27 +198,13 @@ def residuals(
 
 def warm_up() -> None:
     """Compile (or load from numba's cache) :func:`residuals`: one call per kind."""
-    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX
+    from eos_svc.shape.fit import N_PARAMS, SIZE_INDEX, kernel_residuals
     from eos_svc.shape.kernels import KIND_CODES
     from eos_svc.shape.touches import Touches
 
     radii, free = np.full(3, 0.01), np.array([[0.0, 0.0, 0.2]])
     touches = Touches(np.eye(3) * 0.05, np.eye(3), radii, free, radii[:1])
-    for kind, code in KIND_CODES.items():
+    for kind in KIND_CODES:
         theta = np.zeros((1, N_PARAMS[kind]))
         theta[:, SIZE_INDEX[kind][0] :] = math.log(0.04)
-        residuals(
-            code,
-            SIZE_INDEX[kind][0],
-            theta,
-            np.eye(3)[None],
-            (-9.0, 0.0),
-            touches.points,
-            touches.count,
-            touches.radii,
-            touches.normals,
-            touches.free_radii,
-            touches.gap_offset,
-            touches.sigma_distance,
-            touches.sigma_normal,
-        )
+        kernel_residuals(residuals, theta, kind, np.eye(3), touches)

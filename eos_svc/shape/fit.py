@@ -11,6 +11,8 @@ model (:class:`~eos_svc.shape.touches.Touches`), so the covariance is ``(JᵀJ)�
 from __future__ import annotations
 
 import math
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from functools import cached_property, partial
 
@@ -35,6 +37,8 @@ SIZE_INDEX = {k: tuple(range(N_PARAMS[k] - c.half_size_count, N_PARAMS[k])) for 
 GOOD_FIT = 3.0
 #: relative step of the forward-difference Jacobian
 JACOBIAN_STEP = 1e-8
+#: the least-squares solvers' tolerances: relative change of the cost and of θ, the gradient's cosine
+TOLERANCES = {"ftol": 1e-8, "xtol": 1e-8, "gtol": 1e-8}
 #: ridge added to JᵀJ before inverting it (whitened units)
 RIDGE = 1e-6
 #: range of the log half sizes a fit may take (ln m): 0.1 mm to 1 m
@@ -96,27 +100,24 @@ def whitened_residuals(thetas: np.ndarray, kind: str, r0: np.ndarray, touches: T
     ``(sd(c) − r − gap₀)/σ_d`` and the normal ``(∇sd(c) − n)/σ_n``; per free sample the hinge
     ``min(sd(f) − r, 0)/σ_d``: by the compiled loop once loaded (:mod:`eos_svc.shape.kernels`),
     else by :func:`numpy_residuals`."""
-    compiled = kernels.compiled_residuals()
-    if compiled is None or kind not in kernels.KIND_CODES:
+    kernel = kernels.compiled_residuals()
+    if kernel is None or kind not in kernels.KIND_CODES:
         return numpy_residuals(thetas, kind, r0, touches)
-    thetas = np.ascontiguousarray(thetas, dtype=float)
+    return kernel_residuals(kernel, thetas, kind, r0, touches)
+
+
+def kernel_residuals(
+    kernel: Callable[..., np.ndarray], thetas: np.ndarray, kind: str, r0: np.ndarray, touches: Touches
+) -> np.ndarray:
+    """:func:`whitened_residuals` by the compiled loop ``kernel``
+    (:func:`eos_svc.shape.compiled.residuals`)."""
     r0s = np.empty((len(thetas), 3, 3))
     r0s[:] = r0
-    out: np.ndarray = compiled(
-        kernels.KIND_CODES[kind],
-        SIZE_INDEX[kind][0],
-        thetas,
-        r0s,
-        LOG_SIZE_RANGE,
-        touches.points,
-        touches.count,
-        touches.radii,
-        touches.normals,
-        touches.free_radii,
-        touches.gap_offset,
-        touches.sigma_distance,
-        touches.sigma_normal,
-    )
+    t, thetas = touches, np.ascontiguousarray(thetas, dtype=float)
+    out: np.ndarray = kernel(
+        kernels.KIND_CODES[kind], SIZE_INDEX[kind][0], thetas, r0s, LOG_SIZE_RANGE,
+        t.points, t.count, t.radii, t.normals, t.free_radii, t.gap_offset, t.sigma_distance, t.sigma_normal,
+    )  # fmt: skip
     return out
 
 
@@ -148,17 +149,18 @@ class Problem:
     def __init__(self, kind: str, r0: np.ndarray, touches: Touches) -> None:
         self.kind, self.r0, self.touches = kind, r0, touches
         self.known: dict[bytes, tuple[np.ndarray, np.ndarray]] = {}
+        k = N_PARAMS[kind]
+        self.steps = np.eye(k + 1, k, -1)  # θ, then θ + h_i e_i: rows 0, e_1, …, e_k times h
 
     def evaluate(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(whitened residuals (m,), Jacobian (m, k)) at ``theta``."""
         key = theta.tobytes()
-        if key not in self.known:
+        known = self.known.get(key)
+        if known is None:
             h = JACOBIAN_STEP * np.maximum(1.0, np.abs(theta))
-            thetas = np.repeat(theta[None], len(theta) + 1, axis=0)  # θ, then θ + h_i e_i
-            thetas[1:][np.diag_indices(len(theta))] += h
-            R = whitened_residuals(thetas, self.kind, self.r0, self.touches)
-            self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
-        return self.known[key]
+            R = whitened_residuals(theta + self.steps * h, self.kind, self.r0, self.touches)
+            known = self.known[key] = (R[0], ((R[1:] - R[0]) / h[:, None]).T)
+        return known
 
     def residuals(self, theta: np.ndarray, *_: object) -> np.ndarray:
         """The residuals at ``theta`` (a copy: MINPACK works in the arrays it is given)."""
@@ -224,29 +226,15 @@ def _minimise(
     ``max_nfev`` evaluations: MINPACK's Levenberg–Marquardt (``leastsq``, what
     ``least_squares(method="lm", x_scale="jac")`` runs) when ``levenberg_marquardt`` (at least
     as many residuals as parameters), else ``least_squares(method="trf")``."""
+    f, jac = problem.residuals, problem.jacobian
     if levenberg_marquardt:
-        theta, _, info, _, _ = leastsq(
-            problem.residuals,
-            theta0,
-            Dfun=problem.jacobian,
-            full_output=True,
-            ftol=1e-8,
-            xtol=1e-8,
-            gtol=1e-8,
-            maxfev=max_nfev,
-        )
-        return theta, info["fvec"]
-    res = least_squares(
-        problem.residuals,
-        theta0,
-        jac=problem.jacobian,
-        method="trf",
-        x_scale="jac",
-        max_nfev=max_nfev,
-        ftol=1e-8,
-        xtol=1e-8,
-        gtol=1e-8,
-    )
+        # without full_output leastsq skips a covariance (it costs a short fit's time) but warns when
+        # it stops at max_nfev, as a quick fit is meant to
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
+            theta, _ = leastsq(f, theta0, Dfun=jac, maxfev=max_nfev, **TOLERANCES)
+        return theta, problem.evaluate(theta)[0]
+    res = least_squares(f, theta0, jac=jac, method="trf", x_scale="jac", max_nfev=max_nfev, **TOLERANCES)
     return res.x, res.fun
 
 

@@ -179,16 +179,20 @@ def hit_distances(
     (P, 3), ``travel`` (P,) m, tip ``radius`` (P,) m) before its tip touches each of the M
     objects of parameters ``thetas`` (M, k) — ``travel`` where it touches nothing, 0 where it
     starts touching. Sphere tracing on the kind's exact signed distance: each step advances by
-    the gap between the tip and the surface, which never passes the surface."""
+    the gap between the tip and the surface, which never passes the surface; a trace stops once
+    within TRACE_TOLERANCE of it or at the end of its travel (the others go on)."""
     centres, rotations, half = batch_geometry(kind, np.asarray(thetas, dtype=float), r0)
     t = np.zeros((len(thetas), len(starts)))
+    m, p = np.indices(t.shape).reshape(2, -1)  # the traces still going: object m, probe p
     for _ in range(TRACE_STEPS):
-        points = starts[None] + t[..., None] * directions[None]  # (M, P, 3)
-        local = np.einsum("mpi,mij->mpj", points - centres[:, None], rotations)
-        d, _ = KINDS[kind].local_distance(local, half[:, None, :])
-        gap = np.maximum(d - radius[None], 0.0)
-        t = np.minimum(t + gap, travel[None])
-        if np.all((gap < TRACE_TOLERANCE) | (t >= travel[None])):
+        points = starts[p] + t[m, p, None] * directions[p]
+        local = np.einsum("ni,nij->nj", points - centres[m], rotations[m])
+        d, _ = KINDS[kind].local_distance(local, half[m])
+        gap = np.maximum(d - radius[p], 0.0)
+        t[m, p] = np.minimum(t[m, p] + gap, travel[p])
+        going = (gap >= TRACE_TOLERANCE) & (t[m, p] < travel[p])
+        m, p = m[going], p[going]
+        if not len(m):
             break
     return t
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -20,6 +21,7 @@ from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
 from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
+from eos_svc.shape.span import within_span
 from eos_svc.shape.starts import ClassStarts, frame_with_z
 from eos_svc.shape.touches import Touches
 
@@ -40,6 +42,9 @@ QUICK_NFEV = 6
 SIBLING_GAP = 10.0
 #: fewest contacts needed to fit the classes
 MIN_CONTACTS = 4
+#: a class whose χ² on fewer of the same touches exceeds the best now by this is settled (more
+#: touches only add to its χ²; its posterior is below e^−30 of the best's): it is only screened
+SETTLED = 60.0
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,7 @@ class Postulate:
         out: dict[str, Any] = {
             "contacts": self.contacts,
             "classes": {k: round(v, 6) for k, v in sorted(self.probabilities.items(), key=lambda kv: -kv[1])},
+            "chi2": {k: round(f.chi2, 3) for k, f in self.fits.items()},
         }
         fit = self.best
         if fit is not None:
@@ -155,11 +161,14 @@ def select_class(
     touches: Touches,
     classes: tuple[str, ...] = CLASSES,
     warm: dict[str, tuple[np.ndarray, np.ndarray]] | None = None,
+    earlier: dict[str, float] | None = None,
 ) -> Postulate:
     """Fit every class to ``touches`` and choose by posterior (BIC, equal priors); ValueError
     below MIN_CONTACTS contacts. ``warm``: per class, an earlier fit's (θ, R0) on fewer of the
-    same touches, refitted first: one that then :func:`explains` the touches is kept without the
-    class's cold starts."""
+    same touches, refitted first (unless it reaches far past them: :mod:`eos_svc.shape.span`):
+    one that then :func:`explains` the touches is kept without the class's cold starts.
+    ``earlier``: per class, its χ² on fewer of the same touches: a class :data:`SETTLED` by it
+    is only screened (nor refitted as a sibling)."""
     if touches.count < MIN_CONTACTS:
         raise ValueError(f"need at least {MIN_CONTACTS} contacts to fit a class, got {touches.count}")
     mean = touches.normals.mean(axis=0)
@@ -171,21 +180,25 @@ def select_class(
     screened: dict[str, ClassFit] = {}
     shared = ClassStarts(touches)  # every class's starts, their common pieces computed once
     for kind, (theta0, r0) in (warm or {}).items():
-        if kind in classes:
+        # a fit grown far past the touches is no start: refitted, it grows on (shape.span)
+        if kind in classes and within_span(ClassFit(kind, 0.0, 0, np.eye(0), theta0, r0).geometry, touches):
             refit = fit_class(kind, touches, class_starts=shared, only=shared.add(kind, theta0, r0))
             if explains(refit.chi2, touches, kind):
                 fits[kind] = refit
+    # a fit from the nearest start alone, QUICK_NFEV evaluations: a screening
+    screen = partial(
+        fit_class, touches=touches, max_nfev=QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared
+    )
+    behind = min((f.chi2 for f in fits.values()), default=math.inf) + SETTLED
+    settled = [k for k in classes if k not in fits and (earlier or {}).get(k, -math.inf) > behind]
+    fits.update((k, screen(k)) for k in settled)
     if classes[0] not in fits:
         fits[classes[0]] = fit_class(classes[0], touches, class_starts=shared)
     if min(f.chi2 for f in fits.values()) > GOOD_FIT * m and len(classes) > 1:
-        # the first class does not explain the touches: the others, each fitted briefly from its
-        # nearest start (a screening), are fitted from the likeliest, so that once one explains
-        # the touches the rest are shown hopeless against it in a few iterations
-        screened = {
-            k: fit_class(k, touches, QUICK_NFEV, max_starts=1, nearest_first=True, class_starts=shared)
-            for k in classes[1:]
-            if k not in fits
-        }
+        # the first class does not explain the touches: the others, each screened, are fitted
+        # from the likeliest, so that once one explains the touches the rest are shown
+        # hopeless against it in a few iterations
+        screened = {k: screen(k) for k in classes[1:] if k not in fits}
     rest = tuple(k for k in classes[1:] if k not in fits)
     order = sorted(rest, key=lambda k: (screened[k].chi2, classes.index(k))) if screened else rest
     for kind in order:
@@ -211,8 +224,8 @@ def select_class(
         fits[kind] = fit_class(kind, touches, hopeless=hopeless, class_starts=shared)
     best_kind = min(fits, key=lambda k: fits[k].chi2)
     for kind in siblings(best_kind, classes):  # a sibling's own starts may all have missed
-        if fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
-            continue  # near the best already: a refit would barely move the posterior
+        if kind in settled or fits[kind].chi2 <= fits[best_kind].chi2 + SIBLING_GAP:
+            continue  # settled, or near the best already: a refit would barely move the posterior
         start = shared.add(kind, *sibling_start(fits[best_kind], kind))
         refit = fit_class(kind, touches, class_starts=shared, only=start)
         if refit.chi2 < fits[kind].chi2:

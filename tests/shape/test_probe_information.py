@@ -111,7 +111,7 @@ def test_ep2_probes_where_a_box_and_a_cylinder_differ():
     world = KinematicDriver(build_world(PlanRequest(obj=spec, seed=1)))
     candidates = [candidate(k, s, centre).to_dict() for k, s in (("box", [a, a, h]), ("cylinder", [a, h]))]
     (line,) = next_probes(world, candidates, (centre, np.array([a, a, h])), 1, 0.03)
-    probe = line[0]
+    probe = next(line)
     assert abs(probe.direction[2]) < 1e-9  # horizontal
     across = probe.start - centre - ((probe.start - centre) @ probe.direction) * probe.direction
     assert np.linalg.norm(across[:2]) == pytest.approx(OFFSET * a, abs=1e-9)

@@ -1,12 +1,14 @@
 """select_class's warm starts: a class refitted from its fit on fewer of the same touches ends
-where its cold starts end, and a warm start that does not explain the touches changes nothing."""
+where its cold starts end, a warm start that does not explain the touches changes nothing, and a
+class settled on fewer touches is only screened."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from eos_svc.shape import select_class
+from eos_svc.shape import select_class, selection
+from eos_svc.shape.fit import fit_class
 from eos_svc.shape.starts import ClassStarts
 
 from .synthetic import objects, touches_on
@@ -42,3 +44,30 @@ def test_a_warm_start_that_does_not_explain_the_touches_is_dropped():
     assert hot.kind == cold.kind == "box"
     assert hot.fits["box"].chi2 == pytest.approx(cold.fits["box"].chi2)
     assert hot.probabilities == pytest.approx(cold.probabilities)
+
+
+def test_a_class_settled_on_fewer_touches_is_only_screened(monkeypatch):
+    """A class whose χ² on fewer of the touches already exceeded the best by SETTLED gets one
+    screening fit (its nearest start, QUICK_NFEV evaluations), not a sibling's refit either;
+    the posterior is the full selection's to 1e-6."""
+    obj = objects()["box"]
+    fewer = touches_on(obj, np.random.default_rng(3), n=12)
+    touches = touches_on(obj, np.random.default_rng(3), n=18)
+    before = select_class(fewer)
+    earlier, warm = before.evidence()["chi2"], {"box": (before.fits["box"].theta, before.fits["box"].r0)}
+    full = select_class(touches, warm=warm)  # the box refitted from its warm start: the best so far
+    settled = {k for k, chi2 in earlier.items() if chi2 > full.fits["box"].chi2 + selection.SETTLED}
+    assert settled and "box" not in settled
+    calls: list[tuple[str, int | None]] = []
+
+    def recording(kind, touches, *args, **kw):
+        calls.append((kind, kw.get("max_starts")))
+        return fit_class(kind, touches, *args, **kw)
+
+    monkeypatch.setattr(selection, "fit_class", recording)
+    hot = select_class(touches, warm=warm, earlier=earlier)
+    assert hot.kind == full.kind == "box"
+    for kind in settled:
+        assert [starts for k, starts in calls if k == kind] == [1]
+    assert hot.probabilities == pytest.approx(full.probabilities, abs=1e-6)
+    assert hot.confidence == pytest.approx(full.confidence, abs=1e-6)
