@@ -197,9 +197,10 @@ def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     """When the exploration is over, just before the first check, the ball is pushed 12 mm
-    sideways (an outside push the planner is not told of): the check touches find it off, the
-    refit re-locates it, and the grasp planned on the re-located ball is about its true new
-    place (within 2 mm) and lifts it."""
+    along +x, away from the hand (an outside push the planner is not told of; a push sideways
+    put the ball, moved by teleport, into a finger where the last probe left the hand): the
+    check touches find it off, the refit re-locates it, and the grasp planned on the
+    re-located ball is about its true new place (within 2 mm) and lifts it."""
     from eos_svc.agents.relocate import RelocateAgent
 
     request = PlanRequest(seed=1, deadline_s=3600, world="drake")  # a loaded machine simulates slowly
@@ -210,7 +211,7 @@ def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_
 
     def pushed_then_checked(self: RelocateAgent, board: object, ctx: object) -> object:
         if not pushed:
-            driver.displace_object(np.array([0.0, 0.012, 0.0]))
+            driver.displace_object(np.array([0.012, 0.0, 0.0]))
             pushed.append(driver.object_pose()[:3])
         return check(self, board, ctx)  # type: ignore[arg-type]
 
