@@ -21,7 +21,6 @@ from eos_svc.agents.post_shape import touches_from
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.errors import ValidationError
-from eos_svc.grasp.band import TouchBand
 from eos_svc.grasp.postulate import Postulate, make_object, read_postulate
 from eos_svc.grasp.support import TouchSupport
 from eos_svc.grasp.synthesis import GraspCandidate, GraspSynthesis
@@ -127,12 +126,10 @@ class GraspPointsAgent(GraspAgent):
         an approximate postulate (post_shape's ``shape`` says so) its candidates are ranked by
         the touches' support first (:mod:`eos_svc.grasp.support`)."""
         world = self.world
-        support = band = None
+        support = None
         if shape is not None and shape.get("approximate") and postulate.source == "post_shape":
             touches = touches_from(board, world)
             support = TouchSupport(touches.surface_points, touches.normals)
-            if world.table_height is not None:
-                band = TouchBand.of(touches.surface_points, world.table_height)
         return GraspSynthesis(
             world.hand,
             world.sweeps,
@@ -142,7 +139,6 @@ class GraspPointsAgent(GraspAgent):
             vertical_only=postulate.vertical_only,
             table_height=world.table_height,
             support=support,
-            band=band,
         )
 
     def choose_candidates(self, synthesis: GraspSynthesis, spec: ObjectSpec) -> list[GraspCandidate]:

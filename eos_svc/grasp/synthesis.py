@@ -15,7 +15,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from eos_svc.grasp.band import TouchBand
 from eos_svc.grasp.candidate import GraspCandidate, diameter_angle_deg
 from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
@@ -55,8 +54,7 @@ class GraspSynthesis:
     postulated object, checked and scored by ε at ``friction`` μ. ``vertical_only``: the size is
     known along the vertical only; ``table_height`` (world z, m): a hand touching the table is
     rejected. ``support``: the touches of an approximate postulate, which then rank the candidates
-    first (:mod:`~eos_svc.grasp.support`); ``band``: the heights the touches measured on a table,
-    into which the grip is raised when the centre lies below it (:mod:`~eos_svc.grasp.band`). :attr:`rejections` counts the rejected candidates per
+    first (:mod:`~eos_svc.grasp.support`). :attr:`rejections` counts the rejected candidates per
     reason (in words).
     """
 
@@ -70,7 +68,6 @@ class GraspSynthesis:
         vertical_only: bool = False,
         table_height: float | None = None,
         support: TouchSupport | None = None,
-        band: TouchBand | None = None,
     ) -> None:
         self.hand, self.sweeps, self.params, self.obj = hand, sweeps, params, obj
         self.friction = friction
@@ -81,7 +78,6 @@ class GraspSynthesis:
         self.clearance = HandClearance(hand, sweeps, params, obj, table_height)
         self.rejections: dict[str, int] = {}
         self.support = support
-        self.band = band
 
     def _reject(self, why: str) -> None:
         self.rejections[why] = self.rejections.get(why, 0) + 1
@@ -91,19 +87,7 @@ class GraspSynthesis:
         up; the ``SCORED`` least-rotated collision-free ones about the centre (one for a sphere)
         scored by ε, those within ``EPSILON_TIE`` of the best counted equal (least rotation
         first); with ``support``, the ``SUPPORT_SCORED`` least-rotated, ranked by the touches'
-        support first. None about the centre: the collision-free one closest to it, alone. With
-        a ``band`` above the centre, the grips through the centre raised into it
-        (:meth:`~eos_svc.grasp.band.TouchBand.grip_height`) when there are any."""
-        centre = np.asarray(self.obj.placement.translation, dtype=float)
-        z = None if self.band is None else self.band.grip_height(float(centre[2]))
-        if z is not None:
-            raised = self._candidates_through(np.array([centre[0], centre[1], z]))
-            if raised:
-                return raised
-        return self._candidates_through(centre)
-
-    def _candidates_through(self, centre: np.ndarray) -> list[GraspCandidate]:
-        """:meth:`candidates` with the closing axes through ``centre`` (world, m)."""
+        support first. None about the centre: the collision-free one closest to it, alone."""
         wanted = 1 if isinstance(self.obj, Sphere) else (SCORED if self.support is None else SUPPORT_SCORED)
         simulated: list[GraspCandidate] = []
         kept: list[GraspCandidate] = []
@@ -111,7 +95,7 @@ class GraspSynthesis:
         for label, R in candidate_frames(self.obj, self.vertical_only, self.on_table):
             groups.setdefault(round(palm_turn(R), 6), []).append((label, R))
         for group in (groups[turn] for turn in sorted(groups)):
-            fresh = [c for label, R in group if (c := self._at_best_depth(label, R, centre)) is not None]
+            fresh = [c for label, R in group if (c := self._at_best_depth(label, R)) is not None]
             simulated += fresh
             for cand in sorted((c for c in fresh if c.about_centre), key=lambda c: (-c.angle_deg, c.label)):
                 if self._collision_free(cand):
@@ -177,14 +161,10 @@ class GraspSynthesis:
         inside = np.flatnonzero(np.hypot(sweep.points[:, 1], sweep.points[:, 2]) <= reach)
         return None if len(inside) == 0 else float(sweep.points[int(inside[0]), 0])
 
-    def _at_best_depth(
-        self, label: str, R: np.ndarray, centre: np.ndarray | None = None
-    ) -> GraspCandidate | None:
-        """The candidate of orientation ``R`` through ``centre`` (world, m; the object's centre by
-        default) at the depth, among the base depth + ``DEPTH_OFFSETS`` (then refined), whose
-        predicted contacts lie best about ``centre`` (None when it is rejected)."""
-        if centre is None:
-            centre = np.asarray(self.obj.placement.translation, dtype=float)
+    def _at_best_depth(self, label: str, R: np.ndarray) -> GraspCandidate | None:
+        """The candidate of orientation ``R`` at the depth, among the base depth +
+        ``DEPTH_OFFSETS`` (then refined), whose predicted contacts lie best about the centre
+        (None when it is rejected)."""
         rpy = self.wrist_rpy(R)
         if rpy is None:
             self._reject("wrist rotation out of its limits")
@@ -199,30 +179,24 @@ class GraspSynthesis:
             return None
         best: GraspCandidate | None = None
         for offset in DEPTH_OFFSETS:
-            cand = self._simulate(label, R, rpy, base + offset, extent, centre)
+            cand = self._simulate(label, R, rpy, base + offset, extent)
             if cand is not None and (best is None or cand.angle_deg > best.angle_deg):
                 best = cand
             if best is not None and best.angle_deg >= GOOD_ENOUGH_ANGLE_DEG:
                 return best
         if best is not None:
             for step in (-DEPTH_REFINE, DEPTH_REFINE):
-                cand = self._simulate(label, R, rpy, best.depth + step, extent, centre)
+                cand = self._simulate(label, R, rpy, best.depth + step, extent)
                 if cand is not None and cand.angle_deg > best.angle_deg:
                     best = cand
         return best
 
     def _simulate(
-        self,
-        label: str,
-        R: np.ndarray,
-        rpy: tuple[float, float, float],
-        depth: float,
-        extent: float,
-        centre: np.ndarray,
+        self, label: str, R: np.ndarray, rpy: tuple[float, float, float], depth: float, extent: float
     ) -> GraspCandidate | None:
-        """The candidate of orientation ``R`` at ``depth`` before ``centre`` (world, m): where each
-        fingertip lands closing from open (None when the wrist cannot get there or a fingertip
-        misses)."""
+        """The candidate of orientation ``R`` at ``depth``: where each fingertip lands closing
+        from open (None when the wrist cannot get there or a fingertip misses)."""
+        centre = np.asarray(self.obj.placement.translation, dtype=float)
         wrist = centre - R[:, 0] * depth
         widx = self.hand.wrist_q_index[:3]
         if np.any(wrist < self.hand.lower[widx]) or np.any(wrist > self.hand.upper[widx]):
