@@ -9,17 +9,16 @@ past its contact keeps closing); otherwise 0, and ``CANNOT_ACT`` if chosen (pape
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_left
 from operator import itemgetter
-
-import numpy as np
 
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
-from eos_svc.grasp.landing import SweepLandings, rotated_sweep_gaps
+from eos_svc.grasp.landing import SweepLandings, sweep_landings
 from eos_svc.grasp.postulate import make_object
 from eos_svc.objects import SurfaceObject
 from eos_svc.schema import keys
@@ -27,6 +26,38 @@ from eos_svc.schema.request import ObjectSpec
 
 #: finger states that end a finger's part in the grasp
 DONE_STATES = frozenset({"touching", "missed", "link"})
+
+
+class TargetLandings:
+    """The sweep landings of the fingers the grasp target names, on its postulated object, at the
+    current wrist pose: one plan's finger agents share them, computed once per wrist pose and
+    target in one signed-distance query (the postulated object built once per target)."""
+
+    def __init__(self, world: HandDriver) -> None:
+        self.world = world
+        # the wrist's joint values, as a tuple, from the configuration list
+        self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
+        # (wrist pose, target entry, its postulated object, the landings there)
+        self._memo: tuple[object, object, SurfaceObject | None, dict] = (None, None, None, {})
+
+    def at_wrist(self, target: dict) -> dict[str, SweepLandings]:
+        """Per finger of ``target``'s contacts, its sweep's landings from where the wrist is now
+        (none when the target has no object)."""
+        world = self.world
+        pose = self._wrist_pose(world.q_list())
+        memo_pose, memo_target, obj, landings = self._memo
+        if memo_target is not target:
+            spec = target.get("object")
+            obj = None if spec is None else make_object(ObjectSpec.from_dict(spec))
+        elif memo_pose == pose:
+            return landings
+        landings = {}
+        if obj is not None:
+            radii = {f: world.hand.tip_radius(f) for f in target.get("contacts", {})}
+            translation, rotation = world.palm_views()
+            landings = sweep_landings(obj, world.sweeps, radii, rotation, translation)
+        self._memo = (pose, target, obj, landings)
+        return landings
 
 
 class FingerAgent(GraspAgent):
@@ -37,17 +68,14 @@ class FingerAgent(GraspAgent):
     )
     writes = frozenset({keys.LOCATED, keys.GAP, keys.SEARCH_MOVES, keys.FINGER_STATE, keys.FINGER_ANGLE})
 
-    def __init__(self, finger: str, default: float, world: HandDriver) -> None:
+    def __init__(
+        self, finger: str, default: float, world: HandDriver, landings: TargetLandings | None = None
+    ) -> None:
         super().__init__(finger, (SEARCH, GRASP), default, world)
         self.finger = finger
-        self._tip_radius = world.hand.tip_radius(finger)
-        self._sweep = world.sweeps[finger]
-        self._sweep_angles = self._sweep.angles.tolist()
-        # (target entry, its postulated object); (wrist pose, target, the sweep's landings there)
-        self._object_memo: tuple[object, SurfaceObject | None] = (None, None)
-        self._landings_memo: tuple[object, object, SweepLandings | None] = (None, None, None)
-        # the wrist's joint values, as a tuple, from the configuration list
-        self._wrist_pose = itemgetter(*(int(i) for i in world.hand.wrist_q_index))
+        self._sweep_angles = world.sweeps[finger].angles.tolist()
+        #: the landings shared with the plan's other finger agents (their own when not given)
+        self.landings = landings if landings is not None else TargetLandings(world)
 
     def finger_state(self, board: Board) -> str:
         """This finger's state on the board ("open" before grasping starts)."""
@@ -55,36 +83,19 @@ class FingerAgent(GraspAgent):
 
     def landing_miss(self, board: Board) -> float | None:
         """How far (m) from its chosen contact this finger's tip lands on the postulated object
-        if it closes from where it is now; None when it would not land on it at all. The
-        postulated object is kept per target, the sweep's landings on it while the wrist stays."""
+        if it closes from where it is now; None when it would not land on it at all
+        (:class:`TargetLandings`)."""
         target = board.get(keys.TARGET)
         if target is None or self.finger not in target.get("contacts", {}):
             return None
         world = self.world
-        pose = self._wrist_pose(world.q_list())
-        memo_pose, memo_target, landings = self._landings_memo
-        if memo_pose != pose or memo_target is not target:
-            if self._object_memo[0] is not target:
-                spec = target.get("object")
-                self._object_memo = (
-                    target,
-                    None if spec is None else make_object(ObjectSpec.from_dict(spec)),
-                )
-            obj = self._object_memo[1]
-            landings = None
-            if obj is not None:
-                translation, rotation = world.palm_views()
-                rotated = self._sweep.points @ rotation.T
-                pts, gaps = rotated_sweep_gaps(obj, rotated, self._tip_radius, translation)
-                landings = SweepLandings(obj, self._sweep, pts, gaps)
-            self._landings_memo = (pose, target, landings)
+        landings = self.landings.at_wrist(target).get(self.finger)
         if landings is None:
             return None
         hit = landings.landing(bisect_left(self._sweep_angles, world.finger_angle(self.finger) - 1e-12))
         if hit is None:
             return None
-        chosen = np.asarray(target["contacts"][self.finger]["point"], dtype=float)
-        return float(np.linalg.norm(hit.point - chosen))
+        return math.dist(hit.point.tolist(), target["contacts"][self.finger]["point"])
 
     def in_reach(self, board: Board) -> bool:
         """Whether closing from the current angle would land on this finger's chosen contact —

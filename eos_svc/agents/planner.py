@@ -24,7 +24,7 @@ from eos_svc.agents.base import STAGES
 from eos_svc.agents.end import EndAgent
 from eos_svc.agents.ep1 import EP1Agent
 from eos_svc.agents.ep2 import EP2Agent
-from eos_svc.agents.finger import FingerAgent
+from eos_svc.agents.finger import FingerAgent, TargetLandings
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.memory import GraspMemory
 from eos_svc.agents.plugins.loading import PluginSpec, plugin_agents, plugin_entries, requested_plugins
@@ -141,6 +141,7 @@ def build_agents(
     if isinstance(world, GraspWorld):
         world = KinematicDriver(world)
     fingers = world.hand.finger_names
+    landings = TargetLandings(world)  # the fingers' landings at the wrist's pose, shared
     r = {**finger_ratings(fingers), **DEFAULT_RATINGS, **(ratings or {})}
     recall: list[Agent] = [] if memory is None else [RecallAgent(world, memory)]
     # where a touch may push the object, a check of where it is before the grasp (agents.relocate)
@@ -148,7 +149,7 @@ def build_agents(
         [] if world.object_fixed else [RelocateAgent(r.get("relocate", RELOCATE_RATING), world)]
     )
     return [
-        *(FingerAgent(finger, r[finger], world) for finger in fingers),
+        *(FingerAgent(finger, r[finger], world, landings) for finger in fingers),
         WristAgent(r["wrist"], world),
         EP1Agent(r["ep1"], world, solver=solver),
         EP2Agent(r["ep2"], world),

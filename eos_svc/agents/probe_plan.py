@@ -144,12 +144,12 @@ def face_probes(
     first = bottom if normal[2] < -0.5 else top
     fingers = (first, bottom if first == top else top)
     angles = HOOK_ANGLES if away else (None,)
-    t1, t2 = _tangents(normal)
+    tangents = _tangents(normal) if off_centre else ()
     # from as far out as the object may reach, nearer when the wrist cannot start there
     for fraction in REACH_FRACTIONS:
         reach = max(MIN_REACH, fraction * REACH * float(face["half"]))
         travel = 2.0 * reach + standoff
-        offsets = (sign * OFFSET * t for t in (t1, t2) for sign in (1.0, -1.0)) if off_centre else ()
+        offsets = (sign * OFFSET * t for t in tangents for sign in (1.0, -1.0))
         for offset in (np.zeros(3), *offsets):
             start = centre + offset + normal * (reach + standoff)
             for finger in fingers:

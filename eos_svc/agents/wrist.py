@@ -16,7 +16,7 @@ from eos_svc.agents.base import GRASP, SEARCH, GraspAgent
 from eos_svc.agents.search import search_move, search_rating
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
-from eos_svc.grasp.landing import landing
+from eos_svc.grasp.landing import sweep_landings
 from eos_svc.grasp.postulate import make_object
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
@@ -83,11 +83,11 @@ class WristAgent(GraspAgent):
             return "no postulated object to re-predict the contacts on"
         obj = make_object(ObjectSpec.from_dict(spec))
         palm_translation, palm_rotation = world.palm_views()
+        radii = {f: hand.tip_radius(f) for f in hand.finger_names}
+        found = sweep_landings(obj, world.sweeps, radii, palm_rotation, palm_translation)
         contacts = dict(target.get("contacts", {}))
-        for finger in hand.finger_names:
-            sweep = world.sweeps[finger]
-            start = sweep.index_at(world.finger_angle(finger))
-            hit = landing(obj, sweep, hand.tip_radius(finger), palm_rotation, palm_translation, start)
+        for finger, landings in found.items():
+            hit = landings.landing(world.sweeps[finger].index_at(world.finger_angle(finger)))
             if hit is not None:
                 contacts[finger] = hit.to_dict()
         board.set(keys.TARGET, {**target, "contacts": contacts, "repredicted": True})

@@ -38,23 +38,13 @@ class Landing:
         }
 
 
-def rotated_sweep_gaps(
-    obj: SurfaceObject, rotated: np.ndarray, tip_radius: float | np.ndarray, origin: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
-    """The sweep's fingertip centres in the world (N, 3) and each one's gap to ``obj`` (m), from
-    the sweep's points turned by the palm's rotation R (``sweep.points @ R.T``), the palm's
-    ``origin`` (world, m) and the tip's radius (m; one, or one per point)."""
-    pts = rotated + origin
-    return pts, obj.signed_distances(pts)[0] - tip_radius
-
-
 class SweepLandings:
     """The landings of one sweep on an object, the palm at one pose, from any start sample.
 
     A finger closing from ``start`` lands at the first touching sample at or after
     ``max(0, start − 1)`` unless it touches there already; each landing is found once per
     touching sample. ``pts``, ``gaps``: the sweep's tip centres at this pose (world, m) and their
-    gaps (m), from :func:`rotated_sweep_gaps`.
+    gaps (m): the object's signed distance at each, less the tip's radius.
     """
 
     def __init__(self, obj: SurfaceObject, sweep: FingerSweep, pts: np.ndarray, gaps: np.ndarray) -> None:
@@ -99,38 +89,24 @@ class SweepLandings:
         return self._by_sample[k]
 
 
-def landing(
-    obj: SurfaceObject,
-    sweep: FingerSweep,
-    tip_radius: float,
-    rotation: np.ndarray,
-    origin: np.ndarray,
-    start: int = 0,
-) -> Landing | None:
-    """Where ``sweep``'s fingertip (radius ``tip_radius``) first touches ``obj`` when the finger
-    closes from sample ``start``, the palm at (``rotation``, ``origin``) in the world; None when
-    it never does, or already touches there (see :class:`SweepLandings`)."""
-    pts, gaps = rotated_sweep_gaps(obj, sweep.points @ rotation.T, tip_radius, origin)
-    return SweepLandings(obj, sweep, pts, gaps).landing(start)
-
-
-def hand_landings(
+def sweep_landings(
     obj: SurfaceObject,
     sweeps: Mapping[str, FingerSweep],
     tip_radii: Mapping[str, float],
     rotation: np.ndarray,
     origin: np.ndarray,
-) -> dict[str, Landing | None]:
-    """The :func:`landing` from open of every finger of ``tip_radii``, the palm at (``rotation``,
-    ``origin``), in one signed-distance query (a distance costs mostly per query)."""
+) -> dict[str, SweepLandings]:
+    """The :class:`SweepLandings` of every finger of ``tip_radii`` (its tip's radius, m), the palm
+    at (``rotation``, ``origin``) in the world, in one signed-distance query (a distance costs
+    mostly per query)."""
     names = list(tip_radii)
     sizes = [len(sweeps[f].points) for f in names]
     radii = np.repeat([tip_radii[f] for f in names], sizes)
-    rotated = np.concatenate([sweeps[f].points for f in names]) @ rotation.T
-    stacked, gaps = rotated_sweep_gaps(obj, rotated, radii, origin)
+    stacked = np.concatenate([sweeps[f].points for f in names]) @ rotation.T + origin
+    gaps = obj.signed_distances(stacked)[0] - radii
     ends = np.cumsum(sizes)
-    out: dict[str, Landing | None] = {}
+    out: dict[str, SweepLandings] = {}
     for f, end, size in zip(names, ends.tolist(), sizes, strict=True):
         part = slice(end - size, end)
-        out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part]).landing(0)
+        out[f] = SweepLandings(obj, sweeps[f], stacked[part], gaps[part])
     return out

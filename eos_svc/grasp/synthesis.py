@@ -18,7 +18,7 @@ import numpy as np
 from eos_svc.grasp.candidate import GraspCandidate, diameter_angle_deg
 from eos_svc.grasp.clearance import HandClearance
 from eos_svc.grasp.frames import candidate_frames, palm_turn, rotation_from_rpy, rpy_from_rotation
-from eos_svc.grasp.landing import hand_landings
+from eos_svc.grasp.landing import sweep_landings
 from eos_svc.grasp.quality import grasp_quality
 from eos_svc.grasp.support import TouchSupport
 from eos_svc.grasp.sweeps import FingerSweep
@@ -202,7 +202,8 @@ class GraspSynthesis:
         if np.any(wrist < self.hand.lower[widx]) or np.any(wrist > self.hand.upper[widx]):
             self._reject("wrist position out of its limits")
             return None
-        found = hand_landings(self.obj, self.sweeps, self.tip_radii, R, wrist)
+        swept = sweep_landings(self.obj, self.sweeps, self.tip_radii, R, wrist)
+        found = {f: landings.landing(0) for f, landings in swept.items()}  # closing from open
         landings = {f: hit for f, hit in found.items() if hit is not None}
         if len(landings) < len(found):
             self._reject("a fingertip misses the object")

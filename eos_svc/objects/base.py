@@ -69,9 +69,16 @@ def vector3(field: str, value: object) -> Array:
     return arr
 
 
+def xyz_sum(v: Array) -> Array:
+    """x + y + z over the last axis, as ``v.sum(axis=-1)`` (whose reduction over so short an
+    axis costs ~6x the two additions on a sweep's points)."""
+    out: Array = v[..., 0] + v[..., 1] + v[..., 2]
+    return out
+
+
 def norm(v: Array) -> Array:
-    """Euclidean norm over the last axis."""
-    out: Array = np.sqrt((v * v).sum(axis=-1))
+    """Euclidean norm over the last axis, of length 3."""
+    out: Array = np.sqrt(xyz_sum(v * v))
     return out
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pinocchio as pin
 from numpy.typing import ArrayLike
 
-from eos_svc.objects.base import Array, SurfaceObject, norm, positive3, unit
+from eos_svc.objects.base import Array, SurfaceObject, norm, positive3, unit, xyz_sum
 
 _UP = np.array([0.0, 0.0, 1.0])
 #: Newton iterations at most, and the relative step that ends them
@@ -29,18 +29,17 @@ def closest_points(P: Array, a: Array) -> Array:
     root, so ``t ≥ a_i |p_i| − a_i²``; and ``t ≥ 0`` outside. An inside point whose ``F`` is
     negative already at the pole ``t = −min a_i²`` (on the shortest axis' plane, near the
     centre) has no root: its closest point lies at the pole, off that plane."""
-    a = np.broadcast_to(a, P.shape)
     a2 = a * a
-    amin2 = a2.min(axis=-1)
-    inside = ((P / a) ** 2).sum(axis=-1) < 1.0
-    pole = -amin2 * (1.0 - 1e-12)
-    t = np.maximum((a * np.abs(P) - a2).max(axis=-1), np.where(inside, pole, 0.0))
+    inside = xyz_sum((P / a) ** 2) < 1.0
+    pole = -a2.min(axis=-1) * (1.0 - 1e-12)
+    low = a * np.abs(P) - a2  # each term's bound on t, the greatest of the three below
+    t = np.maximum(np.maximum(np.maximum(low[..., 0], low[..., 1]), low[..., 2]), np.where(inside, pole, 0.0))
     ap2 = (a * P) ** 2
     for _ in range(ITERATIONS):
         inv = 1.0 / (t[..., None] + a2)
         terms = ap2 * inv * inv  # (a_i p_i / (t + a_i²))²
-        total = terms.sum(axis=-1)  # F + 1 = h⁻²
-        slope = (terms * inv).sum(axis=-1)  # h' h⁻³
+        total = xyz_sum(terms)  # F + 1 = h⁻²
+        slope = xyz_sum(terms * inv)  # h' h⁻³
         step = total * (np.sqrt(total) - 1.0) / np.maximum(slope, 1e-300)  # (1 − h) / h'
         t_next = np.maximum(t + step, pole)
         # converged where t no longer moves (a point held at the pole moves no more either)
@@ -51,8 +50,8 @@ def closest_points(P: Array, a: Array) -> Array:
     S = a2 * P / (t[..., None] + a2)
     at_pole = inside & (t <= pole)
     if at_pole.any():
-        S = np.where(at_pole[..., None], _pole_points(P, a), S)
-    out: Array = S / np.sqrt(((S / a) ** 2).sum(axis=-1))[..., None]  # exactly on the surface
+        S = np.where(at_pole[..., None], _pole_points(P, np.broadcast_to(a, P.shape)), S)
+    out: Array = S / np.sqrt(xyz_sum((S / a) ** 2))[..., None]  # exactly on the surface
     return out
 
 
@@ -65,7 +64,7 @@ def _pole_points(P: Array, a: Array) -> Array:
     k = np.argmin(a, axis=-1)[..., None]
     off = a2 - np.take_along_axis(a2, k, axis=-1)
     s_off = np.where(off > 0.0, a2 * P / np.where(off > 0.0, off, 1.0), 0.0)
-    rest = 1.0 - np.where(off > 0.0, (s_off / a) ** 2, 0.0).sum(axis=-1)
+    rest = 1.0 - xyz_sum(np.where(off > 0.0, (s_off / a) ** 2, 0.0))
     p_k = np.take_along_axis(P, k, axis=-1)[..., 0]
     a_k = np.take_along_axis(a, k, axis=-1)[..., 0]
     s_k = np.where(p_k < 0.0, -1.0, 1.0) * a_k * np.sqrt(np.maximum(rest, 0.0))
@@ -103,13 +102,12 @@ class Ellipsoid(SurfaceObject):
         S = closest_points(P, half)
         v = P - S
         dist = norm(v)
-        sign = np.where(((P / half) ** 2).sum(axis=-1) < 1.0, -1.0, 1.0)
-        normal = S / half**2
-        g = np.where(
-            (dist > 1e-12)[..., None],
-            sign[..., None] * v / np.maximum(dist, 1e-12)[..., None],
-            unit(normal, norm(normal), _UP),
-        )
+        sign = np.where(xyz_sum((P / half) ** 2) < 1.0, -1.0, 1.0)
+        g = sign[..., None] * v / np.maximum(dist, 1e-12)[..., None]
+        on = dist <= 1e-12  # on the surface: the normal there (made only where needed)
+        if on.any():
+            normal = S / half**2
+            g = np.where(on[..., None], unit(normal, norm(normal), _UP), g)
         return sign * dist, g
 
     @property

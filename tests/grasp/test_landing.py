@@ -9,7 +9,7 @@ import pytest
 
 from eos_svc.agents import ObjectSpec
 from eos_svc.grasp.frames import rotation_from_rpy
-from eos_svc.grasp.landing import SweepLandings, hand_landings, landing, rotated_sweep_gaps
+from eos_svc.grasp.landing import SweepLandings, sweep_landings
 from tests.grasp.scenes import HERE, synthesis
 
 
@@ -20,7 +20,9 @@ def test_sphere_landing_matches_the_closed_form():
     hand = s.hand
     finger = hand.description.opposing_finger
     wrist = np.asarray(HERE) - np.array([0.125, 0.0, 0.0])
-    hit = landing(s.obj, s.sweeps[finger], hand.tip_radius(finger), np.eye(3), wrist)
+    hit = sweep_landings(s.obj, s.sweeps, {finger: hand.tip_radius(finger)}, np.eye(3), wrist)[
+        finger
+    ].landing(0)
     assert hit is not None
     q = hand.neutral()
     q[hand.wrist_q_index[:3]] = wrist
@@ -46,15 +48,17 @@ def test_wrist_angles_outside_the_joint_limits_are_refused():
     ids=lambda spec: spec.shape,
 )
 def test_the_hands_landings_in_one_query_are_each_fingers_landing(spec):
-    # hand_landings stacks the three sweeps into one distance query: the same landings as
-    # landing() finger by finger (the ellipsoid's Newton batch may iterate once more: 1e-12 m)
+    # sweep_landings stacks the three sweeps into one distance query: the same landings as
+    # finger by finger (the ellipsoid's Newton batch may iterate once more: 1e-12 m)
     s = synthesis(spec)
     R = rotation_from_rpy(0.2, -0.1, 0.3)
     wrist = np.asarray(HERE) - R[:, 0] * 0.12
-    together = hand_landings(s.obj, s.sweeps, s.tip_radii, R, wrist)
+    together = {
+        f: found.landing(0) for f, found in sweep_landings(s.obj, s.sweeps, s.tip_radii, R, wrist).items()
+    }
     assert tuple(together) == tuple(s.hand.finger_names)
     for f, hit in together.items():
-        alone = landing(s.obj, s.sweeps[f], s.tip_radii[f], R, wrist)
+        alone = sweep_landings(s.obj, s.sweeps, {f: s.tip_radii[f]}, R, wrist)[f].landing(0)
         assert (hit is None) == (alone is None)
         if hit is not None:
             assert hit.index == alone.index
@@ -71,8 +75,8 @@ def test_a_finger_lands_from_any_start_before_its_touch_and_not_after():
     finger = s.opposing
     sweep, r = s.sweeps[finger], s.hand.tip_radius(finger)
     wrist = np.asarray(HERE) - np.array([0.125, 0.0, 0.0])
-    pts, gaps = rotated_sweep_gaps(s.obj, sweep.points, r, wrist)
-    landings = SweepLandings(s.obj, sweep, pts, gaps)
+    landings = sweep_landings(s.obj, s.sweeps, {finger: r}, np.eye(3), wrist)[finger]
+    pts, gaps = landings.pts, landings.gaps
     first = landings.landing(0)
     assert first is not None and gaps[first.index] <= 0.0 < gaps[first.index - 1]
     for start in range(first.index + 1):

@@ -285,7 +285,7 @@ def test_grasp_holds_on_a_postulate_a_little_off(monkeypatch, shape, size, rpy):
 
 
 def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
-    from eos_svc.agents.finger import FingerAgent
+    from eos_svc.agents.finger import FingerAgent, TargetLandings
     from eos_svc.agents.wrist import WristAgent
 
     world = build_world(PlanRequest())
@@ -296,16 +296,20 @@ def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
     assert GraspPointsAgent(0.6, driver, oracle=spec).act(board, ctx).outcome is Outcome.STAGE_COMPLETE
     target = board[keys.TARGET]
     fingers = [FingerAgent(f, 0.5, driver) for f in world.hand.finger_names]
+    shared = TargetLandings(driver)  # as a plan's fingers share them: the same answers
+    sharing = [FingerAgent(f, 0.5, driver, shared) for f in world.hand.finger_names]
     # the hand stands 12 mm short of its grasp position (as if a contact had stopped it)
     q = world.state.q
     q[world.hand.wrist_q_index[:3]] = np.asarray(target["wrist"]) - 0.012 * np.asarray(target["approach"])
     world.set_q(q)
     assert not any(f.in_reach(board) for f in fingers)  # from here every tip lands elsewhere
+    assert [f.landing_miss(board) for f in sharing] == [f.landing_miss(board) for f in fingers]
     words = WristAgent(0.9, driver).repredict(board, target)
     assert words == "contacts re-predicted from here"
     new = board[keys.TARGET]
     assert new["repredicted"] and new["contacts"] != target["contacts"]
     assert all(f.in_reach(board) and f.landing_miss(board) < 1e-5 for f in fingers)  # µm rounding
+    assert [f.landing_miss(board) for f in sharing] == [f.landing_miss(board) for f in fingers]
 
 
 def test_palm_frame_is_a_rotation_approaching_along_x_closing_along_z():

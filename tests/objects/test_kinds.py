@@ -192,3 +192,16 @@ def test_a_bad_json_form_names_the_field(data, field):
 def test_size_errors_are_object_size_errors():
     with pytest.raises(ObjectSizeError):
         object_from_dict({"shape": "sphere", "radius": 0.0})
+
+
+def test_the_ellipsoid_s_gradient_on_its_surface_is_its_outward_normal():
+    radii = np.array([0.025, 0.03, 0.04])
+    u = np.random.default_rng(2).normal(size=(50, 3))
+    S = u / np.linalg.norm(u / radii, axis=1, keepdims=True)  # Σ (s_i / a_i)² = 1
+    P = np.concatenate([S, 1.5 * S])  # on the surface, and off it (the gradient along p − s there)
+    d, g = Ellipsoid.local_distance(P[None], radii[None, None])
+    n = S / radii**2
+    np.testing.assert_allclose(g[0, :50], n / np.linalg.norm(n, axis=1, keepdims=True), atol=1e-9)
+    np.testing.assert_allclose(d[0, :50], 0.0, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(g[0, 50:], axis=1), 1.0, atol=1e-12)
+    assert np.all(d[0, 50:] > 0.0)
