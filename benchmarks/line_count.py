@@ -39,6 +39,7 @@ NEW_FEATURES: dict[str, str] = {
     "agents/regrip.py": "mesh objects: letting go of a grip the fingertips feel open, re-gripping",
     "grasp/support.py": "mesh objects: grasp candidates ranked by the touches that support them",
     "shape/span.py": "mesh objects: a fit reaching far past its touches explains nothing",
+    "experiments/resting_pose.py": "the Drake world: a random draw turned to poses that rest on a table",
     "experiments/pybullet_objects.py": "pybullet test objects (meshes)",
     "experiments/plugins.py": "eos experiment plugins",
     "cli/batch.py": "eos batch",
