@@ -195,7 +195,8 @@ def test_connecting_to_nobody_and_bad_names(hub) -> None:
 
 def test_a_remote_agent_frozen_mid_plan(hub, remote_process) -> None:
     session, _ = hub
-    proxy = RemoteAgent.connect(session, "remote_post_shape", connect_timeout_s=5.0, timeout_s=0.5)
+    # 1.5 s: a live agent on a loaded 2-core machine answers well within it (0.5 s was not always)
+    proxy = RemoteAgent.connect(session, "remote_post_shape", connect_timeout_s=5.0, timeout_s=1.5)
     frozen: dict[str, int] = {}
 
     def freeze_after_its_first_action(record) -> None:
@@ -213,7 +214,7 @@ def test_a_remote_agent_frozen_mid_plan(hub, remote_process) -> None:
     info = [r for r in result.trace if r.seq > frozen["seq"] and r.stage == "information"]
     after = [r.rating_of("remote_post_shape").skipped for r in info]
     after = [s for s in after if s is not None]
-    assert after[:3] == ["unavailable: late: no rate reply within 500 ms"] * 3
+    assert after[:3] == ["unavailable: late: no rate reply within 1500 ms"] * 3
     assert after[3:] and all("late in 3 cycles in a row" in s for s in after[3:])
     proxy.close()
 
