@@ -10,8 +10,10 @@ the confidence P(class right and size within tolerance); below 60 %, or not prec
 leaves its ``candidates`` and ``open_faces``. When **no class explains the contacts** after
 EP2's last round (:data:`OUT_OF_CLASS`, or the best reaches far past them:
 :mod:`eos_svc.shape.span`): their convex hull (:mod:`eos_svc.shape.hull`),
-``approximate``. The postulate's fields: :class:`~eos_svc.schema.board_entries.ShapeEntry`;
-docs/planner.md has the detail.
+``approximate``. A fit still below 60 % after EP2's last round is planned on as it is, flagged
+``approximate`` too (nothing will raise its confidence; the plan must not stall on it). The
+postulate's fields: :class:`~eos_svc.schema.board_entries.ShapeEntry`; docs/planner.md has the
+detail.
 
 Opportunistic sub-rating: 1 right after EP1 or EP2 wrote something new, else 0.
 """
@@ -192,13 +194,16 @@ class PostShapeAgent(GraspAgent):
             or tolerance_probability(fit, touches, tolerance=PRECISION) >= threshold
         )
         trusted = post.confidence >= threshold and precise
+        # after EP2's last round nothing will raise the confidence: the best fit is planned on as
+        # it is, approximate (as the convex hull is), rather than the plan stalling on it
+        accepted = ep2_done and not trusted and fit is not None
         shape: dict[str, Any] = {
             "class": post.kind,
             "confidence": round(post.confidence, 6),
             "grasp_radius": None,
             "diameter": None,
             "centre": None,
-            "needs": None if trusted else "surface",
+            "needs": None if trusted or accepted else "surface",
             "object": post.object(),
             "pose_known": fit is not None,
             "evidence": {
@@ -209,6 +214,8 @@ class PostShapeAgent(GraspAgent):
             "bounds": None,
             "open_faces": [],
         }
+        if accepted:
+            shape["approximate"] = True
         if fit is not None:
             if not trusted:  # what EP2 should feel next: the faces no touch bounds
                 shape["open_faces"] = [face.to_dict() for face in open_faces(fit, touches)]
@@ -218,6 +225,8 @@ class PostShapeAgent(GraspAgent):
         self._write(board, curvature, shape)
         rivals = ", ".join(f"{k} {p:.0%}" for k, p in list(shape["evidence"]["classes"].items())[:3])
         ask = "" if trusted else "; asks EP2 for more of the surface"
+        if accepted:
+            ask = f"; EP2 has no rounds left: planned on as it is, approximate (below {threshold:.0%})"
         if post.confidence >= threshold and not precise:
             ask += f" (its size not yet known to {PRECISION:.0%})"
         size = "" if fit is None else f", half-height {shape['grasp_radius'] * 1000:.2f} mm"
