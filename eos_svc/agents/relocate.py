@@ -8,8 +8,9 @@ fixed, so its plans do not change). It never reads the true object: it touches i
 
 Once post_shape's postulate is confident (grasp_points would plan on it) and before there is a
 grasp target, it makes **check touches**: guarded probes onto the surface points the postulate
-predicts — the front along +x and the top along −z, each from :data:`~eos_svc.agents.ep2.STANDOFF`
-outside the postulated bounds. A touch farther than :data:`RELOCATE_AFTER` (2 mm) from the
+predicts — the front along +x, a side along +y and the top along −z (one per axis: a ball
+moved 12 mm across the front probe's line moves its touch by 1.8 mm only), each from
+:data:`~eos_svc.agents.ep2.STANDOFF` outside the postulated bounds. A touch farther than :data:`RELOCATE_AFTER` (2 mm) from the
 predicted surface, or a miss, means the object moved: it then **re-locates** it — probes of
 both sides along ±y and of the front off its centre, then the postulated object's pose refitted to
 the fresh touches, its shape kept (:func:`~eos_svc.shape.pose_refit.refit_pose`) — and writes
@@ -42,6 +43,9 @@ RELOCATE_AFTER = 0.002
 MAX_ROUNDS = 3
 #: the front's off-centre relocation probes, as fractions of the half height
 FRONT_OFFSETS = (0.5, -0.5)
+#: where along x a side probe touches, as a fraction of the half length from the middle (toward
+#: the hand: the finger's links trail the tip, clear of the object)
+SIDE_DX = -0.25
 
 
 class RelocateAgent(GraspAgent):
@@ -125,11 +129,15 @@ class RelocateAgent(GraspAgent):
         return obj.centre, np.maximum(obj.half_extents(), 0.005)
 
     def check_probes(self, spec: ObjectSpec) -> list[Probe]:
-        """The check probes: the front's middle along +x and the top's along −z."""
+        """The check probes: the front's middle along +x, a side's along ±y (the one from −y,
+        else, where another part of the hand ends it, the one from +y: alternatives of one
+        group) and the top's along −z — one per axis, so a move in any direction shows (a round
+        object moved across a probe's line barely changes where that probe touches it)."""
         world = self.world
         centre, half = self._estimate(spec)
         return [
             front_probe(world, centre, half, 0.0, 0.0, STANDOFF),
+            *(side_probe(world, centre, half, sign, SIDE_DX * half[0], STANDOFF, group=0) for sign in (1, -1)),
             top_probe(world, centre, half, 0.0, 0.0, STANDOFF),
         ]
 
@@ -137,20 +145,26 @@ class RelocateAgent(GraspAgent):
         """The probes added to re-locate: both sides along ±y, the front off its middle."""
         world = self.world
         centre, half = self._estimate(spec)
-        sides = [side_probe(world, centre, half, sign, -0.25 * half[0], STANDOFF) for sign in (1, -1)]
+        sides = [side_probe(world, centre, half, sign, SIDE_DX * half[0], STANDOFF) for sign in (1, -1)]
         fronts = [front_probe(world, centre, half, 0.0, f * half[2], STANDOFF) for f in FRONT_OFFSETS]
         return sides + fronts
 
     def _probe(self, probes: list[Probe]) -> list[tuple[np.ndarray, np.ndarray, float] | None]:
-        """Each probe's touch (tip centre, sensed normal, tip radius), None where it missed."""
+        """Each probe's touch (tip centre, sensed normal, tip radius), None where it missed; the
+        probes of one group (``group`` ≥ 0, consecutive) are alternatives: one entry, the first
+        that touches (the rest not made), None when none does."""
         out: list[tuple[np.ndarray, np.ndarray, float] | None] = []
-        for p in probes:
+        touched_groups: set[int] = set()
+        for k, p in enumerate(probes):
+            if p.group >= 0 and p.group in touched_groups:
+                continue
             outcome = self.world.guarded_probe(p.finger, p.start, p.direction, p.travel, p.angle, p.yaw)
             if outcome.event == "touched" and outcome.centre is not None and outcome.normal is not None:
                 radius = self.world.hand.tip_radius(p.finger)
                 out.append((np.asarray(outcome.centre), np.asarray(outcome.normal), radius))
-            else:
-                out.append(None)
+                touched_groups.add(p.group)
+            elif p.group < 0 or all(q.group != p.group for q in probes[k + 1 :]):
+                out.append(None)  # a miss, or the group's last alternative missed too
         return out
 
     @staticmethod

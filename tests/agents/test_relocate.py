@@ -55,7 +55,7 @@ def test_a_postulate_where_the_object_is_is_checked_and_kept() -> None:
     assert len(said) == 1 and "where it was postulated" in said[0]
     assert board.get(keys.SHAPE)["located"]["moved"] is False
     assert board.get(keys.SHAPE)["object"] == BOX.to_dict()  # unchanged
-    assert driver.probes == 2  # the two check touches
+    assert driver.probes == 4  # front, the side from −y (ended by a link on the turned box), from +y, top
 
 
 def test_a_postulate_off_by_9_mm_and_10_degrees_is_relocated_onto_the_object() -> None:
@@ -73,3 +73,20 @@ def test_a_postulate_off_by_9_mm_and_10_degrees_is_relocated_onto_the_object() -
     assert np.linalg.norm(found.centre - np.asarray(BOX.position)) < 1e-3
     yaw = np.arctan2(found.rotation[1, 0], found.rotation[0, 0])
     assert abs(np.degrees(yaw) - 11.459) < 2.0  # BOX's 0.2 rad
+
+
+def test_a_sphere_postulated_12_mm_sideways_is_relocated_onto_it() -> None:
+    """A ball believed 12 mm to −y of where it is: the front and top check probes at the
+    postulate's middle pass 12 mm beside the ball's and touch within 2 mm of the prediction
+    (√(0.04² − 0.012²) ≈ 38.2 mm from its centre, not 40); the side check touch sees the move,
+    the refit puts the postulate on the ball (centre within 1 mm), and the next check agrees."""
+    ball = ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.02, -0.015))
+    believed = moved_spec(ball, np.array([0.0, -0.012, 0.0]), np.eye(3))
+    driver = KinematicDriver(build_world(PlanRequest(obj=ball, seed=1)))
+    board = Board({keys.SHAPE: postulate(believed)})
+    said = check_until_located(RelocateAgent(0.65, driver), board)
+    assert "re-located" in said[0] and "where it was postulated" in said[-1]
+    shape = board.get(keys.SHAPE)
+    assert shape["located"]["moved"] is False and shape["relocations"] >= 1
+    found = make_object(ObjectSpec.from_dict(shape["object"]))
+    assert np.linalg.norm(found.centre - np.asarray(ball.position)) < 1e-3
