@@ -137,7 +137,10 @@ class RelocateAgent(GraspAgent):
         centre, half = self._estimate(spec)
         return [
             front_probe(world, centre, half, 0.0, 0.0, STANDOFF),
-            *(side_probe(world, centre, half, sign, SIDE_DX * half[0], STANDOFF, group=0) for sign in (1, -1)),
+            *(
+                side_probe(world, centre, half, sign, SIDE_DX * half[0], STANDOFF, group=0)
+                for sign in (1, -1)
+            ),
             top_probe(world, centre, half, 0.0, 0.0, STANDOFF),
         ]
 
