@@ -8,15 +8,16 @@ fixed, so its plans do not change). It never reads the true object: it touches i
 
 Once post_shape's postulate is confident (grasp_points would plan on it) and before there is a
 grasp target, it makes **check touches**: guarded probes onto the surface points the postulate
-predicts — the front along +x, a side along +y and the top along −z (one per axis: a ball
+predicts — the front along +x, a side along ±y and the top along −z (one per axis: a ball
 moved 12 mm across the front probe's line moves its touch by 1.8 mm only), each from
-:data:`~eos_svc.agents.ep2.STANDOFF` outside the postulated bounds. A touch farther than :data:`RELOCATE_AFTER` (2 mm) from the
-predicted surface, or a miss, means the object moved: it then **re-locates** it — probes of
-both sides along ±y and of the front off its centre, then the postulated object's pose refitted to
-the fresh touches, its shape kept (:func:`~eos_svc.shape.pose_refit.refit_pose`) — and writes
-the re-located postulate (``object``, ``centre``, ``bounds``) for grasp_points to plan on. The
-next check verifies the refit; after :data:`MAX_ROUNDS` checks the plan goes on with the last
-pose, saying so. The postulate's ``located`` entry records what was found.
+:data:`~eos_svc.agents.ep2.STANDOFF` outside the postulated bounds. A touch farther than
+:data:`RELOCATE_AFTER` (2 mm) from the predicted surface, or a miss, means the object moved: it
+then **re-locates** it — probes of both sides along ±y and of the front off its centre, then
+the postulated object's pose refitted to the fresh touches, its shape kept
+(:func:`~eos_svc.shape.pose_refit.refit_pose`) — and writes the re-located postulate
+(``object``, ``centre``, ``bounds``) for grasp_points to plan on. The next check verifies the
+refit; after :data:`MAX_ROUNDS` checks the plan goes on with the last pose, saying so. The
+postulate's ``located`` entry records what was found.
 
 Opportunistic sub-rating: 1 while a confident postulate has no ``located`` verdict and no grasp
 target exists (ahead of grasp_points: default 0.65 against its 0.6); 0 otherwise.

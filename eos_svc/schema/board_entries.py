@@ -91,9 +91,9 @@ sized), ``centre`` (world, m), ``confidence`` in [0, 1], the top's ``principal_c
 (1/m) and ``curvature_radius`` (m, ``None`` when flat), ``needs`` (what post_shape asks for
 next, or ``None``); optional: ``object`` (request form), ``pose_known``, ``evidence``,
 ``bounds`` ([lo, hi], m), ``open_faces`` (:mod:`eos_svc.shape.open_faces`), ``candidates``
-(:mod:`eos_svc.shape.probe_information`), ``approximate`` (the touches' convex hull, or a fit below the threshold after EP2's last round:
-planned on as it is); where
-the object can move, ``located`` and ``relocations`` (:mod:`eos_svc.agents.relocate`).
+(:mod:`eos_svc.shape.probe_information`), ``approximate`` (the touches' convex hull, or a fit
+below the threshold after EP2's last round: planned on as it is); where the object can move,
+``located`` and ``relocations`` (:mod:`eos_svc.agents.relocate`).
 """
 
 

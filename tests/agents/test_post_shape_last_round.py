@@ -105,4 +105,4 @@ def test_a_fit_below_the_threshold_after_the_last_round_is_planned_on_approximat
     assert shape["needs"] is None and shape["approximate"] is True
     assert "planned on as it is" in result.detail
     found = make_object(ObjectSpec.from_dict(shape["object"]))
-    assert np.linalg.norm(found.centre - (np.asarray(CAPSULE.position) + [0.00015, 0.0, 0.0])) < 1e-3
+    assert np.linalg.norm(found.centre - np.add(CAPSULE.position, [0.00015, 0.0, 0.0])) < 1e-3
