@@ -193,14 +193,17 @@ def test_only_a_world_whose_object_can_move_checks_where_it_is() -> None:
 
 
 @pytest.mark.slow
+@pytest.mark.parametrize("push", [(0.012, 0.0, 0.0), (0.0, -0.012, 0.0)], ids=["along +x", "sideways -y"])
 def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_it_went(
-    monkeypatch: pytest.MonkeyPatch,
+    monkeypatch: pytest.MonkeyPatch, push: tuple[float, float, float]
 ) -> None:
     """When the exploration is over, just before the first check, the ball is pushed 12 mm
-    along +x, away from the hand (an outside push the planner is not told of; a push sideways
-    put the ball, moved by teleport, into a finger where the last probe left the hand): the
-    check touches find it off, the refit re-locates it, and the grasp planned on the
-    re-located ball is about its true new place (within 2 mm) and lifts it."""
+    along +x, away from the hand, or sideways along −y (an outside push the planner is not told
+    of; a push along +y put the ball, moved by teleport, into a finger where the last probe left
+    the hand): the check touches find it off (sideways: the side check touch; the front and top
+    ones, 12 mm beside the ball's middle, land within 2 mm of where they would on the postulated
+    ball), the refit re-locates it, and the grasp planned on the re-located ball is about its
+    true new place (within 2 mm) and lifts it."""
     from eos_svc.agents.relocate import RelocateAgent
 
     request = PlanRequest(seed=1, deadline_s=3600, world="drake")  # a loaded machine simulates slowly
@@ -211,7 +214,7 @@ def test_an_object_pushed_during_the_exploration_is_relocated_and_grasped_where_
 
     def pushed_then_checked(self: RelocateAgent, board: object, ctx: object) -> object:
         if not pushed:
-            driver.displace_object(np.array([0.012, 0.0, 0.0]))
+            driver.displace_object(np.array(push))
             pushed.append(driver.object_pose()[:3])
         return check(self, board, ctx)  # type: ignore[arg-type]
 
