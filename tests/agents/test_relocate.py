@@ -15,6 +15,7 @@ from eos_svc.agents.relocate import RelocateAgent
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.grasp.postulate import make_object
+from eos_svc.objects import SurfaceObject
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.shape.pose_refit import moved_spec
@@ -58,18 +59,24 @@ def test_a_postulate_where_the_object_is_is_checked_and_kept() -> None:
     assert driver.probes == 4  # front, the side from −y (ended by a link on the turned box), from +y, top
 
 
-def test_a_postulate_off_by_9_mm_and_10_degrees_is_relocated_onto_the_object() -> None:
-    """The postulate believes the box 9 mm to −y and turned 10° from where it is: the check
-    touches disagree, the refit moves the postulate onto the box (centre within 1 mm, its yaw
-    within 2°), and the next check agrees."""
-    believed = moved_spec(BOX, np.array([0.0, -0.009, 0.0]), pin.rpy.rpyToMatrix(0.0, 0.0, np.radians(10)))
-    driver = KinematicDriver(build_world(PlanRequest(obj=BOX, seed=1)))
+def relocated(truth: ObjectSpec, believed: ObjectSpec) -> SurfaceObject:
+    """The object relocate ends believing when the postulate says ``believed`` and the world holds
+    ``truth``: its checks must first disagree, then agree after the refit."""
+    driver = KinematicDriver(build_world(PlanRequest(obj=truth, seed=1)))
     board = Board({keys.SHAPE: postulate(believed)})
     said = check_until_located(RelocateAgent(0.65, driver), board)
     assert "re-located" in said[0] and "where it was postulated" in said[-1]
     shape = board.get(keys.SHAPE)
     assert shape["located"]["moved"] is False and shape["relocations"] >= 1
-    found = make_object(ObjectSpec.from_dict(shape["object"]))
+    return make_object(ObjectSpec.from_dict(shape["object"]))
+
+
+def test_a_postulate_off_by_9_mm_and_10_degrees_is_relocated_onto_the_object() -> None:
+    """The postulate believes the box 9 mm to −y and turned 10° from where it is: the check
+    touches disagree, the refit moves the postulate onto the box (centre within 1 mm, its yaw
+    within 2°), and the next check agrees."""
+    believed = moved_spec(BOX, np.array([0.0, -0.009, 0.0]), pin.rpy.rpyToMatrix(0.0, 0.0, np.radians(10)))
+    found = relocated(BOX, believed)
     assert np.linalg.norm(found.centre - np.asarray(BOX.position)) < 1e-3
     yaw = np.arctan2(found.rotation[1, 0], found.rotation[0, 0])
     assert abs(np.degrees(yaw) - 11.459) < 2.0  # BOX's 0.2 rad
@@ -82,11 +89,5 @@ def test_a_sphere_postulated_12_mm_sideways_is_relocated_onto_it() -> None:
     the refit puts the postulate on the ball (centre within 1 mm), and the next check agrees."""
     ball = ObjectSpec("sphere", {"radius": 0.03}, (0.21, 0.02, -0.015))
     believed = moved_spec(ball, np.array([0.0, -0.012, 0.0]), np.eye(3))
-    driver = KinematicDriver(build_world(PlanRequest(obj=ball, seed=1)))
-    board = Board({keys.SHAPE: postulate(believed)})
-    said = check_until_located(RelocateAgent(0.65, driver), board)
-    assert "re-located" in said[0] and "where it was postulated" in said[-1]
-    shape = board.get(keys.SHAPE)
-    assert shape["located"]["moved"] is False and shape["relocations"] >= 1
-    found = make_object(ObjectSpec.from_dict(shape["object"]))
+    found = relocated(ball, believed)
     assert np.linalg.norm(found.centre - np.asarray(ball.position)) < 1e-3
