@@ -174,14 +174,11 @@ class PostShapeAgent(GraspAgent):
         warm = {c.kind: (c.theta, c.r0) for c in map(Candidate.from_dict, previous.get("candidates", []))}
         post = select_class(touches, warm=warm, earlier=previous.get("evidence", {}).get("chi2"))
         ep2_done = int(board.get(keys.EP2_RUNS, 0)) >= EP2_ROUNDS  # the surface is all EP2 will feel
-        if (
-            ep2_done
-            and post.best is not None
-            and (
-                fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
-                or not within_span(post.best.geometry, touches)
-            )
-        ):
+        out_of_class = post.best is not None and (
+            fit_probability(post.best, 3 * touches.count) < OUT_OF_CLASS
+            or not within_span(post.best.geometry, touches)
+        )
+        if ep2_done and out_of_class:
             hull = hull_postulate(touches, self.world.table_height)
             if hull is not None:
                 return self._from_hull(board, curvature, touches, post.kind, hull)
@@ -196,7 +193,8 @@ class PostShapeAgent(GraspAgent):
         trusted = post.confidence >= threshold and precise
         # after EP2's last round nothing will raise the confidence: the best fit is planned on as
         # it is, approximate (as the convex hull is), rather than the plan stalling on it
-        accepted = ep2_done and not trusted and fit is not None
+        # (not a fit that explains nothing, when the touches make no hull)
+        accepted = ep2_done and not trusted and fit is not None and not out_of_class
         shape: dict[str, Any] = {
             "class": post.kind,
             "confidence": round(post.confidence, 6),

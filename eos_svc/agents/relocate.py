@@ -156,9 +156,11 @@ class RelocateAgent(GraspAgent):
     def _probe(self, probes: list[Probe]) -> list[tuple[np.ndarray, np.ndarray, float] | None]:
         """Each probe's touch (tip centre, sensed normal, tip radius), None where it missed; the
         probes of one group (``group`` ≥ 0, consecutive) are alternatives: one entry, the first
-        that touches (the rest not made), None when none does."""
+        that touches (the rest not made), None when one missed and none touched. A probe blocked
+        (another part of the hand first, or no clear start) says nothing of the object: no entry."""
         out: list[tuple[np.ndarray, np.ndarray, float] | None] = []
         touched_groups: set[int] = set()
+        missed_groups: set[int] = set()
         for k, p in enumerate(probes):
             if p.group >= 0 and p.group in touched_groups:
                 continue
@@ -167,8 +169,12 @@ class RelocateAgent(GraspAgent):
                 radius = self.world.hand.tip_radius(p.finger)
                 out.append((np.asarray(outcome.centre), np.asarray(outcome.normal), radius))
                 touched_groups.add(p.group)
-            elif p.group < 0 or all(q.group != p.group for q in probes[k + 1 :]):
-                out.append(None)  # a miss, or the group's last alternative missed too
+                continue
+            if outcome.event == "missed":
+                missed_groups.add(p.group)
+            last = p.group < 0 or all(q.group != p.group for q in probes[k + 1 :])
+            if last and (outcome.event == "missed" or (p.group >= 0 and p.group in missed_groups)):
+                out.append(None)  # a miss, or the group's alternatives blocked or missed, one missed
         return out
 
     @staticmethod

@@ -419,8 +419,8 @@ class DrakeDriver(KinematicDriver):
     # --- the referee ------------------------------------------------------------------------------
     def judge_grip(self, friction: float) -> dict[str, Any]:
         """The grip squeezed (a balanced squeeze, :mod:`eos_svc.drivers.balanced_squeeze`; where
-        a fingertip does not touch, every finger joint 0.1 rad further closed), its contacts and
-        quality where the object now is, then the rest of the lift test: good only if held."""
+        a fingertip does not touch, every finger joint 0.1 rad further after its light close), its
+        contacts and quality where the object now is, then the lift test: good only if held."""
         moved = self._explored = self.object_moved()  # before the grip and the lift move it
         self._motion = "squeeze"
         world = self._world

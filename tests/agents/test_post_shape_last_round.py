@@ -33,8 +33,8 @@ NOISE = 5e-5  #: the touches' noise (standard deviation per axis), m
 
 def surface_touches(spec: ObjectSpec, count: int, shift: np.ndarray, seed: int) -> list[dict]:
     """Touches (tip centres one tip radius off the surface, outward normals) on the upper,
-    front and side surfaces of ``spec``'s object moved by ``shift`` (m), the 0.2 mm noise of
-    the default sensor on the centres."""
+    front and side surfaces of ``spec``'s object moved by ``shift`` (m), 0.05 mm of noise on
+    the centres."""
     obj = make_object(spec)
     rng = np.random.default_rng(seed)
     out = []

@@ -11,6 +11,7 @@ import pinocchio as pin
 
 from eos_svc.agent import CycleContext, Outcome
 from eos_svc.agents import PlanRequest, build_world
+from eos_svc.agents.probe_plan import Probe
 from eos_svc.agents.relocate import RelocateAgent
 from eos_svc.board import Board
 from eos_svc.drivers.kinematic import KinematicDriver
@@ -91,3 +92,18 @@ def test_a_sphere_postulated_12_mm_sideways_is_relocated_onto_it() -> None:
     believed = moved_spec(ball, np.array([0.0, -0.012, 0.0]), np.eye(3))
     found = relocated(ball, believed)
     assert np.linalg.norm(found.centre - np.asarray(ball.position)) < 1e-3
+
+
+def test_a_blocked_check_probe_is_no_miss_and_a_free_one_is() -> None:
+    """A check probe the driver refuses (its start 10 m away: outside the wrist's workspace)
+    says nothing of the object, so it gives no entry; one through free space beside the box
+    touches nothing: a miss (None), which starts a re-location."""
+    driver = KinematicDriver(build_world(PlanRequest(obj=BOX, seed=1)))
+    agent = RelocateAgent(0.65, driver)
+    down = np.array([0.0, 0.0, -1.0])
+    far = Probe("top", "finger1", np.array([10.0, 0.0, 0.0]), down, 0.02, 0.0)
+    beside = Probe("top", "finger1", np.array([0.21, 0.12, 0.06]), down, 0.01, 0.0)
+    assert driver.guarded_probe("finger1", far.start, down, 0.02, 0.0).event == "blocked"
+    assert agent._probe([far]) == []
+    assert agent._probe([beside]) == [None]
+    assert agent._probe([far, beside]) == [None]
