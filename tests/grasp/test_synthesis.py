@@ -310,6 +310,11 @@ def test_wrist_stopped_short_repredicts_the_contacts_the_fingers_then_reach():
     assert new["repredicted"] and new["contacts"] != target["contacts"]
     assert all(f.in_reach(board) and f.landing_miss(board) < 1e-5 for f in fingers)  # µm rounding
     assert [f.landing_miss(board) for f in sharing] == [f.landing_miss(board) for f in fingers]
+    # the same target, the wrist moved 20 mm further back: the shared landings are made afresh
+    q[world.hand.wrist_q_index[:3]] -= 0.020 * np.asarray(target["approach"])
+    world.set_q(q)
+    assert not any(f.in_reach(board) for f in sharing)
+    assert [f.landing_miss(board) for f in sharing] == [f.landing_miss(board) for f in fingers]
 
 
 def test_palm_frame_is_a_rotation_approaching_along_x_closing_along_z():
