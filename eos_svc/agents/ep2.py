@@ -18,6 +18,7 @@ Opportunistic sub-rating: right after post_shape asked for the surface (``needs:
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
 import pinocchio as pin
@@ -29,6 +30,9 @@ from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, targeted_p
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import HandDriver
 from eos_svc.schema import keys
+
+if TYPE_CHECKING:
+    from eos_svc.kinematics import HandModel
 
 #: most EP2 rounds over the whole surface in one plan
 MAX_ROUNDS = 5
@@ -74,6 +78,18 @@ def estimate_box(board: Board) -> tuple[np.ndarray, np.ndarray] | None:
     if approach is not None:
         centre[0] = float(approach["point"][0]) + half
     return centre, np.array([half, half, half])
+
+
+def touch_entry(hand: HandModel, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
+    """One entry of ``ep2_touches``: the ``face`` probed, the ``finger``, its tip ``centre`` at the
+    touch (world, m) and the sensed outward ``normal``, the tip's radius (m)."""
+    return {
+        "face": face,
+        "finger": finger,
+        "centre": np.asarray(centre).round(7).tolist(),
+        "normal": np.asarray(normal).round(6).tolist(),
+        "radius": hand.tip_radius(finger),
+    }
 
 
 class EP2Agent(GraspAgent):
@@ -150,15 +166,6 @@ class EP2Agent(GraspAgent):
                 start = np.array([x, cy + dy, top])
                 out.append(Probe("top", finger, start, np.array([0.0, 0.0, -1.0]), travel, opened))
         return out
-
-    def _touch(self, face: str, finger: str, centre: np.ndarray, normal: np.ndarray) -> dict:
-        return {
-            "face": face,
-            "finger": finger,
-            "centre": np.asarray(centre).round(7).tolist(),
-            "normal": np.asarray(normal).round(6).tolist(),
-            "radius": self.world.hand.tip_radius(finger),
-        }
 
     def slide_plan(self, board: Board, faces: list[dict]) -> list[tuple[np.ndarray, int]]:
         """(horizontal axis, most steps) of each slide: :meth:`slide_axes`, or toward each open face
@@ -278,7 +285,9 @@ class EP2Agent(GraspAgent):
             )
             if outcome.event == "touched":
                 assert outcome.centre is not None and outcome.normal is not None
-                touches.append(self._touch(probe.face, probe.finger, outcome.centre, outcome.normal))
+                touches.append(
+                    touch_entry(world.hand, probe.face, probe.finger, outcome.centre, outcome.normal)
+                )
                 counts[probe.face] = counts.get(probe.face, 0) + 1
                 if probe.group >= 0:
                     answered.add(probe.group)
@@ -352,7 +361,9 @@ class EP2Agent(GraspAgent):
                 start = highest if steps == SLIDE_STEPS else max(tops, key=lambda c: float(np.dot(c, axis)))
                 slid, beyond = self.slide(start, axis, steps)
                 for centre, normal in slid:
-                    touches.append(self._touch("slide", world.probe_finger("top"), centre, normal))
+                    touches.append(
+                        touch_entry(world.hand, "slide", world.probe_finger("top"), centre, normal)
+                    )
                     counts["slide"] = counts.get("slide", 0) + 1
                 r = world.hand.tip_radius(world.probe_finger("top"))
                 free.extend([*np.asarray(p).round(7).tolist(), r] for p in beyond)

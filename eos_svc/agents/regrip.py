@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from eos_svc.agents.ep2 import touch_entry
 from eos_svc.agents.grasp_points import GraspPointsAgent
 from eos_svc.agents.post_shape import touches_from
 from eos_svc.board import Board
@@ -53,7 +54,7 @@ class Regrip:
         self.world = world
         self.placer = GraspPointsAgent(0.0, world)  # grasp synthesis and placement, as grasp_points does them
         self.attempts = 0
-        self.tried: list[tuple[np.ndarray, np.ndarray]] = []  # (wrist, palm rotation) of the grasps gripped
+        self.tried: list[np.ndarray] = []  # the palm rotations of the grasps gripped
 
     def felt_closure(self, board: Board) -> tuple[bool, list[dict]]:
         """(whether every fingertip touches and their sensed contacts are in force closure, the
@@ -76,19 +77,9 @@ class Regrip:
                 points, normals, None, mu, DEFAULT_EDGES, None, world.params.contact_patch_radius
             )
             closure = quality.force_closure
-        touches = []
-        for finger, p, n in felt:
-            r = hand.tip_radius(finger)
-            centre = np.round(p + r * n, 6).tolist()
-            touches.append(
-                {
-                    "face": "grip",
-                    "finger": finger,
-                    "centre": centre,
-                    "normal": np.round(n, 6).tolist(),
-                    "radius": r,
-                }
-            )
+        touches = [
+            touch_entry(hand, "grip", finger, p + hand.tip_radius(finger) * n, n) for finger, p, n in felt
+        ]
         return closure, touches
 
     def attempt(self, board: Board) -> str | None:
@@ -101,7 +92,7 @@ class Regrip:
         if closure:
             return None
         self.attempts += 1
-        self.tried.append((np.asarray(target["wrist"], dtype=float), self._rotation(target)))
+        self.tried.append(rotation_from_rpy(*target["wrist_rpy"]))
         board.set(keys.EP2_TOUCHES, [*board.get(keys.EP2_TOUCHES, []), *felt])
         world = self.world
         hull = hull_postulate(touches_from(board, world), world.table_height)
@@ -132,13 +123,8 @@ class Regrip:
             q[hand.finger_q_index(finger)] = world.sweeps[finger].angles[0]
         world.move_joints(q)
 
-    @staticmethod
-    def _rotation(target: dict) -> np.ndarray:
-        """The palm rotation of ``target``'s wrist angles."""
-        return rotation_from_rpy(*target["wrist_rpy"])
-
     def _was_tried(self, cand: GraspCandidate) -> bool:
         """``cand`` grips as a grasp already tried did (the palm turned alike: the same grasp
         axis and approach, wherever the remade hull puts its centre)."""
         cos_same = 2.0 * np.cos(np.radians(SAME_TURN_DEG)) + 1.0  # trace(R1ᵀ R2) at that angle
-        return any(float(np.trace(cand.rotation.T @ R)) > cos_same for _, R in self.tried)
+        return any(float(np.trace(cand.rotation.T @ R)) > cos_same for R in self.tried)

@@ -11,10 +11,10 @@ grasp target, it makes **check touches**: guarded probes onto the surface points
 predicts — the front along +x, a side along ±y and the top along −z (one per axis: a ball
 moved 12 mm across the front probe's line moves its touch by 1.8 mm only), each from
 :data:`~eos_svc.agents.ep2.STANDOFF` outside the postulated bounds. A touch farther than
-:data:`RELOCATE_AFTER` (2 mm) from the predicted surface, or a miss, means the object moved: it
-then **re-locates** it — probes of both sides along ±y and of the front off its centre, then
-the postulated object's pose refitted to the fresh touches, its shape kept
-(:func:`~eos_svc.shape.pose_refit.refit_pose`) — and writes the re-located postulate
+:data:`~eos_svc.drivers.protocol.RELOCATE_AFTER` (2 mm) from the predicted surface, or a miss,
+means the object moved: it then **re-locates** it — probes of both sides along ±y and of the
+front off its centre, then the postulated object's pose refitted to the fresh touches, its
+shape kept (:func:`~eos_svc.shape.pose_refit.refit_pose`) — and writes the re-located postulate
 (``object``, ``centre``, ``bounds``) for grasp_points to plan on. The next check verifies the
 refit; after :data:`MAX_ROUNDS` checks the plan goes on with the last pose, saying so. The
 postulate's ``located`` entry records what was found.
@@ -32,14 +32,12 @@ from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.ep2 import STANDOFF
 from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, top_probe
 from eos_svc.board import Board
-from eos_svc.drivers.protocol import HandDriver
+from eos_svc.drivers.protocol import RELOCATE_AFTER, HandDriver
 from eos_svc.grasp.postulate import make_object, read_postulate
 from eos_svc.schema import keys
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.shape.pose_refit import refit_pose, touch_misses
 
-#: a check touch farther than this from the predicted surface means the object moved, m
-RELOCATE_AFTER = 0.002
 #: most checks of one plan (each after the refit the one before triggered)
 MAX_ROUNDS = 3
 #: the front's off-centre relocation probes, as fractions of the half height

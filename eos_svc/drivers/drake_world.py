@@ -44,7 +44,7 @@ from eos_svc.drivers.drake_plant import DrakeHandPlant, PlantSettings
 from eos_svc.drivers.grip_verdict import grasp_geometry
 from eos_svc.drivers.kinematic import KinematicDriver
 from eos_svc.drivers.lift_test import GRAVITY, SQUEEZE, lift_test, squeeze_grip
-from eos_svc.drivers.protocol import FingerStep, TactileReading, Touch, WristMove
+from eos_svc.drivers.protocol import RELOCATE_AFTER, FingerStep, TactileReading, Touch, WristMove
 from eos_svc.schema.request import ObjectSpec
 from eos_svc.world import wrist_motion
 
@@ -53,10 +53,6 @@ if TYPE_CHECKING:
     from eos_svc.kinematics.ep1 import EP1Result
     from eos_svc.world.probing import ProbeOutcome
     from eos_svc.world.world import GraspWorld
-
-
-#: how far the object may move during a plan before it would have to be re-located, m
-RELOCATE_AFTER = 0.002
 
 
 @dataclass(frozen=True)
@@ -452,8 +448,7 @@ class DrakeDriver(KinematicDriver):
         return {
             "name": "drake",
             "object_moved_mm": round(1000.0 * moved, 3),
-            # the planner assumes the object it explores stays put: past RELOCATE_AFTER it says so
-            # (it does not re-locate the object yet)
+            # past RELOCATE_AFTER the plan's reason says whether the relocate agent re-located it
             "moved_past_relocation_limit": bool(moved > RELOCATE_AFTER),
             "object_moved_max_mm": round(1000.0 * self._moved_max, 3),
             # the path length the object's centre moved during each kind of motion, mm

@@ -47,6 +47,9 @@ if TYPE_CHECKING:
     from eos_svc.world.parameters import WorldParameters
     from eos_svc.world.probing import ProbeChoice, ProbeOutcome
 
+#: an object found farther than this from where it was postulated (a check touch off the predicted
+#: surface; the Drake world's object off where it rested) has moved and is re-located, m
+RELOCATE_AFTER = 0.002
 
 @dataclass(frozen=True)
 class Touch:
