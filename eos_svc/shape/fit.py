@@ -171,6 +171,13 @@ class Problem:
         return self.evaluate(theta)[1].copy()
 
 
+def fitted_object(kind: str, theta: np.ndarray, r0: np.ndarray) -> SurfaceObject:
+    """The object of ``kind`` that the parameters ``theta`` about the start orientation ``r0``
+    describe."""
+    centres, rotations, half = batch_geometry(kind, np.asarray(theta)[None], r0)
+    return KINDS[kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
+
+
 @dataclass(frozen=True)
 class ClassFit:
     """The best fit of one kind: χ² (Σ of the squared whitened residuals at the optimum), its k
@@ -188,8 +195,7 @@ class ClassFit:
     @cached_property
     def geometry(self) -> SurfaceObject:
         """The fitted object (made when first asked for: a selection needs the chosen kind's)."""
-        centres, rotations, half = batch_geometry(self.kind, self.theta[None], self.r0)
-        return KINDS[self.kind].from_half_sizes(half[0], pin.SE3(rotations[0], centres[0]))
+        return fitted_object(self.kind, self.theta, self.r0)
 
     def size_sigmas(self) -> np.ndarray:
         """σ of the log sizes (≈ relative σ of each size)."""

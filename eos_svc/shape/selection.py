@@ -20,7 +20,15 @@ import pinocchio as pin
 from scipy import special
 
 from eos_svc.objects import FITTED_KINDS as KINDS
-from eos_svc.shape.fit import GOOD_FIT, SIZE_INDEX, ClassFit, explains, extent_ratios, fit_class
+from eos_svc.shape.fit import (
+    GOOD_FIT,
+    SIZE_INDEX,
+    ClassFit,
+    explains,
+    extent_ratios,
+    fit_class,
+    fitted_object,
+)
 from eos_svc.shape.span import within_span
 from eos_svc.shape.starts import ClassStarts, frame_with_z
 from eos_svc.shape.touches import Touches
@@ -181,7 +189,7 @@ def select_class(
     shared = ClassStarts(touches)  # every class's starts, their common pieces computed once
     for kind, (theta0, r0) in (warm or {}).items():
         # a fit grown far past the touches is no start: refitted, it grows on (shape.span)
-        if kind in classes and within_span(ClassFit(kind, 0.0, 0, np.eye(0), theta0, r0).geometry, touches):
+        if kind in classes and within_span(fitted_object(kind, theta0, r0), touches):
             refit = fit_class(kind, touches, class_starts=shared, only=shared.add(kind, theta0, r0))
             if explains(refit.chi2, touches, kind):
                 fits[kind] = refit
