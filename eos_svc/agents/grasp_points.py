@@ -62,13 +62,9 @@ class GraspPointsAgent(GraspAgent):
         self.oracle = oracle
 
     def confident_shape(self, board: Board) -> dict | None:
-        """post_shape's postulate if it asks for nothing more and is confident (or approximate)."""
+        """post_shape's postulate if it is :func:`confident`."""
         shape = board.get(keys.SHAPE)
-        if shape is None or shape.get("needs") is not None:
-            return None
-        if shape["confidence"] < self.world.params.confidence_threshold and not shape.get("approximate"):
-            return None
-        return shape
+        return shape if confident(shape, self.world.params.confidence_threshold) else None
 
     def opportunistic(self, board: Board, ctx: CycleContext) -> float | None:
         shape = self.confident_shape(board)
@@ -220,6 +216,14 @@ class GraspPointsAgent(GraspAgent):
             "pose_assumed_upright": not postulate.pose_known,
             "postulate": postulate.source,
         }
+
+
+def confident(shape: dict | None, threshold: float) -> bool:
+    """Whether post_shape's postulate ``shape`` asks for nothing more and is confident (at least
+    ``threshold``) or approximate: a postulate to plan a grasp on."""
+    if shape is None or shape.get("needs") is not None:
+        return False
+    return shape["confidence"] >= threshold or bool(shape.get("approximate"))
 
 
 def unsure(shape: dict | None, threshold: float) -> str:

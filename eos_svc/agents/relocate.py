@@ -30,6 +30,7 @@ import numpy as np
 from eos_svc.agent import ActionResult, CycleContext, Outcome
 from eos_svc.agents.base import INFO, GraspAgent
 from eos_svc.agents.ep2 import STANDOFF
+from eos_svc.agents.grasp_points import confident
 from eos_svc.agents.probe_plan import Probe, front_probe, side_probe, top_probe
 from eos_svc.board import Board
 from eos_svc.drivers.protocol import RELOCATE_AFTER, HandDriver
@@ -60,11 +61,9 @@ class RelocateAgent(GraspAgent):
     def _pending(self, board: Board) -> dict | None:
         """The confident postulate awaiting a check (None when there is none)."""
         shape = board.get(keys.SHAPE)
-        if shape is None or keys.TARGET in board or shape.get("needs") is not None:
+        if keys.TARGET in board or not confident(shape, self.world.params.confidence_threshold):
             return None
         if shape.get("located") is not None or shape.get("object") is None:
-            return None
-        if shape["confidence"] < self.world.params.confidence_threshold and not shape.get("approximate"):
             return None
         return dict(shape)
 
