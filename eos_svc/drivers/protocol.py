@@ -51,6 +51,7 @@ if TYPE_CHECKING:
 #: surface; the Drake world's object off where it rested) has moved and is re-located, m
 RELOCATE_AFTER = 0.002
 
+
 @dataclass(frozen=True)
 class Touch:
     """A fingertip's contact with the object.
